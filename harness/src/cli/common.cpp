@@ -1,0 +1,75 @@
+#include "common.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace curvlab::cli {
+namespace {
+
+std::string human(const Json& v) {
+  if (v.is_number_float()) {
+    std::ostringstream os;
+    os << std::setprecision(12) << v.get<double>();
+    return os.str();
+  }
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_array()) {
+    std::string out = "[";
+    for (std::size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + human(v[i]);
+    return out + "]";
+  }
+  return v.dump();
+}
+
+void print_human(const Json& doc, const std::string& indent) {
+  std::size_t width = 0;
+  for (const auto& [key, value] : doc.items()) width = std::max(width, key.size());
+  for (const auto& [key, value] : doc.items()) {
+    if (value.is_object()) {
+      std::cout << indent << key << ":\n";
+      print_human(value, indent + "  ");
+    } else {
+      std::cout << indent << std::left << std::setw(static_cast<int>(width) + 1)
+                << (key + ":") << ' ' << human(value) << '\n';
+    }
+  }
+}
+
+}  // namespace
+
+void print_result(const Json& doc, bool as_json) {
+  if (as_json) {
+    std::cout << doc.dump(2) << '\n';
+  } else {
+    print_human(doc, "");
+  }
+}
+
+std::vector<double> parse_number_list(const std::string& text, const std::string& option,
+                                      std::size_t expected_count) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    while (used < item.size() && std::isspace(static_cast<unsigned char>(item[used]))) ++used;
+    if (used == 0 || used != item.size() || !std::isfinite(value))
+      throw UsageError(option + ": '" + item + "' is not a finite number (expected " +
+                       std::to_string(expected_count) + " comma-separated numbers)");
+    out.push_back(value);
+  }
+  if (out.size() != expected_count)
+    throw UsageError(option + ": expected " + std::to_string(expected_count) +
+                     " comma-separated numbers, got " + std::to_string(out.size()));
+  return out;
+}
+
+}  // namespace curvlab::cli

@@ -1,0 +1,39 @@
+// Shared pieces of the command line: the error kinds that map to exit codes,
+// and output that is human-readable by default and JSON with --json.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace curvlab::cli {
+
+// Bad arguments or input a person must fix: message on stderr, exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// An expected failure at run time (no device, disk full…): exit code 1.
+struct RuntimeFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+using Json = nlohmann::ordered_json;
+
+// Prints `doc` as indented JSON, or as aligned "key: value" lines.
+void print_result(const Json& doc, bool as_json);
+
+// Parses "x,y,z,w" (or any count) into doubles; throws UsageError naming the
+// option on failure.
+std::vector<double> parse_number_list(const std::string& text, const std::string& option,
+                                      std::size_t expected_count);
+
+// Registration of each command group (one file each, wired in main.cpp).
+void add_inspect_commands(CLI::App& app);
+
+}  // namespace curvlab::cli

@@ -1,0 +1,39 @@
+// The one wiring point: builds the command tree and maps failures to exit
+// codes (0 success, 1 run-time failure, 2 bad arguments or input).
+#include "common.hpp"
+
+#include "curvlab/harness/version.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+  CLI::App app{"curvlab — perception experiments in S3, E3 and H3"};
+  app.set_version_flag("--version", std::string(curvlab::software_version()) + " (" +
+                                        std::string(curvlab::git_commit()) + ")");
+  app.require_subcommand(1);
+  curvlab::cli::add_inspect_commands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  } catch (const curvlab::cli::UsageError& e) {
+    std::cerr << "curvlab: error: " << e.what() << '\n';
+    return 2;
+  } catch (const curvlab::cli::RuntimeFailure& e) {
+    std::cerr << "curvlab: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "curvlab: unexpected failure: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

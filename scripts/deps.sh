@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages curvlab needs, skipping those already there.
+# Runs as root (or through sudo when available).
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config ccache git
+  libglm-dev libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers
+  glslang-dev glslang-tools spirv-tools
+  libsqlite3-dev sqlite3 libhidapi-dev libglfw3-dev libopenxr-dev libopenxr-loader1
+  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libpng-dev libstb-dev
+  fonts-dejavu-core xvfb xauth
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3-mpmath
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "deps: installing ${#missing[@]} missing packages: ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "deps: done"

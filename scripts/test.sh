@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The whole test suite: installs what is missing, builds with -Werror
+# (preset "ci") and runs every ctest test. Exit status is ctest's.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+bash scripts/deps.sh
+jobs=$(nproc)
+launcher=()
+if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+cmake --preset ci "${launcher[@]}" >/dev/null
+cmake --build --preset ci -j "$jobs"
+ctest --preset ci -j "$jobs" "$@"
