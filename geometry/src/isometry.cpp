@@ -113,7 +113,7 @@ Point position(const Space& space, const Isometry& iso) {
 Isometry translation_to(const Space& space, const Point& p) {
   const double rho = space.radius_m;
   const Vec3 xyz(p.x, p.y, p.z);
-  const double r = glm::length(xyz);
+  const double r = norm3(xyz);
   if (r == 0.0) return Isometry::identity();
   const double t = space.arc(r / rho, p.w / rho);
   return translation_rad(space, xyz / r, t);

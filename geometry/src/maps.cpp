@@ -6,7 +6,7 @@
 namespace curvlab::geometry {
 
 double distance_from_origin_rad(const Space& space, const Point& p) {
-  const double r = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  const double r = norm3(p);
   return space.arc(r / space.radius_m, p.w / space.radius_m);
 }
 
@@ -29,7 +29,7 @@ Point exp_origin(const Space& space, const Vec3& v) {
 
 Vec3 log_origin(const Space& space, const Point& q) {
   const Vec3 xyz(q.x, q.y, q.z);
-  const double r = glm::length(xyz);
+  const double r = norm3(xyz);
   const double theta = space.arc(r / space.radius_m, q.w / space.radius_m);
   if (r == 0.0) {
     if (theta == 0.0) return Vec3(0.0);
@@ -40,7 +40,7 @@ Vec3 log_origin(const Space& space, const Point& q) {
 
 Vec3 back_log_origin(const Space& space, const Point& q) {
   const Vec3 xyz(q.x, q.y, q.z);
-  const double r = glm::length(xyz);
+  const double r = norm3(xyz);
   const double theta = space.arc(r / space.radius_m, q.w / space.radius_m);
   const double back = 2.0 * std::numbers::pi - theta;
   if (r == 0.0) return Vec3(0.0, 0.0, space.radius_m * back);
@@ -73,7 +73,7 @@ Point geodesic_lerp(const Space& space, const Point& p, const Point& q, double f
 }
 
 Point normalize_point(const Space& space, const Point& p) {
-  if (space.kind == SpaceKind::E3) return {p.x, p.y, p.z, space.radius_m};
+  // One formula for all three: P(p,p) = w² in E3, so E3 scales by ρ/w.
   const double n = std::sqrt(point_form(space, p, p));
   return p * (space.radius_m / n);
 }

@@ -122,6 +122,15 @@ double off_space_error(const Space& space, const Point& p) {
   return std::abs(point_form(space, p, p) - rho2) / scale;
 }
 
+double norm3(double x, double y, double z) {
+  const double m = std::max({std::abs(x), std::abs(y), std::abs(z)});
+  if (m > 1e150 || (m < 1e-150 && m > 0.0)) {
+    const double a = x / m, b = y / m, c = z / m;
+    return m * std::sqrt(a * a + b * b + c * c);
+  }
+  return std::sqrt(x * x + y * y + z * z);
+}
+
 bool nearly_equal(double a, double b, double tol, double magnitude) {
   return std::abs(a - b) <= tol * std::max(1.0, std::abs(magnitude));
 }

@@ -37,16 +37,14 @@ TableShape shape_in(const Space& space, int n, double side_rad) {
   t.edge_m = side_rad * space.radius_m;
   t.interior_angle_rad = kPi / 2.0;
   const double half = side_rad / 2.0;
-  // Right triangle centre–midpoint–corner, angle π/n at the centre:
-  //   S(s/2) = S(R)·sin(π/n)        (sine rule)
-  //   T(a)   = T(s/2) / tan(π/n)    (T = S/C; a = apothem)
-  t.circumradius_rad = space.S_inv(space.S(half) / std::sin(kPi / n));
-  if (space.kind == SpaceKind::S3 && space.S(half) / std::sin(kPi / n) >= 1.0)
-    t.circumradius_rad = kPi / 2.0;
-  const double tan_a = (space.S(half) / space.C(half)) / std::tan(kPi / n);
-  // arc(s, c) with (s, c) ∝ (T, 1), normalised so that C² + k S² = 1.
-  const double norm = std::sqrt(1.0 + space.k() * tan_a * tan_a);
-  t.apothem_rad = space.arc(tan_a / norm, 1.0 / norm);
+  // Right triangle centre–midpoint–corner (right angle at the midpoint,
+  // angle π/n at the centre, hypotenuse R, legs a and s/2):
+  //   S(s/2) = S(R)·sin(π/n)        (opposite leg from the hypotenuse)
+  //   T(s/2) = S(a)·tan(π/n)        (opposite leg from the adjacent leg)
+  // with T = S/C; both reduce to the Euclidean relations as the radius grows.
+  const double sin_r = space.S(half) / std::sin(kPi / n);
+  t.circumradius_rad = space.kind == SpaceKind::S3 && sin_r >= 1.0 ? kPi / 2.0 : space.S_inv(sin_r);
+  t.apothem_rad = space.S_inv((space.S(half) / space.C(half)) / std::tan(kPi / n));
   return t;
 }
 

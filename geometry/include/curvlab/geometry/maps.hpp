@@ -48,7 +48,7 @@ Vec4 log_ambient(const Space& space, const Point& p, const Point& q);
 Point geodesic_lerp(const Space& space, const Point& p, const Point& q, double f);
 
 // Projects an approximate point back onto the space (for user input and for
-// drift): S3/H3 rescale by P(p,p), E3 sets w = ρ.
+// drift) by the radial rescaling ρ/√P(p,p) (in E3: the projective ρ/w).
 Point normalize_point(const Space& space, const Point& p);
 
 }  // namespace curvlab::geometry

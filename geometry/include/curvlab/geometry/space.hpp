@@ -71,6 +71,12 @@ Point origin(const Space& space);
 // plus, in H3, whether w > 0 (returns +∞ on the wrong sheet).
 double off_space_error(const Space& space, const Point& p);
 
+// |(x, y, z)| without overflow or underflow of the squares: far H3 points
+// have coordinates near sinh θ ≈ 1e300, whose squares overflow double.
+double norm3(double x, double y, double z);
+inline double norm3(const Vec4& p) { return norm3(p.x, p.y, p.z); }
+inline double norm3(const Vec3& v) { return norm3(v.x, v.y, v.z); }
+
 // Fuzzy comparison with a stated magnitude: |a − b| ≤ tol · max(1, magnitude).
 bool nearly_equal(double a, double b, double tol, double magnitude = 1.0);
 
