@@ -28,14 +28,9 @@ Point exp_origin(const Space& space, const Vec3& v) {
 }
 
 Vec3 log_origin(const Space& space, const Point& q) {
-  const Vec3 xyz(q.x, q.y, q.z);
-  const double r = norm3(xyz);
-  const double theta = space.arc(r / space.radius_m, q.w / space.radius_m);
-  if (r == 0.0) {
-    if (theta == 0.0) return Vec3(0.0);
-    return Vec3(0.0, 0.0, -space.radius_m * theta);
-  }
-  return (space.radius_m * theta / r) * xyz;
+  double out[3];
+  log_origin_scalar<double>(space.kind, q.x, q.y, q.z, q.w, space.radius_m, out);
+  return {out[0], out[1], out[2]};
 }
 
 Vec3 back_log_origin(const Space& space, const Point& q) {

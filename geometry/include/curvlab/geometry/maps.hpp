@@ -7,6 +7,8 @@
 
 #include "curvlab/geometry/isometry.hpp"
 
+#include <cmath>
+
 namespace curvlab::geometry {
 
 // Geodesic distance from the origin in radians:
@@ -33,6 +35,33 @@ Vec3 log_origin(const Space& space, const Point& q);
 // opposite direction: −ρ(2π − θ)·xyz/|xyz| (the paper's (π+θ)/sin θ factor
 // holds only for the antipodal twin's coordinates −q).
 Vec3 back_log_origin(const Space& space, const Point& q);
+
+// The same log map for any floating-point type (float for the GPU-precision
+// comparison, double above): the formula lives once. The renderer's GLSL
+// carries a copy, checked against this one by a test.
+template <class T>
+void log_origin_scalar(SpaceKind kind, T x, T y, T z, T w, T rho, T out[3]) {
+  using std::abs, std::atan2, std::asinh, std::sqrt, std::max;
+  const T m = max(max(abs(x), abs(y)), abs(z));
+  T r = T(0);
+  if (m > T(0)) {
+    const T a = x / m, b = y / m, c = z / m;  // squares of x may overflow
+    r = m * sqrt(a * a + b * b + c * c);
+  }
+  T theta = r / rho;  // E3
+  if (kind == SpaceKind::S3) theta = atan2(r / rho, w / rho);
+  if (kind == SpaceKind::H3) theta = asinh(r / rho);
+  if (r == T(0)) {
+    out[0] = out[1] = T(0);
+    out[2] = theta == T(0) ? T(0) : -rho * theta;
+    return;
+  }
+  // ρθ/r, grouped so that neither ρθ nor the result overflows needlessly.
+  const T f = (theta / r) * rho;
+  out[0] = f * x;
+  out[1] = f * y;
+  out[2] = f * z;
+}
 
 // Maps at an arbitrary point given by a frame (an isometry whose column 3 is
 // the point): the tangent vector is expressed in that frame's axes.
