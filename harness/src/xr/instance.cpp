@@ -24,7 +24,8 @@ std::string hint(XrResult result) {
     case XR_ERROR_RUNTIME_FAILURE:
     case XR_ERROR_INSTANCE_LOST:
       return "no OpenXR runtime is installed and active. Install and start one: Monado "
-             "(Debian package monado-service; run `monado-service`), SteamVR (start it and "
+             "(not packaged in Debian 12: build it or use a distribution that packages it, then "
+             "run `monado-service`), SteamVR (start it and "
              "make it the OpenXR runtime in its settings), or the headset vendor's runtime. "
              "Its installer registers it in /etc/xdg/openxr/1/active_runtime.json (or "
              "~/.config/openxr/1/active_runtime.json); to choose one explicitly, set "
