@@ -105,3 +105,20 @@ TEST(HidLibrary, EnumerationWithoutDevicesIsEmptyNotAnError) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(HidDevice, OpeningAMissingDeviceIsAnErrorNamingIt) {
+  curvlab::devices::HidDeviceInfo info;
+  info.vendor_id = 0x046d;
+  info.product_id = 0xc216;
+  info.product = "Dual Action";
+  info.path = "/dev/hidraw-curvlab-missing";
+  auto opened = curvlab::devices::HidDevice::open(info);
+  ASSERT_TRUE(std::holds_alternative<curvlab::devices::DeviceError>(opened));
+  const std::string msg = std::get<curvlab::devices::DeviceError>(opened).message;
+  EXPECT_NE(msg.find("cannot open 046d:c216 Dual Action"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("/dev/hidraw-curvlab-missing"), std::string::npos) << msg;
+}
+
+}  // namespace

@@ -97,14 +97,15 @@ std::vector<HidDeviceInfo> HidLibrary::enumerate() const {
 
 void HidDevice::Closer::operator()(hid_device_* device) const noexcept { hid_close(device); }
 
-std::variant<HidDevice, DeviceError> HidDevice::open(const HidLibrary& /*library*/,
-                                                     const HidDeviceInfo& info) {
+std::variant<HidDevice, DeviceError> HidDevice::open(const HidDeviceInfo& info) {
+  auto library = HidLibrary::open();
+  if (auto* e = std::get_if<DeviceError>(&library)) return *e;
   hid_device* device = hid_open_path(info.path.c_str());
   if (device == nullptr)
     return DeviceError{"cannot open " + describe(info) + " at " + info.path + ": " +
                        utf8(hid_error(nullptr)) +
                        " (is the user allowed to read it? see docs/devices.md, udev rule)"};
-  return HidDevice(device, describe(info));
+  return HidDevice(std::move(std::get<HidLibrary>(library)), device, describe(info));
 }
 
 std::variant<std::size_t, DeviceError> HidDevice::read(std::span<std::uint8_t> buffer,

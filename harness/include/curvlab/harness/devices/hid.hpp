@@ -66,12 +66,12 @@ class ReportSource {
   [[nodiscard]] virtual std::string label() const = 0;
 };
 
-// One open hid_device. Move-only owner; closed by the destructor. Not
-// thread-safe: one thread reads it (HidReader's).
+// One open hid_device. Move-only owner; closed by the destructor. It holds
+// its own HidLibrary reference, so hidapi stays initialised while it is open.
+// Not thread-safe: one thread reads it (DeviceReader's).
 class HidDevice final : public ReportSource {
  public:
-  static std::variant<HidDevice, DeviceError> open(const HidLibrary& library,
-                                                   const HidDeviceInfo& info);
+  static std::variant<HidDevice, DeviceError> open(const HidDeviceInfo& info);
   std::variant<std::size_t, DeviceError> read(std::span<std::uint8_t> buffer,
                                               int timeout_ms) override;
   [[nodiscard]] std::string label() const override { return label_; }
@@ -80,7 +80,9 @@ class HidDevice final : public ReportSource {
   struct Closer {
     void operator()(hid_device_* device) const noexcept;
   };
-  HidDevice(hid_device_* device, std::string label) : device_(device), label_(std::move(label)) {}
+  HidDevice(HidLibrary library, hid_device_* device, std::string label)
+      : library_(std::move(library)), device_(device), label_(std::move(label)) {}
+  HidLibrary library_;  // declared first: outlives device_
   std::unique_ptr<hid_device_, Closer> device_;
   std::string label_;
 };
