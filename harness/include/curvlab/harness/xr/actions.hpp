@@ -1,0 +1,51 @@
+// The controller actions curvlab uses, as data: one action set with both
+// hands' grip and aim poses, the trigger, and the A/B/X/Y buttons, with
+// suggested bindings for the Khronos simple controller and the Oculus Touch
+// controller (the profile most runtimes can remap to others). Pure data, so
+// the binding table is tested without a runtime; xr/instance.hpp creates
+// them.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace curvlab::xr {
+
+inline constexpr const char* kLeftHand = "/user/hand/left";
+inline constexpr const char* kRightHand = "/user/hand/right";
+
+enum class ActionType { Pose, Boolean, Float };
+
+struct ActionDef {
+  std::string name;            // OpenXR path component: lower-case, digits, '-', '_', '.'
+  std::string localized_name;  // shown in the runtime's rebinding UI
+  ActionType type = ActionType::Boolean;
+  std::vector<std::string> subaction_paths;  // hands the action is read per
+};
+
+struct SuggestedBinding {
+  std::string action;  // ActionDef::name
+  std::string path;    // e.g. /user/hand/left/input/grip/pose
+};
+
+struct ProfileBindings {
+  std::string profile;  // e.g. /interaction_profiles/oculus/touch_controller
+  std::vector<SuggestedBinding> bindings;
+};
+
+struct ActionSetDef {
+  std::string name;
+  std::string localized_name;
+  unsigned priority = 0;
+  std::vector<ActionDef> actions;
+  std::vector<ProfileBindings> profiles;
+};
+
+// The action set of a curvlab session.
+ActionSetDef curvlab_action_set();
+
+// Input paths each profile offers (from the OpenXR specification's
+// interaction-profile tables), to check the bindings against.
+std::vector<std::string> profile_input_paths(const std::string& profile);
+
+}  // namespace curvlab::xr

@@ -1,0 +1,91 @@
+// The OpenXR instance path: loader → API layers and extensions → instance
+// with XR_KHR_vulkan_enable2 → head-mounted-display system. On a machine
+// without a runtime this fails at xrCreateInstance (or at the extension
+// query) with XR_ERROR_RUNTIME_UNAVAILABLE; the failure is a value whose
+// message names the result and what to install.
+#pragma once
+
+#include "curvlab/harness/xr/actions.hpp"
+
+#include <openxr/openxr.h>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace curvlab::xr {
+
+// The name of an XrResult ("XR_ERROR_RUNTIME_UNAVAILABLE"), without an
+// instance (xrResultToString needs one, which is exactly what is missing
+// when the runtime is). Unknown codes read "XR_RESULT_<n>".
+std::string result_name(XrResult result);
+
+struct XrFailure {
+  XrResult result = XR_SUCCESS;
+  std::string call;     // the OpenXR function that failed
+  std::string message;  // what happened and what to do, for a person
+};
+
+struct ProbeReport {
+  std::vector<std::string> api_layers;
+  std::vector<std::string> extensions;
+  std::string runtime_name;
+  std::string runtime_version;
+  std::string system_name;
+  std::uint32_t vendor_id = 0;
+  bool orientation_tracking = false;
+  bool position_tracking = false;
+  std::uint32_t max_swapchain_width = 0;
+  std::uint32_t max_swapchain_height = 0;
+};
+
+// Owns one XrInstance (and the XrSystemId found for the HMD). Move-only;
+// destroyed by the destructor. Not thread-safe.
+class Instance {
+ public:
+  static std::variant<Instance, XrFailure> create(const std::string& application_name);
+  Instance(Instance&& other) noexcept;
+  Instance& operator=(Instance&& other) noexcept;
+  Instance(const Instance&) = delete;
+  Instance& operator=(const Instance&) = delete;
+  ~Instance();
+
+  [[nodiscard]] XrInstance handle() const { return instance_; }
+  // The head-mounted display; fails with XR_ERROR_FORM_FACTOR_UNAVAILABLE
+  // while the headset is off or unplugged.
+  std::variant<XrSystemId, XrFailure> hmd_system() const;
+  [[nodiscard]] std::string path_string(XrPath path) const;
+
+ private:
+  explicit Instance(XrInstance instance) : instance_(instance) {}
+  XrInstance instance_ = XR_NULL_HANDLE;
+};
+
+// Owns an XrActionSet and its actions (destroyed with the set). Move-only.
+class ActionSet {
+ public:
+  // Creates the set and actions and suggests the bindings of every profile.
+  static std::variant<ActionSet, XrFailure> create(const Instance& instance,
+                                                   const ActionSetDef& def);
+  ActionSet(ActionSet&& other) noexcept;
+  ActionSet& operator=(ActionSet&& other) noexcept;
+  ActionSet(const ActionSet&) = delete;
+  ActionSet& operator=(const ActionSet&) = delete;
+  ~ActionSet();
+
+  [[nodiscard]] XrActionSet handle() const { return set_; }
+  [[nodiscard]] XrAction action(std::string_view name) const;
+
+ private:
+  ActionSet() = default;
+  XrActionSet set_ = XR_NULL_HANDLE;
+  std::vector<std::pair<std::string, XrAction>> actions_;
+};
+
+// Runs the whole path up to the system (no session: that needs the
+// renderer's Vulkan device) and describes what it found.
+std::variant<ProbeReport, XrFailure> probe(const std::string& application_name);
+
+}  // namespace curvlab::xr

@@ -1,0 +1,73 @@
+#include "curvlab/harness/xr/actions.hpp"
+
+namespace curvlab::xr {
+
+namespace {
+constexpr const char* kSimple = "/interaction_profiles/khr/simple_controller";
+constexpr const char* kTouch = "/interaction_profiles/oculus/touch_controller";
+
+std::string left(const char* input) { return std::string(kLeftHand) + "/input/" + input; }
+std::string right(const char* input) { return std::string(kRightHand) + "/input/" + input; }
+}  // namespace
+
+ActionSetDef curvlab_action_set() {
+  const std::vector<std::string> both = {kLeftHand, kRightHand};
+  ActionSetDef set;
+  set.name = "curvlab";
+  set.localized_name = "curvlab experiment";
+  set.actions = {
+      {"grip_pose", "Hand (grip) pose", ActionType::Pose, both},
+      {"aim_pose", "Pointing (aim) pose", ActionType::Pose, both},
+      {"trigger", "Trigger", ActionType::Float, both},
+      {"button_a", "A button", ActionType::Boolean, {kRightHand}},
+      {"button_b", "B button", ActionType::Boolean, {kRightHand}},
+      {"button_x", "X button", ActionType::Boolean, {kLeftHand}},
+      {"button_y", "Y button", ActionType::Boolean, {kLeftHand}},
+  };
+  // The simple controller has no face buttons: select is the trigger, and
+  // menu stands in for the primary button of each hand (A right, X left).
+  set.profiles.push_back({kSimple,
+                          {{"grip_pose", left("grip/pose")},
+                           {"grip_pose", right("grip/pose")},
+                           {"aim_pose", left("aim/pose")},
+                           {"aim_pose", right("aim/pose")},
+                           {"trigger", left("select/click")},
+                           {"trigger", right("select/click")},
+                           {"button_a", right("menu/click")},
+                           {"button_x", left("menu/click")}}});
+  set.profiles.push_back({kTouch,
+                          {{"grip_pose", left("grip/pose")},
+                           {"grip_pose", right("grip/pose")},
+                           {"aim_pose", left("aim/pose")},
+                           {"aim_pose", right("aim/pose")},
+                           {"trigger", left("trigger/value")},
+                           {"trigger", right("trigger/value")},
+                           {"button_a", right("a/click")},
+                           {"button_b", right("b/click")},
+                           {"button_x", left("x/click")},
+                           {"button_y", left("y/click")}}});
+  return set;
+}
+
+std::vector<std::string> profile_input_paths(const std::string& profile) {
+  std::vector<std::string> out;
+  auto both = [&out](const char* input) {
+    out.push_back(left(input));
+    out.push_back(right(input));
+  };
+  if (profile == kSimple) {
+    for (const char* in : {"select/click", "menu/click", "grip/pose", "aim/pose"}) both(in);
+  } else if (profile == kTouch) {
+    for (const char* in : {"x/click", "x/touch", "y/click", "y/touch", "menu/click"})
+      out.push_back(left(in));
+    for (const char* in : {"a/click", "a/touch", "b/click", "b/touch", "system/click"})
+      out.push_back(right(in));
+    for (const char* in : {"squeeze/value", "trigger/value", "trigger/touch", "thumbstick/x",
+                           "thumbstick/y", "thumbstick/click", "thumbstick/touch",
+                           "thumbrest/touch", "grip/pose", "aim/pose"})
+      both(in);
+  }
+  return out;
+}
+
+}  // namespace curvlab::xr

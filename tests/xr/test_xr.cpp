@@ -1,0 +1,189 @@
+#include "curvlab/harness/xr/actions.hpp"
+#include "curvlab/harness/xr/instance.hpp"
+#include "curvlab/harness/xr/session_state.hpp"
+#include "curvlab/harness/xr/views.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <numbers>
+#include <set>
+
+namespace {
+
+using namespace curvlab::xr;
+
+TEST(XrResultName, NamesWithoutAnInstance) {
+  EXPECT_EQ(result_name(XR_ERROR_RUNTIME_UNAVAILABLE), "XR_ERROR_RUNTIME_UNAVAILABLE");
+  EXPECT_EQ(static_cast<int>(XR_ERROR_RUNTIME_UNAVAILABLE), -51);
+  EXPECT_EQ(result_name(XR_ERROR_FORM_FACTOR_UNAVAILABLE), "XR_ERROR_FORM_FACTOR_UNAVAILABLE");
+  EXPECT_EQ(result_name(XR_SESSION_LOSS_PENDING), "XR_SESSION_LOSS_PENDING");
+  EXPECT_EQ(result_name(static_cast<XrResult>(-987654)), "XR_RESULT_-987654");
+}
+
+// This machine has no OpenXR runtime (DESIGN.md §9). Where one is installed
+// the probe may succeed, and this test has nothing to check.
+TEST(XrProbe, WithoutARuntimeFailsCleanlyAndWritesNothing) {
+  const auto dir = std::filesystem::temp_directory_path() / "curvlab_xr_probe_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto old = std::filesystem::current_path();
+  std::filesystem::current_path(dir);
+  const auto result = probe("curvlab test");
+  std::filesystem::current_path(old);
+  const bool empty = std::filesystem::is_empty(dir);
+  std::filesystem::remove_all(dir);
+  if (std::holds_alternative<ProbeReport>(result)) GTEST_SKIP() << "an OpenXR runtime is present";
+  const auto& f = std::get<XrFailure>(result);
+  EXPECT_EQ(f.result, XR_ERROR_RUNTIME_UNAVAILABLE);
+  EXPECT_NE(f.message.find("XR_ERROR_RUNTIME_UNAVAILABLE (-51)"), std::string::npos) << f.message;
+  EXPECT_NE(f.message.find("monado-service"), std::string::npos);
+  EXPECT_NE(f.message.find("SteamVR"), std::string::npos);
+  EXPECT_NE(f.message.find("XR_RUNTIME_JSON"), std::string::npos);
+  EXPECT_TRUE(empty) << "the probe wrote files into the working directory";
+  // Creating the instance directly fails the same way.
+  auto instance = Instance::create("curvlab test");
+  ASSERT_TRUE(std::holds_alternative<XrFailure>(instance));
+  EXPECT_EQ(std::get<XrFailure>(instance).call, "xrCreateInstance");
+  EXPECT_EQ(std::get<XrFailure>(instance).result, XR_ERROR_RUNTIME_UNAVAILABLE);
+}
+
+TEST(SessionState, NumberingMatchesOpenXR) {
+  EXPECT_EQ(static_cast<int>(SessionState::Idle), XR_SESSION_STATE_IDLE);
+  EXPECT_EQ(static_cast<int>(SessionState::Ready), XR_SESSION_STATE_READY);
+  EXPECT_EQ(static_cast<int>(SessionState::Synchronized), XR_SESSION_STATE_SYNCHRONIZED);
+  EXPECT_EQ(static_cast<int>(SessionState::Visible), XR_SESSION_STATE_VISIBLE);
+  EXPECT_EQ(static_cast<int>(SessionState::Focused), XR_SESSION_STATE_FOCUSED);
+  EXPECT_EQ(static_cast<int>(SessionState::Stopping), XR_SESSION_STATE_STOPPING);
+  EXPECT_EQ(static_cast<int>(SessionState::LossPending), XR_SESSION_STATE_LOSS_PENDING);
+  EXPECT_EQ(static_cast<int>(SessionState::Exiting), XR_SESSION_STATE_EXITING);
+}
+
+TEST(SessionState, FullLifecycleWithFocusLossAndResume) {
+  SessionStateMachine m;
+  auto u = m.on_state_changed(SessionState::Idle);
+  EXPECT_EQ(u.mode, RunMode::WaitForRuntime);
+  u = m.on_state_changed(SessionState::Ready);
+  EXPECT_TRUE(u.begin_session);
+  EXPECT_EQ(u.mode, RunMode::FramesOnly);
+  EXPECT_TRUE(m.session_running());
+  u = m.on_state_changed(SessionState::Synchronized);
+  EXPECT_EQ(u.mode, RunMode::FramesOnly);
+  u = m.on_state_changed(SessionState::Visible);
+  EXPECT_EQ(u.mode, RunMode::FramesOnly);  // not yet focused: nothing to pause
+  EXPECT_TRUE(u.message.empty());
+  u = m.on_state_changed(SessionState::Focused);
+  EXPECT_EQ(u.mode, RunMode::Running);
+  // The participant opens the system menu: pause with a message.
+  u = m.on_state_changed(SessionState::Visible);
+  EXPECT_EQ(u.mode, RunMode::Paused);
+  EXPECT_NE(u.message.find("lost input focus"), std::string::npos);
+  u = m.on_state_changed(SessionState::Focused);
+  EXPECT_EQ(u.mode, RunMode::Running);
+  EXPECT_NE(u.message.find("resuming"), std::string::npos);
+  // Headset off: FOCUSED → VISIBLE → SYNCHRONIZED stays paused.
+  m.on_state_changed(SessionState::Visible);
+  u = m.on_state_changed(SessionState::Synchronized);
+  EXPECT_EQ(u.mode, RunMode::Paused);
+  u = m.on_state_changed(SessionState::Stopping);
+  EXPECT_TRUE(u.end_session);
+  EXPECT_EQ(u.mode, RunMode::Stopped);
+  EXPECT_FALSE(m.session_running());
+  u = m.on_state_changed(SessionState::Idle);
+  EXPECT_EQ(u.mode, RunMode::Stopped);
+  u = m.on_state_changed(SessionState::Exiting);
+  EXPECT_EQ(u.mode, RunMode::Exit);
+  EXPECT_FALSE(u.end_session);
+  EXPECT_FALSE(u.unexpected);
+}
+
+TEST(SessionState, LossPendingEndsARunningSession) {
+  SessionStateMachine m;
+  for (auto s : {SessionState::Idle, SessionState::Ready, SessionState::Synchronized,
+                 SessionState::Visible, SessionState::Focused})
+    m.on_state_changed(s);
+  const auto u = m.on_state_changed(SessionState::LossPending);
+  EXPECT_TRUE(u.lost);
+  EXPECT_TRUE(u.end_session);
+  EXPECT_EQ(u.mode, RunMode::Exit);
+  EXPECT_FALSE(u.unexpected);
+  EXPECT_NE(u.message.find("can be resumed"), std::string::npos);
+}
+
+TEST(SessionState, UnexpectedTransitionIsFlaggedButFollowed) {
+  SessionStateMachine m;
+  m.on_state_changed(SessionState::Idle);
+  const auto u = m.on_state_changed(SessionState::Focused);  // skipped READY…VISIBLE
+  EXPECT_TRUE(u.unexpected);
+  EXPECT_NE(u.message.find("IDLE → FOCUSED"), std::string::npos);
+  EXPECT_EQ(u.mode, RunMode::Running);
+  // READY twice does not begin twice.
+  SessionStateMachine n;
+  n.on_state_changed(SessionState::Idle);
+  EXPECT_TRUE(n.on_state_changed(SessionState::Ready).begin_session);
+  EXPECT_FALSE(n.on_state_changed(SessionState::Ready).begin_session);
+}
+
+bool valid_name(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.';
+  });
+}
+
+TEST(Actions, BindingsExistInTheirProfilesAndCoverTheActions) {
+  const ActionSetDef set = curvlab_action_set();
+  EXPECT_TRUE(valid_name(set.name));
+  std::set<std::string> names;
+  for (const auto& a : set.actions) {
+    EXPECT_TRUE(valid_name(a.name)) << a.name;
+    names.insert(a.name);
+  }
+  ASSERT_EQ(set.profiles.size(), 2u);
+  for (const auto& p : set.profiles) {
+    const auto offered = profile_input_paths(p.profile);
+    ASSERT_FALSE(offered.empty()) << p.profile;
+    for (const auto& b : p.bindings) {
+      EXPECT_TRUE(names.count(b.action)) << b.action;
+      EXPECT_NE(std::find(offered.begin(), offered.end(), b.path), offered.end())
+          << p.profile << " has no " << b.path;
+      // A binding's hand must be one of its action's subaction paths.
+      const auto& action = *std::find_if(set.actions.begin(), set.actions.end(),
+                                         [&](const ActionDef& a) { return a.name == b.action; });
+      EXPECT_TRUE(std::any_of(action.subaction_paths.begin(), action.subaction_paths.end(),
+                              [&](const std::string& hand) { return b.path.rfind(hand, 0) == 0; }))
+          << b.path;
+    }
+  }
+  // The Touch profile binds every action, both poses for both hands.
+  const auto& touch = set.profiles[1];
+  EXPECT_EQ(touch.profile, "/interaction_profiles/oculus/touch_controller");
+  std::set<std::string> bound;
+  for (const auto& b : touch.bindings) bound.insert(b.action);
+  EXPECT_EQ(bound, names);
+}
+
+TEST(Views, QuaternionOrderAndFov) {
+  // 90° about +y: the OpenXR forward −z turns to −x.
+  const float h = static_cast<float>(std::sqrt(0.5));
+  XrPosef pose{};
+  pose.orientation = {0.0f, h, 0.0f, h};  // x, y, z, w
+  pose.position = {0.1f, 1.6f, -0.2f};
+  const LabPose lab = to_lab_pose(pose);
+  const glm::dvec3 forward = lab.orientation * glm::dvec3(0.0, 0.0, -1.0);
+  EXPECT_NEAR(forward.x, -1.0, 1e-6);
+  EXPECT_NEAR(forward.z, 0.0, 1e-6);
+  EXPECT_NEAR(lab.position_m.y, 1.6, 1e-6);
+  EXPECT_NEAR(lab.position_m.z, -0.2, 1e-6);
+  XrFovf fov{-0.9f, 0.8f, 0.85f, -0.95f};  // left, right, up, down
+  const AsymmetricFov f = to_fov(fov);
+  EXPECT_NEAR(f.left_rad, -0.9, 1e-6);
+  EXPECT_NEAR(f.down_rad, -0.95, 1e-6);
+  const FrustumTangents t = tangents(f);
+  EXPECT_NEAR(t.left, std::tan(-0.9), 1e-6);
+  EXPECT_NEAR(t.up, std::tan(0.85), 1e-6);
+}
+
+}  // namespace
