@@ -81,8 +81,13 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
       const std::string sub = alnum_label(s.pseudonym);
       if (std::find(seen_subjects.begin(), seen_subjects.end(), sub) == seen_subjects.end()) {
         seen_subjects.push_back(sub);
-        participants += "sub-" + sub + "\t" + (s.ipd_m ? number(*s.ipd_m) : "n/a") + "\t" +
-                        s.dominant_eye + "\n";
+        participants += "sub-";
+        participants += sub;
+        participants += '\t';
+        participants += s.ipd_m ? number(*s.ipd_m) : std::string("n/a");
+        participants += '\t';
+        participants += s.dominant_eye;
+        participants += '\n';
       }
       const std::string ses = std::to_string(s.session_number);
       const std::string task = alnum_label(s.protocol_name);
@@ -114,12 +119,19 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
           std::snprintf(latency, sizeof latency, "%.9f",
                         static_cast<double>(t - times.front()) * 1e-9);
           tsv += latency;
-          for (int c = 1; c <= 7; ++c) tsv += "\t" + number(rows.column_double(c));
-          tsv += "\t" + std::to_string(rows.column_int(8));
-          tsv += "\t" + std::to_string(rows.column_int(9));
-          for (int c = 10; c <= 11; ++c)
-            tsv += "\t" + (rows.is_null(c) ? std::string("n/a") : number(rows.column_double(c)));
-          tsv += "\n";
+          for (int c = 1; c <= 7; ++c) {
+            tsv += '\t';
+            tsv += number(rows.column_double(c));
+          }
+          for (int c = 8; c <= 9; ++c) {
+            tsv += '\t';
+            tsv += std::to_string(rows.column_int(c));
+          }
+          for (int c = 10; c <= 11; ++c) {
+            tsv += '\t';
+            tsv += rows.is_null(c) ? std::string("n/a") : number(rows.column_double(c));
+          }
+          tsv += '\n';
         }
         const std::size_t n = times.size();
         double duration_s = n > 1 ? static_cast<double>(times.back() - times.front()) * 1e-9 : 0.0;
@@ -137,10 +149,16 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
         if (auto e = write_text(root + "/" + base + "_motion.tsv", tsv)) return *e;
 
         std::string ch_tsv = "name\tcomponent\ttype\ttracked_point\tunits\treference_frame\tdescription\n";
-        for (const auto& c : channels)
-          ch_tsv += c.name + "\t" + c.component + "\t" + c.type + "\t" + c.tracked_point + "\t" +
-                    c.units + "\t" + (c.type == "POS" || c.type == "ORNT" ? "lab" : "n/a") + "\t" +
-                    tsv_field(c.description) + "\n";
+        for (const auto& c : channels) {
+          const std::string frame = c.type == "POS" || c.type == "ORNT" ? "lab" : "n/a";
+          for (const std::string* field :
+               {&c.name, &c.component, &c.type, &c.tracked_point, &c.units, &frame}) {
+            ch_tsv += *field;
+            ch_tsv += '\t';
+          }
+          ch_tsv += tsv_field(c.description);
+          ch_tsv += '\n';
+        }
         if (auto e = write_text(root + "/" + base + "_channels.tsv", ch_tsv)) return *e;
 
         OJson ch_json;
@@ -184,7 +202,10 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
 
         std::string acq = s.started_utc;
         if (!acq.empty() && acq.back() == 'Z') acq.pop_back();
-        scans += base.substr(ses_dir.size() + 1) + "_motion.tsv\t" + acq + "\n";
+        scans += base.substr(ses_dir.size() + 1);
+        scans += "_motion.tsv\t";
+        scans += acq;
+        scans += '\n';
         for (const char* suffix : {"_motion.tsv", "_motion.json", "_channels.tsv", "_channels.json"})
           summary.files.push_back("bids/" + base + suffix);
         summary.rows += n;
