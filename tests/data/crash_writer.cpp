@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   rec.renderer_driver = "none";
   const auto session = store.create_session(rec).value();
   BlockPlan block{"main", false, "{}", {}};
-  for (int i = 0; i < 100000; ++i)
+  for (int i = 0; i < 2000; ++i)
     block.trials.push_back({"{\"i\":" + std::to_string(i) + "}", "{}"});
   (void)store.store_plan(session, {block}).value();
   auto writer = SampleWriter::open(argv[1]).value();

@@ -294,7 +294,7 @@ TEST(Crash, KillNineNeverLosesACommittedTrial) {
   const auto dir = fresh_dir("crash");
   const auto path = (dir / "crash.db").string();
   std::mt19937 rng(12345);
-  std::uniform_int_distribution<int> delay_us(2'000, 60'000);
+  std::uniform_int_distribution<int> delay_us(20'000, 250'000);
   std::int64_t total_checked = 0;
   for (int run = 0; run < 25; ++run) {
     int pipe_fd[2];
