@@ -36,5 +36,6 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 // Registration of each command group (one file each, wired in main.cpp).
 void add_inspect_commands(CLI::App& app);
 void add_devices_commands(CLI::App& app);
+void add_export_commands(CLI::App& app);
 
 }  // namespace curvlab::cli

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   curvlab::cli::add_inspect_commands(app);
   curvlab::cli::add_devices_commands(app);
+  curvlab::cli::add_export_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,57 @@
+// Opening, creating and migrating a curvlab data file (DESIGN.md §7). The
+// schema is data_schema/schema.sql, embedded at build time and executed
+// verbatim; older files are migrated with data_schema/migrations/, newer ones
+// refused.
+#pragma once
+
+#include "curvlab/harness/data/error.hpp"
+#include "curvlab/harness/data/sqlite.hpp"
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace curvlab::data {
+
+// The schema version this build writes (PRAGMA user_version).
+inline constexpr std::int64_t current_schema_version = 2;
+// Marks curvlab files (PRAGMA application_id, ASCII "CVLB").
+inline constexpr std::int64_t curvlab_application_id = 0x43564C42;
+// Free space required before a session may start; below it opening for a
+// session fails with disk_full instead of failing mid-session.
+inline constexpr std::uint64_t min_free_bytes_to_start = 64ull << 20;
+
+// The embedded SQL texts (generated from data_schema/ at build time).
+std::string_view schema_sql();
+// The migration that brings version `to - 1` to `to`; empty when none exists.
+std::string_view migration_sql(std::int64_t to);
+
+enum class OpenMode {
+  create_or_open,  // for running sessions: create if missing, migrate if older,
+                   // check free space and writability
+  open_existing,   // for export: the file must exist; migrates if older
+  read_only,       // inspection: never writes; an older file is refused
+};
+
+// Owns the connection of one thread (the session thread). WAL mode, foreign
+// keys on, synchronous=FULL so that a committed trial survives power loss.
+// Move-only; not thread-safe (one thread at a time).
+class Database {
+ public:
+  static Expected<Database> open(const std::string& path, OpenMode mode);
+
+  Connection& connection() { return connection_; }
+  const std::string& path() const { return connection_.path(); }
+  std::int64_t schema_version() { return connection_.query_int("PRAGMA user_version"); }
+  // "ok" when PRAGMA integrity_check passes, else its first message.
+  std::string integrity_check();
+
+ private:
+  explicit Database(Connection connection) : connection_(std::move(connection)) {}
+  Connection connection_;
+};
+
+// The connection settings every curvlab connection uses (WAL, busy timeout…).
+void configure_connection(Connection& connection, bool synchronous_full);
+
+}  // namespace curvlab::data

@@ -1,0 +1,33 @@
+// Exporters: read a curvlab file and write analysis formats. They are kept
+// apart from the logger and the algorithms (STYLE.md, "Algorithms separate
+// from file formats"); see docs/data.md for the layouts.
+#pragma once
+
+#include "curvlab/harness/data/database.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::data {
+
+struct ExportOptions {
+  std::string out_dir;                    // created if missing
+  std::optional<std::int64_t> session_id; // nullopt: every session
+};
+
+struct ExportSummary {
+  std::vector<std::string> files;  // written, relative to out_dir
+  std::size_t rows = 0;            // data rows written (trials or samples)
+};
+
+// One row per trial, wide: fixed columns, then cond_<name> and stim_<name>
+// columns in order of first appearance. Missing values are NA. → trials.csv
+Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& options);
+// Psych-DS dataset under out_dir/psychds/.
+Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& options);
+// BIDS motion dataset under out_dir/bids/ (one tracking system per device).
+Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& options);
+
+}  // namespace curvlab::data

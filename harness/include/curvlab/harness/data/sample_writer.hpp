@@ -1,0 +1,90 @@
+// The asynchronous half of the logger: tracking samples and frame records go
+// from the frame loop into bounded lock-free rings, and a writer thread with
+// its own connection commits them in batched transactions (DESIGN.md §7).
+//
+// Back-pressure policy: the frame loop never blocks and never touches the
+// disk. push_*() copies the record into a fixed-capacity single-producer /
+// single-consumer ring and returns at once; when a ring is full the new
+// record is dropped and counted (stats().dropped_*), and the writer stores
+// each change of the drop counts as a "logger_drops" event. Memory is
+// bounded by the capacities in SampleWriterConfig plus one batch per ring
+// held by the writer. If a batch cannot be written (disk full, read-only,
+// lock held too long) the writer keeps that batch, stops draining, reports
+// paused() with the reason, and retries every retry interval; the rings
+// absorb the meantime and then drop. A kill at any instant loses at most the
+// records not yet committed: the rings plus one batch.
+//
+// Thread-safety: push_tracking() and push_frame() must be called from one
+// producer thread (the frame loop). flush(), stats(), paused() and
+// last_error() may be called from any thread. The writer thread is owned by
+// this object; the destructor writes what is left (bounded by
+// shutdown_timeout) and joins it. Move is not offered: the thread refers to
+// the object.
+#pragma once
+
+#include "curvlab/harness/data/error.hpp"
+#include "curvlab/harness/data/records.hpp"
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace curvlab::data {
+
+struct SampleWriterConfig {
+  // 32768 samples ≈ 10.9 s of 3 devices at 1 kHz (about 9.4 MiB).
+  std::size_t tracking_capacity = 1u << 15;
+  // 4096 frames ≈ 45 s at 90 Hz.
+  std::size_t frame_capacity = 1u << 12;
+  // Most records one transaction takes from each ring.
+  std::size_t max_batch = 8192;
+  // How often the writer wakes to drain the rings when not asked to flush.
+  std::chrono::milliseconds batch_interval{20};
+  // How long the writer waits before retrying a failed batch.
+  std::chrono::milliseconds retry_interval{500};
+  std::chrono::milliseconds shutdown_timeout{5000};
+};
+
+struct SampleWriterStats {
+  std::uint64_t pushed_tracking = 0;
+  std::uint64_t pushed_frames = 0;
+  std::uint64_t dropped_tracking = 0;
+  std::uint64_t dropped_frames = 0;
+  std::uint64_t committed_tracking = 0;
+  std::uint64_t committed_frames = 0;
+  std::uint64_t transactions = 0;
+  std::uint64_t failed_transactions = 0;
+  double writer_cpu_s = 0.0;  // CPU time of the writer thread
+};
+
+class SampleWriter {
+ public:
+  // Opens its own connection to an existing, current curvlab file.
+  static Expected<std::unique_ptr<SampleWriter>> open(const std::string& path,
+                                                      SampleWriterConfig config = {});
+  ~SampleWriter();
+  SampleWriter(const SampleWriter&) = delete;
+  SampleWriter& operator=(const SampleWriter&) = delete;
+
+  // Producer side: never blocks; false when the record was dropped.
+  bool push_tracking(const TrackingSample& sample) noexcept;
+  bool push_frame(const FrameRecord& frame) noexcept;
+
+  // Blocks until every record pushed before the call is committed (call it at
+  // a trial's end, not inside the frame loop), or returns the writer's error
+  // when it is paused, or a busy error after `timeout`.
+  Expected<Done> flush(std::chrono::milliseconds timeout = std::chrono::seconds(10));
+
+  SampleWriterStats stats() const;
+  bool paused() const;
+  std::string last_error() const;
+
+  struct Impl;
+
+ private:
+  explicit SampleWriter(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace curvlab::data

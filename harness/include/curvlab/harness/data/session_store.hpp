@@ -1,0 +1,62 @@
+// The synchronous half of the logger: protocol, participant, session and
+// trial rows. Every call that changes data commits its own transaction
+// before it returns, so a completed trial is on disk before the next trial
+// starts (DESIGN.md §7). A failure (disk full, read-only) is returned, the
+// database is left as it was, and the same call may be retried after the
+// cause is fixed: complete_trial is idempotent.
+#pragma once
+
+#include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/records.hpp"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::data {
+
+// Owns a Database and its prepared statements. Move-only; not thread-safe:
+// use it from the session (trial) thread only. Tracking samples and frame
+// records go through SampleWriter instead.
+class SessionStore {
+ public:
+  explicit SessionStore(Database db);
+  SessionStore(SessionStore&&) noexcept;
+  SessionStore& operator=(SessionStore&&) noexcept;
+  ~SessionStore();
+
+  Database& database() { return db_; }
+
+  // Stores the full protocol text with its SHA-256; the same text twice
+  // returns the same id.
+  Expected<std::int64_t> add_protocol(const std::string& name, const std::string& text,
+                                      const std::string& source_path = {});
+  // Returns the existing id when the pseudonym is already known.
+  Expected<std::int64_t> add_participant(const ParticipantRecord& participant);
+  Expected<std::int64_t> create_session(const SessionRecord& session);
+  // Stores every block and trial of the session in one transaction; the
+  // returned ids follow the plan's order. Fails if the session has a plan.
+  Expected<std::vector<std::int64_t>> store_plan(std::int64_t session_id,
+                                                 const std::vector<BlockPlan>& blocks);
+  // The first trial (by trial_index) that is pending or was started but not
+  // completed — where a resumed session continues. nullopt: all done.
+  Expected<std::optional<PlannedTrial>> next_incomplete_trial(std::int64_t session_id);
+  // Marks the trial running and counts the attempt; returns the attempt number.
+  Expected<std::int64_t> begin_trial(std::int64_t trial_id);
+  // Commits the response (and its staircase step) in one transaction.
+  Expected<Done> complete_trial(const TrialResult& result);
+  Expected<Done> skip_trial(std::int64_t trial_id);
+  Expected<std::int64_t> record_event(const EventRecord& event);
+  Expected<Done> set_session_status(std::int64_t session_id, SessionStatus status);
+  // Sets the final status and the end time.
+  Expected<Done> close_session(std::int64_t session_id, SessionStatus status);
+  Expected<std::int64_t> count_trials(std::int64_t session_id, const std::string& status);
+
+ private:
+  struct Statements;
+  Database db_;
+  std::unique_ptr<Statements> stmts_;
+};
+
+}  // namespace curvlab::data

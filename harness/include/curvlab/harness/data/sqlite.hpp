@@ -1,0 +1,125 @@
+// Thin RAII layer over the SQLite C API: every sqlite3 and sqlite3_stmt handle
+// is owned by exactly one move-only object, and a Transaction rolls back
+// unless committed. SQLite failures inside the data layer are thrown as
+// SqliteFailure and turned into DataError values at the public API boundary.
+//
+// Thread-safety: none of these types may be used from two threads at once;
+// a Connection (and its statements) belongs to one thread at a time.
+#pragma once
+
+#include "curvlab/harness/data/error.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace curvlab::data {
+
+struct SqliteFailure : std::runtime_error {
+  SqliteFailure(int result_code, const std::string& message)
+      : std::runtime_error(message), code(result_code) {}
+  int code;  // the primary SQLite result code (SQLITE_FULL, SQLITE_READONLY, …)
+};
+
+// Maps a failure to the DataError kind a person can act on; `path` names the file.
+DataError to_data_error(const SqliteFailure& failure, const std::string& path);
+
+struct SqliteCloser {
+  void operator()(sqlite3* db) const noexcept;
+};
+struct StatementFinalizer {
+  void operator()(sqlite3_stmt* stmt) const noexcept;
+};
+using ConnectionHandle = std::unique_ptr<sqlite3, SqliteCloser>;
+using StatementHandle = std::unique_ptr<sqlite3_stmt, StatementFinalizer>;
+
+enum class OpenFlags { read_write_create, read_write, read_only };
+
+// Owns one sqlite3 connection. Move-only.
+class Connection {
+ public:
+  // Throws SqliteFailure.
+  static Connection open(const std::string& path, OpenFlags flags);
+
+  sqlite3* get() const { return handle_.get(); }
+  const std::string& path() const { return path_; }
+
+  // Runs one or more statements without results (DDL, PRAGMA). Throws.
+  void exec(std::string_view sql);
+  // Runs a single-value query such as "PRAGMA user_version". Throws.
+  std::int64_t query_int(std::string_view sql);
+  std::int64_t last_insert_rowid() const;
+  int changes() const;
+  [[noreturn]] void fail(int code, std::string_view context) const;
+
+ private:
+  Connection(ConnectionHandle handle, std::string path)
+      : handle_(std::move(handle)), path_(std::move(path)) {}
+  ConnectionHandle handle_;
+  std::string path_;
+};
+
+// A prepared statement. Bind indices are 1-based as in SQLite. Move-only; the
+// Connection must outlive it.
+class Statement {
+ public:
+  Statement(Connection& db, std::string_view sql);  // throws
+
+  Statement& bind(int index, std::int64_t value);
+  Statement& bind(int index, int value) { return bind(index, std::int64_t{value}); }
+  Statement& bind(int index, double value);
+  Statement& bind(int index, std::string_view value);  // copied (SQLITE_TRANSIENT)
+  Statement& bind_static(int index, std::string_view value);  // must outlive the step
+  Statement& bind_blob(int index, std::span<const std::byte> bytes);
+  Statement& bind_null(int index);
+  template <class T>
+  Statement& bind(int index, const std::optional<T>& value) {
+    if (value) return bind(index, *value);
+    return bind_null(index);
+  }
+
+  // Returns true while a row is available, false when done. Throws on error.
+  bool step();
+  // Runs to completion and resets (for INSERT / UPDATE).
+  void run();
+  void reset();
+
+  bool is_null(int column) const;
+  std::int64_t column_int(int column) const;
+  double column_double(int column) const;
+  std::string column_text(int column) const;
+  std::optional<std::int64_t> column_opt_int(int column) const;
+  std::optional<double> column_opt_double(int column) const;
+  std::optional<std::string> column_opt_text(int column) const;
+  std::span<const std::byte> column_blob(int column) const;
+  int column_count() const;
+  std::string column_name(int column) const;
+
+ private:
+  Connection* db_;
+  StatementHandle handle_;
+};
+
+// BEGIN IMMEDIATE on construction; ROLLBACK in the destructor unless commit()
+// succeeded. Never throws from the destructor.
+class Transaction {
+ public:
+  explicit Transaction(Connection& db);  // throws
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+  ~Transaction();
+  void commit();  // throws; after a failed commit the destructor rolls back
+
+ private:
+  Connection* db_;
+  bool open_ = true;
+};
+
+}  // namespace curvlab::data

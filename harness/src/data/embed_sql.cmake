@@ -1,0 +1,30 @@
+# Writes a C++ source holding the data_schema/ SQL texts as raw string
+# literals, so the program creates exactly the schema in those files.
+# Inputs: SCHEMA_DIR, OUTPUT.
+file(READ "${SCHEMA_DIR}/schema.sql" schema)
+file(READ "${SCHEMA_DIR}/migrations/0002_from_v1.sql" m2)
+foreach(text IN ITEMS "${schema}" "${m2}")
+  string(FIND "${text}" ")curvlab_sql\"" clash)
+  if(NOT clash EQUAL -1)
+    message(FATAL_ERROR "SQL text contains the raw-string delimiter")
+  endif()
+endforeach()
+file(WRITE "${OUTPUT}.tmp" "// Generated from data_schema/ by embed_sql.cmake; do not edit.
+#include \"curvlab/harness/data/database.hpp\"
+
+namespace curvlab::data {
+namespace {
+constexpr std::string_view k_schema = R\"curvlab_sql(${schema})curvlab_sql\";
+constexpr std::string_view k_migration_2 = R\"curvlab_sql(${m2})curvlab_sql\";
+}  // namespace
+
+std::string_view schema_sql() { return k_schema; }
+
+std::string_view migration_sql(std::int64_t to) {
+  if (to == 2) return k_migration_2;
+  return {};
+}
+
+}  // namespace curvlab::data
+")
+file(COPY_FILE "${OUTPUT}.tmp" "${OUTPUT}" ONLY_IF_DIFFERENT)

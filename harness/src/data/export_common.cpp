@@ -1,0 +1,170 @@
+#include "export_common.hpp"
+
+#include "curvlab/harness/data/sqlite.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+namespace curvlab::data::exporting {
+
+namespace fs = std::filesystem;
+
+std::optional<DataError> make_dir(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    return DataError{DataError::Kind::io, "cannot create output folder " + dir + ": " +
+                                              (ec ? ec.message() : "not a folder")};
+  return std::nullopt;
+}
+
+std::optional<DataError> write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return DataError{DataError::Kind::io, "cannot write " + path};
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  out.close();
+  if (!out) return DataError{DataError::Kind::io, "writing " + path + " failed (disk full?)"};
+  return std::nullopt;
+}
+
+std::string csv_field(const std::string& v) {
+  if (v.find_first_of(",\"\r\n") == std::string::npos) return v;
+  std::string out = "\"";
+  for (char c : v) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string tsv_field(const std::string& v) {
+  std::string out = v;
+  for (char& c : out)
+    if (c == '\t' || c == '\n' || c == '\r') c = ' ';
+  return out;
+}
+
+std::string alnum_label(const std::string& text) {
+  std::string out;
+  for (char c : text)
+    if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) out += c;
+  return out.empty() ? "unnamed" : out;
+}
+
+Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptions& options) {
+  try {
+    Statement s(db.connection(),
+                "SELECT s.session_id, s.session_number, p.pseudonym, pr.name, pr.sha256, "
+                "s.software_version, s.started_utc, p.ipd_m, p.dominant_eye FROM sessions s "
+                "JOIN participants p ON p.participant_id = s.participant_id "
+                "JOIN protocols pr ON pr.protocol_id = s.protocol_id "
+                "WHERE ?1 IS NULL OR s.session_id = ?1 ORDER BY s.session_id");
+    s.bind(1, options.session_id);
+    std::vector<SessionInfo> out;
+    while (s.step()) {
+      SessionInfo info;
+      info.session_id = s.column_int(0);
+      info.session_number = s.column_int(1);
+      info.pseudonym = s.column_text(2);
+      info.protocol_name = s.column_text(3);
+      info.protocol_sha256 = s.column_text(4);
+      info.software_version = s.column_text(5);
+      info.started_utc = s.column_text(6);
+      info.ipd_m = s.column_opt_double(7);
+      info.dominant_eye = s.column_text(8);
+      out.push_back(std::move(info));
+    }
+    if (out.empty() && options.session_id)
+      return DataError{DataError::Kind::not_found,
+                       db.path() + ": no session with id " + std::to_string(*options.session_id)};
+    return out;
+  } catch (const SqliteFailure& f) {
+    return to_data_error(f, db.path());
+  }
+}
+
+namespace {
+
+Cell json_cell(const nlohmann::ordered_json& v) {
+  if (v.is_null()) return std::nullopt;
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_boolean()) return std::string(v.get<bool>() ? "TRUE" : "FALSE");
+  return v.dump();
+}
+
+}  // namespace
+
+Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options) {
+  TrialTable table;
+  table.columns = {
+      {"session_id", "Database id of the session", ""},
+      {"participant", "Participant pseudonym (no identifying data)", ""},
+      {"session_number", "Session number of this participant, from 1", ""},
+      {"protocol_sha256", "SHA-256 of the protocol text the session ran", ""},
+      {"block_index", "Block position in the session, from 0", ""},
+      {"block_name", "Block name from the protocol", ""},
+      {"is_practice", "1 for practice blocks, 0 otherwise", ""},
+      {"trial_index", "Trial position in the session, from 0", ""},
+      {"trial_in_block", "Trial position in its block, from 0", ""},
+      {"status", "pending, running, completed, skipped or aborted", ""},
+      {"attempt", "How many times the trial was started (more than 1 after a resume)", ""},
+      {"onset_ns", "Stimulus onset on the session's monotonic clock", "ns"},
+      {"response_ns", "Response time stamp on the session's monotonic clock", "ns"},
+      {"rt_ns", "Response time: response_ns minus onset_ns", "ns"},
+      {"response", "The participant's response", ""},
+      {"response_device", "Device that gave the response", ""},
+      {"completed_utc", "Wall-clock time the trial was committed (UTC, ISO 8601)", ""},
+  };
+  const std::size_t fixed = table.columns.size();
+  try {
+    Statement s(db.connection(),
+                "SELECT t.session_id, p.pseudonym, se.session_number, pr.sha256, b.block_index, "
+                "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.attempt, "
+                "t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
+                "t.completed_utc, t.conditions, t.stimulus FROM trials t "
+                "JOIN sessions se ON se.session_id = t.session_id "
+                "JOIN participants p ON p.participant_id = se.participant_id "
+                "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
+                "JOIN blocks b ON b.block_id = t.block_id "
+                "WHERE ?1 IS NULL OR t.session_id = ?1 ORDER BY t.session_id, t.trial_index");
+    s.bind(1, options.session_id);
+    std::vector<std::string> cond_names, stim_names;
+    std::map<std::string, std::size_t> cond_pos, stim_pos;
+    std::vector<std::pair<nlohmann::ordered_json, nlohmann::ordered_json>> extras;
+    while (s.step()) {
+      std::vector<Cell> row;
+      for (int c = 0; c < static_cast<int>(fixed); ++c) row.push_back(s.column_opt_text(c));
+      auto cond = nlohmann::ordered_json::parse(s.column_text(17), nullptr, false);
+      auto stim = nlohmann::ordered_json::parse(s.column_text(18), nullptr, false);
+      for (auto [obj, names, pos] : {std::tie(cond, cond_names, cond_pos),
+                                     std::tie(stim, stim_names, stim_pos)}) {
+        if (!obj.is_object()) continue;
+        for (auto it = obj.begin(); it != obj.end(); ++it)
+          if (pos.emplace(it.key(), names.size()).second) names.push_back(it.key());
+      }
+      table.rows.push_back(std::move(row));
+      table.row_session.push_back(s.column_int(0));
+      extras.emplace_back(std::move(cond), std::move(stim));
+    }
+    for (const auto& n : cond_names)
+      table.columns.push_back({"cond_" + n, "Condition value \"" + n + "\" from the protocol", ""});
+    for (const auto& n : stim_names)
+      table.columns.push_back({"stim_" + n, "Stimulus parameter \"" + n + "\" from the protocol", ""});
+    for (std::size_t r = 0; r < table.rows.size(); ++r) {
+      auto& row = table.rows[r];
+      const auto& [cond, stim] = extras[r];
+      for (const auto& n : cond_names)
+        row.push_back(cond.is_object() && cond.contains(n) ? json_cell(cond[n]) : std::nullopt);
+      for (const auto& n : stim_names)
+        row.push_back(stim.is_object() && stim.contains(n) ? json_cell(stim[n]) : std::nullopt);
+    }
+  } catch (const SqliteFailure& f) {
+    return to_data_error(f, db.path());
+  }
+  return table;
+}
+
+}  // namespace curvlab::data::exporting

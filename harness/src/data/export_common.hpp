@@ -1,0 +1,52 @@
+// Shared pieces of the exporters (private to curvlab_data).
+#pragma once
+
+#include "curvlab/harness/data/export.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::data::exporting {
+
+struct Column {
+  std::string name;
+  std::string description;
+  std::string unit;  // empty: dimensionless or text
+};
+
+using Cell = std::optional<std::string>;  // nullopt: missing
+
+struct SessionInfo {
+  std::int64_t session_id = 0;
+  std::int64_t session_number = 0;
+  std::string pseudonym;
+  std::string protocol_name;
+  std::string protocol_sha256;
+  std::string software_version;
+  std::string started_utc;
+  std::optional<double> ipd_m;
+  std::string dominant_eye;
+};
+
+struct TrialTable {
+  std::vector<Column> columns;
+  std::vector<std::vector<Cell>> rows;
+  std::vector<std::int64_t> row_session;  // session id of each row
+};
+
+// Sessions selected by the options; not_found when --session names none.
+Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptions& options);
+Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options);
+
+// Creates the folder (and parents); io error naming it on failure.
+std::optional<DataError> make_dir(const std::string& dir);
+// Writes the whole file or returns an io error naming it.
+std::optional<DataError> write_text(const std::string& path, const std::string& text);
+
+std::string csv_field(const std::string& value);  // RFC 4180 quoting when needed
+std::string tsv_field(const std::string& value);  // tabs and newlines become spaces
+// Letters and digits only (BIDS labels, Psych-DS keyword values).
+std::string alnum_label(const std::string& text);
+
+}  // namespace curvlab::data::exporting

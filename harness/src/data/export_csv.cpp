@@ -1,0 +1,42 @@
+// Wide trial CSV: one row per trial, header row, NA for missing values (read
+// as missing by both R's read.csv and pandas.read_csv).
+#include "export_common.hpp"
+
+namespace curvlab::data {
+
+using namespace exporting;
+
+namespace exporting {
+std::string render_csv(const TrialTable& table, std::optional<std::int64_t> only_session) {
+  std::string out;
+  for (std::size_t c = 0; c < table.columns.size(); ++c) {
+    if (c) out += ',';
+    out += csv_field(table.columns[c].name);
+  }
+  out += "\r\n";
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    if (only_session && table.row_session[r] != *only_session) continue;
+    const auto& row = table.rows[r];
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      if (c) out += ',';
+      out += row[c] ? csv_field(*row[c]) : std::string("NA");
+    }
+    out += "\r\n";
+  }
+  return out;
+}
+}  // namespace exporting
+
+Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& options) {
+  auto sessions = load_sessions(db, options);
+  if (!sessions) return sessions.error();
+  auto table = load_trial_table(db, options);
+  if (!table) return table.error();
+  if (auto e = make_dir(options.out_dir)) return *e;
+  const std::string name = "trials.csv";
+  if (auto e = write_text(options.out_dir + "/" + name, render_csv(table.value(), std::nullopt)))
+    return *e;
+  return ExportSummary{{name}, table.value().rows.size()};
+}
+
+}  // namespace curvlab::data

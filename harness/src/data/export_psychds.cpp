@@ -1,0 +1,59 @@
+// Psych-DS: dataset_description.json (schema.org Dataset, JSON-LD) with a
+// PropertyValue in variableMeasured for every column, and one CSV per
+// session in data/, named by keyword-value pairs ending in _data.csv.
+#include "export_common.hpp"
+
+#include "curvlab/harness/version.hpp"
+
+#include <nlohmann/json.hpp>
+
+namespace curvlab::data {
+
+using namespace exporting;
+
+namespace exporting {
+std::string render_csv(const TrialTable& table, std::optional<std::int64_t> only_session);
+}
+
+Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& options) {
+  auto sessions = load_sessions(db, options);
+  if (!sessions) return sessions.error();
+  auto table = load_trial_table(db, options);
+  if (!table) return table.error();
+  const std::string root = options.out_dir + "/psychds";
+  if (auto e = make_dir(root + "/data")) return *e;
+
+  ExportSummary summary;
+  for (const SessionInfo& s : sessions.value()) {
+    const std::string name = "data/study-" + alnum_label(s.protocol_name) + "_subject-" +
+                             alnum_label(s.pseudonym) + "_session-" +
+                             std::to_string(s.session_number) + "_data.csv";
+    if (auto e = write_text(root + "/" + name, render_csv(table.value(), s.session_id))) return *e;
+    summary.files.push_back("psychds/" + name);
+  }
+  summary.rows = table.value().rows.size();
+
+  nlohmann::ordered_json doc;
+  doc["@context"] = "https://schema.org/";
+  doc["@type"] = "Dataset";
+  doc["name"] = "curvlab trial data";
+  doc["description"] =
+      "One row per trial of perception experiments in curved spaces (S3, E3, H3), exported by "
+      "curvlab " + std::string(software_version()) + " from " + db.path() + ". Missing values are NA.";
+  doc["keywords"] = nlohmann::ordered_json::array({"perception", "virtual reality", "curved space"});
+  doc["dateCreated"] = sessions.value().empty() ? "" : sessions.value().front().started_utc;
+  auto& vars = doc["variableMeasured"] = nlohmann::ordered_json::array();
+  for (const Column& c : table.value().columns) {
+    nlohmann::ordered_json v;
+    v["@type"] = "PropertyValue";
+    v["name"] = c.name;
+    v["description"] = c.description;
+    if (!c.unit.empty()) v["unitText"] = c.unit;
+    vars.push_back(std::move(v));
+  }
+  if (auto e = write_text(root + "/dataset_description.json", doc.dump(2) + "\n")) return *e;
+  summary.files.insert(summary.files.begin(), "psychds/dataset_description.json");
+  return summary;
+}
+
+}  // namespace curvlab::data

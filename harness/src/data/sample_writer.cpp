@@ -1,0 +1,339 @@
+#include "curvlab/harness/data/sample_writer.hpp"
+
+#include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/sqlite.hpp"
+
+#include <sqlite3.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <cstring>
+#include <ctime>
+#include <mutex>
+#include <thread>
+#include <type_traits>
+#include <vector>
+
+namespace curvlab::data {
+namespace {
+
+// Single-producer / single-consumer ring of trivially copyable records. The
+// producer only writes head_, the consumer only tail_; acquire/release on
+// them publishes the slot contents. Capacity is rounded up to a power of two.
+template <class T>
+class SpscRing {
+  static_assert(std::is_trivially_copyable_v<T>);
+
+ public:
+  explicit SpscRing(std::size_t capacity) {
+    std::size_t n = 1;
+    while (n < capacity) n <<= 1;
+    slots_.resize(n);
+    mask_ = n - 1;
+  }
+  bool try_push(const T& value) noexcept {
+    const std::size_t head = head_.load(std::memory_order_relaxed);
+    const std::size_t tail = tail_.load(std::memory_order_acquire);
+    if (head - tail > mask_) return false;  // full
+    slots_[head & mask_] = value;
+    head_.store(head + 1, std::memory_order_release);
+    return true;
+  }
+  // Appends up to `max` records to `out`; returns how many.
+  std::size_t pop_into(std::vector<T>& out, std::size_t max) {
+    const std::size_t tail = tail_.load(std::memory_order_relaxed);
+    const std::size_t head = head_.load(std::memory_order_acquire);
+    const std::size_t n = std::min(head - tail, max);
+    for (std::size_t i = 0; i < n; ++i) out.push_back(slots_[(tail + i) & mask_]);
+    tail_.store(tail + n, std::memory_order_release);
+    return n;
+  }
+  bool empty() const {
+    return head_.load(std::memory_order_acquire) == tail_.load(std::memory_order_acquire);
+  }
+
+ private:
+  std::vector<T> slots_;
+  std::size_t mask_ = 0;
+  alignas(64) std::atomic<std::size_t> head_{0};
+  alignas(64) std::atomic<std::size_t> tail_{0};
+};
+
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+constexpr const char* insert_tracking_sql =
+    "INSERT INTO tracking_samples (session_id, trial_id, frame_index, device, t_ns, lab_px_m, "
+    "lab_py_m, lab_pz_m, lab_qx, lab_qy, lab_qz, lab_qw, position_valid, orientation_valid, "
+    "virtual_pose, physical_edge, virtual_edge, laps, anchor_fraction, coherence_error_m, "
+    "coherence_error_rad) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, "
+    "?15, ?16, ?17, ?18, ?19, ?20, ?21)";
+constexpr const char* insert_frame_sql =
+    "INSERT INTO frames (session_id, trial_id, frame_index, t_ns, predicted_display_ns, "
+    "cpu_time_ns, gpu_time_ns, dropped_frames, views, passes, draws, triangles) VALUES (?1, ?2, "
+    "?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)";
+constexpr const char* insert_event_sql =
+    "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) VALUES (?1, NULL, ?2, "
+    "'logger_drops', json_object('dropped_tracking', ?3, 'dropped_frames', ?4))";
+
+}  // namespace
+
+struct SampleWriter::Impl {
+  Impl(Connection c, SampleWriterConfig cfg)
+      : config(cfg),
+        tracking(cfg.tracking_capacity),
+        frames(cfg.frame_capacity),
+        connection(std::move(c)),
+        insert_tracking(connection, insert_tracking_sql),
+        insert_frame(connection, insert_frame_sql),
+        insert_event(connection, insert_event_sql) {
+    pending_tracking.reserve(cfg.max_batch);
+    pending_frames.reserve(cfg.max_batch);
+  }
+
+  SampleWriterConfig config;
+  SpscRing<TrackingSample> tracking;
+  SpscRing<FrameRecord> frames;
+  std::atomic<std::uint64_t> pushed_tracking{0}, pushed_frames{0};
+  std::atomic<std::uint64_t> dropped_tracking{0}, dropped_frames{0};
+  std::atomic<std::uint64_t> committed_tracking{0}, committed_frames{0};
+  std::atomic<std::uint64_t> transactions{0}, failed_transactions{0};
+  std::atomic<double> writer_cpu_s{0.0};
+  std::atomic<bool> is_paused{false};
+
+  // Guards the fields below and the wake-ups; never held during disk I/O.
+  mutable std::mutex mutex;
+  std::condition_variable wake;      // writer waits on it
+  std::condition_variable progress;  // flush() waits on it
+  bool stop = false;
+  std::uint64_t flush_requested = 0;
+  std::uint64_t flush_done = 0;
+  std::uint64_t failure_count = 0;
+  std::string error;
+  DataError::Kind error_kind = DataError::Kind::io;
+
+  // Owned by the writer thread only.
+  Connection connection;
+  Statement insert_tracking, insert_frame, insert_event;
+  std::vector<TrackingSample> pending_tracking;
+  std::vector<FrameRecord> pending_frames;
+  std::uint64_t logged_drops_tracking = 0, logged_drops_frames = 0;
+  std::int64_t last_session_id = 0;
+  std::thread thread;
+
+  void bind_sample(const TrackingSample& s) {
+    auto& st = insert_tracking;
+    st.bind(1, s.session_id);
+    if (s.trial_id >= 0) st.bind(2, s.trial_id); else st.bind_null(2);
+    st.bind(3, s.frame_index).bind_static(4, to_string(s.device)).bind(5, s.t_ns);
+    st.bind(6, s.lab_position_m[0]).bind(7, s.lab_position_m[1]).bind(8, s.lab_position_m[2]);
+    st.bind(9, s.lab_orientation_xyzw[0]).bind(10, s.lab_orientation_xyzw[1]);
+    st.bind(11, s.lab_orientation_xyzw[2]).bind(12, s.lab_orientation_xyzw[3]);
+    st.bind(13, s.position_valid ? 1 : 0).bind(14, s.orientation_valid ? 1 : 0);
+    if (s.has_virtual_pose) {
+      // Little-endian IEEE doubles, column-major (x86-64 and ARM64 byte order).
+      st.bind_blob(15, std::as_bytes(std::span<const double, 16>(s.virtual_pose)));
+    } else {
+      st.bind_null(15);
+    }
+    if (s.has_state) {
+      st.bind(16, std::int64_t{s.state.physical_edge}).bind(17, std::int64_t{s.state.virtual_edge});
+      st.bind(18, s.state.laps).bind(19, s.state.anchor_fraction);
+      st.bind(20, s.state.coherence_error_m).bind(21, s.state.coherence_error_rad);
+    } else {
+      for (int i = 16; i <= 21; ++i) st.bind_null(i);
+    }
+  }
+
+  void bind_frame(const FrameRecord& f) {
+    auto& st = insert_frame;
+    st.bind(1, f.session_id);
+    if (f.trial_id >= 0) st.bind(2, f.trial_id); else st.bind_null(2);
+    st.bind(3, f.frame_index).bind(4, f.t_ns);
+    if (f.predicted_display_ns >= 0) st.bind(5, f.predicted_display_ns); else st.bind_null(5);
+    st.bind(6, f.cpu_time_ns);
+    if (f.gpu_time_ns >= 0) st.bind(7, f.gpu_time_ns); else st.bind_null(7);
+    st.bind(8, std::int64_t{f.dropped_frames}).bind(9, std::int64_t{f.views});
+    st.bind(10, std::int64_t{f.passes}).bind(11, std::int64_t{f.draws}).bind(12, f.triangles);
+  }
+
+  // Writes the pending batch in one transaction; on failure keeps it.
+  bool write_pending() {
+    const std::uint64_t dt = dropped_tracking.load(std::memory_order_relaxed);
+    const std::uint64_t df = dropped_frames.load(std::memory_order_relaxed);
+    const bool log_drops =
+        (dt != logged_drops_tracking || df != logged_drops_frames) && last_session_id > 0;
+    if (pending_tracking.empty() && pending_frames.empty() && !log_drops) return true;
+    try {
+      Transaction txn(connection);
+      for (const auto& s : pending_tracking) {
+        bind_sample(s);
+        insert_tracking.run();
+      }
+      for (const auto& f : pending_frames) {
+        bind_frame(f);
+        insert_frame.run();
+      }
+      if (log_drops) {
+        insert_event.bind(1, last_session_id).bind(2, std::int64_t{0});
+        insert_event.bind(3, static_cast<std::int64_t>(dt)).bind(4, static_cast<std::int64_t>(df));
+        insert_event.run();
+      }
+      txn.commit();
+    } catch (const SqliteFailure& failure) {
+      failed_transactions.fetch_add(1, std::memory_order_relaxed);
+      const DataError e = to_data_error(failure, connection.path());
+      is_paused.store(true, std::memory_order_release);
+      {
+        std::lock_guard lock(mutex);
+        error = "tracking/frame logging paused: " + e.message;
+        error_kind = e.kind;
+        ++failure_count;
+      }
+      progress.notify_all();
+      return false;
+    }
+    if (log_drops) {
+      logged_drops_tracking = dt;
+      logged_drops_frames = df;
+    }
+    transactions.fetch_add(1, std::memory_order_relaxed);
+    committed_tracking.fetch_add(pending_tracking.size(), std::memory_order_relaxed);
+    committed_frames.fetch_add(pending_frames.size(), std::memory_order_relaxed);
+    pending_tracking.clear();
+    pending_frames.clear();
+    is_paused.store(false, std::memory_order_release);
+    return true;
+  }
+
+  void run() {
+    for (;;) {
+      std::uint64_t ticket = 0;
+      bool stopping = false;
+      {
+        std::unique_lock lock(mutex);
+        const auto interval = is_paused.load() ? config.retry_interval : config.batch_interval;
+        wake.wait_for(lock, interval, [&] { return stop || flush_requested != flush_done; });
+        ticket = flush_requested;
+        stopping = stop;
+      }
+      // Drain and write until the rings are empty (or a write fails), so a
+      // flush ticket read above covers everything pushed before it.
+      bool ok = true;
+      for (;;) {
+        if (pending_tracking.empty() && pending_frames.empty()) {
+          tracking.pop_into(pending_tracking, config.max_batch);
+          frames.pop_into(pending_frames, config.max_batch);
+          if (!pending_tracking.empty()) last_session_id = pending_tracking.back().session_id;
+          else if (!pending_frames.empty()) last_session_id = pending_frames.back().session_id;
+        }
+        const bool had_work = !pending_tracking.empty() || !pending_frames.empty();
+        ok = write_pending();
+        if (!ok || !had_work) break;
+      }
+      writer_cpu_s.store(thread_cpu_seconds(), std::memory_order_relaxed);
+      if (ok) {
+        std::lock_guard lock(mutex);
+        flush_done = std::max(flush_done, ticket);
+      }
+      progress.notify_all();
+      if (stopping && (ok || shutdown_deadline_passed())) return;
+    }
+  }
+
+  std::chrono::steady_clock::time_point stop_time{};
+  bool shutdown_deadline_passed() const {
+    return std::chrono::steady_clock::now() - stop_time > config.shutdown_timeout;
+  }
+};
+
+Expected<std::unique_ptr<SampleWriter>> SampleWriter::open(const std::string& path,
+                                                           SampleWriterConfig config) {
+  auto db = Database::open(path, OpenMode::open_existing);
+  if (!db) return db.error();
+  try {
+    Connection c = Connection::open(path, OpenFlags::read_write);
+    // NORMAL: a batch commit does not wait for fsync; WAL keeps the file
+    // consistent after a crash, and the next trial commit (FULL) syncs the
+    // WAL including these batches.
+    configure_connection(c, false);
+    auto impl = std::make_unique<Impl>(std::move(c), config);
+    std::unique_ptr<SampleWriter> writer(new SampleWriter(std::move(impl)));
+    return writer;
+  } catch (const SqliteFailure& failure) {
+    return to_data_error(failure, path);
+  }
+}
+
+SampleWriter::SampleWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {
+  impl_->thread = std::thread([impl = impl_.get()] { impl->run(); });
+}
+
+SampleWriter::~SampleWriter() {
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stop = true;
+    impl_->stop_time = std::chrono::steady_clock::now();
+  }
+  impl_->wake.notify_all();
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+bool SampleWriter::push_tracking(const TrackingSample& sample) noexcept {
+  if (impl_->tracking.try_push(sample)) {
+    impl_->pushed_tracking.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+  impl_->dropped_tracking.fetch_add(1, std::memory_order_relaxed);
+  return false;
+}
+
+bool SampleWriter::push_frame(const FrameRecord& frame) noexcept {
+  if (impl_->frames.try_push(frame)) {
+    impl_->pushed_frames.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+  impl_->dropped_frames.fetch_add(1, std::memory_order_relaxed);
+  return false;
+}
+
+Expected<Done> SampleWriter::flush(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(impl_->mutex);
+  const std::uint64_t ticket = ++impl_->flush_requested;
+  const std::uint64_t failures_before = impl_->failure_count;
+  impl_->wake.notify_all();
+  const bool finished = impl_->progress.wait_for(lock, timeout, [&] {
+    return impl_->flush_done >= ticket || impl_->failure_count != failures_before;
+  });
+  if (impl_->flush_done >= ticket) return Done{};
+  if (!finished)
+    return DataError{DataError::Kind::busy, "tracking/frame flush timed out after " +
+                                                std::to_string(timeout.count()) + " ms"};
+  return DataError{impl_->error_kind, impl_->error};
+}
+
+SampleWriterStats SampleWriter::stats() const {
+  SampleWriterStats s;
+  s.pushed_tracking = impl_->pushed_tracking.load();
+  s.pushed_frames = impl_->pushed_frames.load();
+  s.dropped_tracking = impl_->dropped_tracking.load();
+  s.dropped_frames = impl_->dropped_frames.load();
+  s.committed_tracking = impl_->committed_tracking.load();
+  s.committed_frames = impl_->committed_frames.load();
+  s.transactions = impl_->transactions.load();
+  s.failed_transactions = impl_->failed_transactions.load();
+  s.writer_cpu_s = impl_->writer_cpu_s.load();
+  return s;
+}
+
+bool SampleWriter::paused() const { return impl_->is_paused.load(); }
+
+std::string SampleWriter::last_error() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->error;
+}
+
+}  // namespace curvlab::data

@@ -1,0 +1,385 @@
+#include "curvlab/harness/data/session_store.hpp"
+
+#include "curvlab/harness/data/sha256.hpp"
+
+#include <algorithm>
+
+namespace curvlab::data {
+
+const char* to_string(DominantEye eye) {
+  switch (eye) {
+    case DominantEye::left: return "left";
+    case DominantEye::right: return "right";
+    case DominantEye::unknown: return "unknown";
+  }
+  return "unknown";
+}
+const char* to_string(Backend backend) {
+  switch (backend) {
+    case Backend::headless: return "headless";
+    case Backend::desktop: return "desktop";
+    case Backend::xr: return "xr";
+  }
+  return "unknown";
+}
+const char* to_string(SessionStatus status) {
+  switch (status) {
+    case SessionStatus::running: return "running";
+    case SessionStatus::paused: return "paused";
+    case SessionStatus::completed: return "completed";
+    case SessionStatus::aborted: return "aborted";
+    case SessionStatus::interrupted: return "interrupted";
+  }
+  return "interrupted";
+}
+const char* to_string(TrackedDevice device) {
+  switch (device) {
+    case TrackedDevice::head: return "head";
+    case TrackedDevice::left_hand: return "left_hand";
+    case TrackedDevice::right_hand: return "right_hand";
+    case TrackedDevice::other: return "other";
+  }
+  return "other";
+}
+
+namespace {
+
+constexpr const char* utc_now = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
+
+bool valid_pseudonym(const std::string& p) {
+  if (p.empty() || p.size() > 32) return false;
+  return std::all_of(p.begin(), p.end(), [](char ch) {
+    return (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') ||
+           ch == '-' || ch == '_';
+  });
+}
+
+// Runs `body` and turns SQLite failures into DataError values naming the file.
+template <class T>
+struct Flatten {
+  using type = Expected<T>;
+};
+template <class T>
+struct Flatten<Expected<T>> {
+  using type = Expected<T>;
+};
+template <class F>
+auto guarded(Database& db, F&& body) -> typename Flatten<decltype(body())>::type {
+  try {
+    return body();
+  } catch (const SqliteFailure& failure) {
+    return to_data_error(failure, db.path());
+  }
+}
+
+}  // namespace
+
+struct SessionStore::Statements {
+  explicit Statements(Connection& c)
+      : insert_protocol(c, "INSERT OR IGNORE INTO protocols (name, sha256, text, source_path) "
+                           "VALUES (?1, ?2, ?3, ?4)"),
+        find_protocol(c, "SELECT protocol_id FROM protocols WHERE sha256 = ?1"),
+        find_participant(c, "SELECT participant_id FROM participants WHERE pseudonym = ?1"),
+        insert_participant(c, std::string("INSERT INTO participants (pseudonym, ipd_m, "
+                                          "dominant_eye, created_utc) VALUES (?1, ?2, ?3, ") +
+                                  utc_now + ")"),
+        next_session_number(c, "SELECT coalesce(max(session_number), 0) + 1 FROM sessions "
+                               "WHERE participant_id = ?1"),
+        insert_session(c, std::string("INSERT INTO sessions (protocol_id, participant_id, "
+                                      "session_number, software_version, software_commit, "
+                                      "backend, renderer_device, renderer_driver, "
+                                      "display_refresh_hz, seed, table_calibration, status, "
+                                      "started_utc) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, "
+                                      "?10, ?11, 'running', ") +
+                              utc_now + ")"),
+        count_plan(c, "SELECT count(*) FROM blocks WHERE session_id = ?1"),
+        insert_block(c, "INSERT INTO blocks (session_id, block_index, name, is_practice, "
+                        "settings) VALUES (?1, ?2, ?3, ?4, ?5)"),
+        insert_trial(c, "INSERT INTO trials (session_id, block_id, trial_index, trial_in_block, "
+                        "conditions, stimulus) VALUES (?1, ?2, ?3, ?4, ?5, ?6)"),
+        next_trial(c, "SELECT t.trial_id, t.block_id, b.block_index, t.trial_index, "
+                      "t.trial_in_block, t.attempt, t.conditions, t.stimulus FROM trials t "
+                      "JOIN blocks b ON b.block_id = t.block_id WHERE t.session_id = ?1 AND "
+                      "t.status IN ('pending', 'running') ORDER BY t.trial_index LIMIT 1"),
+        begin_trial(c, "UPDATE trials SET status = 'running', attempt = attempt + 1 "
+                       "WHERE trial_id = ?1 AND status IN ('pending', 'running') "
+                       "RETURNING attempt"),
+        complete_trial(c, std::string("UPDATE trials SET status = 'completed', onset_ns = ?2, "
+                                      "response_ns = ?3, response = ?4, rt_ns = ?3 - ?2, "
+                                      "response_device = ?5, completed_utc = ") +
+                              utc_now + " WHERE trial_id = ?1 AND status != 'completed'"),
+        trial_status(c, "SELECT status, session_id FROM trials WHERE trial_id = ?1"),
+        insert_step(c, "INSERT OR REPLACE INTO staircase_steps (session_id, staircase, "
+                       "step_index, trial_id, intensity, response_correct, is_reversal, "
+                       "next_intensity) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)"),
+        skip_trial(c, "UPDATE trials SET status = 'skipped' WHERE trial_id = ?1 AND "
+                      "status IN ('pending', 'running')"),
+        insert_event(c, "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) "
+                        "VALUES (?1, ?2, ?3, ?4, ?5)"),
+        set_status(c, "UPDATE sessions SET status = ?2 WHERE session_id = ?1"),
+        close_session(c, std::string("UPDATE sessions SET status = ?2, ended_utc = ") + utc_now +
+                             " WHERE session_id = ?1"),
+        count_trials(c, "SELECT count(*) FROM trials WHERE session_id = ?1 AND "
+                        "(?2 = '' OR status = ?2)") {}
+
+  Statement insert_protocol, find_protocol, find_participant, insert_participant,
+      next_session_number, insert_session, count_plan, insert_block, insert_trial, next_trial,
+      begin_trial, complete_trial, trial_status, insert_step, skip_trial, insert_event,
+      set_status, close_session, count_trials;
+};
+
+SessionStore::SessionStore(Database db)
+    : db_(std::move(db)), stmts_(std::make_unique<Statements>(db_.connection())) {}
+SessionStore::SessionStore(SessionStore&&) noexcept = default;
+SessionStore& SessionStore::operator=(SessionStore&&) noexcept = default;
+// Statements are destroyed before the connection (member order), and
+// sqlite3_close_v2 tolerates the other order anyway.
+SessionStore::~SessionStore() = default;
+
+Expected<std::int64_t> SessionStore::add_protocol(const std::string& name,
+                                                  const std::string& text,
+                                                  const std::string& source_path) {
+  return guarded(db_, [&]() -> std::int64_t {
+    const std::string digest = sha256_hex(text);
+    Transaction txn(db_.connection());
+    auto& s = stmts_->insert_protocol;
+    s.bind(1, std::string_view(name)).bind(2, std::string_view(digest)).bind(3, std::string_view(text));
+    if (source_path.empty()) s.bind_null(4); else s.bind(4, std::string_view(source_path));
+    s.run();
+    auto& f = stmts_->find_protocol;
+    f.bind(1, std::string_view(digest));
+    f.step();
+    const std::int64_t id = f.column_int(0);
+    f.reset();
+    txn.commit();
+    return id;
+  });
+}
+
+Expected<std::int64_t> SessionStore::add_participant(const ParticipantRecord& p) {
+  if (!valid_pseudonym(p.pseudonym))
+    return DataError{DataError::Kind::bad_input,
+                     "participant pseudonym \"" + p.pseudonym +
+                         "\" must be 1-32 characters of A-Z a-z 0-9 - _ (no names)"};
+  if (p.ipd_m && !(*p.ipd_m > 0.04 && *p.ipd_m < 0.09))
+    return DataError{DataError::Kind::bad_input,
+                     "participant IPD " + std::to_string(*p.ipd_m) +
+                         " m is outside 0.04-0.09 m (give metres, not millimetres)"};
+  return guarded(db_, [&]() -> std::int64_t {
+    Transaction txn(db_.connection());
+    auto& f = stmts_->find_participant;
+    f.bind(1, std::string_view(p.pseudonym));
+    if (f.step()) {
+      const std::int64_t id = f.column_int(0);
+      f.reset();
+      return id;  // nothing written; the transaction rolls back harmlessly
+    }
+    f.reset();
+    auto& s = stmts_->insert_participant;
+    s.bind(1, std::string_view(p.pseudonym)).bind(2, p.ipd_m).bind_static(3, to_string(p.dominant_eye));
+    s.run();
+    const std::int64_t id = db_.connection().last_insert_rowid();
+    txn.commit();
+    return id;
+  });
+}
+
+Expected<std::int64_t> SessionStore::create_session(const SessionRecord& r) {
+  return guarded(db_, [&]() -> std::int64_t {
+    Transaction txn(db_.connection());
+    std::int64_t number = 0;
+    if (r.session_number) {
+      number = *r.session_number;
+    } else {
+      auto& n = stmts_->next_session_number;
+      n.bind(1, r.participant_id);
+      n.step();
+      number = n.column_int(0);
+      n.reset();
+    }
+    auto& s = stmts_->insert_session;
+    s.bind(1, r.protocol_id).bind(2, r.participant_id).bind(3, number);
+    s.bind(4, std::string_view(r.software_version)).bind(5, std::string_view(r.software_commit));
+    s.bind_static(6, to_string(r.backend));
+    s.bind(7, std::string_view(r.renderer_device)).bind(8, std::string_view(r.renderer_driver));
+    s.bind(9, r.display_refresh_hz).bind(10, r.seed);
+    if (r.table_calibration_json) s.bind(11, std::string_view(*r.table_calibration_json));
+    else s.bind_null(11);
+    s.run();
+    const std::int64_t id = db_.connection().last_insert_rowid();
+    txn.commit();
+    return id;
+  });
+}
+
+Expected<std::vector<std::int64_t>> SessionStore::store_plan(std::int64_t session_id,
+                                                             const std::vector<BlockPlan>& blocks) {
+  return guarded(db_, [&]() -> Expected<std::vector<std::int64_t>> {
+    Transaction txn(db_.connection());
+    auto& count = stmts_->count_plan;
+    count.bind(1, session_id);
+    count.step();
+    const std::int64_t existing = count.column_int(0);
+    count.reset();
+    if (existing != 0)
+      return DataError{DataError::Kind::bad_input,
+                       "session " + std::to_string(session_id) + " already has a trial plan"};
+    std::vector<std::int64_t> ids;
+    std::int64_t trial_index = 0;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      const BlockPlan& block = blocks[b];
+      auto& ib = stmts_->insert_block;
+      ib.bind(1, session_id).bind(2, static_cast<std::int64_t>(b)).bind(3, std::string_view(block.name));
+      ib.bind(4, block.is_practice ? 1 : 0).bind(5, std::string_view(block.settings_json));
+      ib.run();
+      const std::int64_t block_id = db_.connection().last_insert_rowid();
+      for (std::size_t t = 0; t < block.trials.size(); ++t) {
+        auto& it = stmts_->insert_trial;
+        it.bind(1, session_id).bind(2, block_id).bind(3, trial_index++);
+        it.bind(4, static_cast<std::int64_t>(t));
+        it.bind(5, std::string_view(block.trials[t].conditions_json));
+        it.bind(6, std::string_view(block.trials[t].stimulus_json));
+        it.run();
+        ids.push_back(db_.connection().last_insert_rowid());
+      }
+    }
+    txn.commit();
+    return ids;
+  });
+}
+
+Expected<std::optional<PlannedTrial>> SessionStore::next_incomplete_trial(std::int64_t session_id) {
+  return guarded(db_, [&]() -> std::optional<PlannedTrial> {
+    auto& s = stmts_->next_trial;
+    s.bind(1, session_id);
+    std::optional<PlannedTrial> out;
+    if (s.step()) {
+      PlannedTrial t;
+      t.trial_id = s.column_int(0);
+      t.block_id = s.column_int(1);
+      t.block_index = s.column_int(2);
+      t.trial_index = s.column_int(3);
+      t.trial_in_block = s.column_int(4);
+      t.attempt = s.column_int(5);
+      t.conditions_json = s.column_text(6);
+      t.stimulus_json = s.column_text(7);
+      out = std::move(t);
+    }
+    s.reset();
+    return out;
+  });
+}
+
+Expected<std::int64_t> SessionStore::begin_trial(std::int64_t trial_id) {
+  return guarded(db_, [&]() -> Expected<std::int64_t> {
+    Transaction txn(db_.connection());
+    auto& s = stmts_->begin_trial;
+    s.bind(1, trial_id);
+    if (!s.step()) {
+      s.reset();
+      return DataError{DataError::Kind::not_found,
+                       "trial " + std::to_string(trial_id) + " does not exist or is finished"};
+    }
+    const std::int64_t attempt = s.column_int(0);
+    s.reset();
+    txn.commit();
+    return attempt;
+  });
+}
+
+Expected<Done> SessionStore::complete_trial(const TrialResult& r) {
+  if (r.response_ns < r.onset_ns)
+    return DataError{DataError::Kind::bad_input,
+                     "trial " + std::to_string(r.trial_id) + ": response_ns " +
+                         std::to_string(r.response_ns) + " is before onset_ns " +
+                         std::to_string(r.onset_ns)};
+  return guarded(db_, [&]() -> Expected<Done> {
+    Transaction txn(db_.connection());
+    auto& st = stmts_->trial_status;
+    st.bind(1, r.trial_id);
+    if (!st.step()) {
+      st.reset();
+      return DataError{DataError::Kind::not_found,
+                       "trial " + std::to_string(r.trial_id) + " does not exist"};
+    }
+    const std::string status = st.column_text(0);
+    const std::int64_t session_id = st.column_int(1);
+    st.reset();
+    if (status == "completed") return Done{};  // a retry after a commit that did succeed
+    auto& s = stmts_->complete_trial;
+    s.bind(1, r.trial_id).bind(2, r.onset_ns).bind(3, r.response_ns);
+    s.bind(4, std::string_view(r.response)).bind(5, std::string_view(r.response_device));
+    s.run();
+    if (r.staircase_step) {
+      const StaircaseStep& step = *r.staircase_step;
+      auto& is = stmts_->insert_step;
+      is.bind(1, session_id).bind(2, std::string_view(step.staircase)).bind(3, step.step_index);
+      is.bind(4, r.trial_id).bind(5, step.intensity);
+      if (step.response_correct) is.bind(6, *step.response_correct ? 1 : 0); else is.bind_null(6);
+      is.bind(7, step.is_reversal ? 1 : 0).bind(8, step.next_intensity);
+      is.run();
+    }
+    txn.commit();
+    return Done{};
+  });
+}
+
+Expected<Done> SessionStore::skip_trial(std::int64_t trial_id) {
+  return guarded(db_, [&]() -> Done {
+    Transaction txn(db_.connection());
+    stmts_->skip_trial.bind(1, trial_id).run();
+    txn.commit();
+    return Done{};
+  });
+}
+
+Expected<std::int64_t> SessionStore::record_event(const EventRecord& e) {
+  return guarded(db_, [&]() -> std::int64_t {
+    Transaction txn(db_.connection());
+    auto& s = stmts_->insert_event;
+    s.bind(1, e.session_id).bind(2, e.trial_id).bind(3, e.t_ns);
+    s.bind(4, std::string_view(e.kind)).bind(5, std::string_view(e.detail_json));
+    s.run();
+    const std::int64_t id = db_.connection().last_insert_rowid();
+    txn.commit();
+    return id;
+  });
+}
+
+Expected<Done> SessionStore::set_session_status(std::int64_t session_id, SessionStatus status) {
+  return guarded(db_, [&]() -> Expected<Done> {
+    Transaction txn(db_.connection());
+    stmts_->set_status.bind(1, session_id).bind_static(2, to_string(status)).run();
+    if (db_.connection().changes() == 0)
+      return DataError{DataError::Kind::not_found,
+                       "session " + std::to_string(session_id) + " does not exist"};
+    txn.commit();
+    return Done{};
+  });
+}
+
+Expected<Done> SessionStore::close_session(std::int64_t session_id, SessionStatus status) {
+  return guarded(db_, [&]() -> Expected<Done> {
+    Transaction txn(db_.connection());
+    stmts_->close_session.bind(1, session_id).bind_static(2, to_string(status)).run();
+    if (db_.connection().changes() == 0)
+      return DataError{DataError::Kind::not_found,
+                       "session " + std::to_string(session_id) + " does not exist"};
+    txn.commit();
+    return Done{};
+  });
+}
+
+Expected<std::int64_t> SessionStore::count_trials(std::int64_t session_id,
+                                                  const std::string& status) {
+  return guarded(db_, [&]() -> std::int64_t {
+    auto& s = stmts_->count_trials;
+    s.bind(1, session_id).bind(2, std::string_view(status));
+    s.step();
+    const std::int64_t n = s.column_int(0);
+    s.reset();
+    return n;
+  });
+}
+
+}  // namespace curvlab::data

@@ -1,0 +1,480 @@
+#include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/export.hpp"
+#include "curvlab/harness/data/sample_writer.hpp"
+#include "curvlab/harness/data/session_store.hpp"
+#include "curvlab/harness/data/sha256.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+using namespace curvlab::data;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() /
+                       ("curvlab_data_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// (type, name, tbl_name, sql) of every schema object, sorted by name.
+std::vector<std::string> master_rows(Connection& c, bool normalize) {
+  Statement s(c, "SELECT type, name, tbl_name, sql FROM sqlite_master ORDER BY name");
+  std::vector<std::string> rows;
+  while (s.step()) {
+    std::string sql = s.column_text(3);
+    if (normalize) {
+      sql = std::regex_replace(sql, std::regex("--[^\n]*"), "");
+      sql = std::regex_replace(sql, std::regex("\\s+"), " ");
+      sql = std::regex_replace(sql, std::regex("\"(\\w+)\""), "$1");
+    }
+    rows.push_back(s.column_text(0) + "|" + s.column_text(1) + "|" + s.column_text(2) + "|" + sql);
+  }
+  return rows;
+}
+
+SessionStore make_store(const fs::path& db) {
+  auto opened = Database::open(db.string(), OpenMode::create_or_open);
+  EXPECT_TRUE(opened) << (opened ? "" : opened.error().message);
+  return SessionStore(std::move(opened).value());
+}
+
+std::int64_t make_session(SessionStore& store, const std::string& pseudonym) {
+  const auto protocol = store.add_protocol("billiards", "name = \"billiards\"\n").value();
+  const auto participant = store.add_participant({pseudonym, 0.064, DominantEye::left}).value();
+  SessionRecord r;
+  r.protocol_id = protocol;
+  r.participant_id = participant;
+  r.software_version = "0.1.0";
+  r.software_commit = "abc";
+  r.renderer_device = "llvmpipe";
+  r.renderer_driver = "mesa";
+  r.display_refresh_hz = 90.0;
+  r.seed = 7;
+  r.table_calibration_json = "{\"edge_m\":1.2}";
+  return store.create_session(r).value();
+}
+
+std::vector<BlockPlan> two_blocks() {
+  BlockPlan practice{"practice", true, "{}", {{"{\"space\":\"E3\",\"mode\":\"tourist\"}", "{\"sagitta_m\":0.0}"}}};
+  BlockPlan main{"main", false, "{}", {}};
+  for (const char* space : {"S3", "H3"})
+    main.trials.push_back({std::string("{\"space\":\"") + space + "\",\"mode\":\"native\",\"eyes\":2}",
+                           "{\"sagitta_m\":0.01,\"note\":\"a, \\\"quoted\\\" value\"}"});
+  return {practice, main};
+}
+
+}  // namespace
+
+TEST(Sha256, KnownVectors) {
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(sha256_hex(std::string(1000, 'a')),
+            "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3");
+}
+
+TEST(Schema, CreatedSchemaEqualsDataSchemaSql) {
+  const auto dir = fresh_dir("schema");
+  auto db = Database::open((dir / "a.db").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(db.value().schema_version(), current_schema_version);
+
+  auto reference = Connection::open(":memory:", OpenFlags::read_write_create);
+  reference.exec(read_file(fs::path(CURVLAB_SCHEMA_DIR) / "schema.sql"));
+  EXPECT_EQ(reference.query_int("PRAGMA user_version"), current_schema_version);
+  const auto expected = master_rows(reference, false);
+  ASSERT_GE(expected.size(), 10u);
+  EXPECT_EQ(master_rows(db.value().connection(), false), expected);
+  EXPECT_EQ(db.value().connection().query_int("PRAGMA application_id"), curvlab_application_id);
+  Statement mode(db.value().connection(), "PRAGMA journal_mode");
+  ASSERT_TRUE(mode.step());
+  EXPECT_EQ(mode.column_text(0), "wal");
+}
+
+TEST(Schema, MigratesVersion1FileAndKeepsItsData) {
+  const auto dir = fresh_dir("migrate");
+  const auto path = (dir / "old.db").string();
+  {
+    auto c = Connection::open(path, OpenFlags::read_write_create);
+    c.exec(read_file(fs::path(CURVLAB_SCHEMA_DIR) / "v1.sql"));
+    c.exec("INSERT INTO protocols VALUES (1, '" + sha256_hex("p") + "', 'p');"
+           "INSERT INTO participants VALUES (1, 'P07');"
+           "INSERT INTO sessions VALUES (1, 1, 1, 99, 'crashed', '2025-03-01T10:00:00Z');"
+           "INSERT INTO trials VALUES (1, 1, 0, '{\"space\":\"S3\"}', 'convex', 512.5, 'completed');"
+           "INSERT INTO trials VALUES (2, 1, 1, '{\"space\":\"H3\"}', NULL, NULL, 'pending');"
+           "INSERT INTO events VALUES (1, 1, 5, 'note', 'free text');");
+  }
+  auto db = Database::open(path, OpenMode::open_existing);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(db.value().schema_version(), 2);
+  EXPECT_EQ(db.value().integrity_check(), "ok");
+
+  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(fresh);
+  auto fresh_db = std::move(fresh).value();
+  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh_db.connection(), true));
+
+  Statement t(db.value().connection(),
+              "SELECT rt_ns, status, attempt, response FROM trials ORDER BY trial_index");
+  ASSERT_TRUE(t.step());
+  EXPECT_EQ(t.column_int(0), 512'500'000);
+  EXPECT_EQ(t.column_text(1), "completed");
+  EXPECT_EQ(t.column_int(2), 1);
+  EXPECT_EQ(t.column_text(3), "convex");
+  ASSERT_TRUE(t.step());
+  EXPECT_TRUE(t.is_null(0));
+  EXPECT_EQ(t.column_text(1), "pending");
+  EXPECT_EQ(db.value().connection().query_int(
+                "SELECT count(*) FROM sessions WHERE status = 'interrupted' AND seed = 99"), 1);
+  // A migrated session resumes where it stopped.
+  SessionStore store(std::move(db).value());
+  auto next = store.next_incomplete_trial(1).value();
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->trial_index, 1);
+}
+
+TEST(Schema, NewerFileIsRefusedAndLeftUntouched) {
+  const auto dir = fresh_dir("newer");
+  const auto path = (dir / "future.db").string();
+  {
+    auto db = Database::open(path, OpenMode::create_or_open);
+    ASSERT_TRUE(db);
+    db.value().connection().exec("PRAGMA user_version = 3");
+  }
+  auto db = Database::open(path, OpenMode::create_or_open);
+  ASSERT_FALSE(db);
+  EXPECT_EQ(db.error().kind, DataError::Kind::newer_schema);
+  EXPECT_NE(db.error().message.find("schema version 3"), std::string::npos);
+  auto c = Connection::open(path, OpenFlags::read_only);
+  EXPECT_EQ(c.query_int("PRAGMA user_version"), 3);
+}
+
+TEST(Schema, BadPathsGiveClearErrors) {
+  const auto dir = fresh_dir("badpath");
+  auto missing_dir = Database::open((dir / "nope" / "a.db").string(), OpenMode::create_or_open);
+  ASSERT_FALSE(missing_dir);
+  EXPECT_NE(missing_dir.error().message.find("does not exist"), std::string::npos);
+  auto folder = Database::open(dir.string(), OpenMode::create_or_open);
+  ASSERT_FALSE(folder);
+  EXPECT_NE(folder.error().message.find("is a folder"), std::string::npos);
+  auto missing = Database::open((dir / "absent.db").string(), OpenMode::open_existing);
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("no such file"), std::string::npos);
+  std::ofstream((dir / "text.db").string()) << "this is not a database, just some text that is long enough";
+  auto garbage = Database::open((dir / "text.db").string(), OpenMode::open_existing);
+  ASSERT_FALSE(garbage);
+  EXPECT_EQ(garbage.error().kind, DataError::Kind::corrupt);
+  {
+    auto other = Connection::open((dir / "other.db").string(), OpenFlags::read_write_create);
+    other.exec("CREATE TABLE t (x INTEGER)");
+  }
+  auto other = Database::open((dir / "other.db").string(), OpenMode::open_existing);
+  ASSERT_FALSE(other);
+  EXPECT_EQ(other.error().kind, DataError::Kind::not_curvlab);
+}
+
+TEST(Session, PlanResumeAndIdempotentCompletion) {
+  const auto dir = fresh_dir("session");
+  auto store = make_store(dir / "s.db");
+  const auto session = make_session(store, "P01");
+  EXPECT_EQ(store.add_participant({"P01", std::nullopt, DominantEye::unknown}).value(),
+            store.add_participant({"P01", std::nullopt, DominantEye::unknown}).value());
+  EXPECT_FALSE(store.add_participant({"Jane Doe", std::nullopt, DominantEye::unknown}));
+  EXPECT_FALSE(store.add_participant({"P02", 64.0, DominantEye::unknown}));  // millimetres
+  const auto ids = store.store_plan(session, two_blocks()).value();
+  ASSERT_EQ(ids.size(), 3u);
+  EXPECT_FALSE(store.store_plan(session, two_blocks()));
+
+  auto first = store.next_incomplete_trial(session).value();
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->trial_id, ids[0]);
+  EXPECT_EQ(store.begin_trial(first->trial_id).value(), 1);
+  // A crash here: the running trial is offered again, with its attempt count.
+  auto again = store.next_incomplete_trial(session).value();
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->trial_id, ids[0]);
+  EXPECT_EQ(again->attempt, 1);
+  EXPECT_EQ(store.begin_trial(first->trial_id).value(), 2);
+  TrialResult r{first->trial_id, 1'000, 351'000, "convex", "keyboard", StaircaseStep{"s1", 0, 0.02, true, false, 0.015}};
+  ASSERT_TRUE(store.complete_trial(r));
+  ASSERT_TRUE(store.complete_trial(r));  // retried after an uncertain commit
+  EXPECT_FALSE(store.complete_trial({ids[1], 10, 5, "x", "k", std::nullopt}));  // response before onset
+  auto next = store.next_incomplete_trial(session).value();
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->trial_id, ids[1]);
+  EXPECT_EQ(next->block_index, 1);
+  ASSERT_TRUE(store.skip_trial(ids[1]));
+  EXPECT_EQ(store.count_trials(session, "completed").value(), 1);
+  EXPECT_EQ(store.database().connection().query_int(
+                "SELECT rt_ns FROM trials WHERE trial_id = " + std::to_string(ids[0])), 350'000);
+  EXPECT_EQ(store.database().connection().query_int("SELECT count(*) FROM staircase_steps"), 1);
+  ASSERT_TRUE(store.close_session(session, SessionStatus::completed));
+  EXPECT_FALSE(store.close_session(session + 100, SessionStatus::completed));
+}
+
+TEST(SampleWriter, CommitsEverythingAndCountsDropsWhenFull) {
+  const auto dir = fresh_dir("writer");
+  const auto path = dir / "w.db";
+  std::int64_t session = 0;
+  {
+    auto store = make_store(path);
+    session = make_session(store, "P01");
+  }
+  {
+    auto writer = SampleWriter::open(path.string()).value();
+    for (int i = 0; i < 5000; ++i) {
+      TrackingSample s;
+      s.session_id = session;
+      s.t_ns = i;
+      s.device = static_cast<TrackedDevice>(i % 3);
+      s.has_virtual_pose = true;
+      s.virtual_pose[15] = 1.0;
+      while (!writer->push_tracking(s)) std::this_thread::yield();
+      if (i % 11 == 0) {
+        FrameRecord f;
+        f.session_id = session;
+        f.frame_index = i / 11;
+        while (!writer->push_frame(f)) std::this_thread::yield();
+      }
+    }
+    ASSERT_TRUE(writer->flush());
+    EXPECT_EQ(writer->stats().committed_tracking, 5000u);
+  }
+  {
+    // The writer sleeps for a minute unless flushed, so a ring of 4 takes 4
+    // records and drops the rest, deterministically.
+    SampleWriterConfig cfg;
+    cfg.tracking_capacity = 4;
+    cfg.batch_interval = std::chrono::minutes(1);
+    auto writer = SampleWriter::open(path.string(), cfg).value();
+    int accepted = 0;
+    for (int i = 0; i < 100; ++i) {
+      TrackingSample s;
+      s.session_id = session;
+      s.t_ns = 10'000 + i;
+      accepted += writer->push_tracking(s) ? 1 : 0;
+    }
+    EXPECT_EQ(accepted, 4);
+    ASSERT_TRUE(writer->flush());
+    const auto st = writer->stats();
+    EXPECT_EQ(st.dropped_tracking, 96u);
+    EXPECT_EQ(st.committed_tracking, 4u);
+  }
+  auto db = Database::open(path.string(), OpenMode::open_existing).value();
+  EXPECT_EQ(db.connection().query_int("SELECT count(*) FROM tracking_samples"), 5004);
+  EXPECT_EQ(db.connection().query_int("SELECT count(*) FROM frames"), 455);
+  EXPECT_EQ(db.connection().query_int("SELECT json_extract(detail, '$.dropped_tracking') FROM "
+                                      "events WHERE kind = 'logger_drops'"), 96);
+  EXPECT_EQ(db.connection().query_int(
+                "SELECT count(*) FROM tracking_samples WHERE length(virtual_pose) = 128"), 5000);
+}
+
+TEST(Crash, KillNineNeverLosesACommittedTrial) {
+  const auto dir = fresh_dir("crash");
+  const auto path = (dir / "crash.db").string();
+  std::mt19937 rng(12345);
+  std::uniform_int_distribution<int> delay_us(20'000, 250'000);
+  std::int64_t total_checked = 0;
+  for (int run = 0; run < 25; ++run) {
+    int pipe_fd[2];
+    ASSERT_EQ(::pipe(pipe_fd), 0);
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      ::dup2(pipe_fd[1], STDOUT_FILENO);
+      ::close(pipe_fd[0]);
+      ::close(pipe_fd[1]);
+      ::execl(CURVLAB_CRASH_WRITER, CURVLAB_CRASH_WRITER, path.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::close(pipe_fd[1]);
+    std::this_thread::sleep_for(std::chrono::microseconds(delay_us(rng)));
+    ::kill(pid, SIGKILL);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    std::string out;
+    char buf[4096];
+    ssize_t n = 0;
+    while ((n = ::read(pipe_fd[0], buf, sizeof buf)) > 0) out.append(buf, static_cast<std::size_t>(n));
+    ::close(pipe_fd[0]);
+    std::int64_t last = -1;
+    std::istringstream lines(out);
+    std::string word;
+    std::int64_t index = 0;
+    while (lines >> word >> index) last = index;
+
+    auto db = Database::open(path, OpenMode::open_existing);
+    ASSERT_TRUE(db) << "run " << run << ": " << db.error().message;
+    ASSERT_EQ(db.value().integrity_check(), "ok") << "run " << run;
+    const auto session = db.value().connection().query_int("SELECT max(session_id) FROM sessions");
+    if (last >= 0) {
+      const auto completed = db.value().connection().query_int(
+          "SELECT count(*) FROM trials WHERE session_id = " + std::to_string(session) +
+          " AND status = 'completed' AND trial_index <= " + std::to_string(last));
+      EXPECT_EQ(completed, last + 1) << "run " << run << " lost a committed trial";
+      total_checked += last + 1;
+    }
+  }
+  EXPECT_GT(total_checked, 0) << "the helper never got to commit a trial";
+}
+
+namespace {
+int run_cli(const std::string& args, std::string* err) {
+  const std::string cmd = std::string(CURVLAB_BIN) + " " + args + " 2>&1";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, p)) *err += buf;
+  const int status = ::pclose(p);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+void fill_export_db(const fs::path& path) {
+  auto store = make_store(path);
+  const auto session = make_session(store, "P-01");
+  const auto ids = store.store_plan(session, two_blocks()).value();
+  ASSERT_TRUE(store.begin_trial(ids[0]));
+  ASSERT_TRUE(store.complete_trial({ids[0], 100, 450'000'100, "convex", "keyboard", std::nullopt}));
+  auto writer = SampleWriter::open(path.string()).value();
+  for (int i = 0; i < 1000; ++i) {
+    for (int d = 0; d < 2; ++d) {
+      TrackingSample s;
+      s.session_id = session;
+      s.t_ns = 5'000'000 + i * 1'000'000 + d;
+      s.device = static_cast<TrackedDevice>(d);
+      s.position_valid = s.orientation_valid = true;
+      s.lab_position_m = {0.1 * d, 1.6, -0.001 * i};
+      s.has_state = d == 0;
+      ASSERT_TRUE(writer->push_tracking(s));
+    }
+  }
+  ASSERT_TRUE(writer->flush());
+}
+
+std::vector<std::string> split(const std::string& line, char sep) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, sep)) out.push_back(cell);
+  return out;
+}
+}  // namespace
+
+TEST(Export, FilesCarryWhatTheirStandardsRequire) {
+  const auto dir = fresh_dir("export");
+  fill_export_db(dir / "e.db");
+  auto db = Database::open((dir / "e.db").string(), OpenMode::open_existing).value();
+  const ExportOptions opt{(dir / "out").string(), std::nullopt};
+
+  const auto csv = export_trials_csv(db, opt);
+  ASSERT_TRUE(csv) << csv.error().message;
+  std::istringstream csv_in(read_file(dir / "out" / "trials.csv"));
+  std::string header, row1;
+  std::getline(csv_in, header);
+  std::getline(csv_in, row1);
+  EXPECT_EQ(header.rfind("session_id,participant,session_number,protocol_sha256,block_index", 0), 0u);
+  EXPECT_NE(header.find(",cond_space,cond_mode,cond_eyes,stim_sagitta_m,stim_note"), std::string::npos);
+  EXPECT_NE(row1.find(",450000000,convex,keyboard,"), std::string::npos) << row1;
+  EXPECT_NE(row1.find(",E3,tourist,NA,0.0,NA"), std::string::npos) << row1;
+  EXPECT_NE(read_file(dir / "out" / "trials.csv").find("\"a, \"\"quoted\"\" value\""), std::string::npos);
+
+  const auto pds = export_psychds(db, opt);
+  ASSERT_TRUE(pds) << pds.error().message;
+  const auto desc = nlohmann::json::parse(read_file(dir / "out" / "psychds" / "dataset_description.json"));
+  EXPECT_EQ(desc["@context"], "https://schema.org/");
+  EXPECT_EQ(desc["@type"], "Dataset");
+  EXPECT_TRUE(desc["name"].is_string());
+  EXPECT_TRUE(desc["description"].is_string());
+  std::set<std::string> described;
+  for (const auto& v : desc["variableMeasured"]) {
+    EXPECT_EQ(v["@type"], "PropertyValue");
+    EXPECT_FALSE(v["description"].get<std::string>().empty());
+    described.insert(v["name"].get<std::string>());
+  }
+  const fs::path data_file = dir / "out" / "psychds" / "data" / "study-billiards_subject-P01_session-1_data.csv";
+  ASSERT_TRUE(fs::exists(data_file));
+  std::istringstream pin(read_file(data_file));
+  std::string pheader;
+  std::getline(pin, pheader);
+  if (!pheader.empty() && pheader.back() == '\r') pheader.pop_back();
+  for (const auto& col : split(pheader, ',')) EXPECT_TRUE(described.count(col)) << col;
+  EXPECT_TRUE(std::regex_match(data_file.filename().string(),
+                               std::regex("([a-z]+-[A-Za-z0-9]+_)+data\\.csv")));
+
+  const auto bids = export_bids_motion(db, opt);
+  ASSERT_TRUE(bids) << bids.error().message;
+  const fs::path motion = dir / "out" / "bids" / "sub-P01" / "ses-1" / "motion";
+  const std::string base = "sub-P01_ses-1_task-billiards_tracksys-head";
+  const auto channels = read_file(motion / (base + "_channels.tsv"));
+  std::istringstream ch_in(channels);
+  std::string ch_header, line;
+  std::getline(ch_in, ch_header);
+  const auto ch_cols = split(ch_header, '\t');
+  for (const char* required : {"name", "component", "type", "tracked_point", "units"})
+    EXPECT_NE(std::find(ch_cols.begin(), ch_cols.end(), required), ch_cols.end()) << required;
+  std::size_t channel_rows = 0;
+  while (std::getline(ch_in, line)) ++channel_rows;
+  std::istringstream m_in(read_file(motion / (base + "_motion.tsv")));
+  std::size_t motion_rows = 0;
+  while (std::getline(m_in, line)) {
+    if (motion_rows == 0) {
+      EXPECT_EQ(line.rfind("0.000000000\t", 0), 0u) << "no header row allowed";
+    }
+    EXPECT_EQ(split(line, '\t').size(), channel_rows);
+    ++motion_rows;
+  }
+  EXPECT_EQ(motion_rows, 1000u);
+  const auto sidecar = nlohmann::json::parse(read_file(motion / (base + "_motion.json")));
+  EXPECT_EQ(sidecar["TaskName"], "billiards");
+  EXPECT_DOUBLE_EQ(sidecar["SamplingFrequency"].get<double>(), 1000.0);
+  EXPECT_NEAR(sidecar["SamplingFrequencyEffective"].get<double>(), 1000.0, 1e-6);
+  EXPECT_EQ(sidecar["MotionChannelCount"].get<std::size_t>(), channel_rows);
+  EXPECT_TRUE(sidecar.contains("TrackingSystemName"));
+  EXPECT_TRUE(fs::exists(motion / (base + "_channels.json")));
+  EXPECT_TRUE(fs::exists(motion / "sub-P01_ses-1_task-billiards_tracksys-lefthand_motion.tsv"));
+  const auto ds = nlohmann::json::parse(read_file(dir / "out" / "bids" / "dataset_description.json"));
+  EXPECT_TRUE(ds.contains("Name"));
+  EXPECT_TRUE(ds.contains("BIDSVersion"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "bids" / "participants.tsv"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "bids" / "sub-P01" / "ses-1" / "sub-P01_ses-1_scans.tsv"));
+}
+
+TEST(Cli, ExportCommandAndItsErrors) {
+  const auto dir = fresh_dir("cli");
+  fill_export_db(dir / "c.db");
+  std::string out;
+  EXPECT_EQ(run_cli("export --db " + (dir / "c.db").string() + " --out " + (dir / "o").string(), &out), 0) << out;
+  EXPECT_TRUE(fs::exists(dir / "o" / "trials.csv"));
+  EXPECT_TRUE(fs::exists(dir / "o" / "psychds" / "dataset_description.json"));
+  out.clear();
+  EXPECT_EQ(run_cli("export --db " + (dir / "missing.db").string() + " --out " + (dir / "o").string(), &out), 2);
+  EXPECT_NE(out.find("missing.db: no such file"), std::string::npos) << out;
+  out.clear();
+  EXPECT_EQ(run_cli("export --db " + (dir / "c.db").string() + " --out " + (dir / "o").string() +
+                        " --session 42", &out), 2);
+  EXPECT_NE(out.find("no session with id 42"), std::string::npos) << out;
+  out.clear();
+  std::ofstream((dir / "blocker").string()) << "x";
+  EXPECT_EQ(run_cli("export --db " + (dir / "c.db").string() + " --out " + (dir / "blocker" / "x").string(), &out), 1);
+  EXPECT_NE(out.find("cannot create output folder"), std::string::npos) << out;
+}
