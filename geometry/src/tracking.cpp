@@ -197,8 +197,17 @@ void Tracker::update_correspondence() {
   } else if (head.anchor.edge != st.physical_edge) {
     // Step 3: the only history-dependent part. Each physical edge step is the
     // same virtual edge step, in either walking direction.
-    const int step = signed_edge_step(st.physical_edge, head.anchor.edge,
-                                      wrap_centred(u - last_head_u_, 4.0));
+    const double du = wrap_centred(u - last_head_u_, 4.0);
+    int step = signed_edge_step(st.physical_edge, head.anchor.edge, du);
+    // Exactly across the table (a lean straight over the centre) both ways
+    // round are equally near: take the one that unwinds toward the starting
+    // edge, so that leaning over and back restores the correspondence.
+    if (std::abs(std::abs(du) - 2.0) < 1e-9) {
+      const std::int64_t start_edge = static_cast<std::int64_t>(std::floor(start_physical_u_));
+      const std::int64_t here = st.physical_edge_unwrapped;
+      const int other = step > 0 ? step - 4 : step + 4;
+      if (std::abs(here + other - start_edge) < std::abs(here + step - start_edge)) step = other;
+    }
     st.physical_edge = head.anchor.edge;
     st.physical_edge_unwrapped += step;
     st.virtual_edge_unwrapped += step;
