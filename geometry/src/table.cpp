@@ -39,14 +39,12 @@ TableShape shape_in(const Space& space, int n, double side_rad) {
   const double half = side_rad / 2.0;
   // Right triangle centre–midpoint–corner, angle π/n at the centre:
   //   S(s/2) = S(R)·sin(π/n)        (sine rule)
-  //   T(a)   = T(s/2) / tan(π/n)    (T = S/C; a = apothem)
+  //   S(a)   = T(s/2) / tan(π/n)    (T = S/C; a = apothem; the angle at
+  //                                  the centre has tan = T(opposite)/S(adjacent))
   t.circumradius_rad = space.S_inv(space.S(half) / std::sin(kPi / n));
   if (space.kind == SpaceKind::S3 && space.S(half) / std::sin(kPi / n) >= 1.0)
     t.circumradius_rad = kPi / 2.0;
-  const double tan_a = (space.S(half) / space.C(half)) / std::tan(kPi / n);
-  // arc(s, c) with (s, c) ∝ (T, 1), normalised so that C² + k S² = 1.
-  const double norm = std::sqrt(1.0 + space.k() * tan_a * tan_a);
-  t.apothem_rad = space.arc(tan_a / norm, 1.0 / norm);
+  t.apothem_rad = space.S_inv((space.S(half) / space.C(half)) / std::tan(kPi / n));
   return t;
 }
 
