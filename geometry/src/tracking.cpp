@@ -256,7 +256,11 @@ const TrackingOutput& Tracker::update(const LabFrame& frame) {
     a.virtual_edge = wrap_index(out_.state.virtual_edge_unwrapped + offset, table_.sides);
   }
   place(lab, ok);
-  measure_coherence(lab, ok);
+  if (options_.measure_coherence) {
+    measure_coherence(lab, ok);
+  } else {
+    for (auto& c : out_.coherence) c.measured = false;
+  }
   return out_;
 }
 

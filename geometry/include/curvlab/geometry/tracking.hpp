@@ -130,6 +130,9 @@ struct TrackerOptions {
   // it is farther than leave_radius_m again.
   double centre_enter_radius_m = 0.10;
   double centre_leave_radius_m = 0.15;
+  // The coherence readings cost about as much as the placement; a frame loop
+  // that logs them elsewhere (or a benchmark of placement alone) may skip them.
+  bool measure_coherence = true;
 };
 
 // The edge correspondence and where the head's anchor is (paper, step 3).
