@@ -97,8 +97,32 @@ Isometry curved_from_rigid(const Space& space, const RigidPose& pose) {
 }
 
 RigidPose rigid_reading(const Space& space, const Isometry& iso) {
-  const Decomposition d = decompose(space, iso);
-  return {d.rotation, log_origin(space, position(space, iso))};
+  // The same split as decompose() (M = T·R, T the translation to M's
+  // position), but every frame reads four of these, so T⁻¹ is built from the
+  // position column itself (C(t) = w, S(t) = |xyz|, both already divided by
+  // ρ) and the only transcendental call is the one for the distance.
+  const Vec4 p = iso.m[3];
+  const Vec3 xyz(p.x, p.y, p.z);
+  const double r = glm::length(xyz);
+  if (!(r > 1e-300)) {
+    if (p.w > 0.0) return {Mat3(iso.m), Vec3(0.0)};
+    const Decomposition d = decompose(space, iso);  // S3 antipode: no direction
+    return {d.rotation, log_origin(space, position(space, iso))};
+  }
+  const Vec3 u = xyz / r;
+  const double c = p.w;
+  // T⁻¹ is the translation by −t along u: x_u' = C x_u − S w, the rest of xyz
+  // unchanged; applied to M's first three columns it leaves R.
+  RigidPose out;
+  for (int j = 0; j < 3; ++j) {
+    const Vec4 col = iso.m[j];
+    const Vec3 cx(col.x, col.y, col.z);
+    const double along = glm::dot(u, cx);
+    // (T⁻¹ col)_xyz = col_xyz + (c − 1)(u·col_xyz) u − r·col_w u
+    out.rotation[j] = cx + ((c - 1.0) * along - r * col.w) * u;
+  }
+  out.translation_m = (space.radius_m * space.arc(r, c)) * u;
+  return out;
 }
 
 RigidPose PhysicalTable::edge_frame(int edge, double along_m) const {

@@ -439,3 +439,27 @@ TEST(VirtualTable, CornersTurnByExactlyNinetyDegrees) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(RigidReading, InvertsTheCurvedPlacementAndAgreesWithDecompose) {
+  for (SpaceKind kind : {SpaceKind::S3, SpaceKind::E3, SpaceKind::H3}) {
+    const Space space{kind, 0.7};
+    for (const Vec3 t : {Vec3(0.3, -0.5, 0.2), Vec3(0.0, 0.0, 0.0), Vec3(1e-9, 0.0, 0.0),
+                         Vec3(-1.1, 0.4, 0.6)}) {
+      RigidPose pose;
+      pose.rotation = glm::mat3_cast(glm::angleAxis(0.7, glm::normalize(Vec3(1.0, 2.0, -0.5))));
+      pose.translation_m = t;
+      const Isometry iso = curved_from_rigid(space, pose);
+      const RigidPose back = rigid_reading(space, iso);
+      EXPECT_LT(glm::length(back.translation_m - t), 1e-12) << to_string(kind);
+      const Decomposition d = decompose(space, iso);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_LT(glm::length(back.rotation[c] - pose.rotation[c]), 1e-12) << to_string(kind);
+        EXPECT_LT(glm::length(back.rotation[c] - d.rotation[c]), 1e-12) << to_string(kind);
+      }
+    }
+  }
+}
+
+}  // namespace
