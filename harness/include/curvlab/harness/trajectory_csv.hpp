@@ -26,7 +26,7 @@ struct TrajectoryFile {
   bool table_given = false;
 };
 
-// The CSV header row (28 columns).
+// The CSV header row (25 columns: t_ns, then valid, x, y, z, qw, qx, qy, qz per device).
 const std::string& trajectory_csv_header();
 
 std::variant<TrajectoryFile, InputError> parse_trajectory_csv(std::istream& in,
