@@ -37,5 +37,6 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 void add_inspect_commands(CLI::App& app);
 void add_devices_commands(CLI::App& app);
 void add_export_commands(CLI::App& app);
+void add_track_commands(CLI::App& app);  // trajectory, track, inspect vergence/stick
 
 }  // namespace curvlab::cli

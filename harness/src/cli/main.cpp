@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   curvlab::cli::add_inspect_commands(app);
   curvlab::cli::add_devices_commands(app);
   curvlab::cli::add_export_commands(app);
+  curvlab::cli::add_track_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

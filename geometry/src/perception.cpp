@@ -1,0 +1,161 @@
+#include "curvlab/geometry/perception.hpp"
+
+#include "curvlab/geometry/maps.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace curvlab::geometry {
+namespace {
+
+// The observer's model of the eyes: the interocular axis (left → right) and
+// the forward direction orthogonal to it in the plane containing −z.
+struct EyeAxes {
+  Vec3 axis{1.0, 0.0, 0.0};
+  Vec3 forward{0.0, 0.0, -1.0};
+};
+
+EyeAxes eye_axes(const EyeOffsets& eyes) {
+  EyeAxes a;
+  const Vec3 d = eyes.right_m - eyes.left_m;
+  const double len = glm::length(d);
+  if (len > 0.0) a.axis = d / len;
+  const Vec3 minus_z(0.0, 0.0, -1.0);
+  const Vec3 f = minus_z - glm::dot(minus_z, a.axis) * a.axis;
+  const double flen = glm::length(f);
+  if (flen > 0.0) a.forward = f / flen;
+  return a;
+}
+
+double yaw_toward(const EyeAxes& a, const Vec3& dir) {
+  return std::atan2(glm::dot(dir, a.axis), glm::dot(dir, a.forward));
+}
+
+Vec3 unit_or_forward(const Vec3& v) {
+  const double len = glm::length(v);
+  return len > 0.0 ? v / len : Vec3(0.0, 0.0, -1.0);
+}
+
+}  // namespace
+
+std::string_view to_string(ViewMode mode) {
+  switch (mode) {
+    case ViewMode::tourist: return "tourist";
+    case ViewMode::native: return "native";
+    case ViewMode::monocular: return "monocular";
+  }
+  return "?";
+}
+
+std::optional<ViewMode> parse_view_mode(std::string_view text) {
+  if (text == "tourist") return ViewMode::tourist;
+  if (text == "native") return ViewMode::native;
+  if (text == "monocular") return ViewMode::monocular;
+  return std::nullopt;
+}
+
+EyeOffsets eyes_from_ipd(double ipd_m) {
+  return {Vec3(-0.5 * ipd_m, 0.0, 0.0), Vec3(0.5 * ipd_m, 0.0, 0.0)};
+}
+
+std::array<SightLine, 2> sight_lines(const Space& space, const Isometry& nose,
+                                     const EyeOffsets& eyes, ViewMode mode, const Point& q) {
+  const Vec3 offsets[2] = {eyes.left_m, eyes.right_m};
+  std::array<SightLine, 2> out;
+  if (mode == ViewMode::tourist) {
+    // True optics: each eye is the nose translated along a geodesic, so its
+    // axes are the nose's parallel-transported; the initial direction of the
+    // geodesic to q, read in those axes, is where the eye looks.
+    for (int i = 0; i < 2; ++i) {
+      const Isometry eye = nose * translation_m(space, offsets[i]);
+      out[static_cast<std::size_t>(i)] = {offsets[i], unit_or_forward(log_at(space, eye, q))};
+    }
+  } else {
+    // Nose space → Euclidean tangent space (azimuthal-equidistant) → eye.
+    const Vec3 image = log_at(space, nose, q);
+    for (int i = 0; i < 2; ++i)
+      out[static_cast<std::size_t>(i)] = {offsets[i], unit_or_forward(image - offsets[i])};
+  }
+  return out;
+}
+
+PerceivedPoint perceive_point(const Space& space, const Isometry& nose, const EyeOffsets& eyes,
+                              ViewMode mode, const Point& q) {
+  PerceivedPoint p;
+  if (mode == ViewMode::monocular) {
+    p.position_m = log_at(space, nose, q);
+    p.has_disparity = false;
+    return p;
+  }
+  const auto lines = sight_lines(space, nose, eyes, mode, q);
+  const EyeAxes axes = eye_axes(eyes);
+  p.vergence_rad = yaw_toward(axes, lines[0].direction) - yaw_toward(axes, lines[1].direction);
+  // Closest points of the two (infinite) lines o1 + s d1 and o2 + u d2.
+  const Vec3& d1 = lines[0].direction;
+  const Vec3& d2 = lines[1].direction;
+  const Vec3 w0 = lines[0].origin_m - lines[1].origin_m;
+  const double b = glm::dot(d1, d2);
+  const double d = glm::dot(d1, w0);
+  const double e = glm::dot(d2, w0);
+  const double den = 1.0 - b * b;
+  if (den <= 1e-24) {
+    p.parallel = true;
+    p.position_m = 0.5 * (lines[0].origin_m + lines[1].origin_m) +
+                   1e9 * unit_or_forward(d1 + d2);
+    return p;
+  }
+  const double s = (b * e - d) / den;
+  const double u = (e - b * d) / den;
+  p.diverging = s < 0.0 && u < 0.0;
+  p.position_m = 0.5 * (lines[0].origin_m + s * d1 + lines[1].origin_m + u * d2);
+  return p;
+}
+
+double distance_from_vergence_m(double vergence_rad, double ipd_m) {
+  const double t = std::tan(0.5 * vergence_rad);
+  if (t == 0.0) return std::numeric_limits<double>::infinity();
+  return 0.5 * ipd_m / t;
+}
+
+VergenceReading vergence_straight_ahead(const Space& space, double ipd_m, double d_m) {
+  const EyeOffsets eyes = eyes_from_ipd(ipd_m);
+  const Point q = exp_origin(space, Vec3(0.0, 0.0, -d_m));
+  const Isometry nose = Isometry::identity();
+  VergenceReading r;
+  r.vergence_rad = perceive_point(space, nose, eyes, ViewMode::tourist, q).vergence_rad;
+  r.tourist_distance_m = distance_from_vergence_m(r.vergence_rad, ipd_m);
+  r.native_distance_m = -perceive_point(space, nose, eyes, ViewMode::native, q).position_m.z;
+  return r;
+}
+
+Isometry stick_frame(const Space& space, double distance_m) {
+  return translation_rad(space, Vec3(0.0, 0.0, -1.0), distance_m / space.radius_m);
+}
+
+StickPerception perceive_stick(const Space& space, const BentStick& stick, double mid_distance_m,
+                               const EyeOffsets& eyes, ViewMode mode) {
+  const Isometry frame = stick_frame(space, mid_distance_m);
+  const Isometry nose = Isometry::identity();
+  const Point o = origin(space);
+  StickPerception out;
+  for (int i = 0; i < 5; ++i) {
+    const double u = stick.length_m * (static_cast<double>(i) / 4.0 - 0.5);
+    const Point q = stick.centre_point(space, frame, u);
+    out.distances_m[static_cast<std::size_t>(i)] = distance_m(space, o, q);
+    out.perceived_m[static_cast<std::size_t>(i)] =
+        perceive_point(space, nose, eyes, mode, q).position_m;
+  }
+  if (mode == ViewMode::monocular) return out;
+  const Vec3& e1 = out.perceived_m[0];
+  const Vec3& e2 = out.perceived_m[4];
+  const Vec3 mid = 0.5 * (e1 + e2);
+  const Vec3 chord = unit_or_forward(e2 - e1);
+  // The unit normal to the chord pointing from the chord toward the nose.
+  Vec3 toward = -mid - glm::dot(-mid, chord) * chord;
+  const double len = glm::length(toward);
+  toward = len > 0.0 ? toward / len : Vec3(0.0, 0.0, 1.0);
+  out.perceived_sagitta_m = glm::dot(out.perceived_m[2] - mid, toward);
+  return out;
+}
+
+}  // namespace curvlab::geometry
