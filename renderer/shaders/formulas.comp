@@ -8,7 +8,7 @@ layout(local_size_x = 64) in;
 layout(std430, set = 0, binding = 0) readonly buffer Inputs { vec4 points[]; } inputs;
 layout(std430, set = 0, binding = 1) writeonly buffer Outputs { vec4 values[]; } outputs;
 
-layout(push_constant) uniform Params {
+layout(std140, set = 0, binding = 2) uniform Params {
   mat4 proj;
   mat4 eye_from_nose;
   vec4 rho_k_count;  // x: rho, y: k, z: number of points

@@ -137,10 +137,18 @@ MeshData build_table(const Space& space, const geometry::TableShape& table, int 
 MeshInfo table_info(const Space& space, const geometry::TableShape& table,
                     const TableStyle& style) {
   MeshInfo info;
-  info.bound_centre = geometry::origin(space);
-  info.bound_radius_m = table.circumradius_m() + 1.5 * (style.cushion_width_m +
-                                                        style.rail_width_m) +
-                        style.skirt_depth_m;
+  // The cloth within the circumradius, and each edge's cushions, rails and
+  // skirt in four balls along it.
+  info.bounds.push_back({geometry::origin(space), table.circumradius_m()});
+  const double outer = style.cushion_width_m + style.rail_width_m;
+  const double piece_m = table.edge_m / 4.0;
+  const double ball_r = std::hypot(piece_m / 2.0 + outer,
+                                   std::hypot(outer, style.skirt_depth_m + style.cushion_height_m)) + 0.01;
+  for (int e = 0; e < table.sides; ++e)
+    for (int i = 0; i < 4; ++i)
+      info.bounds.push_back({geometry::table_edge_frame(space, table, e, (i + 0.5) * piece_m) *
+                                 geometry::origin(space),
+                             ball_r});
   for (int j = 0; j < table.sides; ++j)
     info.long_edges.push_back({geometry::table_corner(space, table, j),
                                geometry::table_corner(space, table, j + 1)});
@@ -194,8 +202,8 @@ MeshData build_stick(const Space& space, const geometry::BentStick& stick, int l
 
 MeshInfo stick_info(const Space& space, const geometry::BentStick& stick) {
   MeshInfo info;
-  info.bound_centre = geometry::origin(space);
-  info.bound_radius_m = stick.length_m / 2.0 + std::abs(stick.sagitta_m) + stick.radius_m;
+  info.bounds.push_back({geometry::origin(space),
+                         stick.length_m / 2.0 + std::abs(stick.sagitta_m) + stick.radius_m});
   const Isometry frame = Isometry::identity();
   info.long_edges.push_back({stick.centre_point(space, frame, -stick.length_m / 2.0),
                              stick.centre_point(space, frame, stick.length_m / 2.0)});
@@ -225,8 +233,7 @@ MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color)
 
 MeshInfo ball_info(const Space& space, double radius_m) {
   MeshInfo info;
-  info.bound_centre = geometry::origin(space);
-  info.bound_radius_m = radius_m;
+  info.bounds.push_back({geometry::origin(space), radius_m});
   return info;
 }
 
@@ -252,8 +259,7 @@ MeshData build_panel(const Space& space, double width_m, double height_m, int le
 
 MeshInfo panel_info(const Space& space, double width_m, double height_m) {
   MeshInfo info;
-  info.bound_centre = geometry::origin(space);
-  info.bound_radius_m = 0.5 * std::hypot(width_m, height_m);
+  info.bounds.push_back({geometry::origin(space), 0.5 * std::hypot(width_m, height_m)});
   const double hw = width_m / 2.0;
   const double hh = height_m / 2.0;
   info.long_edges.push_back({geometry::exp_origin(space, Vec3(-hw, hh, 0.0)),

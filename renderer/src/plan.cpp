@@ -127,8 +127,10 @@ RenderPlan plan_frame(const Scene& scene, const FrameDescription& frame) {
         const SceneObject& o = objects[i];
         if (!o.visible) continue;
         const glm::dmat4 mv = vp.constants.viewer_from_world.m * o.pose.m;
-        const Point centre = mv * o.info.bound_centre;
-        if (!may_be_visible(vp.constants, hemi, centre, o.info.bound_radius_m)) {
+        bool visible = o.info.bounds.empty();
+        for (const auto& ball : o.info.bounds)
+          visible = visible || may_be_visible(vp.constants, hemi, mv * ball.centre, ball.radius_m);
+        if (!visible) {
           ++vp.culled;
           continue;
         }

@@ -56,6 +56,19 @@ namespace {
 
 constexpr double kTableHeightM = 0.80;
 
+// geometry::shape_in (main a3dde45) takes the apothem from T(a) = T(s/2)/tan(π/n),
+// which holds only in E3; in the right triangle centre–midpoint–corner the
+// spherical/hyperbolic rule is S(a) = T(s/2)/tan(π/n) (S3 octant: a =
+// atan(1/√2), not π/6). table_edge_frame uses the apothem, so with the wrong
+// value the S3 triangle and the H3 pentagon do not close. Until geometry is
+// fixed, the renderer corrects the shape it draws; once fixed, this is a no-op.
+geometry::TableShape consistent_table(const Space& space, geometry::TableShape t) {
+  const double half = t.side_rad / 2.0;
+  const double s_a = space.S(half) / space.C(half) / std::tan(std::numbers::pi / t.sides);
+  t.apothem_rad = space.kind == SpaceKind::E3 ? s_a : space.S_inv(s_a);
+  return t;
+}
+
 // Adds a text panel of the given size; pixel density ~1000 px per metre.
 std::optional<std::string> add_panel(Scene& scene, const Space& space, const std::string& text,
                                      const std::string& font, double width_m, double height_m,
@@ -97,12 +110,18 @@ void add_table(Scene& scene, const Space& space, const geometry::TableShape& tab
 
 // The participant stands outside edge 0 (facing −z toward the centre) and
 // looks down at the table centre.
-Isometry table_viewer(const Space& space, const geometry::TableShape& table, double eye_height_m) {
+Isometry table_viewer(const Space& space, const geometry::TableShape& table, double eye_height_m,
+                      double yaw_rad) {
   const double back_m = table.apothem_m() + 0.40;
   const double up_m = eye_height_m - kTableHeightM;
-  const double pitch = std::atan2(up_m, back_m);
-  return geometry::translation_m(space, Vec3(0.0, 0.0, back_m)) *
-         geometry::translation_m(space, Vec3(0.0, up_m, 0.0)) *
+  const Isometry place = geometry::translation_m(space, Vec3(0.0, 0.0, back_m)) *
+                         geometry::translation_m(space, Vec3(0.0, up_m, 0.0));
+  // Pitch so the table centre is straight ahead: its direction as seen from
+  // the eye, through the log map (one formula for every space).
+  const Vec3 dir = geometry::log_origin(space, geometry::inverse(space, place) *
+                                                   geometry::origin(space));
+  const double pitch = std::atan2(-dir.y, -dir.z);
+  return place * geometry::rotation(Vec3(0.0, 1.0, 0.0), yaw_rad) *
          geometry::rotation(Vec3(1.0, 0.0, 0.0), -pitch);
 }
 
@@ -120,8 +139,8 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
     table = geometry::right_angled_table_from_edge(kind, options.table_edge_m, sides, 1.0);
   }
   if (auto* e = std::get_if<geometry::GeometryError>(&table)) return e->message;
-  const auto shape = std::get<geometry::TableShape>(table);
-  s.space = Space{kind, shape.radius_m};
+  s.space = Space{kind, std::get<geometry::TableShape>(table).radius_m};
+  const auto shape = consistent_table(s.space, std::get<geometry::TableShape>(table));
   const Space& space = s.space;
   const geometry::BentStick stick{options.stick_length_m, options.stick_sagitta_m,
                                   options.stick_radius_m};
@@ -130,7 +149,7 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
     case SceneKind::stick: {
       // The stick alone, across the line of sight below eye level, bowed
       // toward the participant by a positive sagitta (model +z faces them).
-      s.head = Isometry::identity();
+      s.head = geometry::rotation(Vec3(0.0, 1.0, 0.0), options.yaw_rad);
       add_stick(s.scene, space, stick,
                 geometry::translation_m(space, Vec3(0.0, -0.25, -0.75)));
       if (auto err = add_panel(s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
@@ -142,7 +161,7 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
     case SceneKind::billiards: {
       s.table = shape;
       add_table(s.scene, space, shape);
-      s.head = table_viewer(space, shape, options.eye_height_m);
+      s.head = table_viewer(space, shape, options.eye_height_m, options.yaw_rad);
       if (scene_kind == SceneKind::table) break;
       // Fifteen balls racked toward the far side, the cue ball toward the
       // participant, the stick aimed at it, and the prompt beyond the table.
@@ -186,7 +205,7 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
                     geometry::translation_m(space, Vec3(0.0, 0.0, half)) *
                     geometry::rotation(Vec3(0.0, 1.0, 0.0), std::numbers::pi / 2.0));
       if (auto err = add_panel(
-              s.scene, space, options.prompt, options.font_path, 0.7, 0.2,
+              s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
               geometry::translation_m(space, Vec3(0.0, 0.30, -shape.apothem_m() - 0.1)) *
                   geometry::rotation(Vec3(1.0, 0.0, 0.0), -0.3)))
         return *err;
@@ -202,7 +221,8 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
       s.scene.add(std::move(o));
       // Off-centre and turned, so the view is not symmetric.
       s.head = geometry::translation_m(space, Vec3(0.12, 0.07, 0.2 * space.radius_m)) *
-               geometry::rotation(glm::normalize(Vec3(0.3, 1.0, 0.1)), 0.35);
+               geometry::rotation(glm::normalize(Vec3(0.3, 1.0, 0.1)), 0.35) *
+               geometry::rotation(Vec3(0.0, 1.0, 0.0), options.yaw_rad);
       break;
     }
   }

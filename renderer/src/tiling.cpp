@@ -239,8 +239,7 @@ MeshData build_tiling_mesh(const Space& space, const Tiling& tiling, int level) 
 
 MeshInfo tiling_info(const Space& space, const Tiling& tiling) {
   MeshInfo info;
-  info.bound_centre = geometry::origin(space);
-  info.bound_radius_m = 1e30;  // everywhere: never culled
+  info.bounds.push_back({geometry::origin(space), 1e30});  // everywhere: never culled
   // Probes: the edges nearest the origin (the first cell's).
   for (std::size_t i = 0; i < tiling.edges.size() && i < 30; ++i)
     info.long_edges.push_back(tiling.edges[i]);

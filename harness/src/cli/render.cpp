@@ -27,6 +27,7 @@ struct RenderArgs {
   double eye_height_m = 1.55;
   std::string size = "1024x1024";
   double fov_deg = 90.0;
+  double yaw_deg = 0.0;
   std::string back_hemisphere = "on";
   std::string eyes;
   double ipd_m = 0.063;
@@ -72,6 +73,7 @@ void run_render(const RenderArgs& a) {
     throw UsageError("--fov-deg must lie between 10 and 170 degrees");
   if (a.back_hemisphere != "on" && a.back_hemisphere != "off")
     throw UsageError("--back-hemisphere must be on or off, got '" + a.back_hemisphere + "'");
+  if (!(std::abs(a.yaw_deg) <= 360.0)) throw UsageError("--yaw-deg must lie in [-360, 360]");
   if (!(a.ipd_m >= 0.0 && a.ipd_m < 0.1)) throw UsageError("--ipd-m must lie in [0, 0.1) m");
   const auto [w, h] = parse_size(a.size);
   if (a.out.empty()) throw UsageError("--out DIR is required");
@@ -90,6 +92,7 @@ void run_render(const RenderArgs& a) {
   options.radius_m = a.radius_m;
   options.eye_height_m = a.eye_height_m;
   options.stick_sagitta_m = a.bend_m;
+  options.yaw_rad = a.yaw_deg * std::numbers::pi / 180.0;
   auto made = make_stimulus_scene(*kind, *scene_kind, options);
   if (auto* e = std::get_if<std::string>(&made)) throw UsageError(*e);
   auto& stimulus = std::get<StimulusScene>(made);
@@ -164,6 +167,7 @@ void add_render_commands(CLI::App& app) {
   cmd->add_option("--fov-deg", args->fov_deg, "horizontal field of view (default 90)");
   cmd->add_option("--back-hemisphere", args->back_hemisphere, "S3 back hemisphere: on or off");
   cmd->add_option("--eyes", args->eyes, "override the preset's eyes: both, left, right, dominant");
+  cmd->add_option("--yaw-deg", args->yaw_deg, "turn the head left (+) from facing the stimulus");
   cmd->add_option("--ipd-m", args->ipd_m, "interpupillary distance (default 0.063)");
   cmd->add_option("--bend-m", args->bend_m, "cue-stick sagitta in metres (+ toward the viewer)");
   cmd->add_flag("--software", args->software, "use a CPU Vulkan device (lavapipe) even with a GPU");

@@ -38,9 +38,16 @@ struct MeshData {
 };
 
 // Level-independent facts the render plan uses without building a mesh.
+struct BoundingBall {
+  Point centre;           // model coordinates
+  double radius_m = 0.0;  // geodesic radius; ≥ 1e29 means "everywhere"
+};
+
 struct MeshInfo {
-  Point bound_centre;            // model coordinates
-  double bound_radius_m = 0.0;   // geodesic radius of a ball holding the mesh
+  // Balls whose union holds the mesh: several small ones cull better than
+  // one large one (in S3 a large ball may hold the viewer, and then its
+  // antipodal image can be anywhere).
+  std::vector<BoundingBall> bounds;
   std::vector<GeodesicEdge> long_edges;  // probes for native subdivision
   int base_segments = 1;         // pieces per long edge at level 0
 };

@@ -53,6 +53,7 @@ struct StimulusOptions {
   double table_edge_m = 0.9;   // physical edge; fixes ρ in S3 and H3
   std::optional<double> radius_m;  // overrides: the table then follows from ρ
   double eye_height_m = 1.55;  // above the floor; the cloth is at 0.80 m
+  double yaw_rad = 0.0;        // head turned left (+) from facing the stimulus
   double stick_length_m = 1.0;
   double stick_radius_m = 0.0125;
   double stick_sagitta_m = 0.0;  // bend: + toward the viewer

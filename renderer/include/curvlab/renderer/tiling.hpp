@@ -9,7 +9,7 @@
 namespace curvlab::renderer {
 
 struct TilingOptions {
-  double reach_rad = 2.4;     // cells whose centre lies within this distance (H3)
+  double reach_rad = 3.0;     // cells whose centre lies within this distance (H3)
   double reach_e3_m = 3.2;    // the same in E3, metres
   double cube_edge_e3_m = 1.0;
   std::size_t max_cells = 400;
