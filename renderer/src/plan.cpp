@@ -97,6 +97,15 @@ std::pair<int, double> choose_level(const ViewConstants& view, Hemisphere hemi,
                                     const glm::dmat4& model_view, const MeshInfo& info,
                                     const FrameDescription& frame) {
   if (view.projection == Projection::tourist || info.long_edges.empty()) return {0, 0.0};
+  if (frame.settings.forced_level) {
+    double err = 0.0;
+    for (const auto& edge : info.long_edges)
+      err = std::max(err, edge_screen_error(view, hemi, model_view, edge,
+                                            info.base_segments << *frame.settings.forced_level,
+                                            frame.width_px, frame.height_px, 4)
+                              .max_px);
+    return {*frame.settings.forced_level, err};
+  }
   double err = 0.0;
   for (int level = 0; level <= kMaxSubdivisionLevel; ++level) {
     err = 0.0;

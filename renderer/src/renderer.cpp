@@ -107,6 +107,10 @@ struct Renderer::Impl {
   bool timestamps = false;
   RenderPlan last_plan;
   std::vector<double> last_signature;
+  // Eyes of a content-preserving target known to hold only the background:
+  // not cleared or read back again while they stay unshown.
+  std::uint64_t blank_target = 0;
+  std::array<bool, 2> blank_eye{false, false};
   // Bound to set 1 for draws without text, so every pipeline's sets are bound.
   Texture blank;
 
@@ -361,7 +365,9 @@ std::vector<double> frame_signature(const Scene& scene, const FrameDescription& 
                         static_cast<double>(f.settings.eyes),
                         static_cast<double>(f.settings.dominant_eye),
                         f.settings.back_hemisphere ? 1.0 : 0.0, f.settings.near_m,
-                        f.settings.error_budget_px, static_cast<double>(f.width_px),
+                        f.settings.error_budget_px,
+                        static_cast<double>(f.settings.forced_level.value_or(-1)),
+                        static_cast<double>(f.width_px),
                         static_cast<double>(f.height_px)};
   const double* h = glm::value_ptr(f.head.m);
   s.insert(s.end(), h, h + 16);
@@ -416,7 +422,10 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
     const EyeImage img = target.eye_image(vp.eye);
     const vk::ImageSubresourceRange color_range{vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1};
     if (!vp.rendered) {
-      // Only the background: a clear, no pass.
+      // Only the background: a clear, no pass — and nothing at all when a
+      // headless target's image already holds just the background.
+      if (target.preserves_contents() && r.blank_target == target.identity() && r.blank_eye[e])
+        continue;
       transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
                  vk::ImageLayout::eTransferDstOptimal);
       cb.clearColorImage(img.image, vk::ImageLayout::eTransferDstOptimal,
@@ -424,8 +433,14 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
       transition(cb, img.image, vk::ImageAspectFlagBits::eColor,
                  vk::ImageLayout::eTransferDstOptimal, img.final_layout);
       target.record_after(cb, vp.eye);
+      if (target.preserves_contents()) {
+        if (r.blank_target != target.identity()) r.blank_eye = {false, false};
+        r.blank_target = target.identity();
+        r.blank_eye[e] = true;
+      }
       continue;
     }
+    if (r.blank_target == target.identity()) r.blank_eye[e] = false;
     ViewBlock block{to_float(vp.constants.proj_front), to_float(vp.constants.proj_back),
                     to_float(vp.constants.eye_from_nose),
                     glm::vec4(static_cast<float>(frame.space.radius_m), 0.0f, 0.0f, 0.0f)};

@@ -42,6 +42,8 @@ struct ViewSettings {
   // Largest screen-space deviation of a drawn geodesic edge from the true
   // curve, in pixels, that native subdivision may leave.
   double error_budget_px = 0.1;
+  // Fixes the native subdivision level instead (benchmarks, replays).
+  std::optional<int> forced_level;
 
   static ViewSettings preset(ViewPreset preset);
   [[nodiscard]] bool shows(Eye eye) const;
