@@ -58,6 +58,7 @@ FrameDescription frame_for(const StimulusScene& s, ViewSettings settings, std::u
 struct Timing {
   double frame_ms = 0.0;
   double gpu_ms = 0.0;
+  double cpu_ms = 0.0;
   FrameStats last;
 };
 
@@ -65,7 +66,7 @@ struct Timing {
 // no frame is an unchanged (skipped) one.
 Timing time_frames(Renderer& r, const StimulusScene& s, FrameDescription f, RenderTarget& target,
                    int frames) {
-  std::vector<double> wall, gpu;
+  std::vector<double> wall, gpu, cpu;
   Timing t;
   for (int i = 0; i < frames + 1; ++i) {
     f.head = s.head * geometry::rotation(geometry::Vec3(0, 1, 0), 1e-6 * i);
@@ -73,7 +74,9 @@ Timing time_frames(Renderer& r, const StimulusScene& s, FrameDescription f, Rend
     if (i == 0) continue;  // first frame builds meshes and pipelines
     wall.push_back(t.last.frame_ms);
     gpu.push_back(t.last.gpu_ms);
+    cpu.push_back(t.last.cpu_ms);
   }
+  t.cpu_ms = median(cpu);
   t.frame_ms = median(wall);
   t.gpu_ms = median(gpu);
   return t;
@@ -232,20 +235,50 @@ int main(int argc, char** argv) {
 
   // ---- 2. ratios ------------------------------------------------------------
   std::printf("\n2. Ratios, billiards scene, 1024 x 1024 per eye, default settings\n\n");
-  std::printf("| space | tourist ms | native ms | native/tourist | one-eye ms | one-eye/two-eye | native triangles | level |\n");
+  std::printf("| space | tourist ms (cpu/gpu) | native ms (cpu/gpu) | native/tourist | one-eye ms | one-eye/two-eye | native triangles | level |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   std::uint64_t billiards_triangles = 0;
   double billiards_ms = 0.0;
   for (SpaceKind kind : {SpaceKind::S3, SpaceKind::E3, SpaceKind::H3}) {
     const StimulusScene s = make(kind, SceneKind::billiards);
-    Renderer renderer(ctx);
-    OffscreenTarget target(ctx, 1024, 1024);
-    const Timing tourist = time_frames(renderer, s, frame_for(s, ViewSettings::preset(ViewPreset::tourist), 1024), target, frames);
-    const Timing native = time_frames(renderer, s, frame_for(s, ViewSettings::preset(ViewPreset::native), 1024), target, frames);
-    const Timing mono = time_frames(renderer, s, frame_for(s, ViewSettings::preset(ViewPreset::monocular), 1024), target, frames);
-    std::printf("| %s | %.1f | %.1f | %.3f | %.1f | %.3f | %llu | %d |\n", std::string(geometry::to_string(kind)).c_str(),
-                tourist.frame_ms, native.frame_ms, native.frame_ms / tourist.frame_ms, mono.frame_ms,
+    // Three renderers and targets, frames interleaved, so load from other
+    // processes on the machine affects all three alike.
+    Renderer r_tourist(ctx), r_native(ctx), r_mono(ctx);
+    OffscreenTarget t_tourist(ctx, 1024, 1024), t_native(ctx, 1024, 1024), t_mono(ctx, 1024, 1024);
+    Timing tourist, native, mono;
+    std::vector<double> wt, wn, wm, ct, cn, gt, gn;
+    for (int i = 0; i < frames + 1; ++i) {
+      const auto head = s.head * geometry::rotation(geometry::Vec3(0, 1, 0), 1e-6 * i);
+      auto f = [&](ViewPreset p) {
+        FrameDescription fd = frame_for(s, ViewSettings::preset(p), 1024);
+        fd.head = head;
+        return fd;
+      };
+      tourist.last = r_tourist.render(s.scene, f(ViewPreset::tourist), t_tourist);
+      native.last = r_native.render(s.scene, f(ViewPreset::native), t_native);
+      mono.last = r_mono.render(s.scene, f(ViewPreset::monocular), t_mono);
+      if (i == 0) continue;
+      wt.push_back(tourist.last.frame_ms);
+      wn.push_back(native.last.frame_ms);
+      wm.push_back(mono.last.frame_ms);
+      ct.push_back(tourist.last.cpu_ms);
+      cn.push_back(native.last.cpu_ms);
+      gt.push_back(tourist.last.gpu_ms);
+      gn.push_back(native.last.gpu_ms);
+    }
+    tourist.frame_ms = median(wt);
+    native.frame_ms = median(wn);
+    mono.frame_ms = median(wm);
+    tourist.cpu_ms = median(ct);
+    native.cpu_ms = median(cn);
+    tourist.gpu_ms = median(gt);
+    native.gpu_ms = median(gn);
+    std::printf("| %s | %.1f (%.1f/%.1f) | %.1f (%.1f/%.1f) | %.3f | %.1f | %.3f | %llu | %d |\n",
+                std::string(geometry::to_string(kind)).c_str(), tourist.frame_ms, tourist.cpu_ms, tourist.gpu_ms,
+                native.frame_ms, native.cpu_ms, native.gpu_ms, native.frame_ms / tourist.frame_ms, mono.frame_ms,
                 mono.frame_ms / native.frame_ms, static_cast<unsigned long long>(native.last.triangles), native.last.max_level);
+    std::printf("|   | tourist triangles %llu, draws %d |  |  |  |  |  |  |\n",
+                static_cast<unsigned long long>(tourist.last.triangles), tourist.last.draws);
     if (kind == SpaceKind::E3) {
       billiards_triangles = native.last.triangles;
       billiards_ms = native.frame_ms;

@@ -70,24 +70,23 @@ bool may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& cen
       if (glm::dot(n, glm::dvec3(c)) / s.radius_m < limit) return false;
     return true;
   }
-  // Native: the log image of the ball lies within the centre's image plus the
-  // radius stretched by the map's largest tangential factor there.
+  // Native: the map keeps directions from the nose and sets distance to the
+  // geodesic distance, so a ball of radius r at distance θ lands in the cone
+  // of half-angle α, sin α = S(r)/S(θ), about the centre's direction, between
+  // ρ(θ−r) and ρ(θ+r) — or, seen through the S3 antipode, about the opposite
+  // direction between ρ(2π−θ−r) and ρ(2π−θ+r). That cone section is held by
+  // a ball about the centre's image; the eye's few centimetres of offset are
+  // inside the frustum test's margin.
   const double theta = geometry::distance_from_origin_rad(s, centre);
-  double stretch = 1.0;
-  geometry::Vec3 q;
-  if (hemi == Hemisphere::back) {
-    q = geometry::back_log_origin(s, centre);
-    const double sn = std::sin(std::max(theta - radius_m / s.radius_m, 1e-6));
-    stretch = std::max(1.0, (2.0 * std::numbers::pi - theta + radius_m / s.radius_m) / sn);
-  } else {
-    q = geometry::log_origin(s, centre);
-    if (s.kind == SpaceKind::S3) {
-      const double far = std::min(theta + radius_m / s.radius_m, std::numbers::pi - 1e-6);
-      stretch = far / std::sin(far);
-    }
-  }
+  const double r_rad = radius_m / s.radius_m;
+  if (r_rad >= theta) return true;  // the ball holds the nose: any direction
+  if (s.kind == SpaceKind::S3 && theta + r_rad >= std::numbers::pi) return true;
+  const double sin_alpha = std::min(1.0, s.S(r_rad) / s.S(theta));
+  const geometry::Vec3 q = hemi == Hemisphere::back ? geometry::back_log_origin(s, centre)
+                                                    : geometry::log_origin(s, centre);
+  const double far_m = s.radius_m * ((hemi == Hemisphere::back ? 2.0 * std::numbers::pi - theta : theta) + r_rad);
+  const double r = std::hypot(radius_m, far_m * sin_alpha) + 0.05;
   const glm::dvec3 e = glm::dvec3(view.eye_from_nose * glm::dvec4(q, 1.0));
-  const double r = radius_m * stretch;
   for (const auto& n : normals)
     if (glm::dot(n, e) < -r) return false;
   return true;
@@ -106,17 +105,26 @@ std::pair<int, double> choose_level(const ViewConstants& view, Hemisphere hemi,
                               .max_px);
     return {*frame.settings.forced_level, err};
   }
-  double err = 0.0;
-  for (int level = 0; level <= kMaxSubdivisionLevel; ++level) {
-    err = 0.0;
+  auto error_at = [&](int level) {
+    double err = 0.0;
     for (const auto& edge : info.long_edges)
       err = std::max(err, edge_screen_error(view, hemi, model_view, edge,
                                             info.base_segments << level, frame.width_px,
                                             frame.height_px, 4)
                               .max_px);
-    if (err <= frame.settings.error_budget_px) return {level, err};
-  }
-  return {kMaxSubdivisionLevel, err};
+    return err;
+  };
+  // The chord error of a smooth curve falls as 1/pieces², a quarter per
+  // level: predict the level from level 0, then verify (and step up if the
+  // prediction was short).
+  const double budget = frame.settings.error_budget_px;
+  const double err0 = error_at(0);
+  if (err0 <= budget) return {0, err0};
+  int level = std::clamp(static_cast<int>(std::ceil(std::log(err0 / budget) / std::log(4.0))), 1,
+                         kMaxSubdivisionLevel);
+  double err = error_at(level);
+  while (err > budget && level < kMaxSubdivisionLevel) err = error_at(++level);
+  return {level, err};
 }
 
 RenderPlan plan_frame(const Scene& scene, const FrameDescription& frame) {

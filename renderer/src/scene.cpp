@@ -212,13 +212,16 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
       break;
     }
     case SceneKind::tiling: {
-      auto tiling = std::make_shared<Tiling>(build_tiling(space));
-      SceneObject o;
-      o.name = "tiling";
-      o.build = [space, tiling](int level) { return build_tiling_mesh(space, *tiling, level); };
-      o.info = tiling_info(space, *tiling);
-      o.pose = Isometry::identity();
-      s.scene.add(std::move(o));
+      // Shells by distance, each its own object with its own subdivision.
+      for (Tiling& shell : split_into_shells(space, build_tiling(space), 4)) {
+        auto tiling = std::make_shared<Tiling>(std::move(shell));
+        SceneObject o;
+        o.name = "tiling";
+        o.build = [space, tiling](int level) { return build_tiling_mesh(space, *tiling, level); };
+        o.info = tiling_info(space, *tiling);
+        o.pose = Isometry::identity();
+        s.scene.add(std::move(o));
+      }
       // Off-centre and turned, so the view is not symmetric.
       s.head = geometry::translation_m(space, Vec3(0.12, 0.07, 0.2 * space.radius_m)) *
                geometry::rotation(glm::normalize(Vec3(0.3, 1.0, 0.1)), 0.35) *

@@ -214,6 +214,25 @@ Tiling build_tiling(const Space& space, const TilingOptions& options) {
   return t;
 }
 
+std::vector<Tiling> split_into_shells(const Space& space, const Tiling& tiling, int shells) {
+  std::vector<std::pair<double, std::size_t>> by_distance;
+  for (std::size_t i = 0; i < tiling.edges.size(); ++i) {
+    const Point mid = geometry::geodesic_lerp(space, tiling.edges[i].a, tiling.edges[i].b, 0.5);
+    by_distance.emplace_back(geometry::distance_from_origin_rad(space, mid), i);
+  }
+  std::sort(by_distance.begin(), by_distance.end());
+  std::vector<Tiling> out;
+  const std::size_t per = (by_distance.size() + shells - 1) / std::max(1, shells);
+  for (std::size_t start = 0; start < by_distance.size(); start += per) {
+    Tiling t = tiling;
+    t.edges.clear();
+    for (std::size_t i = start; i < std::min(by_distance.size(), start + per); ++i)
+      t.edges.push_back(tiling.edges[by_distance[i].second]);
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
 MeshData build_tiling_mesh(const Space& space, const Tiling& tiling, int level) {
   MeshData m;
   m.topology = Topology::lines;
@@ -240,11 +259,10 @@ MeshData build_tiling_mesh(const Space& space, const Tiling& tiling, int level) 
 MeshInfo tiling_info(const Space& space, const Tiling& tiling) {
   MeshInfo info;
   info.bounds.push_back({geometry::origin(space), 1e30});  // everywhere: never culled
-  // Probes: the edges nearest the origin (the first cell's).
-  for (std::size_t i = 0; i < tiling.edges.size() && i < 30; ++i)
-    info.long_edges.push_back(tiling.edges[i]);
+  // Probes: up to 40 edges spread over the list.
+  const std::size_t step = std::max<std::size_t>(1, tiling.edges.size() / 40);
+  for (std::size_t i = 0; i < tiling.edges.size(); i += step) info.long_edges.push_back(tiling.edges[i]);
   info.base_segments = 1;
-  (void)space;
   return info;
 }
 

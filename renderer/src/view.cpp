@@ -163,9 +163,14 @@ EdgeError edge_screen_error(const ViewConstants& view, Hemisphere hemi,
   const Space& space = view.space;
   const Point a = model_view * edge.a;
   const Point b = model_view * edge.b;
+  // The geodesic through a and b: p(f) = (S((1−f)d)·a + S(f·d)·b) / S(d),
+  // one formula for all three spaces (linear interpolation in E3).
+  const double d_rad = geometry::distance_rad(space, a, b);
+  const double s_d = space.S(d_rad);
   auto curve = [&](double f) {
-    return to_pixels(clip_position(view, hemi, geometry::geodesic_lerp(space, a, b, f)), width_px,
-                     height_px);
+    const Point p = s_d > 1e-12 ? (space.S((1.0 - f) * d_rad) * a + space.S(f * d_rad) * b) / s_d
+                                : (1.0 - f) * a + f * b;
+    return to_pixels(clip_position(view, hemi, p), width_px, height_px);
   };
   EdgeError err;
   double sum = 0.0;

@@ -30,6 +30,11 @@ Tiling build_tiling(const Space& space, const TilingOptions& options = {});
 // of the space; in E3 any R gives the Euclidean angle).
 double regular_cell_dihedral_rad(const Space& space, int p, double circumradius_rad);
 
+// Splits the edges into shells by the distance of their midpoints from the
+// origin, so each shell gets its own subdivision level (near edges bend
+// most in the native view).
+std::vector<Tiling> split_into_shells(const Space& space, const Tiling& tiling, int shells);
+
 // The edges as a line mesh, each split into 2^level geodesic pieces, coloured
 // from light (near the origin) to dim (far).
 MeshData build_tiling_mesh(const Space& space, const Tiling& tiling, int level);
