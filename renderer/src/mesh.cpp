@@ -218,7 +218,6 @@ MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color)
   MeshData m;
   constexpr int kRings = 12;
   constexpr int kSlices = 18;
-  const Point centre = geometry::origin(space);
   for (int r = 0; r <= kRings; ++r) {
     const double lat = kPi * r / kRings;
     for (int s = 0; s <= kSlices; ++s) {
@@ -226,7 +225,6 @@ MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color)
       const Vec3 dir(std::sin(lat) * std::cos(lon), std::cos(lat), std::sin(lat) * std::sin(lon));
       const Point p = geometry::exp_origin(space, radius_m * dir);
       const Point out = geometry::exp_origin(space, (radius_m + 1e-3) * dir);
-      (void)centre;
       push(m, space, p, out, color);
     }
   }

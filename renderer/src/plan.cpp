@@ -42,24 +42,13 @@ std::array<glm::dvec3, 4> side_normals(const Fov& fov) {
   return n;
 }
 
-Fov fov_of(const ViewConstants& view) {
-  // Recover tangents from the projection: m00 = 2/(r−l), m20 = (r+l)/(r−l).
-  const glm::dmat4& m = view.proj_front;
-  const double rl = 2.0 / m[0][0];
-  const double rpl = m[2][0] * rl;
-  const double ud = -2.0 / m[1][1];
-  const double upd = -m[2][1] * ud;
-  return {std::atan((rpl - rl) / 2.0), std::atan((rpl + rl) / 2.0), std::atan((upd + ud) / 2.0),
-          std::atan((upd - ud) / 2.0)};
-}
-
 }  // namespace
 
 bool may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& centre,
                     double radius_m) {
   if (radius_m >= 1e29) return true;
   const Space& s = view.space;
-  const auto normals = side_normals(fov_of(view));
+  const auto normals = side_normals(view.fov);
   if (view.projection == Projection::tourist) {
     // Signed distance to a plane through the eye with unit normal n:
     // S(d) = n·xyz/ρ. Inside when d ≥ −r for every side plane.

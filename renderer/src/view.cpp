@@ -99,6 +99,7 @@ ViewConstants make_view_constants(const Space& space, const ViewSettings& settin
   ViewConstants v;
   v.projection = settings.projection;
   v.space = space;
+  v.fov = eye.fov;
   // S3 splits the depth range: front hemisphere in [0, ½], back in [½, 1]
   // (paper, "The 3-sphere", technical detail).
   const bool split = space.kind == SpaceKind::S3;

@@ -78,6 +78,7 @@ struct StereoRig {
 struct ViewConstants {
   Projection projection = Projection::tourist;
   Space space;
+  Fov fov;  // the eye's, for culling
   glm::dmat4 proj_front{1.0};
   glm::dmat4 proj_back{1.0};
   // Native only: the Euclidean eye offset in the nose's tangent space,
