@@ -77,33 +77,53 @@ MeshData build_table(const Space& space, const geometry::TableShape& table, int 
   MeshData m;
   const int n = table.sides;
   const Point centre = geometry::origin(space);
-  // Cloth: fan triangles (centre, corner j, corner j+1), each split into a
-  // triangular grid of `div` rows. Interior points are normalised linear
-  // combinations, which stay in the totally geodesic plane y = 0 and keep
-  // the grid's edges geodesic.
+  // Cloth: fan triangles (centre, corner j, corner j+1). The outer edge — the
+  // only line a viewer can see on the flat cloth — gets the level's 2^level
+  // pieces; the interior gets at most 4 rows, each with pieces in proportion
+  // to its length, so the triangle count grows linearly with the level, not
+  // quadratically. Points are normalised linear combinations, which stay in
+  // the totally geodesic plane y = 0.
   const int div = pieces(1, level);
+  const int rows = std::min(div, 4);
   for (int j = 0; j < n; ++j) {
     const Point a = geometry::table_corner(space, table, j);
     const Point b = geometry::table_corner(space, table, j + 1);
-    const auto first = static_cast<std::uint32_t>(m.vertices.size());
-    auto index = [&](int r, int c) {  // row r has r+1 vertices
-      return first + static_cast<std::uint32_t>(r * (r + 1) / 2 + c);
-    };
-    for (int r = 0; r <= div; ++r)
-      for (int c = 0; c <= r; ++c) {
-        const double fr = static_cast<double>(r) / div;
-        const double fc = r == 0 ? 0.0 : static_cast<double>(c) / r;
+    std::vector<std::uint32_t> row_start;
+    std::vector<int> row_pieces;
+    for (int r = 0; r <= rows; ++r) {
+      const double fr = static_cast<double>(r) / rows;
+      const int np = r == 0 ? 0 : std::max(1, (div * r + rows - 1) / rows);
+      row_start.push_back(static_cast<std::uint32_t>(m.vertices.size()));
+      row_pieces.push_back(np);
+      for (int c = 0; c <= np; ++c) {
+        const double fc = np == 0 ? 0.0 : static_cast<double>(c) / np;
         const Vec4 lin = (1.0 - fr) * centre + fr * ((1.0 - fc) * a + fc * b);
-        const Point p = geometry::normalize_point(space, lin);
-        m.vertices.push_back({glm::vec4(p), glm::vec4(0, 1, 0, 0), kCloth});
+        m.vertices.push_back({glm::vec4(geometry::normalize_point(space, lin)),
+                              glm::vec4(0, 1, 0, 0), kCloth});
       }
-    for (int r = 0; r < div; ++r)
-      for (int c = 0; c <= r; ++c) {
-        // Counter-clockwise seen from above (+y).
-        m.indices.insert(m.indices.end(), {index(r, c), index(r + 1, c + 1), index(r + 1, c)});
-        if (c < r)
-          m.indices.insert(m.indices.end(), {index(r, c), index(r, c + 1), index(r + 1, c + 1)});
+    }
+    // Stitch neighbouring rows by walking both in order of their parameter.
+    for (int r = 0; r < rows; ++r) {
+      const std::uint32_t top = row_start[r];
+      const std::uint32_t bot = row_start[r + 1];
+      const int nt = row_pieces[r];
+      const int nb = row_pieces[r + 1];
+      int i = 0;
+      int k = 0;
+      while (i < nt || k < nb) {
+        const double next_top = nt == 0 ? 2.0 : static_cast<double>(i + 1) / nt;
+        const double next_bot = static_cast<double>(k + 1) / nb;
+        const auto ti = top + static_cast<std::uint32_t>(i);
+        const auto bk = bot + static_cast<std::uint32_t>(k);
+        if (k < nb && (i >= nt || next_bot <= next_top)) {
+          m.indices.insert(m.indices.end(), {ti, bk + 1, bk});
+          ++k;
+        } else {
+          m.indices.insert(m.indices.end(), {ti, ti + 1, bk});
+          ++i;
+        }
       }
+    }
   }
   // Cushions, rails and skirt in each edge's Fermi coordinates. They extend
   // past the corners by their own width so neighbouring edges meet (the
