@@ -1,0 +1,297 @@
+// Accuracy against speed for the renderer (DESIGN.md §8): prints tables.
+//  1. Native view: screen-space error of drawn geodesic edges (the table's
+//     edges) against the analytic curve, at a headset's 20 px/deg, for each
+//     subdivision level, with frame time.
+//  2. Ratios measured in the same run: native/tourist and one-eye/two-eye
+//     frame time (billiards, 1024² per eye).
+//  3. The billiards frame beside a plain Vulkan loop drawing the same
+//     triangle count into the same two 1024² images.
+// Usage: bench_render_accuracy [frames-per-measurement]
+#include "curvlab/renderer/offscreen.hpp"
+#include "curvlab/renderer/renderer.hpp"
+#include "curvlab/renderer/shader.hpp"
+
+#include "curvlab/geometry/maps.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <string>
+#include <vector>
+
+using namespace curvlab;
+using namespace curvlab::renderer;
+using geometry::SpaceKind;
+
+namespace {
+
+constexpr double kFovRad = std::numbers::pi / 2.0;
+constexpr std::uint32_t kHeadsetPx = 1800;  // 90° at 20 px/deg
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+StimulusScene make(SpaceKind kind, SceneKind scene) {
+  auto made = make_stimulus_scene(kind, scene, {});
+  if (auto* e = std::get_if<std::string>(&made)) {
+    std::fprintf(stderr, "scene: %s\n", e->c_str());
+    std::exit(1);
+  }
+  return std::get<StimulusScene>(std::move(made));
+}
+
+FrameDescription frame_for(const StimulusScene& s, ViewSettings settings, std::uint32_t px) {
+  FrameDescription f;
+  f.space = s.space;
+  f.settings = settings;
+  f.head = s.head;
+  f.rig = StereoRig::from_ipd(0.063, Fov::symmetric(kFovRad, 1.0));
+  f.width_px = px;
+  f.height_px = px;
+  return f;
+}
+
+struct Timing {
+  double frame_ms = 0.0;
+  double gpu_ms = 0.0;
+  double cpu_ms = 0.0;
+  FrameStats last;
+};
+
+// Median over `frames` frames; the head turns by a microradian each frame so
+// no frame is an unchanged (skipped) one.
+Timing time_frames(Renderer& r, const StimulusScene& s, FrameDescription f, RenderTarget& target,
+                   int frames) {
+  std::vector<double> wall, gpu, cpu;
+  Timing t;
+  for (int i = 0; i < frames + 1; ++i) {
+    f.head = s.head * geometry::rotation(geometry::Vec3(0, 1, 0), 1e-6 * i);
+    t.last = r.render(s.scene, f, target);
+    if (i == 0) continue;  // first frame builds meshes and pipelines
+    wall.push_back(t.last.frame_ms);
+    gpu.push_back(t.last.gpu_ms);
+    cpu.push_back(t.last.cpu_ms);
+  }
+  t.cpu_ms = median(cpu);
+  t.frame_ms = median(wall);
+  t.gpu_ms = median(gpu);
+  return t;
+}
+
+// The plain loop: N triangles in clip space (a jittered grid over the whole
+// image, depth-tested), two 1024² passes and read-backs, same as the scene.
+double plain_loop_ms(const Context& ctx, std::uint64_t triangles, std::uint32_t px, int frames) {
+  const auto& dev = ctx.device();
+  struct V {
+    float x, y, z, w, r, g, b, a;
+  };
+  std::vector<V> verts;
+  const auto cells = static_cast<int>(std::ceil(std::sqrt(double(triangles) / 2.0)));
+  std::uint64_t made = 0;
+  for (int j = 0; j < cells && made < triangles; ++j)
+    for (int i = 0; i < cells && made < triangles; ++i) {
+      const float x0 = -1.0f + 2.0f * float(i) / float(cells), x1 = -1.0f + 2.0f * float(i + 1) / float(cells);
+      const float y0 = -1.0f + 2.0f * float(j) / float(cells), y1 = -1.0f + 2.0f * float(j + 1) / float(cells);
+      const float z = 0.2f + 0.6f * float((i * 7 + j * 3) % 11) / 11.0f;
+      const float c = float((i + j) % 2);
+      verts.push_back({x0, y0, z, 1, c, 0.5f, 0.3f, 1});
+      verts.push_back({x1, y0, z, 1, c, 0.5f, 0.3f, 1});
+      verts.push_back({x0, y1, z, 1, c, 0.5f, 0.3f, 1});
+      ++made;
+      if (made >= triangles) break;
+      verts.push_back({x1, y0, z, 1, c, 0.4f, 0.6f, 1});
+      verts.push_back({x1, y1, z, 1, c, 0.4f, 0.6f, 1});
+      verts.push_back({x0, y1, z, 1, c, 0.4f, 0.6f, 1});
+      ++made;
+    }
+  Buffer vb = Buffer::create(ctx, verts.size() * sizeof(V), vk::BufferUsageFlagBits::eVertexBuffer);
+  vb.write(verts.data(), verts.size() * sizeof(V));
+  auto vs = std::get<std::vector<std::uint32_t>>(compile_shader("plain.vert", ShaderStage::vertex));
+  auto fs = std::get<std::vector<std::uint32_t>>(compile_shader("plain.frag", ShaderStage::fragment));
+  vk::raii::ShaderModule vm(dev, {.codeSize = vs.size() * 4, .pCode = vs.data()});
+  vk::raii::ShaderModule fm(dev, {.codeSize = fs.size() * 4, .pCode = fs.data()});
+  vk::raii::PipelineLayout layout(dev, vk::PipelineLayoutCreateInfo{});
+  const vk::PipelineShaderStageCreateInfo stages[] = {
+      {.stage = vk::ShaderStageFlagBits::eVertex, .module = *vm, .pName = "main"},
+      {.stage = vk::ShaderStageFlagBits::eFragment, .module = *fm, .pName = "main"}};
+  const vk::VertexInputBindingDescription binding{0, sizeof(V), vk::VertexInputRate::eVertex};
+  const vk::VertexInputAttributeDescription attrs[] = {{0, 0, vk::Format::eR32G32B32A32Sfloat, 0},
+                                                       {1, 0, vk::Format::eR32G32B32A32Sfloat, 16}};
+  const vk::PipelineVertexInputStateCreateInfo vi{.vertexBindingDescriptionCount = 1, .pVertexBindingDescriptions = &binding,
+                                                  .vertexAttributeDescriptionCount = 2, .pVertexAttributeDescriptions = attrs};
+  const vk::PipelineInputAssemblyStateCreateInfo ia{.topology = vk::PrimitiveTopology::eTriangleList};
+  const vk::Viewport viewport{0, 0, float(px), float(px), 0, 1};
+  const vk::Rect2D scissor{{0, 0}, {px, px}};
+  const vk::PipelineViewportStateCreateInfo vp{.viewportCount = 1, .pViewports = &viewport, .scissorCount = 1, .pScissors = &scissor};
+  const vk::PipelineRasterizationStateCreateInfo rs{.cullMode = vk::CullModeFlagBits::eNone, .lineWidth = 1.0f};
+  const vk::PipelineMultisampleStateCreateInfo ms{.rasterizationSamples = vk::SampleCountFlagBits::e1};
+  const vk::PipelineDepthStencilStateCreateInfo ds{.depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE, .depthCompareOp = vk::CompareOp::eLess};
+  const vk::PipelineColorBlendAttachmentState ba{.colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG |
+                                                                   vk::ColorComponentFlagBits::eB | vk::ColorComponentFlagBits::eA};
+  const vk::PipelineColorBlendStateCreateInfo bs{.attachmentCount = 1, .pAttachments = &ba};
+  const vk::Format cf = vk::Format::eR8G8B8A8Unorm;
+  const vk::PipelineRenderingCreateInfo ri{.colorAttachmentCount = 1, .pColorAttachmentFormats = &cf,
+                                           .depthAttachmentFormat = vk::Format::eD32Sfloat};
+  vk::raii::Pipeline pipeline(dev, nullptr,
+                              vk::GraphicsPipelineCreateInfo{.pNext = &ri, .stageCount = 2, .pStages = stages,
+                                                             .pVertexInputState = &vi, .pInputAssemblyState = &ia,
+                                                             .pViewportState = &vp, .pRasterizationState = &rs,
+                                                             .pMultisampleState = &ms, .pDepthStencilState = &ds,
+                                                             .pColorBlendState = &bs, .layout = *layout});
+  OffscreenTarget target(ctx, px, px);
+  std::array<Image, 2> depth{
+      Image::create(ctx, {px, px}, vk::Format::eD32Sfloat, vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth),
+      Image::create(ctx, {px, px}, vk::Format::eD32Sfloat, vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth)};
+  std::vector<double> times;
+  for (int f = 0; f < frames + 1; ++f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ctx.submit_and_wait([&](const vk::raii::CommandBuffer& cb) {
+      for (int e = 0; e < 2; ++e) {
+        const EyeImage img = target.eye_image(static_cast<Eye>(e));
+        transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined, vk::ImageLayout::eColorAttachmentOptimal);
+        transition(cb, *depth[e].image, vk::ImageAspectFlagBits::eDepth, vk::ImageLayout::eUndefined, vk::ImageLayout::eDepthAttachmentOptimal);
+        const vk::RenderingAttachmentInfo ca{.imageView = img.view, .imageLayout = vk::ImageLayout::eColorAttachmentOptimal,
+                                             .loadOp = vk::AttachmentLoadOp::eClear, .storeOp = vk::AttachmentStoreOp::eStore,
+                                             .clearValue = vk::ClearColorValue{std::array<float, 4>{0, 0, 0, 1}}};
+        const vk::RenderingAttachmentInfo da{.imageView = *depth[e].view, .imageLayout = vk::ImageLayout::eDepthAttachmentOptimal,
+                                             .loadOp = vk::AttachmentLoadOp::eClear, .storeOp = vk::AttachmentStoreOp::eDontCare,
+                                             .clearValue = vk::ClearValue{.depthStencil = {.depth = 1.0f, .stencil = 0}}};
+        cb.beginRendering({.renderArea = scissor, .layerCount = 1, .colorAttachmentCount = 1, .pColorAttachments = &ca, .pDepthAttachment = &da});
+        cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipeline);
+        cb.bindVertexBuffers(0, *vb.buffer, vk::DeviceSize{0});
+        cb.draw(static_cast<std::uint32_t>(verts.size()), 1, 0, 0);
+        cb.endRendering();
+        transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eColorAttachmentOptimal, img.final_layout);
+        target.record_after(cb, static_cast<Eye>(e));
+      }
+    });
+    target.frame_finished();
+    const double elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (f > 0) times.push_back(elapsed_ms);
+  }
+  return median(times);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int frames = argc > 1 ? std::max(1, std::atoi(argv[1])) : 9;
+  auto created = Context::create({.device = DeviceChoice::automatic, .validation = false});
+  if (auto* e = std::get_if<RenderError>(&created)) {
+    std::fprintf(stderr, "%s\n", e->message.c_str());
+    return 1;
+  }
+  const Context& ctx = std::get<Context>(created);
+  std::printf("device: %s (%s); median of %d frames\n\n", ctx.device_name().c_str(), ctx.driver_info().c_str(), frames);
+
+  // ---- 1. native subdivision: error vs level ------------------------------
+  std::printf("1. Native view, table edges (geodesics) drawn as straight pieces vs the analytic curve\n");
+  std::printf("   %u x %u per eye, 90 deg FOV = 20 px/deg; error over both eyes and all edges\n\n", kHeadsetPx, kHeadsetPx);
+  std::printf("| space | level | pieces/edge | max err px | mean err px | triangles | frame ms | GPU ms |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (SpaceKind kind : {SpaceKind::S3, SpaceKind::H3}) {
+    const StimulusScene s = make(kind, SceneKind::billiards);
+    Renderer renderer(ctx);
+    OffscreenTarget target(ctx, kHeadsetPx, kHeadsetPx);
+    const auto& table = s.scene.objects()[0];
+    auto errors_at = [&](int level) {
+      double max_px = 0.0, sum = 0.0;
+      int n = 0;
+      const FrameDescription f = frame_for(s, ViewSettings::preset(ViewPreset::native), kHeadsetPx);
+      for (int e = 0; e < 2; ++e) {
+        const ViewConstants v = make_view_constants(s.space, f.settings, s.head, f.rig.eyes[e]);
+        const glm::dmat4 mv = v.viewer_from_world.m * table.pose.m;
+        for (const auto& edge : table.info.long_edges) {
+          const EdgeError err = edge_screen_error(v, Hemisphere::front, mv, edge, table.info.base_segments << level,
+                                                  kHeadsetPx, kHeadsetPx, 32);
+          max_px = std::max(max_px, err.max_px);
+          sum += err.mean_px * err.samples;
+          n += err.samples;
+        }
+      }
+      return std::make_pair(max_px, n > 0 ? sum / n : 0.0);
+    };
+    for (int level = 0; level <= 5; ++level) {
+      ViewSettings settings = ViewSettings::preset(ViewPreset::native);
+      settings.forced_level = level;
+      const Timing t = time_frames(renderer, s, frame_for(s, settings, kHeadsetPx), target, std::max(3, frames / 3));
+      const auto [max_px, mean_px] = errors_at(level);
+      std::printf("| %s | %d | %d | %.4f | %.4f | %llu | %.1f | %.1f |\n", std::string(geometry::to_string(kind)).c_str(),
+                  level, table.info.base_segments << level, max_px, mean_px,
+                  static_cast<unsigned long long>(t.last.triangles), t.frame_ms, t.gpu_ms);
+    }
+    const Timing d = time_frames(renderer, s, frame_for(s, ViewSettings::preset(ViewPreset::native), kHeadsetPx), target,
+                                 std::max(3, frames / 3));
+    const auto [dmax, dmean] = errors_at(d.last.max_level);
+    std::printf("| %s | default %d (budget 0.1 px) | %d | %.4f | %.4f | %llu | %.1f | %.1f |\n",
+                std::string(geometry::to_string(kind)).c_str(), d.last.max_level,
+                table.info.base_segments << d.last.max_level, dmax, dmean,
+                static_cast<unsigned long long>(d.last.triangles), d.frame_ms, d.gpu_ms);
+  }
+
+  // ---- 2. ratios ------------------------------------------------------------
+  std::printf("\n2. Ratios, billiards scene, 1024 x 1024 per eye, default settings\n\n");
+  std::printf("| space | tourist ms (cpu/gpu) | native ms (cpu/gpu) | native/tourist | one-eye ms | one-eye/two-eye | native triangles | level |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  std::uint64_t billiards_triangles = 0;
+  double billiards_ms = 0.0;
+  for (SpaceKind kind : {SpaceKind::S3, SpaceKind::E3, SpaceKind::H3}) {
+    const StimulusScene s = make(kind, SceneKind::billiards);
+    // Three renderers and targets, frames interleaved, so load from other
+    // processes on the machine affects all three alike.
+    Renderer r_tourist(ctx), r_native(ctx), r_mono(ctx);
+    OffscreenTarget t_tourist(ctx, 1024, 1024), t_native(ctx, 1024, 1024), t_mono(ctx, 1024, 1024);
+    Timing tourist, native, mono;
+    std::vector<double> wt, wn, wm, ct, cn, gt, gn;
+    for (int i = 0; i < frames + 1; ++i) {
+      const auto head = s.head * geometry::rotation(geometry::Vec3(0, 1, 0), 1e-6 * i);
+      auto f = [&](ViewPreset p) {
+        FrameDescription fd = frame_for(s, ViewSettings::preset(p), 1024);
+        fd.head = head;
+        return fd;
+      };
+      tourist.last = r_tourist.render(s.scene, f(ViewPreset::tourist), t_tourist);
+      native.last = r_native.render(s.scene, f(ViewPreset::native), t_native);
+      mono.last = r_mono.render(s.scene, f(ViewPreset::monocular), t_mono);
+      if (i == 0) continue;
+      wt.push_back(tourist.last.frame_ms);
+      wn.push_back(native.last.frame_ms);
+      wm.push_back(mono.last.frame_ms);
+      ct.push_back(tourist.last.cpu_ms);
+      cn.push_back(native.last.cpu_ms);
+      gt.push_back(tourist.last.gpu_ms);
+      gn.push_back(native.last.gpu_ms);
+    }
+    tourist.frame_ms = median(wt);
+    native.frame_ms = median(wn);
+    mono.frame_ms = median(wm);
+    tourist.cpu_ms = median(ct);
+    native.cpu_ms = median(cn);
+    tourist.gpu_ms = median(gt);
+    native.gpu_ms = median(gn);
+    std::printf("| %s | %.1f (%.1f/%.1f) | %.1f (%.1f/%.1f) | %.3f | %.1f | %.3f | %llu | %d |\n",
+                std::string(geometry::to_string(kind)).c_str(), tourist.frame_ms, tourist.cpu_ms, tourist.gpu_ms,
+                native.frame_ms, native.cpu_ms, native.gpu_ms, native.frame_ms / tourist.frame_ms, mono.frame_ms,
+                mono.frame_ms / native.frame_ms, static_cast<unsigned long long>(native.last.triangles), native.last.max_level);
+    std::printf("|   | tourist triangles %llu, draws %d |  |  |  |  |  |  |\n",
+                static_cast<unsigned long long>(tourist.last.triangles), tourist.last.draws);
+    if (kind == SpaceKind::E3) {
+      billiards_triangles = native.last.triangles;
+      billiards_ms = native.frame_ms;
+    }
+  }
+
+  // ---- 3. beside a plain loop -----------------------------------------------
+  const double plain = plain_loop_ms(ctx, billiards_triangles, 1024, frames);
+  std::printf("\n3. Billiards (E3, native, both eyes, 1024 x 1024 per eye) beside a plain Vulkan loop\n\n");
+  std::printf("| what | triangles | frame ms |\n|---|---|---|\n");
+  std::printf("| curvlab billiards frame | %llu | %.1f |\n", static_cast<unsigned long long>(billiards_triangles), billiards_ms);
+  std::printf("| plain loop, same triangles, 2 passes + read-back | %llu | %.1f |\n",
+              static_cast<unsigned long long>(billiards_triangles), plain);
+  std::printf("| ratio curvlab/plain | | %.3f |\n", billiards_ms / plain);
+  return 0;
+}

@@ -1,0 +1,179 @@
+// `curvlab render …`: one stereo frame of a stimulus scene, offscreen, written
+// as DIR/left.png, DIR/right.png and DIR/plan.json (what the render plan
+// drew and skipped, and how long it took).
+#include "common.hpp"
+
+#include "curvlab/renderer/offscreen.hpp"
+#include "curvlab/renderer/renderer.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <numbers>
+
+namespace curvlab::cli {
+namespace {
+
+using namespace curvlab::renderer;
+
+struct RenderArgs {
+  std::string space = "E3";
+  std::optional<double> radius_m;
+  std::string view = "native";
+  std::string scene = "billiards";
+  double eye_height_m = 1.55;
+  std::string size = "1024x1024";
+  double fov_deg = 90.0;
+  double yaw_deg = 0.0;
+  std::string back_hemisphere = "on";
+  std::string eyes;
+  double ipd_m = 0.063;
+  double bend_m = 0.0;
+  bool software = false;
+  std::string out;
+  bool json = false;
+};
+
+std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text) {
+  const auto x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    std::size_t used_w = 0;
+    std::size_t used_h = 0;
+    const long w = std::stol(text.substr(0, x), &used_w);
+    const long h = std::stol(text.substr(x + 1), &used_h);
+    if (used_w != x || used_h != text.size() - x - 1) throw std::invalid_argument("junk");
+    if (w < 16 || h < 16 || w > 8192 || h > 8192)
+      throw UsageError("--size " + text + ": width and height must be between 16 and 8192 pixels");
+    return {static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h)};
+  } catch (const UsageError&) {
+    throw;
+  } catch (const std::exception&) {
+    throw UsageError("--size expects WIDTHxHEIGHT in pixels (e.g. 1024x1024), got '" + text + "'");
+  }
+}
+
+void run_render(const RenderArgs& a) {
+  const auto kind = geometry::parse_space_kind(a.space);
+  if (!kind) throw UsageError("--space must be S3, E3 or H3, got '" + a.space + "'");
+  const auto preset = parse_view_preset(a.view);
+  if (!preset)
+    throw UsageError("--view must be tourist, native or monocular, got '" + a.view + "'");
+  const auto scene_kind = parse_scene_kind(a.scene);
+  if (!scene_kind)
+    throw UsageError("--scene must be stick, table, billiards or tiling, got '" + a.scene + "'");
+  if (a.radius_m && !(*a.radius_m > 0.0 && std::isfinite(*a.radius_m)))
+    throw UsageError("--radius-m must be a positive number of metres");
+  if (!(a.eye_height_m > 0.85 && a.eye_height_m < 3.0))
+    throw UsageError("--eye-height-m must lie between 0.85 and 3 m (the cloth is at 0.80 m)");
+  if (!(a.fov_deg >= 10.0 && a.fov_deg <= 170.0))
+    throw UsageError("--fov-deg must lie between 10 and 170 degrees");
+  if (a.back_hemisphere != "on" && a.back_hemisphere != "off")
+    throw UsageError("--back-hemisphere must be on or off, got '" + a.back_hemisphere + "'");
+  if (!(std::abs(a.yaw_deg) <= 360.0)) throw UsageError("--yaw-deg must lie in [-360, 360]");
+  if (!(a.ipd_m >= 0.0 && a.ipd_m < 0.1)) throw UsageError("--ipd-m must lie in [0, 0.1) m");
+  const auto [w, h] = parse_size(a.size);
+  if (a.out.empty()) throw UsageError("--out DIR is required");
+
+  ViewSettings settings = ViewSettings::preset(*preset);
+  settings.back_hemisphere = a.back_hemisphere == "on";
+  if (!a.eyes.empty()) {
+    if (a.eyes == "both") settings.eyes = EyeSelection::both;
+    else if (a.eyes == "left") settings.eyes = EyeSelection::left;
+    else if (a.eyes == "right") settings.eyes = EyeSelection::right;
+    else if (a.eyes == "dominant") settings.eyes = EyeSelection::dominant;
+    else throw UsageError("--eyes must be both, left, right or dominant, got '" + a.eyes + "'");
+  }
+
+  StimulusOptions options;
+  options.radius_m = a.radius_m;
+  options.eye_height_m = a.eye_height_m;
+  options.stick_sagitta_m = a.bend_m;
+  options.yaw_rad = a.yaw_deg * std::numbers::pi / 180.0;
+  auto made = make_stimulus_scene(*kind, *scene_kind, options);
+  if (auto* e = std::get_if<std::string>(&made)) throw UsageError(*e);
+  auto& stimulus = std::get<StimulusScene>(made);
+
+  std::error_code ec;
+  std::filesystem::create_directories(a.out, ec);
+  if (ec) throw RuntimeFailure("cannot create --out directory " + a.out + ": " + ec.message());
+
+  auto created = Context::create({.device = a.software ? DeviceChoice::software : DeviceChoice::automatic,
+                                  .validation = false});
+  if (auto* e = std::get_if<RenderError>(&created)) throw RuntimeFailure(e->message);
+  const Context& ctx = std::get<Context>(created);
+  Renderer renderer(ctx);
+  OffscreenTarget target(ctx, w, h);
+
+  FrameDescription frame;
+  frame.space = stimulus.space;
+  frame.settings = settings;
+  frame.head = stimulus.head;
+  frame.rig = StereoRig::from_ipd(
+      a.ipd_m, Fov::symmetric(a.fov_deg * std::numbers::pi / 180.0, double(w) / double(h)));
+  frame.width_px = w;
+  frame.height_px = h;
+  const FrameStats stats = renderer.render(stimulus.scene, frame, target);
+
+  for (Eye eye : {Eye::left, Eye::right}) {
+    const std::string path =
+        (std::filesystem::path(a.out) / (eye == Eye::left ? "left.png" : "right.png")).string();
+    if (auto err = write_png(path, target.image(eye)); !err.empty()) throw RuntimeFailure(err);
+  }
+  Json plan;
+  plan["space"] = std::string(geometry::to_string(*kind));
+  plan["radius_m"] = stimulus.space.radius_m;
+  plan["view"] = a.view;
+  plan["projection"] = std::string(to_string(settings.projection));
+  plan["scene"] = a.scene;
+  plan["width_px"] = w;
+  plan["height_px"] = h;
+  plan["device"] = ctx.device_name();
+  plan["views"] = stats.views;
+  plan["passes"] = stats.passes;
+  plan["draws"] = stats.draws;
+  plan["culled"] = stats.culled;
+  plan["triangles"] = stats.triangles;
+  plan["lines"] = stats.lines;
+  plan["back_hemisphere"] = stats.back_hemisphere;
+  plan["subdivision_level"] = stats.max_level;
+  plan["edge_error_px"] = stats.error_px;
+  plan["cpu_ms"] = stats.cpu_ms;
+  plan["gpu_ms"] = stats.gpu_ms;
+  plan["frame_ms"] = stats.frame_ms;
+  const std::string plan_path = (std::filesystem::path(a.out) / "plan.json").string();
+  std::ofstream out(plan_path);
+  out << plan.dump(2) << '\n';
+  if (!out) throw RuntimeFailure("cannot write " + plan_path);
+  print_result(plan, a.json);
+}
+
+}  // namespace
+
+void add_render_commands(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  auto* cmd = app.add_subcommand(
+      "render", "draw one stereo frame of a stimulus scene offscreen (left.png, right.png, plan.json)");
+  cmd->add_option("--space", args->space, "S3, E3 or H3")->required();
+  cmd->add_option_function<double>("--radius-m", [args](double r) { args->radius_m = r; },
+                                   "radius ρ in metres (default: from the 0.9 m table edge)");
+  cmd->add_option("--view", args->view, "tourist, native or monocular")->required();
+  cmd->add_option("--scene", args->scene, "stick, table, billiards or tiling")->required();
+  cmd->add_option("--eye-height-m", args->eye_height_m, "eye height above the floor (default 1.55)");
+  cmd->add_option("--size", args->size, "per-eye image size WxH (default 1024x1024)");
+  cmd->add_option("--fov-deg", args->fov_deg, "horizontal field of view (default 90)");
+  cmd->add_option("--back-hemisphere", args->back_hemisphere, "S3 back hemisphere: on or off");
+  cmd->add_option("--eyes", args->eyes, "override the preset's eyes: both, left, right, dominant");
+  cmd->add_option("--yaw-deg", args->yaw_deg, "turn the head left (+) from facing the stimulus");
+  cmd->add_option("--ipd-m", args->ipd_m, "interpupillary distance (default 0.063)");
+  cmd->add_option("--bend-m", args->bend_m, "cue-stick sagitta in metres (+ toward the viewer)");
+  cmd->add_flag("--software", args->software, "use a CPU Vulkan device (lavapipe) even with a GPU");
+  cmd->add_option("--out", args->out, "output directory")->required();
+  cmd->add_flag("--json", args->json, "print the plan as JSON");
+  cmd->callback([args] { run_render(*args); });
+}
+
+}  // namespace curvlab::cli

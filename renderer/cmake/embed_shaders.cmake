@@ -1,0 +1,15 @@
+# Writes OUT: a C++ table {name, GLSL text} of every file in SOURCES, so the
+# renderer compiles its shaders without looking for files at run time.
+set(body "// Generated from renderer/shaders by embed_shaders.cmake; do not edit.\n")
+string(APPEND body "#include \"curvlab/renderer/shader.hpp\"\n\nnamespace curvlab::renderer {\n")
+string(APPEND body "const std::vector<ShaderSource>& embedded_shader_sources() {\n")
+string(APPEND body "  static const std::vector<ShaderSource> sources = {\n")
+string(REPLACE "|" ";" SOURCES "${SOURCES}")
+foreach(src IN LISTS SOURCES)
+  get_filename_component(name ${src} NAME)
+  file(READ ${src} text)
+  string(APPEND body "    {\"${name}\", R\"glsl_src(${text})glsl_src\"},\n")
+endforeach()
+string(APPEND body "  };\n  return sources;\n}\n}  // namespace curvlab::renderer\n")
+file(WRITE ${OUT}.tmp "${body}")
+file(COPY_FILE ${OUT}.tmp ${OUT} ONLY_IF_DIFFERENT)

@@ -1,0 +1,111 @@
+// The Vulkan instance and device, through the system loader: a GPU when one
+// is present, lavapipe (a CPU device) otherwise or on request. With
+// validation on, every message of the Khronos validation layer is recorded so
+// tests can fail on any of them.
+#pragma once
+
+#include <vulkan/vulkan_raii.hpp>
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace curvlab::renderer {
+
+enum class DeviceChoice {
+  automatic,  // the first discrete or integrated GPU, else a CPU device
+  software,   // a CPU device (lavapipe) even when a GPU is present
+};
+
+struct ContextOptions {
+  DeviceChoice device = DeviceChoice::automatic;
+  bool validation = false;  // enable VK_LAYER_KHRONOS_validation
+};
+
+struct RenderError {
+  std::string message;
+};
+
+// Messages from the validation layer. Thread-safe: the layer may call from
+// any thread that uses the device.
+class ValidationLog {
+ public:
+  void add(std::string message);
+  [[nodiscard]] std::size_t count() const;
+  [[nodiscard]] std::vector<std::string> messages() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<std::string> messages_;
+};
+
+// Owns the instance, the debug messenger, the device, one graphics+compute
+// queue and a command pool. Move-only; handles are destroyed in reverse order
+// of creation by the vk::raii members. Not thread-safe: one thread records and
+// submits (the command pool is not shared).
+class Context {
+ public:
+  static std::variant<Context, RenderError> create(const ContextOptions& options);
+
+  Context(Context&&) noexcept = default;
+  Context& operator=(Context&&) noexcept = default;
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+  ~Context();
+
+  [[nodiscard]] const vk::raii::Device& device() const { return device_; }
+  [[nodiscard]] const vk::raii::PhysicalDevice& physical() const { return physical_; }
+  [[nodiscard]] const vk::raii::Queue& queue() const { return queue_; }
+  [[nodiscard]] std::uint32_t queue_family() const { return queue_family_; }
+  [[nodiscard]] const vk::raii::CommandPool& command_pool() const { return command_pool_; }
+  [[nodiscard]] const std::string& device_name() const { return device_name_; }
+  [[nodiscard]] const std::string& driver_info() const { return driver_info_; }
+  [[nodiscard]] bool is_software() const { return software_; }
+  [[nodiscard]] double timestamp_period_ns() const { return timestamp_period_ns_; }
+  [[nodiscard]] bool validation_enabled() const { return validation_; }
+  // Messages recorded so far (always empty without validation).
+  [[nodiscard]] const ValidationLog& validation_log() const { return *log_; }
+
+  // Index of a memory type with the given bits and properties; a broken
+  // contract (no such type) aborts.
+  [[nodiscard]] std::uint32_t memory_type(std::uint32_t type_bits,
+                                          vk::MemoryPropertyFlags props) const;
+
+  // Records with `record` into a one-time command buffer, submits and waits.
+  template <class F>
+  void submit_and_wait(F&& record) const {
+    vk::raii::CommandBuffers cbs(device_, {.commandPool = *command_pool_,
+                                           .level = vk::CommandBufferLevel::ePrimary,
+                                           .commandBufferCount = 1});
+    const vk::raii::CommandBuffer& cb = cbs.front();
+    cb.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+    record(cb);
+    cb.end();
+    vk::raii::Fence fence(device_, vk::FenceCreateInfo{});
+    const vk::CommandBuffer raw = *cb;
+    queue_.submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &raw}, *fence);
+    (void)device_.waitForFences({*fence}, VK_TRUE, UINT64_MAX);
+  }
+
+ private:
+  Context() = default;
+
+  std::unique_ptr<ValidationLog> log_ = std::make_unique<ValidationLog>();
+  vk::raii::Context loader_;
+  vk::raii::Instance instance_{nullptr};
+  vk::raii::DebugUtilsMessengerEXT messenger_{nullptr};
+  vk::raii::PhysicalDevice physical_{nullptr};
+  vk::raii::Device device_{nullptr};
+  vk::raii::Queue queue_{nullptr};
+  vk::raii::CommandPool command_pool_{nullptr};
+  std::uint32_t queue_family_ = 0;
+  std::string device_name_;
+  std::string driver_info_;
+  bool software_ = false;
+  bool validation_ = false;
+  double timestamp_period_ns_ = 1.0;
+};
+
+}  // namespace curvlab::renderer

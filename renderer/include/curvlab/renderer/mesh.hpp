@@ -1,0 +1,88 @@
+// CPU meshes in model coordinates: 4-vector positions in metres on the space,
+// 4-vector unit normals tangent at each position, colours. Builders take a
+// subdivision level: level L splits every long (geodesic) edge into 2^L times
+// its base count of pieces, which only the native view needs (its log map
+// bends geodesics; the tourist projection keeps them straight).
+#pragma once
+
+#include "curvlab/geometry/table.hpp"
+#include "curvlab/geometry/tube.hpp"
+#include "curvlab/renderer/view.hpp"
+
+#include <glm/vec4.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace curvlab::renderer {
+
+struct Vertex {
+  glm::vec4 position;  // metres, model coordinates
+  glm::vec4 normal;    // unit tangent vector at position (g-norm)
+  glm::vec4 color;     // linear RGBA; text panels: atlas uv in xy
+};
+
+enum class Topology { triangles, lines };
+enum class Shading { lit = 0, unlit = 1, text = 2 };
+
+struct MeshData {
+  Topology topology = Topology::triangles;
+  Shading shading = Shading::lit;
+  std::vector<Vertex> vertices;
+  std::vector<std::uint32_t> indices;
+
+  [[nodiscard]] std::size_t primitive_count() const {
+    return indices.size() / (topology == Topology::triangles ? 3 : 2);
+  }
+};
+
+// Level-independent facts the render plan uses without building a mesh.
+struct BoundingBall {
+  Point centre;           // model coordinates
+  double radius_m = 0.0;  // geodesic radius; ≥ 1e29 means "everywhere"
+};
+
+struct MeshInfo {
+  // Balls whose union holds the mesh: several small ones cull better than
+  // one large one (in S3 a large ball may hold the viewer, and then its
+  // antipodal image can be anywhere).
+  std::vector<BoundingBall> bounds;
+  std::vector<GeodesicEdge> long_edges;  // probes for native subdivision
+  int base_segments = 1;         // pieces per long edge at level 0
+};
+
+// The unit normal at p in direction of the (approximate) tangent v:
+// v projected to p's tangent space and normalised with g.
+glm::dvec4 tangent_normal(const Space& space, const Point& p, const glm::dvec4& v);
+
+struct TableStyle {
+  double cushion_width_m = 0.05;
+  double cushion_height_m = 0.035;
+  double rail_width_m = 0.07;
+  double skirt_depth_m = 0.12;
+};
+
+// The table centred at the model origin, cloth in the plane y = 0 (the model
+// frame of geometry/table.hpp): cloth, cushions, wooden rails and a skirt.
+MeshData build_table(const Space& space, const geometry::TableShape& table, int level,
+                     const TableStyle& style = {});
+MeshInfo table_info(const Space& space, const geometry::TableShape& table,
+                    const TableStyle& style = {});
+
+// The cue stick of geometry/tube.hpp with its chord along the model x axis,
+// centred at the model origin, bowed toward +z by the sagitta. Tip white,
+// shaft light wood, butt dark.
+MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level);
+MeshInfo stick_info(const Space& space, const geometry::BentStick& stick);
+
+// A ball of the given radius centred at the model origin.
+MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color);
+MeshInfo ball_info(const Space& space, double radius_m);
+
+// A flat panel in the geodesic plane z = 0 of the model frame, centred on the
+// origin, facing +z; uv (0,0) top-left … (1,1) bottom-right in colour.xy.
+MeshData build_panel(const Space& space, double width_m, double height_m, int level);
+MeshInfo panel_info(const Space& space, double width_m, double height_m);
+
+}  // namespace curvlab::renderer

@@ -1,0 +1,30 @@
+// Text for instruction and prompt panels: participants in a headset cannot see
+// a monitor. Lines are rasterised with stb_truetype into a coverage bitmap
+// that a panel samples.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace curvlab::renderer {
+
+struct CoverageBitmap {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> pixels;  // row major, 0 = background, 255 = ink
+};
+
+struct TextError {
+  std::string message;
+};
+
+// Lays out `text` ('\n' separates lines), centred, in a bitmap of the given
+// size with a margin, at the largest pixel height ≤ max_line_px that fits.
+// font_path: a TrueType file (default: DejaVu Sans from fonts-dejavu-core).
+std::variant<CoverageBitmap, TextError> render_text(const std::string& text, int width,
+                                                    int height, double max_line_px,
+                                                    const std::string& font_path);
+
+}  // namespace curvlab::renderer

@@ -1,0 +1,294 @@
+#include "curvlab/renderer/mesh.hpp"
+
+#include "curvlab/geometry/maps.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <numbers>
+
+namespace curvlab::renderer {
+
+using geometry::Vec3;
+using geometry::Vec4;
+
+glm::dvec4 tangent_normal(const Space& space, const Point& p, const glm::dvec4& v) {
+  const double rho2 = space.radius_m * space.radius_m;
+  const glm::dvec4 t = v - (geometry::point_form(space, p, v) / rho2) * p;
+  const double n2 = geometry::vector_form(space, t, t);
+  return n2 > 0.0 ? t / std::sqrt(n2) : glm::dvec4(0.0, 1.0, 0.0, 0.0);
+}
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+int pieces(int base, int level) { return base << std::max(0, level); }
+
+// Appends a vertex; the normal is the tangent direction toward `outward`
+// (a nearby point off the surface), which keeps normals exact in every space.
+void push(MeshData& m, const Space& space, const Point& p, const Point& outward,
+          const glm::vec4& color) {
+  const glm::dvec4 n = tangent_normal(space, p, outward - p);
+  m.vertices.push_back({glm::vec4(p), glm::vec4(n), color});
+}
+
+// A quad strip grid: rows × cols vertices already pushed from `first`, row major.
+void grid_indices(MeshData& m, std::uint32_t first, int rows, int cols) {
+  for (int r = 0; r + 1 < rows; ++r)
+    for (int c = 0; c + 1 < cols; ++c) {
+      const auto i = first + static_cast<std::uint32_t>(r * cols + c);
+      const auto cu = static_cast<std::uint32_t>(cols);
+      m.indices.insert(m.indices.end(), {i, i + cu, i + 1, i + 1, i + cu, i + cu + 1});
+    }
+}
+
+// A surface patch of the Fermi "box" around one table edge: (s, y, z) →
+// frame(s)·exp(0, y, z), s along the edge. `normal_dir` gives the outward
+// offset (in the local y/z plane) used for normals.
+void fermi_patch(MeshData& m, const Space& space, const geometry::TableShape& table, int edge,
+                 double s0, double s1, int ns, glm::dvec2 yz0, glm::dvec2 yz1, int nyz,
+                 glm::dvec2 normal_dir, const glm::vec4& color) {
+  const auto first = static_cast<std::uint32_t>(m.vertices.size());
+  constexpr double kEps = 1e-3;
+  for (int i = 0; i <= ns; ++i) {
+    const double s = s0 + (s1 - s0) * i / ns;
+    const Isometry f = geometry::table_edge_frame(space, table, edge, s);
+    for (int j = 0; j <= nyz; ++j) {
+      const glm::dvec2 yz = yz0 + (yz1 - yz0) * (static_cast<double>(j) / nyz);
+      const Point p = f * geometry::exp_origin(space, Vec3(0.0, yz.x, yz.y));
+      const glm::dvec2 o = yz + kEps * normal_dir;
+      const Point out = f * geometry::exp_origin(space, Vec3(0.0, o.x, o.y));
+      push(m, space, p, out, color);
+    }
+  }
+  grid_indices(m, first, ns + 1, nyz + 1);
+}
+
+const glm::vec4 kCloth{0.10f, 0.42f, 0.20f, 1.0f};
+const glm::vec4 kCushion{0.08f, 0.34f, 0.16f, 1.0f};
+const glm::vec4 kRail{0.45f, 0.26f, 0.12f, 1.0f};
+const glm::vec4 kSkirt{0.30f, 0.17f, 0.08f, 1.0f};
+
+}  // namespace
+
+MeshData build_table(const Space& space, const geometry::TableShape& table, int level,
+                     const TableStyle& style) {
+  MeshData m;
+  const int n = table.sides;
+  const Point centre = geometry::origin(space);
+  // Cloth: fan triangles (centre, corner j, corner j+1). The outer edge — the
+  // only line a viewer can see on the flat cloth — gets the level's 2^level
+  // pieces; the interior gets at most 4 rows, each with pieces in proportion
+  // to its length, so the triangle count grows linearly with the level, not
+  // quadratically. Points are normalised linear combinations, which stay in
+  // the totally geodesic plane y = 0.
+  const int div = pieces(1, level);
+  const int rows = std::min(div, 4);
+  for (int j = 0; j < n; ++j) {
+    const Point a = geometry::table_corner(space, table, j);
+    const Point b = geometry::table_corner(space, table, j + 1);
+    std::vector<std::uint32_t> row_start;
+    std::vector<int> row_pieces;
+    for (int r = 0; r <= rows; ++r) {
+      const double fr = static_cast<double>(r) / rows;
+      const int np = r == 0 ? 0 : std::max(1, (div * r + rows - 1) / rows);
+      row_start.push_back(static_cast<std::uint32_t>(m.vertices.size()));
+      row_pieces.push_back(np);
+      for (int c = 0; c <= np; ++c) {
+        const double fc = np == 0 ? 0.0 : static_cast<double>(c) / np;
+        const Vec4 lin = (1.0 - fr) * centre + fr * ((1.0 - fc) * a + fc * b);
+        m.vertices.push_back({glm::vec4(geometry::normalize_point(space, lin)),
+                              glm::vec4(0, 1, 0, 0), kCloth});
+      }
+    }
+    // Stitch neighbouring rows by walking both in order of their parameter.
+    for (int r = 0; r < rows; ++r) {
+      const std::uint32_t top = row_start[r];
+      const std::uint32_t bot = row_start[r + 1];
+      const int nt = row_pieces[r];
+      const int nb = row_pieces[r + 1];
+      int i = 0;
+      int k = 0;
+      while (i < nt || k < nb) {
+        const double next_top = nt == 0 ? 2.0 : static_cast<double>(i + 1) / nt;
+        const double next_bot = static_cast<double>(k + 1) / nb;
+        const auto ti = top + static_cast<std::uint32_t>(i);
+        const auto bk = bot + static_cast<std::uint32_t>(k);
+        if (k < nb && (i >= nt || next_bot <= next_top)) {
+          m.indices.insert(m.indices.end(), {ti, bk + 1, bk});
+          ++k;
+        } else {
+          m.indices.insert(m.indices.end(), {ti, ti + 1, bk});
+          ++i;
+        }
+      }
+    }
+  }
+  // Cushions, rails and skirt in each edge's Fermi coordinates. They extend
+  // past the corners by their own width so neighbouring edges meet (the
+  // corners are right angles).
+  const double cw = style.cushion_width_m;
+  const double ch = style.cushion_height_m;
+  const double rw = style.rail_width_m;
+  const double outer = cw + rw;
+  // The cushion's inner bottom edge is the cloth's geodesic edge, which the
+  // level's 2^level pieces keep within the error budget; 8 pieces carry the
+  // equidistant (non-geodesic) rail curves in every view.
+  const int ns = std::max(8, pieces(1, level));
+  for (int e = 0; e < n; ++e) {
+    const double s0 = 0.0;
+    const double s1 = table.edge_m;
+    const double so0 = -outer;
+    const double so1 = table.edge_m + outer;
+    // Cushion: inner face, top.
+    fermi_patch(m, space, table, e, s0, s1, ns, {ch, 0.0}, {0.0, 0.0}, 1, {0.0, -1.0}, kCushion);
+    fermi_patch(m, space, table, e, s0 - cw, s1 + cw, ns, {ch, cw}, {ch, 0.0}, 1, {1.0, 0.0},
+                kCushion);
+    // Rail: top, outer face.
+    fermi_patch(m, space, table, e, so0, so1, ns, {ch + 0.004, outer}, {ch + 0.004, cw}, 1,
+                {1.0, 0.0}, kRail);
+    fermi_patch(m, space, table, e, so0, so1, ns, {-style.skirt_depth_m, outer},
+                {ch + 0.004, outer}, 2, {0.0, 1.0}, kSkirt);
+    // The step between cushion top and rail top.
+    fermi_patch(m, space, table, e, s0 - cw, s1 + cw, ns, {ch, cw}, {ch + 0.004, cw}, 1,
+                {0.0, -1.0}, kRail);
+  }
+  return m;
+}
+
+MeshInfo table_info(const Space& space, const geometry::TableShape& table,
+                    const TableStyle& style) {
+  MeshInfo info;
+  // The cloth within the circumradius, and each edge's cushions, rails and
+  // skirt in four balls along it.
+  info.bounds.push_back({geometry::origin(space), table.circumradius_m()});
+  const double outer = style.cushion_width_m + style.rail_width_m;
+  const double piece_m = table.edge_m / 4.0;
+  const double ball_r = std::hypot(piece_m / 2.0 + outer,
+                                   std::hypot(outer, style.skirt_depth_m + style.cushion_height_m)) + 0.01;
+  for (int e = 0; e < table.sides; ++e)
+    for (int i = 0; i < 4; ++i)
+      info.bounds.push_back({geometry::table_edge_frame(space, table, e, (i + 0.5) * piece_m) *
+                                 geometry::origin(space),
+                             ball_r});
+  for (int j = 0; j < table.sides; ++j)
+    info.long_edges.push_back({geometry::table_corner(space, table, j),
+                               geometry::table_corner(space, table, j + 1)});
+  info.base_segments = 1;
+  return info;
+}
+
+MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level) {
+  MeshData m;
+  const Isometry frame = Isometry::identity();
+  const int along = pieces(12, level);
+  constexpr int kAround = 16;
+  const double half = stick.length_m / 2.0;
+  const auto first = static_cast<std::uint32_t>(m.vertices.size());
+  for (int i = 0; i <= along; ++i) {
+    const double u = -half + stick.length_m * i / along;
+    const double f = static_cast<double>(i) / along;
+    // Butt (u = −L/2) dark, shaft light, the last 2 cm white (tip).
+    const glm::vec4 color = f < 0.35   ? glm::vec4(0.22f, 0.10f, 0.05f, 1.0f)
+                            : u > half - 0.02 ? glm::vec4(0.9f, 0.9f, 0.88f, 1.0f)
+                                              : glm::vec4(0.85f, 0.66f, 0.40f, 1.0f);
+    const Point c = stick.centre_point(space, frame, u);
+    for (int k = 0; k <= kAround; ++k) {
+      const double phi = 2.0 * kPi * k / kAround;
+      const Point p = stick.surface_point(space, frame, u, phi);
+      // Outward: further from the centre line along the same direction.
+      const Point out = geometry::normalize_point(space, p + 0.01 * (p - c));
+      push(m, space, p, out, color);
+    }
+  }
+  grid_indices(m, first, along + 1, kAround + 1);
+  // End caps as fans.
+  for (int end = 0; end < 2; ++end) {
+    const double u = end == 0 ? -half : half;
+    const Point c = stick.centre_point(space, frame, u);
+    const Point beyond = stick.centre_point(space, frame, u + (end == 0 ? -0.01 : 0.01));
+    const glm::vec4 color = m.vertices[end == 0 ? 0 : m.vertices.size() - 1].color;
+    const auto centre_index = static_cast<std::uint32_t>(m.vertices.size());
+    push(m, space, c, beyond, color);
+    for (int k = 0; k <= kAround; ++k)
+      push(m, space, stick.surface_point(space, frame, u, 2.0 * kPi * k / kAround), beyond, color);
+    for (std::uint32_t k = 0; k < kAround; ++k) {
+      if (end == 0)
+        m.indices.insert(m.indices.end(), {centre_index, centre_index + 2 + k, centre_index + 1 + k});
+      else
+        m.indices.insert(m.indices.end(), {centre_index, centre_index + 1 + k, centre_index + 2 + k});
+    }
+  }
+  return m;
+}
+
+MeshInfo stick_info(const Space& space, const geometry::BentStick& stick) {
+  MeshInfo info;
+  info.bounds.push_back({geometry::origin(space),
+                         stick.length_m / 2.0 + std::abs(stick.sagitta_m) + stick.radius_m});
+  const Isometry frame = Isometry::identity();
+  info.long_edges.push_back({stick.centre_point(space, frame, -stick.length_m / 2.0),
+                             stick.centre_point(space, frame, stick.length_m / 2.0)});
+  info.base_segments = 12;
+  return info;
+}
+
+MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color) {
+  MeshData m;
+  constexpr int kRings = 12;
+  constexpr int kSlices = 18;
+  for (int r = 0; r <= kRings; ++r) {
+    const double lat = kPi * r / kRings;
+    for (int s = 0; s <= kSlices; ++s) {
+      const double lon = 2.0 * kPi * s / kSlices;
+      const Vec3 dir(std::sin(lat) * std::cos(lon), std::cos(lat), std::sin(lat) * std::sin(lon));
+      const Point p = geometry::exp_origin(space, radius_m * dir);
+      const Point out = geometry::exp_origin(space, (radius_m + 1e-3) * dir);
+      push(m, space, p, out, color);
+    }
+  }
+  grid_indices(m, 0, kRings + 1, kSlices + 1);
+  return m;
+}
+
+MeshInfo ball_info(const Space& space, double radius_m) {
+  MeshInfo info;
+  info.bounds.push_back({geometry::origin(space), radius_m});
+  return info;
+}
+
+MeshData build_panel(const Space& space, double width_m, double height_m, int level) {
+  MeshData m;
+  m.shading = Shading::text;
+  const int nx = pieces(2, level);
+  const int ny = pieces(1, level);
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      const double u = static_cast<double>(i) / nx;
+      const double v = static_cast<double>(j) / ny;
+      const Vec3 local((u - 0.5) * width_m, (0.5 - v) * height_m, 0.0);
+      const Point p = geometry::exp_origin(space, local);
+      const Point out = geometry::exp_origin(space, local + Vec3(0.0, 0.0, 1e-3));
+      const glm::dvec4 n = tangent_normal(space, p, out - p);
+      m.vertices.push_back({glm::vec4(p), glm::vec4(n),
+                            glm::vec4(static_cast<float>(u), static_cast<float>(v), 0.0f, 1.0f)});
+    }
+  grid_indices(m, 0, ny + 1, nx + 1);
+  return m;
+}
+
+MeshInfo panel_info(const Space& space, double width_m, double height_m) {
+  MeshInfo info;
+  info.bounds.push_back({geometry::origin(space), 0.5 * std::hypot(width_m, height_m)});
+  const double hw = width_m / 2.0;
+  const double hh = height_m / 2.0;
+  info.long_edges.push_back({geometry::exp_origin(space, Vec3(-hw, hh, 0.0)),
+                             geometry::exp_origin(space, Vec3(hw, hh, 0.0))});
+  info.long_edges.push_back({geometry::exp_origin(space, Vec3(-hw, -hh, 0.0)),
+                             geometry::exp_origin(space, Vec3(hw, -hh, 0.0))});
+  info.base_segments = 2;
+  return info;
+}
+
+}  // namespace curvlab::renderer

@@ -1,0 +1,542 @@
+#include "curvlab/renderer/renderer.hpp"
+
+#include "curvlab/renderer/shader.hpp"
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+
+namespace curvlab::renderer {
+namespace {
+
+constexpr vk::Format kDepthFormat = vk::Format::eD32Sfloat;
+constexpr vk::DeviceSize kViewStride = 256;  // ≥ minUniformBufferOffsetAlignment everywhere
+
+// std140 layout of the View block in scene.vert.
+struct ViewBlock {
+  glm::mat4 proj_front;
+  glm::mat4 proj_back;
+  glm::mat4 eye_from_nose;
+  glm::vec4 params;
+};
+static_assert(sizeof(ViewBlock) <= kViewStride);
+
+struct DrawBlock {
+  glm::mat4 model_view;
+  glm::vec4 tint;
+};
+
+struct SpecData {
+  std::int32_t native_view;
+  std::int32_t curvature;
+  std::int32_t back;
+  std::int32_t shading;
+};
+
+struct GpuMesh {
+  Buffer vertices;
+  Buffer indices;
+  std::uint32_t index_count = 0;
+  std::uint64_t primitives = 0;
+  Topology topology = Topology::triangles;
+  Shading shading = Shading::lit;
+  std::uint64_t mesh_revision = 0;
+};
+
+struct Texture {
+  Image image;
+  vk::raii::DescriptorSet set{nullptr};
+  std::uint64_t mesh_revision = 0;
+};
+
+// Objects the GPU may still be reading; destroyed when their slot is reused.
+struct Garbage {
+  std::vector<GpuMesh> meshes;
+  std::vector<Texture> textures;
+  std::vector<Image> images;
+  void clear() {
+    meshes.clear();
+    textures.clear();
+    images.clear();
+  }
+};
+
+struct FrameSlot {
+  vk::raii::CommandBuffer cb{nullptr};
+  vk::raii::Fence fence{nullptr};
+  Buffer ubo;
+  vk::raii::DescriptorSet view_set{nullptr};
+  vk::raii::QueryPool queries{nullptr};
+  bool pending = false;  // submitted and not yet waited for
+  Garbage garbage;
+};
+
+std::vector<std::uint32_t> compile_or_abort(std::string_view name, ShaderStage stage) {
+  auto result = compile_shader(name, stage);
+  if (auto* e = std::get_if<ShaderError>(&result)) {
+    // The shaders are part of the program: failing to compile them is a bug.
+    std::cerr << "curvlab renderer: " << e->message << '\n';
+    std::abort();
+  }
+  return std::get<std::vector<std::uint32_t>>(std::move(result));
+}
+
+glm::mat4 to_float(const glm::dmat4& m) { return glm::mat4(m); }
+
+}  // namespace
+
+struct Renderer::Impl {
+  const Context& ctx;
+  RendererOptions options;
+  vk::raii::DescriptorSetLayout view_layout{nullptr};
+  vk::raii::DescriptorSetLayout texture_layout{nullptr};
+  vk::raii::PipelineLayout pipeline_layout{nullptr};
+  vk::raii::DescriptorPool pool{nullptr};
+  vk::raii::Sampler sampler{nullptr};
+  vk::raii::ShaderModule vert{nullptr};
+  vk::raii::ShaderModule frag{nullptr};
+  std::map<std::tuple<int, int, int, int, int>, vk::raii::Pipeline> pipelines;
+  std::map<std::pair<std::size_t, int>, GpuMesh> meshes;
+  std::map<std::size_t, Texture> textures;
+  std::array<Image, 2> depth;
+  std::vector<FrameSlot> slots;
+  std::size_t next_slot = 0;
+  bool timestamps = false;
+  RenderPlan last_plan;
+  std::vector<double> last_signature;
+  // Eyes of a content-preserving target known to hold only the background:
+  // not cleared or read back again while they stay unshown.
+  std::uint64_t blank_target = 0;
+  std::array<bool, 2> blank_eye{false, false};
+  // Bound to set 1 for draws without text, so every pipeline's sets are bound.
+  Texture blank;
+
+  Impl(const Context& c, RendererOptions o) : ctx(c), options(o) {
+    const auto& dev = ctx.device();
+    const vk::DescriptorSetLayoutBinding view_binding{
+        .binding = 0,
+        .descriptorType = vk::DescriptorType::eUniformBufferDynamic,
+        .descriptorCount = 1,
+        .stageFlags = vk::ShaderStageFlagBits::eVertex};
+    view_layout = vk::raii::DescriptorSetLayout(dev, {.bindingCount = 1, .pBindings = &view_binding});
+    const vk::DescriptorSetLayoutBinding tex_binding{
+        .binding = 0,
+        .descriptorType = vk::DescriptorType::eCombinedImageSampler,
+        .descriptorCount = 1,
+        .stageFlags = vk::ShaderStageFlagBits::eFragment};
+    texture_layout = vk::raii::DescriptorSetLayout(dev, {.bindingCount = 1, .pBindings = &tex_binding});
+    const vk::PushConstantRange push{.stageFlags = vk::ShaderStageFlagBits::eVertex,
+                                     .offset = 0,
+                                     .size = sizeof(DrawBlock)};
+    const vk::DescriptorSetLayout set_layouts[] = {*view_layout, *texture_layout};
+    pipeline_layout = vk::raii::PipelineLayout(dev, {.setLayoutCount = 2,
+                                                     .pSetLayouts = set_layouts,
+                                                     .pushConstantRangeCount = 1,
+                                                     .pPushConstantRanges = &push});
+    const vk::DescriptorPoolSize sizes[] = {
+        {vk::DescriptorType::eUniformBufferDynamic, 16},
+        {vk::DescriptorType::eCombinedImageSampler, 64}};
+    pool = vk::raii::DescriptorPool(
+        dev, {.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet,
+              .maxSets = 80,
+              .poolSizeCount = 2,
+              .pPoolSizes = sizes});
+    sampler = vk::raii::Sampler(dev, {.magFilter = vk::Filter::eLinear,
+                                      .minFilter = vk::Filter::eLinear,
+                                      .mipmapMode = vk::SamplerMipmapMode::eNearest,
+                                      .addressModeU = vk::SamplerAddressMode::eClampToEdge,
+                                      .addressModeV = vk::SamplerAddressMode::eClampToEdge,
+                                      .addressModeW = vk::SamplerAddressMode::eClampToEdge,
+                                      .maxLod = 0.0f});
+    const auto vs = compile_or_abort("scene.vert", ShaderStage::vertex);
+    const auto fs = compile_or_abort("scene.frag", ShaderStage::fragment);
+    vert = vk::raii::ShaderModule(dev, {.codeSize = vs.size() * 4, .pCode = vs.data()});
+    frag = vk::raii::ShaderModule(dev, {.codeSize = fs.size() * 4, .pCode = fs.data()});
+
+    const auto families = ctx.physical().getQueueFamilyProperties();
+    timestamps = families[ctx.queue_family()].timestampValidBits > 0;
+    for (std::size_t i = 0; i < std::max<std::size_t>(1, options.frames_in_flight); ++i) {
+      FrameSlot s;
+      s.cb = std::move(vk::raii::CommandBuffers(dev, {.commandPool = *ctx.command_pool(),
+                                                      .level = vk::CommandBufferLevel::ePrimary,
+                                                      .commandBufferCount = 1})
+                           .front());
+      s.fence = vk::raii::Fence(dev, vk::FenceCreateInfo{});
+      s.ubo = Buffer::create(ctx, 2 * kViewStride, vk::BufferUsageFlagBits::eUniformBuffer);
+      const vk::DescriptorSetLayout l = *view_layout;
+      s.view_set = std::move(vk::raii::DescriptorSets(
+                                 dev, {.descriptorPool = *pool, .descriptorSetCount = 1, .pSetLayouts = &l})
+                                 .front());
+      const vk::DescriptorBufferInfo info{.buffer = *s.ubo.buffer, .offset = 0, .range = sizeof(ViewBlock)};
+      dev.updateDescriptorSets(vk::WriteDescriptorSet{.dstSet = *s.view_set,
+                                                      .dstBinding = 0,
+                                                      .descriptorCount = 1,
+                                                      .descriptorType = vk::DescriptorType::eUniformBufferDynamic,
+                                                      .pBufferInfo = &info},
+                               {});
+      if (timestamps)
+        s.queries = vk::raii::QueryPool(dev, {.queryType = vk::QueryType::eTimestamp, .queryCount = 2});
+      slots.push_back(std::move(s));
+    }
+    blank = upload_texture(CoverageBitmap{1, 1, {0}});
+  }
+
+  ~Impl() { wait_all(); }
+
+  void wait_all() {
+    for (auto& s : slots)
+      if (s.pending) {
+        (void)ctx.device().waitForFences({*s.fence}, VK_TRUE, UINT64_MAX);
+        s.pending = false;
+      }
+  }
+
+  const vk::raii::Pipeline& pipeline(Projection proj, int k, Hemisphere hemi, Shading shading,
+                                     Topology topology) {
+    const auto key = std::make_tuple(static_cast<int>(proj), k, static_cast<int>(hemi),
+                                     static_cast<int>(shading), static_cast<int>(topology));
+    if (auto it = pipelines.find(key); it != pipelines.end()) return it->second;
+    const SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
+                        static_cast<std::int32_t>(shading)};
+    const vk::SpecializationMapEntry entries[] = {{0, offsetof(SpecData, native_view), 4},
+                                                  {1, offsetof(SpecData, curvature), 4},
+                                                  {2, offsetof(SpecData, back), 4},
+                                                  {3, offsetof(SpecData, shading), 4}};
+    const vk::SpecializationInfo spec_info{.mapEntryCount = 4,
+                                           .pMapEntries = entries,
+                                           .dataSize = sizeof(SpecData),
+                                           .pData = &spec};
+    const vk::PipelineShaderStageCreateInfo stages[] = {
+        {.stage = vk::ShaderStageFlagBits::eVertex, .module = *vert, .pName = "main",
+         .pSpecializationInfo = &spec_info},
+        {.stage = vk::ShaderStageFlagBits::eFragment, .module = *frag, .pName = "main",
+         .pSpecializationInfo = &spec_info}};
+    const vk::VertexInputBindingDescription binding{.binding = 0, .stride = sizeof(Vertex),
+                                                    .inputRate = vk::VertexInputRate::eVertex};
+    const vk::VertexInputAttributeDescription attrs[] = {
+        {0, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, position)},
+        {1, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, normal)},
+        {2, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, color)}};
+    const vk::PipelineVertexInputStateCreateInfo vertex_input{
+        .vertexBindingDescriptionCount = 1, .pVertexBindingDescriptions = &binding,
+        .vertexAttributeDescriptionCount = 3, .pVertexAttributeDescriptions = attrs};
+    const vk::PipelineInputAssemblyStateCreateInfo assembly{
+        .topology = topology == Topology::lines ? vk::PrimitiveTopology::eLineList
+                                                : vk::PrimitiveTopology::eTriangleList};
+    const vk::PipelineViewportStateCreateInfo viewport{.viewportCount = 1, .scissorCount = 1};
+    // No face culling: the S3 twin and the native map may flip orientation.
+    const vk::PipelineRasterizationStateCreateInfo raster{
+        .polygonMode = vk::PolygonMode::eFill,
+        .cullMode = vk::CullModeFlagBits::eNone,
+        .frontFace = vk::FrontFace::eCounterClockwise,
+        .lineWidth = 1.0f};
+    const vk::PipelineMultisampleStateCreateInfo multisample{
+        .rasterizationSamples = vk::SampleCountFlagBits::e1};
+    const vk::PipelineDepthStencilStateCreateInfo depth_state{
+        .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE,
+        .depthCompareOp = vk::CompareOp::eLess};
+    const vk::PipelineColorBlendAttachmentState blend{
+        .blendEnable = VK_FALSE,
+        .colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG |
+                          vk::ColorComponentFlagBits::eB | vk::ColorComponentFlagBits::eA};
+    const vk::PipelineColorBlendStateCreateInfo blend_state{.attachmentCount = 1, .pAttachments = &blend};
+    const vk::DynamicState dyn[] = {vk::DynamicState::eViewport, vk::DynamicState::eScissor};
+    const vk::PipelineDynamicStateCreateInfo dynamic{.dynamicStateCount = 2, .pDynamicStates = dyn};
+    const vk::Format color_format = vk::Format::eR8G8B8A8Unorm;
+    const vk::PipelineRenderingCreateInfo rendering{.colorAttachmentCount = 1,
+                                                    .pColorAttachmentFormats = &color_format,
+                                                    .depthAttachmentFormat = kDepthFormat};
+    const vk::GraphicsPipelineCreateInfo info{.pNext = &rendering,
+                                              .stageCount = 2,
+                                              .pStages = stages,
+                                              .pVertexInputState = &vertex_input,
+                                              .pInputAssemblyState = &assembly,
+                                              .pViewportState = &viewport,
+                                              .pRasterizationState = &raster,
+                                              .pMultisampleState = &multisample,
+                                              .pDepthStencilState = &depth_state,
+                                              .pColorBlendState = &blend_state,
+                                              .pDynamicState = &dynamic,
+                                              .layout = *pipeline_layout};
+    auto [it, inserted] = pipelines.emplace(key, vk::raii::Pipeline(ctx.device(), nullptr, info));
+    (void)inserted;
+    return it->second;
+  }
+
+  GpuMesh& mesh(const Scene& scene, std::size_t object, int level, Garbage& garbage) {
+    const std::uint64_t rev = scene.mesh_revision(object);
+    const auto key = std::make_pair(object, level);
+    if (auto it = meshes.find(key); it != meshes.end()) {
+      if (it->second.mesh_revision == rev) return it->second;
+      garbage.meshes.push_back(std::move(it->second));
+      meshes.erase(it);
+    }
+    const MeshData data = scene.objects()[object].build(level);
+    GpuMesh m;
+    const std::size_t vbytes = data.vertices.size() * sizeof(Vertex);
+    const std::size_t ibytes = data.indices.size() * sizeof(std::uint32_t);
+    m.vertices = Buffer::create(ctx, std::max<std::size_t>(vbytes, 16), vk::BufferUsageFlagBits::eVertexBuffer);
+    m.indices = Buffer::create(ctx, std::max<std::size_t>(ibytes, 16), vk::BufferUsageFlagBits::eIndexBuffer);
+    m.vertices.write(data.vertices.data(), vbytes);
+    m.indices.write(data.indices.data(), ibytes);
+    m.index_count = static_cast<std::uint32_t>(data.indices.size());
+    m.primitives = data.primitive_count();
+    m.topology = data.topology;
+    m.shading = data.shading;
+    m.mesh_revision = rev;
+    return meshes.emplace(key, std::move(m)).first->second;
+  }
+
+  Texture upload_texture(const CoverageBitmap& bmp) {
+    Texture t;
+    const vk::Extent2D extent{static_cast<std::uint32_t>(bmp.width), static_cast<std::uint32_t>(bmp.height)};
+    t.image = Image::create(ctx, extent, vk::Format::eR8Unorm,
+                            vk::ImageUsageFlagBits::eSampled | vk::ImageUsageFlagBits::eTransferDst,
+                            vk::ImageAspectFlagBits::eColor);
+    // Uploaded once, synchronously, when the panel is first drawn.
+    const Buffer staging = Buffer::create(ctx, bmp.pixels.size(), vk::BufferUsageFlagBits::eTransferSrc);
+    staging.write(bmp.pixels.data(), bmp.pixels.size());
+    ctx.submit_and_wait([&](const vk::raii::CommandBuffer& cb) {
+      transition(cb, *t.image.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+                 vk::ImageLayout::eTransferDstOptimal);
+      const vk::BufferImageCopy region{.imageSubresource = {vk::ImageAspectFlagBits::eColor, 0, 0, 1},
+                                       .imageExtent = {extent.width, extent.height, 1}};
+      cb.copyBufferToImage(*staging.buffer, *t.image.image, vk::ImageLayout::eTransferDstOptimal, region);
+      transition(cb, *t.image.image, vk::ImageAspectFlagBits::eColor,
+                 vk::ImageLayout::eTransferDstOptimal, vk::ImageLayout::eShaderReadOnlyOptimal);
+    });
+    const vk::DescriptorSetLayout l = *texture_layout;
+    t.set = std::move(vk::raii::DescriptorSets(ctx.device(), {.descriptorPool = *pool,
+                                                             .descriptorSetCount = 1,
+                                                             .pSetLayouts = &l})
+                          .front());
+    const vk::DescriptorImageInfo info{.sampler = *sampler, .imageView = *t.image.view,
+                                       .imageLayout = vk::ImageLayout::eShaderReadOnlyOptimal};
+    ctx.device().updateDescriptorSets(
+        vk::WriteDescriptorSet{.dstSet = *t.set, .dstBinding = 0, .descriptorCount = 1,
+                               .descriptorType = vk::DescriptorType::eCombinedImageSampler,
+                               .pImageInfo = &info},
+        {});
+    return t;
+  }
+
+  const Texture& texture(const Scene& scene, std::size_t object, Garbage& garbage) {
+    const std::uint64_t rev = scene.mesh_revision(object);
+    if (auto it = textures.find(object); it != textures.end()) {
+      if (it->second.mesh_revision == rev) return it->second;
+      garbage.textures.push_back(std::move(it->second));
+      textures.erase(it);
+    }
+    Texture t = upload_texture(*scene.objects()[object].text);
+    t.mesh_revision = rev;
+    return textures.emplace(object, std::move(t)).first->second;
+  }
+
+  const Image& depth_image(int eye, vk::Extent2D extent, Garbage& garbage) {
+    Image& d = depth[eye];
+    if (*d.image && d.extent == extent) return d;
+    if (*d.image) garbage.images.push_back(std::move(d));
+    d = Image::create(ctx, extent, kDepthFormat, vk::ImageUsageFlagBits::eDepthStencilAttachment,
+                      vk::ImageAspectFlagBits::eDepth);
+    return d;
+  }
+};
+
+Renderer::Renderer(const Context& ctx, RendererOptions options)
+    : impl_(std::make_unique<Impl>(ctx, options)) {}
+Renderer::~Renderer() = default;
+Renderer::Renderer(Renderer&&) noexcept = default;
+
+const RenderPlan& Renderer::last_plan() const { return impl_->last_plan; }
+void Renderer::wait_idle() { impl_->wait_all(); }
+
+namespace {
+
+// Everything a frame's pixels depend on besides the scene content.
+std::vector<double> frame_signature(const Scene& scene, const FrameDescription& f,
+                                    const RenderTarget& target) {
+  std::vector<double> s{static_cast<double>(scene.revision()),
+                        static_cast<double>(target.identity()),
+                        static_cast<double>(f.space.kind), f.space.radius_m,
+                        static_cast<double>(f.settings.projection),
+                        static_cast<double>(f.settings.eyes),
+                        static_cast<double>(f.settings.dominant_eye),
+                        f.settings.back_hemisphere ? 1.0 : 0.0, f.settings.near_m,
+                        f.settings.error_budget_px,
+                        static_cast<double>(f.settings.forced_level.value_or(-1)),
+                        static_cast<double>(f.width_px),
+                        static_cast<double>(f.height_px)};
+  const double* h = glm::value_ptr(f.head.m);
+  s.insert(s.end(), h, h + 16);
+  for (const auto& e : f.rig.eyes) {
+    s.insert(s.end(), {e.position_m.x, e.position_m.y, e.position_m.z, e.fov.angle_left_rad,
+                       e.fov.angle_right_rad, e.fov.angle_up_rad, e.fov.angle_down_rad});
+    const double* r = glm::value_ptr(e.rotation);
+    s.insert(s.end(), r, r + 9);
+  }
+  return s;
+}
+
+}  // namespace
+
+FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
+                            RenderTarget& target) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  Impl& r = *impl_;
+  FrameStats stats;
+
+  auto signature = frame_signature(scene, frame, target);
+  if (target.preserves_contents() && signature == r.last_signature) {
+    stats.reused = true;
+    stats.back_hemisphere = r.last_plan.back_hemisphere;
+    stats.frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    return stats;
+  }
+
+  FrameSlot& slot = r.slots[r.next_slot];
+  r.next_slot = (r.next_slot + 1) % r.slots.size();
+  if (slot.pending) {
+    (void)r.ctx.device().waitForFences({*slot.fence}, VK_TRUE, UINT64_MAX);
+    slot.pending = false;
+  }
+  slot.garbage.clear();  // everything in it was last used by this slot's finished frame
+  r.ctx.device().resetFences({*slot.fence});
+
+  RenderPlan plan = plan_frame(scene, frame);
+  const vk::raii::CommandBuffer& cb = slot.cb;
+  cb.reset();
+  cb.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+  if (r.timestamps) {
+    cb.resetQueryPool(*slot.queries, 0, 2);
+    cb.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *slot.queries, 0);
+  }
+  const std::array<float, 4> bg{r.options.background.x, r.options.background.y,
+                                r.options.background.z, r.options.background.w};
+  const int k = static_cast<int>(frame.space.k());
+  for (int e = 0; e < 2; ++e) {
+    const ViewPlan& vp = plan.views[e];
+    const EyeImage img = target.eye_image(vp.eye);
+    const vk::ImageSubresourceRange color_range{vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1};
+    if (!vp.rendered) {
+      // Only the background: a clear, no pass — and nothing at all when a
+      // headless target's image already holds just the background.
+      if (target.preserves_contents() && r.blank_target == target.identity() && r.blank_eye[e])
+        continue;
+      transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+                 vk::ImageLayout::eTransferDstOptimal);
+      cb.clearColorImage(img.image, vk::ImageLayout::eTransferDstOptimal,
+                         vk::ClearColorValue{bg}, color_range);
+      transition(cb, img.image, vk::ImageAspectFlagBits::eColor,
+                 vk::ImageLayout::eTransferDstOptimal, img.final_layout);
+      target.record_after(cb, vp.eye);
+      if (target.preserves_contents()) {
+        if (r.blank_target != target.identity()) r.blank_eye = {false, false};
+        r.blank_target = target.identity();
+        r.blank_eye[e] = true;
+      }
+      continue;
+    }
+    if (r.blank_target == target.identity()) r.blank_eye[e] = false;
+    ViewBlock block{to_float(vp.constants.proj_front), to_float(vp.constants.proj_back),
+                    to_float(vp.constants.eye_from_nose),
+                    glm::vec4(static_cast<float>(frame.space.radius_m), 0.0f, 0.0f, 0.0f)};
+    slot.ubo.write(&block, sizeof(block), static_cast<std::size_t>(e) * kViewStride);
+
+    // Meshes and textures first: building one may submit an upload.
+    std::vector<GpuMesh*> draw_meshes;
+    std::vector<const Texture*> draw_textures;
+    for (const auto& d : vp.draws) {
+      draw_meshes.push_back(&r.mesh(scene, d.object, d.level, slot.garbage));
+      draw_textures.push_back(scene.objects()[d.object].text ? &r.texture(scene, d.object, slot.garbage)
+                                                             : nullptr);
+    }
+    const Image& depth = r.depth_image(e, img.extent, slot.garbage);
+    transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+               vk::ImageLayout::eColorAttachmentOptimal);
+    transition(cb, *depth.image, vk::ImageAspectFlagBits::eDepth, vk::ImageLayout::eUndefined,
+               vk::ImageLayout::eDepthAttachmentOptimal);
+    const vk::RenderingAttachmentInfo color_att{.imageView = img.view,
+                                                .imageLayout = vk::ImageLayout::eColorAttachmentOptimal,
+                                                .loadOp = vk::AttachmentLoadOp::eClear,
+                                                .storeOp = vk::AttachmentStoreOp::eStore,
+                                                .clearValue = vk::ClearColorValue{bg}};
+    const vk::ClearValue depth_clear{.depthStencil = {.depth = 1.0f, .stencil = 0}};
+    const vk::RenderingAttachmentInfo depth_att{.imageView = *depth.view,
+                                                .imageLayout = vk::ImageLayout::eDepthAttachmentOptimal,
+                                                .loadOp = vk::AttachmentLoadOp::eClear,
+                                                .storeOp = vk::AttachmentStoreOp::eDontCare,
+                                                .clearValue = depth_clear};
+    cb.beginRendering({.renderArea = {{0, 0}, img.extent},
+                       .layerCount = 1,
+                       .colorAttachmentCount = 1,
+                       .pColorAttachments = &color_att,
+                       .pDepthAttachment = &depth_att});
+    ++stats.passes;
+    ++stats.views;
+    cb.setViewport(0, vk::Viewport{0.0f, 0.0f, static_cast<float>(img.extent.width),
+                                   static_cast<float>(img.extent.height), 0.0f, 1.0f});
+    cb.setScissor(0, vk::Rect2D{{0, 0}, img.extent});
+    cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 0, *slot.view_set,
+                          static_cast<std::uint32_t>(e * kViewStride));
+    cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1, *r.blank.set, {});
+    vk::Pipeline bound{};
+    for (std::size_t i = 0; i < vp.draws.size(); ++i) {
+      const PlannedDraw& d = vp.draws[i];
+      GpuMesh& m = *draw_meshes[i];
+      if (m.index_count == 0) continue;
+      const auto& pipe = r.pipeline(frame.settings.projection, k, d.hemisphere, m.shading, m.topology);
+      if (*pipe != bound) {
+        cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipe);
+        bound = *pipe;
+      }
+      if (draw_textures[i] != nullptr)
+        cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1,
+                              *draw_textures[i]->set, {});
+      const DrawBlock db{to_float(d.model_view), scene.objects()[d.object].tint};
+      cb.pushConstants<DrawBlock>(*r.pipeline_layout, vk::ShaderStageFlagBits::eVertex, 0, db);
+      cb.bindVertexBuffers(0, *m.vertices.buffer, vk::DeviceSize{0});
+      cb.bindIndexBuffer(*m.indices.buffer, 0, vk::IndexType::eUint32);
+      cb.drawIndexed(m.index_count, 1, 0, 0, 0);
+      ++stats.draws;
+      (m.topology == Topology::triangles ? stats.triangles : stats.lines) += m.primitives;
+    }
+    cb.endRendering();
+    transition(cb, img.image, vk::ImageAspectFlagBits::eColor,
+               vk::ImageLayout::eColorAttachmentOptimal, img.final_layout);
+    target.record_after(cb, vp.eye);
+    stats.culled += vp.culled;
+    stats.error_px = std::max(stats.error_px, vp.estimated_error_px);
+  }
+  if (r.timestamps) cb.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *slot.queries, 1);
+  cb.end();
+  const auto t_recorded = Clock::now();
+  const vk::CommandBuffer raw = *cb;
+  r.ctx.queue().submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &raw}, *slot.fence);
+  slot.pending = true;
+  if (target.preserves_contents()) {
+    (void)r.ctx.device().waitForFences({*slot.fence}, VK_TRUE, UINT64_MAX);
+    slot.pending = false;
+    if (r.timestamps) {
+      std::array<std::uint64_t, 2> ts{};
+      const vk::Result res = (*r.ctx.device()).getQueryPoolResults(
+          *slot.queries, 0, 2, sizeof(ts), ts.data(), sizeof(std::uint64_t),
+          vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
+      if (res == vk::Result::eSuccess)
+        stats.gpu_ms = static_cast<double>(ts[1] - ts[0]) * r.ctx.timestamp_period_ns() * 1e-6;
+    }
+  }
+  target.frame_finished();
+  stats.back_hemisphere = plan.back_hemisphere;
+  stats.max_level = plan.max_level;
+  stats.cpu_ms = std::chrono::duration<double, std::milli>(t_recorded - t0).count();
+  stats.frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  r.last_plan = std::move(plan);
+  r.last_signature = std::move(signature);
+  return stats;
+}
+
+}  // namespace curvlab::renderer

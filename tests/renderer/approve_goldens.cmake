@@ -1,0 +1,10 @@
+# Copies FROM/*.png (the last test run's outputs) over TO/*.png.
+file(GLOB outputs "${FROM}/*.png")
+if(NOT outputs)
+  message(FATAL_ERROR "no test outputs in ${FROM}: run ctest -L vulkan first")
+endif()
+foreach(f IN LISTS outputs)
+  get_filename_component(name ${f} NAME)
+  file(COPY_FILE ${f} ${TO}/${name} ONLY_IF_DIFFERENT)
+  message(STATUS "approved ${name}")
+endforeach()

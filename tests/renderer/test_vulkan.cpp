@@ -1,0 +1,316 @@
+// Device tests on lavapipe (label "vulkan"), validation layer on: any
+// validation message fails the test.
+#include "curvlab/renderer/offscreen.hpp"
+#include "curvlab/renderer/renderer.hpp"
+#include "curvlab/renderer/shader.hpp"
+
+#include "curvlab/geometry/maps.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+
+using namespace curvlab;
+using namespace curvlab::renderer;
+using geometry::SpaceKind;
+
+namespace {
+
+class VulkanTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto created = Context::create({.device = DeviceChoice::software, .validation = true});
+    if (auto* e = std::get_if<RenderError>(&created)) FAIL() << e->message;
+    ctx_ = std::make_unique<Context>(std::move(std::get<Context>(created)));
+  }
+  void TearDown() override {
+    if (!ctx_) return;
+    const auto messages = ctx_->validation_log().messages();
+    EXPECT_EQ(messages.size(), 0u) << (messages.empty() ? "" : messages.front());
+  }
+  const Context& ctx() const { return *ctx_; }
+
+  std::unique_ptr<Context> ctx_;
+};
+
+StimulusScene make(SpaceKind kind, SceneKind scene, double yaw_rad = 0.0) {
+  StimulusOptions o;
+  o.yaw_rad = yaw_rad;
+  auto made = make_stimulus_scene(kind, scene, o);
+  EXPECT_TRUE(std::holds_alternative<StimulusScene>(made));
+  return std::get<StimulusScene>(std::move(made));
+}
+
+FrameDescription frame_for(const StimulusScene& s, ViewPreset preset, std::uint32_t px) {
+  FrameDescription f;
+  f.space = s.space;
+  f.settings = ViewSettings::preset(preset);
+  f.head = s.head;
+  f.rig = StereoRig::from_ipd(0.063, Fov::symmetric(std::numbers::pi / 2.0, 1.0));
+  f.width_px = px;
+  f.height_px = px;
+  return f;
+}
+
+// True when every pixel equals the first (the cleared background).
+bool all_background(const Rgba8Image& img) {
+  for (std::size_t i = 4; i < img.pixels.size(); i += 4)
+    for (std::size_t c = 0; c < 4; ++c)
+      if (img.pixels[i + c] != img.pixels[c]) return false;
+  return true;
+}
+
+Rgba8Image side_by_side(const Rgba8Image& a, const Rgba8Image& b) {
+  Rgba8Image out{a.width + b.width, a.height, {}};
+  out.pixels.resize(static_cast<std::size_t>(out.width * out.height * 4));
+  for (int y = 0; y < a.height; ++y) {
+    std::copy_n(&a.pixels[static_cast<std::size_t>(y * a.width * 4)], a.width * 4,
+                &out.pixels[static_cast<std::size_t>(y * out.width * 4)]);
+    std::copy_n(&b.pixels[static_cast<std::size_t>(y * b.width * 4)], b.width * 4,
+                &out.pixels[static_cast<std::size_t>((y * out.width + a.width) * 4)]);
+  }
+  return out;
+}
+
+}  // namespace
+
+// ---- golden images: every space × view, both eyes side by side ----------
+
+struct GoldenCase {
+  SpaceKind space;
+  ViewPreset view;
+};
+
+class Golden : public VulkanTest, public ::testing::WithParamInterface<GoldenCase> {};
+
+TEST_P(Golden, MatchesApprovedImage) {
+  const auto [kind, preset] = GetParam();
+  const std::string name = std::string(geometry::to_string(kind)) + "_" + std::string(to_string(preset));
+  const StimulusScene s = make(kind, SceneKind::billiards);
+  Renderer renderer(ctx());
+  OffscreenTarget target(ctx(), 256, 256);
+  const FrameStats stats = renderer.render(s.scene, frame_for(s, preset, 256), target);
+  EXPECT_GT(stats.draws, 0);
+  const Rgba8Image actual = side_by_side(target.image(Eye::left), target.image(Eye::right));
+
+  // Every run leaves its output where approve_goldens picks it up.
+  const std::filesystem::path out_dir = CURVLAB_GOLDEN_OUT_DIR;
+  std::filesystem::create_directories(out_dir / "diff");
+  ASSERT_EQ(write_png((out_dir / (name + ".png")).string(), actual), "");
+
+  const std::filesystem::path golden = std::filesystem::path(CURVLAB_GOLDEN_DIR) / (name + ".png");
+  Rgba8Image expected;
+  std::string error;
+  ASSERT_TRUE(read_png(golden.string(), expected, error))
+      << error << "\nnew output: " << (out_dir / (name + ".png")).string()
+      << "\nlook at it, then run: cmake --build <build> --target approve_goldens";
+  // Tolerance: a channel may differ by 6/255, and 0.3 % of pixels by more
+  // (other drivers rasterise edges slightly differently; lavapipe itself is
+  // byte-identical run to run).
+  const ImageDiff d = diff_images(actual, expected, 6);
+  const int allowed = actual.width * actual.height * 3 / 1000;
+  if (d.differing_pixels > allowed) {
+    const auto diff_path = out_dir / "diff" / (name + ".diff.png");
+    (void)write_png(diff_path.string(), d.visual);
+    ADD_FAILURE() << name << ": " << d.differing_pixels << " pixels differ (allowed " << allowed
+                  << ", max channel difference " << d.max_channel_diff << ")\n"
+                  << "diff image: " << diff_path.string() << "\nnew output: "
+                  << (out_dir / (name + ".png")).string()
+                  << "\nif the change is intended: cmake --build <build> --target approve_goldens";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    SpacesAndViews, Golden,
+    ::testing::Values(GoldenCase{SpaceKind::S3, ViewPreset::tourist}, GoldenCase{SpaceKind::S3, ViewPreset::native},
+                      GoldenCase{SpaceKind::S3, ViewPreset::monocular}, GoldenCase{SpaceKind::E3, ViewPreset::tourist},
+                      GoldenCase{SpaceKind::E3, ViewPreset::native}, GoldenCase{SpaceKind::E3, ViewPreset::monocular},
+                      GoldenCase{SpaceKind::H3, ViewPreset::tourist}, GoldenCase{SpaceKind::H3, ViewPreset::native},
+                      GoldenCase{SpaceKind::H3, ViewPreset::monocular}),
+    [](const ::testing::TestParamInfo<GoldenCase>& param_info) {
+      return std::string(geometry::to_string(param_info.param.space)) + "_" +
+             std::string(to_string(param_info.param.view));
+    });
+
+// ---- the skipping -------------------------------------------------------
+
+TEST_F(VulkanTest, MonocularRendersOneViewAndTheOtherEyeIsBackground) {
+  const StimulusScene s = make(SpaceKind::H3, SceneKind::billiards);
+  Renderer renderer(ctx());
+  OffscreenTarget target(ctx(), 128, 128);
+  FrameDescription f = frame_for(s, ViewPreset::monocular, 128);
+  f.settings.dominant_eye = Eye::left;
+  const FrameStats stats = renderer.render(s.scene, f, target);
+  EXPECT_EQ(stats.views, 1);
+  EXPECT_EQ(stats.passes, 1);
+  EXPECT_TRUE(all_background(target.image(Eye::right)));
+  EXPECT_FALSE(all_background(target.image(Eye::left)));
+
+  const FrameStats both = renderer.render(s.scene, frame_for(s, ViewPreset::native, 128), target);
+  EXPECT_EQ(both.views, 2);
+  EXPECT_EQ(both.draws, 2 * stats.draws);
+}
+
+TEST_F(VulkanTest, UnchangedHeadlessFrameIsNotRenderedAgain) {
+  StimulusScene s = make(SpaceKind::E3, SceneKind::billiards);
+  Renderer renderer(ctx());
+  OffscreenTarget target(ctx(), 96, 96);
+  const FrameDescription f = frame_for(s, ViewPreset::native, 96);
+  const FrameStats first = renderer.render(s.scene, f, target);
+  EXPECT_FALSE(first.reused);
+  const Rgba8Image before = target.image(Eye::left);
+  const FrameStats second = renderer.render(s.scene, f, target);
+  EXPECT_TRUE(second.reused);
+  EXPECT_EQ(second.passes, 0);
+  EXPECT_EQ(second.draws, 0);
+  EXPECT_EQ(target.image(Eye::left).pixels, before.pixels);
+  // Moving the cue ball is a change: drawn again, and the image differs.
+  s.scene.edit(16).pose = s.scene.objects()[16].pose *
+                          geometry::translation_m(s.space, geometry::Vec3(0.1, 0.0, -0.1));
+  const FrameStats third = renderer.render(s.scene, f, target);
+  EXPECT_FALSE(third.reused);
+  EXPECT_GT(third.draws, 0);
+  EXPECT_NE(target.image(Eye::left).pixels, before.pixels);
+  // A different target with the same frame is not "unchanged" either.
+  OffscreenTarget other(ctx(), 96, 96);
+  EXPECT_FALSE(renderer.render(s.scene, f, other).reused);
+}
+
+TEST_F(VulkanTest, BackHemisphereOnlyInS3) {
+  Renderer renderer(ctx());
+  OffscreenTarget target(ctx(), 96, 96);
+  for (SpaceKind kind : {SpaceKind::E3, SpaceKind::H3}) {
+    for (SceneKind scene : {SceneKind::billiards, SceneKind::tiling}) {
+      const StimulusScene s = make(kind, scene, std::numbers::pi);
+      EXPECT_FALSE(renderer.render(s.scene, frame_for(s, ViewPreset::tourist, 96), target).back_hemisphere);
+      EXPECT_FALSE(renderer.render(s.scene, frame_for(s, ViewPreset::native, 96), target).back_hemisphere);
+    }
+  }
+  // S3 looking away from the table: the antipodal image is drawn and shows;
+  // switched off, it is neither drawn nor seen.
+  const StimulusScene s = make(SpaceKind::S3, SceneKind::billiards, std::numbers::pi);
+  FrameDescription f = frame_for(s, ViewPreset::native, 96);
+  const FrameStats on = renderer.render(s.scene, f, target);
+  EXPECT_TRUE(on.back_hemisphere);
+  EXPECT_FALSE(all_background(target.image(Eye::left)));
+  f.settings.back_hemisphere = false;
+  const FrameStats off = renderer.render(s.scene, f, target);
+  EXPECT_FALSE(off.back_hemisphere);
+  EXPECT_LT(off.draws, on.draws);
+}
+
+TEST_F(VulkanTest, NativeSubdividesTouristDoesNot) {
+  const StimulusScene s = make(SpaceKind::H3, SceneKind::table);
+  Renderer renderer(ctx());
+  OffscreenTarget target(ctx(), 256, 256);
+  const FrameStats tourist = renderer.render(s.scene, frame_for(s, ViewPreset::tourist, 256), target);
+  const FrameStats native = renderer.render(s.scene, frame_for(s, ViewPreset::native, 256), target);
+  EXPECT_EQ(tourist.max_level, 0);
+  EXPECT_GT(native.max_level, 0);
+  EXPECT_GT(native.triangles, tourist.triangles);
+  EXPECT_LE(native.error_px, 0.1);
+}
+
+// ---- GLSL vs C++ --------------------------------------------------------
+
+TEST_F(VulkanTest, ShaderFormulasMatchCpp) {
+  // Runs curved.glsl's log map, back-hemisphere map and clip positions (tourist
+  // and native, front and back) in a compute shader on the same points the
+  // C++ twins see, and compares.
+  auto spirv = compile_shader("formulas.comp", ShaderStage::compute);
+  ASSERT_TRUE(std::holds_alternative<std::vector<std::uint32_t>>(spirv)) << std::get<ShaderError>(spirv).message;
+  const auto& code = std::get<std::vector<std::uint32_t>>(spirv);
+  const auto& dev = ctx().device();
+  const vk::DescriptorSetLayoutBinding bindings[] = {
+      {0, vk::DescriptorType::eStorageBuffer, 1, vk::ShaderStageFlagBits::eCompute},
+      {1, vk::DescriptorType::eStorageBuffer, 1, vk::ShaderStageFlagBits::eCompute},
+      {2, vk::DescriptorType::eUniformBuffer, 1, vk::ShaderStageFlagBits::eCompute}};
+  vk::raii::DescriptorSetLayout layout(dev, {.bindingCount = 3, .pBindings = bindings});
+  const vk::DescriptorSetLayout raw_layout = *layout;
+  vk::raii::PipelineLayout pl(dev, {.setLayoutCount = 1, .pSetLayouts = &raw_layout});
+  vk::raii::ShaderModule module(dev, {.codeSize = code.size() * 4, .pCode = code.data()});
+  vk::raii::Pipeline pipeline(dev, nullptr,
+                              vk::ComputePipelineCreateInfo{
+                                  .stage = {.stage = vk::ShaderStageFlagBits::eCompute, .module = *module, .pName = "main"},
+                                  .layout = *pl});
+  const vk::DescriptorPoolSize sizes[] = {{vk::DescriptorType::eStorageBuffer, 2}, {vk::DescriptorType::eUniformBuffer, 1}};
+  vk::raii::DescriptorPool pool(dev, {.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet,
+                                      .maxSets = 1, .poolSizeCount = 2, .pPoolSizes = sizes});
+  vk::raii::DescriptorSets sets(dev, {.descriptorPool = *pool, .descriptorSetCount = 1, .pSetLayouts = &raw_layout});
+
+  int compared = 0;
+  for (SpaceKind kind : {SpaceKind::S3, SpaceKind::E3, SpaceKind::H3}) {
+    const geometry::Space space{kind, 0.85};
+    // Points at many distances and directions, including near the viewer and
+    // (S3) near the antipode.
+    std::vector<geometry::Point> pts;
+    const double max_t = kind == SpaceKind::S3 ? std::numbers::pi - 1e-3 : 6.0;
+    for (double t : {1e-5, 1e-3, 0.05, 0.3, 1.0, 1.6, 2.5, 3.1, 4.5, 6.0}) {
+      if (t > max_t) continue;
+      for (int j = 0; j < 6; ++j) {
+        const geometry::Vec3 dir = glm::normalize(geometry::Vec3(std::sin(1.3 * j + t), 0.4 * std::cos(2.1 * j) - 0.2, -1.0 + 0.3 * j));
+        pts.push_back(geometry::exp_origin(space, dir * (t * space.radius_m)));
+      }
+    }
+    if (kind == SpaceKind::S3) pts.push_back(geometry::exp_origin(space, geometry::Vec3(0.2, 0.1, -1.0) * (0.999 * std::numbers::pi * space.radius_m / glm::length(geometry::Vec3(0.2, 0.1, -1.0)))));
+    EyeOffset eye;
+    eye.position_m = {0.0315, 0.0, 0.0};
+    eye.fov = {-0.9, 0.7, 0.6, -0.75};
+    const ViewConstants native = make_view_constants(space, ViewSettings::preset(ViewPreset::native), Isometry::identity(), eye);
+    ViewConstants tourist = make_view_constants(space, ViewSettings::preset(ViewPreset::tourist), Isometry::identity(), eye);
+    // One projection matrix per dispatch: the GLSL uses `proj` for every
+    // variant, so give both views the same matrix for comparison.
+    tourist.proj_front = native.proj_front;
+    tourist.proj_back = native.proj_front;
+    ViewConstants native_same = native;
+    native_same.proj_back = native.proj_front;
+
+    const std::size_t n = pts.size();
+    Buffer in = Buffer::create(ctx(), n * 16, vk::BufferUsageFlagBits::eStorageBuffer);
+    Buffer out = Buffer::create(ctx(), n * 6 * 16, vk::BufferUsageFlagBits::eStorageBuffer);
+    Buffer params = Buffer::create(ctx(), 256, vk::BufferUsageFlagBits::eUniformBuffer);
+    std::vector<glm::vec4> fin;
+    for (const auto& p : pts) fin.emplace_back(p);
+    in.write(fin.data(), n * 16);
+    struct {
+      glm::mat4 proj;
+      glm::mat4 eye_from_nose;
+      glm::vec4 rho_k_count;
+    } block{glm::mat4(native.proj_front), glm::mat4(native.eye_from_nose),
+            glm::vec4(float(space.radius_m), float(space.k()), float(n), 0.0f)};
+    params.write(&block, sizeof(block));
+    const vk::DescriptorBufferInfo bi[] = {{*in.buffer, 0, VK_WHOLE_SIZE}, {*out.buffer, 0, VK_WHOLE_SIZE}, {*params.buffer, 0, VK_WHOLE_SIZE}};
+    dev.updateDescriptorSets({vk::WriteDescriptorSet{.dstSet = *sets[0], .dstBinding = 0, .descriptorCount = 1, .descriptorType = vk::DescriptorType::eStorageBuffer, .pBufferInfo = &bi[0]},
+                              vk::WriteDescriptorSet{.dstSet = *sets[0], .dstBinding = 1, .descriptorCount = 1, .descriptorType = vk::DescriptorType::eStorageBuffer, .pBufferInfo = &bi[1]},
+                              vk::WriteDescriptorSet{.dstSet = *sets[0], .dstBinding = 2, .descriptorCount = 1, .descriptorType = vk::DescriptorType::eUniformBuffer, .pBufferInfo = &bi[2]}},
+                             {});
+    ctx().submit_and_wait([&](const vk::raii::CommandBuffer& cb) {
+      cb.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline);
+      cb.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pl, 0, *sets[0], {});
+      cb.dispatch(static_cast<std::uint32_t>((n + 63) / 64), 1, 1);
+      const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eShaderWrite, .dstAccessMask = vk::AccessFlagBits::eHostRead};
+      cb.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eHost, {}, to_host, {}, {});
+    });
+    const auto* gpu = static_cast<const glm::vec4*>(out.mapped);
+    auto check = [&](const glm::dvec4& cpu, const glm::vec4& g, const char* what, std::size_t i) {
+      // float32 against double: relative 2e-5 of the vector's size.
+      const double scale = std::max(1.0, glm::length(cpu));
+      for (int c = 0; c < 4; ++c)
+        EXPECT_NEAR(double(g[c]), cpu[c], 2e-5 * scale)
+            << geometry::to_string(kind) << " " << what << " point " << i << " component " << c;
+      ++compared;
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      const geometry::Point& p = glm::dvec4(fin[i]);  // the float inputs the GPU saw
+      check(glm::dvec4(geometry::log_origin(space, p), geometry::distance_from_origin_rad(space, p)), gpu[6 * i + 0], "log", i);
+      if (kind == SpaceKind::S3) check(glm::dvec4(geometry::back_log_origin(space, p), 0.0), gpu[6 * i + 1], "back log", i);
+      check(clip_position(tourist, Hemisphere::front, p), gpu[6 * i + 2], "tourist clip", i);
+      check(clip_position(tourist, Hemisphere::back, p), gpu[6 * i + 3], "tourist back clip", i);
+      check(clip_position(native_same, Hemisphere::front, p), gpu[6 * i + 4], "native clip", i);
+      if (kind == SpaceKind::S3) check(clip_position(native_same, Hemisphere::back, p), gpu[6 * i + 5], "native back clip", i);
+    }
+  }
+  EXPECT_GT(compared, 500);
+}
