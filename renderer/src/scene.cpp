@@ -56,19 +56,6 @@ namespace {
 
 constexpr double kTableHeightM = 0.80;
 
-// geometry::shape_in (main a3dde45) takes the apothem from T(a) = T(s/2)/tan(π/n),
-// which holds only in E3; in the right triangle centre–midpoint–corner the
-// spherical/hyperbolic rule is S(a) = T(s/2)/tan(π/n) (S3 octant: a =
-// atan(1/√2), not π/6). table_edge_frame uses the apothem, so with the wrong
-// value the S3 triangle and the H3 pentagon do not close. Until geometry is
-// fixed, the renderer corrects the shape it draws; once fixed, this is a no-op.
-geometry::TableShape consistent_table(const Space& space, geometry::TableShape t) {
-  const double half = t.side_rad / 2.0;
-  const double s_a = space.S(half) / space.C(half) / std::tan(std::numbers::pi / t.sides);
-  t.apothem_rad = space.kind == SpaceKind::E3 ? s_a : space.S_inv(s_a);
-  return t;
-}
-
 // Adds a text panel of the given size; pixel density ~1000 px per metre.
 std::optional<std::string> add_panel(Scene& scene, const Space& space, const std::string& text,
                                      const std::string& font, double width_m, double height_m,
@@ -140,7 +127,7 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
   }
   if (auto* e = std::get_if<geometry::GeometryError>(&table)) return e->message;
   s.space = Space{kind, std::get<geometry::TableShape>(table).radius_m};
-  const auto shape = consistent_table(s.space, std::get<geometry::TableShape>(table));
+  const auto& shape = std::get<geometry::TableShape>(table);
   const Space& space = s.space;
   const geometry::BentStick stick{options.stick_length_m, options.stick_sagitta_m,
                                   options.stick_radius_m};
