@@ -27,4 +27,7 @@ done
 echo "== A point 2.5 rad away on S3 of radius 1 m: native and back-hemisphere images =="
 "$bin" inspect map --space S3 --radius-m 1 --point 0,0,-0.5984721441,-0.8011436155 | tee "$out/map_S3.txt"
 echo
-echo "Results are in $(pwd)/$out"
+echo "== The cue stick and billiards table in H3, native view (offscreen Vulkan) =="
+"$bin" render --space H3 --view native --scene billiards --size 1024x1024 --out "$out/render_H3_native"
+echo
+echo "Results are in $(pwd)/$out (text tables, and left.png/right.png/plan.json under render_H3_native/)"
