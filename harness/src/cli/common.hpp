@@ -35,5 +35,6 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 
 // Registration of each command group (one file each, wired in main.cpp).
 void add_inspect_commands(CLI::App& app);
+void add_protocol_commands(CLI::App& app);
 
 }  // namespace curvlab::cli

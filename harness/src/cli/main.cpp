@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
                                         std::string(curvlab::git_commit()) + ")");
   app.require_subcommand(1);
   curvlab::cli::add_inspect_commands(app);
+  curvlab::cli::add_protocol_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
