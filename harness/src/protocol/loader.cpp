@@ -259,6 +259,12 @@ class Loader {
     return out;
   }
 
+  // Adds what was actually written when the registry's message does not say.
+  static std::string with_found(const std::string& message, const toml::node& n) {
+    if (message.find("found") != std::string::npos) return message;
+    return message + ", found " + type_name(n);
+  }
+
   std::optional<SettingValue> to_value(const toml::node& n) {
     if (const auto* b = n.as_boolean()) return SettingValue{b->get()};
     if (const auto* i = n.as_integer()) return SettingValue{i->get()};
@@ -285,7 +291,7 @@ class Loader {
         const auto problem = value ? check_setting(*info, *value)
                                    : std::optional<std::string>("expected a value, found " + type_name(v));
         if (problem) {
-          error(pos_of(v), join(prefix, path), *problem + (value ? "" : ""));
+          error(pos_of(v), join(prefix, path), with_found(*problem, v));
           continue;
         }
         out.push_back({path, *value, pos_of(v)});
@@ -441,7 +447,7 @@ class Loader {
           }
           if (info) {
             if (const auto problem = check_setting(*info, *value)) {
-              error(pos_of(e), field, *problem + " (levels of " + f.sets + ")");
+              error(pos_of(e), field, with_found(*problem, e) + " (levels of " + f.sets + ")");
               continue;
             }
           } else if (!std::holds_alternative<std::string>(*value) && !t->contains("sets")) {
@@ -903,9 +909,12 @@ class Loader {
   // only be checked on the combination (a table that cannot exist in a space,
   // a bend deeper than the stick allows).
   void check_cells(const Protocol& p, const Block& b, const std::string& bp) {
-    std::map<std::string, SourcePos> base_origin;
-    for (const auto& o : p.session_overrides) base_origin[o.path] = o.pos;
-    for (const auto& o : b.overrides) base_origin[o.path] = o.pos;
+    // Where each setting got its value: position and the field as written.
+    std::map<std::string, std::pair<SourcePos, std::string>> base_origin;
+    for (const auto& o : p.session_overrides) base_origin[o.path] = {o.pos, o.path};
+    const bool explicit_blocks = bp != "blocks";
+    for (const auto& o : b.overrides)
+      base_origin[o.path] = {o.pos, explicit_blocks ? bp + "." + o.path : o.path};
     const Settings base = p.block_settings(b);
     std::set<std::pair<std::string, std::string>> reported;
     for (const auto& cell : block_cells(p, b)) {
@@ -916,7 +925,8 @@ class Loader {
         const Level& l = p.factors[f].levels[cell[f]];
         if (const auto* info = find_setting(p.factors[f].sets)) {
           apply_setting(s, *info, l.value);
-          origin[p.factors[f].sets] = l.pos;
+          origin[p.factors[f].sets] = {l.pos, "factors." + p.factors[f].name + ".levels[" +
+                                                     std::to_string(cell[f] + 1) + "]"};
         }
         where += (where.empty() ? "" : ", ") + p.factors[f].name + " = " + l.label;
       }
@@ -924,13 +934,17 @@ class Loader {
       const auto report = [&](const std::string& path, const std::string& msg) {
         if (!reported.insert({path, msg}).second) return;
         const auto it = origin.find(path);
-        const SourcePos at = it != origin.end() ? it->second : b.pos;
-        error(at, it != origin.end() ? path : bp, msg + suffix);
+        if (it != origin.end()) error(it->second.first, it->second.second, msg + suffix);
+        else error(b.pos, bp, msg + suffix);
       };
       std::string why;
       if (!derive(s, &why)) {
         report(origin.count("space.table_sides") ? "space.table_sides" : "space.kind", why);
       }
+      if (s.stimulus.stick_anchor == StickAnchor::head && s.stimulus.stick_distance_m < 0.1)
+        report("stimulus.stick_distance_m",
+               "a head-anchored stick must be at least 0.1 m from the eyes, found " +
+                   value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_distance_m)));
       if (std::abs(s.stimulus.stick_sagitta_m) >= s.stimulus.stick_length_m / 2)
         report("stimulus.stick_sagitta_m", "expected |sagitta| < stick_length_m / 2 = " +
                                                value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_length_m / 2)));

@@ -66,8 +66,9 @@ std::vector<SettingInfo> make_registry() {
        "signed bend of the stick at its middle; + bows toward the viewer"},
       {"stimulus.stick_anchor", K::enumeration, 0, 0, {"head", "table"},
        "the stick's pose is relative to the head or to the table"},
-      {"stimulus.stick_distance_m", K::number, 0.1, 20.0, {},
-       "distance from the eyes (head) or from the near table edge (table)"},
+      {"stimulus.stick_distance_m", K::number, 0.0, 20.0, {},
+       "distance from the eyes (head anchor, at least 0.1) or from the table centre toward "
+       "the participant's edge (table anchor)"},
       {"stimulus.stick_height_m", K::number, -2.0, 2.0, {},
        "height relative to the eyes (head) or to the table top (table)"},
       {"stimulus.stick_yaw_deg", K::number, -180.0, 180.0, {},

@@ -62,7 +62,7 @@ struct Stimulus {
   // Signed sagitta of the stick's bend: positive bows toward the viewer.
   double stick_sagitta_m = 0.0;
   StickAnchor stick_anchor = StickAnchor::head;
-  double stick_distance_m = 1.0;  // from the eyes (head) or the near edge (table)
+  double stick_distance_m = 1.0;  // from the eyes (head) or the table centre (table)
   double stick_height_m = 0.0;    // relative to eye height (head) or table top (table)
   double stick_yaw_deg = 0.0;     // rotation about the vertical, 0 = across the view
   bool show_stick = true;
