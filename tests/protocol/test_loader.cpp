@@ -203,3 +203,19 @@ TEST(Diagnostics, GarbageNeverCrashes) {
     EXPECT_FALSE(r.diagnostics.empty());
   }
 }
+
+TEST(Diagnostics, NonAsciiTextInValueStringsIsAccepted) {
+  // Instructions in any language: only keys and bare text must be ASCII.
+  const std::string text =
+      "[protocol]\nname = \"d\u00e9mo\"\nversion = \"1\"\n"
+      "description = \"\"\"ρ = L / s, \u00a7 7,\n\u00a7 again\"\"\"\n"
+      "[randomization]\nseed = 3\n"
+      "[instructions]\nstart = [\"Bitte drücken Sie die Taste — ¿listo? 「はい」\"]  # ρ ≠ 1\n"
+      "[judgement]\ntype = \"choice\"\noptions = [{ value = \"a\", label = \"gewölbt\", keys = [\"1\"] },"
+      " { value = \"b\", label = \"gerade\", keys = [\"2\"] }]\n";
+  const auto r = load_protocol_text(text, "unicode.toml");
+  for (const auto& d : r.diagnostics) ADD_FAILURE() << format_diagnostic(d);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r.protocol->instructions_start.at(0), "Bitte drücken Sie die Taste — ¿listo? 「はい」");
+  EXPECT_EQ(r.protocol->judgement.options.at(0).label, "gewölbt");
+}

@@ -96,6 +96,132 @@ std::vector<std::string> numeric_paths() {
   return out;
 }
 
+// toml++ 3.3 (Debian 12) reaches __builtin_unreachable() — undefined
+// behaviour, found by our fuzzer and known upstream (marzer/tomlplusplus#190,
+// #295, fixed after 3.3) — when it asks whether certain non-ASCII code points
+// are whitespace: U+00A1–U+0499, U+2D8E–U+3187 and U+FB46–U+FEFE (except
+// U+3000). It asks for characters outside strings, inside keys (quoted keys
+// are recorded character by character) and after a line-ending backslash in a
+// multi-line basic string. Value strings and comments are safe, so
+// instructions may be written in any language. This scan finds the unsafe
+// places first and reports them as syntax errors instead of calling the parser.
+bool unsafe_for_toml33(char32_t c) {
+  if (c < 0xA1 || c > 0xFEFF || c == 0x3000 || c == 0xFEFF) return false;
+  const auto child = (static_cast<std::uint64_t>(c) - 0xA0u) / 0x3FAu;
+  return child == 0 || child == 11 || child == 63;
+}
+
+struct Hazard {
+  SourcePos pos;
+  std::string message;
+};
+
+std::string hex4(char32_t c) {
+  static const char* digits = "0123456789ABCDEF";
+  std::string out;
+  for (int shift = c > 0xFFFF ? 20 : 12; shift >= 0; shift -= 4) out += digits[(c >> shift) & 0xFu];
+  return out;
+}
+
+bool is_toml_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+std::optional<Hazard> find_toml33_hazard(std::string_view text) {
+  int line = 1, column = 1;
+  std::size_t i = 0;
+  // Decodes the code point at i (invalid UTF-8: the byte itself; toml++
+  // reports those cleanly) and advances i, line and column.
+  const auto next = [&]() -> char32_t {
+    const auto b0 = static_cast<unsigned char>(text[i]);
+    std::size_t len = b0 < 0x80 ? 1 : (b0 >> 5) == 6 ? 2 : (b0 >> 4) == 14 ? 3 : (b0 >> 3) == 30 ? 4 : 1;
+    if (i + len > text.size()) len = 1;
+    char32_t c = len == 1 ? b0 : len == 2 ? (b0 & 0x1Fu) : len == 3 ? (b0 & 0x0Fu) : (b0 & 0x07u);
+    for (std::size_t k = 1; k < len; ++k) {
+      const auto b = static_cast<unsigned char>(text[i + k]);
+      if ((b >> 6) != 2) {
+        len = 1;
+        c = b0;
+        break;
+      }
+      c = (c << 6) | (b & 0x3Fu);
+    }
+    i += len;
+    if (c == U'\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+    return c;
+  };
+  const auto here = [&] { return SourcePos{line, column}; };
+  const auto starts = [&](std::string_view s) { return text.substr(i, s.size()) == s; };
+
+  std::vector<char> nest;  // '[' array, '{' inline table (value side only)
+  bool key_position = true;
+  while (i < text.size()) {
+    const SourcePos at = here();
+    const char ch = text[i];
+    if (ch == '#') {
+      while (i < text.size() && text[i] != '\n') next();
+      continue;
+    }
+    if (ch == '"' || ch == '\'') {
+      const std::string_view delim = ch == '"' ? std::string_view("\"\"\"") : std::string_view("'''");
+      const bool triple = starts(delim);
+      const bool basic = ch == '"';
+      const bool is_key = key_position;
+      for (int k = 0; k < (triple ? 3 : 1); ++k) next();
+      while (i < text.size()) {
+        if (triple ? starts(delim) : text[i] == ch) {
+          for (int k = 0; k < (triple ? 3 : 1); ++k) next();
+          // A closing delimiter may be followed by up to two more quotes.
+          while (triple && i < text.size() && text[i] == ch) next();
+          break;
+        }
+        if (!triple && text[i] == '\n') break;  // unterminated: toml++ reports it
+        const SourcePos cp_at = here();
+        if (basic && text[i] == '\\') {
+          next();
+          if (i >= text.size()) break;
+          if (triple && is_toml_space(text[i])) {
+            while (i < text.size() && is_toml_space(text[i])) next();
+            const SourcePos after = here();
+            if (i < text.size() && static_cast<unsigned char>(text[i]) >= 0x80) {
+              const char32_t c = next();
+              if (unsafe_for_toml33(c))
+                return Hazard{after, "U+" + hex4(c) +
+                                         " right after a line-ending backslash cannot be read by the TOML "
+                                         "library (toml++ 3.3); write it as the escape \\u" + hex4(c)};
+            }
+            continue;
+          }
+          next();  // the escaped character
+          continue;
+        }
+        const char32_t c = next();
+        if (is_key && c >= 0x80)
+          return Hazard{cp_at, "non-ASCII character U+" + hex4(c) + " in a key: protocol keys are ASCII names"};
+      }
+      continue;
+    }
+    const char32_t c = next();
+    if (c >= 0x80)
+      return Hazard{at, "non-ASCII character U+" + hex4(c) +
+                            " outside a string or comment (TOML allows it only inside quotes or after #)"};
+    switch (c) {
+      case U'=': key_position = false; break;
+      case U'\n': if (nest.empty()) key_position = true; break;
+      case U'[': if (!(key_position && nest.empty())) nest.push_back('['); break;
+      case U']': if (!nest.empty() && nest.back() == '[') nest.pop_back(); break;
+      case U'{': nest.push_back('{'); key_position = true; break;
+      case U'}': if (!nest.empty()) nest.pop_back(); key_position = false; break;
+      case U',': if (!nest.empty() && nest.back() == '{') key_position = true; break;
+      default: break;
+    }
+  }
+  return std::nullopt;
+}
+
 class Loader {
  public:
   explicit Loader(std::string file) : file_(std::move(file)) {}
@@ -103,6 +229,11 @@ class Loader {
   LoadResult run(std::string_view text) {
     LoadResult result;
     toml::table root;
+    if (const auto hazard = find_toml33_hazard(text)) {
+      error(hazard->pos, "syntax", hazard->message);
+      result.diagnostics = std::move(diags_);
+      return result;
+    }
     try {
       root = toml::parse(text, file_);
     } catch (const toml::parse_error& e) {
