@@ -1068,18 +1068,48 @@ class Loader {
         if (it != origin.end()) error(it->second.first, it->second.second, msg + suffix);
         else error(b.pos, bp, msg + suffix);
       };
-      std::string why;
-      if (!derive(s, &why)) {
-        report(origin.count("space.table_sides") ? "space.table_sides" : "space.kind", why);
+      check_settings(s, report);
+      // The values a staircase or adjustment can reach must be possible too:
+      // check both ends of every range, reported at the judgement.
+      const std::string& param = b.judgement.type == JudgementType::adjustment && b.judgement.adjustment
+                                     ? b.judgement.adjustment->parameter
+                                     : b.judgement.parameter;
+      if (param.empty() || b.judgement.type == JudgementType::choice) continue;
+      std::vector<double> ends;
+      if (b.judgement.adjustment) ends = {b.judgement.adjustment->min, b.judgement.adjustment->max};
+      for (const auto& st : b.judgement.staircases) {
+        ends.push_back(st.min);
+        ends.push_back(st.max);
       }
-      if (s.stimulus.stick_anchor == StickAnchor::head && s.stimulus.stick_distance_m < 0.1)
-        report("stimulus.stick_distance_m",
-               "a head-anchored stick must be at least 0.1 m from the eyes, found " +
-                   value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_distance_m)));
-      if (std::abs(s.stimulus.stick_sagitta_m) >= s.stimulus.stick_length_m / 2)
-        report("stimulus.stick_sagitta_m", "expected |sagitta| < stick_length_m / 2 = " +
-                                               value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_length_m / 2)));
+      const std::string jfield = (b.judgement.pos.line == p.judgement.pos.line &&
+                                  b.judgement.pos.column == p.judgement.pos.column)
+                                     ? "judgement"
+                                     : bp + ".judgement";
+      for (double v : ends) {
+        Settings reached = s;
+        set_numeric_setting(reached, param, v);
+        check_settings(reached, [&](const std::string& path, const std::string& msg) {
+          const std::string full = msg + " when " + param + " reaches " +
+                                   value_label(SettingValue(std::in_place_type<double>, v));
+          if (reported.insert({path, full}).second) error(b.judgement.pos, jfield, full + suffix);
+        });
+      }
     }
+  }
+
+  // Checks that need a whole resolved set of settings.
+  template <typename Report>
+  static void check_settings(const Settings& s, const Report& report) {
+    std::string why;
+    if (!derive(s, &why)) report(s.space.table_sides > 0 ? "space.table_sides" : "space.kind", why);
+    if (s.stimulus.stick_anchor == StickAnchor::head && s.stimulus.stick_distance_m < 0.1)
+      report("stimulus.stick_distance_m",
+             "a head-anchored stick must be at least 0.1 m from the eyes, found " +
+                 value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_distance_m)));
+    if (std::abs(s.stimulus.stick_sagitta_m) >= s.stimulus.stick_length_m / 2)
+      report("stimulus.stick_sagitta_m",
+             "expected |sagitta| < stick_length_m / 2 = " +
+                 value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_length_m / 2)));
   }
 
   std::string file_;
