@@ -158,14 +158,23 @@ std::optional<Hazard> find_toml33_hazard(std::string_view text) {
 
   std::vector<char> nest;  // '[' array, '{' inline table (value side only)
   bool key_position = true;
+  char prev = '\n';  // the last character outside strings and comments
   while (i < text.size()) {
     const SourcePos at = here();
     const char ch = text[i];
     if (ch == '#') {
       while (i < text.size() && text[i] != '\n') next();
+      prev = ' ';
       continue;
     }
     if (ch == '"' || ch == '\'') {
+      // A quote glued to a bare value (`0"x"`) is a syntax error, but toml++
+      // first scans the whole run of characters as one value — into the
+      // "string" — classifying each, so report it here.
+      if (std::string_view(" \t\r\n=[{,.").find(prev) == std::string_view::npos)
+        return Hazard{at, std::string("unexpected quote right after '") + prev +
+                              "': expected whitespace, '=', '[', '{', ',' or '.' before a string"};
+      prev = ch;
       const std::string_view delim = ch == '"' ? std::string_view("\"\"\"") : std::string_view("'''");
       const bool triple = starts(delim);
       const bool basic = ch == '"';
@@ -205,6 +214,7 @@ std::optional<Hazard> find_toml33_hazard(std::string_view text) {
       continue;
     }
     const char32_t c = next();
+    prev = static_cast<char>(c);
     if (c >= 0x80)
       return Hazard{at, "non-ASCII character U+" + hex4(c) +
                             " outside a string or comment (TOML allows it only inside quotes or after #)"};
