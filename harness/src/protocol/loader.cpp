@@ -450,12 +450,16 @@ class Loader {
     read_backend(root, p);
     read_randomization(root, p);
     read_factors(root, p);
-    if (const toml::table* j = sub_table(root, "judgement", "")) {
-      p.judgement = read_judgement(*j, "judgement", p);
-    } else if (!root.contains("judgement")) {
-      error({1, 1}, "judgement", "missing required table [judgement] (type = \"choice\", "
-                                 "\"adjustment\" or \"staircase\")");
-    }
+    // A top-level [judgement] is required unless every block has its own
+    // (checked in read_blocks, where that is known).
+    has_root_judgement_ = root.contains("judgement");
+    if (const toml::table* j = sub_table(root, "judgement", "")) p.judgement = read_judgement(*j, "judgement", p);
+    // A session value for a setting a factor varies would never be used.
+    for (const auto& o : p.session_overrides)
+      for (const auto& f : p.factors)
+        if (f.sets == o.path)
+          error(o.pos, o.path, "factor \"" + f.name + "\" varies " + f.sets +
+                                   ", so this value would never be used; remove it");
     if (const toml::table* ins = sub_table(root, "instructions", "")) {
       check_keys(*ins, "instructions", {"start", "end"});
       p.instructions_start = get_string_array(*ins, "start", "instructions");
@@ -854,6 +858,9 @@ class Loader {
       b.repetitions = static_cast<int>(reps);
       b.randomize = default_randomize_;
       b.judgement = p.judgement;
+      if (!has_root_judgement_)
+        error({1, 1}, "judgement", "missing required table [judgement] (type = \"choice\", "
+                                   "\"adjustment\" or \"staircase\")");
       b.break_every_trials = static_cast<int>(every);
       b.break_text = break_text;
       b.break_min_ms = break_ms;
@@ -906,7 +913,9 @@ class Loader {
                       "; restrict its levels with levels." + f.name + " instead of overriding it");
       if (const toml::table* lv = sub_table(*t, "levels", bp)) read_block_levels(*lv, bp + ".levels", p, b);
       if (const toml::table* j = sub_table(*t, "judgement", bp)) b.judgement = read_judgement(*j, bp + ".judgement", p);
-      else b.judgement = p.judgement;
+      else if (has_root_judgement_) b.judgement = p.judgement;
+      else error(b.pos, bp + ".judgement",
+                 "this block has no judgement: add a top-level [judgement] or one for the block");
       if (b.judgement.type == JudgementType::staircase && b.repetitions > 1)
         error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions",
               "expected 1 in a staircase block (its length comes from the stop rule); add staircases instead");
@@ -1125,6 +1134,7 @@ class Loader {
   std::string file_;
   std::vector<Diagnostic> diags_;
   RandomizeMode default_randomize_ = RandomizeMode::shuffle;
+  bool has_root_judgement_ = false;
 };
 
 }  // namespace
