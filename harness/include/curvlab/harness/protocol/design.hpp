@@ -1,0 +1,64 @@
+// Design expansion: protocol + participant number → the exact list of trials
+// the runner stores at session start. Pure and deterministic: the only input
+// besides the protocol is the participant number, which selects the
+// counterbalancing row and (by default) the seed.
+#pragma once
+
+#include "curvlab/harness/protocol/protocol.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace curvlab::harness::protocol {
+
+struct PlannedTrial {
+  std::size_t index = 0;           // 0-based in the session
+  std::size_t block_position = 0;  // 0-based position of the block in the run order
+  std::string block;
+  bool practice = false;
+  std::size_t trial_in_block = 0;
+  int repetition = 0;  // 0-based
+  std::vector<std::pair<std::string, std::string>> levels;  // factor → level label
+  std::size_t cell = 0;  // index of the factor-level combination within the block
+  Settings settings;     // resolved: session → block → levels
+  Derived derived;
+  JudgementType judgement = JudgementType::choice;
+  // Staircase blocks: which staircase of this cell's interleaved set the slot
+  // belongs to; the runner skips a slot whose staircase has already stopped.
+  int staircase = -1;
+  std::optional<double> adjustment_start;
+  bool break_before = false;
+};
+
+struct PlannedBlock {
+  std::string name;
+  bool practice = false;
+  std::size_t first_trial = 0;
+  std::size_t trial_count = 0;  // staircase blocks: the maximum
+  std::vector<std::string> instructions;
+  std::int64_t break_min_ms = 0;
+};
+
+struct Design {
+  std::uint64_t protocol_seed = 0;
+  std::uint64_t seed = 0;  // the seed actually used (logged with the session)
+  std::uint64_t participant = 0;
+  std::optional<std::size_t> counterbalance_row;
+  std::vector<PlannedBlock> blocks;  // in run order
+  std::vector<PlannedTrial> trials;
+  // Upper bound from the timelines and minimum break lengths (reading time of
+  // instruction pages excluded).
+  [[nodiscard]] std::int64_t estimated_duration_ms() const;
+};
+
+// participant ≥ 1. The protocol must have passed the loader.
+Design expand_design(const Protocol& p, std::uint64_t participant);
+
+// Combinations of the block's factor levels, in factorial order (last factor
+// fastest): each entry is one level index per factor of p.factors.
+std::vector<std::vector<std::size_t>> block_cells(const Protocol& p, const Block& b);
+
+}  // namespace curvlab::harness::protocol

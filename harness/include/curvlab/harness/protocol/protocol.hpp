@@ -1,0 +1,152 @@
+// A loaded, validated protocol: plain data, no file format in sight. The
+// loader (loader.hpp) is the only code that knows TOML; the design expander,
+// the staircase and the runner work from this struct.
+#pragma once
+
+#include "curvlab/harness/protocol/diagnostic.hpp"
+#include "curvlab/harness/protocol/settings.hpp"
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::harness::protocol {
+
+struct Metadata {
+  std::string name;
+  std::string version;
+  std::string description;
+};
+
+// One value written somewhere in the protocol, with where it was written.
+struct SettingOverride {
+  std::string path;  // registry path, e.g. "viewing.preset"
+  SettingValue value;
+  SourcePos pos;
+};
+
+struct Level {
+  std::string label;
+  SettingValue value;
+  SourcePos pos;
+};
+
+// A factor varies one setting (`sets`) over its levels, or, with `sets`
+// empty, only labels trials (for example a between-subject grouping).
+struct Factor {
+  std::string name;
+  std::string sets;
+  std::string description;
+  std::vector<Level> levels;
+  SourcePos pos;
+};
+
+enum class JudgementType { choice, adjustment, staircase };
+std::string_view to_string(JudgementType t);
+
+struct ResponseOption {
+  std::string value;  // stored in the data, e.g. "convex"
+  std::string label;  // shown on the in-headset panel
+  std::vector<std::string> keys;
+  std::vector<std::string> buttons;
+};
+
+struct AdjustmentSpec {
+  std::string parameter;  // numeric setting path
+  double start_min = 0.0;
+  double start_max = 0.0;
+  double step = 0.0;
+  double fine_step = 0.0;  // 0: no fine step
+  double min = 0.0;
+  double max = 0.0;
+  std::vector<std::string> keys_decrease, keys_increase, keys_confirm;
+  std::vector<std::string> buttons_decrease, buttons_increase, buttons_confirm;
+};
+
+// One staircase of an interleaved set (n-up/m-down, Levitt 1971).
+struct StaircaseSpec {
+  std::string name;
+  double start = 0.0;
+  int up = 1;    // consecutive negative responses before the value goes up
+  int down = 2;  // consecutive positive responses before the value goes down
+  std::vector<double> step_sizes;  // step k is used after k reversals; the last repeats
+  int stop_reversals = 8;
+  int max_trials = 50;
+  int discard_reversals = 2;  // reversals left out of the threshold estimate
+  double min = 0.0;
+  double max = 0.0;
+};
+
+struct Judgement {
+  JudgementType type = JudgementType::choice;
+  std::string prompt;
+  std::vector<ResponseOption> options;  // choice and staircase
+  std::optional<AdjustmentSpec> adjustment;
+  std::string parameter;  // staircase: numeric setting path
+  std::string positive;   // staircase: the option value that counts as "positive"
+  std::vector<StaircaseSpec> staircases;
+  SourcePos pos;
+};
+
+enum class RandomizeMode { none, shuffle, shuffle_within_repetition };
+enum class BlockOrder { fixed, latin_square, random };
+std::string_view to_string(RandomizeMode m);
+std::string_view to_string(BlockOrder o);
+
+struct Block {
+  std::string name;
+  bool practice = false;
+  int repetitions = 1;
+  RandomizeMode randomize = RandomizeMode::shuffle;
+  // Factor name → indices of the levels this block uses (absent: all levels).
+  std::map<std::string, std::vector<std::size_t>> levels;
+  std::vector<SettingOverride> overrides;  // applied on top of the session's
+  Judgement judgement;                     // the session's unless overridden
+  std::vector<std::string> instructions;   // pages shown before the block
+  int break_every_trials = 0;              // 0: no breaks inside the block
+  std::string break_text;
+  std::int64_t break_min_ms = 0;
+  SourcePos pos;
+};
+
+struct Protocol {
+  std::string file;
+  Metadata meta;
+  std::vector<SettingOverride> session_overrides;
+  std::vector<Factor> factors;
+  Judgement judgement;
+  std::vector<Block> blocks;  // in file order
+  std::uint64_t seed = 0;
+  bool seed_per_participant = true;
+  BlockOrder block_order = BlockOrder::fixed;
+  // Explicit counterbalancing square: rows of indices into the non-practice
+  // blocks (file order). Empty: a Williams design is generated.
+  std::vector<std::vector<std::size_t>> square;
+  std::vector<std::string> instructions_start, instructions_end;
+  std::string backend_preferred = "headless";
+  int refresh_hz = 90;
+  int resolution_width = 1024, resolution_height = 1024;
+
+  // The session's settings: defaults with the session sections applied.
+  [[nodiscard]] Settings session_settings() const;
+  // The settings of one block before any factor level is applied.
+  [[nodiscard]] Settings block_settings(const Block& b) const;
+  [[nodiscard]] const Factor* find_factor(const std::string& name) const;
+};
+
+// Values derived from the settings of one trial (paper, "Construction of the
+// billiards tables": the table's edge matches the physical edge, ρ = L / s).
+struct Derived {
+  double radius_m = 0.0;
+  int table_sides = 0;
+  double side_rad = 0.0;
+  double table_circumradius_m = 0.0;
+  double table_apothem_m = 0.0;
+};
+
+// nullopt with a message when the settings describe an impossible table.
+std::optional<Derived> derive(const Settings& s, std::string* error);
+
+}  // namespace curvlab::harness::protocol

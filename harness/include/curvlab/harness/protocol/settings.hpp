@@ -1,0 +1,122 @@
+// The per-trial settings a protocol controls, and the registry that names
+// each of them by a dotted path ("viewing.projection", "stimulus.stick_sagitta_m").
+// The same registry checks a value written in a session section, in a block
+// override and as a factor level, so the three can never disagree about what
+// is allowed. Values resolve session → block → factor level (UXF's fallback
+// from trial to block to session, with the factor level winning).
+#pragma once
+
+#include "curvlab/geometry/space.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace curvlab::harness::protocol {
+
+enum class Tracking { naive, head_anchored, table_anchored };
+enum class Projection { tourist, native };
+enum class Eyes { both, left, right, dominant };
+enum class StickAnchor { head, table };
+
+std::string_view to_string(Tracking t);
+std::string_view to_string(Projection p);
+std::string_view to_string(Eyes e);
+std::string_view to_string(StickAnchor a);
+
+struct SpaceSettings {
+  geometry::SpaceKind kind = geometry::SpaceKind::E3;
+  // nullopt: derived from the physical table's edge, ρ = L / side_rad
+  // (paper, "Construction of the billiards tables"); E3 then uses e3_radius_m.
+  std::optional<double> radius_m;
+  int table_sides = 0;  // 0: the space's default (S3 3, E3 4, H3 5)
+  double e3_radius_m = 1.0;  // the radius that defines Euclidean radians
+};
+
+struct Viewing {
+  Projection projection = Projection::tourist;
+  Eyes eyes = Eyes::both;
+  bool back_hemisphere = true;  // S3 only: draw the antipodal images
+  double ipd_m = 0.063;
+};
+
+// Per-trial timeline in milliseconds: fixation → stimulus → response window
+// → inter-trial interval.
+struct Timeline {
+  std::int64_t fixation_ms = 500;
+  std::int64_t stimulus_ms = 1500;
+  std::int64_t response_ms = 4000;
+  std::int64_t iti_ms = 500;
+  bool stimulus_during_response = true;
+  [[nodiscard]] std::int64_t total_ms() const {
+    return fixation_ms + stimulus_ms + response_ms + iti_ms;
+  }
+};
+
+struct Stimulus {
+  double stick_length_m = 1.0;
+  double stick_radius_m = 0.012;
+  // Signed sagitta of the stick's bend: positive bows toward the viewer.
+  double stick_sagitta_m = 0.0;
+  StickAnchor stick_anchor = StickAnchor::head;
+  double stick_distance_m = 1.0;  // from the eyes (head) or the table centre (table)
+  double stick_height_m = 0.0;    // relative to eye height (head) or table top (table)
+  double stick_yaw_deg = 0.0;     // rotation about the vertical, 0 = across the view
+  bool show_stick = true;
+  bool show_table = true;
+  double table_sagitta_m = 0.0;   // signed convexity of the table top, + bulges up
+  std::int64_t balls = 0;
+  double ball_radius_m = 0.028575;  // 57.15 mm balls (paper, "VR needs explicit units")
+};
+
+struct PhysicalTable {
+  double edge_m = 1.0;
+  double height_m = 0.76;
+};
+
+struct Settings {
+  SpaceSettings space;
+  Tracking tracking = Tracking::table_anchored;
+  Viewing viewing;
+  Timeline timeline;
+  Stimulus stimulus;
+  PhysicalTable table;
+};
+
+// A value as written in the protocol (TOML integers stay integers).
+using SettingValue = std::variant<bool, std::int64_t, double, std::string>;
+
+enum class SettingKind { boolean, integer, number, enumeration, number_or_from_table };
+
+struct SettingInfo {
+  std::string_view path;  // "section.key"
+  SettingKind kind;
+  double min = 0.0;  // inclusive range for integer and number kinds
+  double max = 0.0;
+  std::vector<std::string_view> choices;  // enumeration kind
+  std::string_view meaning;  // one line, with the unit
+};
+
+// Every setting, in documentation order.
+const std::vector<SettingInfo>& all_settings();
+const SettingInfo* find_setting(std::string_view path);
+// Keys allowed in one section ("viewing" → projection, eyes, …).
+std::vector<std::string> setting_keys(std::string_view section);
+bool is_setting_section(std::string_view section);
+
+// nullopt when the value fits; otherwise what was expected.
+std::optional<std::string> check_setting(const SettingInfo& info, const SettingValue& value);
+// Applies a value that check_setting accepted.
+void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& value);
+// Reads a numeric setting (for staircases and adjustment); nullopt if not numeric.
+std::optional<double> numeric_setting(const Settings& s, std::string_view path);
+// Writes a numeric setting (staircase/adjustment value for one trial).
+bool set_numeric_setting(Settings& s, std::string_view path, double value);
+
+// A level's label: strings as written, numbers in shortest round-trip form.
+std::string value_label(const SettingValue& v);
+
+}  // namespace curvlab::harness::protocol

@@ -1,0 +1,172 @@
+// `curvlab validate` and `curvlab design`: what an author runs while writing a
+// protocol. Both only read the file; neither writes anything.
+#include "common.hpp"
+
+#include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/loader.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+namespace curvlab::cli {
+namespace {
+
+namespace pr = curvlab::harness::protocol;
+
+// Loads or prints every diagnostic and fails with exit code 2.
+pr::Protocol load_or_fail(const std::string& file) {
+  auto result = pr::load_protocol_file(file);
+  if (result.ok()) return std::move(*result.protocol);
+  for (const auto& d : result.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+  const auto n = result.diagnostics.size();
+  throw UsageError(std::to_string(n) + (n == 1 ? " error" : " errors") + " in " + file);
+}
+
+std::string duration_text(std::int64_t ms) {
+  const std::int64_t s = (ms + 500) / 1000;
+  return std::to_string(s / 60) + " min " + std::to_string(s % 60) + " s";
+}
+
+Json settings_json(const pr::Settings& s, const pr::Derived& d) {
+  Json j;
+  j["space"] = std::string(geometry::to_string(s.space.kind));
+  j["radius_m"] = d.radius_m;
+  j["table_sides"] = d.table_sides;
+  j["table_side_rad"] = d.side_rad;
+  j["tracking"] = std::string(pr::to_string(s.tracking));
+  j["projection"] = std::string(pr::to_string(s.viewing.projection));
+  j["eyes"] = std::string(pr::to_string(s.viewing.eyes));
+  j["back_hemisphere"] = s.viewing.back_hemisphere;
+  j["ipd_m"] = s.viewing.ipd_m;
+  j["timeline_ms"] = Json::array({s.timeline.fixation_ms, s.timeline.stimulus_ms,
+                                  s.timeline.response_ms, s.timeline.iti_ms});
+  j["stick_length_m"] = s.stimulus.stick_length_m;
+  j["stick_sagitta_m"] = s.stimulus.stick_sagitta_m;
+  j["stick_anchor"] = std::string(pr::to_string(s.stimulus.stick_anchor));
+  j["stick_distance_m"] = s.stimulus.stick_distance_m;
+  j["table_sagitta_m"] = s.stimulus.table_sagitta_m;
+  j["table_edge_m"] = s.table.edge_m;
+  return j;
+}
+
+Json design_json(const pr::Protocol& p, const pr::Design& d, bool with_trials) {
+  Json doc;
+  doc["protocol"] = p.meta.name;
+  doc["version"] = p.meta.version;
+  doc["participant"] = d.participant;
+  doc["protocol_seed"] = d.protocol_seed;
+  doc["seed"] = d.seed;
+  doc["block_order"] = std::string(pr::to_string(p.block_order));
+  if (d.counterbalance_row) doc["counterbalance_row"] = *d.counterbalance_row + 1;
+  Json blocks = Json::array();
+  for (const auto& b : d.blocks) {
+    Json jb;
+    jb["name"] = b.name;
+    jb["practice"] = b.practice;
+    jb["trials"] = b.trial_count;
+    blocks.push_back(jb);
+  }
+  doc["blocks"] = blocks;
+  doc["total_trials"] = d.trials.size();
+  doc["estimated_duration_s"] = static_cast<double>(d.estimated_duration_ms()) / 1000.0;
+  if (!with_trials) return doc;
+  Json trials = Json::array();
+  for (const auto& t : d.trials) {
+    Json jt;
+    jt["index"] = t.index;
+    jt["block"] = t.block;
+    jt["trial_in_block"] = t.trial_in_block;
+    jt["practice"] = t.practice;
+    jt["repetition"] = t.repetition;
+    Json lv = Json::object();
+    for (const auto& [f, l] : t.levels) lv[f] = l;
+    jt["levels"] = lv;
+    jt["judgement"] = std::string(pr::to_string(t.judgement));
+    if (t.staircase >= 0) jt["staircase"] = t.staircase;
+    if (t.adjustment_start) jt["adjustment_start"] = *t.adjustment_start;
+    if (t.break_before) jt["break_before"] = true;
+    jt["settings"] = settings_json(t.settings, t.derived);
+    trials.push_back(jt);
+  }
+  doc["trials"] = trials;
+  return doc;
+}
+
+void run_validate(const std::string& file, bool as_json) {
+  const auto p = load_or_fail(file);
+  const auto d = pr::expand_design(p, 1);
+  if (as_json) {
+    Json doc = design_json(p, d, false);
+    doc["ok"] = true;
+    std::cout << doc.dump(2) << '\n';
+    return;
+  }
+  std::cout << "OK " << file << ": " << p.meta.name << " " << p.meta.version << '\n';
+  std::cout << "  seed " << p.seed << (p.seed_per_participant ? " (mixed with the participant number)" : "")
+            << ", block order " << pr::to_string(p.block_order) << '\n';
+  for (const auto& f : p.factors) {
+    std::cout << "  factor " << f.name << (f.sets.empty() ? "" : " → " + f.sets) << ":";
+    for (const auto& l : f.levels) std::cout << ' ' << l.label;
+    std::cout << '\n';
+  }
+  for (const auto& b : d.blocks) {
+    std::cout << "  block " << b.name << (b.practice ? " (practice)" : "") << ": " << b.trial_count
+              << " trials";
+    const auto& src = *std::find_if(p.blocks.begin(), p.blocks.end(),
+                                    [&](const pr::Block& x) { return x.name == b.name; });
+    std::cout << ", " << pr::to_string(src.judgement.type);
+    if (src.judgement.type == pr::JudgementType::staircase) std::cout << " (at most)";
+    std::cout << '\n';
+  }
+  std::cout << "  total " << d.trials.size() << " trials, estimated duration "
+            << duration_text(d.estimated_duration_ms())
+            << " (timelines and breaks; instruction reading not included)\n";
+}
+
+void run_design(const std::string& file, std::int64_t participant, bool as_json) {
+  if (participant < 1) throw UsageError("--participant must be a participant number ≥ 1");
+  const auto p = load_or_fail(file);
+  const auto d = pr::expand_design(p, static_cast<std::uint64_t>(participant));
+  if (as_json) {
+    std::cout << design_json(p, d, true).dump(2) << '\n';
+    return;
+  }
+  std::cout << "# " << p.meta.name << " " << p.meta.version << ", participant " << participant
+            << ", seed " << d.seed;
+  if (d.counterbalance_row) std::cout << ", counterbalance row " << *d.counterbalance_row + 1;
+  std::cout << "\n# index block trial practice judgement levels\n";
+  for (const auto& t : d.trials) {
+    std::cout << t.index << ' ' << t.block << ' ' << t.trial_in_block << ' ' << (t.practice ? "practice" : "-")
+              << ' ' << pr::to_string(t.judgement);
+    for (const auto& [f, l] : t.levels) std::cout << ' ' << f << '=' << l;
+    if (t.staircase >= 0) std::cout << " staircase=" << t.staircase;
+    if (t.adjustment_start) std::cout << " start=" << *t.adjustment_start;
+    if (t.break_before) std::cout << " [break before]";
+    std::cout << '\n';
+  }
+}
+
+}  // namespace
+
+void add_protocol_commands(CLI::App& app) {
+  struct Args {
+    std::string file;
+    bool json = false;
+    std::int64_t participant = 0;
+  };
+  auto args = std::make_shared<Args>();
+
+  auto* validate = app.add_subcommand("validate", "check a protocol file; prints a summary or every error");
+  validate->add_option("file", args->file, "protocol (TOML)")->required();
+  validate->add_flag("--json", args->json, "print the summary as JSON");
+  validate->callback([args] { run_validate(args->file, args->json); });
+
+  auto* design = app.add_subcommand("design", "print the expanded trial list for one participant");
+  design->add_option("protocol", args->file, "protocol (TOML)")->required();
+  design->add_option("--participant", args->participant, "participant number (≥ 1)")->required();
+  design->add_flag("--json", args->json, "print JSON (the list the runner stores)");
+  design->callback([args] { run_design(args->file, args->participant, args->json); });
+}
+
+}  // namespace curvlab::cli

@@ -1,0 +1,1176 @@
+// The only code that knows the protocol file is TOML. It walks the document
+// once, reporting every problem with its position, then checks the design as
+// a whole (every factor-level combination of every block), so an author sees
+// all errors in one pass.
+#include "curvlab/harness/protocol/loader.hpp"
+
+#include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/latin_square.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace curvlab::harness::protocol {
+namespace {
+
+constexpr std::size_t kMaxFileBytes = 1u << 20;
+constexpr std::size_t kMaxCells = 100000;
+constexpr std::size_t kMaxTrials = 1000000;
+
+SourcePos pos_of(const toml::source_region& r) {
+  return {static_cast<int>(r.begin.line), static_cast<int>(r.begin.column)};
+}
+SourcePos pos_of(const toml::node& n) { return pos_of(n.source()); }
+
+std::string type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a float";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::date: return "a date";
+    case toml::node_type::time: return "a time";
+    case toml::node_type::date_time: return "a date-time";
+    default: return "nothing";
+  }
+}
+
+std::string join(const std::string& prefix, std::string_view key) {
+  return prefix.empty() ? std::string(key) : prefix + "." + std::string(key);
+}
+
+std::string quoted_list(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", \"" : "\"") + items[i] + "\"";
+  return out;
+}
+
+bool is_identifier(const std::string& s) {
+  if (s.empty() || s.size() > 64) return false;
+  if (!(std::islower(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::islower(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) ||
+           c == '_' || c == '-';
+  });
+}
+
+const std::vector<std::string>& key_names() {
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> k;
+    for (char c = 'a'; c <= 'z'; ++c) k.emplace_back(1, c);
+    for (char c = '0'; c <= '9'; ++c) k.emplace_back(1, c);
+    for (const char* n : {"left", "right", "up", "down", "space", "enter", "tab", "backspace",
+                          "comma", "period", "slash", "semicolon", "shift", "control"})
+      k.emplace_back(n);
+    return k;  // "escape" is reserved: it pauses the session
+  }();
+  return keys;
+}
+
+const std::vector<std::string>& button_names() {
+  static const std::vector<std::string> buttons = [] {
+    std::vector<std::string> b{"a", "b", "x", "y", "left_trigger", "right_trigger", "left_grip",
+                               "right_grip"};
+    for (const char* hand : {"left", "right"})
+      for (const char* dir : {"left", "right", "up", "down", "click"})
+        b.push_back(std::string(hand) + "_thumbstick_" + dir);
+    for (int i = 1; i <= 32; ++i) b.push_back("hid_" + std::to_string(i));
+    return b;
+  }();
+  return buttons;
+}
+
+// What a judgement's numeric parameter may name.
+std::vector<std::string> numeric_paths() {
+  std::vector<std::string> out;
+  const Settings s;
+  for (const auto& info : all_settings())
+    if (numeric_setting(s, info.path)) out.emplace_back(info.path);
+  return out;
+}
+
+// toml++ 3.3 (Debian 12) reaches __builtin_unreachable() — undefined
+// behaviour, found by our fuzzer and known upstream (marzer/tomlplusplus#190,
+// #295, fixed after 3.3) — when it asks whether certain non-ASCII code points
+// are whitespace: U+00A1–U+0499, U+2D8E–U+3187 and U+FB46–U+FEFE (except
+// U+3000). It asks for characters outside strings, inside keys (quoted keys
+// are recorded character by character) and after a line-ending backslash in a
+// multi-line basic string. Value strings and comments are safe, so
+// instructions may be written in any language. This scan finds the unsafe
+// places first and reports them as syntax errors instead of calling the parser.
+bool unsafe_for_toml33(char32_t c) {
+  if (c < 0xA1 || c > 0xFEFF || c == 0x3000 || c == 0xFEFF) return false;
+  const auto child = (static_cast<std::uint64_t>(c) - 0xA0u) / 0x3FAu;
+  return child == 0 || child == 11 || child == 63;
+}
+
+struct Hazard {
+  SourcePos pos;
+  std::string message;
+};
+
+std::string hex4(char32_t c) {
+  static const char* digits = "0123456789ABCDEF";
+  std::string out;
+  for (int shift = c > 0xFFFF ? 20 : 12; shift >= 0; shift -= 4) out += digits[(c >> shift) & 0xFu];
+  return out;
+}
+
+bool is_toml_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+std::optional<Hazard> find_toml33_hazard(std::string_view text) {
+  int line = 1, column = 1;
+  std::size_t i = 0;
+  // Decodes the code point at i (invalid UTF-8: the byte itself; toml++
+  // reports those cleanly) and advances i, line and column.
+  const auto next = [&]() -> char32_t {
+    const auto b0 = static_cast<unsigned char>(text[i]);
+    std::size_t len = b0 < 0x80 ? 1 : (b0 >> 5) == 6 ? 2 : (b0 >> 4) == 14 ? 3 : (b0 >> 3) == 30 ? 4 : 1;
+    if (i + len > text.size()) len = 1;
+    char32_t c = len == 1 ? b0 : len == 2 ? (b0 & 0x1Fu) : len == 3 ? (b0 & 0x0Fu) : (b0 & 0x07u);
+    for (std::size_t k = 1; k < len; ++k) {
+      const auto b = static_cast<unsigned char>(text[i + k]);
+      if ((b >> 6) != 2) {
+        len = 1;
+        c = b0;
+        break;
+      }
+      c = (c << 6) | (b & 0x3Fu);
+    }
+    i += len;
+    if (c == U'\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+    return c;
+  };
+  const auto here = [&] { return SourcePos{line, column}; };
+  const auto starts = [&](std::string_view s) { return text.substr(i, s.size()) == s; };
+
+  std::vector<char> nest;  // '[' array, '{' inline table (value side only)
+  bool key_position = true;
+  char prev = '\n';  // the last character outside strings and comments
+  while (i < text.size()) {
+    const SourcePos at = here();
+    const char ch = text[i];
+    if (ch == '#') {
+      while (i < text.size() && text[i] != '\n') next();
+      prev = ' ';
+      continue;
+    }
+    if (ch == '"' || ch == '\'') {
+      // A quote glued to a bare value (`0"x"`) is a syntax error, but toml++
+      // first scans the whole run of characters as one value — into the
+      // "string" — classifying each, so report it here.
+      if (std::string_view(" \t\r\n=[{,.").find(prev) == std::string_view::npos)
+        return Hazard{at, std::string("unexpected quote right after '") + prev +
+                              "': expected whitespace, '=', '[', '{', ',' or '.' before a string"};
+      prev = ch;
+      const std::string_view delim = ch == '"' ? std::string_view("\"\"\"") : std::string_view("'''");
+      const bool triple = starts(delim);
+      const bool basic = ch == '"';
+      const bool is_key = key_position;
+      for (int k = 0; k < (triple ? 3 : 1); ++k) next();
+      while (i < text.size()) {
+        if (triple ? starts(delim) : text[i] == ch) {
+          for (int k = 0; k < (triple ? 3 : 1); ++k) next();
+          // A closing delimiter may be followed by up to two more quotes.
+          while (triple && i < text.size() && text[i] == ch) next();
+          break;
+        }
+        if (!triple && text[i] == '\n') break;  // unterminated: toml++ reports it
+        const SourcePos cp_at = here();
+        if (basic && text[i] == '\\') {
+          next();
+          if (i >= text.size()) break;
+          if (triple && is_toml_space(text[i])) {
+            while (i < text.size() && is_toml_space(text[i])) next();
+            const SourcePos after = here();
+            if (i < text.size() && static_cast<unsigned char>(text[i]) >= 0x80) {
+              const char32_t c = next();
+              if (unsafe_for_toml33(c))
+                return Hazard{after, "U+" + hex4(c) +
+                                         " right after a line-ending backslash cannot be read by the TOML "
+                                         "library (toml++ 3.3); write it as the escape \\u" + hex4(c)};
+            }
+            continue;
+          }
+          next();  // the escaped character
+          continue;
+        }
+        const char32_t c = next();
+        if (is_key && c >= 0x80)
+          return Hazard{cp_at, "non-ASCII character U+" + hex4(c) + " in a key: protocol keys are ASCII names"};
+      }
+      continue;
+    }
+    const char32_t c = next();
+    prev = static_cast<char>(c);
+    if (c >= 0x80)
+      return Hazard{at, "non-ASCII character U+" + hex4(c) +
+                            " outside a string or comment (TOML allows it only inside quotes or after #)"};
+    switch (c) {
+      case U'=': key_position = false; break;
+      case U'\n': if (nest.empty()) key_position = true; break;
+      case U'[': if (!(key_position && nest.empty())) nest.push_back('['); break;
+      case U']': if (!nest.empty() && nest.back() == '[') nest.pop_back(); break;
+      case U'{': nest.push_back('{'); key_position = true; break;
+      case U'}': if (!nest.empty()) nest.pop_back(); key_position = false; break;
+      case U',': if (!nest.empty() && nest.back() == '{') key_position = true; break;
+      default: break;
+    }
+  }
+  return std::nullopt;
+}
+
+class Loader {
+ public:
+  explicit Loader(std::string file) : file_(std::move(file)) {}
+
+  LoadResult run(std::string_view text) {
+    LoadResult result;
+    toml::table root;
+    if (const auto hazard = find_toml33_hazard(text)) {
+      error(hazard->pos, "syntax", hazard->message);
+      result.diagnostics = std::move(diags_);
+      return result;
+    }
+    try {
+      root = toml::parse(text, file_);
+    } catch (const toml::parse_error& e) {
+      error(pos_of(e.source()), "syntax", std::string(e.description()));
+      result.diagnostics = std::move(diags_);
+      return result;
+    }
+    Protocol p;
+    p.file = file_;
+    read_root(root, p);
+    if (diags_.empty()) check_design(p, root);
+    result.diagnostics = std::move(diags_);
+    if (result.diagnostics.empty()) result.protocol = std::move(p);
+    return result;
+  }
+
+  void error(SourcePos pos, std::string field, std::string message) {
+    diags_.push_back({file_, pos, std::move(field), std::move(message)});
+  }
+
+ private:
+  // ---- generic readers -------------------------------------------------
+  void check_keys(const toml::table& t, const std::string& prefix,
+                  const std::vector<std::string>& allowed) {
+    for (auto&& [k, v] : t) {
+      const std::string key(k.str());
+      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+      std::string msg = "unknown key \"" + key + "\"";
+      const std::string guess = closest_match(key, allowed);
+      if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
+      msg += " Expected one of: " + quoted_list(allowed);
+      error(pos_of(k.source()), join(prefix, key), msg);
+    }
+  }
+
+  const toml::table* sub_table(const toml::table& t, std::string_view key, const std::string& prefix) {
+    const toml::node* n = t.get(key);
+    if (!n) return nullptr;
+    if (const auto* tt = n->as_table()) return tt;
+    error(pos_of(*n), join(prefix, key), "expected a table, found " + type_name(*n));
+    return nullptr;
+  }
+
+  std::optional<std::string> get_string(const toml::table& t, std::string_view key,
+                                        const std::string& prefix, bool required) {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) error(pos_of(t), join(prefix, key), "missing required string");
+      return std::nullopt;
+    }
+    if (const auto* s = n->as_string()) return s->get();
+    error(pos_of(*n), join(prefix, key), "expected a string, found " + type_name(*n));
+    return std::nullopt;
+  }
+
+  std::optional<std::int64_t> get_int(const toml::table& t, std::string_view key,
+                                      const std::string& prefix, std::int64_t lo, std::int64_t hi,
+                                      bool required) {
+    const toml::node* n = t.get(key);
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    if (!n) {
+      if (required) error(pos_of(t), join(prefix, key), "missing required integer in " + range);
+      return std::nullopt;
+    }
+    const auto* i = n->as_integer();
+    if (!i) {
+      error(pos_of(*n), join(prefix, key), "expected an integer in " + range + ", found " + type_name(*n));
+      return std::nullopt;
+    }
+    if (i->get() < lo || i->get() > hi) {
+      error(pos_of(*n), join(prefix, key),
+            "expected an integer in " + range + ", found " + std::to_string(i->get()));
+      return std::nullopt;
+    }
+    return i->get();
+  }
+
+  std::optional<double> node_number(const toml::node& n) {
+    if (const auto* i = n.as_integer()) return static_cast<double>(i->get());
+    if (const auto* f = n.as_floating_point()) return f->get();
+    return std::nullopt;
+  }
+
+  std::optional<double> get_number(const toml::table& t, std::string_view key,
+                                   const std::string& prefix, bool required) {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) error(pos_of(t), join(prefix, key), "missing required number");
+      return std::nullopt;
+    }
+    const auto v = node_number(*n);
+    if (!v || !std::isfinite(*v)) {
+      error(pos_of(*n), join(prefix, key), "expected a finite number, found " +
+                                               (v ? std::string("a non-finite float") : type_name(*n)));
+      return std::nullopt;
+    }
+    return v;
+  }
+
+  std::optional<bool> get_bool(const toml::table& t, std::string_view key, const std::string& prefix) {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    if (const auto* b = n->as_boolean()) return b->get();
+    error(pos_of(*n), join(prefix, key), "expected true or false, found " + type_name(*n));
+    return std::nullopt;
+  }
+
+  std::optional<std::string> get_enum(const toml::table& t, std::string_view key,
+                                      const std::string& prefix, const std::vector<std::string>& allowed) {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    const auto* s = n->as_string();
+    if (!s) {
+      error(pos_of(*n), join(prefix, key), "expected one of " + quoted_list(allowed) + ", found " + type_name(*n));
+      return std::nullopt;
+    }
+    if (std::find(allowed.begin(), allowed.end(), s->get()) != allowed.end()) return s->get();
+    std::string msg = "unknown value \"" + s->get() + "\": expected one of " + quoted_list(allowed);
+    const std::string guess = closest_match(s->get(), allowed);
+    if (!guess.empty()) msg += " (did you mean \"" + guess + "\"?)";
+    error(pos_of(*n), join(prefix, key), msg);
+    return std::nullopt;
+  }
+
+  std::vector<std::string> get_string_array(const toml::table& t, std::string_view key,
+                                            const std::string& prefix,
+                                            const std::vector<std::string>* allowed = nullptr) {
+    std::vector<std::string> out;
+    const toml::node* n = t.get(key);
+    if (!n) return out;
+    const auto* arr = n->as_array();
+    if (!arr) {
+      error(pos_of(*n), join(prefix, key), "expected an array of strings, found " + type_name(*n));
+      return out;
+    }
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const toml::node& e = (*arr)[i];
+      const std::string field = join(prefix, key) + "[" + std::to_string(i + 1) + "]";
+      const auto* s = e.as_string();
+      if (!s) {
+        error(pos_of(e), field, "expected a string, found " + type_name(e));
+        continue;
+      }
+      if (allowed && std::find(allowed->begin(), allowed->end(), s->get()) == allowed->end()) {
+        std::string msg = "unknown name \"" + s->get() + "\"";
+        const std::string guess = closest_match(s->get(), *allowed);
+        if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
+        msg += " See docs/protocols.md, \"Key and button names\"";
+        error(pos_of(e), field, msg);
+        continue;
+      }
+      out.push_back(s->get());
+    }
+    return out;
+  }
+
+  // Adds what was actually written when the registry's message does not say.
+  static std::string with_found(const std::string& message, const toml::node& n) {
+    if (message.find("found") != std::string::npos) return message;
+    return message + ", found " + type_name(n);
+  }
+
+  std::optional<SettingValue> to_value(const toml::node& n) {
+    if (const auto* b = n.as_boolean()) return SettingValue{b->get()};
+    if (const auto* i = n.as_integer()) return SettingValue{i->get()};
+    if (const auto* f = n.as_floating_point()) return SettingValue{f->get()};
+    if (const auto* s = n.as_string()) return SettingValue{s->get()};
+    return std::nullopt;
+  }
+
+  // ---- settings sections (session level and per block) ----------------
+  void read_settings(const toml::table& t, const std::string& prefix, std::vector<SettingOverride>& out) {
+    for (const char* section : {"space", "tracking", "viewing", "timeline", "stimulus", "table"}) {
+      const std::string sp = join(prefix, section);
+      const toml::table* st = sub_table(t, section, prefix);
+      if (!st) continue;
+      check_keys(*st, sp, setting_keys(section));
+      if (st->contains("preset") && (st->contains("projection") || st->contains("eyes")))
+        error(pos_of(*st->get("preset")), sp + ".preset",
+              "a preset sets projection and eyes; give either the preset or projection/eyes");
+      for (auto&& [k, v] : *st) {
+        const std::string path = std::string(section) + "." + std::string(k.str());
+        const SettingInfo* info = find_setting(path);
+        if (!info) continue;  // reported by check_keys
+        const auto value = to_value(v);
+        const auto problem = value ? check_setting(*info, *value)
+                                   : std::optional<std::string>("expected a value, found " + type_name(v));
+        if (problem) {
+          error(pos_of(v), join(prefix, path), with_found(*problem, v));
+          continue;
+        }
+        out.push_back({path, *value, pos_of(v)});
+      }
+    }
+  }
+
+  // ---- top level ---------------------------------------------------------
+  void read_root(const toml::table& root, Protocol& p) {
+    check_keys(root, "", {"protocol", "space", "tracking", "viewing", "timeline", "stimulus",
+                          "table", "backend", "randomization", "counterbalance", "session",
+                          "factors", "judgement", "instructions", "blocks"});
+    read_metadata(root, p);
+    read_settings(root, "", p.session_overrides);
+    read_backend(root, p);
+    read_randomization(root, p);
+    read_factors(root, p);
+    // A top-level [judgement] is required unless every block has its own
+    // (checked in read_blocks, where that is known).
+    has_root_judgement_ = root.contains("judgement");
+    if (const toml::table* j = sub_table(root, "judgement", "")) p.judgement = read_judgement(*j, "judgement", p);
+    // A session value for a setting a factor varies would never be used.
+    for (const auto& o : p.session_overrides)
+      for (const auto& f : p.factors)
+        if (f.sets == o.path)
+          error(o.pos, o.path, "factor \"" + f.name + "\" varies " + f.sets +
+                                   ", so this value would never be used; remove it");
+    if (const toml::table* ins = sub_table(root, "instructions", "")) {
+      check_keys(*ins, "instructions", {"start", "end"});
+      p.instructions_start = get_string_array(*ins, "start", "instructions");
+      p.instructions_end = get_string_array(*ins, "end", "instructions");
+    }
+    read_blocks(root, p);
+    read_counterbalance(root, p);
+  }
+
+  void read_metadata(const toml::table& root, Protocol& p) {
+    const toml::table* m = sub_table(root, "protocol", "");
+    if (!m) {
+      if (!root.contains("protocol"))
+        error({1, 1}, "protocol", "missing required table [protocol] with name and version");
+      return;
+    }
+    check_keys(*m, "protocol", {"name", "version", "description"});
+    p.meta.name = get_string(*m, "name", "protocol", true).value_or("");
+    p.meta.version = get_string(*m, "version", "protocol", true).value_or("");
+    p.meta.description = get_string(*m, "description", "protocol", false).value_or("");
+    if (m->contains("name") && m->get("name")->is_string() && p.meta.name.empty())
+      error(pos_of(*m->get("name")), "protocol.name", "expected a non-empty name");
+  }
+
+  void read_backend(const toml::table& root, Protocol& p) {
+    const toml::table* b = sub_table(root, "backend", "");
+    if (!b) return;
+    check_keys(*b, "backend", {"preferred", "refresh_hz", "resolution"});
+    p.backend_preferred = get_enum(*b, "preferred", "backend", {"headless", "desktop", "xr"}).value_or("headless");
+    p.refresh_hz = static_cast<int>(get_int(*b, "refresh_hz", "backend", 30, 240, false).value_or(90));
+    if (const toml::node* r = b->get("resolution")) {
+      const auto* arr = r->as_array();
+      const toml::value<std::int64_t>* wn = arr && arr->size() == 2 ? (*arr)[0].as_integer() : nullptr;
+      const toml::value<std::int64_t>* hn = arr && arr->size() == 2 ? (*arr)[1].as_integer() : nullptr;
+      if (!wn || !hn) {
+        error(pos_of(*r), "backend.resolution", "expected [width, height] in pixels, two integers");
+      } else {
+        const auto w = wn->get(), h = hn->get();
+        if (w < 16 || w > 8192 || h < 16 || h > 8192)
+          error(pos_of(*r), "backend.resolution", "expected each size in [16, 8192] pixels");
+        else {
+          p.resolution_width = static_cast<int>(w);
+          p.resolution_height = static_cast<int>(h);
+        }
+      }
+    }
+  }
+
+  void read_randomization(const toml::table& root, Protocol& p) {
+    const toml::table* r = sub_table(root, "randomization", "");
+    if (!r) {
+      if (!root.contains("randomization"))
+        error({1, 1}, "randomization",
+              "missing required table [randomization] with an explicit seed (it is logged with every session)");
+      return;
+    }
+    check_keys(*r, "randomization", {"seed", "trials", "per_participant"});
+    if (const auto seed = get_int(*r, "seed", "randomization", 0, std::numeric_limits<std::int64_t>::max(), true))
+      p.seed = static_cast<std::uint64_t>(*seed);
+    const auto mode = get_enum(*r, "trials", "randomization", {"none", "shuffle", "shuffle_within_repetition"});
+    default_randomize_ = parse_mode(mode.value_or("shuffle"));
+    p.seed_per_participant = get_bool(*r, "per_participant", "randomization").value_or(true);
+  }
+
+  static RandomizeMode parse_mode(const std::string& m) {
+    if (m == "none") return RandomizeMode::none;
+    if (m == "shuffle_within_repetition") return RandomizeMode::shuffle_within_repetition;
+    return RandomizeMode::shuffle;
+  }
+
+  void read_factors(const toml::table& root, Protocol& p) {
+    const toml::table* fs = sub_table(root, "factors", "");
+    if (!fs) return;
+    std::map<std::string, std::string> varied;  // setting path → factor
+    for (auto&& [k, v] : *fs) {
+      Factor f;
+      f.name = std::string(k.str());
+      f.pos = pos_of(k.source());
+      const std::string prefix = "factors." + f.name;
+      if (!is_identifier(f.name))
+        error(f.pos, prefix, "factor names are lower-case identifiers (a-z, 0-9, _ and -)");
+      const auto* t = v.as_table();
+      if (!t) {
+        error(pos_of(v), prefix, "expected a table with sets and levels, found " + type_name(v));
+        continue;
+      }
+      check_keys(*t, prefix, {"sets", "levels", "description"});
+      f.description = get_string(*t, "description", prefix, false).value_or("");
+      const SettingInfo* info = nullptr;
+      if (auto sets = get_string(*t, "sets", prefix, false)) {
+        info = find_setting(*sets);
+        if (!info) {
+          std::vector<std::string> paths;
+          for (const auto& s : all_settings()) paths.emplace_back(s.path);
+          std::string msg = "unknown setting \"" + *sets + "\"";
+          const std::string guess = closest_match(*sets, paths);
+          if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
+          msg += " Expected a setting path such as \"space.kind\" or \"viewing.preset\"";
+          error(pos_of(*t->get("sets")), prefix + ".sets", msg);
+        } else {
+          f.sets = *sets;
+          const auto overlaps = [&](const std::string& a, const std::string& b) {
+            const bool view_a = a == "viewing.preset", view_b = b == "viewing.preset";
+            return a == b || (view_a && (b == "viewing.projection" || b == "viewing.eyes")) ||
+                   (view_b && (a == "viewing.projection" || a == "viewing.eyes"));
+          };
+          for (const auto& [path, other] : varied)
+            if (overlaps(path, f.sets))
+              error(pos_of(*t->get("sets")), prefix + ".sets",
+                    "\"" + f.sets + "\" is already varied by factor \"" + other + "\"");
+          varied[f.sets] = f.name;
+        }
+      }
+      const toml::node* ln = t->get("levels");
+      if (!ln) {
+        error(pos_of(*t), prefix + ".levels", "missing required array of levels");
+      } else if (const auto* arr = ln->as_array(); !arr) {
+        error(pos_of(*ln), prefix + ".levels", "expected an array of levels, found " + type_name(*ln));
+      } else if (arr->empty()) {
+        error(pos_of(*ln), prefix + ".levels", "expected at least one level");
+      } else {
+        std::set<std::string> labels;
+        for (std::size_t i = 0; i < arr->size(); ++i) {
+          const toml::node& e = (*arr)[i];
+          const std::string field = prefix + ".levels[" + std::to_string(i + 1) + "]";
+          const auto value = to_value(e);
+          if (!value) {
+            error(pos_of(e), field, "expected a level value, found " + type_name(e));
+            continue;
+          }
+          if (info) {
+            if (const auto problem = check_setting(*info, *value)) {
+              error(pos_of(e), field, with_found(*problem, e) + " (levels of " + f.sets + ")");
+              continue;
+            }
+          } else if (!std::holds_alternative<std::string>(*value) && !t->contains("sets")) {
+            error(pos_of(e), field, "a factor without \"sets\" only labels trials: expected a string");
+            continue;
+          }
+          Level level{value_label(*value), *value, pos_of(e)};
+          if (!labels.insert(level.label).second) {
+            error(pos_of(e), field, "duplicate level \"" + level.label + "\"");
+            continue;
+          }
+          f.levels.push_back(level);
+        }
+      }
+      p.factors.push_back(std::move(f));
+    }
+  }
+
+  // ---- judgements -------------------------------------------------------
+  std::vector<ResponseOption> read_options(const toml::table& j, const std::string& prefix) {
+    std::vector<ResponseOption> out;
+    const toml::node* n = j.get("options");
+    if (!n) {
+      error(pos_of(j), prefix + ".options", "missing required array of options ([[" + prefix + ".options]] tables)");
+      return out;
+    }
+    const auto* arr = n->as_array();
+    if (!arr) {
+      error(pos_of(*n), prefix + ".options", "expected an array of tables, found " + type_name(*n));
+      return out;
+    }
+    std::set<std::string> values, bound;
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const toml::node& e = (*arr)[i];
+      const std::string op = prefix + ".options[" + std::to_string(i + 1) + "]";
+      const auto* t = e.as_table();
+      if (!t) {
+        error(pos_of(e), op, "expected a table with value, label, keys and buttons, found " + type_name(e));
+        continue;
+      }
+      check_keys(*t, op, {"value", "label", "keys", "buttons"});
+      ResponseOption o;
+      o.value = get_string(*t, "value", op, true).value_or("");
+      if (t->contains("value") && t->get("value")->is_string() && !is_identifier(o.value))
+        error(pos_of(*t->get("value")), op + ".value", "expected a lower-case identifier (stored in the data)");
+      o.label = get_string(*t, "label", op, false).value_or(o.value);
+      o.keys = get_string_array(*t, "keys", op, &key_names());
+      o.buttons = get_string_array(*t, "buttons", op, &button_names());
+      if (!t->contains("keys") && !t->contains("buttons"))
+        error(pos_of(*t), op, "expected at least one of keys or buttons to answer with");
+      if (!o.value.empty() && !values.insert(o.value).second)
+        error(pos_of(*t), op + ".value", "duplicate option value \"" + o.value + "\"");
+      for (const auto& key : o.keys)
+        if (!bound.insert("key:" + key).second)
+          error(pos_of(*t->get("keys")), op + ".keys", "key \"" + key + "\" is bound to two options");
+      for (const auto& b : o.buttons)
+        if (!bound.insert("button:" + b).second)
+          error(pos_of(*t->get("buttons")), op + ".buttons", "button \"" + b + "\" is bound to two options");
+      out.push_back(std::move(o));
+    }
+    if (arr->size() < 2)
+      error(pos_of(*n), prefix + ".options", "expected at least 2 options, found " + std::to_string(arr->size()));
+    return out;
+  }
+
+  std::string read_parameter(const toml::table& j, const std::string& prefix, const Protocol& p) {
+    const auto param = get_string(j, "parameter", prefix, true);
+    if (!param) return "";
+    const SourcePos at = pos_of(*j.get("parameter"));
+    const auto paths = numeric_paths();
+    if (std::find(paths.begin(), paths.end(), *param) == paths.end()) {
+      std::string msg = "unknown parameter \"" + *param + "\"";
+      const std::string guess = closest_match(*param, paths);
+      if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
+      if (p.find_factor(*param)) msg += " (\"" + *param + "\" is a factor, not a numeric setting)";
+      msg += " Expected a numeric setting: " + quoted_list(paths);
+      error(at, prefix + ".parameter", msg);
+      return "";
+    }
+    for (const auto& f : p.factors)
+      if (f.sets == *param)
+        error(at, prefix + ".parameter", "\"" + *param + "\" is also varied by factor \"" + f.name +
+                                             "\"; a trial's value cannot come from both");
+    return *param;
+  }
+
+  void check_range(const std::string& param, double lo, double hi, const toml::table& t,
+                   const std::string& prefix) {
+    const SettingInfo* info = find_setting(param);
+    if (!info) return;
+    if (!(lo < hi)) {
+      error(pos_of(t), prefix, "expected min < max");
+      return;
+    }
+    if (lo < info->min || hi > info->max)
+      error(pos_of(t), prefix, "min and max must lie within " + std::string(param) + "'s range [" +
+                                   value_label(SettingValue(std::in_place_type<double>, info->min)) + ", " + value_label(SettingValue(std::in_place_type<double>, info->max)) + "]");
+  }
+
+  Judgement read_judgement(const toml::table& j, const std::string& prefix, const Protocol& p) {
+    Judgement out;
+    out.pos = pos_of(j);
+    const auto type = get_enum(j, "type", prefix, {"choice", "adjustment", "staircase"});
+    if (!j.contains("type")) error(pos_of(j), prefix + ".type", "missing required type: \"choice\", \"adjustment\" or \"staircase\"");
+    if (!type) {
+      check_keys(j, prefix, {"type", "prompt", "options", "parameter", "positive", "staircases",
+                             "start_min", "start_max", "step", "fine_step", "min", "max",
+                             "keys_decrease", "keys_increase", "keys_confirm", "buttons_decrease",
+                             "buttons_increase", "buttons_confirm"});
+      return out;
+    }
+    out.prompt = get_string(j, "prompt", prefix, false).value_or("");
+    if (*type == "choice") {
+      out.type = JudgementType::choice;
+      check_keys(j, prefix, {"type", "prompt", "options"});
+      out.options = read_options(j, prefix);
+    } else if (*type == "adjustment") {
+      out.type = JudgementType::adjustment;
+      check_keys(j, prefix, {"type", "prompt", "parameter", "start_min", "start_max", "step",
+                             "fine_step", "min", "max", "keys_decrease", "keys_increase",
+                             "keys_confirm", "buttons_decrease", "buttons_increase", "buttons_confirm"});
+      AdjustmentSpec a;
+      a.parameter = read_parameter(j, prefix, p);
+      const auto mn = get_number(j, "min", prefix, true), mx = get_number(j, "max", prefix, true);
+      const auto s0 = get_number(j, "start_min", prefix, true), s1 = get_number(j, "start_max", prefix, true);
+      const auto step = get_number(j, "step", prefix, true);
+      a.fine_step = get_number(j, "fine_step", prefix, false).value_or(0.0);
+      if (mn && mx) {
+        a.min = *mn;
+        a.max = *mx;
+        if (!a.parameter.empty()) check_range(a.parameter, a.min, a.max, j, prefix);
+      }
+      if (s0 && s1 && mn && mx) {
+        a.start_min = *s0;
+        a.start_max = *s1;
+        if (!(a.min <= a.start_min && a.start_min <= a.start_max && a.start_max <= a.max))
+          error(pos_of(*j.get("start_min")), prefix + ".start_min",
+                "expected min ≤ start_min ≤ start_max ≤ max");
+      }
+      if (step) {
+        a.step = *step;
+        if (!(a.step > 0.0) || (mn && mx && a.step > a.max - a.min))
+          error(pos_of(*j.get("step")), prefix + ".step", "expected 0 < step ≤ max − min");
+      }
+      if (a.fine_step < 0.0 || (a.fine_step > 0.0 && a.fine_step > a.step))
+        error(pos_of(*j.get("fine_step")), prefix + ".fine_step", "expected 0 < fine_step ≤ step");
+      a.keys_decrease = get_string_array(j, "keys_decrease", prefix, &key_names());
+      a.keys_increase = get_string_array(j, "keys_increase", prefix, &key_names());
+      a.keys_confirm = get_string_array(j, "keys_confirm", prefix, &key_names());
+      a.buttons_decrease = get_string_array(j, "buttons_decrease", prefix, &button_names());
+      a.buttons_increase = get_string_array(j, "buttons_increase", prefix, &button_names());
+      a.buttons_confirm = get_string_array(j, "buttons_confirm", prefix, &button_names());
+      if (a.keys_decrease.empty() && a.buttons_decrease.empty()) a.keys_decrease = {"left"};
+      if (a.keys_increase.empty() && a.buttons_increase.empty()) a.keys_increase = {"right"};
+      if (a.keys_confirm.empty() && a.buttons_confirm.empty()) a.keys_confirm = {"space"};
+      out.adjustment = a;
+    } else {
+      out.type = JudgementType::staircase;
+      check_keys(j, prefix, {"type", "prompt", "options", "parameter", "positive", "staircases"});
+      out.options = read_options(j, prefix);
+      out.parameter = read_parameter(j, prefix, p);
+      if (auto pos = get_string(j, "positive", prefix, true)) {
+        const bool known = std::any_of(out.options.begin(), out.options.end(),
+                                       [&](const ResponseOption& o) { return o.value == *pos; });
+        if (!known) {
+          std::vector<std::string> values;
+          for (const auto& o : out.options) values.push_back(o.value);
+          error(pos_of(*j.get("positive")), prefix + ".positive",
+                "\"" + *pos + "\" is not an option value: expected one of " + quoted_list(values));
+        }
+        out.positive = *pos;
+      }
+      read_staircases(j, prefix, out);
+    }
+    return out;
+  }
+
+  void read_staircases(const toml::table& j, const std::string& prefix, Judgement& out) {
+    const toml::node* n = j.get("staircases");
+    if (!n) {
+      error(pos_of(j), prefix + ".staircases", "missing required [[" + prefix + ".staircases]] tables");
+      return;
+    }
+    const auto* arr = n->as_array();
+    if (!arr || arr->empty()) {
+      error(pos_of(*n), prefix + ".staircases", "expected at least one staircase table");
+      return;
+    }
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const toml::node& e = (*arr)[i];
+      const std::string sp = prefix + ".staircases[" + std::to_string(i + 1) + "]";
+      const auto* t = e.as_table();
+      if (!t) {
+        error(pos_of(e), sp, "expected a table, found " + type_name(e));
+        continue;
+      }
+      check_keys(*t, sp, {"name", "start", "up", "down", "step_sizes", "stop_reversals",
+                          "max_trials", "discard_reversals", "min", "max"});
+      StaircaseSpec s;
+      s.name = get_string(*t, "name", sp, true).value_or("");
+      if (!s.name.empty() && !names.insert(s.name).second)
+        error(pos_of(*t->get("name")), sp + ".name", "duplicate staircase name \"" + s.name + "\"");
+      const auto start = get_number(*t, "start", sp, true);
+      s.up = static_cast<int>(get_int(*t, "up", sp, 1, 5, false).value_or(1));
+      s.down = static_cast<int>(get_int(*t, "down", sp, 1, 5, false).value_or(2));
+      s.stop_reversals = static_cast<int>(get_int(*t, "stop_reversals", sp, 1, 100, false).value_or(8));
+      s.max_trials = static_cast<int>(get_int(*t, "max_trials", sp, 1, 1000, false).value_or(50));
+      s.discard_reversals = static_cast<int>(get_int(*t, "discard_reversals", sp, 0, 99, false).value_or(2));
+      if (t->contains("discard_reversals") && s.discard_reversals >= s.stop_reversals)
+        error(pos_of(*t->get("discard_reversals")), sp + ".discard_reversals",
+              "expected fewer than stop_reversals (" + std::to_string(s.stop_reversals) +
+                  "), or no reversal is left for the estimate");
+      const auto mn = get_number(*t, "min", sp, true), mx = get_number(*t, "max", sp, true);
+      if (mn && mx) {
+        s.min = *mn;
+        s.max = *mx;
+        if (!out.parameter.empty()) check_range(out.parameter, s.min, s.max, *t, sp);
+        else if (!(s.min < s.max)) error(pos_of(*t), sp, "expected min < max");
+      }
+      if (start) {
+        s.start = *start;
+        if (mn && mx && (s.start < s.min || s.start > s.max))
+          error(pos_of(*t->get("start")), sp + ".start", "expected min ≤ start ≤ max");
+      }
+      if (const toml::node* st = t->get("step_sizes")) {
+        const auto* sa = st->as_array();
+        if (!sa || sa->empty()) {
+          error(pos_of(*st), sp + ".step_sizes", "expected a non-empty array of positive numbers");
+        } else {
+          for (std::size_t k = 0; k < sa->size(); ++k) {
+            const auto v = node_number((*sa)[k]);
+            if (!v || !(*v > 0.0) || !std::isfinite(*v)) {
+              error(pos_of((*sa)[k]), sp + ".step_sizes[" + std::to_string(k + 1) + "]",
+                    "expected a positive number");
+              continue;
+            }
+            s.step_sizes.push_back(*v);
+          }
+        }
+      } else {
+        error(pos_of(*t), sp + ".step_sizes", "missing required array of step sizes");
+      }
+      out.staircases.push_back(std::move(s));
+    }
+  }
+
+  // ---- blocks ------------------------------------------------------------
+  void read_blocks(const toml::table& root, Protocol& p) {
+    std::int64_t reps = 1, every = 0, break_ms = 0;
+    std::string break_text = "Take a short break. Press any response key to continue.";
+    if (const toml::table* s = sub_table(root, "session", "")) {
+      check_keys(*s, "session", {"repetitions", "break_every_trials", "break_text", "break_min_ms"});
+      reps = get_int(*s, "repetitions", "session", 1, 1000, false).value_or(1);
+      every = get_int(*s, "break_every_trials", "session", 0, 100000, false).value_or(0);
+      break_text = get_string(*s, "break_text", "session", false).value_or(break_text);
+      break_ms = get_int(*s, "break_min_ms", "session", 0, 3600000, false).value_or(0);
+    }
+    const toml::node* n = root.get("blocks");
+    if (!n) {
+      Block b;
+      b.name = "main";
+      b.repetitions = static_cast<int>(reps);
+      b.randomize = default_randomize_;
+      b.judgement = p.judgement;
+      if (!has_root_judgement_)
+        error({1, 1}, "judgement", "missing required table [judgement] (type = \"choice\", "
+                                   "\"adjustment\" or \"staircase\")");
+      b.break_every_trials = static_cast<int>(every);
+      b.break_text = break_text;
+      b.break_min_ms = break_ms;
+      b.pos = {1, 1};
+      p.blocks.push_back(std::move(b));
+      return;
+    }
+    const auto* arr = n->as_array();
+    if (!arr || arr->empty()) {
+      error(pos_of(*n), "blocks", "expected one or more [[blocks]] tables");
+      return;
+    }
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const toml::node& e = (*arr)[i];
+      const std::string bp = "blocks[" + std::to_string(i + 1) + "]";
+      const auto* t = e.as_table();
+      if (!t) {
+        error(pos_of(e), bp, "expected a table, found " + type_name(e));
+        continue;
+      }
+      check_keys(*t, bp, {"name", "practice", "repetitions", "randomize", "levels", "instructions",
+                          "break_every_trials", "break_text", "break_min_ms", "space", "tracking",
+                          "viewing", "timeline", "stimulus", "table", "judgement"});
+      Block b;
+      b.pos = pos_of(*t);
+      b.name = get_string(*t, "name", bp, true).value_or("");
+      if (t->contains("name") && t->get("name")->is_string()) {
+        if (!is_identifier(b.name))
+          error(pos_of(*t->get("name")), bp + ".name", "block names are lower-case identifiers (a-z, 0-9, _ and -)");
+        else if (!names.insert(b.name).second)
+          error(pos_of(*t->get("name")), bp + ".name", "duplicate block name \"" + b.name + "\"");
+      }
+      b.practice = get_bool(*t, "practice", bp).value_or(false);
+      b.repetitions = static_cast<int>(get_int(*t, "repetitions", bp, 1, 1000, false).value_or(reps));
+      const auto mode = get_enum(*t, "randomize", bp, {"none", "shuffle", "shuffle_within_repetition"});
+      b.randomize = mode ? parse_mode(*mode) : default_randomize_;
+      b.instructions = get_string_array(*t, "instructions", bp);
+      b.break_every_trials = static_cast<int>(get_int(*t, "break_every_trials", bp, 0, 100000, false).value_or(every));
+      b.break_text = get_string(*t, "break_text", bp, false).value_or(break_text);
+      b.break_min_ms = get_int(*t, "break_min_ms", bp, 0, 3600000, false).value_or(break_ms);
+      read_settings(*t, bp, b.overrides);
+      for (const auto& o : b.overrides)
+        for (const auto& f : p.factors)
+          if (!f.sets.empty() && (f.sets == o.path ||
+                                  (f.sets == "viewing.preset" && (o.path == "viewing.projection" || o.path == "viewing.eyes")) ||
+                                  (o.path == "viewing.preset" && (f.sets == "viewing.projection" || f.sets == "viewing.eyes"))))
+            error(o.pos, bp + "." + o.path,
+                  "factor \"" + f.name + "\" varies " + f.sets +
+                      "; restrict its levels with levels." + f.name + " instead of overriding it");
+      if (const toml::table* lv = sub_table(*t, "levels", bp)) read_block_levels(*lv, bp + ".levels", p, b);
+      if (const toml::table* j = sub_table(*t, "judgement", bp)) b.judgement = read_judgement(*j, bp + ".judgement", p);
+      else if (has_root_judgement_) b.judgement = p.judgement;
+      else error(b.pos, bp + ".judgement",
+                 "this block has no judgement: add a top-level [judgement] or one for the block");
+      if (b.judgement.type == JudgementType::staircase && b.repetitions > 1)
+        error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions",
+              "expected 1 in a staircase block (its length comes from the stop rule); add staircases instead");
+      p.blocks.push_back(std::move(b));
+    }
+  }
+
+  void read_block_levels(const toml::table& lv, const std::string& prefix, const Protocol& p, Block& b) {
+    for (auto&& [k, v] : lv) {
+      const std::string name(k.str());
+      const std::string field = prefix + "." + name;
+      const Factor* f = p.find_factor(name);
+      if (!f) {
+        std::vector<std::string> names;
+        for (const auto& fa : p.factors) names.push_back(fa.name);
+        std::string msg = "no factor named \"" + name + "\"";
+        const std::string guess = closest_match(name, names);
+        if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
+        msg += names.empty() ? " (the protocol declares no factors)" : " Declared factors: " + quoted_list(names);
+        error(pos_of(k.source()), field, msg);
+        continue;
+      }
+      std::vector<const toml::node*> items;
+      if (const auto* arr = v.as_array()) {
+        for (std::size_t i = 0; i < arr->size(); ++i) items.push_back(&(*arr)[i]);
+        if (arr->empty()) error(pos_of(v), field, "expected at least one level (a block with no levels has no trials)");
+      } else {
+        items.push_back(&v);
+      }
+      std::vector<std::size_t> chosen;
+      for (const toml::node* item : items) {
+        const auto value = to_value(*item);
+        const std::string label = value ? value_label(*value) : "";
+        const auto it = std::find_if(f->levels.begin(), f->levels.end(),
+                                     [&](const Level& l) { return l.label == label; });
+        if (!value || it == f->levels.end()) {
+          std::vector<std::string> labels;
+          for (const auto& l : f->levels) labels.push_back(l.label);
+          error(pos_of(*item), field, (value ? "unknown level \"" + label + "\"" : "expected a level, found " + type_name(*item)) +
+                                          ": expected one of " + quoted_list(labels));
+          continue;
+        }
+        const auto idx = static_cast<std::size_t>(it - f->levels.begin());
+        if (std::find(chosen.begin(), chosen.end(), idx) != chosen.end())
+          error(pos_of(*item), field, "level \"" + label + "\" listed twice");
+        else chosen.push_back(idx);
+      }
+      b.levels[name] = chosen;
+    }
+  }
+
+  void read_counterbalance(const toml::table& root, Protocol& p) {
+    const toml::table* c = sub_table(root, "counterbalance", "");
+    if (!c) return;
+    check_keys(*c, "counterbalance", {"blocks", "square"});
+    const auto order = get_enum(*c, "blocks", "counterbalance", {"fixed", "latin_square", "random"});
+    p.block_order = !order || *order == "fixed" ? BlockOrder::fixed
+                    : *order == "random"        ? BlockOrder::random
+                                                : BlockOrder::latin_square;
+    std::vector<std::string> main;
+    for (const auto& b : p.blocks)
+      if (!b.practice) main.push_back(b.name);
+    if (p.block_order == BlockOrder::latin_square && main.size() < 2)
+      error(pos_of(*c->get("blocks")), "counterbalance.blocks",
+            "a Latin square needs at least 2 non-practice blocks, found " + std::to_string(main.size()));
+    const toml::node* sq = c->get("square");
+    if (!sq) return;
+    if (p.block_order != BlockOrder::latin_square) {
+      error(pos_of(*sq), "counterbalance.square", "a square is used only with blocks = \"latin_square\"");
+      return;
+    }
+    const auto* rows = sq->as_array();
+    if (!rows || rows->empty()) {
+      error(pos_of(*sq), "counterbalance.square", "expected an array of rows, each an array of block names");
+      return;
+    }
+    Square square;
+    for (std::size_t r = 0; r < rows->size(); ++r) {
+      const toml::node& rn = (*rows)[r];
+      const std::string field = "counterbalance.square[" + std::to_string(r + 1) + "]";
+      const auto* row = rn.as_array();
+      if (!row) {
+        error(pos_of(rn), field, "expected an array of block names, found " + type_name(rn));
+        return;
+      }
+      std::vector<std::size_t> idx;
+      for (std::size_t k = 0; k < row->size(); ++k) {
+        const toml::node& cell = (*row)[k];
+        const auto* s = cell.as_string();
+        const auto it = s ? std::find(main.begin(), main.end(), s->get()) : main.end();
+        if (it == main.end()) {
+          error(pos_of(cell), field + "[" + std::to_string(k + 1) + "]",
+                "expected the name of a non-practice block: " + quoted_list(main));
+          return;
+        }
+        idx.push_back(static_cast<std::size_t>(it - main.begin()));
+      }
+      square.push_back(idx);
+    }
+    if (const auto problem = check_latin(square, main.size())) {
+      error(pos_of(*sq), "counterbalance.square",
+            "not a Latin square over the " + std::to_string(main.size()) + " non-practice blocks: " + *problem);
+      return;
+    }
+    p.square = square;
+  }
+
+  // ---- the design as a whole ---------------------------------------------
+  void check_design(const Protocol& p, const toml::table& root) {
+    std::size_t total = 0;
+    for (std::size_t bi = 0; bi < p.blocks.size(); ++bi) {
+      const Block& b = p.blocks[bi];
+      const std::string bp = root.contains("blocks") ? "blocks[" + std::to_string(bi + 1) + "]" : "blocks";
+      std::size_t cells = 1;
+      for (const auto& f : p.factors) {
+        const auto it = b.levels.find(f.name);
+        const std::size_t n = it == b.levels.end() ? f.levels.size() : it->second.size();
+        cells = n == 0 ? 0 : (cells > kMaxCells ? cells : cells * n);
+      }
+      if (cells > kMaxCells) {
+        error(b.pos, bp, "the block crosses more than " + std::to_string(kMaxCells) + " factor-level combinations");
+        return;
+      }
+      std::size_t trials = 0;
+      if (b.judgement.type == JudgementType::staircase) {
+        for (const auto& s : b.judgement.staircases) trials += cells * static_cast<std::size_t>(s.max_trials);
+      } else {
+        trials = cells * static_cast<std::size_t>(b.repetitions);
+      }
+      if (trials == 0) error(b.pos, bp, "the block has zero trials");
+      total += trials;
+      if (total > kMaxTrials) {
+        error(b.pos, bp, "the session would exceed " + std::to_string(kMaxTrials) + " trials");
+        return;
+      }
+      check_cells(p, b, bp);
+    }
+  }
+
+  // Resolves every factor-level combination of a block and checks what can
+  // only be checked on the combination (a table that cannot exist in a space,
+  // a bend deeper than the stick allows).
+  void check_cells(const Protocol& p, const Block& b, const std::string& bp) {
+    // Where each setting got its value: position and the field as written.
+    std::map<std::string, std::pair<SourcePos, std::string>> base_origin;
+    for (const auto& o : p.session_overrides) base_origin[o.path] = {o.pos, o.path};
+    const bool explicit_blocks = bp != "blocks";
+    for (const auto& o : b.overrides)
+      base_origin[o.path] = {o.pos, explicit_blocks ? bp + "." + o.path : o.path};
+    const Settings base = p.block_settings(b);
+    std::set<std::pair<std::string, std::string>> reported;
+    for (const auto& cell : block_cells(p, b)) {
+      Settings s = base;
+      auto origin = base_origin;
+      std::string where;
+      for (std::size_t f = 0; f < p.factors.size(); ++f) {
+        const Level& l = p.factors[f].levels[cell[f]];
+        if (const auto* info = find_setting(p.factors[f].sets)) {
+          apply_setting(s, *info, l.value);
+          origin[p.factors[f].sets] = {l.pos, "factors." + p.factors[f].name + ".levels[" +
+                                                     std::to_string(cell[f] + 1) + "]"};
+        }
+        where += (where.empty() ? "" : ", ") + p.factors[f].name + " = " + l.label;
+      }
+      const std::string suffix = where.empty() ? "" : " (in " + b.name + " with " + where + ")";
+      const auto report = [&](const std::string& path, const std::string& msg) {
+        if (!reported.insert({path, msg}).second) return;
+        const auto it = origin.find(path);
+        if (it != origin.end()) error(it->second.first, it->second.second, msg + suffix);
+        else error(b.pos, bp, msg + suffix);
+      };
+      check_settings(s, report);
+      // The values a staircase or adjustment can reach must be possible too:
+      // check both ends of every range, reported at the judgement.
+      const std::string& param = b.judgement.type == JudgementType::adjustment && b.judgement.adjustment
+                                     ? b.judgement.adjustment->parameter
+                                     : b.judgement.parameter;
+      if (param.empty() || b.judgement.type == JudgementType::choice) continue;
+      std::vector<double> ends;
+      if (b.judgement.adjustment) ends = {b.judgement.adjustment->min, b.judgement.adjustment->max};
+      for (const auto& st : b.judgement.staircases) {
+        ends.push_back(st.min);
+        ends.push_back(st.max);
+      }
+      const std::string jfield = (b.judgement.pos.line == p.judgement.pos.line &&
+                                  b.judgement.pos.column == p.judgement.pos.column)
+                                     ? "judgement"
+                                     : bp + ".judgement";
+      for (double v : ends) {
+        Settings reached = s;
+        set_numeric_setting(reached, param, v);
+        check_settings(reached, [&](const std::string& path, const std::string& msg) {
+          const std::string full = msg + " when " + param + " reaches " +
+                                   value_label(SettingValue(std::in_place_type<double>, v));
+          if (reported.insert({path, full}).second) error(b.judgement.pos, jfield, full + suffix);
+        });
+      }
+    }
+  }
+
+  // Checks that need a whole resolved set of settings.
+  template <typename Report>
+  static void check_settings(const Settings& s, const Report& report) {
+    std::string why;
+    if (!derive(s, &why)) report(s.space.table_sides > 0 ? "space.table_sides" : "space.kind", why);
+    if (s.stimulus.stick_anchor == StickAnchor::head && s.stimulus.stick_distance_m < 0.1)
+      report("stimulus.stick_distance_m",
+             "a head-anchored stick must be at least 0.1 m from the eyes, found " +
+                 value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_distance_m)));
+    if (std::abs(s.stimulus.stick_sagitta_m) >= s.stimulus.stick_length_m / 2)
+      report("stimulus.stick_sagitta_m",
+             "expected |sagitta| < stick_length_m / 2 = " +
+                 value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_length_m / 2)));
+  }
+
+  std::string file_;
+  std::vector<Diagnostic> diags_;
+  RandomizeMode default_randomize_ = RandomizeMode::shuffle;
+  bool has_root_judgement_ = false;
+};
+
+}  // namespace
+
+LoadResult load_protocol_text(std::string_view text, const std::string& file) {
+  Loader loader(file);
+  try {
+    return loader.run(text);
+  } catch (const std::exception& e) {
+    // Only allocation failure can get here; report it rather than crash.
+    LoadResult r;
+    r.diagnostics.push_back({file, {}, "", std::string("internal failure while loading: ") + e.what()});
+    return r;
+  }
+}
+
+LoadResult load_protocol_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    LoadResult r;
+    r.diagnostics.push_back({path, {}, "", "cannot open the file for reading"});
+    return r;
+  }
+  std::string text;
+  char buf[65536];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    text.append(buf, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxFileBytes) {
+      LoadResult r;
+      r.diagnostics.push_back({path, {}, "", "the file is larger than 1 MiB; a protocol is a short text file"});
+      return r;
+    }
+  }
+  return load_protocol_text(text, path);
+}
+
+}  // namespace curvlab::harness::protocol

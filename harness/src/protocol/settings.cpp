@@ -1,0 +1,276 @@
+#include "curvlab/harness/protocol/settings.hpp"
+
+#include <charconv>
+#include <cmath>
+
+namespace curvlab::harness::protocol {
+
+std::string_view to_string(Tracking t) {
+  switch (t) {
+    case Tracking::naive: return "naive";
+    case Tracking::head_anchored: return "head-anchored";
+    case Tracking::table_anchored: return "table-anchored";
+  }
+  return "?";
+}
+std::string_view to_string(Projection p) {
+  return p == Projection::tourist ? "tourist" : "native";
+}
+std::string_view to_string(Eyes e) {
+  switch (e) {
+    case Eyes::both: return "both";
+    case Eyes::left: return "left";
+    case Eyes::right: return "right";
+    case Eyes::dominant: return "dominant";
+  }
+  return "?";
+}
+std::string_view to_string(StickAnchor a) { return a == StickAnchor::head ? "head" : "table"; }
+
+namespace {
+
+using K = SettingKind;
+
+std::vector<SettingInfo> make_registry() {
+  // Ranges are what a lab can physically mean, wide enough for pilots; they
+  // catch unit slips (millimetres written as metres, seconds as ms).
+  return {
+      {"space.kind", K::enumeration, 0, 0, {"S3", "E3", "H3"}, "the space"},
+      {"space.radius_m", K::number_or_from_table, 0.01, 1000.0, {},
+       "ρ in metres, or \"from_table\": ρ = table.edge_m / side_rad"},
+      {"space.table_sides", K::integer, 3, 12, {},
+       "sides of the right-angled virtual table (S3 3, E3 4, H3 ≥ 5)"},
+      {"space.e3_radius_m", K::number, 0.01, 1000.0, {},
+       "the radius that defines Euclidean radians in E3"},
+      {"tracking.algorithm", K::enumeration, 0, 0, {"naive", "head-anchored", "table-anchored"},
+       "body-coherent tracking algorithm (paper, sections 4–5)"},
+      {"viewing.preset", K::enumeration, 0, 0, {"tourist", "native", "monocular"},
+       "sets projection and eyes: tourist = tourist/both, native = native/both, "
+       "monocular = native/dominant"},
+      {"viewing.projection", K::enumeration, 0, 0, {"tourist", "native"},
+       "tourist (true optics) or native (azimuthal-equidistant) projection"},
+      {"viewing.eyes", K::enumeration, 0, 0, {"both", "left", "right", "dominant"},
+       "which eyes see the scene; the other shows the background"},
+      {"viewing.back_hemisphere", K::boolean, 0, 0, {}, "S3: draw the antipodal images"},
+      {"viewing.ipd_m", K::number, 0.045, 0.085, {},
+       "default interpupillary distance (used when the runtime gives none)"},
+      {"timeline.fixation_ms", K::integer, 0, 60000, {}, "fixation mark before the stimulus"},
+      {"timeline.stimulus_ms", K::integer, 1, 600000, {}, "stimulus duration"},
+      {"timeline.response_ms", K::integer, 1, 600000, {}, "response window"},
+      {"timeline.iti_ms", K::integer, 0, 60000, {}, "inter-trial interval"},
+      {"timeline.stimulus_during_response", K::boolean, 0, 0, {},
+       "keep the stimulus visible during the response window"},
+      {"stimulus.stick_length_m", K::number, 0.05, 5.0, {}, "cue stick length"},
+      {"stimulus.stick_radius_m", K::number, 0.001, 0.1, {}, "cue stick radius"},
+      {"stimulus.stick_sagitta_m", K::number, -1.0, 1.0, {},
+       "signed bend of the stick at its middle; + bows toward the viewer"},
+      {"stimulus.stick_anchor", K::enumeration, 0, 0, {"head", "table"},
+       "the stick's pose is relative to the head or to the table"},
+      {"stimulus.stick_distance_m", K::number, 0.0, 20.0, {},
+       "distance from the eyes (head anchor, at least 0.1) or from the table centre toward "
+       "the participant's edge (table anchor)"},
+      {"stimulus.stick_height_m", K::number, -2.0, 2.0, {},
+       "height relative to the eyes (head) or to the table top (table)"},
+      {"stimulus.stick_yaw_deg", K::number, -180.0, 180.0, {},
+       "rotation about the vertical; 0 lies across the line of sight"},
+      {"stimulus.show_stick", K::boolean, 0, 0, {}, "draw the cue stick"},
+      {"stimulus.show_table", K::boolean, 0, 0, {}, "draw the billiards table"},
+      {"stimulus.table_sagitta_m", K::number, -1.0, 1.0, {},
+       "signed convexity of the table top at its centre; + bulges up"},
+      {"stimulus.balls", K::integer, 0, 16, {}, "number of balls on the table"},
+      {"stimulus.ball_radius_m", K::number, 0.005, 0.2, {}, "ball radius"},
+      {"table.edge_m", K::number, 0.2, 5.0, {}, "physical table edge length"},
+      {"table.height_m", K::number, 0.3, 1.5, {}, "physical table top height above the floor"},
+  };
+}
+
+std::string number_text(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string choices_text(const SettingInfo& info) {
+  std::string out;
+  for (std::size_t i = 0; i < info.choices.size(); ++i) {
+    if (i) out += ", ";
+    out += '"';
+    out += info.choices[i];
+    out += '"';
+  }
+  return out;
+}
+
+std::string range_text(const SettingInfo& info) {
+  std::string out = "[";
+  out += number_text(info.min);
+  out += ", ";
+  out += number_text(info.max);
+  out += ']';
+  return out;
+}
+
+std::optional<double> as_number(const SettingValue& v) {
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return static_cast<double>(*i);
+  if (const auto* d = std::get_if<double>(&v)) return *d;
+  return std::nullopt;
+}
+
+}  // namespace
+
+const std::vector<SettingInfo>& all_settings() {
+  static const std::vector<SettingInfo> registry = make_registry();
+  return registry;
+}
+
+const SettingInfo* find_setting(std::string_view path) {
+  for (const auto& s : all_settings())
+    if (s.path == path) return &s;
+  return nullptr;
+}
+
+std::vector<std::string> setting_keys(std::string_view section) {
+  std::vector<std::string> keys;
+  for (const auto& s : all_settings()) {
+    const auto dot = s.path.find('.');
+    if (s.path.substr(0, dot) == section) keys.emplace_back(s.path.substr(dot + 1));
+  }
+  return keys;
+}
+
+bool is_setting_section(std::string_view section) { return !setting_keys(section).empty(); }
+
+std::string value_label(const SettingValue& v) {
+  if (const auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
+  if (const auto* d = std::get_if<double>(&v)) return number_text(*d);
+  return std::get<std::string>(v);
+}
+
+std::optional<std::string> check_setting(const SettingInfo& info, const SettingValue& value) {
+  switch (info.kind) {
+    case K::boolean:
+      if (!std::holds_alternative<bool>(value)) return "expected true or false";
+      return std::nullopt;
+    case K::integer: {
+      const auto* i = std::get_if<std::int64_t>(&value);
+      if (!i) return "expected an integer in " + range_text(info);
+      if (static_cast<double>(*i) < info.min || static_cast<double>(*i) > info.max)
+        return "expected an integer in " + range_text(info) + ", found " + std::to_string(*i);
+      return std::nullopt;
+    }
+    case K::number_or_from_table:
+      if (const auto* s = std::get_if<std::string>(&value)) {
+        if (*s == "from_table") return std::nullopt;
+        return "expected a number of metres in " + range_text(info) +
+               " or \"from_table\", found \"" + *s + "\"";
+      }
+      [[fallthrough]];
+    case K::number: {
+      const auto n = as_number(value);
+      if (!n) return "expected a number in " + range_text(info);
+      if (!std::isfinite(*n) || *n < info.min || *n > info.max)
+        return "expected a number in " + range_text(info) + ", found " + number_text(*n);
+      return std::nullopt;
+    }
+    case K::enumeration: {
+      const auto* s = std::get_if<std::string>(&value);
+      if (!s) return "expected one of " + choices_text(info);
+      for (auto c : info.choices)
+        if (c == *s) return std::nullopt;
+      return "unknown value \"" + *s + "\": expected one of " + choices_text(info);
+    }
+  }
+  return "unsupported setting";
+}
+
+void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& value) {
+  const std::string_view p = info.path;
+  const auto num = as_number(value).value_or(0.0);
+  const auto integer = std::holds_alternative<std::int64_t>(value) ? std::get<std::int64_t>(value) : 0;
+  const bool flag = std::holds_alternative<bool>(value) && std::get<bool>(value);
+  const std::string text = std::holds_alternative<std::string>(value) ? std::get<std::string>(value) : "";
+  if (p == "space.kind") {
+    s.space.kind = geometry::parse_space_kind(text).value_or(geometry::SpaceKind::E3);
+  } else if (p == "space.radius_m") {
+    if (text == "from_table") s.space.radius_m.reset();
+    else s.space.radius_m = num;
+  } else if (p == "space.table_sides") {
+    s.space.table_sides = static_cast<int>(integer);
+  } else if (p == "space.e3_radius_m") {
+    s.space.e3_radius_m = num;
+  } else if (p == "tracking.algorithm") {
+    s.tracking = text == "naive" ? Tracking::naive
+                 : text == "head-anchored" ? Tracking::head_anchored
+                                           : Tracking::table_anchored;
+  } else if (p == "viewing.preset") {
+    s.viewing.projection = text == "tourist" ? Projection::tourist : Projection::native;
+    s.viewing.eyes = text == "monocular" ? Eyes::dominant : Eyes::both;
+  } else if (p == "viewing.projection") {
+    s.viewing.projection = text == "tourist" ? Projection::tourist : Projection::native;
+  } else if (p == "viewing.eyes") {
+    s.viewing.eyes = text == "both" ? Eyes::both
+                     : text == "left" ? Eyes::left
+                     : text == "right" ? Eyes::right
+                                       : Eyes::dominant;
+  } else if (p == "viewing.back_hemisphere") {
+    s.viewing.back_hemisphere = flag;
+  } else if (p == "viewing.ipd_m") {
+    s.viewing.ipd_m = num;
+  } else if (p == "timeline.fixation_ms") {
+    s.timeline.fixation_ms = integer;
+  } else if (p == "timeline.stimulus_ms") {
+    s.timeline.stimulus_ms = integer;
+  } else if (p == "timeline.response_ms") {
+    s.timeline.response_ms = integer;
+  } else if (p == "timeline.iti_ms") {
+    s.timeline.iti_ms = integer;
+  } else if (p == "timeline.stimulus_during_response") {
+    s.timeline.stimulus_during_response = flag;
+  } else if (p == "stimulus.stick_anchor") {
+    s.stimulus.stick_anchor = text == "table" ? StickAnchor::table : StickAnchor::head;
+  } else if (p == "stimulus.show_stick") {
+    s.stimulus.show_stick = flag;
+  } else if (p == "stimulus.show_table") {
+    s.stimulus.show_table = flag;
+  } else if (p == "stimulus.balls") {
+    s.stimulus.balls = integer;
+  } else {
+    set_numeric_setting(s, p, num);
+  }
+}
+
+namespace {
+template <typename S>
+auto numeric_field(S& s, std::string_view p) -> decltype(&s.space.e3_radius_m) {
+  if (p == "space.radius_m") return nullptr;  // may be "from_table"; not adjustable
+  if (p == "space.e3_radius_m") return &s.space.e3_radius_m;
+  if (p == "viewing.ipd_m") return &s.viewing.ipd_m;
+  if (p == "stimulus.stick_length_m") return &s.stimulus.stick_length_m;
+  if (p == "stimulus.stick_radius_m") return &s.stimulus.stick_radius_m;
+  if (p == "stimulus.stick_sagitta_m") return &s.stimulus.stick_sagitta_m;
+  if (p == "stimulus.stick_distance_m") return &s.stimulus.stick_distance_m;
+  if (p == "stimulus.stick_height_m") return &s.stimulus.stick_height_m;
+  if (p == "stimulus.stick_yaw_deg") return &s.stimulus.stick_yaw_deg;
+  if (p == "stimulus.table_sagitta_m") return &s.stimulus.table_sagitta_m;
+  if (p == "stimulus.ball_radius_m") return &s.stimulus.ball_radius_m;
+  if (p == "table.edge_m") return &s.table.edge_m;
+  if (p == "table.height_m") return &s.table.height_m;
+  return nullptr;
+}
+}  // namespace
+
+std::optional<double> numeric_setting(const Settings& s, std::string_view path) {
+  if (const double* f = numeric_field(s, path)) return *f;
+  return std::nullopt;
+}
+
+bool set_numeric_setting(Settings& s, std::string_view path, double value) {
+  if (double* f = numeric_field(s, path)) {
+    *f = value;
+    return true;
+  }
+  return false;
+}
+
+}  // namespace curvlab::harness::protocol

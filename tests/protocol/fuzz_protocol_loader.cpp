@@ -1,0 +1,35 @@
+// libFuzzer entry point for the protocol loader (built only with
+// -DCURVLAB_FUZZ=ON and clang; run by bench/fuzz_protocol.sh). Any input must
+// give either a protocol or diagnostics — never a crash, hang or sanitizer
+// report — and an accepted protocol must expand.
+#include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/loader.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <string_view>
+
+using namespace curvlab::harness::protocol;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view text(reinterpret_cast<const char*>(data), size);
+  const LoadResult r = load_protocol_text(text, "fuzz.toml");
+  if (r.ok() == !r.diagnostics.empty()) std::abort();  // exactly one of the two
+  for (const auto& d : r.diagnostics) {
+    if (format_diagnostic(d).empty()) std::abort();
+  }
+  if (!r.ok()) return 0;
+  // Expand small designs only: a valid protocol may hold up to 10^6 trials,
+  // which is correct but would slow the search to a crawl.
+  std::size_t trials = 0;
+  for (const auto& b : r.protocol->blocks) {
+    std::size_t n = b.judgement.type == JudgementType::staircase ? 0 : static_cast<std::size_t>(b.repetitions);
+    for (const auto& s : b.judgement.staircases) n += static_cast<std::size_t>(s.max_trials);
+    trials += n * block_cells(*r.protocol, b).size();
+    if (trials > 5000) return 0;
+  }
+  const Design d = expand_design(*r.protocol, 1 + size % 7);
+  if (d.trials.size() != trials) std::abort();
+  return 0;
+}

@@ -1,0 +1,221 @@
+// Loading and validation as an author meets it: every shipped protocol loads,
+// every malformed one is rejected at the stated line, column and field, and
+// the CLI exits with 2 without writing anything.
+#include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/loader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+using namespace curvlab::harness::protocol;
+
+namespace {
+
+std::vector<fs::path> files_in(const fs::path& dir) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".toml") out.push_back(e.path());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+// Runs a shell command in `cwd`, capturing stdout and stderr together.
+CommandResult run_in(const fs::path& cwd, const std::string& command) {
+  const std::string full = "cd '" + cwd.string() + "' && " + command + " 2>&1";
+  CommandResult r;
+  FILE* pipe = popen(full.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+struct Expectation {
+  int line = 0, column = 0;
+  std::string field;
+};
+
+Expectation read_expectation(const fs::path& file) {
+  std::ifstream in(file);
+  std::string first;
+  std::getline(in, first);
+  static const std::regex re(R"(^# expect: (\d+):(\d+) (\S+)\s*$)");
+  std::smatch m;
+  Expectation e;
+  if (std::regex_match(first, m, re)) {
+    e.line = std::stoi(m[1]);
+    e.column = std::stoi(m[2]);
+    e.field = m[3];
+  }
+  return e;
+}
+
+const fs::path kSource = CURVLAB_SOURCE_DIR;
+
+}  // namespace
+
+TEST(ProtocolFiles, EveryShippedProtocolValidatesAndExpands) {
+  const auto files = files_in(kSource / "protocols");
+  ASSERT_GE(files.size(), 5u);
+  for (const auto& f : files) {
+    SCOPED_TRACE(f.string());
+    const auto r = load_protocol_file(f.string());
+    for (const auto& d : r.diagnostics) ADD_FAILURE() << format_diagnostic(d);
+    ASSERT_TRUE(r.ok());
+    for (std::uint64_t participant = 1; participant <= 3; ++participant) {
+      const auto d = expand_design(*r.protocol, participant);
+      EXPECT_FALSE(d.trials.empty());
+      for (const auto& t : d.trials) EXPECT_GT(t.derived.radius_m, 0.0);
+    }
+  }
+}
+
+TEST(ProtocolFiles, DemoIsShort) {
+  const auto r = load_protocol_file((kSource / "protocols/demo.toml").string());
+  ASSERT_TRUE(r.ok());
+  const auto d = expand_design(*r.protocol, 1);
+  EXPECT_LE(d.trials.size(), 12u);
+  EXPECT_LT(d.estimated_duration_ms(), 30000);
+}
+
+TEST(MalformedCorpus, EachFileYieldsItsExpectedDiagnostic) {
+  const auto files = files_in(kSource / "tests/protocol/malformed");
+  ASSERT_GE(files.size(), 20u);
+  for (const auto& f : files) {
+    SCOPED_TRACE(f.filename().string());
+    const Expectation want = read_expectation(f);
+    ASSERT_GT(want.line, 0) << "first line must be '# expect: LINE:COLUMN FIELD'";
+    const auto r = load_protocol_file(f.string());
+    EXPECT_FALSE(r.ok());
+    ASSERT_FALSE(r.diagnostics.empty());
+    bool found = false;
+    for (const auto& d : r.diagnostics) {
+      EXPECT_GT(d.pos.line, 0) << format_diagnostic(d);
+      EXPECT_EQ(d.file, f.string());
+      if (d.pos.line == want.line && d.pos.column == want.column && d.field == want.field) found = true;
+    }
+    std::string all;
+    for (const auto& d : r.diagnostics) all += format_diagnostic(d) + "\n";
+    EXPECT_TRUE(found) << "expected " << want.line << ":" << want.column << " " << want.field
+                       << ", got:\n" << all;
+  }
+}
+
+TEST(MalformedCorpus, CliExitsWithTwoPrintsFileLineColumnAndWritesNothing) {
+  const fs::path scratch = fs::temp_directory_path() / ("curvlab-validate-" + std::to_string(::getpid()));
+  fs::create_directories(scratch);
+  const auto corpus = kSource / "tests/protocol/malformed";
+  const auto before = fs::last_write_time(corpus);
+  for (const auto& f : files_in(corpus)) {
+    SCOPED_TRACE(f.filename().string());
+    const Expectation want = read_expectation(f);
+    const auto r = run_in(scratch, std::string(CURVLAB_CLI) + " validate '" + f.string() + "'");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    const std::string line = f.string() + ":" + std::to_string(want.line) + ":" +
+                             std::to_string(want.column) + ": error: " + want.field + ": ";
+    EXPECT_NE(r.output.find(line), std::string::npos) << "missing '" << line << "' in:\n" << r.output;
+  }
+  EXPECT_TRUE(fs::is_empty(scratch)) << "validate wrote into its working directory";
+  EXPECT_EQ(fs::last_write_time(corpus), before);
+  fs::remove_all(scratch);
+}
+
+TEST(Cli, ValidateOkPrintsTrialCountsAndDuration) {
+  const auto r = run_in(kSource, std::string(CURVLAB_CLI) + " validate protocols/demo.toml");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("OK protocols/demo.toml"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("total 8 trials"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("estimated duration"), std::string::npos) << r.output;
+}
+
+TEST(Cli, DesignJsonListsEveryTrialWithItsSeed) {
+  const auto r = run_in(kSource, std::string(CURVLAB_CLI) + " design protocols/demo.toml --participant 4 --json");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\"participant\": 4"), std::string::npos);
+  EXPECT_NE(r.output.find("\"index\": 7"), std::string::npos);
+  EXPECT_EQ(r.output.find("\"index\": 8"), std::string::npos);
+  const auto bad = run_in(kSource, std::string(CURVLAB_CLI) + " design protocols/demo.toml --participant 0");
+  EXPECT_EQ(bad.exit_code, 2);
+  const auto missing = run_in(kSource, std::string(CURVLAB_CLI) + " validate no/such/file.toml");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.output.find("no/such/file.toml: error: cannot open"), std::string::npos) << missing.output;
+}
+
+TEST(Diagnostics, UnknownKeySuggestsTheClosestAndListsAllowed) {
+  const auto r = load_protocol_file((kSource / "tests/protocol/malformed/unknown_key.toml").string());
+  ASSERT_EQ(r.diagnostics.size(), 1u);
+  EXPECT_NE(r.diagnostics[0].message.find("did you mean \"projection\""), std::string::npos);
+  EXPECT_NE(r.diagnostics[0].message.find("\"ipd_m\""), std::string::npos);
+}
+
+TEST(Diagnostics, UnknownEnumListsEveryAllowedValue) {
+  const auto r = load_protocol_file((kSource / "tests/protocol/malformed/unknown_enum.toml").string());
+  ASSERT_FALSE(r.diagnostics.empty());
+  const auto& m = r.diagnostics[0].message;
+  for (const char* v : {"\"choice\"", "\"adjustment\"", "\"staircase\""}) EXPECT_NE(m.find(v), std::string::npos) << m;
+}
+
+TEST(Diagnostics, AllProblemsAreReportedInOnePass) {
+  const std::string text = R"(
+[protocol]
+name = "x"
+version = "1"
+[randomization]
+seed = 1
+[viewing]
+ipd_m = 63
+eyse = "both"
+[timeline]
+iti_ms = -5
+[judgement]
+type = "choice"
+options = [{ value = "a", keys = ["1"] }, { value = "b", keys = ["2"] }]
+)";
+  const auto r = load_protocol_text(text, "inline.toml");
+  ASSERT_EQ(r.diagnostics.size(), 3u);
+  std::set<std::string> fields;
+  for (const auto& d : r.diagnostics) fields.insert(d.field);
+  EXPECT_EQ(fields, (std::set<std::string>{"viewing.eyse", "viewing.ipd_m", "timeline.iti_ms"}));
+}
+
+TEST(Diagnostics, GarbageNeverCrashes) {
+  for (const std::string& text : {std::string(), std::string("\0\0\0", 3), std::string("[[[[["),
+                                 std::string("a = [") + std::string(5000, '['), std::string("x = 1e999"),
+                                 std::string("[protocol]\nname = 5\n"), std::string("blocks = 3\nfactors = []\n")}) {
+    const auto r = load_protocol_text(text, "garbage.toml");
+    EXPECT_FALSE(r.ok());
+    EXPECT_FALSE(r.diagnostics.empty());
+  }
+}
+
+TEST(Diagnostics, NonAsciiTextInValueStringsIsAccepted) {
+  // Instructions in any language: only keys and bare text must be ASCII.
+  const std::string text =
+      "[protocol]\nname = \"d\u00e9mo\"\nversion = \"1\"\n"
+      "description = \"\"\"ρ = L / s, \u00a7 7,\n\u00a7 again\"\"\"\n"
+      "[randomization]\nseed = 3\n"
+      "[instructions]\nstart = [\"Bitte drücken Sie die Taste — ¿listo? 「はい」\"]  # ρ ≠ 1\n"
+      "[judgement]\ntype = \"choice\"\noptions = [{ value = \"a\", label = \"gewölbt\", keys = [\"1\"] },"
+      " { value = \"b\", label = \"gerade\", keys = [\"2\"] }]\n";
+  const auto r = load_protocol_text(text, "unicode.toml");
+  for (const auto& d : r.diagnostics) ADD_FAILURE() << format_diagnostic(d);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r.protocol->instructions_start.at(0), "Bitte drücken Sie die Taste — ¿listo? 「はい」");
+  EXPECT_EQ(r.protocol->judgement.options.at(0).label, "gewölbt");
+}
