@@ -1,5 +1,7 @@
 #include "common.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -70,6 +72,14 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
     throw UsageError(option + ": expected " + std::to_string(expected_count) +
                      " comma-separated numbers, got " + std::to_string(out.size()));
   return out;
+}
+
+void add_space_option(CLI::App* cmd, geometry::SpaceKind* kind) {
+  cmd->add_option_function<std::string>(
+         "--space", [kind](const std::string& text) { *kind = *geometry::parse_space_kind(text); },
+         "space: S3, E3 or H3")
+      ->required()
+      ->check(CLI::IsMember({"S3", "E3", "H3", "s3", "e3", "h3"}));
 }
 
 }  // namespace curvlab::cli

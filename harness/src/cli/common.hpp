@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "curvlab/geometry/space.hpp"
+
 namespace CLI {
 class App;
 }
@@ -32,6 +34,9 @@ void print_result(const Json& doc, bool as_json);
 // option on failure.
 std::vector<double> parse_number_list(const std::string& text, const std::string& option,
                                       std::size_t expected_count);
+
+// Adds the required option `--space S3|E3|H3` (case-insensitive) to cmd.
+void add_space_option(CLI::App* cmd, geometry::SpaceKind* kind);
 
 // Registration of each command group (one file each, wired in main.cpp).
 void add_inspect_commands(CLI::App& app);

@@ -23,14 +23,6 @@ using namespace curvlab::geometry;
 
 constexpr double kPi = std::numbers::pi;
 
-void add_space_option(CLI::App* cmd, SpaceKind* kind) {
-  cmd->add_option_function<std::string>(
-         "--space", [kind](const std::string& text) { *kind = *parse_space_kind(text); },
-         "space: S3, E3 or H3")
-      ->required()
-      ->check(CLI::IsMember({"S3", "E3", "H3", "s3", "e3", "h3"}));
-}
-
 void require_positive(double value, const std::string& option, const std::string& unit) {
   if (!(value > 0.0) || !std::isfinite(value))
     throw UsageError(option + " must be a positive finite number of " + unit);
