@@ -1,5 +1,7 @@
 // The tracking commands as a user runs them: exit codes, JSON keys, and the
 // numbers a methods developer checks.
+#include "run_cli.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
@@ -13,23 +15,9 @@
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string out;  // stdout and stderr together
-};
+using Result = curvlab::testing::CliResult;
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(CURVLAB_EXE) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+Result run(const std::string& args) { return curvlab::testing::run_cli(args); }
 
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() /
@@ -42,10 +30,10 @@ nlohmann::json json_of(const Result& r) { return nlohmann::json::parse(r.out); }
 TEST(TrackCli, WalkAroundThenTrackGivesTheSummaryKeys) {
   const std::string traj = temp_path("walk.csv");
   const std::string frames = temp_path("frames.csv");
-  ASSERT_EQ(run("trajectory walk-around --laps 1.25 --out " + traj).code, 0);
+  ASSERT_EQ(run("trajectory walk-around --laps 1.25 --out " + traj).exit_code, 0);
   const Result r = run("track --trajectory " + traj +
                        " --space H3 --algorithm table-anchored --json --out " + frames);
-  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = json_of(r);
   for (const char* key : {"physical_edge", "virtual_edge", "virtual_laps", "max_coherence_error_m",
                           "max_coherence_error_rad"})
@@ -66,9 +54,9 @@ TEST(TrackCli, WalkAroundThenTrackGivesTheSummaryKeys) {
 
 TEST(TrackCli, ClockwiseWalkRunsTheLapsBackwards) {
   const std::string traj = temp_path("cw.csv");
-  ASSERT_EQ(run("trajectory walk-around --laps 0.75 --direction cw --out " + traj).code, 0);
+  ASSERT_EQ(run("trajectory walk-around --laps 0.75 --direction cw --out " + traj).exit_code, 0);
   const Result r = run("track --trajectory " + traj + " --space S3 --algorithm table-anchored --json");
-  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NEAR(json_of(r)["virtual_laps"].get<double>(), -1.0, 1e-9);
   std::filesystem::remove(traj);
 }
@@ -77,50 +65,50 @@ TEST(TrackCli, EveryTrajectoryKindIsWritten) {
   for (const std::string kind : {"head-square --side-m 0.3", "hand-lap", "lean-over-center"}) {
     const std::string traj = temp_path("k.csv");
     const Result g = run("trajectory " + kind + " --out " + traj);
-    ASSERT_EQ(g.code, 0) << kind << ": " << g.out;
+    ASSERT_EQ(g.exit_code, 0) << kind << ": " << g.out;
     const Result r = run("track --trajectory " + traj + " --space H3 --algorithm naive --json");
-    EXPECT_EQ(r.code, 0) << kind << ": " << r.out;
+    EXPECT_EQ(r.exit_code, 0) << kind << ": " << r.out;
     std::filesystem::remove(traj);
   }
 }
 
 TEST(TrackCli, BadTrajectoryFileExitsTwoNamingLineAndField) {
   const std::string traj = temp_path("bad.csv");
-  ASSERT_EQ(run("trajectory walk-around --laps 0.1 --out " + traj).code, 0);
+  ASSERT_EQ(run("trajectory walk-around --laps 0.1 --out " + traj).exit_code, 0);
   {
     std::ofstream f(traj, std::ios::app);
     f << "99999999999,1,0,1.6,zz,1,0,0,0,1,0,0,0,1,0,0,0,1,0,0,0,1,0,0,0\n";
   }
   const Result r = run("track --trajectory " + traj + " --space H3 --algorithm naive");
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find(traj + ":"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("field 'head_z_m'"), std::string::npos) << r.out;
-  EXPECT_EQ(run("track --trajectory /nonexistent.csv --space H3 --algorithm naive").code, 2);
-  EXPECT_EQ(run("track --trajectory " + traj + " --space H3 --algorithm sideways").code, 2);
-  EXPECT_EQ(run("track --trajectory " + traj + " --space S3 --sides 5 --algorithm naive").code, 2);
-  EXPECT_EQ(run("track --trajectory " + traj + " --space H3 --radius-m 1 --edge-m 1 --algorithm naive").code, 2);
-  EXPECT_EQ(run("trajectory walk-around --laps -1 --out " + traj).code, 2);
-  EXPECT_EQ(run("trajectory head-square --out " + traj).code, 2);  // --side-m required
+  EXPECT_EQ(run("track --trajectory /nonexistent.csv --space H3 --algorithm naive").exit_code, 2);
+  EXPECT_EQ(run("track --trajectory " + traj + " --space H3 --algorithm sideways").exit_code, 2);
+  EXPECT_EQ(run("track --trajectory " + traj + " --space S3 --sides 5 --algorithm naive").exit_code, 2);
+  EXPECT_EQ(run("track --trajectory " + traj + " --space H3 --radius-m 1 --edge-m 1 --algorithm naive").exit_code, 2);
+  EXPECT_EQ(run("trajectory walk-around --laps -1 --out " + traj).exit_code, 2);
+  EXPECT_EQ(run("trajectory head-square --out " + traj).exit_code, 2);  // --side-m required
   std::filesystem::remove(traj);
 }
 
 TEST(InspectCli, VergenceKeysAndTheS3QuarterCircle) {
   const Result r = run("inspect vergence --space S3 --radius-m 1 --ipd-m 0.063 --distance-m 2 --json");
-  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = json_of(r);
   for (const char* key : {"vergence_deg", "tourist_distance_m", "native_distance_m"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_LT(j["vergence_deg"].get<double>(), 0.0);
   EXPECT_LT(j["tourist_distance_m"].get<double>(), 0.0);
   EXPECT_NEAR(j["native_distance_m"].get<double>(), 2.0, 1e-12);
-  EXPECT_EQ(run("inspect vergence --space S3 --radius-m 1 --distance-m 4").code, 2);  // > ρπ
-  EXPECT_EQ(run("inspect vergence --space H3 --radius-m -1 --distance-m 1").code, 2);
+  EXPECT_EQ(run("inspect vergence --space S3 --radius-m 1 --distance-m 4").exit_code, 2);  // > ρπ
+  EXPECT_EQ(run("inspect vergence --space H3 --radius-m -1 --distance-m 1").exit_code, 2);
 }
 
 TEST(InspectCli, StickKeysAndBowDirection) {
   const Result h = run("inspect stick --space H3 --radius-m 0.85 --length-m 1 --distance-m 1 "
                        "--ipd-m 0.063 --view native --json");
-  ASSERT_EQ(h.code, 0) << h.out;
+  ASSERT_EQ(h.exit_code, 0) << h.out;
   const auto j = json_of(h);
   ASSERT_TRUE(j.contains("distances_m"));
   ASSERT_EQ(j["distances_m"].size(), 5u);
@@ -132,7 +120,7 @@ TEST(InspectCli, StickKeysAndBowDirection) {
   const Result t = run("inspect stick --space H3 --radius-m 0.85 --length-m 1 --distance-m 1 "
                        "--view tourist --bend-m 0 --json");
   EXPECT_NEAR(json_of(t)["perceived_sagitta_m"].get<double>(), 0.0, 1e-12);
-  EXPECT_EQ(run("inspect stick --space H3 --radius-m 1 --length-m 1 --distance-m 1 --view sideways").code, 2);
+  EXPECT_EQ(run("inspect stick --space H3 --radius-m 1 --length-m 1 --distance-m 1 --view sideways").exit_code, 2);
 }
 
 }  // namespace
