@@ -1,0 +1,102 @@
+// Where a session's frames come from and go to (DESIGN.md §6). The session
+// runner (session.hpp) drives one Backend frame by frame:
+//
+//   while (auto frame = backend.begin_frame()) {      // paced by the backend
+//     poses  = backend.poses(*frame);                   // lab poses at the predicted time
+//     backend.poll_input(events);                       // keys, buttons, controllers
+//     ... state machine, tracking, scene ...
+//     backend.submit(scene, description, overlay);      // draw (or plan only)
+//   }
+//
+// Three implementations: headless (offscreen renderer, generated or replayed
+// poses, simulated observer; headless.hpp), desktop (GLFW window, keyboard
+// and mouse move the head; desktop.hpp) and xr (OpenXR; xr/backend.hpp).
+// A backend that cannot start (no runtime, no display) fails in its factory
+// with a BackendError before the runner writes anything.
+#pragma once
+
+#include "curvlab/geometry/tracking.hpp"
+#include "curvlab/renderer/plan.hpp"
+#include "curvlab/renderer/renderer.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::harness::runner {
+
+struct BackendError {
+  std::string message;  // names the failing call or result and what to do about it
+};
+
+// Provenance the session stores (DESIGN.md §7).
+struct BackendInfo {
+  std::string name;  // "headless", "desktop" or "xr"
+  std::string renderer_device;
+  std::string renderer_driver;
+  double refresh_hz = 90.0;
+};
+
+struct FrameTiming {
+  std::int64_t index = 0;              // frames since the backend started
+  std::int64_t now_ns = 0;             // session clock when the frame began
+  std::int64_t predicted_display_ns = 0;  // when this frame's image will be shown
+  std::int64_t period_ns = 11'111'111;
+};
+
+// One discrete input: a key (GLFW-style lower-case names: "1", "left",
+// "space", "escape"), a HID or controller button (names from the mapping
+// file or the XR action set), or a simulated observer's key press. The runner
+// maps names to responses through the protocol's judgement options.
+struct InputEvent {
+  std::int64_t t_ns = 0;  // session clock
+  std::string name;
+  std::string device;  // "keyboard", "hid:<name>", "xr:left", "observer", …
+  bool pressed = true;
+};
+
+// Something the backend wants the runner to know (pause, resume, quit).
+enum class BackendSignal { none, pause, resume, quit, recenter };
+
+// What the runner shows besides the scene (for desktop windows and logs).
+struct Overlay {
+  std::string phase;  // "instructions", "fixation", "stimulus", "response", "iti", "break", "done"
+  std::string text;   // trial information line
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  Backend() = default;
+  Backend(const Backend&) = delete;
+  Backend& operator=(const Backend&) = delete;
+
+  [[nodiscard]] virtual BackendInfo info() const = 0;
+  // Waits until the next frame should be prepared (real time) or returns at
+  // once (fast headless); nullopt ends the session (window closed, runtime
+  // exiting, replay finished).
+  virtual std::optional<FrameTiming> begin_frame() = 0;
+  // Lab poses of head and hands for the frame's predicted display time.
+  virtual geometry::LabFrame poses(const FrameTiming& frame) = 0;
+  // Appends inputs that arrived since the last call; returns a signal.
+  virtual BackendSignal poll_input(std::vector<InputEvent>& out) = 0;
+  // Eye offsets and fields of view for this frame (OpenXR views; otherwise
+  // from the participant's IPD), as the renderer takes them.
+  virtual renderer::StereoRig rig(const FrameTiming& frame, double ipd_m) = 0;
+  // Draws (or, when nothing will look at it, only plans) the frame.
+  // `draw` false: the runner knows no one needs the pixels (fast headless
+  // between onsets); the backend may skip the GPU but still returns the plan's counts.
+  virtual renderer::FrameStats submit(const renderer::Scene& scene,
+                                      const renderer::FrameDescription& frame,
+                                      const Overlay& overlay, bool draw) = 0;
+  // Writes the last drawn frame as `stem`_left.png / `stem`_right.png (a
+  // screenshot, or the stimulus image of a trial's onset); returns the files
+  // written. Backends that cannot read their images back return none.
+  virtual std::vector<std::string> save_frame(const std::string& stem) {
+    (void)stem;
+    return {};
+  }
+};
+
+}  // namespace curvlab::harness::runner
