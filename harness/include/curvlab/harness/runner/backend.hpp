@@ -60,9 +60,14 @@ struct InputEvent {
 enum class BackendSignal { none, pause, resume, quit, recenter };
 
 // What the runner shows besides the scene (for desktop windows and logs).
+// Phases: "instructions", "fixation", "stimulus", "response", "iti",
+// "break", "done". Instruction pages and breaks advance on the key "space"
+// or "enter", or a button named "continue"; responses come from the keys and
+// buttons of the judgement's options.
 struct Overlay {
-  std::string phase;  // "instructions", "fixation", "stimulus", "response", "iti", "break", "done"
-  std::string text;   // trial information line
+  std::string phase;
+  std::string text;   // trial information line (block, trial, condition)
+  bool waiting_for_input = false;  // instructions, response window, break
 };
 
 class Backend {

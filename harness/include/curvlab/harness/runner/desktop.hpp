@@ -1,0 +1,39 @@
+// The desktop backend for piloting a protocol (DESIGN.md §6): a GLFW window
+// with a Vulkan swapchain, both eyes side by side or one eye, the keyboard
+// and mouse moving the head and hands, trial information on screen, and
+// screenshots. Needs a display (X11 or Wayland; Xvfb works).
+#pragma once
+
+#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/runner/backend.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace curvlab::harness::runner {
+
+enum class DesktopPreview { side_by_side, left, right };
+
+struct DesktopOptions {
+  std::uint32_t eye_width_px = 960;  // per eye
+  std::uint32_t eye_height_px = 960;
+  DesktopPreview preview = DesktopPreview::side_by_side;
+  // Screenshots go here: every trial's first stimulus frame, and F12.
+  // Empty: screenshots only on F12, into the current directory.
+  std::string screenshot_dir;
+  // A file of key presses made for the participant (scripted pilots and
+  // tests): one `KEY [DELAY_MS]` per line, '#' comments. Each key is pressed
+  // DELAY_MS (default 300) after the runner next waits for input (overlay
+  // phase instructions, response or break). Empty: none.
+  std::string key_script;
+  bool software = false;  // lavapipe even with a GPU
+  bool vsync = true;
+  const devices::Clock* clock = nullptr;  // the session's; required
+};
+
+std::variant<std::unique_ptr<Backend>, BackendError> make_desktop_backend(const DesktopOptions& options);
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,24 @@
+// The OpenXR backend (DESIGN.md §6): XR_KHR_vulkan_enable2, a STAGE reference
+// space, one swapchain per eye, poses located at the predicted display time,
+// controllers through action sets, session-state handling. Without a runtime
+// the factory returns the OpenXR result by name and what to install.
+#pragma once
+
+#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/runner/backend.hpp"
+
+#include <memory>
+#include <string>
+#include <variant>
+
+namespace curvlab::xr {
+
+struct XrBackendOptions {
+  std::string application_name = "curvlab";
+  const devices::Clock* clock = nullptr;  // the session's; required
+};
+
+std::variant<std::unique_ptr<harness::runner::Backend>, harness::runner::BackendError>
+make_xr_backend(const XrBackendOptions& options);
+
+}  // namespace curvlab::xr
