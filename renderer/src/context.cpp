@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <optional>
 
 namespace curvlab::renderer {
 
@@ -41,6 +42,48 @@ bool has_layer(const vk::raii::Context& ctx, const char* name) {
   return false;
 }
 
+void add_unique(std::vector<const char*>& names, const char* name) {
+  for (const char* n : names)
+    if (std::strcmp(n, name) == 0) return;
+  names.push_back(name);
+}
+
+bool has_instance_extension(const vk::raii::Context& ctx, const char* name) {
+  for (const auto& e : ctx.enumerateInstanceExtensionProperties())
+    if (std::strcmp(e.extensionName, name) == 0) return true;
+  // Layers add extensions of their own (the validation layer's debug utils).
+  for (const auto& l : ctx.enumerateInstanceLayerProperties())
+    for (const auto& e : ctx.enumerateInstanceExtensionProperties(std::string(l.layerName.data())))
+      if (std::strcmp(e.extensionName, name) == 0) return true;
+  return false;
+}
+
+bool has_device_extensions(const vk::raii::PhysicalDevice& pd,
+                           const std::vector<const char*>& names) {
+  const auto available = pd.enumerateDeviceExtensionProperties();
+  for (const char* name : names) {
+    bool found = false;
+    for (const auto& e : available)
+      if (std::strcmp(e.extensionName, name) == 0) found = true;
+    if (!found) return false;
+  }
+  return true;
+}
+
+// The first queue family with graphics and compute (and, with a surface,
+// presentation to it): one queue does everything, so no ownership transfers.
+std::optional<std::uint32_t> usable_queue_family(const vk::raii::PhysicalDevice& pd,
+                                                 VkSurfaceKHR surface) {
+  const auto families = pd.getQueueFamilyProperties();
+  for (std::uint32_t i = 0; i < families.size(); ++i) {
+    const auto f = families[i].queueFlags;
+    if (!(f & vk::QueueFlagBits::eGraphics) || !(f & vk::QueueFlagBits::eCompute)) continue;
+    if (surface != VK_NULL_HANDLE && !pd.getSurfaceSupportKHR(i, surface)) continue;
+    return i;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Context::~Context() = default;
@@ -60,6 +103,13 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
       extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
       c.validation_ = true;
     }
+    for (const auto& e : options.instance_extensions) {
+      if (!has_instance_extension(c.loader_, e.c_str()))
+        return RenderError{"the Vulkan instance extension " + e +
+                           " is not available (a window needs the loader's surface "
+                           "extensions: install libvulkan1 and a driver with WSI support)"};
+      add_unique(extensions, e.c_str());
+    }
     const vk::ApplicationInfo app{.pApplicationName = "curvlab",
                                   .applicationVersion = 1,
                                   .pEngineName = "curvlab",
@@ -73,46 +123,90 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
                        vk::DebugUtilsMessageTypeFlagBitsEXT::ePerformance,
         .pfnUserCallback = &on_validation_message,
         .pUserData = c.log_.get()};
-    c.instance_ = vk::raii::Instance(
-        c.loader_, vk::InstanceCreateInfo{
-                       .pNext = options.validation ? &messenger_info : nullptr,
-                       .pApplicationInfo = &app,
-                       .enabledLayerCount = static_cast<std::uint32_t>(layers.size()),
-                       .ppEnabledLayerNames = layers.data(),
-                       .enabledExtensionCount = static_cast<std::uint32_t>(extensions.size()),
-                       .ppEnabledExtensionNames = extensions.data()});
+    const vk::InstanceCreateInfo instance_info{
+        .pNext = options.validation ? &messenger_info : nullptr,
+        .pApplicationInfo = &app,
+        .enabledLayerCount = static_cast<std::uint32_t>(layers.size()),
+        .ppEnabledLayerNames = layers.data(),
+        .enabledExtensionCount = static_cast<std::uint32_t>(extensions.size()),
+        .ppEnabledExtensionNames = extensions.data()};
+    if (options.hooks.create_instance) {
+      auto made = options.hooks.create_instance(static_cast<const VkInstanceCreateInfo&>(instance_info));
+      if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+      c.instance_ = vk::raii::Instance(c.loader_, std::get<VkInstance>(made));
+    } else {
+      c.instance_ = vk::raii::Instance(c.loader_, instance_info);
+    }
     if (options.validation)
       c.messenger_ = vk::raii::DebugUtilsMessengerEXT(c.instance_, messenger_info);
+    if (options.create_surface) {
+      auto made = options.create_surface(static_cast<VkInstance>(*c.instance_));
+      if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+      c.surface_ = vk::raii::SurfaceKHR(c.instance_, std::get<VkSurfaceKHR>(made));
+    }
 
-    // Pick a device: GPUs first unless software is requested; a CPU device
-    // (lavapipe) is always acceptable. Vulkan 1.3 for dynamic rendering.
-    vk::raii::PhysicalDevices devices(c.instance_);
-    int best_score = -1;
-    for (auto& pd : devices) {
-      const auto props = pd.getProperties();
-      if (props.apiVersion < VK_API_VERSION_1_3) continue;
-      int score = 0;
-      const bool cpu = props.deviceType == vk::PhysicalDeviceType::eCpu;
-      if (options.device == DeviceChoice::software) {
-        if (!cpu) continue;
-        score = 1;
-      } else {
-        score = props.deviceType == vk::PhysicalDeviceType::eDiscreteGpu     ? 4
-                : props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ? 3
-                : cpu                                                        ? 1
-                                                                             : 2;
+    std::vector<const char*> device_extensions;
+    for (const auto& e : options.device_extensions) add_unique(device_extensions, e.c_str());
+    if (*c.surface_) add_unique(device_extensions, VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+    const VkSurfaceKHR surface = *c.surface_ ? static_cast<VkSurfaceKHR>(*c.surface_) : VK_NULL_HANDLE;
+
+    if (options.hooks.pick_physical_device) {
+      auto picked = options.hooks.pick_physical_device(static_cast<VkInstance>(*c.instance_));
+      if (auto* e = std::get_if<std::string>(&picked)) return RenderError{*e};
+      c.physical_ = vk::raii::PhysicalDevice(c.instance_, std::get<VkPhysicalDevice>(picked));
+      const auto props = c.physical_.getProperties();
+      if (props.apiVersion < VK_API_VERSION_1_3)
+        return RenderError{std::string("the Vulkan device chosen by the embedder (") +
+                           props.deviceName.data() +
+                           ") does not support Vulkan 1.3, which curvlab needs for dynamic "
+                           "rendering; update its driver"};
+      if (!has_device_extensions(c.physical_, device_extensions))
+        return RenderError{std::string("the Vulkan device chosen by the embedder (") +
+                           props.deviceName.data() + ") lacks a required device extension"};
+      const auto family = usable_queue_family(c.physical_, surface);
+      if (!family) return RenderError{"the Vulkan device has no graphics+compute queue" +
+                                      std::string(surface ? " that can present to the window" : "")};
+      c.queue_family_ = *family;
+    } else {
+      // Pick a device: GPUs first unless software is requested; a CPU device
+      // (lavapipe) is always acceptable. Vulkan 1.3 for dynamic rendering;
+      // with a surface, a queue that can present to it.
+      vk::raii::PhysicalDevices devices(c.instance_);
+      int best_score = -1;
+      for (auto& pd : devices) {
+        const auto props = pd.getProperties();
+        if (props.apiVersion < VK_API_VERSION_1_3) continue;
+        if (!has_device_extensions(pd, device_extensions)) continue;
+        const auto family = usable_queue_family(pd, surface);
+        if (!family) continue;
+        int score = 0;
+        const bool cpu = props.deviceType == vk::PhysicalDeviceType::eCpu;
+        if (options.device == DeviceChoice::software) {
+          if (!cpu) continue;
+          score = 1;
+        } else {
+          score = props.deviceType == vk::PhysicalDeviceType::eDiscreteGpu     ? 4
+                  : props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ? 3
+                  : cpu                                                        ? 1
+                                                                               : 2;
+        }
+        if (score > best_score) {
+          best_score = score;
+          c.physical_ = std::move(pd);
+          c.queue_family_ = *family;
+        }
       }
-      if (score > best_score) {
-        best_score = score;
-        c.physical_ = std::move(pd);
+      if (best_score < 0) {
+        if (surface)
+          return RenderError{"no Vulkan 1.3 device can present to the window (install a GPU "
+                             "driver, or mesa-vulkan-drivers for lavapipe)"};
+        return RenderError{options.device == DeviceChoice::software
+                               ? "no CPU Vulkan device found (apt-get install mesa-vulkan-drivers "
+                                 "for lavapipe)"
+                               : "no Vulkan 1.3 device found (install a GPU driver, or "
+                                 "mesa-vulkan-drivers for lavapipe)"};
       }
     }
-    if (best_score < 0)
-      return RenderError{options.device == DeviceChoice::software
-                             ? "no CPU Vulkan device found (apt-get install mesa-vulkan-drivers "
-                               "for lavapipe)"
-                             : "no Vulkan 1.3 device found (install a GPU driver, or "
-                               "mesa-vulkan-drivers for lavapipe)"};
     const auto props = c.physical_.getProperties();
     c.device_name_ = props.deviceName.data();
     c.software_ = props.deviceType == vk::PhysicalDeviceType::eCpu;
@@ -123,18 +217,6 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
             .get<vk::PhysicalDeviceDriverProperties>();
     c.driver_info_ = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
 
-    const auto families = c.physical_.getQueueFamilyProperties();
-    bool found = false;
-    for (std::uint32_t i = 0; i < families.size(); ++i) {
-      const auto f = families[i].queueFlags;
-      if ((f & vk::QueueFlagBits::eGraphics) && (f & vk::QueueFlagBits::eCompute)) {
-        c.queue_family_ = i;
-        found = true;
-        break;
-      }
-    }
-    if (!found) return RenderError{"the Vulkan device has no graphics+compute queue"};
-
     const float priority = 1.0f;
     const vk::DeviceQueueCreateInfo queue_info{.queueFamilyIndex = c.queue_family_,
                                                .queueCount = 1,
@@ -142,9 +224,20 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
     vk::PhysicalDeviceVulkan13Features features13{.dynamicRendering = VK_TRUE};
     vk::PhysicalDeviceFeatures2 features{.pNext = &features13};
     features.features.fillModeNonSolid = VK_FALSE;
-    c.device_ = vk::raii::Device(c.physical_, vk::DeviceCreateInfo{.pNext = &features,
-                                                                  .queueCreateInfoCount = 1,
-                                                                  .pQueueCreateInfos = &queue_info});
+    const vk::DeviceCreateInfo device_info{
+        .pNext = &features,
+        .queueCreateInfoCount = 1,
+        .pQueueCreateInfos = &queue_info,
+        .enabledExtensionCount = static_cast<std::uint32_t>(device_extensions.size()),
+        .ppEnabledExtensionNames = device_extensions.data()};
+    if (options.hooks.create_device) {
+      auto made = options.hooks.create_device(static_cast<VkPhysicalDevice>(*c.physical_),
+                                              static_cast<const VkDeviceCreateInfo&>(device_info));
+      if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+      c.device_ = vk::raii::Device(c.physical_, std::get<VkDevice>(made));
+    } else {
+      c.device_ = vk::raii::Device(c.physical_, device_info);
+    }
     c.queue_ = vk::raii::Queue(c.device_, c.queue_family_, 0);
     c.command_pool_ = vk::raii::CommandPool(
         c.device_, {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer,

@@ -6,6 +6,7 @@
 
 #include <vulkan/vulkan_raii.hpp>
 
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -19,9 +20,40 @@ enum class DeviceChoice {
   software,   // a CPU device (lavapipe) even when a GPU is present
 };
 
+// For an embedder that must create the Vulkan objects itself. OpenXR's
+// XR_KHR_vulkan_enable2 is the case in point: the runtime creates the
+// instance (xrCreateVulkanInstanceKHR), names the physical device
+// (xrGetVulkanGraphicsDevice2KHR) and creates the device
+// (xrCreateVulkanDeviceKHR) from create-infos the application prepares. Each
+// hook gets the create-info the context would have used itself and returns
+// the handle, or a message for a person. Handles returned are owned by the
+// context from then on (destroyed with vkDestroyInstance / vkDestroyDevice,
+// as XR_KHR_vulkan_enable2 requires of the application). Empty hooks: the
+// context creates and picks as usual.
+struct ContextHooks {
+  std::function<std::variant<VkInstance, std::string>(const VkInstanceCreateInfo& info)>
+      create_instance;
+  std::function<std::variant<VkPhysicalDevice, std::string>(VkInstance instance)>
+      pick_physical_device;
+  std::function<std::variant<VkDevice, std::string>(VkPhysicalDevice physical,
+                                                    const VkDeviceCreateInfo& info)>
+      create_device;
+};
+
 struct ContextOptions {
   DeviceChoice device = DeviceChoice::automatic;
   bool validation = false;  // enable VK_LAYER_KHRONOS_validation
+  // Extensions the embedder needs besides the context's own (e.g. the
+  // window system's surface extensions, from glfwGetRequiredInstanceExtensions).
+  // A device lacking one of the device extensions is not chosen.
+  std::vector<std::string> instance_extensions;
+  std::vector<std::string> device_extensions;
+  // Called once the instance exists to make the surface a window presents
+  // to (e.g. glfwCreateWindowSurface). The context owns the surface, adds
+  // VK_KHR_swapchain to the device and picks a queue family that can present
+  // to it. Empty: no surface (headless, OpenXR).
+  std::function<std::variant<VkSurfaceKHR, std::string>(VkInstance instance)> create_surface;
+  ContextHooks hooks;
 };
 
 struct RenderError {
@@ -41,8 +73,9 @@ class ValidationLog {
   std::vector<std::string> messages_;
 };
 
-// Owns the instance, the debug messenger, the device, one graphics+compute
-// queue and a command pool. Move-only; handles are destroyed in reverse order
+// Owns the instance, the debug messenger, the surface (when asked for one),
+// the device, one graphics+compute queue (that can also present to the
+// surface) and a command pool. Move-only; handles are destroyed in reverse order
 // of creation by the vk::raii members. Not thread-safe: one thread records and
 // submits (the command pool is not shared).
 class Context {
@@ -55,6 +88,9 @@ class Context {
   Context& operator=(const Context&) = delete;
   ~Context();
 
+  [[nodiscard]] const vk::raii::Instance& instance() const { return instance_; }
+  // The window surface of ContextOptions::create_surface (null without one).
+  [[nodiscard]] const vk::raii::SurfaceKHR& surface() const { return surface_; }
   [[nodiscard]] const vk::raii::Device& device() const { return device_; }
   [[nodiscard]] const vk::raii::PhysicalDevice& physical() const { return physical_; }
   [[nodiscard]] const vk::raii::Queue& queue() const { return queue_; }
@@ -96,6 +132,7 @@ class Context {
   vk::raii::Context loader_;
   vk::raii::Instance instance_{nullptr};
   vk::raii::DebugUtilsMessengerEXT messenger_{nullptr};
+  vk::raii::SurfaceKHR surface_{nullptr};  // destroyed before the instance
   vk::raii::PhysicalDevice physical_{nullptr};
   vk::raii::Device device_{nullptr};
   vk::raii::Queue queue_{nullptr};

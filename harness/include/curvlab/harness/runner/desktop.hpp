@@ -31,6 +31,7 @@ struct DesktopOptions {
   std::string key_script;
   bool software = false;  // lavapipe even with a GPU
   bool vsync = true;
+  bool validation = false;  // Khronos validation layer on (tests); messages go to stderr
   const devices::Clock* clock = nullptr;  // the session's; required
 };
 

@@ -1,0 +1,67 @@
+#include "key_script.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <fstream>
+#include <sstream>
+
+namespace curvlab::desktop {
+
+std::variant<std::vector<ScriptedKey>, KeyScriptError> parse_key_script(const std::string& text,
+                                                                         const std::string& origin) {
+  std::vector<ScriptedKey> keys;
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    std::istringstream words(line);
+    std::string key;
+    std::string delay;
+    std::string extra;
+    if (!(words >> key)) continue;  // blank or comment
+    const std::string where = origin + ":" + std::to_string(number) + ": ";
+    ScriptedKey k;
+    k.line = number;
+    std::transform(key.begin(), key.end(), key.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    k.name = key;
+    if (words >> delay) {
+      long long ms = -1;
+      const auto [end, ec] = std::from_chars(delay.data(), delay.data() + delay.size(), ms);
+      if (ec != std::errc() || end != delay.data() + delay.size() || ms < 0 || ms > 3'600'000)
+        return KeyScriptError{where + "expected `KEY [DELAY_MS]` with DELAY_MS a whole number "
+                                      "of milliseconds from 0 to 3600000, got '" + delay + "'"};
+      k.delay_ns = static_cast<std::int64_t>(ms) * 1'000'000;
+    }
+    if (words >> extra)
+      return KeyScriptError{where + "expected `KEY [DELAY_MS]`, got more after the delay: '" +
+                            extra + "'"};
+    keys.push_back(std::move(k));
+  }
+  return keys;
+}
+
+std::variant<std::vector<ScriptedKey>, KeyScriptError> load_key_script(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) return KeyScriptError{path + ": cannot open the key script"};
+  std::ostringstream text;
+  text << file.rdbuf();
+  return parse_key_script(text.str(), path);
+}
+
+void KeyScriptPlayer::on_frame(bool waiting_for_input, std::int64_t now_ns) {
+  if (finished() || armed_at_ns_ || !waiting_for_input) return;
+  armed_at_ns_ = now_ns;
+}
+
+std::optional<ScriptedKey> KeyScriptPlayer::due(std::int64_t now_ns) {
+  if (finished() || !armed_at_ns_) return std::nullopt;
+  if (now_ns - *armed_at_ns_ < keys_[next_].delay_ns) return std::nullopt;
+  armed_at_ns_.reset();
+  return keys_[next_++];
+}
+
+}  // namespace curvlab::desktop

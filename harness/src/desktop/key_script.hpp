@@ -1,0 +1,54 @@
+// Key presses made for the participant in scripted pilots and tests
+// (DesktopOptions::key_script): one `KEY [DELAY_MS]` per line, '#' starts a
+// comment. Each key is pressed DELAY_MS (default 300) after the runner next
+// waits for input. Parsing is separate from playing, and both are pure, so
+// the timing rule is tested without a window.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace curvlab::desktop {
+
+struct ScriptedKey {
+  std::string name;  // lower-case, as InputEvent names keys ("1", "space", "left")
+  std::int64_t delay_ns = 300'000'000;
+  int line = 0;  // in the script file, for messages
+};
+
+struct KeyScriptError {
+  std::string message;  // "FILE:LINE: what was expected"
+};
+
+// Parses script text; `origin` names the file in messages.
+std::variant<std::vector<ScriptedKey>, KeyScriptError> parse_key_script(const std::string& text,
+                                                                         const std::string& origin);
+std::variant<std::vector<ScriptedKey>, KeyScriptError> load_key_script(const std::string& path);
+
+// Plays a script against the runner's overlay. The runner shows it to the
+// backend every frame (submit); a key is armed the first frame, after the
+// previous key was pressed, on which the runner waits for input, and is
+// pressed once its delay has passed since then. Not thread-safe.
+class KeyScriptPlayer {
+ public:
+  explicit KeyScriptPlayer(std::vector<ScriptedKey> keys) : keys_(std::move(keys)) {}
+
+  // The overlay of the frame just submitted.
+  void on_frame(bool waiting_for_input, std::int64_t now_ns);
+  // The key due at now_ns, if any (at most one per call: the runner sees the
+  // effect of each key before the next is armed).
+  std::optional<ScriptedKey> due(std::int64_t now_ns);
+
+  [[nodiscard]] bool finished() const { return next_ >= keys_.size(); }
+  [[nodiscard]] std::size_t pressed() const { return next_; }
+
+ private:
+  std::vector<ScriptedKey> keys_;
+  std::size_t next_ = 0;
+  std::optional<std::int64_t> armed_at_ns_;
+};
+
+}  // namespace curvlab::desktop

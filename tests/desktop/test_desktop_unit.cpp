@@ -1,0 +1,132 @@
+// Pure parts of the desktop backend: the key-script format and timing rule,
+// the pilot body's start pose and movement, key names.
+#include "desktop_backend.hpp"
+
+#include <GLFW/glfw3.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace {
+
+using namespace curvlab::desktop;
+
+TEST(KeyScript, ParsesKeysDelaysAndComments) {
+  auto parsed = parse_key_script("# pilot\nspace\n\n2 150  # straight\nLEFT 0\n", "keys.txt");
+  ASSERT_TRUE(std::holds_alternative<std::vector<ScriptedKey>>(parsed));
+  const auto& keys = std::get<std::vector<ScriptedKey>>(parsed);
+  ASSERT_EQ(keys.size(), 3u);
+  EXPECT_EQ(keys[0].name, "space");
+  EXPECT_EQ(keys[0].delay_ns, 300'000'000);
+  EXPECT_EQ(keys[0].line, 2);
+  EXPECT_EQ(keys[1].name, "2");
+  EXPECT_EQ(keys[1].delay_ns, 150'000'000);
+  EXPECT_EQ(keys[2].name, "left");
+  EXPECT_EQ(keys[2].delay_ns, 0);
+}
+
+TEST(KeyScript, BadLinesNameFileLineAndWhatWasExpected) {
+  for (const char* bad : {"1\n2 soon\n", "1\n2 -5\n", "1\n2 10 3\n", "1\n2 1.5\n"}) {
+    auto parsed = parse_key_script(bad, "keys.txt");
+    ASSERT_TRUE(std::holds_alternative<KeyScriptError>(parsed)) << bad;
+    const auto& message = std::get<KeyScriptError>(parsed).message;
+    EXPECT_EQ(message.rfind("keys.txt:2: expected `KEY [DELAY_MS]`", 0), 0u) << message;
+  }
+  auto missing = load_key_script("/nonexistent/keys.txt");
+  ASSERT_TRUE(std::holds_alternative<KeyScriptError>(missing));
+  EXPECT_NE(std::get<KeyScriptError>(missing).message.find("/nonexistent/keys.txt"), std::string::npos);
+}
+
+TEST(KeyScript, EachKeyWaitsForTheNextWaitAndItsDelay) {
+  KeyScriptPlayer player({{"space", 100, 1}, {"2", 50, 2}});
+  constexpr std::int64_t ms = 1'000'000;
+  EXPECT_FALSE(player.due(0));            // nothing armed yet
+  player.on_frame(false, 0);              // fixation: not waiting
+  EXPECT_FALSE(player.due(1000 * ms));
+  player.on_frame(true, 1000 * ms);       // instructions wait: armed at 1000 ms
+  player.on_frame(true, 1050 * ms);       // still the same wait: not re-armed
+  EXPECT_FALSE(player.due(1000 * ms + 99));
+  auto first = player.due(1000 * ms + 100);
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->name, "space");
+  EXPECT_FALSE(player.due(5000 * ms));    // the next key waits for a new wait
+  player.on_frame(false, 5000 * ms);
+  player.on_frame(true, 6000 * ms);       // the response window
+  EXPECT_FALSE(player.due(6000 * ms + 49));
+  auto second = player.due(6000 * ms + 50);
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->name, "2");
+  EXPECT_TRUE(player.finished());
+  player.on_frame(true, 7000 * ms);
+  EXPECT_FALSE(player.due(9000 * ms));
+}
+
+TEST(PilotBody, StartsAtTheTableLookingAtItsCentre) {
+  PilotBody body;
+  const auto frame = body.frame();
+  const auto& head = frame[curvlab::geometry::Device::head];
+  EXPECT_NEAR(head.position_m.y, 1.55, 1e-12);
+  EXPECT_NEAR(head.position_m.z, 0.9, 1e-12);
+  // The view direction (−z of the head) points at the table-top centre.
+  const glm::dvec3 forward = head.orientation * glm::dvec3(0.0, 0.0, -1.0);
+  const glm::dvec3 to_centre = glm::normalize(glm::dvec3(0.0, 0.76, 0.0) - head.position_m);
+  EXPECT_NEAR(glm::dot(forward, to_centre), 1.0, 1e-12);
+  // Hands below the eyes, in front, right hand to the right.
+  const auto& left = frame[curvlab::geometry::Device::left_hand];
+  const auto& right = frame[curvlab::geometry::Device::right_hand];
+  EXPECT_LT(right.position_m.y, head.position_m.y);
+  EXPECT_LT(right.position_m.z, head.position_m.z);
+  EXPECT_GT(right.position_m.x, left.position_m.x);
+}
+
+TEST(PilotBody, KeysWalkInTheHeadingAndMouseTurnsIt) {
+  PilotBody body;
+  body.walk(1.0, 0.0, 0.0, 0.5);  // W for half a second toward the table
+  EXPECT_NEAR(body.head_m().z, 0.9 - 0.4, 1e-12);
+  EXPECT_NEAR(body.head_m().y, 1.55, 1e-12);  // walking keeps the height
+  body.walk(0.0, 0.0, 1.0, 0.5);  // E: up
+  EXPECT_NEAR(body.head_m().y, 1.75, 1e-12);
+  // Mouse right by 100 px turns right (yaw decreases) by 0.3 rad; D then
+  // strafes along the new right.
+  const double yaw = body.yaw_rad();
+  body.look(100.0, 0.0);
+  EXPECT_NEAR(body.yaw_rad(), yaw - 0.3, 1e-12);
+  const glm::dvec3 before = body.head_m();
+  body.walk(0.0, 1.0, 0.0, 1.0);
+  const glm::dvec3 step = body.head_m() - before;
+  EXPECT_NEAR(step.x, 0.8 * std::cos(0.3), 1e-12);
+  EXPECT_NEAR(step.z, 0.8 * std::sin(0.3), 1e-12);  // facing right of −z, right leans to +z
+  // Pitch stops short of straight down.
+  body.look(0.0, 1e6);
+  EXPECT_GT(body.pitch_rad(), -1.5);
+  body.reset();
+  EXPECT_NEAR(body.head_m().z, 0.9, 1e-12);
+}
+
+TEST(PilotBody, HandsMoveWithinReach) {
+  PilotBody body;
+  const auto before = body.frame()[curvlab::geometry::Device::right_hand].position_m;
+  body.move_hand(Hand::right, 50.0, -25.0, 0.0);  // right and up
+  const auto after = body.frame()[curvlab::geometry::Device::right_hand].position_m;
+  EXPECT_NEAR(after.x - before.x, 0.1, 1e-12);
+  EXPECT_NEAR(after.y - before.y, 0.05, 1e-12);
+  body.move_hand(Hand::left, 0.0, 0.0, 1000.0);  // scrolled far forward
+  const auto moved = body.frame();
+  EXPECT_LE(glm::length(moved[curvlab::geometry::Device::left_hand].position_m -
+                        moved[curvlab::geometry::Device::head].position_m),
+            0.9 + 1e-9);
+}
+
+TEST(KeyNames, GlfwStyleLowerCase) {
+  EXPECT_EQ(key_name(GLFW_KEY_1), "1");
+  EXPECT_EQ(key_name(GLFW_KEY_A), "a");
+  EXPECT_EQ(key_name(GLFW_KEY_LEFT), "left");
+  EXPECT_EQ(key_name(GLFW_KEY_SPACE), "space");
+  EXPECT_EQ(key_name(GLFW_KEY_ENTER), "enter");
+  EXPECT_EQ(key_name(GLFW_KEY_ESCAPE), "escape");
+  EXPECT_EQ(key_name(GLFW_KEY_F12), "f12");
+  EXPECT_EQ(key_name(GLFW_KEY_KP_3), "kp_3");
+  EXPECT_EQ(key_name(GLFW_KEY_UNKNOWN), "");
+}
+
+}  // namespace

@@ -1,0 +1,212 @@
+// The desktop backend with a real window (on Xvfb when there is no display):
+// the runner's frame loop driven by hand, a scripted key arriving as an
+// InputEvent, a stimulus drawn into the swapchain and saved as a screenshot
+// that shows it. Vulkan on lavapipe with the validation layer on.
+#include "desktop_backend.hpp"
+#include "xvfb.hpp"
+
+#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/renderer/image_io.hpp"
+#include "curvlab/renderer/scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+namespace {
+
+using namespace curvlab;
+using harness::runner::BackendSignal;
+using harness::runner::DesktopOptions;
+using harness::runner::InputEvent;
+using harness::runner::Overlay;
+
+test::XServer* g_xserver = nullptr;
+
+class XEnvironment : public ::testing::Environment {
+ public:
+  void SetUp() override { g_xserver = new test::XServer; }
+  void TearDown() override {
+    delete g_xserver;
+    g_xserver = nullptr;
+  }
+};
+const auto* const g_env = ::testing::AddGlobalTestEnvironment(new XEnvironment);
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("curvlab_desktop_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+bool validation_layer_installed() {
+  return std::filesystem::exists("/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json");
+}
+
+// Pixels of a kind inside a rectangle (fractions of the image).
+template <class Pred>
+int count_pixels(const renderer::Rgba8Image& img, double x0, double y0, double x1, double y1,
+                 Pred pred) {
+  int n = 0;
+  for (int y = static_cast<int>(y0 * img.height); y < static_cast<int>(y1 * img.height); ++y)
+    for (int x = static_cast<int>(x0 * img.width); x < static_cast<int>(x1 * img.width); ++x) {
+      const std::uint8_t* p = &img.pixels[4 * (static_cast<std::size_t>(y) * img.width + x)];
+      if (pred(p[0], p[1], p[2])) ++n;
+    }
+  return n;
+}
+
+// The cloth (0.10, 0.42, 0.20), lit: green well above red and blue.
+bool cloth(int r, int g, int b) { return g > 40 && g > r + 25 && g > b + 15; }
+// The cue's shaft (0.85, 0.66, 0.40) and butt (0.22, 0.10, 0.05), lit: red
+// above green above blue — wood, which nothing else in the scene is.
+bool wood(int r, int g, int b) { return r > 40 && r > g + 10 && g > b + 5 && r < 250; }
+
+class DesktopWindow : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (g_xserver == nullptr || !g_xserver->available())
+      GTEST_SKIP() << "no X display: " << (g_xserver ? g_xserver->reason() : "not started");
+  }
+  devices::SteadyClock clock_;
+};
+
+TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
+  const auto dir = fresh_dir("stimulus");
+  const auto script = dir / "keys.txt";
+  std::ofstream(script) << "# answer the first trial with key 2 after 40 ms\n2 40\n";
+
+  DesktopOptions options;
+  options.eye_width_px = 320;
+  options.eye_height_px = 320;
+  options.screenshot_dir = (dir / "shots").string();
+  options.key_script = script.string();
+  options.software = true;
+  options.validation = validation_layer_installed();
+  options.clock = &clock_;
+  auto made = desktop::DesktopBackend::create(options);
+  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<desktop::DesktopBackend>>(made))
+      << std::get<harness::runner::BackendError>(made).message;
+  auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(made);
+  EXPECT_EQ(backend.info().name, "desktop");
+  EXPECT_NE(backend.info().renderer_device.find("llvmpipe"), std::string::npos);
+
+  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3,
+                                                renderer::SceneKind::billiards, {});
+  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
+  auto& s = std::get<renderer::StimulusScene>(stimulus);
+
+  // fixation → stimulus (onset screenshot) → response until the scripted key.
+  std::vector<InputEvent> events;
+  std::optional<InputEvent> answer;
+  int frames = 0;
+  for (; frames < 400 && !answer; ++frames) {
+    auto timing = backend.begin_frame();
+    ASSERT_TRUE(timing.has_value());
+    EXPECT_EQ(timing->index, frames);
+    EXPECT_GT(timing->predicted_display_ns, timing->now_ns);
+    const auto lab = backend.poses(*timing);
+    EXPECT_TRUE(lab[geometry::Device::head].valid);
+    events.clear();
+    EXPECT_EQ(backend.poll_input(events), BackendSignal::none);
+    for (const auto& e : events)
+      if (e.device == "script") answer = e;
+    renderer::FrameDescription f;
+    f.space = s.space;
+    f.settings = renderer::ViewSettings::preset(renderer::ViewPreset::tourist);
+    f.head = s.head;
+    f.rig = backend.rig(*timing, 0.063);
+    Overlay overlay;
+    overlay.phase = frames < 2 ? "fixation" : frames < 4 ? "stimulus" : "response";
+    overlay.text = "block 1 · trial 1 of 8 · E3 tourist";
+    overlay.waiting_for_input = overlay.phase == "response";
+    const auto stats = backend.submit(s.scene, f, overlay, true);
+    EXPECT_EQ(stats.views, 2);
+  }
+  ASSERT_TRUE(answer.has_value()) << "the scripted key never arrived";
+  EXPECT_EQ(answer->name, "2");
+  EXPECT_TRUE(answer->pressed);
+  EXPECT_GE(frames, 5);  // armed only once the response phase waited for input
+  EXPECT_EQ(backend.scripted_keys_pressed(), 1u);
+  EXPECT_GE(backend.target().presented_frames(), static_cast<std::uint64_t>(frames));
+  EXPECT_NE(backend.banner().find("trial 1 of 8"), std::string::npos);
+
+  // The onset screenshot: both eyes and the window.
+  const auto shots = dir / "shots";
+  for (const char* name : {"stimulus_001_left.png", "stimulus_001_right.png", "stimulus_001_window.png"})
+    EXPECT_TRUE(std::filesystem::exists(shots / name)) << name;
+  renderer::Rgba8Image left;
+  std::string error;
+  ASSERT_TRUE(renderer::read_png((shots / "stimulus_001_left.png").string(), left, error)) << error;
+  ASSERT_EQ(left.width, 320);
+  ASSERT_EQ(left.height, 320);
+  // The head looks at the table centre: cloth fills the middle of the image,
+  // the cue lies toward the participant, below the centre.
+  const int centre_cloth = count_pixels(left, 0.35, 0.35, 0.65, 0.65, cloth);
+  EXPECT_GT(centre_cloth, 0.6 * (0.3 * 320) * (0.3 * 320)) << "cloth pixels in the centre";
+  EXPECT_GT(count_pixels(left, 0.3, 0.5, 0.7, 1.0, wood), 100) << "cue pixels below the centre";
+  EXPECT_LT(count_pixels(left, 0.0, 0.0, 1.0, 0.15, cloth), count_pixels(left, 0.0, 0.4, 1.0, 0.55, cloth));
+
+  // The window holds both eyes side by side and the banner below them.
+  renderer::Rgba8Image window;
+  ASSERT_TRUE(renderer::read_png((shots / "stimulus_001_window.png").string(), window, error)) << error;
+  EXPECT_EQ(window.width, 640);
+  EXPECT_EQ(window.height, 320 + 28);
+  EXPECT_GT(count_pixels(window, 0.1, 0.3, 0.4, 0.7, cloth), 1000) << "left eye in the left half";
+  EXPECT_GT(count_pixels(window, 0.6, 0.3, 0.9, 0.7, cloth), 1000) << "right eye in the right half";
+  const double banner_top = 320.0 / window.height;
+  EXPECT_GT(count_pixels(window, 0.0, banner_top, 1.0, 1.0,
+                         [](int r, int g, int b) { return r > 150 && g > 150 && b > 150; }),
+            50)
+      << "banner text";
+
+  // F12-style screenshot on request: save_frame writes the same three files.
+  const auto files = backend.save_frame((dir / "again").string());
+  EXPECT_EQ(files.size(), 3u);
+  EXPECT_EQ(backend.context().validation_log().count(), 0u);
+  // CURVLAB_KEEP_TEST_OUTPUT=1 keeps the screenshots for a person to look at.
+  if (std::getenv("CURVLAB_KEEP_TEST_OUTPUT") == nullptr) std::filesystem::remove_all(dir);
+  else std::cout << "screenshots kept in " << shots << '\n';
+}
+
+TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
+  DesktopOptions options;
+  options.eye_width_px = 200;
+  options.eye_height_px = 150;
+  options.preview = harness::runner::DesktopPreview::right;
+  options.software = true;
+  options.vsync = false;
+  options.validation = validation_layer_installed();
+  options.clock = &clock_;
+  auto made = desktop::DesktopBackend::create(options);
+  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<desktop::DesktopBackend>>(made))
+      << std::get<harness::runner::BackendError>(made).message;
+  auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(made);
+  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::H3, renderer::SceneKind::stick, {});
+  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
+  auto& s = std::get<renderer::StimulusScene>(stimulus);
+  for (int i = 0; i < 4; ++i) {
+    auto timing = backend.begin_frame();
+    ASSERT_TRUE(timing.has_value());
+    renderer::FrameDescription f;
+    f.space = s.space;
+    f.head = s.head;
+    f.rig = backend.rig(*timing, 0.063);
+    backend.submit(s.scene, f, Overlay{"stimulus", "", false}, true);
+  }
+  // One eye: the window is that eye plus the banner.
+  const auto window = backend.target().read_window();
+  ASSERT_TRUE(window.has_value());
+  EXPECT_EQ(window->width, 200);
+  EXPECT_EQ(window->height, 150 + 28);
+  EXPECT_EQ(backend.target().recreations(), 1u);
+  EXPECT_EQ(backend.context().validation_log().count(), 0u);
+}
+
+}  // namespace
