@@ -72,7 +72,32 @@ std::string result_name(XrResult result) {
   return "XR_RESULT_" + std::to_string(static_cast<int>(result));
 }
 
+XrFailure failure_of(XrResult result, const char* call) { return failure(result, call); }
+
+std::variant<std::vector<std::string>, XrFailure> available_extensions() {
+  std::uint32_t count = 0;
+  if (const XrResult r = xrEnumerateInstanceExtensionProperties(nullptr, 0, &count, nullptr);
+      XR_FAILED(r))
+    return failure(r, "xrEnumerateInstanceExtensionProperties");
+  std::vector<XrExtensionProperties> extensions(
+      count, tagged<XrExtensionProperties>(XR_TYPE_EXTENSION_PROPERTIES));
+  if (count > 0) {
+    if (const XrResult r =
+            xrEnumerateInstanceExtensionProperties(nullptr, count, &count, extensions.data());
+        XR_FAILED(r))
+      return failure(r, "xrEnumerateInstanceExtensionProperties");
+  }
+  std::vector<std::string> names;
+  for (std::uint32_t i = 0; i < count; ++i) names.emplace_back(extensions[i].extensionName);
+  return names;
+}
+
 std::variant<Instance, XrFailure> Instance::create(const std::string& application_name) {
+  return create(application_name, {});
+}
+
+std::variant<Instance, XrFailure> Instance::create(const std::string& application_name,
+                                                   const std::vector<std::string>& extra_extensions) {
   auto info = tagged<XrInstanceCreateInfo>(XR_TYPE_INSTANCE_CREATE_INFO);
   std::strncpy(info.applicationInfo.applicationName, application_name.c_str(),
                XR_MAX_APPLICATION_NAME_SIZE - 1);
@@ -80,9 +105,10 @@ std::variant<Instance, XrFailure> Instance::create(const std::string& applicatio
   std::strncpy(info.applicationInfo.engineName, "curvlab", XR_MAX_ENGINE_NAME_SIZE - 1);
   info.applicationInfo.engineVersion = 1;
   info.applicationInfo.apiVersion = XR_MAKE_VERSION(1, 0, 0);
-  const char* extensions[] = {kVulkanEnable2};
-  info.enabledExtensionCount = 1;
-  info.enabledExtensionNames = extensions;
+  std::vector<const char*> extensions{kVulkanEnable2};
+  for (const auto& e : extra_extensions) extensions.push_back(e.c_str());
+  info.enabledExtensionCount = static_cast<std::uint32_t>(extensions.size());
+  info.enabledExtensionNames = extensions.data();
   XrInstance instance = XR_NULL_HANDLE;
   const XrResult r = xrCreateInstance(&info, &instance);
   if (XR_FAILED(r)) return failure(r, "xrCreateInstance");

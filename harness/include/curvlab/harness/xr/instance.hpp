@@ -46,6 +46,10 @@ struct ProbeReport {
 class Instance {
  public:
   static std::variant<Instance, XrFailure> create(const std::string& application_name);
+  // With further extensions besides XR_KHR_vulkan_enable2 (each must be
+  // offered by the runtime: check with available_extensions()).
+  static std::variant<Instance, XrFailure> create(const std::string& application_name,
+                                                  const std::vector<std::string>& extra_extensions);
   Instance(Instance&& other) noexcept;
   Instance& operator=(Instance&& other) noexcept;
   Instance(const Instance&) = delete;
@@ -83,6 +87,14 @@ class ActionSet {
   XrActionSet set_ = XR_NULL_HANDLE;
   std::vector<std::pair<std::string, XrAction>> actions_;
 };
+
+// The failure of `call` with `result`, its message naming the result and
+// what to do (the same wording as every other failure here).
+XrFailure failure_of(XrResult result, const char* call);
+
+// The instance extensions the loader and runtime offer; this is where a
+// missing runtime first shows (XR_ERROR_RUNTIME_UNAVAILABLE).
+std::variant<std::vector<std::string>, XrFailure> available_extensions();
 
 // Runs the whole path up to the system (no session: that needs the
 // renderer's Vulkan device) and describes what it found.

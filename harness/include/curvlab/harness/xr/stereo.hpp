@@ -1,0 +1,57 @@
+// The pure parts of the OpenXR backend (xr/backend.hpp), testable without a
+// runtime: views located in STAGE space → the renderer's eye offsets relative
+// to the head; swapchain format negotiation; XrTime → session clock.
+#pragma once
+
+#include "curvlab/geometry/tracking.hpp"
+#include "curvlab/harness/xr/views.hpp"
+#include "curvlab/renderer/view.hpp"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace curvlab::xr {
+
+// Eye offsets and fields of view as the renderer takes them (DESIGN.md §4):
+// each eye's position and rotation relative to the head (the VIEW space,
+// between the eyes), from poses all located in the same space at the same
+// time. Holds for any head orientation: offsets are expressed in the head's
+// frame, so the rig turns with the head.
+renderer::StereoRig rig_from_views(const LabPose& head, const std::array<LabPose, 2>& eyes,
+                                   const std::array<AsymmetricFov, 2>& fovs);
+
+// A lab pose in geometry's type (the tracker's input).
+geometry::LabPose to_geometry(const LabPose& pose, bool valid);
+
+// VkFormat values (as OpenXR's xrEnumerateSwapchainFormats returns them) in
+// curvlab's order of preference: the 8-bit RGBA formats the renderer's eye
+// images can be copied into byte for byte, then BGRA (blitted). nullopt: the
+// runtime offers none of them.
+std::optional<std::int64_t> choose_swapchain_format(const std::vector<std::int64_t>& offered);
+
+// XrTime (runtime nanoseconds) → the session clock. With
+// XR_KHR_convert_timespec_time the runtime converts to CLOCK_MONOTONIC and an
+// offset measured against the session clock maps that; without it the
+// offset is anchored once, at the first frame, by taking its predicted
+// display time to be one display period after the moment xrWaitFrame
+// returned (docs/lab.md). Either way later times keep the runtime's exact
+// differences. Not thread-safe.
+class XrClockMap {
+ public:
+  // Anchors the map: xr_ns (an XrTime) happens at session_ns.
+  void anchor(std::int64_t xr_ns, std::int64_t session_ns) {
+    offset_ns_ = session_ns - xr_ns;
+    anchored_ = true;
+  }
+  [[nodiscard]] bool anchored() const { return anchored_; }
+  [[nodiscard]] std::int64_t to_session(std::int64_t xr_ns) const { return xr_ns + offset_ns_; }
+  [[nodiscard]] std::int64_t to_xr(std::int64_t session_ns) const { return session_ns - offset_ns_; }
+
+ private:
+  std::int64_t offset_ns_ = 0;
+  bool anchored_ = false;
+};
+
+}  // namespace curvlab::xr

@@ -1,0 +1,708 @@
+// The OpenXR backend (xr/backend.hpp). The order of the calls follows the
+// OpenXR specification's lifecycle: instance → system → graphics
+// requirements → Vulkan instance and device made by the runtime
+// (XR_KHR_vulkan_enable2) → session → reference spaces and action spaces →
+// swapchains; then per frame xrWaitFrame → xrBeginFrame → locate views and
+// devices at the predicted display time → render → xrEndFrame.
+#include "curvlab/harness/xr/backend.hpp"
+
+#include "curvlab/harness/xr/actions.hpp"
+#include "curvlab/harness/xr/instance.hpp"
+#include "curvlab/harness/xr/session_state.hpp"
+#include "curvlab/harness/xr/stereo.hpp"
+#include "curvlab/renderer/context.hpp"
+#include "curvlab/renderer/renderer.hpp"
+#include "curvlab/renderer/swapchain.hpp"
+
+#include <time.h>
+#include <vulkan/vulkan.h>
+#define XR_USE_GRAPHICS_API_VULKAN
+#define XR_USE_TIMESPEC
+#include <openxr/openxr_platform.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <deque>
+#include <iostream>
+#include <thread>
+#include <utility>
+
+namespace curvlab::xr {
+
+using harness::runner::Backend;
+using harness::runner::BackendError;
+using harness::runner::BackendInfo;
+using harness::runner::BackendSignal;
+using harness::runner::FrameTiming;
+using harness::runner::InputEvent;
+using harness::runner::Overlay;
+
+namespace {
+
+constexpr XrViewConfigurationType kViewConfig = XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO;
+constexpr XrPosef kIdentityPose{{0.0f, 0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f}};
+// Trigger hysteresis: a press above 0.75, a release below 0.25.
+constexpr float kTriggerPress = 0.75f;
+constexpr float kTriggerRelease = 0.25f;
+
+template <class T>
+T tagged(XrStructureType type) {
+  T value{};
+  value.type = type;
+  return value;
+}
+
+// Owns one OpenXR child handle. Move-only; destroyed by the destructor.
+template <class H, XrResult (*Destroy)(H)>
+class Handle {
+ public:
+  Handle() = default;
+  Handle(Handle&& o) noexcept : h_(std::exchange(o.h_, XR_NULL_HANDLE)) {}
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) {
+      reset();
+      h_ = std::exchange(o.h_, XR_NULL_HANDLE);
+    }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  ~Handle() { reset(); }
+  void reset() noexcept {
+    if (h_ != XR_NULL_HANDLE) (void)Destroy(h_);
+    h_ = XR_NULL_HANDLE;
+  }
+  [[nodiscard]] H get() const { return h_; }
+  H* out() {
+    reset();
+    return &h_;
+  }
+
+ private:
+  H h_ = XR_NULL_HANDLE;
+};
+
+using SessionHandle = Handle<XrSession, xrDestroySession>;
+using SpaceHandle = Handle<XrSpace, xrDestroySpace>;
+using SwapchainHandle = Handle<XrSwapchain, xrDestroySwapchain>;
+
+BackendError error(const XrFailure& f) { return BackendError{f.message}; }
+BackendError error(XrResult r, const char* call) { return error(failure_of(r, call)); }
+
+template <class F>
+XrResult load(XrInstance instance, const char* name, F& fn) {
+  return xrGetInstanceProcAddr(instance, name, reinterpret_cast<PFN_xrVoidFunction*>(&fn));
+}
+
+std::int64_t monotonic_now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+bool located(XrSpaceLocationFlags flags) {
+  // Valid and tracked: an inferred (untracked) pose counts as lost tracking,
+  // which is data (DESIGN.md §3), not a pose to show.
+  constexpr XrSpaceLocationFlags want =
+      XR_SPACE_LOCATION_POSITION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_VALID_BIT |
+      XR_SPACE_LOCATION_POSITION_TRACKED_BIT | XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT;
+  return (flags & want) == want;
+}
+
+std::string vk_result(VkResult r) { return vk::to_string(static_cast<vk::Result>(r)); }
+
+}  // namespace
+
+// Owns, in order of destruction: the eye target and renderer, the swapchains,
+// spaces and session, the Vulkan context (instance and device made through
+// the runtime), the action set, the OpenXR instance. Runs on one thread (the
+// runner's frame loop); not thread-safe.
+class XrBackend final : public Backend {
+ public:
+  static std::variant<std::unique_ptr<Backend>, BackendError> create(const XrBackendOptions& options);
+  ~XrBackend() override;
+
+  [[nodiscard]] BackendInfo info() const override;
+  std::optional<FrameTiming> begin_frame() override;
+  geometry::LabFrame poses(const FrameTiming& frame) override;
+  BackendSignal poll_input(std::vector<InputEvent>& out) override;
+  renderer::StereoRig rig(const FrameTiming& frame, double ipd_m) override;
+  renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
+                              const Overlay& overlay, bool draw) override;
+  std::vector<std::string> save_frame(const std::string& stem) override;
+
+ private:
+  struct EyeSwapchain {
+    SwapchainHandle handle;
+    std::vector<XrSwapchainImageVulkan2KHR> images;
+    std::uint32_t width = 0;
+    std::uint32_t height = 0;
+  };
+
+  XrBackend(Instance instance, const XrBackendOptions& options)
+      : options_(options), instance_(std::move(instance)) {}
+  // Drains the event queue; false when the session must end.
+  bool poll_events();
+  void on_state(SessionState next);
+  void fail(const std::string& message);
+  void end_frame(bool with_layer);
+  std::int64_t to_session_ns(XrTime t);
+  void read_buttons(std::vector<InputEvent>& out);
+
+  XrBackendOptions options_;
+  Instance instance_;
+  XrSystemId system_ = XR_NULL_SYSTEM_ID;
+  std::optional<ActionSet> actions_;
+  std::unique_ptr<renderer::Context> context_;
+  SessionHandle session_;
+  SpaceHandle stage_;
+  SpaceHandle view_;
+  std::array<SpaceHandle, 2> grip_;  // left, right
+  std::array<XrPath, 2> hand_paths_{XR_NULL_PATH, XR_NULL_PATH};
+  std::array<EyeSwapchain, 2> swapchains_;
+  std::int64_t swapchain_format_ = 0;
+  std::unique_ptr<renderer::Renderer> renderer_;
+  std::unique_ptr<renderer::ExternalImagesTarget> target_;
+
+  SessionStateMachine state_;
+  PFN_xrConvertTimeToTimespecTimeKHR to_timespec_ = nullptr;
+  XrClockMap clock_map_;
+  std::deque<BackendSignal> signals_;
+  bool failed_ = false;
+
+  XrFrameState frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
+  bool frame_begun_ = false;
+  std::int64_t frame_index_ = 0;
+  std::array<XrView, 2> views_{tagged<XrView>(XR_TYPE_VIEW), tagged<XrView>(XR_TYPE_VIEW)};
+  bool views_valid_ = false;
+  LabPose head_;
+  geometry::LabFrame lab_;
+  std::array<bool, 2> trigger_down_{false, false};
+};
+
+std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrBackendOptions& options) {
+  if (options.clock == nullptr)
+    return BackendError{"the OpenXR backend needs the session clock (XrBackendOptions::clock)"};
+  // The extension list comes from the runtime: without one, this is where
+  // XR_ERROR_RUNTIME_UNAVAILABLE shows, before anything is created.
+  auto offered = available_extensions();
+  if (auto* f = std::get_if<XrFailure>(&offered)) return error(*f);
+  const auto& names = std::get<std::vector<std::string>>(offered);
+  auto has = [&names](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+  if (!has(XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME))
+    return error(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
+  std::vector<std::string> extra;
+  const bool timespec = has(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
+  if (timespec) extra.emplace_back(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
+  auto made = Instance::create(options.application_name, extra);
+  if (auto* f = std::get_if<XrFailure>(&made)) return error(*f);
+  std::unique_ptr<XrBackend> b(new XrBackend(std::get<Instance>(std::move(made)), options));
+  const XrInstance xr = b->instance_.handle();
+  if (timespec && XR_FAILED(load(xr, "xrConvertTimeToTimespecTimeKHR", b->to_timespec_)))
+    b->to_timespec_ = nullptr;
+
+  auto system = b->instance_.hmd_system();
+  if (auto* f = std::get_if<XrFailure>(&system)) return error(*f);
+  b->system_ = std::get<XrSystemId>(system);
+  const XrSystemId sys = b->system_;
+
+  PFN_xrGetVulkanGraphicsRequirements2KHR requirements_fn = nullptr;
+  PFN_xrCreateVulkanInstanceKHR create_instance_fn = nullptr;
+  PFN_xrGetVulkanGraphicsDevice2KHR device_fn = nullptr;
+  PFN_xrCreateVulkanDeviceKHR create_device_fn = nullptr;
+  for (auto [name, r] : {std::pair{"xrGetVulkanGraphicsRequirements2KHR",
+                                   load(xr, "xrGetVulkanGraphicsRequirements2KHR", requirements_fn)},
+                         std::pair{"xrCreateVulkanInstanceKHR",
+                                   load(xr, "xrCreateVulkanInstanceKHR", create_instance_fn)},
+                         std::pair{"xrGetVulkanGraphicsDevice2KHR",
+                                   load(xr, "xrGetVulkanGraphicsDevice2KHR", device_fn)},
+                         std::pair{"xrCreateVulkanDeviceKHR",
+                                   load(xr, "xrCreateVulkanDeviceKHR", create_device_fn)}})
+    if (XR_FAILED(r)) return error(r, name);
+
+  // Required before the session; curvlab needs Vulkan 1.3 (dynamic rendering).
+  auto req = tagged<XrGraphicsRequirementsVulkan2KHR>(XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR);
+  if (const XrResult r = requirements_fn(xr, sys, &req); XR_FAILED(r))
+    return error(r, "xrGetVulkanGraphicsRequirements2KHR");
+  const XrVersion needed = XR_MAKE_VERSION(1, 3, 0);
+  if (req.minApiVersionSupported > needed)
+    return BackendError{"the OpenXR runtime needs a newer Vulkan than 1.3, which curvlab uses; "
+                        "update curvlab or use another runtime"};
+  if (XR_VERSION_MAJOR(req.maxApiVersionSupported) == 1 &&
+      XR_VERSION_MINOR(req.maxApiVersionSupported) < 3)
+    std::cerr << "curvlab: xr: the runtime was tested with Vulkan up to "
+              << XR_VERSION_MAJOR(req.maxApiVersionSupported) << "."
+              << XR_VERSION_MINOR(req.maxApiVersionSupported)
+              << "; curvlab uses 1.3 and tries anyway\n";
+
+  // The Vulkan objects, made by the runtime from the renderer's create-infos.
+  renderer::ContextOptions co;
+  co.hooks.create_instance = [&](const VkInstanceCreateInfo& info)
+      -> std::variant<VkInstance, std::string> {
+    auto ci = tagged<XrVulkanInstanceCreateInfoKHR>(XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR);
+    ci.systemId = sys;
+    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
+    ci.vulkanCreateInfo = &info;
+    VkInstance instance = VK_NULL_HANDLE;
+    VkResult vr = VK_SUCCESS;
+    if (const XrResult r = create_instance_fn(xr, &ci, &instance, &vr); XR_FAILED(r))
+      return failure_of(r, "xrCreateVulkanInstanceKHR").message;
+    if (vr != VK_SUCCESS)
+      return "xrCreateVulkanInstanceKHR: vkCreateInstance returned " + vk_result(vr);
+    return instance;
+  };
+  co.hooks.pick_physical_device = [&](VkInstance instance) -> std::variant<VkPhysicalDevice, std::string> {
+    auto gi = tagged<XrVulkanGraphicsDeviceGetInfoKHR>(XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR);
+    gi.systemId = sys;
+    gi.vulkanInstance = instance;
+    VkPhysicalDevice physical = VK_NULL_HANDLE;
+    if (const XrResult r = device_fn(xr, &gi, &physical); XR_FAILED(r))
+      return failure_of(r, "xrGetVulkanGraphicsDevice2KHR").message;
+    return physical;
+  };
+  co.hooks.create_device = [&](VkPhysicalDevice physical, const VkDeviceCreateInfo& info)
+      -> std::variant<VkDevice, std::string> {
+    auto ci = tagged<XrVulkanDeviceCreateInfoKHR>(XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR);
+    ci.systemId = sys;
+    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
+    ci.vulkanPhysicalDevice = physical;
+    ci.vulkanCreateInfo = &info;
+    VkDevice device = VK_NULL_HANDLE;
+    VkResult vr = VK_SUCCESS;
+    if (const XrResult r = create_device_fn(xr, &ci, &device, &vr); XR_FAILED(r))
+      return failure_of(r, "xrCreateVulkanDeviceKHR").message;
+    if (vr != VK_SUCCESS) return "xrCreateVulkanDeviceKHR: vkCreateDevice returned " + vk_result(vr);
+    return device;
+  };
+  auto ctx = renderer::Context::create(co);
+  if (auto* e = std::get_if<renderer::RenderError>(&ctx))
+    return BackendError{"cannot render for the headset: " + e->message};
+  b->context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));
+  const renderer::Context& c = *b->context_;
+
+  // The action set exists before the session so it can be attached to it.
+  auto set = ActionSet::create(b->instance_, curvlab_action_set());
+  if (auto* f = std::get_if<XrFailure>(&set)) return error(*f);
+  b->actions_.emplace(std::get<ActionSet>(std::move(set)));
+
+  auto binding = tagged<XrGraphicsBindingVulkan2KHR>(XR_TYPE_GRAPHICS_BINDING_VULKAN2_KHR);
+  binding.instance = static_cast<VkInstance>(*c.instance());
+  binding.physicalDevice = static_cast<VkPhysicalDevice>(*c.physical());
+  binding.device = static_cast<VkDevice>(*c.device());
+  binding.queueFamilyIndex = c.queue_family();
+  binding.queueIndex = 0;
+  auto session_info = tagged<XrSessionCreateInfo>(XR_TYPE_SESSION_CREATE_INFO);
+  session_info.next = &binding;
+  session_info.systemId = sys;
+  if (const XrResult r = xrCreateSession(xr, &session_info, b->session_.out()); XR_FAILED(r))
+    return error(r, "xrCreateSession");
+  const XrSession session = b->session_.get();
+
+  auto space_info = tagged<XrReferenceSpaceCreateInfo>(XR_TYPE_REFERENCE_SPACE_CREATE_INFO);
+  space_info.poseInReferenceSpace = kIdentityPose;
+  space_info.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_STAGE;
+  if (const XrResult r = xrCreateReferenceSpace(session, &space_info, b->stage_.out()); XR_FAILED(r))
+    return BackendError{failure_of(r, "xrCreateReferenceSpace").message +
+                        " (STAGE space: set up the play area / room boundary in the runtime, so "
+                        "that the floor and the table are where curvlab's lab frame says)"};
+  space_info.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_VIEW;
+  if (const XrResult r = xrCreateReferenceSpace(session, &space_info, b->view_.out()); XR_FAILED(r))
+    return error(r, "xrCreateReferenceSpace");
+
+  const XrActionSet action_set = b->actions_->handle();
+  auto attach = tagged<XrSessionActionSetsAttachInfo>(XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO);
+  attach.countActionSets = 1;
+  attach.actionSets = &action_set;
+  if (const XrResult r = xrAttachSessionActionSets(session, &attach); XR_FAILED(r))
+    return error(r, "xrAttachSessionActionSets");
+  for (std::size_t i = 0; i < 2; ++i) {
+    if (const XrResult r = xrStringToPath(xr, i == 0 ? kLeftHand : kRightHand, &b->hand_paths_[i]);
+        XR_FAILED(r))
+      return error(r, "xrStringToPath");
+    auto info = tagged<XrActionSpaceCreateInfo>(XR_TYPE_ACTION_SPACE_CREATE_INFO);
+    info.action = b->actions_->action("grip_pose");
+    info.subactionPath = b->hand_paths_[i];
+    info.poseInActionSpace = kIdentityPose;
+    if (const XrResult r = xrCreateActionSpace(session, &info, b->grip_[i].out()); XR_FAILED(r))
+      return error(r, "xrCreateActionSpace");
+  }
+
+  // One swapchain per eye at the runtime's recommended size.
+  std::uint32_t count = 0;
+  if (const XrResult r = xrEnumerateViewConfigurationViews(xr, sys, kViewConfig, 0, &count, nullptr);
+      XR_FAILED(r))
+    return error(r, "xrEnumerateViewConfigurationViews");
+  std::vector<XrViewConfigurationView> config(count, tagged<XrViewConfigurationView>(XR_TYPE_VIEW_CONFIGURATION_VIEW));
+  if (const XrResult r = xrEnumerateViewConfigurationViews(xr, sys, kViewConfig, count, &count, config.data());
+      XR_FAILED(r))
+    return error(r, "xrEnumerateViewConfigurationViews");
+  if (count != 2)
+    return BackendError{"the headset's stereo view configuration has " + std::to_string(count) +
+                        " views; curvlab needs 2"};
+  if (const XrResult r = xrEnumerateSwapchainFormats(session, 0, &count, nullptr); XR_FAILED(r))
+    return error(r, "xrEnumerateSwapchainFormats");
+  std::vector<std::int64_t> formats(count);
+  if (const XrResult r = xrEnumerateSwapchainFormats(session, count, &count, formats.data()); XR_FAILED(r))
+    return error(r, "xrEnumerateSwapchainFormats");
+  const auto format = choose_swapchain_format(formats);
+  if (!format)
+    return BackendError{"the OpenXR runtime offers no 8-bit RGBA or BGRA swapchain format "
+                        "(xrEnumerateSwapchainFormats); curvlab cannot show its images"};
+  b->swapchain_format_ = *format;
+  for (std::size_t i = 0; i < 2; ++i) {
+    EyeSwapchain& sc = b->swapchains_[i];
+    sc.width = config[i].recommendedImageRectWidth;
+    sc.height = config[i].recommendedImageRectHeight;
+    auto info = tagged<XrSwapchainCreateInfo>(XR_TYPE_SWAPCHAIN_CREATE_INFO);
+    info.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT;
+    info.format = *format;
+    info.sampleCount = 1;
+    info.width = sc.width;
+    info.height = sc.height;
+    info.faceCount = 1;
+    info.arraySize = 1;
+    info.mipCount = 1;
+    if (const XrResult r = xrCreateSwapchain(session, &info, sc.handle.out()); XR_FAILED(r))
+      return error(r, "xrCreateSwapchain");
+    if (const XrResult r = xrEnumerateSwapchainImages(sc.handle.get(), 0, &count, nullptr); XR_FAILED(r))
+      return error(r, "xrEnumerateSwapchainImages");
+    sc.images.assign(count, tagged<XrSwapchainImageVulkan2KHR>(XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR));
+    if (const XrResult r = xrEnumerateSwapchainImages(
+            sc.handle.get(), count, &count,
+            reinterpret_cast<XrSwapchainImageBaseHeader*>(sc.images.data()));
+        XR_FAILED(r))
+      return error(r, "xrEnumerateSwapchainImages");
+  }
+  b->renderer_ = std::make_unique<renderer::Renderer>(c);
+  b->target_ = std::make_unique<renderer::ExternalImagesTarget>(c);
+  return std::unique_ptr<Backend>(std::move(b));
+}
+
+XrBackend::~XrBackend() {
+  // A frame the runner began but never submitted must still end.
+  if (frame_begun_) end_frame(false);
+  if (renderer_) renderer_->wait_idle();
+}
+
+BackendInfo XrBackend::info() const {
+  const double period = static_cast<double>(frame_state_.predictedDisplayPeriod);
+  return {"xr", context_->device_name(), context_->driver_info(), period > 0.0 ? 1e9 / period : 90.0};
+}
+
+void XrBackend::fail(const std::string& message) {
+  std::cerr << "curvlab: xr: " << message << '\n';
+  failed_ = true;
+  signals_.push_back(BackendSignal::quit);
+}
+
+void XrBackend::on_state(SessionState next) {
+  const RunMode before = state_.mode();
+  const SessionUpdate u = state_.on_state_changed(next);
+  if (!u.message.empty()) std::cerr << "curvlab: xr: " << u.message << '\n';
+  if (u.begin_session) {
+    auto info = tagged<XrSessionBeginInfo>(XR_TYPE_SESSION_BEGIN_INFO);
+    info.primaryViewConfigurationType = kViewConfig;
+    if (const XrResult r = xrBeginSession(session_.get(), &info); XR_FAILED(r))
+      return fail(failure_of(r, "xrBeginSession").message);
+  }
+  if (u.end_session) {
+    if (frame_begun_) end_frame(false);
+    if (const XrResult r = xrEndSession(session_.get()); XR_FAILED(r))
+      std::cerr << "curvlab: xr: " << failure_of(r, "xrEndSession").message << '\n';
+  }
+  if (u.mode == RunMode::Paused && before == RunMode::Running) signals_.push_back(BackendSignal::pause);
+  if (u.mode == RunMode::Running && before == RunMode::Paused) signals_.push_back(BackendSignal::resume);
+  if (u.mode == RunMode::Exit) signals_.push_back(BackendSignal::quit);
+}
+
+bool XrBackend::poll_events() {
+  for (;;) {
+    auto event = tagged<XrEventDataBuffer>(XR_TYPE_EVENT_DATA_BUFFER);
+    const XrResult r = xrPollEvent(instance_.handle(), &event);
+    if (r == XR_EVENT_UNAVAILABLE) break;
+    if (XR_FAILED(r)) {
+      fail(failure_of(r, "xrPollEvent").message);
+      return false;
+    }
+    switch (event.type) {
+      case XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED: {
+        const auto& e = *reinterpret_cast<const XrEventDataSessionStateChanged*>(&event);
+        on_state(static_cast<SessionState>(e.state));
+        break;
+      }
+      case XR_TYPE_EVENT_DATA_INSTANCE_LOSS_PENDING:
+        fail("the OpenXR runtime is going away (instance loss pending); the session is saved "
+             "and can be resumed");
+        return false;
+      case XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING: {
+        const auto& e = *reinterpret_cast<const XrEventDataReferenceSpaceChangePending*>(&event);
+        // The play area was recentred or redrawn: the lab frame moved under
+        // the physical table, so the runner must recalibrate or recenter.
+        if (e.referenceSpaceType == XR_REFERENCE_SPACE_TYPE_STAGE) {
+          std::cerr << "curvlab: xr: the runtime moved the STAGE space (recentred or a new play "
+                       "area); check the table calibration\n";
+          signals_.push_back(BackendSignal::recenter);
+        }
+        break;
+      }
+      default:
+        break;
+    }
+  }
+  return !failed_ && state_.mode() != RunMode::Exit;
+}
+
+std::int64_t XrBackend::to_session_ns(XrTime t) {
+  if (to_timespec_ != nullptr) {
+    timespec ts{};
+    if (XR_SUCCEEDED(to_timespec_(instance_.handle(), t, &ts)))
+      return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec - monotonic_now_ns() +
+             options_.clock->now_ns();
+  }
+  return clock_map_.to_session(t);
+}
+
+void XrBackend::end_frame(bool with_layer) {
+  std::array<XrCompositionLayerProjectionView, 2> views{};
+  for (std::size_t i = 0; i < 2; ++i) {
+    views[i] = tagged<XrCompositionLayerProjectionView>(XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW);
+    views[i].pose = views_[i].pose;
+    views[i].fov = views_[i].fov;
+    views[i].subImage.swapchain = swapchains_[i].handle.get();
+    views[i].subImage.imageRect = {{0, 0},
+                                   {static_cast<std::int32_t>(swapchains_[i].width),
+                                    static_cast<std::int32_t>(swapchains_[i].height)}};
+    views[i].subImage.imageArrayIndex = 0;
+  }
+  auto layer = tagged<XrCompositionLayerProjection>(XR_TYPE_COMPOSITION_LAYER_PROJECTION);
+  layer.space = stage_.get();
+  layer.viewCount = 2;
+  layer.views = views.data();
+  const auto* header = reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer);
+  auto info = tagged<XrFrameEndInfo>(XR_TYPE_FRAME_END_INFO);
+  info.displayTime = frame_state_.predictedDisplayTime;
+  info.environmentBlendMode = XR_ENVIRONMENT_BLEND_MODE_OPAQUE;
+  info.layerCount = with_layer ? 1 : 0;
+  info.layers = with_layer ? &header : nullptr;
+  frame_begun_ = false;
+  if (const XrResult r = xrEndFrame(session_.get(), &info); XR_FAILED(r))
+    fail(failure_of(r, "xrEndFrame").message);
+}
+
+std::optional<FrameTiming> XrBackend::begin_frame() {
+  // Until the runtime makes the session READY there is no frame loop; wait
+  // for its events (the runner shows nothing meanwhile).
+  for (;;) {
+    if (!poll_events()) return std::nullopt;
+    if (state_.session_running()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (frame_begun_) end_frame(false);
+  const XrSession session = session_.get();
+  auto wait_info = tagged<XrFrameWaitInfo>(XR_TYPE_FRAME_WAIT_INFO);
+  frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
+  if (const XrResult r = xrWaitFrame(session, &wait_info, &frame_state_); XR_FAILED(r)) {
+    fail(failure_of(r, "xrWaitFrame").message);
+    return std::nullopt;
+  }
+  const std::int64_t now = options_.clock->now_ns();
+  auto begin_info = tagged<XrFrameBeginInfo>(XR_TYPE_FRAME_BEGIN_INFO);
+  if (const XrResult r = xrBeginFrame(session, &begin_info); XR_FAILED(r)) {
+    fail(failure_of(r, "xrBeginFrame").message);
+    return std::nullopt;
+  }
+  frame_begun_ = true;
+  const XrTime t = frame_state_.predictedDisplayTime;
+  // Without XR_KHR_convert_timespec_time: the first frame's image is taken
+  // to appear one period after xrWaitFrame returned (docs/lab.md).
+  if (to_timespec_ == nullptr && !clock_map_.anchored())
+    clock_map_.anchor(t, now + frame_state_.predictedDisplayPeriod);
+
+  if (state_.mode() == RunMode::Running) {
+    XrActiveActionSet active{actions_->handle(), XR_NULL_PATH};
+    auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
+    sync.countActiveActionSets = 1;
+    sync.activeActionSets = &active;
+    if (const XrResult r = xrSyncActions(session, &sync); XR_FAILED(r))
+      std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
+  }
+
+  // Views and devices where they will be when this frame is seen.
+  auto locate_info = tagged<XrViewLocateInfo>(XR_TYPE_VIEW_LOCATE_INFO);
+  locate_info.viewConfigurationType = kViewConfig;
+  locate_info.displayTime = t;
+  locate_info.space = stage_.get();
+  auto view_state = tagged<XrViewState>(XR_TYPE_VIEW_STATE);
+  std::uint32_t n = 0;
+  views_ = {tagged<XrView>(XR_TYPE_VIEW), tagged<XrView>(XR_TYPE_VIEW)};
+  const XrResult located_views = xrLocateViews(session, &locate_info, &view_state, 2, &n, views_.data());
+  views_valid_ = XR_SUCCEEDED(located_views) && n == 2 &&
+                 (view_state.viewStateFlags & XR_VIEW_STATE_POSITION_VALID_BIT) != 0 &&
+                 (view_state.viewStateFlags & XR_VIEW_STATE_ORIENTATION_VALID_BIT) != 0;
+  auto locate = [&](XrSpace space) {
+    auto loc = tagged<XrSpaceLocation>(XR_TYPE_SPACE_LOCATION);
+    const bool ok = XR_SUCCEEDED(xrLocateSpace(space, stage_.get(), t, &loc)) && located(loc.locationFlags);
+    return std::pair{to_lab_pose(loc.pose), ok};
+  };
+  const auto [head, head_ok] = locate(view_.get());
+  head_ = head;
+  lab_[geometry::Device::head] = to_geometry(head, head_ok);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto [hand, hand_ok] = locate(grip_[i].get());
+    lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand] = to_geometry(hand, hand_ok);
+  }
+
+  FrameTiming timing;
+  timing.index = frame_index_++;
+  timing.now_ns = now;
+  timing.predicted_display_ns = to_session_ns(t);
+  timing.period_ns = frame_state_.predictedDisplayPeriod;
+  return timing;
+}
+
+geometry::LabFrame XrBackend::poses(const FrameTiming& frame) {
+  (void)frame;  // located in begin_frame at this frame's predicted display time
+  return lab_;
+}
+
+renderer::StereoRig XrBackend::rig(const FrameTiming& frame, double ipd_m) {
+  (void)frame;
+  if (!views_valid_) return renderer::StereoRig::from_ipd(ipd_m, renderer::Fov{});
+  return rig_from_views(head_, {to_lab_pose(views_[0].pose), to_lab_pose(views_[1].pose)},
+                        {to_fov(views_[0].fov), to_fov(views_[1].fov)});
+}
+
+void XrBackend::read_buttons(std::vector<InputEvent>& out) {
+  const XrSession session = session_.get();
+  const auto def = curvlab_action_set();
+  for (const auto& a : def.actions) {
+    if (a.type == ActionType::Pose) continue;
+    for (const auto& sub : a.subaction_paths) {
+      const std::size_t hand = sub == kLeftHand ? 0 : 1;
+      auto get = tagged<XrActionStateGetInfo>(XR_TYPE_ACTION_STATE_GET_INFO);
+      get.action = actions_->action(a.name);
+      get.subactionPath = hand_paths_[hand];
+      const std::string device = hand == 0 ? "xr:left" : "xr:right";
+      if (a.type == ActionType::Boolean) {
+        auto st = tagged<XrActionStateBoolean>(XR_TYPE_ACTION_STATE_BOOLEAN);
+        if (XR_FAILED(xrGetActionStateBoolean(session, &get, &st))) continue;
+        if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE)
+          out.push_back({to_session_ns(st.lastChangeTime), a.name, device, st.currentState == XR_TRUE});
+      } else {
+        auto st = tagged<XrActionStateFloat>(XR_TYPE_ACTION_STATE_FLOAT);
+        if (XR_FAILED(xrGetActionStateFloat(session, &get, &st)) || st.isActive != XR_TRUE) continue;
+        const bool was = trigger_down_[hand];
+        const bool now = was ? st.currentState > kTriggerRelease : st.currentState > kTriggerPress;
+        if (now == was) continue;
+        trigger_down_[hand] = now;
+        const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
+        out.push_back({t_ns, a.name, device, now});
+        // The trigger also advances instruction pages and breaks, which
+        // follow a button named "continue" (runner/backend.hpp).
+        out.push_back({t_ns, "continue", device, now});
+      }
+    }
+  }
+}
+
+BackendSignal XrBackend::poll_input(std::vector<InputEvent>& out) {
+  if (!failed_) poll_events();
+  if (!failed_ && state_.mode() == RunMode::Running) read_buttons(out);
+  if (signals_.empty()) return BackendSignal::none;
+  // Quit outranks everything still queued.
+  if (std::find(signals_.begin(), signals_.end(), BackendSignal::quit) != signals_.end()) {
+    signals_.clear();
+    return BackendSignal::quit;
+  }
+  const BackendSignal s = signals_.front();
+  signals_.pop_front();
+  return s;
+}
+
+renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
+                                       const renderer::FrameDescription& frame,
+                                       const Overlay& overlay, bool draw) {
+  // The headset shows every frame: `draw` cannot skip one.
+  (void)overlay;
+  (void)draw;
+  renderer::FrameStats stats;
+  if (!frame_begun_) return stats;
+  const bool render = frame_state_.shouldRender == XR_TRUE && views_valid_;
+  if (!render) {
+    end_frame(false);
+    return stats;
+  }
+  std::array<bool, 2> acquired{false, false};
+  auto release_all = [&] {
+    for (std::size_t i = 0; i < 2; ++i) {
+      if (!acquired[i]) continue;
+      auto info = tagged<XrSwapchainImageReleaseInfo>(XR_TYPE_SWAPCHAIN_IMAGE_RELEASE_INFO);
+      (void)xrReleaseSwapchainImage(swapchains_[i].handle.get(), &info);
+    }
+  };
+  for (std::size_t i = 0; i < 2; ++i) {
+    EyeSwapchain& sc = swapchains_[i];
+    std::uint32_t index = 0;
+    auto acquire = tagged<XrSwapchainImageAcquireInfo>(XR_TYPE_SWAPCHAIN_IMAGE_ACQUIRE_INFO);
+    if (const XrResult r = xrAcquireSwapchainImage(sc.handle.get(), &acquire, &index); XR_FAILED(r)) {
+      release_all();
+      fail(failure_of(r, "xrAcquireSwapchainImage").message);
+      end_frame(false);
+      return stats;
+    }
+    acquired[i] = true;
+    auto wait = tagged<XrSwapchainImageWaitInfo>(XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO);
+    wait.timeout = XR_INFINITE_DURATION;
+    if (const XrResult r = xrWaitSwapchainImage(sc.handle.get(), &wait); XR_FAILED(r)) {
+      release_all();
+      fail(failure_of(r, "xrWaitSwapchainImage").message);
+      end_frame(false);
+      return stats;
+    }
+    target_->set_image(i == 0 ? renderer::Eye::left : renderer::Eye::right,
+                       {sc.images[index].image, static_cast<vk::Format>(swapchain_format_),
+                        vk::Extent2D{sc.width, sc.height},
+                        vk::ImageLayout::eColorAttachmentOptimal});
+  }
+  renderer::FrameDescription f = frame;
+  f.width_px = swapchains_[0].width;
+  f.height_px = swapchains_[0].height;
+  try {
+    // render() submits before returning, as xrReleaseSwapchainImage requires.
+    stats = renderer_->render(scene, f, *target_);
+  } catch (const vk::SystemError& e) {
+    release_all();
+    fail(std::string("rendering for the headset failed: ") + e.what());
+    end_frame(false);
+    return stats;
+  }
+  release_all();
+  end_frame(true);
+  return stats;
+}
+
+std::vector<std::string> XrBackend::save_frame(const std::string& stem) {
+  std::vector<std::string> written;
+  try {
+    for (const auto eye : {renderer::Eye::left, renderer::Eye::right}) {
+      const auto image = target_->read_eye(eye);
+      if (!image) continue;
+      const std::string path = stem + (eye == renderer::Eye::left ? "_left.png" : "_right.png");
+      if (const std::string err = renderer::write_png(path, *image); !err.empty()) {
+        std::cerr << "curvlab: xr: frame not saved: " << err << '\n';
+        continue;
+      }
+      written.push_back(path);
+    }
+  } catch (const vk::SystemError& e) {
+    std::cerr << "curvlab: xr: frame not saved: " << e.what() << '\n';
+  }
+  return written;
+}
+
+std::variant<std::unique_ptr<Backend>, BackendError> make_xr_backend(const XrBackendOptions& options) {
+  return XrBackend::create(options);
+}
+
+}  // namespace curvlab::xr
