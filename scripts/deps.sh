@@ -12,6 +12,7 @@ packages=(
   fonts-dejavu-core xvfb xauth
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-mpmath
+  xdotool
 )
 
 missing=()

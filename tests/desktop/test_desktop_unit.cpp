@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <iostream>
 
 namespace {
 
@@ -127,6 +129,36 @@ TEST(KeyNames, GlfwStyleLowerCase) {
   EXPECT_EQ(key_name(GLFW_KEY_F12), "f12");
   EXPECT_EQ(key_name(GLFW_KEY_KP_3), "kp_3");
   EXPECT_EQ(key_name(GLFW_KEY_UNKNOWN), "");
+}
+
+TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
+  // This process never opens a window, so GLFW initialises here, without X.
+  unsetenv("DISPLAY");
+  unsetenv("WAYLAND_DISPLAY");
+  curvlab::devices::SteadyClock clock;
+  curvlab::harness::runner::DesktopOptions options;
+  options.clock = &clock;
+  auto made = curvlab::harness::runner::make_desktop_backend(options);
+  ASSERT_TRUE(std::holds_alternative<curvlab::harness::runner::BackendError>(made));
+  const auto& message = std::get<curvlab::harness::runner::BackendError>(made).message;
+  EXPECT_NE(message.find("glfwInit failed"), std::string::npos) << message;
+  EXPECT_NE(message.find("GLFW_PLATFORM_ERROR"), std::string::npos) << message;
+  EXPECT_NE(message.find("DISPLAY"), std::string::npos) << message;
+  EXPECT_NE(message.find("xvfb-run"), std::string::npos) << message;
+  std::cout << message << '\n';
+}
+
+TEST(DesktopBackend, BadOptionsAreRefusedBeforeAnyWindow) {
+  curvlab::devices::SteadyClock clock;
+  curvlab::harness::runner::DesktopOptions options;
+  auto no_clock = curvlab::harness::runner::make_desktop_backend(options);
+  ASSERT_TRUE(std::holds_alternative<curvlab::harness::runner::BackendError>(no_clock));
+  options.clock = &clock;
+  options.key_script = "/nonexistent/keys.txt";
+  auto no_script = curvlab::harness::runner::make_desktop_backend(options);
+  ASSERT_TRUE(std::holds_alternative<curvlab::harness::runner::BackendError>(no_script));
+  EXPECT_NE(std::get<curvlab::harness::runner::BackendError>(no_script).message.find("keys.txt"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -209,4 +209,58 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
   EXPECT_EQ(backend.context().validation_log().count(), 0u);
 }
 
+// Real key presses, typed into the window through the X server's XTEST
+// extension by xdotool: they arrive as "keyboard" events with GLFW-style
+// names, and Escape ends the session.
+TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
+  if (std::system("command -v xdotool > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xdotool is not installed (apt-get install xdotool)";
+  DesktopOptions options;
+  options.eye_width_px = 64;
+  options.eye_height_px = 64;
+  options.software = true;
+  options.vsync = false;
+  options.clock = &clock_;
+  auto made = desktop::DesktopBackend::create(options);
+  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<desktop::DesktopBackend>>(made))
+      << std::get<harness::runner::BackendError>(made).message;
+  auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(made);
+  renderer::Scene empty;
+  auto frame = [&](std::vector<InputEvent>& events) {
+    auto timing = backend.begin_frame();
+    if (!timing) return std::optional<BackendSignal>();
+    const BackendSignal signal = backend.poll_input(events);
+    renderer::FrameDescription f;
+    f.rig = backend.rig(*timing, 0.063);
+    backend.submit(empty, f, Overlay{"response", "", true}, true);
+    return std::optional<BackendSignal>(signal);
+  };
+  std::vector<InputEvent> events;
+  ASSERT_TRUE(frame(events));  // the window is mapped and drawn once
+  ASSERT_EQ(std::system("timeout 10 xdotool search --sync --name '^curvlab' windowfocus --sync "
+                        "key 1 Left space"),
+            0);
+  for (int i = 0; i < 50 && events.size() < 6; ++i) ASSERT_TRUE(frame(events));
+  std::vector<std::string> pressed;
+  for (const auto& e : events) {
+    EXPECT_EQ(e.device, "keyboard");
+    if (e.pressed) pressed.push_back(e.name);
+  }
+  EXPECT_EQ(pressed, (std::vector<std::string>{"1", "left", "space"}));
+  EXPECT_EQ(events.size(), 6u);  // and their releases
+
+  ASSERT_EQ(std::system("timeout 10 xdotool search --name '^curvlab' windowfocus --sync key Escape"), 0);
+  std::optional<BackendSignal> signal;
+  for (int i = 0; i < 50; ++i) {
+    events.clear();
+    signal = frame(events);
+    if (!signal || *signal == BackendSignal::quit) break;
+  }
+  ASSERT_TRUE(signal.has_value());
+  EXPECT_EQ(*signal, BackendSignal::quit);
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.front().name, "escape");
+  EXPECT_FALSE(backend.begin_frame().has_value()) << "the session ends after Escape";
+}
+
 }  // namespace

@@ -247,7 +247,7 @@ std::size_t DesktopBackend::scripted_keys_pressed() const {
 }
 
 std::optional<FrameTiming> DesktopBackend::begin_frame() {
-  if (failed_) return std::nullopt;
+  if (failed_ && quit_delivered_) return std::nullopt;
   // Pace to the display's refresh: FIFO presentation blocks on a real
   // display, but not under Xvfb, where key-script delays and frame times
   // should still mean what they say.
@@ -257,7 +257,9 @@ std::optional<FrameTiming> DesktopBackend::begin_frame() {
       std::this_thread::sleep_for(std::chrono::nanoseconds(wait_ns));
   }
   glfwPollEvents();
-  if (glfwWindowShouldClose(window_.get()) == GLFW_TRUE) return std::nullopt;
+  // Escape or the window's close button: one more frame, so poll_input can
+  // hand the runner the keys and the quit signal; the session ends after it.
+  if (glfwWindowShouldClose(window_.get()) == GLFW_TRUE && quit_delivered_) return std::nullopt;
 
   const std::int64_t now = options_.clock->now_ns();
   const double dt_s = std::clamp(static_cast<double>(now - last_frame_ns_) * 1e-9, 0.0, 0.1);
@@ -334,7 +336,10 @@ BackendSignal DesktopBackend::poll_input(std::vector<InputEvent>& out) {
     out.push_back(std::move(pending_.front()));
     pending_.pop_front();
   }
-  if (failed_ || glfwWindowShouldClose(window_.get()) == GLFW_TRUE) return BackendSignal::quit;
+  if (failed_ || glfwWindowShouldClose(window_.get()) == GLFW_TRUE) {
+    quit_delivered_ = true;
+    return BackendSignal::quit;
+  }
   const BackendSignal s = signal_;
   signal_ = BackendSignal::none;
   return s;

@@ -85,6 +85,7 @@ class DesktopBackend final : public harness::runner::Backend {
   int f12_count_ = 0;
   std::vector<std::string> screenshots_;
   bool failed_ = false;
+  bool quit_delivered_ = false;  // poll_input has returned quit
 };
 
 // The GLFW-style lower-case name of a key ("a", "1", "space", "left",
