@@ -89,6 +89,11 @@ std::optional<std::uint32_t> usable_queue_family(const vk::raii::PhysicalDevice&
 Context::~Context() = default;
 
 std::variant<Context, RenderError> Context::create(const ContextOptions& options) {
+  return create(options, ContextEmbedding{});
+}
+
+std::variant<Context, RenderError> Context::create(const ContextOptions& options,
+                                                   const ContextEmbedding& embedding) {
   Context c;
   try {
     if (c.loader_.enumerateInstanceVersion() < VK_API_VERSION_1_3)
@@ -103,7 +108,7 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
       extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
       c.validation_ = true;
     }
-    for (const auto& e : options.instance_extensions) {
+    for (const auto& e : embedding.instance_extensions) {
       if (!has_instance_extension(c.loader_, e.c_str()))
         return RenderError{"the Vulkan instance extension " + e +
                            " is not available (a window needs the loader's surface "
@@ -130,8 +135,8 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
         .ppEnabledLayerNames = layers.data(),
         .enabledExtensionCount = static_cast<std::uint32_t>(extensions.size()),
         .ppEnabledExtensionNames = extensions.data()};
-    if (options.hooks.create_instance) {
-      auto made = options.hooks.create_instance(static_cast<const VkInstanceCreateInfo&>(instance_info));
+    if (embedding.hooks.create_instance) {
+      auto made = embedding.hooks.create_instance(static_cast<const VkInstanceCreateInfo&>(instance_info));
       if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
       c.instance_ = vk::raii::Instance(c.loader_, std::get<VkInstance>(made));
     } else {
@@ -139,19 +144,19 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
     }
     if (options.validation)
       c.messenger_ = vk::raii::DebugUtilsMessengerEXT(c.instance_, messenger_info);
-    if (options.create_surface) {
-      auto made = options.create_surface(static_cast<VkInstance>(*c.instance_));
+    if (embedding.create_surface) {
+      auto made = embedding.create_surface(static_cast<VkInstance>(*c.instance_));
       if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
       c.surface_ = vk::raii::SurfaceKHR(c.instance_, std::get<VkSurfaceKHR>(made));
     }
 
     std::vector<const char*> device_extensions;
-    for (const auto& e : options.device_extensions) add_unique(device_extensions, e.c_str());
+    for (const auto& e : embedding.device_extensions) add_unique(device_extensions, e.c_str());
     if (*c.surface_) add_unique(device_extensions, VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     const VkSurfaceKHR surface = *c.surface_ ? static_cast<VkSurfaceKHR>(*c.surface_) : VK_NULL_HANDLE;
 
-    if (options.hooks.pick_physical_device) {
-      auto picked = options.hooks.pick_physical_device(static_cast<VkInstance>(*c.instance_));
+    if (embedding.hooks.pick_physical_device) {
+      auto picked = embedding.hooks.pick_physical_device(static_cast<VkInstance>(*c.instance_));
       if (auto* e = std::get_if<std::string>(&picked)) return RenderError{*e};
       c.physical_ = vk::raii::PhysicalDevice(c.instance_, std::get<VkPhysicalDevice>(picked));
       const auto props = c.physical_.getProperties();
@@ -230,8 +235,8 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
         .pQueueCreateInfos = &queue_info,
         .enabledExtensionCount = static_cast<std::uint32_t>(device_extensions.size()),
         .ppEnabledExtensionNames = device_extensions.data()};
-    if (options.hooks.create_device) {
-      auto made = options.hooks.create_device(static_cast<VkPhysicalDevice>(*c.physical_),
+    if (embedding.hooks.create_device) {
+      auto made = embedding.hooks.create_device(static_cast<VkPhysicalDevice>(*c.physical_),
                                               static_cast<const VkDeviceCreateInfo&>(device_info));
       if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
       c.device_ = vk::raii::Device(c.physical_, std::get<VkDevice>(made));

@@ -121,7 +121,7 @@ std::variant<std::unique_ptr<SwapchainTarget>, RenderError> SwapchainTarget::cre
     const Context& ctx, vk::Extent2D framebuffer_px, const SwapchainOptions& options) {
   if (!*ctx.surface())
     return RenderError{"SwapchainTarget needs a Context made with a surface "
-                       "(ContextOptions::create_surface)"};
+                       "(ContextEmbedding::create_surface)"};
   if (options.eye_extent.width == 0 || options.eye_extent.height == 0)
     return RenderError{"the eye images must not be empty"};
   std::unique_ptr<SwapchainTarget> t(new SwapchainTarget(ctx, options));

@@ -160,14 +160,18 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
     o.key_script = a.key_script;
     o.software = a.software;
     o.clock = out.clock;
-    (void)o;
-    throw RuntimeFailure("LAB_PENDING desktop");
+    auto made = rn::make_desktop_backend(o);
+    if (auto* e = std::get_if<rn::BackendError>(&made)) throw RuntimeFailure(e->message);
+    out.backend = std::get<std::unique_ptr<rn::Backend>>(std::move(made));
+    return out;
   }
   if (a.backend == "xr") {
     xr::XrBackendOptions o;
     o.clock = out.clock;
-    (void)o;
-    throw RuntimeFailure("LAB_PENDING xr");
+    auto made = xr::make_xr_backend(o);
+    if (auto* e = std::get_if<rn::BackendError>(&made)) throw RuntimeFailure(e->message);
+    out.backend = std::get<std::unique_ptr<rn::Backend>>(std::move(made));
+    return out;
   }
   throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
 }

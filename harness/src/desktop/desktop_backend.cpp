@@ -213,10 +213,11 @@ std::variant<std::unique_ptr<DesktopBackend>, BackendError> DesktopBackend::crea
   renderer::ContextOptions co;
   co.device = options.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic;
   co.validation = options.validation;
+  renderer::ContextEmbedding window_embedding;
   std::uint32_t count = 0;
   const char** required = glfwGetRequiredInstanceExtensions(&count);
-  for (std::uint32_t i = 0; i < count; ++i) co.instance_extensions.emplace_back(required[i]);
-  co.create_surface = [window](VkInstance instance) -> std::variant<VkSurfaceKHR, std::string> {
+  for (std::uint32_t i = 0; i < count; ++i) window_embedding.instance_extensions.emplace_back(required[i]);
+  window_embedding.create_surface = [window](VkInstance instance) -> std::variant<VkSurfaceKHR, std::string> {
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     if (const VkResult r = glfwCreateWindowSurface(instance, window, nullptr, &surface);
         r != VK_SUCCESS)
@@ -224,7 +225,7 @@ std::variant<std::unique_ptr<DesktopBackend>, BackendError> DesktopBackend::crea
              "): " + take_last_error();
     return surface;
   };
-  auto ctx = renderer::Context::create(co);
+  auto ctx = renderer::Context::create(co, window_embedding);
   if (auto* e = std::get_if<renderer::RenderError>(&ctx))
     return BackendError{"cannot render to the desktop window: " + e->message};
   b->context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));

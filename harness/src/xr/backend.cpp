@@ -237,8 +237,8 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
               << "; curvlab uses 1.3 and tries anyway\n";
 
   // The Vulkan objects, made by the runtime from the renderer's create-infos.
-  renderer::ContextOptions co;
-  co.hooks.create_instance = [&](const VkInstanceCreateInfo& info)
+  renderer::ContextEmbedding runtime_made;
+  runtime_made.hooks.create_instance = [&](const VkInstanceCreateInfo& info)
       -> std::variant<VkInstance, std::string> {
     auto ci = tagged<XrVulkanInstanceCreateInfoKHR>(XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR);
     ci.systemId = sys;
@@ -252,7 +252,7 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
       return "xrCreateVulkanInstanceKHR: vkCreateInstance returned " + vk_result(vr);
     return instance;
   };
-  co.hooks.pick_physical_device = [&](VkInstance instance) -> std::variant<VkPhysicalDevice, std::string> {
+  runtime_made.hooks.pick_physical_device = [&](VkInstance instance) -> std::variant<VkPhysicalDevice, std::string> {
     auto gi = tagged<XrVulkanGraphicsDeviceGetInfoKHR>(XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR);
     gi.systemId = sys;
     gi.vulkanInstance = instance;
@@ -261,7 +261,7 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
       return failure_of(r, "xrGetVulkanGraphicsDevice2KHR").message;
     return physical;
   };
-  co.hooks.create_device = [&](VkPhysicalDevice physical, const VkDeviceCreateInfo& info)
+  runtime_made.hooks.create_device = [&](VkPhysicalDevice physical, const VkDeviceCreateInfo& info)
       -> std::variant<VkDevice, std::string> {
     auto ci = tagged<XrVulkanDeviceCreateInfoKHR>(XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR);
     ci.systemId = sys;
@@ -275,7 +275,7 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
     if (vr != VK_SUCCESS) return "xrCreateVulkanDeviceKHR: vkCreateDevice returned " + vk_result(vr);
     return device;
   };
-  auto ctx = renderer::Context::create(co);
+  auto ctx = renderer::Context::create(renderer::ContextOptions{}, runtime_made);
   if (auto* e = std::get_if<renderer::RenderError>(&ctx))
     return BackendError{"cannot render for the headset: " + e->message};
   b->context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));

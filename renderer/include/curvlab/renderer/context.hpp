@@ -43,6 +43,12 @@ struct ContextHooks {
 struct ContextOptions {
   DeviceChoice device = DeviceChoice::automatic;
   bool validation = false;  // enable VK_LAYER_KHRONOS_validation
+};
+
+// What an embedder adds to a context (a window, an OpenXR runtime). Kept
+// apart from ContextOptions so that callers who designate only its fields
+// stay warning-free.
+struct ContextEmbedding {
   // Extensions the embedder needs besides the context's own (e.g. the
   // window system's surface extensions, from glfwGetRequiredInstanceExtensions).
   // A device lacking one of the device extensions is not chosen.
@@ -81,6 +87,8 @@ class ValidationLog {
 class Context {
  public:
   static std::variant<Context, RenderError> create(const ContextOptions& options);
+  static std::variant<Context, RenderError> create(const ContextOptions& options,
+                                                   const ContextEmbedding& embedding);
 
   Context(Context&&) noexcept = default;
   Context& operator=(Context&&) noexcept = default;
@@ -89,7 +97,7 @@ class Context {
   ~Context();
 
   [[nodiscard]] const vk::raii::Instance& instance() const { return instance_; }
-  // The window surface of ContextOptions::create_surface (null without one).
+  // The window surface of ContextEmbedding::create_surface (null without one).
   [[nodiscard]] const vk::raii::SurfaceKHR& surface() const { return surface_; }
   [[nodiscard]] const vk::raii::Device& device() const { return device_; }
   [[nodiscard]] const vk::raii::PhysicalDevice& physical() const { return physical_; }

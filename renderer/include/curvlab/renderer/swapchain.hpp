@@ -6,7 +6,7 @@
 // presented images, so the presented format is negotiated freely.
 //
 // The renderer knows nothing of windows: the surface comes from the Context
-// (ContextOptions::create_surface), made by whoever owns the window.
+// (ContextEmbedding::create_surface), made by whoever owns the window.
 #pragma once
 
 #include "curvlab/renderer/gpu.hpp"

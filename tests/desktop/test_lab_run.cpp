@@ -1,0 +1,106 @@
+// `curvlab run` with the lab backends, as an experimenter runs it: a desktop
+// pilot of the demo protocol on Xvfb answered by a key script, and the xr
+// backend on a machine without an OpenXR runtime.
+#include "../cli/run_cli.hpp"
+#include "xvfb.hpp"
+
+#include "curvlab/renderer/image_io.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sqlite3.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace {
+
+using curvlab::testing::run_cli;
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("curvlab_lab_run_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+int count_trials(const std::string& db_path, const std::string& status) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    sqlite3_close(db);
+    return -1;
+  }
+  sqlite3_stmt* stmt = nullptr;
+  int n = -1;
+  if (sqlite3_prepare_v2(db, "SELECT count(*) FROM trials WHERE status = ?", -1, &stmt, nullptr) ==
+      SQLITE_OK) {
+    sqlite3_bind_text(stmt, 1, status.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(stmt) == SQLITE_ROW) n = sqlite3_column_int(stmt, 0);
+  }
+  sqlite3_finalize(stmt);
+  sqlite3_close(db);
+  return n;
+}
+
+TEST(LabRun, DesktopPilotOfTheDemoCompletesWithScriptedKeys) {
+  curvlab::test::XServer x;
+  if (!x.available()) GTEST_SKIP() << "no X display: " << x.reason();
+  const auto dir = fresh_dir("desktop");
+  // Any instruction page first, then one answer per trial; a key the runner
+  // does not expect is ignored and the next one follows.
+  std::ofstream keys(dir / "keys.txt");
+  keys << "# demo: 8 trials answered 'straight'\nspace 100\n";
+  for (int i = 0; i < 8; ++i) keys << "2 100\n";
+  keys << "space 100\nspace 100\n";
+  keys.close();
+  const auto db = dir / "pilot.db";
+  const auto shots = dir / "shots";
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/demo.toml --participant T1 --db " +
+                         db.string() + " --backend desktop --software --window-size 256x256 --key-script " +
+                         (dir / "keys.txt").string() + " --screenshot " + shots.string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto json_start = r.out.find('{');
+  ASSERT_NE(json_start, std::string::npos) << r.out;
+  const auto doc = nlohmann::json::parse(r.out.substr(json_start));
+  EXPECT_EQ(doc["status"], "completed");
+  EXPECT_EQ(doc["trials_planned"], 8);
+  EXPECT_EQ(doc["trials_completed"], 8);
+  EXPECT_EQ(count_trials(db.string(), "completed"), 8);
+
+  // One onset screenshot per trial, each showing the table's cloth.
+  for (int trial = 1; trial <= 8; ++trial) {
+    char name[40];
+    std::snprintf(name, sizeof name, "stimulus_%03d_left.png", trial);
+    curvlab::renderer::Rgba8Image img;
+    std::string error;
+    ASSERT_TRUE(curvlab::renderer::read_png((shots / name).string(), img, error)) << error;
+    ASSERT_EQ(img.width, 256);
+    int cloth = 0;
+    int distinct_from_first = 0;
+    for (std::size_t i = 0; i + 3 < img.pixels.size(); i += 4) {
+      const int rr = img.pixels[i], g = img.pixels[i + 1], b = img.pixels[i + 2];
+      if (g > 40 && g > rr + 25 && g > b + 15) ++cloth;
+      if (img.pixels[i] != img.pixels[0] || img.pixels[i + 1] != img.pixels[1]) ++distinct_from_first;
+    }
+    EXPECT_GT(distinct_from_first, 256 * 256 / 10) << name << " is blank";
+    EXPECT_GT(cloth, 256 * 256 / 20) << name << " shows no table cloth";
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(LabRun, XrWithoutARuntimeExitsWithTheResultAndWritesNothing) {
+  const auto dir = fresh_dir("xr");
+  const auto db = dir / "s.db";
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/demo.toml --participant P1 --db " +
+                         db.string() + " --backend xr");
+  if (r.exit_code == 0) GTEST_SKIP() << "an OpenXR runtime and headset are present";
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("XR_ERROR_RUNTIME_UNAVAILABLE (-51)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Monado"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("SteamVR"), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::is_empty(dir)) << "something was written: the database?";
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
