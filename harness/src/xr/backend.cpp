@@ -170,6 +170,7 @@ class XrBackend final : public Backend {
   XrClockMap clock_map_;
   std::deque<BackendSignal> signals_;
   bool failed_ = false;
+  double refresh_hz_ = 90.0;
 
   XrFrameState frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
   bool frame_begun_ = false;
@@ -195,6 +196,10 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
   std::vector<std::string> extra;
   const bool timespec = has(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
   if (timespec) extra.emplace_back(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
+  // The display's refresh rate before the first frame, for the session's
+  // provenance (Meta, Pico and Monado offer it).
+  const bool refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
+  if (refresh) extra.emplace_back(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
   auto made = Instance::create(options.application_name, extra);
   if (auto* f = std::get_if<XrFailure>(&made)) return error(*f);
   std::unique_ptr<XrBackend> b(new XrBackend(std::get<Instance>(std::move(made)), options));
@@ -298,6 +303,11 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
   if (const XrResult r = xrCreateSession(xr, &session_info, b->session_.out()); XR_FAILED(r))
     return error(r, "xrCreateSession");
   const XrSession session = b->session_.get();
+  if (PFN_xrGetDisplayRefreshRateFB rate_fn = nullptr;
+      refresh && XR_SUCCEEDED(load(xr, "xrGetDisplayRefreshRateFB", rate_fn))) {
+    float hz = 0.0f;
+    if (XR_SUCCEEDED(rate_fn(session, &hz)) && hz > 0.0f) b->refresh_hz_ = static_cast<double>(hz);
+  }
 
   auto space_info = tagged<XrReferenceSpaceCreateInfo>(XR_TYPE_REFERENCE_SPACE_CREATE_INFO);
   space_info.poseInReferenceSpace = kIdentityPose;
@@ -386,8 +396,10 @@ XrBackend::~XrBackend() {
 }
 
 BackendInfo XrBackend::info() const {
+  // Once frames run, the runtime's frame period; before, the display's
+  // reported rate (XR_FB_display_refresh_rate) or 90 Hz, the common rate.
   const double period = static_cast<double>(frame_state_.predictedDisplayPeriod);
-  return {"xr", context_->device_name(), context_->driver_info(), period > 0.0 ? 1e9 / period : 90.0};
+  return {"xr", context_->device_name(), context_->driver_info(), period > 0.0 ? 1e9 / period : refresh_hz_};
 }
 
 void XrBackend::fail(const std::string& message) {
