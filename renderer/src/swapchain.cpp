@@ -320,9 +320,23 @@ void SwapchainTarget::frame_finished() {
     if (area_h > 0) {
       auto blit_eye = [&](Eye eye, std::int32_t x0, std::uint32_t w) {
         const Image& src = eyes_[static_cast<std::size_t>(eye)];
-        cb.blitImage(*src.image, vk::ImageLayout::eTransferSrcOptimal, *window_.image,
-                     vk::ImageLayout::eTransferDstOptimal, letterbox(src.extent, x0, 0, w, area_h),
-                     vk::Filter::eLinear);
+        const vk::ImageBlit blit = letterbox(src.extent, x0, 0, w, area_h);
+        const std::int32_t shown_w = blit.dstOffsets[1].x - blit.dstOffsets[0].x;
+        const std::int32_t shown_h = blit.dstOffsets[1].y - blit.dstOffsets[0].y;
+        if (shown_w == static_cast<std::int32_t>(src.extent.width) &&
+            shown_h == static_cast<std::int32_t>(src.extent.height)) {
+          // Shown at its rendered size (the window's natural size): a plain
+          // copy, several times cheaper than a filtered blit on a CPU device.
+          const vk::ImageCopy copy{.srcSubresource = kColorLayer,
+                                   .dstSubresource = kColorLayer,
+                                   .dstOffset = blit.dstOffsets[0],
+                                   .extent = {src.extent.width, src.extent.height, 1}};
+          cb.copyImage(*src.image, vk::ImageLayout::eTransferSrcOptimal, *window_.image,
+                       vk::ImageLayout::eTransferDstOptimal, copy);
+        } else {
+          cb.blitImage(*src.image, vk::ImageLayout::eTransferSrcOptimal, *window_.image,
+                       vk::ImageLayout::eTransferDstOptimal, blit, vk::Filter::eLinear);
+        }
       };
       switch (layout_) {
         case WindowLayout::side_by_side: {

@@ -207,6 +207,32 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
   EXPECT_EQ(window->height, 150 + 28);
   EXPECT_EQ(backend.target().recreations(), 1u);
   EXPECT_EQ(backend.context().validation_log().count(), 0u);
+
+  // Resized by the window system: the swapchain is made again at the new
+  // size and the eye is scaled to fit (a filtered blit, letterboxed).
+  if (std::system("command -v xdotool > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xdotool is not installed: resizing not tested";
+  ASSERT_EQ(std::system("timeout 10 xdotool search --name '^curvlab' windowsize --sync 420 300"), 0);
+  for (int i = 0; i < 50 && backend.target().window_extent().width != 420; ++i) {
+    auto timing = backend.begin_frame();
+    ASSERT_TRUE(timing.has_value());
+    renderer::FrameDescription f;
+    f.space = s.space;
+    f.head = s.head;
+    f.rig = backend.rig(*timing, 0.063);
+    backend.submit(s.scene, f, Overlay{"stimulus", "", false}, true);
+  }
+  EXPECT_EQ(backend.target().recreations(), 2u);
+  const auto resized = backend.target().read_window();
+  ASSERT_TRUE(resized.has_value());
+  EXPECT_EQ(resized->width, 420);
+  EXPECT_EQ(resized->height, 300);
+  if (std::getenv("CURVLAB_KEEP_TEST_OUTPUT") != nullptr) {
+    const auto path = std::filesystem::temp_directory_path() / "curvlab_desktop_resized_window.png";
+    EXPECT_EQ(renderer::write_png(path.string(), *resized), "");
+    std::cout << "resized window kept in " << path << '\n';
+  }
+  EXPECT_EQ(backend.context().validation_log().count(), 0u);
 }
 
 // Real key presses, typed into the window through the X server's XTEST
