@@ -99,6 +99,8 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
     return(res)
   }
   notes <- character(0)
+  if (max(x[y == 0]) < min(x[y == 1]) || max(x[y == 1]) < min(x[y == 0]))
+    notes <- c(notes, "complete separation: every response is predicted by the level, the slope is not identified (estimates and SEs are meaningless)")
   g <- withCallingHandlers(
     stats::glm(y ~ x, family = stats::binomial(link = "probit")),
     warning = function(w) { notes <<- c(notes, conditionMessage(w)); invokeRestart("muffleWarning") })

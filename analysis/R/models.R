@@ -41,7 +41,7 @@ fit_glmm_safely <- function(formula, data, random) {
 # Fits the model for one outcome on one subset (e.g. one judged object).
 # Returns list(formula, family, coefficients (data frame), tests (data frame),
 # notes, n, participants, random_sd).
-space_view_model <- function(d, outcome_name, outcome_fun) {
+space_view_model <- function(d, outcome_name, outcome_fun, interaction_test = TRUE) {
   d$y <- outcome_fun(d$response)
   d$space <- factor(d$cond_space)
   d$view <- factor(d$cond_view)
@@ -92,7 +92,7 @@ space_view_model <- function(d, outcome_name, outcome_fun) {
   }
   tests <- list()
   if (length(factors)) tests[[1]] <- lrt(paste(paste(factors, collapse = " × "), "(all terms)"), rhs_null)
-  if (length(factors) == 2)
+  if (length(factors) == 2 && interaction_test)
     tests[[2]] <- lrt("space:view interaction", c(rhs_null, "space + view"))
   tests <- tests[!vapply(tests, is.null, TRUE)]
   if (length(tests)) result$tests <- do.call(rbind, tests)

@@ -73,41 +73,24 @@ simulate_curvlab_db <- function(path, observers,
                      lapse = ob$lapse, criterion_m = ob$criterion_m, seed = seed), auto_unbox = TRUE, digits = NA))))
 
     cells <- expand.grid(space = spaces, view = views, stringsAsFactors = FALSE)
-    respond <- function(x, cell) {
-      s <- x + effect_m(cell$space, cell$view)
-      latent <- s + ob$bias_m + stats::rnorm(1, 0, 1 / ob$slope_per_m)
-      answer <- if (length(options) == 2) {
-        if (latent > 0) options[1] else options[2]
-      } else {
-        if (latent > ob$criterion_m) "convex" else if (latent < -ob$criterion_m) "concave" else "straight"
-      }
-      if (stats::runif(1) < ob$lapse) answer <- sample(options, 1)
-      answer
-    }
-    rows <- list()
-    steps <- list()
     if (judgement == "constant") {
-      plan <- do.call(rbind, lapply(seq_len(nrow(cells)), function(k)
-        expand.grid(space = cells$space[k], view = cells$view[k], x = levels_m,
-                    rep = seq_len(repetitions), stringsAsFactors = FALSE)))
-      plan <- plan[sample.int(nrow(plan)), ]
-      plan$staircase <- NA_character_
-      plan$response <- vapply(seq_len(nrow(plan)), function(k) respond(plan$x[k], plan[k, ]), "")
+      plan <- simulate_constant_plan(ob, cells, levels_m, repetitions, options, effect_m)
     } else {
       plan <- NULL
       for (k in seq_len(nrow(cells))) for (name in c("from-convex", "from-concave")) {
         x <- if (name == "from-convex") start_m else -start_m
         last_dir <- 0; reversals <- 0L
         for (step in seq_len(staircase_trials)) {
-          answer <- respond(x, cells[k, ])
+          answer <- observer_response(x + effect_m(cells$space[k], cells$view[k]), ob, options)
           positive <- answer == options[1]
           dir <- if (positive) -1 else 1        # 1-up/1-down toward the 50 % point
           is_rev <- last_dir != 0 && dir != last_dir
           if (is_rev) reversals <- reversals + 1L
           size <- step_sizes_m[min(reversals + 1L, length(step_sizes_m))]
           nxt <- min(0.15, max(-0.15, x + dir * size))
-          plan <- rbind(plan, data.frame(space = cells$space[k], view = cells$view[k], x = x, rep = step,
-                                         staircase = name, response = answer, step = step - 1L,
+          plan <- rbind(plan, data.frame(space = cells$space[k], view = cells$view[k], x = x,
+                                         staircase = paste(cells$space[k], cells$view[k], name),
+                                         response = answer, step = step - 1L,
                                          is_reversal = as.integer(is_rev), next_x = nxt,
                                          correct = as.integer(positive), stringsAsFactors = FALSE))
           last_dir <- dir; x <- nxt
@@ -115,37 +98,36 @@ simulate_curvlab_db <- function(path, observers,
       }
       plan <- plan[sample.int(nrow(plan)), ]  # interleaved
     }
-    t0 <- 0
-    for (k in seq_len(nrow(plan))) {
-      trial_id <- trial_id + 1L
-      p <- plan[k, ]
-      projection <- if (p$view == "tourist") "tourist" else "native"
-      eyes <- if (p$view == "monocular") "dominant" else "both"
-      cond <- list(space = p$space, view = p$view, space = p$space, view = p$view,
-                   projection = projection, eyes = eyes, judged = "stick")
-      cond <- cond[!duplicated(names(cond))]
-      if (judgement == "constant") cond <- c(list(sagitta = format(p$x)), cond)
-      else cond$staircase <- p$staircase
-      stim <- list(stick_sagitta_m = p$x, table_sagitta_m = 0, stick_distance_m = 1, radius_m = 1,
-                   tracking = "table-anchored")
-      onset <- t0 + 0.5e9
-      rt <- round(stats::rlnorm(1, log(0.6), 0.35) * 1e9)
-      DBI::dbExecute(con, paste(
-        "INSERT INTO trials VALUES (?, ?, ?, ?, ?, ?, ?, 'completed', 1, ?, ?, ?, ?, 'observer', ?)"),
-        params = list(trial_id, i, i, k - 1L, k - 1L,
-                      as.character(jsonlite::toJSON(cond, auto_unbox = TRUE)),
-                      as.character(jsonlite::toJSON(stim, auto_unbox = TRUE, digits = NA)),
-                      onset, onset + rt, p$response, rt, "2024-01-01T00:00:00.000Z"))
-      if (judgement == "staircase") {
-        step_id <- step_id + 1L
-        DBI::dbExecute(con, "INSERT INTO staircase_steps VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                       params = list(step_id, i, paste(p$space, p$view, p$staircase), p$step, trial_id,
-                                     p$x, p$correct, p$is_reversal, p$next_x))
-        DBI::dbExecute(con, "UPDATE trials SET conditions = json_set(conditions, '$.staircase', ?) WHERE trial_id = ?",
-                       params = list(paste(p$space, p$view, p$staircase), trial_id))
-      }
-      t0 <- onset + rt + 0.3e9
+    n <- nrow(plan)
+    ids <- trial_id + seq_len(n)
+    trial_id <- trial_id + n
+    rt <- round(stats::rlnorm(n, log(0.6), 0.35) * 1e9)
+    gap <- 0.5e9 + 0.3e9
+    onset <- cumsum(c(0.5e9, utils::head(rt, -1) + gap))
+    cond <- vapply(seq_len(n), function(k) {
+      c_ <- list(space = plan$space[k], view = plan$view[k],
+                 projection = if (plan$view[k] == "tourist") "tourist" else "native",
+                 eyes = if (plan$view[k] == "monocular") "dominant" else "both", judged = "stick")
+      if (judgement == "constant") c_ <- c(list(sagitta = format(plan$x[k])), c_)
+      else c_$staircase <- plan$staircase[k]
+      as.character(jsonlite::toJSON(c_, auto_unbox = TRUE))
+    }, "")
+    stim <- vapply(plan$x, function(x) as.character(jsonlite::toJSON(list(
+      stick_sagitta_m = x, table_sagitta_m = 0, stick_distance_m = 1, radius_m = 1,
+      tracking = "table-anchored"), auto_unbox = TRUE, digits = NA)), "")
+    DBI::dbWriteTable(con, "trials", data.frame(
+      trial_id = ids, session_id = i, block_id = i, trial_index = seq_len(n) - 1L,
+      trial_in_block = seq_len(n) - 1L, conditions = cond, stimulus = stim, status = "completed",
+      attempt = 1L, onset_ns = onset, response_ns = onset + rt, response = plan$response, rt_ns = rt,
+      response_device = "observer", completed_utc = "2024-01-01T00:00:00.000Z"), append = TRUE)
+    if (judgement == "staircase") {
+      DBI::dbWriteTable(con, "staircase_steps", data.frame(
+        step_id = step_id + seq_len(n), session_id = i, staircase = plan$staircase, step_index = plan$step,
+        trial_id = ids, intensity = plan$x, response_correct = plan$correct,
+        is_reversal = plan$is_reversal, next_intensity = plan$next_x), append = TRUE)
+      step_id <- step_id + n
     }
+    t0 <- onset[n] + rt[n] + gap
     if (tracking) write_synthetic_tracking(con, i, t0)
   }
   invisible(path)
@@ -168,4 +150,40 @@ write_synthetic_tracking <- function(con, session_id, duration_ns, rate_hz = 30)
                    lab_qx = 0, lab_qy = 0, lab_qz = 0, lab_qw = 1, position_valid = 1L, orientation_valid = 1L,
                    coherence_error_m = abs(stats::rnorm(3 * n, 0, 0.002)))
   DBI::dbWriteTable(con, "tracking_samples", df, append = TRUE)
+}
+
+# One simulated observer's answer to each shown (perceived) sagitta x.
+observer_response <- function(x, ob, options = c("convex", "concave")) {
+  latent <- x + ob$bias_m + stats::rnorm(length(x), 0, 1 / ob$slope_per_m)
+  answer <- if (length(options) == 2) ifelse(latent > 0, options[1], options[2])
+            else ifelse(latent > ob$criterion_m, "convex", ifelse(latent < -ob$criterion_m, "concave", "straight"))
+  lapsed <- stats::runif(length(x)) < ob$lapse
+  answer[lapsed] <- sample(options, sum(lapsed), replace = TRUE)
+  answer
+}
+
+simulate_constant_plan <- function(ob, cells, levels_m, repetitions, options, effect_m) {
+  plan <- do.call(rbind, lapply(seq_len(nrow(cells)), function(k)
+    expand.grid(space = cells$space[k], view = cells$view[k], x = levels_m,
+                rep = seq_len(repetitions), stringsAsFactors = FALSE)))
+  plan <- plan[sample.int(nrow(plan)), ]
+  shift <- mapply(effect_m, plan$space, plan$view)
+  plan$response <- observer_response(plan$x + shift, ob, options)
+  plan
+}
+
+# Trials in memory with the columns the analysis uses (no database): fast
+# enough for the many replicates of a null simulation.
+simulate_trials <- function(observers, spaces = "E3", views = "tourist", levels_m = 0,
+                            repetitions = 10L, options = c("convex", "straight", "concave"),
+                            effect_m = function(space, view) 0) {
+  if (is.null(observers$criterion_m)) observers$criterion_m <- 0.005
+  cells <- expand.grid(space = spaces, view = views, stringsAsFactors = FALSE)
+  do.call(rbind, lapply(seq_len(nrow(observers)), function(i) {
+    plan <- simulate_constant_plan(observers[i, ], cells, levels_m, repetitions, options, effect_m)
+    data.frame(participant = observers$participant[i], status = "completed", is_practice = 0L,
+               protocol_sha256 = "synthetic", block_name = "main", response = plan$response,
+               cond_space = plan$space, cond_view = plan$view, cond_judged = "stick",
+               x_m = plan$x, staircase = NA_character_, intensity = NA_real_, stringsAsFactors = FALSE)
+  }))
 }
