@@ -98,8 +98,16 @@ MeshData build_table(const Space& space, const geometry::TableShape& table, int 
       for (int c = 0; c <= np; ++c) {
         const double fc = np == 0 ? 0.0 : static_cast<double>(c) / np;
         const Vec4 lin = (1.0 - fr) * centre + fr * ((1.0 - fc) * a + fc * b);
-        m.vertices.push_back({glm::vec4(geometry::normalize_point(space, lin)),
-                              glm::vec4(0, 1, 0, 0), kCloth});
+        Point p = geometry::normalize_point(space, lin);
+        if (style.cloth_sagitta_m != 0.0) {
+          // Raise p along the plane's normal by a geodesic of the profile's
+          // height: the translation taking the origin to p within the plane
+          // carries the origin's normal e_y to p's.
+          const double h = style.cloth_sagitta_m * (1.0 - fr * fr);
+          p = geometry::translation_to(space, p).m *
+              geometry::translation_m(space, Vec3(0.0, h, 0.0)).m * centre;
+        }
+        m.vertices.push_back({glm::vec4(p), glm::vec4(0, 1, 0, 0), kCloth});
       }
     }
     // Stitch neighbouring rows by walking both in order of their parameter.

@@ -45,5 +45,6 @@ void add_export_commands(CLI::App& app);
 void add_track_commands(CLI::App& app);  // trajectory, track, inspect vergence/stick
 void add_render_commands(CLI::App& app);
 void add_protocol_commands(CLI::App& app);
+void add_run_commands(CLI::App& app);  // run, resume, predict, replay
 
 }  // namespace curvlab::cli

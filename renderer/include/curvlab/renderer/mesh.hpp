@@ -61,6 +61,10 @@ struct TableStyle {
   double cushion_height_m = 0.035;
   double rail_width_m = 0.07;
   double skirt_depth_m = 0.12;
+  // Signed convexity of the cloth: the centre rises by this much above the
+  // edges (negative: sinks), along a parabolic profile in the fan's radial
+  // fraction; the edges and cushions stay where they are.
+  double cloth_sagitta_m = 0.0;
 };
 
 // The table centred at the model origin, cloth in the plane y = 0 (the model

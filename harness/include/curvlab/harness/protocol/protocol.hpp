@@ -3,6 +3,7 @@
 // the staircase and the runner work from this struct.
 #pragma once
 
+#include "curvlab/geometry/table.hpp"
 #include "curvlab/harness/protocol/diagnostic.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
 
@@ -10,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace curvlab::harness::protocol {
@@ -148,5 +150,7 @@ struct Derived {
 
 // nullopt with a message when the settings describe an impossible table.
 std::optional<Derived> derive(const Settings& s, std::string* error);
+// The virtual table the settings describe, or why there is none.
+std::variant<geometry::TableShape, std::string> table_shape(const Settings& s);
 
 }  // namespace curvlab::harness::protocol

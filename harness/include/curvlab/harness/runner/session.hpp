@@ -1,0 +1,112 @@
+// The session runner (DESIGN.md §6): Session → Block → Trial, driven frame by
+// frame by a Backend. At start the whole expanded design is stored, so a
+// crash resumes exactly: every trial runs to completion exactly once, in the
+// stored order (a trial interrupted mid-way is run again as a new attempt).
+// Each completed trial commits in its own transaction before the next one
+// starts; tracking samples and frame records go through the SampleWriter.
+//
+// Per frame: poses → tracking → input → phase logic → scene → submit → log.
+// Phases of a trial: fixation → stimulus → response window → inter-trial
+// interval; responses count from stimulus onset to the window's end. A lost
+// head (or a recenter) during a trial aborts the attempt and repeats the
+// trial once tracking is back; a pause does the same after resuming.
+#pragma once
+
+#include "curvlab/geometry/calibration.hpp"
+#include "curvlab/harness/data/records.hpp"
+#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/harness/runner/backend.hpp"
+#include "curvlab/harness/runner/observer.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace curvlab::harness::runner {
+
+// Which frames the backend must draw. Fast headless runs need pixels only
+// for the stimulus images; every other frame is planned (counts logged) but
+// not drawn.
+enum class FrameDrawing { all, onset, none };
+std::optional<FrameDrawing> parse_frame_drawing(std::string_view text);
+
+struct RunOptions {
+  std::string participant;  // pseudonym, [A-Za-z0-9_-]{1,32}
+  std::uint64_t participant_number = 1;  // counterbalancing row and seed (≥ 1)
+  data::DominantEye dominant_eye = data::DominantEye::unknown;
+  std::optional<double> ipd_m;  // overrides the protocol's viewing.ipd_m
+  std::optional<ObserverParams> observer;  // answers for the participant
+  FrameDrawing drawing = FrameDrawing::all;
+  std::string images_dir;  // stimulus images of every onset ("" none)
+  bool progress = false;   // a progress bar on stderr
+  std::optional<geometry::PhysicalTableFit> calibration;
+  std::string font_path;   // text panels; empty: the renderer's default
+  // The head untracked for this long during a trial aborts the attempt.
+  std::int64_t tracking_loss_ns = 250'000'000;
+  // Fast runs may wait for the logger instead of dropping samples.
+  bool lossless_logging = true;
+};
+
+struct SessionSummary {
+  std::string db_path;
+  std::int64_t session_id = 0;
+  std::string status;  // completed, interrupted, aborted
+  std::int64_t trials_planned = 0;
+  std::int64_t trials_completed = 0;
+  std::int64_t trials_skipped = 0;   // stopped staircases' slots
+  std::int64_t attempts_repeated = 0;
+  std::int64_t frames = 0;
+  std::uint64_t samples_dropped = 0;
+  double session_s = 0.0;  // on the session clock
+  double wall_s = 0.0;
+  double frame_cpu_median_ms = 0.0;  // runner work per frame, GPU excluded
+  double frame_cpu_p95_ms = 0.0;
+  std::vector<std::string> images;
+};
+
+struct RunError {
+  bool usage = false;  // bad input (exit 2) rather than a run-time failure
+  std::string message;
+};
+
+using RunResult = std::variant<SessionSummary, RunError>;
+
+// Starts a new session of `protocol` (loaded from `protocol_text`).
+RunResult run_session(const protocol::Protocol& protocol, const std::string& protocol_text,
+                      const std::string& db_path, const RunOptions& options, Backend& backend,
+                      const devices::Clock& clock);
+
+// Continues a session from its first incomplete trial. The protocol text,
+// participant number and seed come from the database; options supply the
+// observer, drawing and progress settings.
+RunResult resume_session(const std::string& db_path, std::int64_t session_id,
+                         const RunOptions& options, Backend& backend,
+                         const devices::Clock& clock);
+
+// What a session needs from the database before a backend is opened: its
+// protocol (text and parsed), participant number and state.
+struct StoredSession {
+  std::string protocol_text;
+  std::string protocol_source;
+  std::string participant;
+  std::uint64_t participant_number = 1;
+  std::int64_t seed = 0;
+  std::string status;
+  std::string backend;
+  std::optional<geometry::PhysicalTableFit> calibration;
+  std::optional<ObserverParams> observer;
+  std::int64_t last_t_ns = 0;  // latest time stamp logged (a resumed clock starts after it)
+};
+std::variant<StoredSession, RunError> read_stored_session(const std::string& db_path,
+                                                          std::int64_t session_id);
+
+// The stored conditions and stimulus of a planned trial (trials.conditions
+// and trials.stimulus; data_schema/codebook.md).
+std::string conditions_json(const protocol::Protocol& p, const protocol::PlannedTrial& t);
+std::string stimulus_json(const protocol::PlannedTrial& t);
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,97 @@
+// A trial's world and stimulus, from its resolved settings: the space and the
+// virtual table (paper, "Construction of the billiards tables"), where the
+// stick goes at onset (relative to the head or to the table), the scene the
+// renderer draws through the trial's phases, and the quantity the simulated
+// observer judges (DESIGN.md §5).
+#pragma once
+
+#include "curvlab/geometry/calibration.hpp"
+#include "curvlab/geometry/perception.hpp"
+#include "curvlab/geometry/table.hpp"
+#include "curvlab/geometry/tracking.hpp"
+#include "curvlab/geometry/tube.hpp"
+#include "curvlab/harness/protocol/settings.hpp"
+#include "curvlab/renderer/scene.hpp"
+#include "curvlab/renderer/view.hpp"
+
+#include <optional>
+#include <string>
+#include <variant>
+
+namespace curvlab::harness::runner {
+
+struct World {
+  geometry::Space space;
+  geometry::TableShape table;
+  // Equal worlds share one tracker, so the edge correspondence survives
+  // from trial to trial.
+  [[nodiscard]] bool same_as(const World& other) const;
+};
+std::variant<World, std::string> make_world(const protocol::Settings& s);
+
+// The physical table of the tracking code, from calibration (centre, yaw)
+// and the protocol (edge, height).
+geometry::PhysicalTable physical_table(const protocol::Settings& s,
+                                       const std::optional<geometry::PhysicalTableFit>& calibration);
+
+// The default calibration of a headless run: a table of the protocol's edge
+// and height centred at the lab origin, yaw 0.
+geometry::PhysicalTableFit nominal_calibration(const protocol::Settings& s);
+
+enum class Judged { stick, table };
+Judged judged(const protocol::Settings& s);
+
+// The stimulus fixed at onset.
+struct Placement {
+  geometry::BentStick stick;
+  geometry::Isometry stick_pose;  // model → world: chord along x, bow toward +z (the viewer)
+  double table_sagitta_m = 0.0;
+};
+Placement place_stimulus(const World& world, const protocol::Settings& s,
+                         const geometry::Isometry& head_at_onset);
+
+geometry::ViewMode view_mode(const protocol::Settings& s);
+renderer::ViewSettings view_settings(const protocol::Settings& s, renderer::Eye dominant);
+// "tourist", "native", "monocular" or "custom".
+std::string view_name(const protocol::Settings& s);
+
+// The perceived signed sagitta of the judged object for a viewer whose nose
+// is at `head` (perception.hpp): the stick's bow toward the viewer, or the
+// table top's rise of its centre above the plane of its edge midpoints.
+// One eye: 0 (no disparity, DESIGN.md §5).
+double perceived_sagitta_m(const World& world, const protocol::Settings& s,
+                           const Placement& placement, const geometry::Isometry& head);
+// The same for the physical stimulus alone (the null observer).
+double physical_sagitta_m(const protocol::Settings& s);
+
+// The scene of one trial: table, stick, balls, a prompt panel and a
+// fixation mark, with visibility switched per phase.
+class TrialScene {
+ public:
+  static std::variant<TrialScene, std::string> build(const World& world,
+                                                     const protocol::Settings& s,
+                                                     const std::string& prompt,
+                                                     const std::string& font_path);
+  // Visibility for a phase ("fixation", "stimulus", "response", …) and the
+  // stimulus placement (fixed at onset).
+  void show(const std::string& phase, bool stimulus_during_response);
+  void place(const Placement& placement, const geometry::Isometry& head_at_onset);
+  // A changed stimulus during the trial (method of adjustment): the stick's
+  // shape and pose and the cloth's convexity follow the settings.
+  void set_stimulus(const protocol::Settings& s, const Placement& placement);
+  // A page of text in front of the head (instructions, breaks); empty hides it.
+  std::optional<std::string> set_page(const std::string& text, const geometry::Isometry& head);
+  renderer::Scene& scene() { return scene_; }
+
+ private:
+  World world_;
+  renderer::Scene scene_;
+  std::string font_path_;
+  std::size_t table_ = 0, stick_ = 0, prompt_ = 0, fixation_ = 0, page_ = 0;
+  std::vector<std::size_t> balls_;
+  bool has_table_ = false, has_stick_ = false;
+  double stick_sagitta_m_ = 0.0, stick_length_m_ = 0.0, table_sagitta_m_ = 0.0;
+  std::string page_text_;
+};
+
+}  // namespace curvlab::harness::runner

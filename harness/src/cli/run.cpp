@@ -1,0 +1,507 @@
+// `curvlab run | resume | predict | replay`: sessions of a protocol with a
+// participant (or the simulated observer), their continuation after a crash,
+// predictions before a study, and re-rendering of what was seen.
+#include "common.hpp"
+
+#include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/export.hpp"
+#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/protocol/loader.hpp"
+#include "curvlab/harness/protocol/random.hpp"
+#include "curvlab/harness/runner/desktop.hpp"
+#include "curvlab/harness/runner/headless.hpp"
+#include "curvlab/harness/runner/predict.hpp"
+#include "curvlab/harness/runner/replay.hpp"
+#include "curvlab/harness/runner/session.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/xr/backend.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace curvlab::cli {
+namespace {
+
+namespace rn = curvlab::harness::runner;
+namespace pr = curvlab::harness::protocol;
+
+struct ObserverArgs {
+  std::string model = "perception";
+  double bias_m = 0.0;
+  double slope_per_m = 300.0;
+  double lapse = 0.02;
+  double criterion_m = 0.006;
+  std::optional<std::uint64_t> seed;
+};
+
+void add_observer_options(CLI::App* cmd, ObserverArgs& o) {
+  cmd->add_option("--observer", o.model,
+                  "who answers in headless runs: perception (default), physical (null model), random, or none");
+  cmd->add_option("--observer-bias-m", o.bias_m, "simulated observer: bias added to the perceived sagitta (m)");
+  cmd->add_option("--observer-slope-per-m", o.slope_per_m, "simulated observer: 1 / noise SD (default 300 /m)");
+  cmd->add_option("--observer-lapse", o.lapse, "simulated observer: lapse rate (default 0.02)");
+  cmd->add_option("--observer-criterion-m", o.criterion_m,
+                  "simulated observer: half-width of the 'straight' band (default 0.006 m)");
+  cmd->add_option_function<std::uint64_t>("--observer-seed", [&o](std::uint64_t s) { o.seed = s; },
+                                          "simulated observer's seed (default: from the session's seed)");
+}
+
+std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::uint64_t default_seed) {
+  if (a.model == "none") return std::nullopt;
+  const auto model = rn::parse_observer_model(a.model);
+  if (!model)
+    throw UsageError("--observer must be perception, physical, random or none, got '" + a.model + "'");
+  rn::ObserverParams p;
+  p.model = *model;
+  p.bias_m = a.bias_m;
+  p.slope_per_m = a.slope_per_m;
+  p.lapse = a.lapse;
+  p.criterion_m = a.criterion_m;
+  p.seed = a.seed.value_or(default_seed);
+  if (auto e = rn::check_observer(p)) throw UsageError("--observer-*: " + *e);
+  return p;
+}
+
+struct BackendArgs {
+  std::string backend = "headless";
+  std::string pace = "fast";
+  std::string render = "all";
+  std::string images;
+  std::string trajectory;
+  bool software = false;
+  std::string window_size = "960x960";
+  std::string preview = "side-by-side";
+  std::string screenshot;
+  std::string key_script;
+  bool quiet = false;
+  bool json = false;
+  std::string export_dir;
+};
+
+void add_backend_options(CLI::App* cmd, BackendArgs& b) {
+  cmd->add_option("--backend", b.backend, "headless (default), desktop or xr");
+  cmd->add_option("--pace", b.pace, "headless: fast (simulated time, default) or realtime");
+  cmd->add_option("--render", b.render,
+                  "headless: draw all frames (default), only each stimulus onset, or none");
+  cmd->add_option("--images", b.images, "save each trial's stimulus onset as PNGs in this folder");
+  cmd->add_option("--trajectory", b.trajectory,
+                  "headless: lab poses from a trajectory CSV (curvlab trajectory …), looped");
+  cmd->add_flag("--software", b.software, "use a CPU Vulkan device (lavapipe) even with a GPU");
+  cmd->add_option("--window-size", b.window_size, "desktop: per-eye size WxH (default 960x960)");
+  cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
+  cmd->add_option("--screenshot", b.screenshot, "desktop: save every onset (and F12) here");
+  cmd->add_option("--key-script", b.key_script, "desktop: a file of scripted key presses");
+  cmd->add_option("--export", b.export_dir, "afterwards, export CSV, Psych-DS and BIDS motion here");
+  cmd->add_flag("--quiet", b.quiet, "no progress bar");
+  cmd->add_flag("--json", b.json, "print the summary as JSON");
+}
+
+std::pair<std::uint32_t, std::uint32_t> parse_wxh(const std::string& text, const std::string& option) {
+  unsigned w = 0, h = 0;
+  char x = 0;
+  std::istringstream in(text);
+  if (!(in >> w >> x >> h) || x != 'x' || w < 16 || h < 16 || w > 8192 || h > 8192)
+    throw UsageError(option + " expects WIDTHxHEIGHT between 16 and 8192 pixels, got '" + text + "'");
+  return {w, h};
+}
+
+// The backend, created before anything is written: a backend that cannot
+// start (no display, no OpenXR runtime) leaves no trace.
+struct Backends {
+  std::unique_ptr<rn::Backend> backend;
+  std::unique_ptr<devices::SteadyClock> steady;
+  const devices::Clock* clock = nullptr;
+};
+
+Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
+                      const geometry::PhysicalTableFit& table, std::int64_t start_ns) {
+  Backends out;
+  if (a.backend == "headless") {
+    rn::HeadlessOptions o;
+    if (a.pace == "fast") o.pace = rn::Pace::fast;
+    else if (a.pace == "realtime") o.pace = rn::Pace::realtime;
+    else throw UsageError("--pace must be fast or realtime, got '" + a.pace + "'");
+    o.refresh_hz = p.refresh_hz;
+    o.width_px = static_cast<std::uint32_t>(p.resolution_width);
+    o.height_px = static_cast<std::uint32_t>(p.resolution_height);
+    o.software = a.software;
+    o.table = table;
+    o.start_ns = start_ns;
+    if (!a.trajectory.empty()) {
+      auto file = harness::read_trajectory_csv(a.trajectory);
+      if (auto* e = std::get_if<harness::InputError>(&file)) throw UsageError(e->message);
+      o.trajectory = std::get<harness::TrajectoryFile>(file).samples;
+      if (o.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
+    }
+    auto made = rn::HeadlessBackend::create(o);
+    if (auto* e = std::get_if<rn::BackendError>(&made)) throw RuntimeFailure(e->message);
+    auto& hb = std::get<std::unique_ptr<rn::HeadlessBackend>>(made);
+    out.clock = &hb->clock();
+    out.backend = std::move(hb);
+    return out;
+  }
+  out.steady = std::make_unique<devices::SteadyClock>();
+  out.clock = out.steady.get();
+  if (a.backend == "desktop") {
+    rn::DesktopOptions o;
+    std::tie(o.eye_width_px, o.eye_height_px) = parse_wxh(a.window_size, "--window-size");
+    if (a.preview == "side-by-side") o.preview = rn::DesktopPreview::side_by_side;
+    else if (a.preview == "left") o.preview = rn::DesktopPreview::left;
+    else if (a.preview == "right") o.preview = rn::DesktopPreview::right;
+    else throw UsageError("--preview must be side-by-side, left or right, got '" + a.preview + "'");
+    o.screenshot_dir = a.screenshot;
+    o.key_script = a.key_script;
+    o.software = a.software;
+    o.clock = out.clock;
+    (void)o;
+    throw RuntimeFailure("LAB_PENDING desktop");
+  }
+  if (a.backend == "xr") {
+    xr::XrBackendOptions o;
+    o.clock = out.clock;
+    (void)o;
+    throw RuntimeFailure("LAB_PENDING xr");
+  }
+  throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
+}
+
+rn::RunOptions drawing_options(const BackendArgs& a) {
+  rn::RunOptions o;
+  const auto drawing = rn::parse_frame_drawing(a.render);
+  if (!drawing) throw UsageError("--render must be all, onset or none, got '" + a.render + "'");
+  o.drawing = *drawing;
+  o.images_dir = a.images;
+  o.progress = !a.quiet && !a.json;
+  o.lossless_logging = a.backend == "headless" && a.pace == "fast";
+  if (!a.images.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(a.images, ec);
+    if (ec) throw RuntimeFailure("cannot create --images folder " + a.images + ": " + ec.message());
+  }
+  return o;
+}
+
+void export_all(const std::string& db_path, std::int64_t session_id, const std::string& dir, Json& doc) {
+  auto db = data::Database::open(db_path, data::OpenMode::open_existing);
+  if (!db) throw RuntimeFailure(db.error().message);
+  Json files = Json::array();
+  for (auto [name, fn] : {std::pair{"csv", &data::export_trials_csv}, std::pair{"psychds", &data::export_psychds},
+                          std::pair{"bids", &data::export_bids_motion}}) {
+    data::ExportOptions o;
+    o.out_dir = (std::filesystem::path(dir) / name).string();
+    o.session_id = session_id;
+    auto r = fn(db.value(), o);
+    if (!r) throw RuntimeFailure(r.error().message);
+    for (const auto& f : r.value().files) files.push_back((std::filesystem::path(o.out_dir) / f).string());
+  }
+  doc["exports"] = files;
+}
+
+void report(const rn::RunResult& result, const BackendArgs& a) {
+  if (const auto* e = std::get_if<rn::RunError>(&result)) {
+    if (e->usage) throw UsageError(e->message);
+    throw RuntimeFailure(e->message);
+  }
+  const auto& s = std::get<rn::SessionSummary>(result);
+  Json doc;
+  doc["db"] = s.db_path;
+  doc["session_id"] = s.session_id;
+  doc["status"] = s.status;
+  doc["trials_planned"] = s.trials_planned;
+  doc["trials_completed"] = s.trials_completed;
+  doc["trials_skipped"] = s.trials_skipped;
+  doc["attempts_repeated"] = s.attempts_repeated;
+  doc["frames"] = s.frames;
+  doc["samples_dropped"] = s.samples_dropped;
+  doc["session_s"] = s.session_s;
+  doc["wall_s"] = s.wall_s;
+  doc["frame_cpu_median_ms"] = s.frame_cpu_median_ms;
+  doc["frame_cpu_p95_ms"] = s.frame_cpu_p95_ms;
+  if (!a.images.empty()) {
+    doc["images_dir"] = a.images;
+    doc["images"] = s.images.size();
+  }
+  if (!a.export_dir.empty()) export_all(s.db_path, s.session_id, a.export_dir, doc);
+  print_result(doc, a.json);
+  if (s.status != "completed") {
+    std::cerr << "session " << s.session_id << " stopped before the end; continue it with: curvlab resume --db "
+              << s.db_path << " --session " << s.session_id << '\n';
+    throw RuntimeFailure("session interrupted");
+  }
+}
+
+pr::Protocol load_or_usage(const std::string& path, std::string& text) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw UsageError(path + ": cannot read the protocol file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  text = ss.str();
+  auto loaded = pr::load_protocol_text(text, path);
+  if (!loaded.ok()) {
+    for (const auto& d : loaded.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+    throw UsageError(path + ": " + std::to_string(loaded.diagnostics.size()) +
+                     " error(s); nothing was run or written");
+  }
+  return std::move(*loaded.protocol);
+}
+
+std::uint64_t number_from_pseudonym(const std::string& id) {
+  std::size_t end = id.size();
+  std::size_t begin = end;
+  while (begin > 0 && std::isdigit(static_cast<unsigned char>(id[begin - 1]))) --begin;
+  if (begin == end || end - begin > 9) return 1;
+  return std::stoull(id.substr(begin, end - begin));
+}
+
+struct RunArgs {
+  std::string protocol;
+  std::string participant;
+  std::optional<std::uint64_t> participant_number;
+  std::string db;
+  std::optional<double> ipd_m;
+  std::string dominant_eye = "unknown";
+  std::string calibration;
+  ObserverArgs observer;
+  BackendArgs backend;
+};
+
+std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  std::ifstream in(path);
+  if (!in) throw UsageError(path + ": cannot read the calibration file");
+  const Json j = Json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    throw UsageError(path + ": expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
+  geometry::PhysicalTableFit fit;
+  try {
+    fit.centre_m = {j.at("centre_x_m").get<double>(), j.at("centre_z_m").get<double>()};
+    fit.yaw_rad = j.at("yaw_rad").get<double>();
+    fit.edge_m = j.at("edge_m").get<double>();
+    fit.height_m = j.at("height_m").get<double>();
+  } catch (const std::exception& e) {
+    throw UsageError(path + ": " + e.what() + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
+  }
+  if (!(fit.edge_m > 0.2 && fit.edge_m < 5.0 && fit.height_m > 0.3 && fit.height_m < 1.5))
+    throw UsageError(path + ": edge_m must lie in (0.2, 5) m and height_m in (0.3, 1.5) m");
+  return fit;
+}
+
+void run_command(const RunArgs& a) {
+  std::string text;
+  const pr::Protocol p = load_or_usage(a.protocol, text);
+  rn::RunOptions o = drawing_options(a.backend);
+  o.participant = a.participant;
+  o.participant_number = a.participant_number.value_or(number_from_pseudonym(a.participant));
+  if (o.participant_number < 1) throw UsageError("--participant-number must be at least 1");
+  o.ipd_m = a.ipd_m;
+  if (a.ipd_m && !(*a.ipd_m > 0.04 && *a.ipd_m < 0.09)) throw UsageError("--ipd-m must lie in (0.04, 0.09) m");
+  if (a.dominant_eye == "left") o.dominant_eye = data::DominantEye::left;
+  else if (a.dominant_eye == "right") o.dominant_eye = data::DominantEye::right;
+  else if (a.dominant_eye != "unknown") throw UsageError("--dominant-eye must be left, right or unknown");
+  o.calibration = read_calibration(a.calibration);
+  if (a.backend.backend == "headless") {
+    const std::uint64_t seed = pr::participant_seed(p.seed, o.participant_number, p.seed_per_participant);
+    o.observer = observer_params(a.observer, pr::mix_seed(seed ^ 0x5eedULL));
+  }
+  const std::string db = a.db.empty()
+                             ? (std::filesystem::path("results") / (p.meta.name + ".sqlite")).string()
+                             : a.db;
+  const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
+  auto backend = open_backend(a.backend, p, table, 0);
+  if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(parent, ec);
+  }
+  report(rn::run_session(p, text, db, o, *backend.backend, *backend.clock), a.backend);
+}
+
+struct ResumeArgs {
+  std::string db;
+  std::int64_t session = 0;
+  ObserverArgs observer;
+  bool observer_given = false;
+  BackendArgs backend;
+};
+
+void resume_command(const ResumeArgs& a) {
+  auto stored_v = rn::read_stored_session(a.db, a.session);
+  if (auto* e = std::get_if<rn::RunError>(&stored_v)) {
+    if (e->usage) throw UsageError(e->message);
+    throw RuntimeFailure(e->message);
+  }
+  const auto& stored = std::get<rn::StoredSession>(stored_v);
+  auto loaded = pr::load_protocol_text(stored.protocol_text, stored.protocol_source);
+  if (!loaded.ok()) throw RuntimeFailure("the stored protocol no longer loads");
+  rn::RunOptions o = drawing_options(a.backend);
+  if (a.observer_given && a.backend.backend == "headless")
+    o.observer = observer_params(a.observer, stored.observer ? stored.observer->seed : 1);
+  const auto table = stored.calibration.value_or(rn::nominal_calibration(loaded.protocol->session_settings()));
+  // A resumed session's clock continues after the last logged time.
+  auto backend = open_backend(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
+  report(rn::resume_session(a.db, a.session, o, *backend.backend, *backend.clock), a.backend);
+}
+
+struct PredictArgs {
+  std::string protocol;
+  int participants = 20;
+  int simulations = 400;
+  std::string effect;
+  ObserverArgs observer;
+  double bias_sd_m = 0.004;
+  bool json = false;
+};
+
+void predict_command(const PredictArgs& a) {
+  std::string text;
+  const pr::Protocol p = load_or_usage(a.protocol, text);
+  rn::PredictOptions o;
+  o.participants = a.participants;
+  o.simulations = a.simulations;
+  o.bias_sd_m = a.bias_sd_m;
+  if (!(a.bias_sd_m >= 0.0 && a.bias_sd_m < 1.0)) throw UsageError("--bias-sd-m must lie in [0, 1) m");
+  auto obs = observer_params(a.observer, a.observer.seed.value_or(1));
+  if (!obs) throw UsageError("predict needs a simulated observer (--observer none makes no sense here)");
+  o.observer = *obs;
+  if (!a.effect.empty()) {
+    // FACTOR:LEVEL_A,LEVEL_B
+    const auto colon = a.effect.find(':');
+    const auto comma = a.effect.find(',', colon == std::string::npos ? 0 : colon);
+    if (colon == std::string::npos || comma == std::string::npos)
+      throw UsageError("--effect expects FACTOR:LEVEL_A,LEVEL_B (e.g. view:native,tourist), got '" + a.effect + "'");
+    o.factor = a.effect.substr(0, colon);
+    o.level_a = a.effect.substr(colon + 1, comma - colon - 1);
+    o.level_b = a.effect.substr(comma + 1);
+    if (!p.find_factor(o.factor)) throw UsageError("--effect: the protocol has no factor \"" + o.factor + "\"");
+  }
+  auto r = rn::predict(p, o);
+  if (auto* e = std::get_if<std::string>(&r)) throw UsageError(*e);
+  const auto& pred = std::get<rn::Prediction>(r);
+  Json doc;
+  doc["protocol"] = p.meta.name;
+  doc["participants"] = pred.participants;
+  doc["observer"] = Json::parse(rn::observer_json(o.observer));
+  doc["bias_sd_m"] = o.bias_sd_m;
+  Json conds = Json::array();
+  for (const auto& c : pred.conditions) {
+    Json cj;
+    for (const auto& [f, l] : c.levels) cj[f] = l;
+    cj["judged"] = c.judged;
+    cj["trials_per_participant"] = c.trials_per_participant;
+    cj["perceived_sagitta_m"] = c.perceived_m;
+    Json props;
+    for (std::size_t k = 0; k < c.options.size(); ++k) props[c.options[k]] = c.proportions[k];
+    cj["proportions"] = props;
+    conds.push_back(cj);
+  }
+  doc["conditions"] = conds;
+  Json power = Json::array();
+  for (const auto& pe : pred.power)
+    power.push_back({{"factor", pe.factor}, {"level_a", pe.level_a}, {"level_b", pe.level_b},
+                     {"predicted_difference", pe.predicted_difference}, {"power", pe.power},
+                     {"simulations", pe.simulations}, {"test", "paired t, two-sided, alpha 0.05"}});
+  doc["power"] = power;
+  doc["notes"] = pred.notes;
+  if (a.json) {
+    print_result(doc, true);
+    return;
+  }
+  std::printf("%s: expected response proportions, %d participants\n", p.meta.name.c_str(), pred.participants);
+  for (const auto& c : pred.conditions) {
+    std::string label;
+    for (const auto& [f, l] : c.levels) label += f + "=" + l + " ";
+    std::printf("  %-58s %-5s s=%+.4f m ", label.c_str(), c.judged.c_str(), c.perceived_m);
+    for (std::size_t k = 0; k < c.options.size(); ++k)
+      std::printf(" %s %.2f", c.options[k].c_str(), c.proportions[k]);
+    std::printf("\n");
+  }
+  std::printf("power (P(first option) at level a vs b, paired t across participants, alpha 0.05):\n");
+  for (const auto& pe : pred.power)
+    std::printf("  %-12s %s vs %s: difference %+.3f, power %.2f (%d simulated studies)\n", pe.factor.c_str(),
+                pe.level_a.c_str(), pe.level_b.c_str(), pe.predicted_difference, pe.power, pe.simulations);
+  for (const auto& n : pred.notes) std::printf("note: %s\n", n.c_str());
+}
+
+struct ReplayArgs {
+  rn::ReplayRequest request;
+  std::optional<std::int64_t> frame;
+  bool json = false;
+};
+
+void replay_command(ReplayArgs a) {
+  a.request.frame_index = a.frame;
+  auto r = rn::replay_frame(a.request);
+  if (auto* e = std::get_if<rn::ReplayError>(&r)) {
+    if (e->usage) throw UsageError(e->message);
+    throw RuntimeFailure(e->message);
+  }
+  const auto& res = std::get<rn::ReplayResult>(r);
+  Json doc;
+  doc["frame_index"] = res.frame_index;
+  doc["phase"] = res.phase;
+  doc["device"] = res.device;
+  doc["files"] = res.files;
+  print_result(doc, a.json);
+}
+
+}  // namespace
+
+void add_run_commands(CLI::App& app) {
+  auto run = std::make_shared<RunArgs>();
+  auto* r = app.add_subcommand("run", "run a session of a protocol (headless with the simulated observer by default)");
+  r->add_option("protocol", run->protocol, "protocol file (TOML)")->required();
+  r->add_option("--participant", run->participant, "participant pseudonym (no names)")->required();
+  r->add_option_function<std::uint64_t>("--participant-number",
+                                        [run](std::uint64_t n) { run->participant_number = n; },
+                                        "counterbalancing row and seed (default: the pseudonym's trailing number, else 1)");
+  r->add_option("--db", run->db, "SQLite file (default results/<protocol name>.sqlite)");
+  r->add_option_function<double>("--ipd-m", [run](double v) { run->ipd_m = v; }, "participant's IPD in metres");
+  r->add_option("--dominant-eye", run->dominant_eye, "left, right or unknown");
+  r->add_option("--calibration", run->calibration, "table calibration JSON (centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
+  add_observer_options(r, run->observer);
+  add_backend_options(r, run->backend);
+  r->callback([run] { run_command(*run); });
+
+  auto res = std::make_shared<ResumeArgs>();
+  auto* rs = app.add_subcommand("resume", "continue an interrupted session from its first incomplete trial");
+  rs->add_option("--db", res->db, "SQLite file")->required();
+  rs->add_option("--session", res->session, "session id")->required();
+  add_observer_options(rs, res->observer);
+  add_backend_options(rs, res->backend);
+  rs->callback([res, rs] {
+    res->observer_given = rs->count("--observer") + rs->count("--observer-bias-m") +
+                              rs->count("--observer-slope-per-m") + rs->count("--observer-lapse") > 0;
+    resume_command(*res);
+  });
+
+  auto pa = std::make_shared<PredictArgs>();
+  auto* p = app.add_subcommand("predict", "expected response proportions and power from the simulated observer");
+  p->add_option("protocol", pa->protocol, "protocol file (TOML)")->required();
+  p->add_option("--participants", pa->participants, "participants per simulated study (default 20)");
+  p->add_option("--simulations", pa->simulations, "simulated studies for the power (default 400)");
+  p->add_option("--effect", pa->effect, "the effect to test, FACTOR:LEVEL_A,LEVEL_B (default: every factor)");
+  p->add_option("--bias-sd-m", pa->bias_sd_m, "between-participant SD of the bias (default 0.004 m)");
+  add_observer_options(p, pa->observer);
+  p->add_flag("--json", pa->json, "print JSON");
+  p->callback([pa] { predict_command(*pa); });
+
+  auto ra = std::make_shared<ReplayArgs>();
+  auto* rp = app.add_subcommand("replay", "re-render one frame of a stored trial from the logged poses");
+  rp->add_option("--db", ra->request.db_path, "SQLite file")->required();
+  rp->add_option("--session", ra->request.session_id, "session id")->required();
+  rp->add_option("--trial", ra->request.trial_index, "trial index in the session (from 0)")->required();
+  rp->add_option_function<std::int64_t>("--frame", [ra](std::int64_t f) { ra->frame = f; },
+                                        "frame index (default: the stimulus onset)");
+  rp->add_option("--out", ra->request.out_dir, "output folder")->required();
+  rp->add_flag("--software", ra->request.software, "use lavapipe even with a GPU");
+  rp->add_flag("--json", ra->json, "print JSON");
+  rp->callback([ra] { replay_command(*ra); });
+}
+
+}  // namespace curvlab::cli

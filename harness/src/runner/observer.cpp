@@ -1,0 +1,141 @@
+#include "curvlab/harness/runner/observer.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace curvlab::harness::runner {
+
+std::string_view to_string(ObserverModel m) {
+  switch (m) {
+    case ObserverModel::perception: return "perception";
+    case ObserverModel::physical: return "physical";
+    case ObserverModel::random: return "random";
+  }
+  return "?";
+}
+
+std::optional<ObserverModel> parse_observer_model(std::string_view text) {
+  if (text == "perception") return ObserverModel::perception;
+  if (text == "physical") return ObserverModel::physical;
+  if (text == "random") return ObserverModel::random;
+  return std::nullopt;
+}
+
+std::optional<std::string> check_observer(const ObserverParams& p) {
+  if (!(std::abs(p.bias_m) <= 1.0)) return "bias_m must lie in [-1, 1] metres";
+  if (!(p.slope_per_m > 0.0 && p.slope_per_m <= 1e6))
+    return "slope_per_m must be a positive number (1 / noise SD in metres)";
+  if (!(p.lapse >= 0.0 && p.lapse <= 1.0)) return "lapse must lie in [0, 1]";
+  if (!(p.criterion_m >= 0.0 && p.criterion_m <= 1.0)) return "criterion_m must lie in [0, 1] metres";
+  if (!(p.rt_base_ms >= 0.0 && p.rt_mean_extra_ms >= 0.0))
+    return "response-time parameters must not be negative";
+  return std::nullopt;
+}
+
+std::string observer_json(const ObserverParams& p) {
+  nlohmann::ordered_json j;
+  j["model"] = std::string(to_string(p.model));
+  j["bias_m"] = p.bias_m;
+  j["slope_per_m"] = p.slope_per_m;
+  j["lapse"] = p.lapse;
+  j["criterion_m"] = p.criterion_m;
+  j["rt_base_ms"] = p.rt_base_ms;
+  j["rt_mean_extra_ms"] = p.rt_mean_extra_ms;
+  j["seed"] = p.seed;
+  return j.dump();
+}
+
+double normal_cdf(double x) { return 0.5 * std::erfc(-x / std::numbers::sqrt2); }
+
+SimulatedObserver::SimulatedObserver(const ObserverParams& params)
+    : params_(params), rng_(protocol::mix_seed(params.seed ^ 0x6f62736572766572ULL)) {}
+
+double SimulatedObserver::uniform() { return protocol::uniform01(rng_); }
+
+// Box–Muller on the portable uniform draw, so a seed gives the same answers
+// with every standard library.
+double SimulatedObserver::gaussian() {
+  const double u1 = 1.0 - uniform();  // (0, 1]
+  const double u2 = uniform();
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+namespace {
+
+// The n−1 cuts, from the most positive down.
+double cut(std::size_t k, std::size_t n, double criterion_m) {
+  if (n <= 2) return 0.0;
+  const double span = static_cast<double>(n - 2);
+  return criterion_m * (span - 2.0 * static_cast<double>(k)) / span;
+}
+
+}  // namespace
+
+std::vector<double> SimulatedObserver::choice_probabilities(double s, std::size_t n) const {
+  std::vector<double> p(n, 0.0);
+  if (n == 0) return p;
+  const double guess = 1.0 / static_cast<double>(n);
+  if (params_.model == ObserverModel::random) {
+    std::fill(p.begin(), p.end(), guess);
+    return p;
+  }
+  const double mean = s + params_.bias_m;
+  double above_prev = 0.0;  // P(L > previous cut); the first option is L > cut 0
+  for (std::size_t k = 0; k < n; ++k) {
+    const double above =
+        k + 1 < n ? 1.0 - normal_cdf(params_.slope_per_m * (cut(k, n, params_.criterion_m) - mean))
+                  : 1.0;
+    p[k] = params_.lapse * guess + (1.0 - params_.lapse) * (above - above_prev);
+    above_prev = above;
+  }
+  return p;
+}
+
+std::size_t SimulatedObserver::choose(double s, std::size_t n) {
+  if (n == 0) return 0;
+  const double lapse_draw = uniform();
+  const double option_draw = uniform();
+  const double noise = gaussian();
+  if (params_.model == ObserverModel::random || lapse_draw < params_.lapse)
+    return std::min(n - 1, static_cast<std::size_t>(option_draw * static_cast<double>(n)));
+  const double latent = s + params_.bias_m + noise / params_.slope_per_m;
+  for (std::size_t k = 0; k + 1 < n; ++k)
+    if (latent > cut(k, n, params_.criterion_m)) return k;
+  return n - 1;
+}
+
+double SimulatedObserver::adjust(const std::function<double(double)>& perceived, double lo,
+                                 double hi) {
+  const double lapse_draw = uniform();
+  const double where = uniform();
+  const double noise = gaussian() / params_.slope_per_m;
+  if (params_.model == ObserverModel::random || lapse_draw < params_.lapse)
+    return lo + where * (hi - lo);
+  auto f = [&](double x) { return perceived(x) + params_.bias_m + noise; };
+  double flo = f(lo);
+  const double fhi = f(hi);
+  if (flo == 0.0) return lo;
+  if ((flo > 0.0) == (fhi > 0.0)) return std::abs(flo) < std::abs(fhi) ? lo : hi;
+  for (int i = 0; i < 60 && hi - lo > 1e-7; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    const double fm = f(mid);
+    if ((fm > 0.0) == (flo > 0.0)) {
+      lo = mid;
+      flo = fm;
+    } else {
+      hi = mid;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
+std::int64_t SimulatedObserver::response_time_ns() {
+  const double u = 1.0 - uniform();
+  const double ms = params_.rt_base_ms - params_.rt_mean_extra_ms * std::log(u);
+  return static_cast<std::int64_t>(ms * 1e6);
+}
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,217 @@
+#include "curvlab/harness/runner/predict.hpp"
+
+#include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/runner/headless.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+
+namespace curvlab::harness::runner {
+
+namespace {
+
+// Regularized incomplete beta I_x(a, b) by its continued fraction (modified
+// Lentz), using the symmetry I_x(a,b) = 1 − I_{1−x}(b,a) where it converges
+// slowly (Abramowitz & Stegun 26.5.8).
+double incomplete_beta(double a, double b, double x) {
+  if (x <= 0.0) return 0.0;
+  if (x >= 1.0) return 1.0;
+  if (x > (a + 1.0) / (a + b + 2.0)) return 1.0 - incomplete_beta(b, a, 1.0 - x);
+  const double log_front = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) +
+                           b * std::log1p(-x);
+  const double tiny = 1e-300;
+  double c = 1.0;
+  double d = 1.0 - (a + b) * x / (a + 1.0);
+  d = std::abs(d) < tiny ? tiny : d;
+  d = 1.0 / d;
+  double f = d;
+  for (int m = 1; m <= 300; ++m) {
+    const double md = m;
+    const double even = md * (b - md) * x / ((a + 2.0 * md - 1.0) * (a + 2.0 * md));
+    d = 1.0 + even * d;
+    d = std::abs(d) < tiny ? tiny : d;
+    c = 1.0 + even / c;
+    c = std::abs(c) < tiny ? tiny : c;
+    d = 1.0 / d;
+    f *= d * c;
+    const double odd = -(a + md) * (a + b + md) * x / ((a + 2.0 * md) * (a + 2.0 * md + 1.0));
+    d = 1.0 + odd * d;
+    d = std::abs(d) < tiny ? tiny : d;
+    c = 1.0 + odd / c;
+    c = std::abs(c) < tiny ? tiny : c;
+    d = 1.0 / d;
+    const double delta = d * c;
+    f *= delta;
+    if (std::abs(delta - 1.0) < 1e-14) break;
+  }
+  return std::exp(log_front) * f / a;
+}
+
+double gaussian(protocol::Engine& rng) {
+  const double u1 = 1.0 - protocol::uniform01(rng);
+  const double u2 = protocol::uniform01(rng);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+std::int64_t binomial(protocol::Engine& rng, std::int64_t n, double p) {
+  std::int64_t k = 0;
+  for (std::int64_t i = 0; i < n; ++i) k += protocol::uniform01(rng) < p ? 1 : 0;
+  return k;
+}
+
+}  // namespace
+
+double student_t_two_sided_p(double t, double df) {
+  if (!std::isfinite(t)) return 0.0;
+  return incomplete_beta(df / 2.0, 0.5, df / (df + t * t));
+}
+
+std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const PredictOptions& o) {
+  if (o.participants < 2) return std::string("--participants must be at least 2");
+  if (o.simulations < 1) return std::string("--simulations must be at least 1");
+  if (auto e = check_observer(o.observer)) return "observer: " + *e;
+  Prediction out;
+  out.participants = o.participants;
+
+  // Conditions of participant 1's design (every participant sees the same
+  // conditions; only order and counterbalancing differ).
+  const protocol::Design design = protocol::expand_design(p, 1);
+  std::map<std::string, std::size_t> index;  // condition key → out.conditions
+  std::vector<double> perceived;
+  bool skipped_other = false;
+  for (const auto& t : design.trials) {
+    if (t.practice) continue;
+    if (t.judgement != protocol::JudgementType::choice) {
+      skipped_other = true;
+      continue;
+    }
+    const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
+    std::string key = t.block + "|" + judged_name;
+    for (const auto& [f, l] : t.levels) key += "|" + f + "=" + l;
+    auto it = index.find(key);
+    if (it == index.end()) {
+      auto made = make_world(t.settings);
+      if (auto* e = std::get_if<std::string>(&made)) return *e;
+      const World world = std::get<World>(made);
+      auto tracker = geometry::make_tracker(
+          t.settings.tracking == protocol::Tracking::naive ? geometry::TrackingAlgorithm::naive
+          : t.settings.tracking == protocol::Tracking::head_anchored ? geometry::TrackingAlgorithm::head_anchored
+                                                                     : geometry::TrackingAlgorithm::table_anchored,
+          world.space, world.table, physical_table(t.settings, std::nullopt));
+      const auto fit = nominal_calibration(t.settings);
+      const auto head = tracker->update(standing_pose(fit, 1.55, 0)).pose[0];
+      const Placement placement = place_stimulus(world, t.settings, head);
+      ConditionPrediction c;
+      c.levels = t.levels;
+      c.judged = judged_name;
+      c.perceived_m = o.observer.model == ObserverModel::physical
+                          ? physical_sagitta_m(t.settings)
+                          : perceived_sagitta_m(world, t.settings, placement, head);
+      for (const auto& b : p.blocks)
+        if (b.name == t.block)
+          for (const auto& opt : b.judgement.options) c.options.push_back(opt.value);
+      it = index.emplace(key, out.conditions.size()).first;
+      out.conditions.push_back(std::move(c));
+    }
+    ++out.conditions[it->second].trials_per_participant;
+  }
+  if (skipped_other) out.notes.push_back("staircase and adjustment blocks are not predicted (choice only)");
+  if (out.conditions.empty()) return std::string("the protocol has no choice trials outside practice to predict");
+
+  // Participants drawn from the population; proportions are their mean.
+  protocol::Engine rng(protocol::mix_seed(o.observer.seed ^ 0x70726564696374ULL));
+  auto draw_participant = [&]() {
+    ObserverParams q = o.observer;
+    q.bias_m += o.bias_sd_m * gaussian(rng);
+    q.slope_per_m *= std::exp(o.slope_sd_log * gaussian(rng));
+    return q;
+  };
+  const int population = 400;
+  for (auto& c : out.conditions) c.proportions.assign(c.options.size(), 0.0);
+  std::vector<ObserverParams> people;
+  for (int k = 0; k < population; ++k) people.push_back(draw_participant());
+  for (const auto& q : people) {
+    SimulatedObserver obs(q);
+    for (auto& c : out.conditions) {
+      const auto probs = obs.choice_probabilities(c.perceived_m, c.options.size());
+      for (std::size_t k = 0; k < probs.size(); ++k) c.proportions[k] += probs[k] / population;
+    }
+  }
+
+  // Power per factor: P(first option) at level a versus level b.
+  std::vector<std::string> factors;
+  if (!o.factor.empty()) factors.push_back(o.factor);
+  else
+    for (const auto& f : p.factors) factors.push_back(f.name);
+  auto level_of = [](const ConditionPrediction& c, const std::string& f) -> std::string {
+    for (const auto& [name, label] : c.levels)
+      if (name == f) return label;
+    return {};
+  };
+  for (const auto& f : factors) {
+    std::map<std::string, std::pair<double, double>> by_level;  // label → (sum P, count)
+    for (const auto& c : out.conditions) {
+      const auto l = level_of(c, f);
+      if (l.empty() || c.proportions.empty()) continue;
+      by_level[l].first += c.proportions[0];
+      by_level[l].second += 1.0;
+    }
+    if (by_level.size() < 2) {
+      if (!o.factor.empty()) return "factor \"" + f + "\" has fewer than two levels among the choice trials";
+      continue;
+    }
+    std::string a = o.level_a, b = o.level_b;
+    if (!o.factor.empty() && (!by_level.count(a) || !by_level.count(b)))
+      return "factor \"" + f + "\" has no choice trials at level \"" + (by_level.count(a) ? b : a) + "\"";
+    if (a.empty()) {
+      double best = -1.0;
+      for (const auto& [la, va] : by_level)
+        for (const auto& [lb, vb] : by_level) {
+          const double d = std::abs(va.first / va.second - vb.first / vb.second);
+          if (la < lb && d > best) {
+            best = d;
+            a = la;
+            b = lb;
+          }
+        }
+    }
+    PowerEstimate pe;
+    pe.factor = f;
+    pe.level_a = a;
+    pe.level_b = b;
+    pe.predicted_difference = by_level[a].first / by_level[a].second - by_level[b].first / by_level[b].second;
+    pe.simulations = o.simulations;
+    int significant = 0;
+    for (int sim = 0; sim < o.simulations; ++sim) {
+      double sum = 0.0, sum2 = 0.0;
+      for (int k = 0; k < o.participants; ++k) {
+        const SimulatedObserver obs(draw_participant());
+        double na = 0.0, ka = 0.0, nb = 0.0, kb = 0.0;
+        for (const auto& c : out.conditions) {
+          const auto l = level_of(c, f);
+          if (l != a && l != b) continue;
+          const double pf = obs.choice_probabilities(c.perceived_m, c.options.size())[0];
+          const auto hits = static_cast<double>(binomial(rng, c.trials_per_participant, pf));
+          const auto n = static_cast<double>(c.trials_per_participant);
+          if (l == a) { na += n; ka += hits; } else { nb += n; kb += hits; }
+        }
+        const double d = ka / na - kb / nb;
+        sum += d;
+        sum2 += d * d;
+      }
+      const double n = o.participants;
+      const double mean = sum / n;
+      const double var = (sum2 - n * mean * mean) / (n - 1.0);
+      const double t = var > 0.0 ? mean / std::sqrt(var / n) : (mean != 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+      if (student_t_two_sided_p(t, n - 1.0) < o.alpha) ++significant;
+    }
+    pe.power = static_cast<double>(significant) / o.simulations;
+    out.power.push_back(pe);
+  }
+  return out;
+}
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,313 @@
+#include "curvlab/harness/runner/stimulus.hpp"
+
+#include "curvlab/geometry/maps.hpp"
+#include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/renderer/mesh.hpp"
+#include "curvlab/renderer/text.hpp"
+
+#include <array>
+#include <cmath>
+#include <numbers>
+
+namespace curvlab::harness::runner {
+
+using geometry::Isometry;
+using geometry::Point;
+using geometry::Vec3;
+using protocol::Settings;
+
+bool World::same_as(const World& other) const {
+  return space.kind == other.space.kind && space.radius_m == other.space.radius_m &&
+         table.sides == other.table.sides && table.side_rad == other.table.side_rad;
+}
+
+std::variant<World, std::string> make_world(const Settings& s) {
+  auto shape = protocol::table_shape(s);
+  if (auto* e = std::get_if<std::string>(&shape)) return *e;
+  const auto& t = std::get<geometry::TableShape>(shape);
+  return World{geometry::Space{s.space.kind, t.radius_m}, t};
+}
+
+geometry::PhysicalTableFit nominal_calibration(const Settings& s) {
+  geometry::PhysicalTableFit fit;
+  fit.edge_m = s.table.edge_m;
+  fit.height_m = s.table.height_m;
+  return fit;
+}
+
+geometry::PhysicalTable physical_table(const Settings& s,
+                                       const std::optional<geometry::PhysicalTableFit>& calibration) {
+  const auto fit = calibration.value_or(nominal_calibration(s));
+  geometry::PhysicalTable t;
+  t.centre_x_m = fit.centre_m.x;
+  t.centre_z_m = fit.centre_m.y;
+  t.yaw_rad = fit.yaw_rad;
+  t.edge_m = fit.edge_m;
+  t.height_m = fit.height_m;
+  return t;
+}
+
+Judged judged(const Settings& s) { return s.stimulus.show_stick ? Judged::stick : Judged::table; }
+
+Placement place_stimulus(const World& world, const Settings& s, const Isometry& head_at_onset) {
+  const auto& st = s.stimulus;
+  Placement p;
+  p.stick = geometry::BentStick{st.stick_length_m, st.stick_sagitta_m, st.stick_radius_m};
+  p.table_sagitta_m = st.table_sagitta_m;
+  const double yaw = st.stick_yaw_deg * std::numbers::pi / 180.0;
+  const Isometry turn = geometry::rotation(Vec3(0.0, 1.0, 0.0), yaw);
+  const auto& space = world.space;
+  if (st.stick_anchor == protocol::StickAnchor::head) {
+    // Head-locked at onset, then fixed in the world for the trial.
+    p.stick_pose = head_at_onset *
+                   geometry::translation_m(space, Vec3(0.0, st.stick_height_m, -st.stick_distance_m)) *
+                   turn;
+    return p;
+  }
+  // Across the table, stick_distance_m from its centre toward the viewer,
+  // stick_height_m above the cloth, its +z (the bow) facing the viewer.
+  Vec3 toward = geometry::log_origin(space, head_at_onset.m * geometry::origin(space));
+  toward.y = 0.0;
+  const double len = glm::length(toward);
+  toward = len > 1e-9 ? toward / len : Vec3(0.0, 0.0, 1.0);
+  const Vec3 up(0.0, 1.0, 0.0);
+  const geometry::Mat3 frame(glm::cross(up, toward), up, toward);
+  p.stick_pose = geometry::translation_m(space, toward * st.stick_distance_m) *
+                 geometry::translation_m(space, Vec3(0.0, st.stick_height_m, 0.0)) *
+                 geometry::rotation(frame) * turn;
+  return p;
+}
+
+geometry::ViewMode view_mode(const Settings& s) {
+  if (s.viewing.eyes != protocol::Eyes::both) return geometry::ViewMode::monocular;
+  return s.viewing.projection == protocol::Projection::native ? geometry::ViewMode::native
+                                                              : geometry::ViewMode::tourist;
+}
+
+renderer::ViewSettings view_settings(const Settings& s, renderer::Eye dominant) {
+  renderer::ViewSettings v;
+  v.projection = s.viewing.projection == protocol::Projection::native ? renderer::Projection::native
+                                                                      : renderer::Projection::tourist;
+  switch (s.viewing.eyes) {
+    case protocol::Eyes::both: v.eyes = renderer::EyeSelection::both; break;
+    case protocol::Eyes::left: v.eyes = renderer::EyeSelection::left; break;
+    case protocol::Eyes::right: v.eyes = renderer::EyeSelection::right; break;
+    case protocol::Eyes::dominant: v.eyes = renderer::EyeSelection::dominant; break;
+  }
+  v.dominant_eye = dominant;
+  v.back_hemisphere = s.viewing.back_hemisphere;
+  return v;
+}
+
+std::string view_name(const Settings& s) {
+  const bool both = s.viewing.eyes == protocol::Eyes::both;
+  if (s.viewing.projection == protocol::Projection::tourist) return both ? "tourist" : "custom";
+  return both ? "native" : "monocular";
+}
+
+namespace {
+
+// Signed distance of the middle point from the chord of the two ends,
+// positive toward the nose (the origin of the nose frame).
+double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
+  Vec3 chord = end_b - end_a;
+  const double cl = glm::length(chord);
+  chord = cl > 0.0 ? chord / cl : Vec3(1.0, 0.0, 0.0);
+  const Vec3 mid = 0.5 * (end_a + end_b);
+  Vec3 toward = -mid - glm::dot(-mid, chord) * chord;
+  const double len = glm::length(toward);
+  toward = len > 0.0 ? toward / len : Vec3(0.0, 0.0, 1.0);
+  return glm::dot(middle - mid, toward);
+}
+
+}  // namespace
+
+double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
+                           const Isometry& head) {
+  const auto mode = view_mode(s);
+  if (mode == geometry::ViewMode::monocular) return 0.0;
+  const auto& space = world.space;
+  const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
+  auto seen = [&](const Point& q) {
+    return geometry::perceive_point(space, head, eyes, mode, q).position_m;
+  };
+  if (judged(s) == Judged::stick) {
+    const double half = placement.stick.length_m / 2.0;
+    const Vec3 a = seen(placement.stick.centre_point(space, placement.stick_pose, -half));
+    const Vec3 m = seen(placement.stick.centre_point(space, placement.stick_pose, 0.0));
+    const Vec3 b = seen(placement.stick.centre_point(space, placement.stick_pose, half));
+    return bow_toward_viewer(a, m, b);
+  }
+  // The table top: its (possibly raised) centre against the plane of the
+  // perceived edge midpoints (Newell's normal), oriented by the perceived up.
+  const auto& table = world.table;
+  std::vector<Vec3> mids;
+  for (int e = 0; e < table.sides; ++e)
+    mids.push_back(seen(geometry::table_edge_frame(space, table, e, table.edge_m / 2.0).m *
+                        geometry::origin(space)));
+  Vec3 centroid(0.0);
+  for (const auto& m : mids) centroid += m;
+  centroid /= static_cast<double>(mids.size());
+  Vec3 normal(0.0);
+  for (std::size_t i = 0; i < mids.size(); ++i)
+    normal += glm::cross(mids[i] - centroid, mids[(i + 1) % mids.size()] - centroid);
+  const Vec3 centre = seen(geometry::translation_m(space, Vec3(0.0, placement.table_sagitta_m, 0.0)).m *
+                           geometry::origin(space));
+  const Vec3 flat_centre = seen(geometry::origin(space));
+  const Vec3 above = seen(geometry::translation_m(space, Vec3(0.0, 0.1, 0.0)).m * geometry::origin(space));
+  const double nl = glm::length(normal);
+  if (!(nl > 0.0)) return 0.0;
+  normal /= nl;
+  if (glm::dot(normal, above - flat_centre) < 0.0) normal = -normal;
+  return glm::dot(centre - centroid, normal);
+}
+
+double physical_sagitta_m(const Settings& s) {
+  return judged(s) == Judged::stick ? s.stimulus.stick_sagitta_m : s.stimulus.table_sagitta_m;
+}
+
+// ---------------------------------------------------------------------------
+
+namespace {
+
+std::variant<renderer::SceneObject, std::string> make_panel(const geometry::Space& space,
+                                                            const std::string& name,
+                                                            const std::string& text,
+                                                            const std::string& font,
+                                                            double width_m, double height_m) {
+  const int w = 1024;
+  const int h = static_cast<int>(std::lround(w * height_m / width_m));
+  auto bmp = renderer::render_text(text.empty() ? std::string(" ") : text, w, h, h / 3.0, font);
+  if (auto* e = std::get_if<renderer::TextError>(&bmp)) return e->message;
+  renderer::SceneObject o;
+  o.name = name;
+  o.build = [space, width_m, height_m](int level) {
+    return renderer::build_panel(space, width_m, height_m, level);
+  };
+  o.info = renderer::panel_info(space, width_m, height_m);
+  o.text = std::move(std::get<renderer::CoverageBitmap>(bmp));
+  o.visible = false;
+  return o;
+}
+
+}  // namespace
+
+std::variant<TrialScene, std::string> TrialScene::build(const World& world, const Settings& s,
+                                                        const std::string& prompt,
+                                                        const std::string& font_path) {
+  TrialScene t;
+  t.world_ = world;
+  t.font_path_ = font_path;
+  const auto& space = world.space;
+  const auto& st = s.stimulus;
+  if (st.show_table) {
+    renderer::TableStyle style;
+    style.cloth_sagitta_m = st.table_sagitta_m;
+    const auto table = world.table;
+    renderer::SceneObject o;
+    o.name = "table";
+    o.build = [space, table, style](int level) { return renderer::build_table(space, table, level, style); };
+    o.info = renderer::table_info(space, table, style);
+    o.pose = Isometry::identity();
+    o.visible = false;
+    t.table_ = t.scene_.add(std::move(o));
+    t.has_table_ = true;
+    t.table_sagitta_m_ = st.table_sagitta_m;
+    // Balls in a row across the far half of the cloth.
+    const double r = st.ball_radius_m;
+    const double z = -0.3 * table.apothem_m();
+    for (std::int64_t i = 0; i < st.balls; ++i) {
+      renderer::SceneObject b;
+      b.name = "ball " + std::to_string(i + 1);
+      const glm::vec4 colour = i == 0 ? glm::vec4(0.95f, 0.95f, 0.92f, 1.0f)
+                                      : glm::vec4(0.85f, 0.12f, 0.10f, 1.0f);
+      b.build = [space, r, colour](int) { return renderer::build_ball(space, r, colour); };
+      b.info = renderer::ball_info(space, r);
+      const double x = (static_cast<double>(i) - 0.5 * static_cast<double>(st.balls - 1)) * 3.0 * r;
+      b.pose = geometry::translation_m(space, Vec3(x, 0.0, z)) *
+               geometry::translation_m(space, Vec3(0.0, r, 0.0));
+      b.visible = false;
+      t.balls_.push_back(t.scene_.add(std::move(b)));
+    }
+  }
+  if (st.show_stick) {
+    const geometry::BentStick stick{st.stick_length_m, st.stick_sagitta_m, st.stick_radius_m};
+    renderer::SceneObject o;
+    o.name = "cue stick";
+    o.build = [space, stick](int level) { return renderer::build_stick(space, stick, level); };
+    o.info = renderer::stick_info(space, stick);
+    o.visible = false;
+    t.stick_ = t.scene_.add(std::move(o));
+    t.has_stick_ = true;
+    t.stick_sagitta_m_ = st.stick_sagitta_m;
+    t.stick_length_m_ = st.stick_length_m;
+  }
+  for (auto [index, name, text, w, h] :
+       {std::tuple{&t.prompt_, "prompt", prompt, 1.0, 0.22},
+        std::tuple{&t.fixation_, "fixation", std::string("+"), 0.08, 0.08},
+        std::tuple{&t.page_, "page", std::string(" "), 1.0, 0.5}}) {
+    auto made = make_panel(space, name, text, font_path, w, h);
+    if (auto* e = std::get_if<std::string>(&made)) return *e;
+    *index = t.scene_.add(std::move(std::get<renderer::SceneObject>(made)));
+  }
+  return t;
+}
+
+void TrialScene::place(const Placement& placement, const Isometry& head_at_onset) {
+  const auto& space = world_.space;
+  if (has_stick_) scene_.edit(stick_).pose = placement.stick_pose;
+  scene_.edit(prompt_).pose =
+      head_at_onset * geometry::translation_m(space, Vec3(0.0, 0.32, -1.5));
+  scene_.edit(fixation_).pose = head_at_onset * geometry::translation_m(space, Vec3(0.0, 0.0, -1.2));
+}
+
+void TrialScene::set_stimulus(const Settings& s, const Placement& placement) {
+  const auto& space = world_.space;
+  const auto& st = s.stimulus;
+  if (has_stick_) {
+    if (st.stick_sagitta_m != stick_sagitta_m_ || st.stick_length_m != stick_length_m_) {
+      const geometry::BentStick stick = placement.stick;
+      scene_.replace_mesh(stick_, [space, stick](int level) { return renderer::build_stick(space, stick, level); },
+                          renderer::stick_info(space, stick));
+      stick_sagitta_m_ = st.stick_sagitta_m;
+      stick_length_m_ = st.stick_length_m;
+    }
+    scene_.edit(stick_).pose = placement.stick_pose;
+  }
+  if (has_table_ && st.table_sagitta_m != table_sagitta_m_) {
+    renderer::TableStyle style;
+    style.cloth_sagitta_m = st.table_sagitta_m;
+    const auto table = world_.table;
+    scene_.replace_mesh(table_, [space, table, style](int level) { return renderer::build_table(space, table, level, style); },
+                        renderer::table_info(space, table, style));
+    table_sagitta_m_ = st.table_sagitta_m;
+  }
+}
+
+void TrialScene::show(const std::string& phase, bool stimulus_during_response) {
+  const bool stimulus =
+      phase == "stimulus" || (phase == "response" && stimulus_during_response);
+  auto set = [&](std::size_t i, bool v) {
+    if (scene_.objects()[i].visible != v) scene_.edit(i).visible = v;
+  };
+  if (has_table_) set(table_, stimulus);
+  for (auto b : balls_) set(b, stimulus);
+  if (has_stick_) set(stick_, stimulus);
+  set(fixation_, phase == "fixation");
+  set(prompt_, phase == "response");
+  set(page_, phase == "instructions" || phase == "break" || phase == "done");
+}
+
+std::optional<std::string> TrialScene::set_page(const std::string& text, const Isometry& head) {
+  if (text != page_text_) {
+    auto made = make_panel(world_.space, "page", text, font_path_, 1.0, 0.5);
+    if (auto* e = std::get_if<std::string>(&made)) return *e;
+    auto& o = std::get<renderer::SceneObject>(made);
+    scene_.replace_mesh(page_, o.build, o.info, std::move(o.text));
+    page_text_ = text;
+  }
+  scene_.edit(page_).pose = head * geometry::translation_m(world_.space, Vec3(0.0, 0.0, -1.2));
+  return std::nullopt;
+}
+
+}  // namespace curvlab::harness::runner
