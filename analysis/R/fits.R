@@ -8,9 +8,16 @@
 # internal noise). For a 2-option observer with bias b and slope s, mu = -b
 # and beta = s. Without lapse (lambda = 0) this is a probit GLM.
 
+# Completed, non-practice trials that got an answer. A response window that
+# ran out is stored as response "timeout" from device "none": not a judgement.
 analysed_trials <- function(trials) {
-  trials[trials$status == "completed" & !is.na(trials$response) &
+  trials[trials$status == "completed" & !is.na(trials$response) & !no_answer(trials) &
            (is.na(trials$is_practice) | trials$is_practice == 0), , drop = FALSE]
+}
+
+no_answer <- function(trials) {
+  device <- if ("response_device" %in% names(trials)) trials$response_device else rep(NA, nrow(trials))
+  (!is.na(device) & device == "none") | (!is.na(trials$response) & trials$response == "timeout")
 }
 
 # Condition factors: cond_* columns that label conditions (not the staircase

@@ -94,7 +94,9 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
     protocol_sha256 = s$protocol_sha256, software = paste(s$software_version, s$software_commit),
     backend = s$backend, renderer = paste(s$renderer_device, s$renderer_driver, sep = " / "),
     seed = s$seed, started_utc = s$started_utc, status = s$status,
-    completed = paste0(s$trials_completed, " / ", s$trials_planned))
+    completed = paste0(s$trials_completed, " / ", s$trials_planned),
+    no_answer = vapply(s$session_id, function(id)
+      sum(trials$session_id == id & trials$status == "completed" & no_answer(trials)), 0L))
 
   model_html <- vapply(models, function(m) {
     paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",

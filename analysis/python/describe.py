@@ -38,6 +38,11 @@ def load(path):
     if missing:
         fail(f"{csv}: missing column(s) {', '.join(missing)} (expected the curvlab trial CSV)")
     done = trials[(trials["status"] == "completed") & trials["response"].notna()]
+    # A response window that ran out is stored as "timeout" from device "none".
+    answered = done["response"] != "timeout"
+    if "response_device" in done.columns:
+        answered &= done["response_device"] != "none"
+    done = done[answered]
     if "is_practice" in done.columns:
         done = done[done["is_practice"] != "1"]
     return csv, done

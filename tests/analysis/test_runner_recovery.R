@@ -34,7 +34,7 @@ simulate_session <- function(protocol, db, participant, model, bias, slope, laps
 }
 
 cat("Recovery through the runner\n")
-truth <- data.frame(participant = as.character(1:4), bias_m = c(-0.01, 0, 0.008, 0.015),
+truth <- data.frame(participant = sprintf("R%02d", 1:4), bias_m = c(-0.01, 0, 0.008, 0.015),
                     slope_per_m = c(80, 150, 120, 200), lapse = c(0.02, 0, 0.03, 0.02))
 db <- scratch("runner_recovery.sqlite")
 unlink(paste0(db, c("", "-wal", "-shm")))
@@ -65,7 +65,7 @@ check(is.null(attr(r, "status")) && file.exists(file.path(out, "report.html")), 
 cat("Null check through the runner (physical observer)\n")
 db0 <- scratch("runner_null.sqlite")
 unlink(paste0(db0, c("", "-wal", "-shm")))
-for (p in 1:4) simulate_session(file.path(here, "null_space_view.toml"), db0, as.character(p), "physical",
+for (p in 1:4) simulate_session(file.path(here, "null_space_view.toml"), db0, sprintf("N%02d", p), "physical",
                                 c(-0.004, 0, 0.003, 0.006)[p], 150, 0.02)
 d0 <- read_curvlab(db0)
 m <- space_view_models(d0$trials)[[1]]
