@@ -81,7 +81,7 @@ figure_staircases <- function(trials) {
   d$condition <- condition_label(d)
   d$step <- if (all(is.na(d$step_index))) stats::ave(d$trial_index, d$participant, d$staircase, FUN = rank)
             else d$step_index
-  d$track <- sub(".* ", "", d$staircase)  # the protocol's staircase name
+  d$track <- sub(".*[ :]", "", d$staircase)  # the protocol's staircase name, without the cell
   d$reversal <- !is.na(d$is_reversal) & d$is_reversal == 1
   ggplot2::ggplot(d, ggplot2::aes(x = step, y = 1000 * intensity,
                                   group = interaction(participant, staircase), colour = track)) +
