@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <fstream>
 #include <fcntl.h>
 #include <random>
 #include <spawn.h>
@@ -124,4 +125,47 @@ TEST(Resume, UnknownSessionOrDatabaseIsAUsageError) {
   r = run_cli("resume --db " + db + " --session 9");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find("no session with id 9"), std::string::npos) << r.out;
+}
+
+// Tracking lost during a trial (the head's samples flagged invalid for half a
+// second of a recorded trajectory): the attempt is aborted and the trial runs
+// again once tracking is back; the rest of the session is unaffected.
+TEST(Resume, LostTrackingRepeatsTheTrial) {
+  const auto dir = fresh_dir("lost");
+  const auto walk = (dir / "walk.csv").string();
+  auto r = run_cli("trajectory walk-around --laps 3 --out " + walk);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::ifstream in(walk);
+  const auto lost = (dir / "lost.csv").string();
+  std::ofstream out(lost);
+  std::string line;
+  int flagged = 0;
+  while (std::getline(in, line)) {
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
+      const auto comma = line.find(',');
+      const long long t = std::stoll(line.substr(0, comma));
+      if (t >= 250'000'000 && t < 750'000'000) {
+        line[comma + 1] = '0';  // head_valid
+        ++flagged;
+      }
+    }
+    out << line << '\n';
+  }
+  out.close();
+  ASSERT_GT(flagged, 40);
+  const auto db = (dir / "lost.sqlite").string();
+  r = run_cli("run " + kProtocols + "demo.toml --participant P01 --render none --quiet --trajectory " + lost +
+              " --db " + db);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(db, "SELECT attempt, status FROM trials WHERE trial_index = 0")[0],
+            (std::vector<std::string>{"2", "completed"}));
+  EXPECT_EQ(query(db, "SELECT MAX(attempt) FROM trials WHERE trial_index > 0")[0][0], "1");
+  EXPECT_EQ(query(db, "SELECT json_extract(detail, '$.reason') FROM events WHERE kind = 'trial_aborted'"),
+            (std::vector<std::vector<std::string>>{{"tracking_lost"}}));
+  EXPECT_EQ(query(db, "SELECT COUNT(*) FROM events WHERE kind = 'trial_repeated'")[0][0], "1");
+  EXPECT_EQ(query(db, "SELECT COUNT(*) FROM trials WHERE status != 'completed'")[0][0], "0");
+  // The lost samples are logged as such.
+  EXPECT_GT(std::stoi(query(db, "SELECT COUNT(*) FROM tracking_samples WHERE device = 'head' "
+                                "AND position_valid = 0")[0][0]),
+            20);
 }
