@@ -12,6 +12,7 @@ packages=(
   fonts-dejavu-core xvfb xauth
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-mpmath
+  r-base-core r-cran-lme4 r-cran-ggplot2 r-cran-rsqlite r-cran-jsonlite python3-pandas python3-matplotlib
   xdotool
 )
 

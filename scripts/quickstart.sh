@@ -11,23 +11,29 @@ cmake --preset release "${launcher[@]}" >/dev/null
 cmake --build --preset release -j "$(nproc)"
 
 bin=build/release/bin/curvlab
-out=results/quickstart
+out=results/demo
+rm -rf "$out"
 mkdir -p "$out"
 echo
-echo "== The right-angled billiards tables for a 0.90 m physical edge =="
-for space in S3 E3 H3; do
-  "$bin" inspect table --space "$space" --edge-m 0.9 | tee "$out/table_$space.txt"
-  echo
-done
-echo "== Holonomy of the head-square (theta = 0.2 rad) =="
-for space in S3 H3; do
-  "$bin" inspect holonomy --space "$space" --theta-rad 0.2 | tee "$out/holonomy_$space.txt"
-  echo
-done
-echo "== A point 2.5 rad away on S3 of radius 1 m: native and back-hemisphere images =="
-"$bin" inspect map --space S3 --radius-m 1 --point 0,0,-0.5984721441,-0.8011436155 | tee "$out/map_S3.txt"
+echo "== Validating the demo protocol =="
+"$bin" validate protocols/demo.toml
 echo
-echo "== The cue stick and billiards table in H3, native view (offscreen Vulkan) =="
-"$bin" render --space H3 --view native --scene billiards --size 1024x1024 --out "$out/render_H3_native"
+echo "== Running it headless: offscreen Vulkan, simulated participant, SQLite =="
+"$bin" run protocols/demo.toml --participant P01 --db "$out/demo.sqlite" \
+  --images "$out/stimuli" --export "$out/export" | grep -v '^exports:'
 echo
-echo "Results are in $(pwd)/$out (text tables, and left.png/right.png/plan.json under render_H3_native/)"
+echo "== What the simulated observer should find (perception model, 20 participants) =="
+"$bin" predict protocols/demo.toml --participants 20 --simulations 200
+if [ -f analysis/report.R ] && command -v Rscript >/dev/null; then
+  echo
+  echo "== Analysis report =="
+  Rscript analysis/report.R --db "$out/demo.sqlite" --out "$out/report"
+fi
+echo
+echo "Results are in $(pwd)/$out:"
+echo "  database          $out/demo.sqlite   (every trial, tracked pose and frame; data_schema/codebook.md)"
+echo "  exports           $out/export/csv/trials.csv, $out/export/psychds/, $out/export/bids/"
+echo "  stimulus images   $out/stimuli/trial_NNNN_{left,right}.png (each trial's onset frame)"
+if [ -f "$out/report/report.html" ]; then
+  echo "  report            $out/report/report.html"
+fi

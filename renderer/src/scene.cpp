@@ -3,6 +3,7 @@
 #include "curvlab/geometry/maps.hpp"
 #include "curvlab/renderer/tiling.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -12,15 +13,20 @@ namespace curvlab::renderer {
 using geometry::SpaceKind;
 using geometry::Vec3;
 
+std::uint64_t Scene::next_revision() {
+  static std::atomic<std::uint64_t> counter{1};
+  return counter.fetch_add(1, std::memory_order_relaxed);
+}
+
 std::size_t Scene::add(SceneObject object) {
   objects_.push_back(std::move(object));
-  mesh_revisions_.push_back(next_mesh_revision_++);
-  ++revision_;
+  mesh_revisions_.push_back(next_revision());
+  revision_ = next_revision();
   return objects_.size() - 1;
 }
 
 SceneObject& Scene::edit(std::size_t index) {
-  ++revision_;
+  revision_ = next_revision();
   return objects_.at(index);
 }
 
@@ -30,8 +36,8 @@ void Scene::replace_mesh(std::size_t index, std::function<MeshData(int)> build, 
   o.build = std::move(build);
   o.info = std::move(info);
   o.text = std::move(text);
-  mesh_revisions_[index] = next_mesh_revision_++;
-  ++revision_;
+  mesh_revisions_[index] = next_revision();
+  revision_ = next_revision();
 }
 
 std::optional<SceneKind> parse_scene_kind(std::string_view text) {

@@ -117,6 +117,10 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
       {"response", "The participant's response", ""},
       {"response_device", "Device that gave the response", ""},
       {"completed_utc", "Wall-clock time the trial was committed (UTC, ISO 8601)", ""},
+      {"staircase", "Staircase trials: the staircase (block:name) the trial stepped", ""},
+      {"staircase_step", "Staircase trials: the step's index in its staircase, from 0", ""},
+      {"intensity", "Staircase trials: the value of the staircase's parameter shown", "protocol unit"},
+      {"is_reversal", "Staircase trials: 1 when the response reversed the staircase's direction", ""},
   };
   const std::size_t fixed = table.columns.size();
   try {
@@ -124,7 +128,9 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
                 "SELECT t.session_id, p.pseudonym, se.session_number, pr.sha256, b.block_index, "
                 "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.attempt, "
                 "t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
-                "t.completed_utc, t.conditions, t.stimulus FROM trials t "
+                "t.completed_utc, st.staircase, st.step_index, st.intensity, st.is_reversal, "
+                "t.conditions, t.stimulus FROM trials t "
+                "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
                 "JOIN sessions se ON se.session_id = t.session_id "
                 "JOIN participants p ON p.participant_id = se.participant_id "
                 "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
@@ -137,8 +143,8 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
     while (s.step()) {
       std::vector<Cell> row;
       for (int c = 0; c < static_cast<int>(fixed); ++c) row.push_back(s.column_opt_text(c));
-      auto cond = nlohmann::ordered_json::parse(s.column_text(17), nullptr, false);
-      auto stim = nlohmann::ordered_json::parse(s.column_text(18), nullptr, false);
+      auto cond = nlohmann::ordered_json::parse(s.column_text(21), nullptr, false);
+      auto stim = nlohmann::ordered_json::parse(s.column_text(22), nullptr, false);
       for (auto [obj, names, pos] : {std::tie(cond, cond_names, cond_pos),
                                      std::tie(stim, stim_names, stim_pos)}) {
         if (!obj.is_object()) continue;

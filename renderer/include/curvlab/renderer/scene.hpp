@@ -26,6 +26,9 @@ struct SceneObject {
 
 // A list of objects. Not thread-safe. Every mutable access bumps revision();
 // mesh_revision(i) changes only when object i's mesh or text may have changed.
+// Both are drawn from one process-wide counter, so two scenes never share a
+// revision: a renderer that draws one scene after another (a session builds
+// one per trial) can neither reuse the other's meshes nor skip its frame.
 class Scene {
  public:
   std::size_t add(SceneObject object);
@@ -41,8 +44,8 @@ class Scene {
  private:
   std::vector<SceneObject> objects_;
   std::vector<std::uint64_t> mesh_revisions_;
-  std::uint64_t revision_ = 1;
-  std::uint64_t next_mesh_revision_ = 1;
+  std::uint64_t revision_ = next_revision();
+  static std::uint64_t next_revision();
 };
 
 enum class SceneKind { stick, table, billiards, tiling };

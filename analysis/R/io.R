@@ -1,0 +1,275 @@
+# Reading curvlab data into plain data frames.
+#
+# Two sources give the same trial table:
+#   - a curvlab SQLite file (schema version 2, data_schema/schema.sql), read
+#     read-only with RSQLite; conditions/stimulus JSON are expanded into
+#     cond_<name> / stim_<name> columns exactly as `curvlab export --format csv`
+#     names them, and staircase steps are joined on trial_id;
+#   - an export directory holding trials.csv (`curvlab export --format csv`).
+# The database also gives full session provenance, observer ground truth and
+# tracking samples; an export directory gives what trials.csv carries.
+#
+# Input problems raise a condition of class "curvlab_input_error" whose message
+# names the file and what was expected; report.R turns it into exit code 2.
+
+curvlab_application_id <- 1129729090  # PRAGMA application_id "CVLB"
+curvlab_schema_version <- 2L
+
+input_error <- function(...) {
+  stop(structure(class = c("curvlab_input_error", "error", "condition"),
+                 list(message = paste0(...), call = NULL)))
+}
+
+# Reads a database file or an export directory; returns a list with
+#   source (path), kind ("database" | "export"), trials, sessions,
+#   staircase (steps), tracking (may be empty), events (observer rows).
+read_curvlab <- function(path, max_tracking_per_device = 20000L) {
+  if (!nzchar(path)) input_error("no input given (expected --db FILE or --export DIR)")
+  if (!file.exists(path))
+    input_error(path, ": no such file or directory (expected a curvlab SQLite database ",
+                "or a directory written by `curvlab export`)")
+  if (dir.exists(path)) read_export_dir(path) else read_database(path, max_tracking_per_device)
+}
+
+# ---------------------------------------------------------------------------
+# SQLite
+
+read_database <- function(path, max_tracking_per_device = 20000L) {
+  header <- tryCatch(readBin(path, "raw", 16L), error = function(e) raw(0))
+  if (length(header) < 16L || rawToChar(header[1:15]) != "SQLite format 3")
+    input_error(path, ": not an SQLite database (expected a curvlab data file ",
+                "written by `curvlab run`, or an export directory)")
+  con <- tryCatch(
+    DBI::dbConnect(RSQLite::SQLite(), path, flags = RSQLite::SQLITE_RO, bigint = "numeric"),
+    error = function(e) input_error(path, ": cannot open read-only: ", conditionMessage(e)))
+  on.exit(DBI::dbDisconnect(con), add = TRUE)
+  q <- function(sql, params = NULL) DBI::dbGetQuery(con, sql, params = params)
+
+  app_id <- q("PRAGMA application_id")[[1]]
+  version <- q("PRAGMA user_version")[[1]]
+  if (app_id != curvlab_application_id)
+    input_error(path, ": not a curvlab data file (PRAGMA application_id is ", app_id,
+                ", expected ", curvlab_application_id, " = \"CVLB\")")
+  if (version != curvlab_schema_version)
+    input_error(path, ": schema version ", version, ", expected ", curvlab_schema_version,
+                if (version < curvlab_schema_version)
+                  " (migrate it by opening it once with `curvlab export --db FILE --out DIR`)"
+                else " (written by a newer curvlab; update the analysis scripts)")
+  tables <- q("SELECT name FROM sqlite_master WHERE type = 'table'")$name
+  needed <- c("protocols", "participants", "sessions", "blocks", "trials",
+              "staircase_steps", "tracking_samples", "events")
+  missing <- setdiff(needed, tables)
+  if (length(missing))
+    input_error(path, ": missing table(s) ", paste(missing, collapse = ", "),
+                " (expected the curvlab schema version 2, data_schema/schema.sql)")
+
+  raw_trials <- q(paste(
+    "SELECT t.trial_id, t.session_id, p.pseudonym AS participant, se.session_number,",
+    "pr.sha256 AS protocol_sha256, b.block_index, b.name AS block_name, b.is_practice,",
+    "t.trial_index, t.trial_in_block, t.status, t.attempt, t.onset_ns, t.response_ns,",
+    "t.rt_ns, t.response, t.response_device, t.completed_utc, t.conditions, t.stimulus,",
+    "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct",
+    "FROM trials t",
+    "JOIN sessions se ON se.session_id = t.session_id",
+    "JOIN participants p ON p.participant_id = se.participant_id",
+    "JOIN protocols pr ON pr.protocol_id = se.protocol_id",
+    "JOIN blocks b ON b.block_id = t.block_id",
+    "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id",
+    "ORDER BY t.session_id, t.trial_index"))
+  cond <- expand_json_column(raw_trials$conditions, "cond_", path, "trials.conditions")
+  stim <- expand_json_column(raw_trials$stimulus, "stim_", path, "trials.stimulus")
+  trials <- cbind(raw_trials[setdiff(names(raw_trials), c("conditions", "stimulus"))], cond, stim)
+  trials <- normalise_trials(trials)
+
+  sessions <- q(paste(
+    "SELECT s.session_id, p.pseudonym AS participant, s.session_number,",
+    "pr.name AS protocol_name, pr.sha256 AS protocol_sha256, s.software_version,",
+    "s.software_commit, s.backend, s.renderer_device, s.renderer_driver,",
+    "s.display_refresh_hz, CAST(s.seed AS TEXT) AS seed, s.table_calibration, s.status,",
+    "s.started_utc, s.ended_utc,",
+    "(SELECT count(*) FROM trials t WHERE t.session_id = s.session_id) AS trials_planned,",
+    "(SELECT count(*) FROM trials t WHERE t.session_id = s.session_id",
+    "   AND t.status = 'completed') AS trials_completed,",
+    "(SELECT e.detail FROM events e WHERE e.session_id = s.session_id",
+    "   AND e.kind = 'observer' ORDER BY e.event_id LIMIT 1) AS observer",
+    "FROM sessions s JOIN participants p ON p.participant_id = s.participant_id",
+    "JOIN protocols pr ON pr.protocol_id = s.protocol_id ORDER BY s.session_id"))
+
+  staircase <- q(paste(
+    "SELECT st.session_id, p.pseudonym AS participant, st.staircase, st.step_index,",
+    "st.trial_id, st.intensity, st.response_correct, st.is_reversal, st.next_intensity",
+    "FROM staircase_steps st JOIN sessions s ON s.session_id = st.session_id",
+    "JOIN participants p ON p.participant_id = s.participant_id",
+    "ORDER BY st.session_id, st.staircase, st.step_index"))
+
+  events <- q("SELECT session_id, trial_id, t_ns, kind, detail FROM events WHERE kind = 'observer'")
+
+  # Thin long recordings evenly per session and device so figures stay light:
+  # a 1 kHz hour would otherwise be millions of points on a top-view plot.
+  counts <- q(paste("SELECT session_id, device, count(*) AS n FROM tracking_samples",
+                    "WHERE position_valid = 1 GROUP BY session_id, device"))
+  stride <- max(1, ceiling(max(c(0, counts$n)) / max_tracking_per_device))
+  tracking <- q(paste(
+    "SELECT * FROM (SELECT session_id, trial_id, device, t_ns, lab_px_m, lab_py_m, lab_pz_m,",
+    "coherence_error_m, ROW_NUMBER() OVER (PARTITION BY session_id, device ORDER BY t_ns) AS rn",
+    "FROM tracking_samples WHERE position_valid = 1) WHERE (rn - 1) % ? = 0"),
+    params = list(stride))
+  tracking$rn <- NULL
+
+  list(source = normalizePath(path), kind = "database", trials = trials,
+       sessions = sessions, staircase = staircase, tracking = tracking, events = events,
+       tracking_stride = stride)
+}
+
+# JSON objects (one per row) → data frame of prefixed columns, keys in order of
+# first appearance (the CSV exporter's order). Strings stay text, numbers
+# become numeric where every present value is a number, booleans TRUE/FALSE.
+expand_json_column <- function(texts, prefix, path, field) {
+  n <- length(texts)
+  if (n == 0) return(data.frame(row.names = integer(0)))
+  parsed <- tryCatch(
+    jsonlite::fromJSON(paste0("[", paste(ifelse(is.na(texts), "{}", texts), collapse = ","), "]"),
+                       simplifyVector = FALSE),
+    error = function(e) input_error(path, ": ", field, " holds invalid JSON (", conditionMessage(e), ")"))
+  keys <- unique(unlist(lapply(parsed, names), use.names = FALSE))
+  out <- lapply(keys, function(k) {
+    vals <- lapply(parsed, function(o) if (is.null(o[[k]])) NA else o[[k]])
+    if (all(vapply(vals, function(v) length(v) == 1 && (is.na(v) || is.numeric(v)), TRUE)))
+      as.numeric(unlist(vals))
+    else vapply(vals, function(v) if (length(v) == 1 && !is.na(v)) {
+      if (is.logical(v)) (if (v) "TRUE" else "FALSE") else as.character(v)
+    } else NA_character_, "")
+  })
+  names(out) <- paste0(prefix, keys)
+  as.data.frame(out, stringsAsFactors = FALSE, check.names = FALSE)
+}
+
+# ---------------------------------------------------------------------------
+# Export directory
+
+read_export_dir <- function(dir) {
+  csv <- file.path(dir, "trials.csv")
+  if (!file.exists(csv))
+    input_error(dir, ": no trials.csv in this directory (expected the output of ",
+                "`curvlab export --db FILE --format csv --out DIR`)")
+  trials <- tryCatch(
+    utils::read.csv(csv, colClasses = "character", na.strings = "NA", check.names = FALSE),
+    error = function(e) input_error(csv, ": cannot read as CSV (", conditionMessage(e), ")"))
+  required <- c("session_id", "participant", "status", "response", "trial_index")
+  missing <- setdiff(required, names(trials))
+  if (length(missing))
+    input_error(csv, ": missing column(s) ", paste(missing, collapse = ", "),
+                " (expected the curvlab trial CSV, see docs/data.md)")
+  stim_cols <- grep("^stim_", names(trials), value = TRUE)
+  for (col in stim_cols) {
+    v <- suppressWarnings(as.numeric(trials[[col]]))
+    if (all(is.na(v) == is.na(trials[[col]]))) trials[[col]] <- v
+  }
+  trials <- normalise_trials(trials)
+
+  sessions <- unique(trials[c("session_id", "participant", "session_number", "protocol_sha256")])
+  sessions <- sessions[order(sessions$session_id), , drop = FALSE]
+  sessions$trials_planned <- as.vector(table(factor(trials$session_id, sessions$session_id)))
+  sessions$trials_completed <- as.vector(table(factor(trials$session_id[trials$status == "completed"],
+                                                      sessions$session_id)))
+  for (col in c("protocol_name", "software_version", "software_commit", "backend",
+                "renderer_device", "renderer_driver", "seed", "table_calibration",
+                "status", "started_utc", "observer"))
+    sessions[[col]] <- NA_character_
+  # trials.csv has no session table: the first completion time stands in for the start.
+  sessions$started_utc <- vapply(sessions$session_id, function(s) {
+    t <- trials$completed_utc[trials$session_id == s & !is.na(trials$completed_utc)]
+    if (length(t)) min(t) else NA_character_
+  }, "")
+
+  staircase <- trials[!is.na(trials$intensity),
+                      intersect(c("session_id", "participant", "staircase", "step_index",
+                                  "trial_index", "intensity", "is_reversal"), names(trials)),
+                      drop = FALSE]
+  list(source = normalizePath(dir), kind = "export", trials = trials, sessions = sessions,
+       staircase = staircase, tracking = read_bids_motion(dir), events = data.frame(),
+       tracking_stride = 1)
+}
+
+# Lab positions from a BIDS-motion export (DIR/bids/sub-*/ses-*/motion), when
+# present: one *_motion.tsv per device with columns named by *_channels.tsv.
+read_bids_motion <- function(dir) {
+  files <- list.files(file.path(dir, "bids"), pattern = "_motion\\.tsv$", recursive = TRUE,
+                      full.names = TRUE)
+  empty <- data.frame(session_id = integer(0), trial_id = integer(0), device = character(0),
+                      t_ns = numeric(0), lab_px_m = numeric(0), lab_py_m = numeric(0),
+                      lab_pz_m = numeric(0), coherence_error_m = numeric(0))
+  if (!length(files)) return(empty)
+  rows <- lapply(files, function(f) {
+    channels_file <- sub("_motion\\.tsv$", "_channels.tsv", f)
+    if (!file.exists(channels_file)) return(NULL)
+    ch <- utils::read.delim(channels_file, colClasses = "character")
+    m <- utils::read.delim(f, header = FALSE, colClasses = "numeric", na.strings = c("n/a", "NA"))
+    if (ncol(m) != nrow(ch)) return(NULL)
+    names(m) <- ch$name
+    pos <- ch$name[ch$type == "POS"]
+    if (length(pos) != 3) return(NULL)
+    base <- basename(f)
+    data.frame(session_id = as.integer(sub(".*_ses-([0-9]+)_.*", "\\1", base)),
+               participant = sub("^sub-([^_]+)_.*", "\\1", base),
+               trial_id = NA_integer_,
+               device = sub(".*_tracksys-([^_]+)_motion\\.tsv$", "\\1", base),
+               t_ns = m[[ch$name[ch$type == "LATENCY"][1]]] * 1e9,
+               lab_px_m = m[[pos[1]]], lab_py_m = m[[pos[2]]], lab_pz_m = m[[pos[3]]],
+               coherence_error_m = NA_real_)
+  })
+  rows <- rows[!vapply(rows, is.null, TRUE)]
+  if (!length(rows)) return(empty)
+  do.call(rbind, rows)
+}
+
+# ---------------------------------------------------------------------------
+# Common column types and derived columns
+
+normalise_trials <- function(trials) {
+  int_cols <- c("session_id", "session_number", "block_index", "is_practice", "trial_index",
+                "trial_in_block", "attempt", "step_index", "is_reversal", "trial_id")
+  num_cols <- c("onset_ns", "response_ns", "rt_ns", "intensity")
+  for (col in intersect(int_cols, names(trials))) trials[[col]] <- as.integer(trials[[col]])
+  for (col in intersect(num_cols, names(trials))) trials[[col]] <- as.numeric(trials[[col]])
+  for (col in grep("^cond_", names(trials), value = TRUE))
+    trials[[col]] <- as.character(trials[[col]])
+  for (col in c("staircase", "step_index", "intensity", "is_reversal"))
+    if (!col %in% names(trials)) trials[[col]] <- NA
+  if (!"is_practice" %in% names(trials)) trials$is_practice <- 0L
+  if (!"cond_judged" %in% names(trials)) trials$cond_judged <- "stick"
+  # The staircase name is also a condition value; the step row is authoritative.
+  if ("cond_staircase" %in% names(trials))
+    trials$staircase <- ifelse(is.na(trials$staircase), trials$cond_staircase, trials$staircase)
+  trials$rt_ms <- trials$rt_ns / 1e6
+  trials$participant <- as.character(trials$participant)
+  trials$x_m <- stimulus_intensity(trials)
+  trials
+}
+
+# The intensity a trial showed, in metres of signed sagitta: the staircase
+# step's intensity where there is one, otherwise the judged object's sagitta.
+stimulus_intensity <- function(trials) {
+  n <- nrow(trials)
+  pick <- function(col) if (col %in% names(trials)) as.numeric(trials[[col]]) else rep(NA_real_, n)
+  judged <- ifelse(is.na(trials$cond_judged), "stick", trials$cond_judged)
+  x <- ifelse(judged == "table", pick("stim_table_sagitta_m"), pick("stim_stick_sagitta_m"))
+  ifelse(is.na(trials$intensity), x, trials$intensity)
+}
+
+# Observer ground truth (events kind "observer") per session, as columns.
+observer_truth <- function(data) {
+  s <- data$sessions
+  if (!nrow(s) || all(is.na(s$observer))) return(NULL)
+  rows <- lapply(seq_len(nrow(s)), function(i) {
+    if (is.na(s$observer[i])) return(NULL)
+    d <- jsonlite::fromJSON(s$observer[i])
+    data.frame(session_id = s$session_id[i], participant = s$participant[i],
+               model = if (is.null(d$model)) NA else d$model,
+               bias_m = num_or_na(d$bias_m), slope_per_m = num_or_na(d$slope_per_m),
+               lapse = num_or_na(d$lapse), criterion_m = num_or_na(d$criterion_m))
+  })
+  do.call(rbind, rows[!vapply(rows, is.null, TRUE)])
+}
+
+num_or_na <- function(v) if (is.null(v)) NA_real_ else as.numeric(v)

@@ -1,0 +1,162 @@
+# The analysis report: one self-contained HTML file (figures embedded as
+# base64 PNG, no external files, no pandoc), plus the figures and tables as
+# separate PNG and CSV files next to it for reuse in papers.
+
+html_escape <- function(x) {
+  x <- gsub("&", "&amp;", as.character(x), fixed = TRUE)
+  x <- gsub("<", "&lt;", x, fixed = TRUE)
+  x <- gsub(">", "&gt;", x, fixed = TRUE)
+  gsub("\"", "&quot;", x, fixed = TRUE)
+}
+
+format_cell <- function(v, digits = 4) {
+  if (is.numeric(v)) {
+    out <- ifelse(is.na(v), "NA", formatC(signif(v, digits), format = "fg", digits = digits, flag = "#"))
+    out <- sub("\\.$", "", out)
+    ifelse(!is.na(v) & v == round(v) & abs(v) < 1e9, format(round(v), scientific = FALSE, trim = TRUE), out)
+  } else ifelse(is.na(v), "NA", as.character(v))
+}
+
+html_table <- function(df, caption = NULL, digits = 4) {
+  if (is.null(df) || !nrow(df)) return("<p class=\"empty\">(nothing to show)</p>")
+  head <- paste0("<tr>", paste0("<th>", html_escape(names(df)), "</th>", collapse = ""), "</tr>")
+  cells <- vapply(df, function(col) html_escape(format_cell(col, digits)), character(nrow(df)))
+  if (is.null(dim(cells))) cells <- matrix(cells, nrow = nrow(df))
+  body <- paste0("<tr>", apply(cells, 1, function(r) paste0("<td>", r, "</td>", collapse = "")), "</tr>",
+                 collapse = "\n")
+  paste0("<table>", if (!is.null(caption)) paste0("<caption>", html_escape(caption), "</caption>"),
+         "<thead>", head, "</thead><tbody>", body, "</tbody></table>")
+}
+
+html_figure <- function(file, caption) {
+  if (is.null(file) || !file.exists(file)) return("")
+  data <- jsonlite::base64_enc(readBin(file, "raw", file.info(file)$size))
+  paste0("<figure><img alt=\"", html_escape(caption), "\" src=\"data:image/png;base64,", data,
+         "\"><figcaption>", html_escape(caption), "</figcaption></figure>")
+}
+
+report_css <- paste(
+  "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;max-width:1100px;margin:2em auto;",
+  "padding:0 1em;color:#222;line-height:1.45}",
+  "h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}",
+  "table{border-collapse:collapse;margin:.8em 0;font-size:.85em}",
+  "th,td{border:1px solid #ddd;padding:.25em .5em;text-align:right}",
+  "th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}",
+  "caption{caption-side:top;text-align:left;font-weight:600;padding:.3em 0}",
+  "figure{margin:1em 0}img{max-width:100%;border:1px solid #eee}figcaption{font-size:.9em;color:#555}",
+  ".note{background:#fff8e1;border-left:4px solid #f9a825;padding:.4em .8em;margin:.5em 0}",
+  ".empty{color:#888}code{background:#f4f4f4;padding:0 .2em}")
+
+# Writes report.html (and the PNG/CSV files) into out_dir; returns its path.
+build_report <- function(data, out_dir, positive = "convex", lapse = "free", lapse_max = 0.1,
+                         discard_reversals = 2L) {
+  dir.create(out_dir, recursive = TRUE, showWarnings = FALSE)
+  if (!dir.exists(out_dir) || file.access(out_dir, 2) != 0)
+    stop(paste0(out_dir, ": cannot write the report here (expected a writable folder)"))
+  trials <- data$trials
+  analysed <- analysed_trials(trials)
+  cond_cols <- condition_columns(trials)
+  fac <- intersect(c("cond_space", "cond_view", "cond_judged"), names(trials))
+
+  props <- response_proportions(trials, c("participant", cond_cols))
+  props_pooled <- response_proportions(trials, fac)
+  fits <- psychometric_fits(trials, positive, lapse, lapse_max)
+  thresholds <- staircase_thresholds(trials, discard_reversals)
+  models <- space_view_models(trials, positive)
+  truth <- observer_truth(data)
+
+  fig <- function(name) file.path(out_dir, name)
+  n_panels <- function(k) max(1, ceiling(sqrt(k)))
+  figures <- list(
+    list(save_figure(figure_proportions(trials), fig("proportions.png"), 10, 5.5),
+         "Proportion of each judgement by space (panels) and view (x axis), pooled over participants with 95% Wilson intervals; points are single participants."),
+    list(save_figure(figure_psychometric(trials, fits, positive), fig("psychometric.png"), 10,
+                     2.5 + 3 * n_panels(length(unique(fits$condition)))),
+         paste0("Psychometric functions: proportion of '", positive, "' per shown sagitta (point area = trials) with the fitted probit-with-lapse curve per participant; crosses mark the PSEs.")),
+    list(save_figure(figure_staircases(trials), fig("staircases.png"), 10,
+                     2 + 1.6 * length(unique(stats::na.omit(analysed$participant[!is.na(analysed$staircase)])))),
+         "Staircase tracks: shown sagitta against step for every staircase; open circles are reversals."),
+    list(save_figure(figure_trajectories(data$tracking, data$sessions), fig("trajectories.png"), 10, 7),
+         paste0("Head and hand positions over the physical table, seen from above (lab x right, forward up the page)",
+                if (isTRUE(data$tracking_stride > 1)) sprintf("; every %d-th sample drawn", data$tracking_stride) else "", ".")),
+    list(save_figure(figure_rt(trials), fig("rt.png"), 10, 6),
+         "Response-time distributions per space (columns) and view (rows), stacked by judgement; dashed lines are medians.")
+  )
+  figures <- figures[!vapply(figures, function(f) is.null(f[[1]]), TRUE)]
+
+  utils::write.csv(props, fig("proportions.csv"), row.names = FALSE)
+  utils::write.csv(fits, fig("psychometric_fits.csv"), row.names = FALSE)
+  if (nrow(thresholds)) utils::write.csv(thresholds, fig("staircase_thresholds.csv"), row.names = FALSE)
+
+  s <- data$sessions
+  provenance <- data.frame(
+    session = s$session_id, participant = s$participant, protocol = s$protocol_name,
+    protocol_sha256 = s$protocol_sha256, software = paste(s$software_version, s$software_commit),
+    backend = s$backend, renderer = paste(s$renderer_device, s$renderer_driver, sep = " / "),
+    seed = s$seed, started_utc = s$started_utc, status = s$status,
+    completed = paste0(s$trials_completed, " / ", s$trials_planned),
+    no_answer = vapply(s$session_id, function(id)
+      sum(trials$session_id == id & trials$status == "completed" & no_answer(trials)), 0L))
+
+  model_html <- vapply(models, function(m) {
+    paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",
+           "<p><code>", html_escape(m$formula), "</code>, ", html_escape(m$family), "; ",
+           m$n, " trials, ", m$participants, " participant(s)",
+           if (!is.na(m$random_sd)) sprintf("; participant SD (probit units) %.3g", m$random_sd) else "", ".</p>",
+           paste0("<p class=\"note\">", html_escape(m$notes), "</p>", collapse = ""),
+           html_table(m$coefficients, "Fixed effects (probit units)"),
+           html_table(m$tests, "Likelihood-ratio tests against the model without these terms"))
+  }, "")
+
+  truth_html <- if (!is.null(truth) && nrow(truth)) {
+    cmp <- truth
+    cmp$true_pse_m <- -cmp$bias_m
+    if (nrow(fits)) {
+      agg <- stats::aggregate(cbind(pse_m, slope_per_m) ~ participant, fits, mean)
+      cmp <- merge(cmp, agg, by = "participant", all.x = TRUE)
+      names(cmp)[names(cmp) == "pse_m"] <- "mean_fitted_pse_m"
+      names(cmp)[names(cmp) == "slope_per_m"] <- "mean_fitted_slope_per_m"
+    }
+    paste0("<h2>Simulated observers</h2><p>These sessions were answered by curvlab's simulated observer; ",
+           "its parameters are the ground truth for the fits (for a 2-option judgement in E3 the PSE is -bias_m ",
+           "and the probit slope is slope_per_m; in curved spaces the perception model adds the perceived bend).</p>",
+           html_table(cmp, "Observer parameters and fits averaged over conditions"))
+  } else ""
+
+  body <- c(
+    "<h1>curvlab analysis report</h1>",
+    paste0("<p>Source: <code>", html_escape(data$source), "</code> (", data$kind, "); generated ",
+           format(Sys.time(), "%Y-%m-%d %H:%M:%S %Z"), " with R ", html_escape(getRversion()), ", lme4 ",
+           html_escape(utils::packageVersion("lme4")), ". ", nrow(analysed), " completed non-practice trials of ",
+           nrow(trials), " planned, ", length(unique(analysed$participant)), " participant(s), ",
+           nrow(s), " session(s).</p>"),
+    if (data$kind == "export") "<p class=\"note\">Read from an export directory: trials.csv carries no protocol name, software, renderer or seed; run the report on the database for full provenance.</p>" else "",
+    "<h2>Sessions and provenance</h2>", html_table(provenance),
+    "<h2>Judgements</h2>",
+    vapply(figures[grepl("proportions", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
+    html_table(props_pooled, "Proportions pooled over participants (95% Wilson intervals)"),
+    html_table(props, "Proportions per participant and condition (also in proportions.csv)"),
+    "<h2>Psychometric fits</h2>",
+    paste0("<p>Model: P(", html_escape(positive), ") = &lambda;/K + (1 &minus; &lambda;) &Phi;(&beta;(x &minus; PSE)), x the shown signed sagitta in metres, ",
+           "K the number of answer options, &lambda; the lapse rate (", if (lapse == "free") sprintf("fitted by maximum likelihood in [0, %g]", lapse_max) else "fixed at 0: probit GLM",
+           "). Standard errors from the observed information. Fitted wherever the shown sagitta takes three or more values in a participant &times; condition cell (constant-stimulus levels or staircase steps pooled).</p>"),
+    vapply(figures[grepl("psychometric", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
+    html_table(fits, "PSE (m) and slope (1/m) per participant and condition"),
+    if (nrow(thresholds)) c("<h2>Staircases</h2>",
+                            vapply(figures[grepl("staircases", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
+                            html_table(thresholds, sprintf("Reversal-mean thresholds (first %d reversals discarded; SE = SD/sqrt(n))", discard_reversals))) else "",
+    "<h2>Mixed models: space &times; view</h2>",
+    if (length(models)) model_html else "<p class=\"empty\">(no model: no completed trials)</p>",
+    truth_html,
+    "<h2>Tracking</h2>",
+    vapply(figures[grepl("trajectories", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
+    if (!any(grepl("trajectories", vapply(figures, `[[`, "", 1)))) "<p class=\"empty\">(no tracking samples in this source)</p>" else "",
+    "<h2>Response times</h2>",
+    vapply(figures[grepl("rt\\.png", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""))
+  html <- paste0("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>curvlab report</title><style>",
+                 report_css, "</style></head><body>\n", paste(body, collapse = "\n"), "\n</body></html>\n")
+  out <- file.path(out_dir, "report.html")
+  writeLines(html, out, useBytes = TRUE)
+  invisible(list(report = out, figures = vapply(figures, `[[`, "", 1), fits = fits, models = models,
+                 proportions = props, thresholds = thresholds))
+}

@@ -1,0 +1,91 @@
+# The report command end to end on synthetic curvlab databases: exit codes,
+# figures that exist and are not blank, provenance in the HTML, the export
+# directory path (through the real `curvlab export`) and the Python summary.
+#   Rscript tests/analysis/test_report.R SOURCE_ROOT [CURVLAB_BINARY]
+source(file.path(commandArgs(TRUE)[1], "tests/analysis/helpers.R"))
+curvlab <- if (length(commandArgs(TRUE)) >= 2) commandArgs(TRUE)[2] else ""
+rscript <- file.path(R.home("bin"), "Rscript")
+python <- "/usr/bin/python3"
+report_r <- file.path(source_root, "analysis", "report.R")
+run <- function(cmd, args) {
+  out <- suppressWarnings(system2(cmd, args, stdout = TRUE, stderr = TRUE))
+  list(status = if (is.null(attr(out, "status"))) 0L else attr(out, "status"), out = out)
+}
+png_ok <- function(files) run(python, c(file.path(source_root, "tests/analysis/check_png.py"), files))
+
+truth <- data.frame(participant = c("P01", "P02", "P03"), bias_m = c(-0.01, 0, 0.01),
+                    slope_per_m = c(100, 150, 200), lapse = 0.02)
+db <- scratch("report.sqlite")
+simulate_curvlab_db(db, truth, spaces = c("E3", "H3"), views = c("tourist", "native"), repetitions = 6, seed = 31)
+stair <- scratch("report_staircase.sqlite")
+simulate_curvlab_db(stair, truth[1:2, ], spaces = "H3", views = c("tourist", "native"), judgement = "staircase",
+                    staircase_trials = 30, seed = 32)
+
+cat("Report from a database\n")
+out <- scratch("report_db")
+r <- run(rscript, c(report_r, "--db", db, "--out", out))
+check(r$status == 0, paste("exit 0:", paste(utils::tail(r$out, 3), collapse = " | ")))
+check(utils::tail(r$out, 1) == normalizePath(file.path(out, "report.html")), "prints the report path last")
+html <- paste(readLines(file.path(out, "report.html"), warn = FALSE), collapse = "\n")
+figs <- file.path(out, c("proportions.png", "psychometric.png", "trajectories.png", "rt.png"))
+check(all(file.exists(figs)), "proportions, psychometric, trajectories and RT figures written")
+check(lengths(regmatches(html, gregexpr("data:image/png;base64,", html))) == 4, "all four figures embedded in the HTML")
+p <- png_ok(figs)
+check(p$status == 0, paste("figures are not blank:", paste(p$out, collapse = " | ")))
+check(grepl("synthetic-constant", html) && grepl(strrep("1f", 32), html) && grepl("31001", html) &&
+        grepl("synthetic data (analysis/R/simulate.R)", html, fixed = TRUE) && grepl("168 / 168", html),
+      "provenance: protocol name, sha256, seed, renderer, trials completed/planned")
+check(grepl("y ~ x_m + space * view + (1 | participant)", html, fixed = TRUE), "mixed model formula shown")
+check(grepl("Simulated observers", html), "observer ground truth section")
+fits <- utils::read.csv(file.path(out, "psychometric_fits.csv"))
+check(nrow(fits) == 12, "one psychometric fit per participant x space x view")
+
+cat("Report from staircases\n")
+out2 <- scratch("report_staircase")
+r <- run(rscript, c(report_r, "--db", stair, "--out", out2, "--quiet"))
+check(r$status == 0 && length(r$out) == 1, "exit 0, --quiet prints one line")
+check(file.exists(file.path(out2, "staircases.png")) && png_ok(file.path(out2, "staircases.png"))$status == 0,
+      "staircase track figure written and not blank")
+check(file.exists(file.path(out2, "staircase_thresholds.csv")), "staircase thresholds table written")
+
+cat("The blank-figure check can fail\n")
+blank <- scratch("blank.png")
+grDevices::png(blank, 800, 600); graphics::plot.new(); invisible(grDevices::dev.off())
+check(png_ok(blank)$status == 1, "an empty page is rejected")
+
+cat("Bad input: exit 2 with the file named\n")
+r <- run(rscript, c(report_r, "--db", scratch("missing.sqlite"), "--out", scratch("x")))
+check(r$status == 2 && any(grepl("missing.sqlite: no such file", r$out)), "missing database")
+text_file <- scratch("notes.txt"); writeLines("not a database", text_file)
+r <- run(rscript, c(report_r, "--db", text_file, "--out", scratch("x")))
+check(r$status == 2 && any(grepl("notes.txt: not an SQLite database", r$out)), "text file")
+other <- scratch("other.sqlite"); if (file.exists(other)) file.remove(other)
+con <- DBI::dbConnect(RSQLite::SQLite(), other); invisible(DBI::dbExecute(con, "CREATE TABLE t (a)")); DBI::dbDisconnect(con)
+r <- run(rscript, c(report_r, "--db", other, "--out", scratch("x")))
+check(r$status == 2 && any(grepl("other.sqlite: not a curvlab data file", r$out)), "SQLite file of another program")
+empty_dir <- scratch("empty_export"); dir.create(empty_dir, showWarnings = FALSE)
+r <- run(rscript, c(report_r, "--export", empty_dir, "--out", scratch("x")))
+check(r$status == 2 && any(grepl("no trials.csv", r$out)), "export directory without trials.csv")
+r <- run(rscript, c(report_r, "--db", db, "--out", scratch("x"), "--lapse", "maybe"))
+check(r$status == 2 && any(grepl("--lapse must be", r$out)), "bad option value")
+
+if (nzchar(curvlab) && file.exists(curvlab)) {
+  cat("Report from `curvlab export` output, and the Python summary\n")
+  exp_dir <- scratch("export")
+  unlink(exp_dir, recursive = TRUE)
+  r <- run(curvlab, c("export", "--db", db, "--format", "csv", "--out", exp_dir))
+  check(r$status == 0, "curvlab export --format csv")
+  out3 <- scratch("report_export")
+  r <- run(rscript, c(report_r, "--export", exp_dir, "--out", out3, "--quiet"))
+  check(r$status == 0, "report from the export directory")
+  fits_csv <- utils::read.csv(file.path(out3, "psychometric_fits.csv"))
+  key <- function(f) f[order(f$participant, f$condition), c("pse_m", "slope_per_m")]
+  check(isTRUE(all.equal(key(fits_csv), key(fits), tolerance = 1e-6, check.attributes = FALSE)),
+        "same fits from the CSV export as from the database")
+  r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), exp_dir, "--figure", scratch("describe.png")))
+  check(r$status == 0 && any(grepl("Proportion of each judgement", r$out)), "describe.py prints proportions")
+  check(png_ok(scratch("describe.png"))$status == 0, "describe.py figure is not blank")
+  r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), empty_dir))
+  check(r$status == 2, "describe.py: exit 2 without trials.csv")
+} else cat("(no curvlab binary given: export path not tested)\n")
+finish()

@@ -1,0 +1,171 @@
+// kill -9 at random instants of headless sessions, then resume: every trial
+// is completed exactly once, in the stored order, and the file stays sound.
+#include "run_cli.hpp"
+#include "session_db.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <fstream>
+#include <fcntl.h>
+#include <random>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <thread>
+
+extern char** environ;
+
+using curvlab::testing::fresh_dir;
+using curvlab::testing::query;
+using curvlab::testing::run_cli;
+
+namespace {
+
+const std::string kProtocols = std::string(CURVLAB_SOURCE_DIR) + "/protocols/";
+
+// Starts the program with its output discarded, waits `delay`, kills it
+// with SIGKILL. Returns true when the kill landed (the program was still
+// running), false when it had already exited.
+bool run_and_kill(const std::vector<std::string>& args, std::chrono::milliseconds delay) {
+  std::vector<char*> argv;
+  std::string bin = CURVLAB_BIN;
+  argv.push_back(bin.data());
+  std::vector<std::string> copy = args;
+  for (auto& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, bin.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) return false;
+  std::this_thread::sleep_for(delay);
+  int status = 0;
+  const bool running = waitpid(pid, &status, WNOHANG) == 0;
+  if (running) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+  }
+  return running;
+}
+
+}  // namespace
+
+TEST(Resume, KillNineAtRandomPointsThenResumeCompletesEveryTrialOnce) {
+  const auto dir = fresh_dir("kill");
+  const auto db = (dir / "study.sqlite").string();
+  std::mt19937 rng(20260731);
+  std::uniform_int_distribution<int> delay_ms(250, 1400);
+  int kills = 0;
+  int interrupted_mid_session = 0;
+  for (int round = 0; round < 6; ++round) {
+    const auto sessions = query(db, "SELECT session_id, status FROM sessions");
+    if (!sessions.empty() && sessions[0][1] == "completed") break;
+    std::vector<std::string> args;
+    if (sessions.empty())
+      args = {"run", kProtocols + "proposed_study.toml", "--participant", "P03", "--db", db, "--render", "none",
+              "--quiet"};
+    else
+      args = {"resume", "--db", db, "--session", sessions[0][0], "--render", "none", "--quiet"};
+    if (run_and_kill(args, std::chrono::milliseconds(delay_ms(rng)))) {
+      ++kills;
+      const auto done = query(db, "SELECT COUNT(*) FROM trials WHERE status = 'completed'");
+      if (!done.empty() && std::stoi(done[0][0]) > 0) ++interrupted_mid_session;
+    }
+  }
+  // Finish whatever is left.
+  auto sessions = query(db, "SELECT session_id, status FROM sessions");
+  ASSERT_EQ(sessions.size(), 1u) << "the first run was killed before it stored its session";
+  if (sessions[0][1] != "completed") {
+    const auto r = run_cli("resume --db " + db + " --session " + sessions[0][0] + " --render none --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  }
+  EXPECT_GE(kills, 1);
+  EXPECT_GE(interrupted_mid_session, 1);
+
+  // Every trial completed exactly once, with one response.
+  const auto counts = query(db, "SELECT COUNT(*), SUM(status = 'completed'), SUM(response IS NOT NULL), "
+                                "MIN(attempt), MAX(attempt) FROM trials");
+  EXPECT_EQ(counts[0][0], counts[0][1]);
+  EXPECT_EQ(counts[0][0], counts[0][2]);
+  EXPECT_EQ(counts[0][3], "1");
+  // In the stored order: the trials' onsets, in the order they happened,
+  // never go back (an interrupted trial is run again, then the next).
+  const auto onsets = query(db, "SELECT t.trial_index FROM events e JOIN trials t ON t.trial_id = e.trial_id "
+                                "WHERE e.kind = 'onset' ORDER BY e.event_id");
+  ASSERT_FALSE(onsets.empty());
+  int previous = -1;
+  for (const auto& row : onsets) {
+    const int index = std::stoi(row[0]);
+    EXPECT_GE(index, previous);
+    previous = index;
+  }
+  // Each completed trial's response came after its last onset, and the
+  // resumed runs logged their frames after the killed ones (one clock).
+  EXPECT_EQ(query(db, "SELECT COUNT(*) FROM trials WHERE response_ns < onset_ns")[0][0], "0");
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
+  EXPECT_EQ(curvlab::testing::integrity(db), "ok");
+
+  // A completed session cannot be resumed again.
+  const auto again = run_cli("resume --db " + db + " --session " + sessions[0][0]);
+  EXPECT_EQ(again.exit_code, 2);
+  EXPECT_NE(again.out.find("already completed"), std::string::npos) << again.out;
+}
+
+TEST(Resume, UnknownSessionOrDatabaseIsAUsageError) {
+  const auto dir = fresh_dir("unknown");
+  auto r = run_cli("resume --db " + (dir / "missing.sqlite").string() + " --session 1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("no such database"), std::string::npos) << r.out;
+  const auto db = (dir / "d.sqlite").string();
+  ASSERT_EQ(run_cli("run " + kProtocols + "demo.toml --participant P01 --render none --quiet --db " + db).exit_code, 0);
+  r = run_cli("resume --db " + db + " --session 9");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("no session with id 9"), std::string::npos) << r.out;
+}
+
+// Tracking lost during a trial (the head's samples flagged invalid for half a
+// second of a recorded trajectory): the attempt is aborted and the trial runs
+// again once tracking is back; the rest of the session is unaffected.
+TEST(Resume, LostTrackingRepeatsTheTrial) {
+  const auto dir = fresh_dir("lost");
+  const auto walk = (dir / "walk.csv").string();
+  auto r = run_cli("trajectory walk-around --laps 3 --out " + walk);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::ifstream in(walk);
+  const auto lost = (dir / "lost.csv").string();
+  std::ofstream out(lost);
+  std::string line;
+  int flagged = 0;
+  while (std::getline(in, line)) {
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
+      const auto comma = line.find(',');
+      const long long t = std::stoll(line.substr(0, comma));
+      if (t >= 250'000'000 && t < 750'000'000) {
+        line[comma + 1] = '0';  // head_valid
+        ++flagged;
+      }
+    }
+    out << line << '\n';
+  }
+  out.close();
+  ASSERT_GT(flagged, 40);
+  const auto db = (dir / "lost.sqlite").string();
+  r = run_cli("run " + kProtocols + "demo.toml --participant P01 --render none --quiet --trajectory " + lost +
+              " --db " + db);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(db, "SELECT attempt, status FROM trials WHERE trial_index = 0")[0],
+            (std::vector<std::string>{"2", "completed"}));
+  EXPECT_EQ(query(db, "SELECT MAX(attempt) FROM trials WHERE trial_index > 0")[0][0], "1");
+  EXPECT_EQ(query(db, "SELECT json_extract(detail, '$.reason') FROM events WHERE kind = 'trial_aborted'"),
+            (std::vector<std::vector<std::string>>{{"tracking_lost"}}));
+  EXPECT_EQ(query(db, "SELECT COUNT(*) FROM events WHERE kind = 'trial_repeated'")[0][0], "1");
+  EXPECT_EQ(query(db, "SELECT COUNT(*) FROM trials WHERE status != 'completed'")[0][0], "0");
+  // The lost samples are logged as such.
+  EXPECT_GT(std::stoi(query(db, "SELECT COUNT(*) FROM tracking_samples WHERE device = 'head' "
+                                "AND position_valid = 0")[0][0]),
+            20);
+}

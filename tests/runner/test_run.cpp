@@ -1,0 +1,158 @@
+// Whole headless sessions through the program, answered by the simulated
+// observer: the paper's study, reproducibility, replay, bad input.
+#include "run_cli.hpp"
+#include "session_db.hpp"
+
+#include "curvlab/renderer/image_io.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <map>
+
+using curvlab::testing::fresh_dir;
+using curvlab::testing::query;
+using curvlab::testing::run_cli;
+
+namespace {
+
+const std::string kProtocols = std::string(CURVLAB_SOURCE_DIR) + "/protocols/";
+
+}  // namespace
+
+// The proposed study with two simulated participants: on the straight stick
+// the native H3 view is mostly judged convex (bowed toward the viewer), the
+// native S3 view concave, and the tourist and one-eye views straight
+// (DESIGN.md §5; paper, "Mental models of space").
+TEST(RunHeadless, TheProposedStudyFollowsThePerceptionModel) {
+  const auto dir = fresh_dir("study");
+  const auto db = (dir / "study.sqlite").string();
+  for (const char* who : {"P01", "P02"}) {
+    const auto r = run_cli("run " + kProtocols + "proposed_study.toml --participant " + who + " --db " + db +
+                           " --render none --quiet --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  }
+  const auto rows = query(db,
+                          "SELECT json_extract(conditions, '$.space'), json_extract(conditions, '$.view'), "
+                          "response FROM trials t JOIN blocks b ON b.block_id = t.block_id WHERE b.is_practice = 0 "
+                          "AND json_extract(conditions, '$.judged') = 'stick' "
+                          "AND json_extract(conditions, '$.stick_bend') = '0' AND t.status = 'completed'");
+  std::map<std::string, std::map<std::string, int>> counts;  // "H3 native" → response → n
+  for (const auto& row : rows) ++counts[row[0] + " " + row[1]][row[2]];
+  ASSERT_EQ(counts.size(), 9u);
+  auto share = [&](const std::string& cond, const std::string& response) {
+    int n = 0;
+    for (const auto& [resp, k] : counts[cond]) n += k;
+    return n == 0 ? 0.0 : counts[cond][response] / double(n);
+  };
+  EXPECT_GE(share("H3 native", "convex"), 0.8);
+  EXPECT_GE(share("S3 native", "concave"), 0.8);
+  for (const char* space : {"S3", "E3", "H3"}) {
+    EXPECT_GE(share(std::string(space) + " tourist", "straight"), 0.8) << space;
+    EXPECT_GE(share(std::string(space) + " monocular", "straight"), 0.8) << space;
+  }
+  // Complete: every planned trial answered, samples and frames logged, the
+  // observer's parameters and the provenance stored.
+  const auto incomplete = query(db, "SELECT COUNT(*) FROM trials WHERE status != 'completed'");
+  EXPECT_EQ(incomplete[0][0], "0");
+  const auto sessions = query(db, "SELECT status, backend, renderer_device, seed, table_calibration FROM sessions");
+  ASSERT_EQ(sessions.size(), 2u);
+  for (const auto& s : sessions) {
+    EXPECT_EQ(s[0], "completed");
+    EXPECT_EQ(s[1], "headless");
+    EXPECT_NE(s[4], "NULL");
+  }
+  EXPECT_EQ(query(db, "SELECT COUNT(*) FROM events WHERE kind = 'observer'")[0][0], "2");
+  const auto samples = query(db, "SELECT COUNT(*), SUM(virtual_pose IS NOT NULL) FROM tracking_samples");
+  EXPECT_GT(std::stol(samples[0][0]), 100000);
+  EXPECT_EQ(samples[0][0], samples[0][1]);
+  EXPECT_EQ(curvlab::testing::integrity(db), "ok");
+}
+
+TEST(RunHeadless, TheSameSeedReproducesTheSessionExactly) {
+  const auto dir = fresh_dir("repro");
+  std::vector<std::vector<std::vector<std::string>>> results;
+  for (const char* name : {"a.sqlite", "b.sqlite"}) {
+    const auto db = (dir / name).string();
+    const auto r = run_cli("run " + kProtocols + "demo.toml --participant P07 --db " + db + " --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    auto rows = query(db, "SELECT trial_index, conditions, stimulus, response, onset_ns, response_ns, attempt "
+                          "FROM trials ORDER BY trial_index");
+    const auto samples = query(db, "SELECT COUNT(*), SUM(t_ns), SUM(lab_px_m), SUM(coherence_error_m) "
+                                   "FROM tracking_samples");
+    rows.push_back(samples[0]);
+    const auto seed = query(db, "SELECT seed FROM sessions");
+    rows.push_back(seed[0]);
+    results.push_back(rows);
+  }
+  ASSERT_EQ(results[0].size(), 10u);  // 8 trials, samples, seed
+  EXPECT_EQ(results[0], results[1]);
+  // A different participant number draws a different order.
+  const auto other = (dir / "c.sqlite").string();
+  ASSERT_EQ(run_cli("run " + kProtocols + "demo.toml --participant P08 --db " + other + " --quiet").exit_code, 0);
+  const auto c = query(other, "SELECT trial_index, conditions FROM trials ORDER BY trial_index");
+  std::vector<std::vector<std::string>> a_order;
+  for (std::size_t i = 0; i < 8; ++i) a_order.push_back({results[0][i][0], results[0][i][1]});
+  EXPECT_NE(c, a_order);
+}
+
+// Replay re-renders the onset frame from the logged poses: pixel for pixel
+// the stimulus image the session saved.
+TEST(RunHeadless, ReplayReproducesTheStimulusImage) {
+  const auto dir = fresh_dir("replay");
+  const auto db = (dir / "demo.sqlite").string();
+  const auto images = (dir / "images").string();
+  auto r = run_cli("run " + kProtocols + "demo.toml --participant P01 --db " + db + " --images " + images +
+                   " --render onset --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  for (int trial : {2, 5}) {
+    const auto out = (dir / ("replay" + std::to_string(trial))).string();
+    r = run_cli("replay --db " + db + " --session 1 --trial " + std::to_string(trial) + " --out " + out + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    for (const char* eye : {"left", "right"}) {
+      curvlab::renderer::Rgba8Image saved, replayed;
+      std::string err;
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "trial_%04d_%s.png", trial, eye);
+      ASSERT_TRUE(curvlab::renderer::read_png(images + "/" + stem, saved, err)) << err;
+      ASSERT_TRUE(curvlab::renderer::read_png(out + "/" + eye + ".png", replayed, err)) << err;
+      const auto diff = curvlab::renderer::diff_images(saved, replayed, 0);
+      EXPECT_EQ(diff.differing_pixels, 0) << "trial " << trial << " " << eye;
+    }
+  }
+  // A frame outside the trial is refused with the trial's frame range.
+  r = run_cli("replay --db " + db + " --session 1 --trial 2 --frame 0 --out " + (dir / "x").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("its frames:"), std::string::npos) << r.out;
+}
+
+TEST(RunHeadless, BadInputIsRefusedAndWritesNothing) {
+  const auto dir = fresh_dir("bad");
+  const auto db = (dir / "never.sqlite").string();
+  auto r = run_cli("run " + kProtocols + "demo.toml --participant 'Jane Doe' --db " + db);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("pseudonym"), std::string::npos) << r.out;
+  r = run_cli("run " + std::string(CURVLAB_SOURCE_DIR) +
+              "/tests/protocol/malformed/unknown_key.toml --participant P01 --db " + db);
+  EXPECT_EQ(r.exit_code, 2);
+  r = run_cli("run " + kProtocols + "demo.toml --participant P01 --observer-lapse 2 --db " + db);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("lapse"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
+TEST(Predict, PrintsProportionsAndPower) {
+  const auto r = run_cli("predict " + kProtocols + "proposed_study.toml --participants 10 --simulations 50 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc.at("participants"), 10);
+  EXPECT_FALSE(doc.at("conditions").empty());
+  for (const auto& c : doc.at("conditions")) {
+    double sum = 0.0;
+    for (const auto& [k, v] : c.at("proportions").items()) sum += v.get<double>();
+    EXPECT_NEAR(sum, 1.0, 1e-9);
+  }
+  EXPECT_FALSE(doc.at("power").empty());
+  const auto bad = run_cli("predict " + kProtocols + "proposed_study.toml --effect view:native,nowhere");
+  EXPECT_EQ(bad.exit_code, 2);
+}
