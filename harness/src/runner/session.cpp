@@ -630,6 +630,12 @@ class Session {
         if (onset_ns) {
           for (const auto& in : f.inputs) {
             if (!in.pressed || answer) continue;
+            if (in.t_ns < *onset_ns) {
+              // Pressed before the stimulus was on the display: an
+              // anticipation, logged but not an answer.
+              event(trial_id, "early_input", Json{{"name", in.name}, {"device", in.device}, {"t_ns", in.t_ns}});
+              continue;
+            }
             if (j.type == JudgementType::adjustment) {
               const auto& a = *j.adjustment;
               if (listed(a.keys_increase, a.buttons_increase, in.name)) adjustment->increase();
