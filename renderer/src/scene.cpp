@@ -58,47 +58,65 @@ std::string_view to_string(SceneKind kind) {
   return "?";
 }
 
-namespace {
+SceneObject stick_object(const Space& space, const geometry::BentStick& stick, const Isometry& pose) {
+  SceneObject o;
+  o.name = "cue stick";
+  o.build = [space, stick](int level) { return build_stick(space, stick, level); };
+  o.info = stick_info(space, stick);
+  o.pose = pose;
+  return o;
+}
 
-constexpr double kTableHeightM = 0.80;
+SceneObject table_object(const Space& space, const geometry::TableShape& table,
+                         const TableStyle& style) {
+  SceneObject o;
+  o.name = "table";
+  o.build = [space, table, style](int level) { return build_table(space, table, level, style); };
+  o.info = table_info(space, table, style);
+  o.pose = Isometry::identity();
+  return o;
+}
 
-// Adds a text panel of the given size; pixel density ~1000 px per metre.
-std::optional<std::string> add_panel(Scene& scene, const Space& space, const std::string& text,
-                                     const std::string& font, double width_m, double height_m,
-                                     const Isometry& pose) {
+SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour,
+                        const Isometry& pose) {
+  SceneObject o;
+  o.name = "ball";
+  o.build = [space, radius_m, colour](int) { return build_ball(space, radius_m, colour); };
+  o.info = ball_info(space, radius_m);
+  o.pose = pose;
+  return o;
+}
+
+std::variant<SceneObject, std::string> text_panel_object(const Space& space, std::string name,
+                                                         const std::string& text,
+                                                         const std::string& font, double width_m,
+                                                         double height_m, const Isometry& pose) {
   const int w = 1024;
   const int h = static_cast<int>(std::lround(w * height_m / width_m));
   auto bmp = render_text(text, w, h, h / 2.5, font);
   if (auto* e = std::get_if<TextError>(&bmp)) return e->message;
   SceneObject o;
-  o.name = "prompt";
+  o.name = std::move(name);
   o.build = [space, width_m, height_m](int level) {
     return build_panel(space, width_m, height_m, level);
   };
   o.info = panel_info(space, width_m, height_m);
   o.pose = pose;
   o.text = std::move(std::get<CoverageBitmap>(bmp));
-  scene.add(std::move(o));
+  return o;
+}
+
+namespace {
+
+constexpr double kTableHeightM = 0.80;
+
+std::optional<std::string> add_panel(Scene& scene, const Space& space, const std::string& text,
+                                     const std::string& font, double width_m, double height_m,
+                                     const Isometry& pose) {
+  auto made = text_panel_object(space, "prompt", text, font, width_m, height_m, pose);
+  if (auto* e = std::get_if<std::string>(&made)) return *e;
+  scene.add(std::move(std::get<SceneObject>(made)));
   return std::nullopt;
-}
-
-void add_stick(Scene& scene, const Space& space, const geometry::BentStick& stick,
-               const Isometry& pose) {
-  SceneObject o;
-  o.name = "cue stick";
-  o.build = [space, stick](int level) { return build_stick(space, stick, level); };
-  o.info = stick_info(space, stick);
-  o.pose = pose;
-  scene.add(std::move(o));
-}
-
-void add_table(Scene& scene, const Space& space, const geometry::TableShape& table) {
-  SceneObject o;
-  o.name = "table";
-  o.build = [space, table](int level) { return build_table(space, table, level); };
-  o.info = table_info(space, table);
-  o.pose = Isometry::identity();
-  scene.add(std::move(o));
 }
 
 // The participant stands outside edge 0 (facing −z toward the centre) and
@@ -143,8 +161,7 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
       // The stick alone, across the line of sight below eye level, bowed
       // toward the participant by a positive sagitta (model +z faces them).
       s.head = geometry::rotation(Vec3(0.0, 1.0, 0.0), options.yaw_rad);
-      add_stick(s.scene, space, stick,
-                geometry::translation_m(space, Vec3(0.0, -0.25, -0.75)));
+      s.scene.add(stick_object(space, stick, geometry::translation_m(space, Vec3(0.0, -0.25, -0.75))));
       if (auto err = add_panel(s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
                                geometry::translation_m(space, Vec3(0.0, 0.22, -1.1))))
         return *err;
@@ -153,7 +170,7 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
     case SceneKind::table:
     case SceneKind::billiards: {
       s.table = shape;
-      add_table(s.scene, space, shape);
+      s.scene.add(table_object(space, shape));
       s.head = table_viewer(space, shape, options.eye_height_m, options.yaw_rad);
       if (scene_kind == SceneKind::table) break;
       // Fifteen balls racked toward the far side, the cue ball toward the
@@ -174,29 +191,22 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
         for (int i = 0; i <= row; ++i, ++n) {
           const double x = (i - row / 2.0) * 2.0 * r * 1.01;
           const double z = rack_z - row * std::sqrt(3.0) * r * 1.01;
-          SceneObject o;
+          SceneObject o = ball_object(space, r, colors[n % 8], place(x, z));
           o.name = "ball " + std::to_string(n + 1);
-          const glm::vec4 c = colors[n % 8];
-          o.build = [space, r, c](int) { return build_ball(space, r, c); };
-          o.info = ball_info(space, r);
-          o.pose = place(x, z);
           s.scene.add(std::move(o));
         }
-      SceneObject cue;
+      SceneObject cue = ball_object(space, r, glm::vec4(0.95f, 0.95f, 0.92f, 1), place(0.0, cue_z));
       cue.name = "cue ball";
-      cue.build = [space, r](int) { return build_ball(space, r, glm::vec4(0.95f, 0.95f, 0.92f, 1)); };
-      cue.info = ball_info(space, r);
-      cue.pose = place(0.0, cue_z);
       s.scene.add(std::move(cue));
       // Stick along −z (model +x rotated by +90° about y), tip just behind the
       // cue ball, raised a little toward the butt.
       const double half = stick.length_m / 2.0;
       const double tilt = -0.12;
-      add_stick(s.scene, space, stick,
-                geometry::translation_m(space, Vec3(0.0, r, cue_z + r + 0.02)) *
-                    geometry::rotation(Vec3(1.0, 0.0, 0.0), tilt) *
-                    geometry::translation_m(space, Vec3(0.0, 0.0, half)) *
-                    geometry::rotation(Vec3(0.0, 1.0, 0.0), std::numbers::pi / 2.0));
+      s.scene.add(stick_object(space, stick,
+                               geometry::translation_m(space, Vec3(0.0, r, cue_z + r + 0.02)) *
+                                   geometry::rotation(Vec3(1.0, 0.0, 0.0), tilt) *
+                                   geometry::translation_m(space, Vec3(0.0, 0.0, half)) *
+                                   geometry::rotation(Vec3(0.0, 1.0, 0.0), std::numbers::pi / 2.0)));
       if (auto err = add_panel(
               s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
               geometry::translation_m(space, Vec3(0.0, 0.30, -shape.apothem_m() - 0.1)) *

@@ -74,6 +74,25 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
   return out;
 }
 
+std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text, const std::string& option) {
+  const auto x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    std::size_t used_w = 0;
+    std::size_t used_h = 0;
+    const long w = std::stol(text.substr(0, x), &used_w);
+    const long h = std::stol(text.substr(x + 1), &used_h);
+    if (used_w != x || used_h != text.size() - x - 1) throw std::invalid_argument("junk");
+    if (w < 16 || h < 16 || w > 8192 || h > 8192)
+      throw UsageError(option + " " + text + ": width and height must be between 16 and 8192 pixels");
+    return {static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h)};
+  } catch (const UsageError&) {
+    throw;
+  } catch (const std::exception&) {
+    throw UsageError(option + " expects WIDTHxHEIGHT in pixels (e.g. 1024x1024), got '" + text + "'");
+  }
+}
+
 void add_space_option(CLI::App* cmd, geometry::SpaceKind* kind) {
   cmd->add_option_function<std::string>(
          "--space", [kind](const std::string& text) { *kind = *geometry::parse_space_kind(text); },

@@ -4,10 +4,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "curvlab/geometry/space.hpp"
+#include "curvlab/harness/protocol/protocol.hpp"
 
 namespace CLI {
 class App;
@@ -37,6 +40,8 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 
 // Adds the required option `--space S3|E3|H3` (case-insensitive) to cmd.
 void add_space_option(CLI::App* cmd, geometry::SpaceKind* kind);
+// "WIDTHxHEIGHT" in pixels, each 16…8192; a UsageError naming `option` otherwise.
+std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text, const std::string& option);
 
 // Registration of each command group (one file each, wired in main.cpp).
 void add_inspect_commands(CLI::App& app);
@@ -45,6 +50,10 @@ void add_export_commands(CLI::App& app);
 void add_track_commands(CLI::App& app);  // trajectory, track, inspect vergence/stick
 void add_render_commands(CLI::App& app);
 void add_protocol_commands(CLI::App& app);
-void add_run_commands(CLI::App& app);  // run, resume, predict, replay
+void add_run_commands(CLI::App& app);
+// Reads and loads a protocol file, or prints every diagnostic and throws a
+// UsageError (exit 2). `text`, when given, receives the text that was loaded
+// (sessions store it).
+harness::protocol::Protocol load_protocol_or_usage(const std::string& path, std::string* text = nullptr);  // run, resume, predict, replay
 
 }  // namespace curvlab::cli

@@ -8,20 +8,12 @@
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <sstream>
 
 namespace curvlab::cli {
 namespace {
 
 namespace pr = curvlab::harness::protocol;
-
-// Loads or prints every diagnostic and fails with exit code 2.
-pr::Protocol load_or_fail(const std::string& file) {
-  auto result = pr::load_protocol_file(file);
-  if (result.ok()) return std::move(*result.protocol);
-  for (const auto& d : result.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
-  const auto n = result.diagnostics.size();
-  throw UsageError(std::to_string(n) + (n == 1 ? " error" : " errors") + " in " + file);
-}
 
 std::string duration_text(std::int64_t ms) {
   const std::int64_t s = (ms + 500) / 1000;
@@ -94,7 +86,7 @@ Json design_json(const pr::Protocol& p, const pr::Design& d, bool with_trials) {
 }
 
 void run_validate(const std::string& file, bool as_json) {
-  const auto p = load_or_fail(file);
+  const auto p = load_protocol_or_usage(file);
   const auto d = pr::expand_design(p, 1);
   if (as_json) {
     Json doc = design_json(p, d, false);
@@ -126,7 +118,7 @@ void run_validate(const std::string& file, bool as_json) {
 
 void run_design(const std::string& file, std::int64_t participant, bool as_json) {
   if (participant < 1) throw UsageError("--participant must be a participant number ≥ 1");
-  const auto p = load_or_fail(file);
+  const auto p = load_protocol_or_usage(file);
   const auto d = pr::expand_design(p, static_cast<std::uint64_t>(participant));
   if (as_json) {
     std::cout << design_json(p, d, true).dump(2) << '\n';
@@ -148,6 +140,18 @@ void run_design(const std::string& file, std::int64_t participant, bool as_json)
 }
 
 }  // namespace
+
+pr::Protocol load_protocol_or_usage(const std::string& path, std::string* text) {
+  auto result = pr::load_protocol_file(path);
+  if (result.ok()) {
+    if (text) *text = std::move(result.text);
+    return std::move(*result.protocol);
+  }
+  for (const auto& d : result.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+  const auto n = result.diagnostics.size();
+  throw UsageError(std::to_string(n) + (n == 1 ? " error" : " errors") + " in " + path +
+                   "; nothing was run or written");
+}
 
 void add_protocol_commands(CLI::App& app) {
   struct Args {

@@ -37,25 +37,6 @@ struct RenderArgs {
   bool json = false;
 };
 
-std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text) {
-  const auto x = text.find('x');
-  try {
-    if (x == std::string::npos) throw std::invalid_argument("no x");
-    std::size_t used_w = 0;
-    std::size_t used_h = 0;
-    const long w = std::stol(text.substr(0, x), &used_w);
-    const long h = std::stol(text.substr(x + 1), &used_h);
-    if (used_w != x || used_h != text.size() - x - 1) throw std::invalid_argument("junk");
-    if (w < 16 || h < 16 || w > 8192 || h > 8192)
-      throw UsageError("--size " + text + ": width and height must be between 16 and 8192 pixels");
-    return {static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h)};
-  } catch (const UsageError&) {
-    throw;
-  } catch (const std::exception&) {
-    throw UsageError("--size expects WIDTHxHEIGHT in pixels (e.g. 1024x1024), got '" + text + "'");
-  }
-}
-
 void run_render(const RenderArgs& a) {
   const auto kind = geometry::parse_space_kind(a.space);
   if (!kind) throw UsageError("--space must be S3, E3 or H3, got '" + a.space + "'");
@@ -75,7 +56,7 @@ void run_render(const RenderArgs& a) {
     throw UsageError("--back-hemisphere must be on or off, got '" + a.back_hemisphere + "'");
   if (!(std::abs(a.yaw_deg) <= 360.0)) throw UsageError("--yaw-deg must lie in [-360, 360]");
   if (!(a.ipd_m >= 0.0 && a.ipd_m < 0.1)) throw UsageError("--ipd-m must lie in [0, 0.1) m");
-  const auto [w, h] = parse_size(a.size);
+  const auto [w, h] = parse_size(a.size, "--size");
   if (a.out.empty()) throw UsageError("--out DIR is required");
 
   ViewSettings settings = ViewSettings::preset(*preset);

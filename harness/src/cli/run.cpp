@@ -103,15 +103,6 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_flag("--json", b.json, "print the summary as JSON");
 }
 
-std::pair<std::uint32_t, std::uint32_t> parse_wxh(const std::string& text, const std::string& option) {
-  unsigned w = 0, h = 0;
-  char x = 0;
-  std::istringstream in(text);
-  if (!(in >> w >> x >> h) || x != 'x' || w < 16 || h < 16 || w > 8192 || h > 8192)
-    throw UsageError(option + " expects WIDTHxHEIGHT between 16 and 8192 pixels, got '" + text + "'");
-  return {w, h};
-}
-
 // The backend, created before anything is written: a backend that cannot
 // start (no display, no OpenXR runtime) leaves no trace.
 struct Backends {
@@ -151,7 +142,7 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
   out.clock = out.steady.get();
   if (a.backend == "desktop") {
     rn::DesktopOptions o;
-    std::tie(o.eye_width_px, o.eye_height_px) = parse_wxh(a.window_size, "--window-size");
+    std::tie(o.eye_width_px, o.eye_height_px) = parse_size(a.window_size, "--window-size");
     if (a.preview == "side-by-side") o.preview = rn::DesktopPreview::side_by_side;
     else if (a.preview == "left") o.preview = rn::DesktopPreview::left;
     else if (a.preview == "right") o.preview = rn::DesktopPreview::right;
@@ -241,21 +232,6 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   }
 }
 
-pr::Protocol load_or_usage(const std::string& path, std::string& text) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw UsageError(path + ": cannot read the protocol file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  text = ss.str();
-  auto loaded = pr::load_protocol_text(text, path);
-  if (!loaded.ok()) {
-    for (const auto& d : loaded.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
-    throw UsageError(path + ": " + std::to_string(loaded.diagnostics.size()) +
-                     " error(s); nothing was run or written");
-  }
-  return std::move(*loaded.protocol);
-}
-
 std::uint64_t number_from_pseudonym(const std::string& id) {
   std::size_t end = id.size();
   std::size_t begin = end;
@@ -280,26 +256,16 @@ std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& pa
   if (path.empty()) return std::nullopt;
   std::ifstream in(path);
   if (!in) throw UsageError(path + ": cannot read the calibration file");
-  const Json j = Json::parse(in, nullptr, false);
-  if (j.is_discarded() || !j.is_object())
-    throw UsageError(path + ": expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
-  geometry::PhysicalTableFit fit;
-  try {
-    fit.centre_m = {j.at("centre_x_m").get<double>(), j.at("centre_z_m").get<double>()};
-    fit.yaw_rad = j.at("yaw_rad").get<double>();
-    fit.edge_m = j.at("edge_m").get<double>();
-    fit.height_m = j.at("height_m").get<double>();
-  } catch (const std::exception& e) {
-    throw UsageError(path + ": " + e.what() + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
-  }
-  if (!(fit.edge_m > 0.2 && fit.edge_m < 5.0 && fit.height_m > 0.3 && fit.height_m < 1.5))
-    throw UsageError(path + ": edge_m must lie in (0.2, 5) m and height_m in (0.3, 1.5) m");
-  return fit;
+  std::stringstream text;
+  text << in.rdbuf();
+  auto fit = rn::parse_calibration_json(text.str());
+  if (auto* e = std::get_if<std::string>(&fit)) throw UsageError(path + ": " + *e);
+  return std::get<geometry::PhysicalTableFit>(fit);
 }
 
 void run_command(const RunArgs& a) {
   std::string text;
-  const pr::Protocol p = load_or_usage(a.protocol, text);
+  const pr::Protocol p = load_protocol_or_usage(a.protocol, &text);
   rn::RunOptions o = drawing_options(a.backend);
   o.participant = a.participant;
   o.participant_number = a.participant_number.value_or(number_from_pseudonym(a.participant));
@@ -342,14 +308,17 @@ void resume_command(const ResumeArgs& a) {
   }
   const auto& stored = std::get<rn::StoredSession>(stored_v);
   auto loaded = pr::load_protocol_text(stored.protocol_text, stored.protocol_source);
-  if (!loaded.ok()) throw RuntimeFailure("the stored protocol no longer loads");
+  if (!loaded.ok())
+    throw RuntimeFailure("the stored protocol no longer loads: " +
+                         pr::format_diagnostic(loaded.diagnostics.front()));
   rn::RunOptions o = drawing_options(a.backend);
   if (a.observer_given && a.backend.backend == "headless")
     o.observer = observer_params(a.observer, stored.observer ? stored.observer->seed : 1);
   const auto table = stored.calibration.value_or(rn::nominal_calibration(loaded.protocol->session_settings()));
   // A resumed session's clock continues after the last logged time.
   auto backend = open_backend(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
-  report(rn::resume_session(a.db, a.session, o, *backend.backend, *backend.clock), a.backend);
+  report(rn::resume_session(a.db, a.session, stored, *loaded.protocol, o, *backend.backend, *backend.clock),
+         a.backend);
 }
 
 struct PredictArgs {
@@ -363,8 +332,7 @@ struct PredictArgs {
 };
 
 void predict_command(const PredictArgs& a) {
-  std::string text;
-  const pr::Protocol p = load_or_usage(a.protocol, text);
+  const pr::Protocol p = load_protocol_or_usage(a.protocol);
   rn::PredictOptions o;
   o.participants = a.participants;
   o.simulations = a.simulations;

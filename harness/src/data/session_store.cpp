@@ -42,10 +42,6 @@ const char* to_string(TrackedDevice device) {
   return "other";
 }
 
-namespace {
-
-constexpr const char* utc_now = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
-
 bool valid_pseudonym(const std::string& p) {
   if (p.empty() || p.size() > 32) return false;
   return std::all_of(p.begin(), p.end(), [](char ch) {
@@ -53,6 +49,10 @@ bool valid_pseudonym(const std::string& p) {
            ch == '-' || ch == '_';
   });
 }
+
+namespace {
+
+constexpr const char* utc_now = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
 
 // Runs `body` and turns SQLite failures into DataError values naming the file.
 template <class T>

@@ -1170,7 +1170,9 @@ LoadResult load_protocol_file(const std::string& path) {
       return r;
     }
   }
-  return load_protocol_text(text, path);
+  LoadResult r = load_protocol_text(text, path);
+  r.text = std::move(text);
+  return r;
 }
 
 }  // namespace curvlab::harness::protocol

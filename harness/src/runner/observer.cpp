@@ -55,11 +55,9 @@ SimulatedObserver::SimulatedObserver(const ObserverParams& params)
 
 double SimulatedObserver::uniform() { return protocol::uniform01(rng_); }
 
-// Box–Muller on the portable uniform draw, so a seed gives the same answers
-// with every standard library.
-double SimulatedObserver::gaussian() {
-  const double u1 = 1.0 - uniform();  // (0, 1]
-  const double u2 = uniform();
+double standard_normal(protocol::Engine& rng) {
+  const double u1 = 1.0 - protocol::uniform01(rng);  // (0, 1]
+  const double u2 = protocol::uniform01(rng);
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }
 
@@ -98,7 +96,7 @@ std::size_t SimulatedObserver::choose(double s, std::size_t n) {
   if (n == 0) return 0;
   const double lapse_draw = uniform();
   const double option_draw = uniform();
-  const double noise = gaussian();
+  const double noise = standard_normal(rng_);
   if (params_.model == ObserverModel::random || lapse_draw < params_.lapse)
     return std::min(n - 1, static_cast<std::size_t>(option_draw * static_cast<double>(n)));
   const double latent = s + params_.bias_m + noise / params_.slope_per_m;
@@ -111,7 +109,7 @@ double SimulatedObserver::adjust(const std::function<double(double)>& perceived,
                                  double hi) {
   const double lapse_draw = uniform();
   const double where = uniform();
-  const double noise = gaussian() / params_.slope_per_m;
+  const double noise = standard_normal(rng_) / params_.slope_per_m;
   if (params_.model == ObserverModel::random || lapse_draw < params_.lapse)
     return lo + where * (hi - lo);
   auto f = [&](double x) { return perceived(x) + params_.bias_m + noise; };

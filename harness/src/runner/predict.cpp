@@ -7,7 +7,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <numbers>
 
 namespace curvlab::harness::runner {
 
@@ -50,12 +49,6 @@ double incomplete_beta(double a, double b, double x) {
   return std::exp(log_front) * f / a;
 }
 
-double gaussian(protocol::Engine& rng) {
-  const double u1 = 1.0 - protocol::uniform01(rng);
-  const double u2 = protocol::uniform01(rng);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
-}
-
 std::int64_t binomial(protocol::Engine& rng, std::int64_t n, double p) {
   std::int64_t k = 0;
   for (std::int64_t i = 0; i < n; ++i) k += protocol::uniform01(rng) < p ? 1 : 0;
@@ -96,11 +89,8 @@ std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const
       auto made = make_world(t.settings);
       if (auto* e = std::get_if<std::string>(&made)) return *e;
       const World world = std::get<World>(made);
-      auto tracker = geometry::make_tracker(
-          t.settings.tracking == protocol::Tracking::naive ? geometry::TrackingAlgorithm::naive
-          : t.settings.tracking == protocol::Tracking::head_anchored ? geometry::TrackingAlgorithm::head_anchored
-                                                                     : geometry::TrackingAlgorithm::table_anchored,
-          world.space, world.table, physical_table(t.settings, std::nullopt));
+      auto tracker = geometry::make_tracker(tracking_algorithm(t.settings), world.space, world.table,
+                                            physical_table(t.settings, std::nullopt));
       const auto fit = nominal_calibration(t.settings);
       const auto head = tracker->update(standing_pose(fit, 1.55, 0)).pose[0];
       const Placement placement = place_stimulus(world, t.settings, head);
@@ -125,8 +115,8 @@ std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const
   protocol::Engine rng(protocol::mix_seed(o.observer.seed ^ 0x70726564696374ULL));
   auto draw_participant = [&]() {
     ObserverParams q = o.observer;
-    q.bias_m += o.bias_sd_m * gaussian(rng);
-    q.slope_per_m *= std::exp(o.slope_sd_log * gaussian(rng));
+    q.bias_m += o.bias_sd_m * standard_normal(rng);
+    q.slope_per_m *= std::exp(o.slope_sd_log * standard_normal(rng));
     return q;
   };
   const int population = 400;

@@ -6,7 +6,6 @@
 #include "curvlab/harness/data/sqlite.hpp"
 #include "curvlab/harness/protocol/adjustment.hpp"
 #include "curvlab/harness/protocol/design.hpp"
-#include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/staircase.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/version.hpp"
@@ -65,46 +64,10 @@ Json matrix_json(const Isometry& iso) {
   return a;
 }
 
-bool valid_pseudonym(const std::string& s) {
-  if (s.empty() || s.size() > 32) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
-           c == '-';
-  });
-}
-
 data::Backend backend_kind(const std::string& name) {
   if (name == "desktop") return data::Backend::desktop;
   if (name == "xr") return data::Backend::xr;
   return data::Backend::headless;
-}
-
-std::string calibration_json(const geometry::PhysicalTableFit& fit) {
-  Json j;
-  j["centre_x_m"] = fit.centre_m.x;
-  j["centre_z_m"] = fit.centre_m.y;
-  j["yaw_rad"] = fit.yaw_rad;
-  j["edge_m"] = fit.edge_m;
-  j["height_m"] = fit.height_m;
-  j["rms_residual_m"] = fit.rms_residual_m;
-  j["max_residual_m"] = fit.max_residual_m;
-  j["corners_used"] = fit.corners_used;
-  return j.dump();
-}
-
-std::optional<geometry::PhysicalTableFit> parse_calibration(const std::optional<std::string>& text) {
-  if (!text) return std::nullopt;
-  const Json j = Json::parse(*text, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) return std::nullopt;
-  geometry::PhysicalTableFit fit;
-  fit.centre_m = {j.value("centre_x_m", 0.0), j.value("centre_z_m", 0.0)};
-  fit.yaw_rad = j.value("yaw_rad", 0.0);
-  fit.edge_m = j.value("edge_m", 1.0);
-  fit.height_m = j.value("height_m", 0.76);
-  fit.rms_residual_m = j.value("rms_residual_m", 0.0);
-  fit.max_residual_m = j.value("max_residual_m", 0.0);
-  fit.corners_used = j.value("corners_used", 0);
-  return fit;
 }
 
 bool is_continue(const std::string& name) {
@@ -191,10 +154,14 @@ class Session {
     session_start_ns_ = clock_.now_ns();
     summary_.session_id = session_id_;
     summary_.trials_planned = static_cast<std::int64_t>(design_.trials.size());
+    // One entry per frame: reserved up front so the frame loop does not grow it.
+    cpu_ns_.reserve(static_cast<std::size_t>(design_.estimated_duration_ms() * p_.refresh_hz / 1000) + 1024);
     Outcome outcome = Outcome::done;
     try {
-      if (!design_.trials.empty()) prepare(design_.trials[std::min(first, design_.trials.size() - 1)].settings);
-      if (start_pages && prepared_) outcome = pages(p_.instructions_start, "instructions", 0, std::nullopt);
+      // Pages are shown in the scene of the trial that follows them (the
+      // first here, the previous one later): each trial prepares its own.
+      prepare(design_.trials[std::min(first, design_.trials.size() - 1)].settings);
+      if (start_pages) outcome = pages(p_.instructions_start, "instructions", 0, std::nullopt);
       std::optional<std::size_t> block_position;
       for (std::size_t i = first; outcome == Outcome::done && i < design_.trials.size(); ++i) {
         const PlannedTrial& t = design_.trials[i];
@@ -203,13 +170,11 @@ class Session {
           const auto& pb = design_.blocks.at(t.block_position);
           event(std::nullopt, "block_start", Json{{"block", pb.name}, {"block_index", t.block_position}});
           if (t.trial_in_block == 0 || i == first) {
-            prepare(t.settings);
             outcome = pages(pb.instructions, "instructions", 0, std::nullopt);
             if (outcome == Outcome::quit) break;
           }
         }
         if (t.break_before && i != first) {
-          prepare(t.settings);
           const auto& b = block_of(p_, t.block);
           outcome = pages({b.break_text.empty() ? std::string("Break") : b.break_text}, "break",
                           b.break_min_ms * 1'000'000, trial_ids_[i]);
@@ -224,7 +189,7 @@ class Session {
         outcome = run_trial(i);
         progress_.update(static_cast<std::int64_t>(i + 1), summary_.trials_planned, t.block);
       }
-      if (outcome == Outcome::done && prepared_) outcome = pages(p_.instructions_end, "done", 0, std::nullopt);
+      if (outcome == Outcome::done) outcome = pages(p_.instructions_end, "done", 0, std::nullopt);
       check(writer_.flush());
       const auto status = outcome == Outcome::done ? data::SessionStatus::completed
                                                    : data::SessionStatus::interrupted;
@@ -280,10 +245,7 @@ class Session {
     auto made = make_world(s);
     if (auto* e = std::get_if<std::string>(&made)) throw RunError{true, "impossible table: " + *e};
     World world = std::get<World>(made);
-    const auto algorithm = s.tracking == protocol::Tracking::naive ? geometry::TrackingAlgorithm::naive
-                           : s.tracking == protocol::Tracking::head_anchored
-                               ? geometry::TrackingAlgorithm::head_anchored
-                               : geometry::TrackingAlgorithm::table_anchored;
+    const auto algorithm = tracking_algorithm(s);
     if (!tracker_ || !world_ || !world_->same_as(world) || tracker_->algorithm() != algorithm) {
       tracker_ = geometry::make_tracker(algorithm, world.space, world.table,
                                         physical_table(s, options_.calibration));
@@ -292,7 +254,6 @@ class Session {
     world_ = world;
     settings_ = s;
     rebuild_scene();
-    prepared_ = true;
   }
 
   void rebuild_scene() {
@@ -368,17 +329,14 @@ class Session {
     return stats;
   }
 
-  template <class R>
-  void push(const R& record) {
-    bool ok = false;
-    if constexpr (std::is_same_v<R, data::FrameRecord>) ok = writer_.push_frame(record);
-    else ok = writer_.push_tracking(record);
-    if (ok || !options_.lossless_logging) return;
-    // Fast runs: wait for the writer rather than lose samples.
-    for (int i = 0; i < 100 && !ok; ++i) {
+  // Hands a record to the logger. Fast runs wait for the writer rather than
+  // lose samples; real-time runs never wait (the writer counts the drop).
+  template <class Push>
+  void push(Push&& try_push) {
+    if (try_push() || !options_.lossless_logging) return;
+    for (int i = 0; i < 100; ++i) {
       check(writer_.flush());
-      if constexpr (std::is_same_v<R, data::FrameRecord>) ok = writer_.push_frame(record);
-      else ok = writer_.push_tracking(record);
+      if (try_push()) return;
     }
   }
 
@@ -415,7 +373,7 @@ class Session {
           s.state.coherence_error_m = c.error_m;
           s.state.coherence_error_rad = c.error_rad;
         }
-        push(s);
+        push([&] { return writer_.push_tracking(s); });
       }
     }
     data::FrameRecord fr;
@@ -430,7 +388,7 @@ class Session {
     fr.passes = stats.reused ? 0 : stats.passes;
     fr.draws = stats.draws;
     fr.triangles = static_cast<std::int64_t>(stats.triangles);
-    push(fr);
+    push([&] { return writer_.push_frame(fr); });
   }
 
   // ---- pages: instructions, breaks, the end ------------------------------
@@ -764,7 +722,6 @@ class Session {
   Settings settings_;
   std::unique_ptr<geometry::Tracker> tracker_;
   std::optional<TrialScene> scene_;
-  bool prepared_ = false;
   std::optional<std::size_t> current_trial_;
   geometry::LabFrame lab_;
   std::optional<geometry::LabFrame> last_lab_;
@@ -837,7 +794,7 @@ std::string stimulus_json(const PlannedTrial& t) {
 
 RunResult run_session(const Protocol& p, const std::string& protocol_text, const std::string& db_path,
                       const RunOptions& options, Backend& backend, const devices::Clock& clock) {
-  if (!valid_pseudonym(options.participant))
+  if (!data::valid_pseudonym(options.participant))
     return RunError{true, "--participant must be a pseudonym of 1-32 letters, digits, '_' or '-' (no names), got '" +
                               options.participant + "'"};
   if (options.participant_number < 1) return RunError{true, "the participant number must be at least 1"};
@@ -918,7 +875,10 @@ std::variant<StoredSession, RunError> read_stored_session(const std::string& db_
     out.seed = s.column_int(3);
     out.status = s.column_text(4);
     out.backend = s.column_text(5);
-    out.calibration = parse_calibration(s.column_opt_text(6));
+    if (const auto text = s.column_opt_text(6)) {
+      auto fit = parse_calibration_json(*text);
+      if (auto* f = std::get_if<geometry::PhysicalTableFit>(&fit)) out.calibration = *f;
+    }
     data::Statement last(db.value().connection(),
                          "SELECT MAX(COALESCE((SELECT MAX(t_ns) FROM frames WHERE session_id = ?1), 0), "
                          "COALESCE((SELECT MAX(t_ns) FROM events WHERE session_id = ?1), 0))");
@@ -957,17 +917,10 @@ std::variant<StoredSession, RunError> read_stored_session(const std::string& db_
 }
 
 RunResult resume_session(const std::string& db_path, std::int64_t session_id,
-                         const RunOptions& options, Backend& backend, const devices::Clock& clock) {
-  auto stored_v = read_stored_session(db_path, session_id);
-  if (auto* e = std::get_if<RunError>(&stored_v)) return *e;
-  const auto& stored = std::get<StoredSession>(stored_v);
+                         const StoredSession& stored, const Protocol& p, const RunOptions& options,
+                         Backend& backend, const devices::Clock& clock) {
   if (stored.status == "completed")
     return RunError{true, db_path + ": session " + std::to_string(session_id) + " is already completed"};
-  auto loaded = protocol::load_protocol_text(stored.protocol_text, stored.protocol_source);
-  if (!loaded.ok())
-    return RunError{false, "the stored protocol no longer loads: " +
-                               protocol::format_diagnostic(loaded.diagnostics.front())};
-  const Protocol& p = *loaded.protocol;
   Design design = protocol::expand_design(p, stored.participant_number);
   if (static_cast<std::int64_t>(design.seed) != stored.seed)
     return RunError{false, "the stored seed does not match the re-expanded design"};

@@ -3,7 +3,8 @@
 #include "curvlab/geometry/maps.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/renderer/mesh.hpp"
-#include "curvlab/renderer/text.hpp"
+
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cmath>
@@ -45,6 +46,49 @@ geometry::PhysicalTable physical_table(const Settings& s,
   t.edge_m = fit.edge_m;
   t.height_m = fit.height_m;
   return t;
+}
+
+geometry::TrackingAlgorithm tracking_algorithm(const Settings& s) {
+  switch (s.tracking) {
+    case protocol::Tracking::naive: return geometry::TrackingAlgorithm::naive;
+    case protocol::Tracking::head_anchored: return geometry::TrackingAlgorithm::head_anchored;
+    case protocol::Tracking::table_anchored: return geometry::TrackingAlgorithm::table_anchored;
+  }
+  return geometry::TrackingAlgorithm::table_anchored;
+}
+
+std::string calibration_json(const geometry::PhysicalTableFit& fit) {
+  nlohmann::ordered_json j;
+  j["centre_x_m"] = fit.centre_m.x;
+  j["centre_z_m"] = fit.centre_m.y;
+  j["yaw_rad"] = fit.yaw_rad;
+  j["edge_m"] = fit.edge_m;
+  j["height_m"] = fit.height_m;
+  j["rms_residual_m"] = fit.rms_residual_m;
+  j["max_residual_m"] = fit.max_residual_m;
+  j["corners_used"] = fit.corners_used;
+  return j.dump();
+}
+
+std::variant<geometry::PhysicalTableFit, std::string> parse_calibration_json(const std::string& text) {
+  const auto j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    return std::string("expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
+  geometry::PhysicalTableFit fit;
+  try {
+    fit.centre_m = {j.at("centre_x_m").get<double>(), j.at("centre_z_m").get<double>()};
+    fit.yaw_rad = j.at("yaw_rad").get<double>();
+    fit.edge_m = j.at("edge_m").get<double>();
+    fit.height_m = j.at("height_m").get<double>();
+    fit.rms_residual_m = j.value("rms_residual_m", 0.0);
+    fit.max_residual_m = j.value("max_residual_m", 0.0);
+    fit.corners_used = j.value("corners_used", 0);
+  } catch (const nlohmann::json::exception& e) {
+    return std::string(e.what()) + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)";
+  }
+  if (!(fit.edge_m > 0.2 && fit.edge_m < 5.0 && fit.height_m > 0.3 && fit.height_m < 1.5))
+    return std::string("edge_m must lie in (0.2, 5) m and height_m in (0.3, 1.5) m");
+  return fit;
 }
 
 Judged judged(const Settings& s) { return s.stimulus.show_stick ? Judged::stick : Judged::table; }
@@ -166,32 +210,6 @@ double physical_sagitta_m(const Settings& s) {
   return judged(s) == Judged::stick ? s.stimulus.stick_sagitta_m : s.stimulus.table_sagitta_m;
 }
 
-// ---------------------------------------------------------------------------
-
-namespace {
-
-std::variant<renderer::SceneObject, std::string> make_panel(const geometry::Space& space,
-                                                            const std::string& name,
-                                                            const std::string& text,
-                                                            const std::string& font,
-                                                            double width_m, double height_m) {
-  const int w = 1024;
-  const int h = static_cast<int>(std::lround(w * height_m / width_m));
-  auto bmp = renderer::render_text(text.empty() ? std::string(" ") : text, w, h, h / 3.0, font);
-  if (auto* e = std::get_if<renderer::TextError>(&bmp)) return e->message;
-  renderer::SceneObject o;
-  o.name = name;
-  o.build = [space, width_m, height_m](int level) {
-    return renderer::build_panel(space, width_m, height_m, level);
-  };
-  o.info = renderer::panel_info(space, width_m, height_m);
-  o.text = std::move(std::get<renderer::CoverageBitmap>(bmp));
-  o.visible = false;
-  return o;
-}
-
-}  // namespace
-
 std::variant<TrialScene, std::string> TrialScene::build(const World& world, const Settings& s,
                                                         const std::string& prompt,
                                                         const std::string& font_path) {
@@ -200,44 +218,31 @@ std::variant<TrialScene, std::string> TrialScene::build(const World& world, cons
   t.font_path_ = font_path;
   const auto& space = world.space;
   const auto& st = s.stimulus;
+  auto hidden = [](renderer::SceneObject o) {
+    o.visible = false;
+    return o;
+  };
   if (st.show_table) {
     renderer::TableStyle style;
     style.cloth_sagitta_m = st.table_sagitta_m;
-    const auto table = world.table;
-    renderer::SceneObject o;
-    o.name = "table";
-    o.build = [space, table, style](int level) { return renderer::build_table(space, table, level, style); };
-    o.info = renderer::table_info(space, table, style);
-    o.pose = Isometry::identity();
-    o.visible = false;
-    t.table_ = t.scene_.add(std::move(o));
+    t.table_ = t.scene_.add(hidden(renderer::table_object(space, world.table, style)));
     t.has_table_ = true;
     t.table_sagitta_m_ = st.table_sagitta_m;
-    // Balls in a row across the far half of the cloth.
+    // Balls in a row across the far half of the cloth, the first one white.
     const double r = st.ball_radius_m;
-    const double z = -0.3 * table.apothem_m();
+    const double z = -0.3 * world.table.apothem_m();
     for (std::int64_t i = 0; i < st.balls; ++i) {
-      renderer::SceneObject b;
-      b.name = "ball " + std::to_string(i + 1);
       const glm::vec4 colour = i == 0 ? glm::vec4(0.95f, 0.95f, 0.92f, 1.0f)
                                       : glm::vec4(0.85f, 0.12f, 0.10f, 1.0f);
-      b.build = [space, r, colour](int) { return renderer::build_ball(space, r, colour); };
-      b.info = renderer::ball_info(space, r);
       const double x = (static_cast<double>(i) - 0.5 * static_cast<double>(st.balls - 1)) * 3.0 * r;
-      b.pose = geometry::translation_m(space, Vec3(x, 0.0, z)) *
-               geometry::translation_m(space, Vec3(0.0, r, 0.0));
-      b.visible = false;
-      t.balls_.push_back(t.scene_.add(std::move(b)));
+      t.balls_.push_back(t.scene_.add(hidden(renderer::ball_object(
+          space, r, colour,
+          geometry::translation_m(space, Vec3(x, 0.0, z)) * geometry::translation_m(space, Vec3(0.0, r, 0.0))))));
     }
   }
   if (st.show_stick) {
     const geometry::BentStick stick{st.stick_length_m, st.stick_sagitta_m, st.stick_radius_m};
-    renderer::SceneObject o;
-    o.name = "cue stick";
-    o.build = [space, stick](int level) { return renderer::build_stick(space, stick, level); };
-    o.info = renderer::stick_info(space, stick);
-    o.visible = false;
-    t.stick_ = t.scene_.add(std::move(o));
+    t.stick_ = t.scene_.add(hidden(renderer::stick_object(space, stick, Isometry::identity())));
     t.has_stick_ = true;
     t.stick_sagitta_m_ = st.stick_sagitta_m;
     t.stick_length_m_ = st.stick_length_m;
@@ -246,9 +251,10 @@ std::variant<TrialScene, std::string> TrialScene::build(const World& world, cons
        {std::tuple{&t.prompt_, "prompt", prompt, 1.0, 0.22},
         std::tuple{&t.fixation_, "fixation", std::string("+"), 0.08, 0.08},
         std::tuple{&t.page_, "page", std::string(" "), 1.0, 0.5}}) {
-    auto made = make_panel(space, name, text, font_path, w, h);
+    auto made = renderer::text_panel_object(space, name, text.empty() ? std::string(" ") : text, font_path,
+                                            w, h, Isometry::identity());
     if (auto* e = std::get_if<std::string>(&made)) return *e;
-    *index = t.scene_.add(std::move(std::get<renderer::SceneObject>(made)));
+    *index = t.scene_.add(hidden(std::move(std::get<renderer::SceneObject>(made))));
   }
   return t;
 }
@@ -266,9 +272,8 @@ void TrialScene::set_stimulus(const Settings& s, const Placement& placement) {
   const auto& st = s.stimulus;
   if (has_stick_) {
     if (st.stick_sagitta_m != stick_sagitta_m_ || st.stick_length_m != stick_length_m_) {
-      const geometry::BentStick stick = placement.stick;
-      scene_.replace_mesh(stick_, [space, stick](int level) { return renderer::build_stick(space, stick, level); },
-                          renderer::stick_info(space, stick));
+      auto o = renderer::stick_object(space, placement.stick, placement.stick_pose);
+      scene_.replace_mesh(stick_, std::move(o.build), std::move(o.info));
       stick_sagitta_m_ = st.stick_sagitta_m;
       stick_length_m_ = st.stick_length_m;
     }
@@ -277,9 +282,8 @@ void TrialScene::set_stimulus(const Settings& s, const Placement& placement) {
   if (has_table_ && st.table_sagitta_m != table_sagitta_m_) {
     renderer::TableStyle style;
     style.cloth_sagitta_m = st.table_sagitta_m;
-    const auto table = world_.table;
-    scene_.replace_mesh(table_, [space, table, style](int level) { return renderer::build_table(space, table, level, style); },
-                        renderer::table_info(space, table, style));
+    auto o = renderer::table_object(space, world_.table, style);
+    scene_.replace_mesh(table_, std::move(o.build), std::move(o.info));
     table_sagitta_m_ = st.table_sagitta_m;
   }
 }
@@ -300,10 +304,11 @@ void TrialScene::show(const std::string& phase, bool stimulus_during_response) {
 
 std::optional<std::string> TrialScene::set_page(const std::string& text, const Isometry& head) {
   if (text != page_text_) {
-    auto made = make_panel(world_.space, "page", text, font_path_, 1.0, 0.5);
+    auto made = renderer::text_panel_object(world_.space, "page", text.empty() ? std::string(" ") : text,
+                                            font_path_, 1.0, 0.5, Isometry::identity());
     if (auto* e = std::get_if<std::string>(&made)) return *e;
     auto& o = std::get<renderer::SceneObject>(made);
-    scene_.replace_mesh(page_, o.build, o.info, std::move(o.text));
+    scene_.replace_mesh(page_, std::move(o.build), std::move(o.info), std::move(o.text));
     page_text_ = text;
   }
   scene_.edit(page_).pose = head * geometry::translation_m(world_.space, Vec3(0.0, 0.0, -1.2));

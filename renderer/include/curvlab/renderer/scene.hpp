@@ -48,6 +48,20 @@ class Scene {
   static std::uint64_t next_revision();
 };
 
+// The stimulus's objects (model frames as in mesh.hpp), shared by the
+// stimulus scenes below and the session runner's trial scenes.
+SceneObject stick_object(const Space& space, const geometry::BentStick& stick, const Isometry& pose);
+SceneObject table_object(const Space& space, const geometry::TableShape& table,
+                         const TableStyle& style = {});
+SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour,
+                        const Isometry& pose);
+// A text panel of width × height metres (about 1000 px per metre), or why
+// the text could not be drawn.
+std::variant<SceneObject, std::string> text_panel_object(const Space& space, std::string name,
+                                                         const std::string& text,
+                                                         const std::string& font, double width_m,
+                                                         double height_m, const Isometry& pose);
+
 enum class SceneKind { stick, table, billiards, tiling };
 std::optional<SceneKind> parse_scene_kind(std::string_view text);
 std::string_view to_string(SceneKind kind);

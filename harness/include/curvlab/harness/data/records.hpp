@@ -21,6 +21,7 @@ const char* to_string(SessionStatus status);
 const char* to_string(TrackedDevice device);
 
 // No names or other identifying data: a pseudonym of [A-Za-z0-9_-], 1–32 chars.
+bool valid_pseudonym(const std::string& pseudonym);
 struct ParticipantRecord {
   std::string pseudonym;
   std::optional<double> ipd_m;

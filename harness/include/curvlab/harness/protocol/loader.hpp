@@ -16,6 +16,7 @@ namespace curvlab::harness::protocol {
 struct LoadResult {
   std::optional<Protocol> protocol;  // set only when diagnostics is empty
   std::vector<Diagnostic> diagnostics;
+  std::string text;  // load_protocol_file: the text read (sessions store it)
   [[nodiscard]] bool ok() const { return protocol.has_value(); }
 };
 

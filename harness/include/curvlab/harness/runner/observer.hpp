@@ -53,6 +53,9 @@ std::string observer_json(const ObserverParams& p);
 
 // Standard normal CDF.
 double normal_cdf(double x);
+// A standard normal draw (Box–Muller on the portable uniform draw, so a seed
+// gives the same values with every standard library).
+double standard_normal(protocol::Engine& rng);
 
 class SimulatedObserver {
  public:
@@ -74,7 +77,6 @@ class SimulatedObserver {
  private:
   ObserverParams params_;
   protocol::Engine rng_;
-  double gaussian();
 };
 
 }  // namespace curvlab::harness::runner

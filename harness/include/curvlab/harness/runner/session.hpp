@@ -80,13 +80,6 @@ RunResult run_session(const protocol::Protocol& protocol, const std::string& pro
                       const std::string& db_path, const RunOptions& options, Backend& backend,
                       const devices::Clock& clock);
 
-// Continues a session from its first incomplete trial. The protocol text,
-// participant number and seed come from the database; options supply the
-// observer, drawing and progress settings.
-RunResult resume_session(const std::string& db_path, std::int64_t session_id,
-                         const RunOptions& options, Backend& backend,
-                         const devices::Clock& clock);
-
 // What a session needs from the database before a backend is opened: its
 // protocol (text and parsed), participant number and state.
 struct StoredSession {
@@ -103,6 +96,14 @@ struct StoredSession {
 };
 std::variant<StoredSession, RunError> read_stored_session(const std::string& db_path,
                                                           std::int64_t session_id);
+
+// Continues a session from its first incomplete trial. `stored` is what
+// read_stored_session returned and `protocol` its protocol text, loaded; the
+// participant, seed, calibration and (unless options give one) observer come
+// from it; options supply the drawing and progress settings.
+RunResult resume_session(const std::string& db_path, std::int64_t session_id,
+                         const StoredSession& stored, const protocol::Protocol& protocol,
+                         const RunOptions& options, Backend& backend, const devices::Clock& clock);
 
 // The stored conditions and stimulus of a planned trial (trials.conditions
 // and trials.stimulus; data_schema/codebook.md).

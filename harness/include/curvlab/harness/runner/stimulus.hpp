@@ -38,6 +38,14 @@ geometry::PhysicalTable physical_table(const protocol::Settings& s,
 // and height centred at the lab origin, yaw 0.
 geometry::PhysicalTableFit nominal_calibration(const protocol::Settings& s);
 
+// The tracking code's algorithm for the protocol's setting.
+geometry::TrackingAlgorithm tracking_algorithm(const protocol::Settings& s);
+
+// The calibration as stored with a session (sessions.table_calibration), and
+// back; parsing names what is missing or out of range.
+std::string calibration_json(const geometry::PhysicalTableFit& fit);
+std::variant<geometry::PhysicalTableFit, std::string> parse_calibration_json(const std::string& text);
+
 enum class Judged { stick, table };
 Judged judged(const protocol::Settings& s);
 
