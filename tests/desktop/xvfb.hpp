@@ -44,8 +44,10 @@ class XServer {
         dup2(null, 1);
         dup2(null, 2);
       }
+      // -noreset: by default the server resets when its last client leaves
+      // and refuses connections meanwhile, which fails the next window.
       execl(exe, exe, "-displayfd", fd.c_str(), "-screen", "0", "1280x1024x24", "-nolisten",
-            "tcp", static_cast<char*>(nullptr));
+            "tcp", "-noreset", static_cast<char*>(nullptr));
       _exit(127);
     }
     close(fds[1]);
