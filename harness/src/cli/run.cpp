@@ -212,6 +212,8 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   doc["trials_planned"] = s.trials_planned;
   doc["trials_completed"] = s.trials_completed;
   doc["trials_skipped"] = s.trials_skipped;
+  doc["trials_aborted"] = s.trials_aborted;
+  doc["trials_flagged"] = s.trials_flagged;
   doc["attempts_repeated"] = s.attempts_repeated;
   doc["frames"] = s.frames;
   doc["samples_dropped"] = s.samples_dropped;

@@ -121,6 +121,10 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
       {"staircase_step", "Staircase trials: the step's index in its staircase, from 0", ""},
       {"intensity", "Staircase trials: the value of the staircase's parameter shown", "protocol unit"},
       {"is_reversal", "Staircase trials: 1 when the response reversed the staircase's direction", ""},
+      {"tracking_lost_ms",
+       "Trials completed with tracking lost (tracking.on_loss = \"flag\"): how long the head was "
+       "untracked, in spells longer than tracking.loss_ms",
+       "ms"},
   };
   const std::size_t fixed = table.columns.size();
   try {
@@ -129,6 +133,8 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
                 "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.attempt, "
                 "t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
                 "t.completed_utc, st.staircase, st.step_index, st.intensity, st.is_reversal, "
+                "(SELECT SUM(json_extract(e.detail, '$.lost_ms')) FROM events e WHERE "
+                "e.trial_id = t.trial_id AND e.kind = 'tracking_flagged'), "
                 "t.conditions, t.stimulus FROM trials t "
                 "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
                 "JOIN sessions se ON se.session_id = t.session_id "
@@ -143,8 +149,8 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
     while (s.step()) {
       std::vector<Cell> row;
       for (int c = 0; c < static_cast<int>(fixed); ++c) row.push_back(s.column_opt_text(c));
-      auto cond = nlohmann::ordered_json::parse(s.column_text(21), nullptr, false);
-      auto stim = nlohmann::ordered_json::parse(s.column_text(22), nullptr, false);
+      auto cond = nlohmann::ordered_json::parse(s.column_text(22), nullptr, false);
+      auto stim = nlohmann::ordered_json::parse(s.column_text(23), nullptr, false);
       for (auto [obj, names, pos] : {std::tie(cond, cond_names, cond_pos),
                                      std::tie(stim, stim_names, stim_pos)}) {
         if (!obj.is_object()) continue;

@@ -112,8 +112,8 @@ struct SessionStore::Statements {
         insert_step(c, "INSERT OR REPLACE INTO staircase_steps (session_id, staircase, "
                        "step_index, trial_id, intensity, response_correct, is_reversal, "
                        "next_intensity) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)"),
-        skip_trial(c, "UPDATE trials SET status = 'skipped' WHERE trial_id = ?1 AND "
-                      "status IN ('pending', 'running')"),
+        end_unanswered(c, "UPDATE trials SET status = ?2 WHERE trial_id = ?1 AND "
+                          "status IN ('pending', 'running')"),
         insert_event(c, "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) "
                         "VALUES (?1, ?2, ?3, ?4, ?5)"),
         set_status(c, "UPDATE sessions SET status = ?2 WHERE session_id = ?1"),
@@ -124,7 +124,7 @@ struct SessionStore::Statements {
 
   Statement insert_protocol, find_protocol, find_participant, insert_participant,
       next_session_number, insert_session, count_plan, insert_block, insert_trial, next_trial,
-      begin_trial, complete_trial, trial_status, insert_step, skip_trial, insert_event,
+      begin_trial, complete_trial, trial_status, insert_step, end_unanswered, insert_event,
       set_status, close_session, count_trials;
 };
 
@@ -324,14 +324,18 @@ Expected<Done> SessionStore::complete_trial(const TrialResult& r) {
   });
 }
 
-Expected<Done> SessionStore::skip_trial(std::int64_t trial_id) {
+Expected<Done> SessionStore::end_unanswered(std::int64_t trial_id, const char* status) {
   return guarded(db_, [&]() -> Done {
     Transaction txn(db_.connection());
-    stmts_->skip_trial.bind(1, trial_id).run();
+    stmts_->end_unanswered.bind(1, trial_id).bind(2, std::string_view(status)).run();
     txn.commit();
     return Done{};
   });
 }
+
+Expected<Done> SessionStore::skip_trial(std::int64_t trial_id) { return end_unanswered(trial_id, "skipped"); }
+
+Expected<Done> SessionStore::abort_trial(std::int64_t trial_id) { return end_unanswered(trial_id, "aborted"); }
 
 Expected<std::int64_t> SessionStore::record_event(const EventRecord& e) {
   return guarded(db_, [&]() -> std::int64_t {

@@ -26,6 +26,14 @@ std::string_view to_string(Eyes e) {
   return "?";
 }
 std::string_view to_string(StickAnchor a) { return a == StickAnchor::head ? "head" : "table"; }
+std::string_view to_string(OnTrackingLoss o) {
+  switch (o) {
+    case OnTrackingLoss::repeat: return "repeat";
+    case OnTrackingLoss::flag: return "flag";
+    case OnTrackingLoss::abort: return "abort";
+  }
+  return "?";
+}
 
 namespace {
 
@@ -44,6 +52,12 @@ std::vector<SettingInfo> make_registry() {
        "the radius that defines Euclidean radians in E3"},
       {"tracking.algorithm", K::enumeration, 0, 0, {"naive", "head-anchored", "table-anchored"},
        "body-coherent tracking algorithm (paper, sections 4–5)"},
+      {"tracking.loss_ms", K::integer, 10, 10000, {},
+       "how long the head may be untracked before the trial counts tracking as lost"},
+      {"tracking.on_loss", K::enumeration, 0, 0, {"repeat", "flag", "abort"},
+       "tracking lost: repeat the trial, flag it and go on, or mark it aborted"},
+      {"tracking.max_attempts", K::integer, 0, 100, {},
+       "attempts a trial is given before it is marked aborted (0: no limit)"},
       {"viewing.preset", K::enumeration, 0, 0, {"tourist", "native", "monocular"},
        "sets projection and eyes: tourist = tourist/both, native = native/both, "
        "monocular = native/dominant"},
@@ -203,6 +217,14 @@ void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& val
     s.tracking = text == "naive" ? Tracking::naive
                  : text == "head-anchored" ? Tracking::head_anchored
                                            : Tracking::table_anchored;
+  } else if (p == "tracking.loss_ms") {
+    s.tracking_loss.loss_ms = integer;
+  } else if (p == "tracking.on_loss") {
+    s.tracking_loss.on_loss = text == "flag"    ? OnTrackingLoss::flag
+                              : text == "abort" ? OnTrackingLoss::abort
+                                                : OnTrackingLoss::repeat;
+  } else if (p == "tracking.max_attempts") {
+    s.tracking_loss.max_attempts = integer;
   } else if (p == "viewing.preset") {
     s.viewing.projection = text == "tourist" ? Projection::tourist : Projection::native;
     s.viewing.eyes = text == "monocular" ? Eyes::dominant : Eyes::both;

@@ -536,7 +536,13 @@ class Session {
       if (!begin(f)) return Outcome::quit;
       const std::int64_t start_ns = f.timing.now_ns;
       scene_->place(place_stimulus(*world_, s, head()), head());
+      // Tracking loss: how long the head has been untracked, and for
+      // "flag", the spells past the threshold and their total length.
+      const auto& loss = s.tracking_loss;
       std::int64_t untracked_since = -1;
+      bool lost_spell = false;
+      std::int64_t lost_ns = 0;
+      int lost_spells = 0;
       std::optional<std::int64_t> onset_ns;
       std::int64_t onset_frame_time = 0;
       Isometry head_at_onset;
@@ -555,11 +561,20 @@ class Session {
         }
         if (!f.head_tracked) {
           if (untracked_since < 0) untracked_since = f.timing.now_ns;
-          if (f.timing.now_ns - untracked_since >= options_.tracking_loss_ns) {
-            aborted = true;
-            abort_reason = "tracking_lost";
+          if (f.timing.now_ns - untracked_since >= loss.loss_ms * 1'000'000) {
+            if (loss.on_loss == protocol::OnTrackingLoss::flag) {
+              lost_spell = true;
+            } else {
+              aborted = true;
+              abort_reason = "tracking_lost";
+            }
           }
         } else {
+          if (lost_spell) {
+            lost_ns += f.timing.now_ns - untracked_since;
+            ++lost_spells;
+            lost_spell = false;
+          }
           untracked_since = -1;
         }
         if (aborted) break;
@@ -585,34 +600,33 @@ class Session {
           phase = "response";
         }
         // Responses count from onset to the end of the response window.
-        if (onset_ns) {
-          for (const auto& in : f.inputs) {
-            if (!in.pressed || answer) continue;
-            if (in.t_ns < *onset_ns) {
-              // Pressed before the stimulus was on the display: an
-              // anticipation, logged but not an answer.
-              event(trial_id, "early_input", Json{{"name", in.name}, {"device", in.device}, {"t_ns", in.t_ns}});
+        for (const auto& in : f.inputs) {
+          if (!in.pressed || answer) continue;
+          if (!onset_ns || in.t_ns < *onset_ns) {
+            // Pressed before the stimulus was on the display (during the
+            // fixation, or in the onset frame before its display time):
+            // an anticipation, logged but not an answer.
+            event(trial_id, "early_input", Json{{"name", in.name}, {"device", in.device}, {"t_ns", in.t_ns}});
+            continue;
+          }
+          if (j.type == JudgementType::adjustment) {
+            const auto& a = *j.adjustment;
+            if (listed(a.keys_increase, a.buttons_increase, in.name)) adjustment->increase();
+            else if (listed(a.keys_decrease, a.buttons_decrease, in.name)) adjustment->decrease();
+            else if (listed(a.keys_confirm, a.buttons_confirm, in.name)) {
+              adjustment->confirm();
+              char buf[64];
+              std::snprintf(buf, sizeof buf, "%.9g", adjustment->value());
+              answer = std::pair{std::string(buf), in};
+              continue;
+            } else {
               continue;
             }
-            if (j.type == JudgementType::adjustment) {
-              const auto& a = *j.adjustment;
-              if (listed(a.keys_increase, a.buttons_increase, in.name)) adjustment->increase();
-              else if (listed(a.keys_decrease, a.buttons_decrease, in.name)) adjustment->decrease();
-              else if (listed(a.keys_confirm, a.buttons_confirm, in.name)) {
-                adjustment->confirm();
-                char buf[64];
-                std::snprintf(buf, sizeof buf, "%.9g", adjustment->value());
-                answer = std::pair{std::string(buf), in};
-                continue;
-              } else {
-                continue;
-              }
-              protocol::set_numeric_setting(s, a.parameter, adjustment->value());
-              placement = place_stimulus(*world_, s, head_at_onset);
-              scene_->set_stimulus(s, placement);
-            } else if (auto k = option_for(j, in)) {
-              answer = std::pair{j.options[*k].value, in};
-            }
+            protocol::set_numeric_setting(s, a.parameter, adjustment->value());
+            placement = place_stimulus(*world_, s, head_at_onset);
+            scene_->set_stimulus(s, placement);
+          } else if (auto k = option_for(j, in)) {
+            answer = std::pair{j.options[*k].value, in};
           }
         }
         scene_->show(phase, tl.stimulus_during_response);
@@ -644,8 +658,31 @@ class Session {
 
       if (aborted) {
         event(trial_id, "trial_aborted", Json{{"reason", abort_reason}, {"attempt", attempt}});
+        // Wait for the head (or the resume) whatever comes next, so that one
+        // loss does not abort the trials after it as well.
         if (auto o = wait_until_ready(abort_reason, trial_id); o == Outcome::quit) return o;
-        continue;  // the same trial again, as a new attempt
+        const bool give_up =
+            (abort_reason == "tracking_lost" && loss.on_loss == protocol::OnTrackingLoss::abort) ||
+            (loss.max_attempts > 0 && attempt >= loss.max_attempts);
+        if (!give_up) {
+          event(trial_id, "trial_repeated", Json{{"reason", abort_reason}});
+          continue;  // the same trial again, as a new attempt
+        }
+        check(store_.abort_trial(trial_id));
+        event(trial_id, "trial_abandoned", Json{{"reason", abort_reason}, {"attempts", attempt}});
+        ++summary_.trials_aborted;
+        check(writer_.flush());
+        current_trial_.reset();
+        return Outcome::done;
+      }
+      if (lost_spell) {
+        lost_ns += clock_.now_ns() - untracked_since;
+        ++lost_spells;
+      }
+      if (lost_spells > 0) {
+        event(trial_id, "tracking_flagged",
+              Json{{"lost_ms", static_cast<double>(lost_ns) * 1e-6}, {"spells", lost_spells}, {"attempt", attempt}});
+        ++summary_.trials_flagged;
       }
 
       data::TrialResult r;
@@ -700,7 +737,6 @@ class Session {
       if (ready) break;
     }
     if (reason == "pause") check(store_.set_session_status(session_id_, data::SessionStatus::running));
-    event(trial_id, "trial_repeated", Json{{"reason", reason}});
     return Outcome::done;
   }
 

@@ -46,7 +46,10 @@ class SessionStore {
   Expected<std::int64_t> begin_trial(std::int64_t trial_id);
   // Commits the response (and its staircase step) in one transaction.
   Expected<Done> complete_trial(const TrialResult& result);
+  // A trial that ends without an answer: skipped (a stopped staircase's
+  // slot) or aborted (given up after interruptions). Either is final.
   Expected<Done> skip_trial(std::int64_t trial_id);
+  Expected<Done> abort_trial(std::int64_t trial_id);
   Expected<std::int64_t> record_event(const EventRecord& event);
   Expected<Done> set_session_status(std::int64_t session_id, SessionStatus status);
   // Sets the final status and the end time.
@@ -54,6 +57,7 @@ class SessionStore {
   Expected<std::int64_t> count_trials(std::int64_t session_id, const std::string& status);
 
  private:
+  Expected<Done> end_unanswered(std::int64_t trial_id, const char* status);
   struct Statements;
   Database db_;
   std::unique_ptr<Statements> stmts_;

@@ -21,11 +21,14 @@ enum class Tracking { naive, head_anchored, table_anchored };
 enum class Projection { tourist, native };
 enum class Eyes { both, left, right, dominant };
 enum class StickAnchor { head, table };
+// What a trial does when the head has been untracked for `loss_ms`.
+enum class OnTrackingLoss { repeat, flag, abort };
 
 std::string_view to_string(Tracking t);
 std::string_view to_string(Projection p);
 std::string_view to_string(Eyes e);
 std::string_view to_string(StickAnchor a);
+std::string_view to_string(OnTrackingLoss o);
 
 struct SpaceSettings {
   geometry::SpaceKind kind = geometry::SpaceKind::E3;
@@ -34,6 +37,18 @@ struct SpaceSettings {
   std::optional<double> radius_m;
   int table_sides = 0;  // 0: the space's default (S3 3, E3 4, H3 5)
   double e3_radius_m = 1.0;  // the radius that defines Euclidean radians
+};
+
+// Interruptions of a trial. Tracking loss follows `on_loss`: the attempt is
+// dropped and the trial runs again once the head is tracked (repeat), the
+// trial goes on and is flagged (flag), or the trial is marked aborted and
+// the session moves on (abort). A recenter or a pause always drops the
+// attempt. `max_attempts` (0: no limit) marks a trial aborted instead of
+// starting it again after that many attempts.
+struct TrackingLoss {
+  std::int64_t loss_ms = 250;
+  OnTrackingLoss on_loss = OnTrackingLoss::repeat;
+  std::int64_t max_attempts = 0;
 };
 
 struct Viewing {
@@ -80,6 +95,7 @@ struct PhysicalTable {
 struct Settings {
   SpaceSettings space;
   Tracking tracking = Tracking::table_anchored;
+  TrackingLoss tracking_loss;
   Viewing viewing;
   Timeline timeline;
   Stimulus stimulus;

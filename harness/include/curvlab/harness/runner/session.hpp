@@ -9,7 +9,9 @@
 // Phases of a trial: fixation → stimulus → response window → inter-trial
 // interval; responses count from stimulus onset to the window's end. A lost
 // head (or a recenter) during a trial aborts the attempt and repeats the
-// trial once tracking is back; a pause does the same after resuming.
+// trial once tracking is back; a pause does the same after resuming. The
+// protocol's [tracking] section may flag losses instead, give such trials
+// up, or cap the attempts (protocol::TrackingLoss).
 #pragma once
 
 #include "curvlab/geometry/calibration.hpp"
@@ -45,8 +47,6 @@ struct RunOptions {
   bool progress = false;   // a progress bar on stderr
   std::optional<geometry::PhysicalTableFit> calibration;
   std::string font_path;   // text panels; empty: the renderer's default
-  // The head untracked for this long during a trial aborts the attempt.
-  std::int64_t tracking_loss_ns = 250'000'000;
   // Fast runs may wait for the logger instead of dropping samples.
   bool lossless_logging = true;
 };
@@ -58,6 +58,8 @@ struct SessionSummary {
   std::int64_t trials_planned = 0;
   std::int64_t trials_completed = 0;
   std::int64_t trials_skipped = 0;   // stopped staircases' slots
+  std::int64_t trials_aborted = 0;   // given up after tracking loss (tracking.on_loss, max_attempts)
+  std::int64_t trials_flagged = 0;   // completed with tracking lost (tracking.on_loss = "flag")
   std::int64_t attempts_repeated = 0;
   std::int64_t frames = 0;
   std::uint64_t samples_dropped = 0;

@@ -1,0 +1,290 @@
+// Whole sessions in process, with the headless backend (no GPU) wrapped so
+// that a test decides when the head is lost, when a recenter comes and which
+// keys are pressed when: what the runner does with anticipations, tracking
+// loss under each `tracking.on_loss` policy, and `tracking.max_attempts`.
+#include "session_db.hpp"
+
+#include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/export.hpp"
+#include "curvlab/harness/protocol/loader.hpp"
+#include "curvlab/harness/runner/headless.hpp"
+#include "curvlab/harness/runner/session.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+namespace {
+
+using namespace curvlab;
+using curvlab::testing::fresh_dir;
+using curvlab::testing::query;
+namespace rn = harness::runner;
+namespace pr = harness::protocol;
+
+using Rows = std::vector<std::vector<std::string>>;
+
+// Forwards to a headless backend; the test's hooks may invalidate the head,
+// add inputs and raise signals. `phase` is the phase of the last submitted
+// frame, as a window would show it.
+class ScriptedBackend final : public rn::Backend {
+ public:
+  explicit ScriptedBackend(rn::HeadlessBackend& inner) : inner_(inner) {}
+
+  std::function<bool(std::int64_t t_ns)> head_valid = [](std::int64_t) { return true; };
+  std::function<rn::BackendSignal(const rn::FrameTiming&, const std::string& phase,
+                                  std::vector<rn::InputEvent>&)>
+      inputs;
+
+  [[nodiscard]] rn::BackendInfo info() const override { return inner_.info(); }
+  std::optional<rn::FrameTiming> begin_frame() override {
+    auto t = inner_.begin_frame();
+    if (t) timing_ = *t;
+    return t;
+  }
+  geometry::LabFrame poses(const rn::FrameTiming& frame) override {
+    auto p = inner_.poses(frame);
+    p[geometry::Device::head].valid = head_valid(frame.now_ns);
+    return p;
+  }
+  rn::BackendSignal poll_input(std::vector<rn::InputEvent>& out) override {
+    const auto signal = inner_.poll_input(out);
+    if (inputs) {
+      const auto mine = inputs(timing_, phase_, out);
+      if (mine != rn::BackendSignal::none) return mine;
+    }
+    return signal;
+  }
+  renderer::StereoRig rig(const rn::FrameTiming& frame, double ipd_m) override {
+    return inner_.rig(frame, ipd_m);
+  }
+  renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
+                              const rn::Overlay& overlay, bool draw) override {
+    phase_ = overlay.phase;
+    return inner_.submit(scene, frame, overlay, draw);
+  }
+
+ private:
+  rn::HeadlessBackend& inner_;
+  rn::FrameTiming timing_;
+  std::string phase_;
+};
+
+struct Outcome {
+  std::string db;
+  rn::SessionSummary summary;
+};
+
+// The demo protocol (8 trials: 100 ms fixation, 300 ms stimulus, 2.5 s
+// response window) with `extra` appended, run to the end.
+Outcome run_demo(const std::string& name, const std::string& extra, bool observer,
+                 const std::function<void(ScriptedBackend&)>& script) {
+  const std::string path = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf() << '\n' << extra;
+  auto loaded = pr::load_protocol_text(text.str(), path);
+  EXPECT_TRUE(loaded.ok()) << (loaded.diagnostics.empty() ? "" : pr::format_diagnostic(loaded.diagnostics[0]));
+  if (!loaded.ok()) return {};
+  const auto& p = *loaded.protocol;
+  rn::HeadlessOptions ho;
+  ho.no_gpu = true;
+  ho.refresh_hz = p.refresh_hz;
+  ho.table = rn::nominal_calibration(p.session_settings());
+  auto made = rn::HeadlessBackend::create(ho);
+  EXPECT_TRUE(std::holds_alternative<std::unique_ptr<rn::HeadlessBackend>>(made));
+  if (!std::holds_alternative<std::unique_ptr<rn::HeadlessBackend>>(made)) return {};
+  auto& headless = *std::get<std::unique_ptr<rn::HeadlessBackend>>(made);
+  ScriptedBackend backend(headless);
+  script(backend);
+  rn::RunOptions o;
+  o.participant = "T01";
+  if (observer) o.observer = rn::ObserverParams{};
+  o.drawing = rn::FrameDrawing::none;
+  const auto db = (fresh_dir("interrupt_" + name) / "s.sqlite").string();
+  auto result = rn::run_session(p, text.str(), db, o, backend, headless.clock());
+  EXPECT_TRUE(std::holds_alternative<rn::SessionSummary>(result))
+      << std::get<rn::RunError>(result).message;
+  if (!std::holds_alternative<rn::SessionSummary>(result)) return {};
+  return {db, std::get<rn::SessionSummary>(result)};
+}
+
+// The head untracked in [from, to) of session time, in milliseconds.
+std::function<bool(std::int64_t)> lost_between(std::vector<std::pair<int, int>> spans_ms) {
+  return [spans_ms](std::int64_t t_ns) {
+    for (auto [from, to] : spans_ms)
+      if (t_ns >= from * 1'000'000LL && t_ns < to * 1'000'000LL) return false;
+    return true;
+  };
+}
+
+}  // namespace
+
+// A key pressed before the stimulus is on the display — during the fixation,
+// or in the onset frame itself but time-stamped before that frame's display
+// time — is logged as an anticipation and does not answer the trial; the
+// key pressed after it does.
+TEST(Interruptions, PressesBeforeTheDisplayedOnsetAreAnticipationsNotAnswers) {
+  bool answered = false;
+  const auto out = run_demo("early", "", false, [&](ScriptedBackend& b) {
+    b.inputs = [&](const rn::FrameTiming& t, const std::string& phase, std::vector<rn::InputEvent>& in) {
+      if (phase == "fixation") {
+        // Includes the frame in which the runner decides onset: stamped at
+        // the frame's start, before its predicted display time.
+        in.push_back({t.now_ns, "1", "keyboard", true});
+        answered = false;
+      } else if ((phase == "stimulus" || phase == "response") && !answered) {
+        in.push_back({t.predicted_display_ns, "2", "keyboard", true});
+        answered = true;
+      }
+      return rn::BackendSignal::none;
+    };
+  });
+  ASSERT_FALSE(out.db.empty());
+  EXPECT_EQ(out.summary.trials_completed, 8);
+  // Every trial was answered by the later key ("straight"), none by "1".
+  EXPECT_EQ(query(out.db, "SELECT DISTINCT response FROM trials"), (Rows{{"straight"}}));
+  // The press in the onset frame was logged, stamped before the onset.
+  EXPECT_EQ(query(out.db, "SELECT COUNT(*) FROM trials t WHERE EXISTS (SELECT 1 FROM events e "
+                          "WHERE e.trial_id = t.trial_id AND e.kind = 'early_input' AND "
+                          "json_extract(e.detail, '$.name') = '1' AND "
+                          "json_extract(e.detail, '$.t_ns') < t.onset_ns AND "
+                          "json_extract(e.detail, '$.t_ns') > t.onset_ns - 30000000)")[0][0],
+            "8");
+  // And so were the presses during the fixation (100 ms at 90 Hz: ≥ 8 each).
+  EXPECT_GE(std::stoi(query(out.db, "SELECT MIN(n) FROM (SELECT COUNT(*) AS n FROM events "
+                                    "WHERE kind = 'early_input' GROUP BY trial_id)")[0][0]),
+            9);
+}
+
+// on_loss = "flag": the trial goes on through a 500 ms loss, is completed in
+// its first attempt and carries the loss, in its event and in the export.
+TEST(Interruptions, FlaggedTrackingLossKeepsTheTrialAndRecordsHowLong) {
+  const auto out = run_demo("flag", "[tracking]\non_loss = \"flag\"\n", true,
+                            [](ScriptedBackend& b) { b.head_valid = lost_between({{50, 550}}); });
+  ASSERT_FALSE(out.db.empty());
+  EXPECT_EQ(out.summary.trials_completed, 8);
+  EXPECT_EQ(out.summary.trials_flagged, 1);
+  EXPECT_EQ(out.summary.attempts_repeated, 0);
+  EXPECT_EQ(query(out.db, "SELECT attempt, status FROM trials WHERE trial_index = 0"), (Rows{{"1", "completed"}}));
+  EXPECT_EQ(query(out.db, "SELECT COUNT(*) FROM events WHERE kind = 'trial_aborted'")[0][0], "0");
+  const auto flagged = query(out.db, "SELECT t.trial_index, json_extract(e.detail, '$.lost_ms'), "
+                                     "json_extract(e.detail, '$.spells') FROM events e "
+                                     "JOIN trials t ON t.trial_id = e.trial_id WHERE e.kind = 'tracking_flagged'");
+  ASSERT_EQ(flagged.size(), 1u);
+  EXPECT_EQ(flagged[0][0], "0");
+  EXPECT_NEAR(std::stod(flagged[0][1]), 500.0, 12.0);  // one 90 Hz frame either side
+  EXPECT_EQ(flagged[0][2], "1");
+
+  auto db = data::Database::open(out.db, data::OpenMode::read_only);
+  ASSERT_TRUE(db);
+  data::ExportOptions eo;
+  eo.out_dir = fresh_dir("interrupt_flag_export").string();
+  ASSERT_TRUE(data::export_trials_csv(db.value(), eo));
+  std::ifstream csv(std::filesystem::path(eo.out_dir) / "trials.csv");
+  std::string header, first, second;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  std::getline(csv, second);
+  const auto split = [](const std::string& text) {
+    std::vector<std::string> cells;
+    std::stringstream ss(text);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (!text.empty() && text.back() == ',') cells.emplace_back();
+    return cells;
+  };
+  const auto column = [&](const std::string& line) {
+    const auto h = split(header);
+    const auto v = split(line);
+    for (std::size_t k = 0; k < h.size() && k < v.size(); ++k)
+      if (h[k] == "tracking_lost_ms") return v[k];
+    return std::string("missing");
+  };
+  EXPECT_NEAR(std::stod(column(first)), 500.0, 12.0) << header << '\n' << first;
+  EXPECT_EQ(column(second), "NA") << second;
+}
+
+// on_loss = "abort": the trial is marked aborted after its one attempt and
+// the session goes on — but only once the head is tracked again, so the
+// trials after it are not lost with it.
+TEST(Interruptions, AbortPolicyGivesUpTheTrialAndWaitsForTrackingBeforeTheNext) {
+  const auto out = run_demo("abort", "[tracking]\non_loss = \"abort\"\n", true,
+                            [](ScriptedBackend& b) { b.head_valid = lost_between({{50, 2000}}); });
+  ASSERT_FALSE(out.db.empty());
+  EXPECT_EQ(out.summary.status, "completed");
+  EXPECT_EQ(out.summary.trials_aborted, 1);
+  EXPECT_EQ(out.summary.trials_completed, 7);
+  EXPECT_EQ(query(out.db, "SELECT trial_index, attempt, status FROM trials WHERE status != 'completed'"),
+            (Rows{{"0", "1", "aborted"}}));
+  EXPECT_EQ(query(out.db, "SELECT MAX(attempt) FROM trials")[0][0], "1");
+  EXPECT_EQ(query(out.db, "SELECT json_extract(detail, '$.reason'), json_extract(detail, '$.attempts') "
+                          "FROM events WHERE kind = 'trial_abandoned'"),
+            (Rows{{"tracking_lost", "1"}}));
+  EXPECT_EQ(query(out.db, "SELECT COUNT(*) FROM events WHERE kind = 'trial_repeated'")[0][0], "0");
+  // The next trial started after tracking came back at 2 s.
+  EXPECT_GT(std::stoll(query(out.db, "SELECT onset_ns FROM trials WHERE trial_index = 1")[0][0]),
+            2'000'000'000LL);
+  // Nothing is left to resume.
+  EXPECT_EQ(query(out.db, "SELECT COUNT(*) FROM trials WHERE status IN ('pending', 'running')")[0][0], "0");
+}
+
+// max_attempts = 2 with the default on_loss = "repeat": the first loss
+// repeats the trial, the second (in attempt 2) gives it up.
+TEST(Interruptions, MaxAttemptsEndsRepeatedLosses) {
+  // Attempt 1 starts at 0 and is lost at 300 ms (loss from 50 ms); attempt 2
+  // starts when the head is back at 600 ms and is lost again at 1.1 s,
+  // before the simulated observer's earliest answer (onset + 450 ms).
+  const auto out = run_demo("max", "[tracking]\nmax_attempts = 2\n", true, [](ScriptedBackend& b) {
+    b.head_valid = lost_between({{50, 600}, {850, 1400}});
+  });
+  ASSERT_FALSE(out.db.empty());
+  EXPECT_EQ(query(out.db, "SELECT trial_index, attempt, status FROM trials WHERE status != 'completed'"),
+            (Rows{{"0", "2", "aborted"}}));
+  EXPECT_EQ(query(out.db, "SELECT COUNT(*) FROM events WHERE kind = 'trial_aborted'")[0][0], "2");
+  EXPECT_EQ(query(out.db, "SELECT COUNT(*) FROM events WHERE kind = 'trial_repeated'")[0][0], "1");
+  EXPECT_EQ(query(out.db, "SELECT json_extract(detail, '$.attempts') FROM events WHERE kind = 'trial_abandoned'"),
+            (Rows{{"2"}}));
+  EXPECT_EQ(out.summary.trials_completed, 7);
+}
+
+// A recenter always drops the attempt, whatever on_loss says, and counts
+// toward max_attempts.
+TEST(Interruptions, RecenterRepeatsTheTrialEvenWhenLossesAreOnlyFlagged) {
+  // A recenter in the third fixation frame of the first two attempts.
+  int recenters = 0;
+  int fixation_frames = 0;
+  const auto out = run_demo("recenter", "[tracking]\non_loss = \"flag\"\nmax_attempts = 3\n", true,
+                            [&](ScriptedBackend& b) {
+                              b.inputs = [&](const rn::FrameTiming&, const std::string& phase,
+                                             std::vector<rn::InputEvent>&) {
+                                fixation_frames = phase == "fixation" ? fixation_frames + 1 : 0;
+                                if (fixation_frames == 3 && recenters < 2) {
+                                  ++recenters;
+                                  return rn::BackendSignal::recenter;
+                                }
+                                return rn::BackendSignal::none;
+                              };
+                            });
+  ASSERT_FALSE(out.db.empty());
+  EXPECT_EQ(query(out.db, "SELECT attempt, status FROM trials WHERE trial_index = 0"), (Rows{{"3", "completed"}}));
+  EXPECT_EQ(query(out.db, "SELECT json_extract(detail, '$.reason') FROM events WHERE kind = 'trial_aborted'"),
+            (Rows{{"recenter"}, {"recenter"}}));
+  EXPECT_EQ(out.summary.trials_completed, 8);
+}
+
+// Validation of the new settings: a clear error with the allowed values.
+TEST(Interruptions, UnknownLossPolicyIsRejectedWithTheAllowedValues) {
+  const auto loaded = pr::load_protocol_text(
+      "[protocol]\nname = \"x\"\nversion = \"1\"\n[randomization]\nseed = 1\n[tracking]\non_loss = \"retry\"\n"
+      "[judgement]\ntype = \"choice\"\noptions = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n",
+      "bad.toml");
+  ASSERT_FALSE(loaded.ok());
+  const auto message = pr::format_diagnostic(loaded.diagnostics.at(0));
+  EXPECT_NE(message.find("bad.toml:7"), std::string::npos) << message;
+  EXPECT_NE(message.find("on_loss"), std::string::npos) << message;
+  EXPECT_NE(message.find("\"repeat\", \"flag\", \"abort\""), std::string::npos) << message;
+}
