@@ -1,9 +1,13 @@
 // `curvlab predict`: Student's t against tabled values, and the paper's
-// study predicted from the perception model.
+// study predicted from the perception model, and where staircases converge.
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
 
 namespace rn = curvlab::harness::runner;
 
@@ -58,4 +62,108 @@ TEST(Predict, TheProposedStudyFollowsThePerceptionModel) {
     }
   }
   EXPECT_TRUE(view_power);
+}
+
+// Levitt's convergence points: 1-up/n-down where P^n = 1/2, and the
+// mirror image for m-up/1-down.
+TEST(Predict, StaircaseTargetsAreLevittsConvergencePoints) {
+  EXPECT_NEAR(rn::staircase_target_probability(1, 1), 0.5, 1e-12);
+  EXPECT_NEAR(rn::staircase_target_probability(1, 2), std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(rn::staircase_target_probability(1, 3), std::cbrt(0.5), 1e-12);
+  EXPECT_NEAR(rn::staircase_target_probability(2, 1), 1.0 - std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(rn::staircase_target_probability(2, 2), 0.5, 1e-12);
+}
+
+namespace {
+
+// z with Φ(z) = p, by bisection on erfc (independent of the observer code).
+double normal_quantile(double p) {
+  double lo = -10.0, hi = 10.0;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p) lo = mid;
+    else hi = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+std::string replace_all(std::string text, const std::string& from, const std::string& to) {
+  for (std::size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size())
+    text.replace(at, from.size(), to);
+  return text;
+}
+
+std::string staircase_protocol_text(int down) {
+  std::ifstream in(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string text = ss.str();
+  return replace_all(text, "down = 1\n", "down = " + std::to_string(down) + "\n");
+}
+
+}  // namespace
+
+// With the physical observer (it sees the bend as built) the value a
+// staircase converges on has a closed form: the bend b where
+// λ/2 + (1 − λ)·Φ(k·(b + bias)) equals the rule's target probability.
+TEST(Predict, PhysicalObserverStaircasesConvergeOnTheClosedForm) {
+  for (int down : {1, 2}) {
+    auto loaded = curvlab::harness::protocol::load_protocol_text(staircase_protocol_text(down), "pse.toml");
+    ASSERT_TRUE(loaded.ok());
+    rn::PredictOptions o;
+    o.observer.model = rn::ObserverModel::physical;
+    o.observer.bias_m = 0.01;
+    o.observer.slope_per_m = 250.0;
+    o.observer.lapse = 0.04;
+    auto r = rn::predict(*loaded.protocol, o);
+    ASSERT_TRUE(std::holds_alternative<rn::Prediction>(r)) << std::get<std::string>(r);
+    const auto& pred = std::get<rn::Prediction>(r);
+    ASSERT_EQ(pred.staircases.size(), 8u);  // 2 spaces × 2 projections × 2 staircases
+    const double target = down == 1 ? 0.5 : std::sqrt(0.5);
+    const double expected = normal_quantile((target - 0.02) / 0.96) / 250.0 - 0.01;
+    for (const auto& sp : pred.staircases) {
+      EXPECT_NEAR(sp.target_p, target, 1e-12);
+      ASSERT_TRUE(sp.target_value.has_value()) << sp.staircase;
+      EXPECT_NEAR(*sp.target_value, expected, 1e-7) << "down " << down;
+      EXPECT_EQ(sp.crossings, 1);
+    }
+  }
+}
+
+// The shipped PSE protocol: every staircase converges inside its range, on
+// a monotone judgement, where the perception model says it should.
+TEST(Predict, TheStickPseStaircasesConvergeInsideTheirRanges) {
+  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
+  ASSERT_TRUE(loaded.ok());
+  auto r = rn::predict(*loaded.protocol, rn::PredictOptions{});
+  ASSERT_TRUE(std::holds_alternative<rn::Prediction>(r)) << std::get<std::string>(r);
+  const auto& pred = std::get<rn::Prediction>(r);
+  ASSERT_EQ(pred.staircases.size(), 8u);
+  EXPECT_TRUE(pred.notes.empty()) << pred.notes.front();
+  for (const auto& sp : pred.staircases) {
+    std::string space, projection;
+    for (const auto& [f, l] : sp.levels) (f == "space" ? space : projection) = l;
+    ASSERT_TRUE(sp.target_value.has_value()) << space << ' ' << projection;
+    EXPECT_EQ(sp.crossings, 1) << space << ' ' << projection;
+    if (projection == "tourist") EXPECT_NEAR(*sp.target_value, 0.0, 0.002) << "true optics: straight looks straight";
+    else if (space == "H3") EXPECT_LT(*sp.target_value, -0.02) << "H3 native: a stick bent away looks straight";
+    else EXPECT_GT(*sp.target_value, 0.05) << "S3 native: a stick bent toward the viewer looks straight";
+  }
+}
+
+// A range the judgement never crosses is reported with what to do.
+TEST(Predict, AStaircaseRangeThatMissesTheTargetIsReported) {
+  const std::string text =
+      replace_all(replace_all(staircase_protocol_text(1), "min = -0.15", "min = 0.005"), "start = -0.06", "start = 0.01");
+  auto loaded = curvlab::harness::protocol::load_protocol_text(text, "narrow.toml");
+  ASSERT_TRUE(loaded.ok()) << curvlab::harness::protocol::format_diagnostic(loaded.diagnostics.at(0));
+  auto r = rn::predict(*loaded.protocol, rn::PredictOptions{});
+  ASSERT_TRUE(std::holds_alternative<rn::Prediction>(r));
+  const auto& pred = std::get<rn::Prediction>(r);
+  int missing = 0;
+  for (const auto& sp : pred.staircases) missing += sp.target_value ? 0 : 1;
+  EXPECT_EQ(missing, 6);  // everything but S3 native, whose target is above 0.005
+  ASSERT_EQ(pred.notes.size(), 6u);
+  EXPECT_NE(pred.notes[0].find("outside [0.005, 0.15]"), std::string::npos) << pred.notes[0];
+  EXPECT_NE(pred.notes[0].find("widen the range"), std::string::npos) << pred.notes[0];
 }

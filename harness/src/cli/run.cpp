@@ -381,12 +381,31 @@ void predict_command(const PredictArgs& a) {
                      {"predicted_difference", pe.predicted_difference}, {"power", pe.power},
                      {"simulations", pe.simulations}, {"test", "paired t, two-sided, alpha 0.05"}});
   doc["power"] = power;
+  Json stairs = Json::array();
+  for (const auto& sp : pred.staircases) {
+    Json sj;
+    sj["block"] = sp.block;
+    for (const auto& [f, l] : sp.levels) sj[f] = l;
+    sj["judged"] = sp.judged;
+    sj["staircase"] = sp.staircase;
+    sj["parameter"] = sp.parameter;
+    sj["rule"] = std::to_string(sp.up) + "-up/" + std::to_string(sp.down) + "-down";
+    sj["target_p_" + sp.positive] = sp.target_p;
+    sj["range"] = Json::array({sp.min, sp.max});
+    sj["converges_on"] = sp.target_value ? Json(*sp.target_value) : Json(nullptr);
+    sj["p_at_min"] = sp.p_at_min;
+    sj["p_at_max"] = sp.p_at_max;
+    sj["crossings"] = sp.crossings;
+    stairs.push_back(sj);
+  }
+  doc["staircases"] = stairs;
   doc["notes"] = pred.notes;
   if (a.json) {
     print_result(doc, true);
     return;
   }
-  std::printf("%s: expected response proportions, %d participants\n", p.meta.name.c_str(), pred.participants);
+  if (!pred.conditions.empty())
+    std::printf("%s: expected response proportions, %d participants\n", p.meta.name.c_str(), pred.participants);
   for (const auto& c : pred.conditions) {
     std::string label;
     for (const auto& [f, l] : c.levels) label += f + "=" + l + " ";
@@ -395,10 +414,24 @@ void predict_command(const PredictArgs& a) {
       std::printf(" %s %.2f", c.options[k].c_str(), c.proportions[k]);
     std::printf("\n");
   }
-  std::printf("power (P(first option) at level a vs b, paired t across participants, alpha 0.05):\n");
+  if (!pred.power.empty())
+    std::printf("power (P(first option) at level a vs b, paired t across participants, alpha 0.05):\n");
   for (const auto& pe : pred.power)
     std::printf("  %-12s %s vs %s: difference %+.3f, power %.2f (%d simulated studies)\n", pe.factor.c_str(),
                 pe.level_a.c_str(), pe.level_b.c_str(), pe.predicted_difference, pe.power, pe.simulations);
+  if (!pred.staircases.empty())
+    std::printf("staircases: the value each converges on for the mean observer (m-up/n-down target, Levitt 1971)\n");
+  for (const auto& sp : pred.staircases) {
+    std::string label = sp.block + " ";
+    for (const auto& [f, l] : sp.levels) label += f + "=" + l + " ";
+    std::printf("  %-40s %-12s %d-up/%d-down %4.1f%% %s: ", label.c_str(), sp.staircase.c_str(), sp.up, sp.down,
+                100.0 * sp.target_p, sp.positive.c_str());
+    if (sp.target_value)
+      std::printf("%s = %+.4f in [%g, %g]%s\n", sp.parameter.c_str(), *sp.target_value, sp.min, sp.max,
+                  sp.crossings > 1 ? " (not monotone: more than one crossing)" : "");
+    else
+      std::printf("outside [%g, %g]\n", sp.min, sp.max);
+  }
   for (const auto& n : pred.notes) std::printf("note: %s\n", n.c_str());
 }
 

@@ -5,6 +5,7 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 
@@ -49,6 +50,55 @@ double incomplete_beta(double a, double b, double x) {
   return std::exp(log_front) * f / a;
 }
 
+// The mean observer's P(positive) in one staircase condition, as a function
+// of the staircase's parameter; and the target crossings on [min, max].
+void locate_target(const protocol::PlannedTrial& t, const protocol::Judgement& j, const World& world,
+                   const SimulatedObserver& observer, bool physical, StaircasePrediction& out) {
+  std::size_t positive = 0;
+  for (std::size_t k = 0; k < j.options.size(); ++k)
+    if (j.options[k].value == j.positive) positive = k;
+  const auto fit = nominal_calibration(t.settings);
+  auto p_positive = [&](double x) {
+    protocol::Settings s = t.settings;
+    protocol::set_numeric_setting(s, j.parameter, x);
+    auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
+                                          physical_table(s, std::nullopt));
+    const auto head = tracker->update(standing_pose(fit, 1.55, 0)).pose[0];
+    const double perceived = physical ? physical_sagitta_m(s)
+                                      : perceived_sagitta_m(world, s, place_stimulus(world, s, head), head);
+    return observer.choice_probabilities(perceived, j.options.size())[positive];
+  };
+  constexpr int kSamples = 120;
+  auto g = [&](double x) { return p_positive(x) - out.target_p; };
+  double x0 = out.min;
+  double g0 = g(x0);
+  out.p_at_min = g0 + out.target_p;
+  for (int i = 1; i <= kSamples; ++i) {
+    const double x1 = out.min + (out.max - out.min) * i / kSamples;
+    const double g1 = g(x1);
+    if ((g0 < 0.0) != (g1 < 0.0) || g1 == 0.0) {
+      ++out.crossings;
+      if (!out.target_value) {
+        double lo = x0, hi = x1, glo = g0;
+        for (int it = 0; it < 50; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          const double gm = g(mid);
+          if ((gm < 0.0) == (glo < 0.0)) {
+            lo = mid;
+            glo = gm;
+          } else {
+            hi = mid;
+          }
+        }
+        out.target_value = 0.5 * (lo + hi);
+      }
+    }
+    x0 = x1;
+    g0 = g1;
+  }
+  out.p_at_max = g0 + out.target_p;
+}
+
 std::int64_t binomial(protocol::Engine& rng, std::int64_t n, double p) {
   std::int64_t k = 0;
   for (std::int64_t i = 0; i < n; ++i) k += protocol::uniform01(rng) < p ? 1 : 0;
@@ -56,6 +106,26 @@ std::int64_t binomial(protocol::Engine& rng, std::int64_t n, double p) {
 }
 
 }  // namespace
+
+double staircase_target_probability(int up, int down) {
+  // A run of n positives comes before a run of m negatives with probability
+  // p^(n−1)(1 − q^m) / (p^(n−1) + q^(m−1) − p^(n−1) q^(m−1)), q = 1 − p
+  // (Feller, An Introduction to Probability Theory, vol. 1, §VIII.1); it
+  // increases with p, and the staircase settles where it is 1/2.
+  const auto down_first = [&](double p) {
+    const double q = 1.0 - p;
+    const double a = std::pow(p, down - 1);
+    const double b = std::pow(q, up - 1);
+    return a * (1.0 - std::pow(q, up)) / (a + b - a * b);
+  };
+  double lo = 0.0, hi = 1.0;
+  for (int it = 0; it < 200; ++it) {
+    const double p = 0.5 * (lo + hi);
+    if (down_first(p) < 0.5) lo = p;
+    else hi = p;
+  }
+  return 0.5 * (lo + hi);
+}
 
 double student_t_two_sided_p(double t, double df) {
   if (!std::isfinite(t)) return 0.0;
@@ -73,17 +143,59 @@ std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const
   // conditions; only order and counterbalancing differ).
   const protocol::Design design = protocol::expand_design(p, 1);
   std::map<std::string, std::size_t> index;  // condition key → out.conditions
-  std::vector<double> perceived;
+  std::map<std::string, bool> staircase_seen;  // condition key → predicted
+  const SimulatedObserver mean_observer(o.observer);
+  const bool physical = o.observer.model == ObserverModel::physical;
   bool skipped_other = false;
   for (const auto& t : design.trials) {
     if (t.practice) continue;
+    const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
+    std::string key = t.block + "|" + judged_name;
+    for (const auto& [f, l] : t.levels) key += "|" + f + "=" + l;
+    if (t.judgement == protocol::JudgementType::staircase) {
+      if (!staircase_seen.emplace(key, true).second) continue;
+      const protocol::Block* block = nullptr;
+      for (const auto& b : p.blocks)
+        if (b.name == t.block) block = &b;
+      if (block == nullptr) continue;
+      auto made = make_world(t.settings);
+      if (auto* e = std::get_if<std::string>(&made)) return *e;
+      const World world = std::get<World>(made);
+      const auto& j = block->judgement;
+      for (const auto& sc : j.staircases) {
+        StaircasePrediction sp;
+        sp.block = t.block;
+        sp.levels = t.levels;
+        sp.judged = judged_name;
+        sp.staircase = sc.name;
+        sp.parameter = j.parameter;
+        sp.positive = j.positive;
+        sp.up = sc.up;
+        sp.down = sc.down;
+        sp.min = sc.min;
+        sp.max = sc.max;
+        sp.target_p = staircase_target_probability(sc.up, sc.down);
+        locate_target(t, j, world, mean_observer, physical, sp);
+        if (!sp.target_value) {
+          std::string label;
+          for (const auto& [f, l] : sp.levels) label += (label.empty() ? "" : " ") + f + "=" + l;
+          char buf[320];
+          std::snprintf(buf, sizeof buf,
+                        "block %s, %s, staircase %s: the value it converges on lies outside [%g, %g] "
+                        "(P(%s) is %.2f at %g and %.2f at %g; it targets %.2f): widen the range or change "
+                        "the stimulus",
+                        sp.block.c_str(), label.c_str(), sp.staircase.c_str(), sp.min, sp.max,
+                        sp.positive.c_str(), sp.p_at_min, sp.min, sp.p_at_max, sp.max, sp.target_p);
+          out.notes.emplace_back(buf);
+        }
+        out.staircases.push_back(std::move(sp));
+      }
+      continue;
+    }
     if (t.judgement != protocol::JudgementType::choice) {
       skipped_other = true;
       continue;
     }
-    const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
-    std::string key = t.block + "|" + judged_name;
-    for (const auto& [f, l] : t.levels) key += "|" + f + "=" + l;
     auto it = index.find(key);
     if (it == index.end()) {
       auto made = make_world(t.settings);
@@ -97,7 +209,7 @@ std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const
       ConditionPrediction c;
       c.levels = t.levels;
       c.judged = judged_name;
-      c.perceived_m = o.observer.model == ObserverModel::physical
+      c.perceived_m = physical
                           ? physical_sagitta_m(t.settings)
                           : perceived_sagitta_m(world, t.settings, placement, head);
       for (const auto& b : p.blocks)
@@ -108,8 +220,10 @@ std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const
     }
     ++out.conditions[it->second].trials_per_participant;
   }
-  if (skipped_other) out.notes.push_back("staircase and adjustment blocks are not predicted (choice only)");
-  if (out.conditions.empty()) return std::string("the protocol has no choice trials outside practice to predict");
+  if (skipped_other) out.notes.push_back("adjustment blocks are not predicted (choice and staircase only)");
+  if (out.conditions.empty() && out.staircases.empty())
+    return std::string("the protocol has no choice or staircase trials outside practice to predict");
+  if (out.conditions.empty()) return out;
 
   // Participants drawn from the population; proportions are their mean.
   protocol::Engine rng(protocol::mix_seed(o.observer.seed ^ 0x70726564696374ULL));

@@ -4,12 +4,15 @@
 // expected response proportions per condition are averaged over them, and
 // the power to detect each factor's effect on the proportion of the first
 // option (e.g. "convex") comes from simulated studies analysed with a
-// paired t-test across participants.
+// paired t-test across participants. Staircase blocks get, per condition
+// and staircase, the stimulus value the up/down rule converges on for the
+// mean observer, and whether it lies inside the staircase's range.
 #pragma once
 
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/runner/observer.hpp"
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <variant>
@@ -45,9 +48,34 @@ struct PowerEstimate {
   int simulations = 0;
 };
 
+// One staircase of one condition: where the mean observer's staircase
+// settles. An m-up/n-down rule converges where a run of n positive answers
+// is as likely to come first as a run of m negative ones (Levitt 1971):
+// 50 % positive for 1-up/1-down, 70.7 % for 1-up/2-down.
+struct StaircasePrediction {
+  std::string block;
+  std::vector<std::pair<std::string, std::string>> levels;  // factor → level
+  std::string judged;      // stick or table
+  std::string staircase;   // its name
+  std::string parameter;   // the setting it varies
+  std::string positive;    // the option that counts as positive
+  int up = 1, down = 1;
+  double min = 0.0, max = 0.0;
+  double target_p = 0.5;   // P(positive) the rule converges on
+  // The value where the mean observer's P(positive) = target_p; nullopt when
+  // there is none in [min, max].
+  std::optional<double> target_value;
+  double p_at_min = 0.0, p_at_max = 0.0;
+  int crossings = 0;  // how often P(positive) crosses target_p in [min, max]
+};
+
+// The P(positive) an m-up/n-down staircase converges on.
+double staircase_target_probability(int up, int down);
+
 struct Prediction {
   int participants = 0;
   std::vector<ConditionPrediction> conditions;
+  std::vector<StaircasePrediction> staircases;
   std::vector<PowerEstimate> power;
   std::vector<std::string> notes;
 };
