@@ -165,6 +165,20 @@ TEST(Actions, BindingsExistInTheirProfilesAndCoverTheActions) {
   EXPECT_EQ(bound, names);
 }
 
+// Controller events carry the button names protocols bind (docs/protocols.md,
+// "Key and button names"): a protocol with buttons = ["a"] must be answerable.
+TEST(Actions, EventsUseTheProtocolsButtonNames) {
+  const std::set<std::string> protocol_buttons = {"a", "b", "x", "y", "left_trigger", "right_trigger"};
+  std::set<std::string> produced;
+  for (const auto& a : curvlab_action_set().actions) {
+    if (a.type == ActionType::Pose) continue;
+    for (const auto& hand : a.subaction_paths) produced.insert(protocol_button(a.name, hand == kLeftHand));
+  }
+  EXPECT_EQ(produced, protocol_buttons);
+  EXPECT_EQ(protocol_button("button_x", true), "x");
+  EXPECT_EQ(protocol_button("trigger", false), "right_trigger");
+}
+
 TEST(Views, QuaternionOrderAndFov) {
   // 90° about +y: the OpenXR forward −z turns to −x.
   const float h = static_cast<float>(std::sqrt(0.5));

@@ -49,6 +49,12 @@ ActionSetDef curvlab_action_set() {
   return set;
 }
 
+std::string protocol_button(const std::string& action, bool left_hand) {
+  if (action == "trigger") return left_hand ? "left_trigger" : "right_trigger";
+  if (action.rfind("button_", 0) == 0) return action.substr(7);
+  return action;
+}
+
 std::vector<std::string> profile_input_paths(const std::string& profile) {
   std::vector<std::string> out;
   auto both = [&out](const char* input) {

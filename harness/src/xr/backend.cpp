@@ -149,6 +149,9 @@ class XrBackend final : public Backend {
   void end_frame(bool with_layer);
   std::int64_t to_session_ns(XrTime t);
   void read_buttons(std::vector<InputEvent>& out);
+  // Logs a failed action-state query once per call name (it repeats every
+  // frame otherwise) and goes on: one unreadable button must not end a session.
+  void report_once(XrResult r, const char* call);
 
   XrBackendOptions options_;
   Instance instance_;
@@ -170,6 +173,7 @@ class XrBackend final : public Backend {
   XrClockMap clock_map_;
   std::deque<BackendSignal> signals_;
   bool failed_ = false;
+  std::vector<std::string> reported_;
   double refresh_hz_ = 90.0;
 
   XrFrameState frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
@@ -585,6 +589,12 @@ renderer::StereoRig XrBackend::rig(const FrameTiming& frame, double ipd_m) {
                         {to_fov(views_[0].fov), to_fov(views_[1].fov)});
 }
 
+void XrBackend::report_once(XrResult r, const char* call) {
+  if (std::find(reported_.begin(), reported_.end(), call) != reported_.end()) return;
+  reported_.emplace_back(call);
+  std::cerr << "curvlab: xr: " << failure_of(r, call).message << '\n';
+}
+
 void XrBackend::read_buttons(std::vector<InputEvent>& out) {
   const XrSession session = session_.get();
   const auto def = curvlab_action_set();
@@ -596,20 +606,30 @@ void XrBackend::read_buttons(std::vector<InputEvent>& out) {
       get.action = actions_->action(a.name);
       get.subactionPath = hand_paths_[hand];
       const std::string device = hand == 0 ? "xr:left" : "xr:right";
+      // Events carry the protocol's button names (docs/protocols.md, "Key
+      // and button names"), which is what judgement options bind.
+      const std::string name = protocol_button(a.name, hand == 0);
       if (a.type == ActionType::Boolean) {
         auto st = tagged<XrActionStateBoolean>(XR_TYPE_ACTION_STATE_BOOLEAN);
-        if (XR_FAILED(xrGetActionStateBoolean(session, &get, &st))) continue;
+        if (const XrResult r = xrGetActionStateBoolean(session, &get, &st); XR_FAILED(r)) {
+          report_once(r, "xrGetActionStateBoolean");
+          continue;
+        }
         if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE)
-          out.push_back({to_session_ns(st.lastChangeTime), a.name, device, st.currentState == XR_TRUE});
+          out.push_back({to_session_ns(st.lastChangeTime), name, device, st.currentState == XR_TRUE});
       } else {
         auto st = tagged<XrActionStateFloat>(XR_TYPE_ACTION_STATE_FLOAT);
-        if (XR_FAILED(xrGetActionStateFloat(session, &get, &st)) || st.isActive != XR_TRUE) continue;
+        if (const XrResult r = xrGetActionStateFloat(session, &get, &st); XR_FAILED(r)) {
+          report_once(r, "xrGetActionStateFloat");
+          continue;
+        }
+        if (st.isActive != XR_TRUE) continue;
         const bool was = trigger_down_[hand];
         const bool now = was ? st.currentState > kTriggerRelease : st.currentState > kTriggerPress;
         if (now == was) continue;
         trigger_down_[hand] = now;
         const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
-        out.push_back({t_ns, a.name, device, now});
+        out.push_back({t_ns, name, device, now});
         // The trigger also advances instruction pages and breaks, which
         // follow a button named "continue" (runner/backend.hpp).
         out.push_back({t_ns, "continue", device, now});

@@ -44,6 +44,12 @@ struct ActionSetDef {
 // The action set of a curvlab session.
 ActionSetDef curvlab_action_set();
 
+// The name an action's input events carry: the protocol's button names
+// (docs/protocols.md, "Key and button names") that judgement options bind —
+// button_a → "a", …, the trigger → "left_trigger" / "right_trigger".
+// Other actions keep their own name.
+std::string protocol_button(const std::string& action, bool left_hand);
+
 // Input paths each profile offers (from the OpenXR specification's
 // interaction-profile tables), to check the bindings against.
 std::vector<std::string> profile_input_paths(const std::string& profile);

@@ -1,0 +1,1827 @@
+// curvlab's OpenXR runtime for tests: a scripted headset that the real
+// Khronos loader loads through XR_RUNTIME_JSON (the manifest is generated in
+// the build folder next to this library), so the real `curvlab run --backend
+// xr` drives a whole session on a machine without a headset. It implements
+// what curvlab's backend calls and checks the rules of the OpenXR 1.0
+// specification that are cheap to check (call order of the frame loop and of
+// swapchain images, session states, action-set attachment, action types and
+// subaction paths, layers referencing released images, …). A broken rule
+// returns the specification's error and writes a "violation" line to the log
+// and to stderr, so a test fails even where the application ignores a result.
+//
+// Environment (all optional):
+//   CURVLAB_TEST_XR_PRESS    controller presses, comma-separated
+//                            HAND:BUTTON@SECONDS[/EVERY][~HOLD], e.g.
+//                            "right:a@1.0/1.2,left:x@1.6/1.2" (HAND left|right;
+//                            BUTTON a b x y menu trigger squeeze; SECONDS after
+//                            the session first became FOCUSED; repeated every
+//                            EVERY s; held HOLD s, default 0.08)
+//   CURVLAB_TEST_XR_UNFOCUS  spells without input focus, SECONDS+DURATION,
+//                            comma-separated: FOCUSED → VISIBLE → FOCUSED
+//   CURVLAB_TEST_XR_EXIT     SECONDS: the runtime asks the application to exit
+//                            (VISIBLE, SYNCHRONIZED, STOPPING; after
+//                            xrEndSession IDLE and EXITING)
+//   CURVLAB_TEST_XR_CAPTURE_DIR   write the left eye of submitted frames here
+//                            as PNG (left_<frame>_<monotonic ns>.png, the
+//                            frame's predicted display time on CLOCK_MONOTONIC)
+//   CURVLAB_TEST_XR_CAPTURE_EVERY every n-th submitted frame (default 1)
+//   CURVLAB_TEST_XR_LOG      a text log: one "frame" line per xrWaitFrame with
+//                            the predicted display time (XrTime and
+//                            CLOCK_MONOTONIC ns) and the head pose at it; "state",
+//                            "input", "capture", "violation", "warning" lines
+//   CURVLAB_TEST_XR_SIZE     recommended eye size WxH (default 320x320)
+//
+// XrTime is CLOCK_MONOTONIC minus an epoch taken when the library loads (so
+// the two differ, and xrConvertTimeToTimespecTimeKHR has work to do). Frames
+// are paced in real time at 90 Hz.
+//
+// Not thread-safe beyond a global lock: one application thread at a time.
+#include "script.hpp"
+
+#include <time.h>
+
+#define VK_NO_PROTOTYPES
+#include <vulkan/vulkan.h>
+#define XR_NO_PROTOTYPES
+#define XR_USE_GRAPHICS_API_VULKAN
+#define XR_USE_TIMESPEC
+#include <openxr/openxr.h>
+#include <openxr/openxr_platform.h>
+#include <openxr/openxr_reflection.h>
+
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <deque>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <vector>
+
+// The loader ↔ runtime negotiation structures (OpenXR loader specification,
+// "Runtime Interface Negotiation"); Debian's libopenxr-dev 1.0.20 does not
+// install the header that declares them.
+extern "C" {
+enum XrLoaderInterfaceStructs {
+  XR_LOADER_INTERFACE_STRUCT_UNINTIALIZED = 0,
+  XR_LOADER_INTERFACE_STRUCT_LOADER_INFO = 1,
+  XR_LOADER_INTERFACE_STRUCT_API_LAYER_REQUEST = 2,
+  XR_LOADER_INTERFACE_STRUCT_RUNTIME_REQUEST = 3,
+};
+struct XrNegotiateLoaderInfo {
+  XrLoaderInterfaceStructs structType;
+  uint32_t structVersion;
+  size_t structSize;
+  uint32_t minInterfaceVersion;
+  uint32_t maxInterfaceVersion;
+  XrVersion minApiVersion;
+  XrVersion maxApiVersion;
+};
+struct XrNegotiateRuntimeRequest {
+  XrLoaderInterfaceStructs structType;
+  uint32_t structVersion;
+  size_t structSize;
+  uint32_t runtimeInterfaceVersion;
+  XrVersion runtimeApiVersion;
+  PFN_xrGetInstanceProcAddr getInstanceProcAddr;
+};
+__attribute__((visibility("default"))) XrResult xrNegotiateLoaderRuntimeInterface(
+    const XrNegotiateLoaderInfo* loaderInfo, XrNegotiateRuntimeRequest* runtimeRequest);
+}
+
+namespace curvlab::test_runtime {
+namespace {
+
+constexpr std::uint32_t kLoaderInfoVersion = 1;
+constexpr std::uint32_t kRuntimeRequestVersion = 1;
+constexpr std::uint32_t kRuntimeInterfaceVersion = 1;
+constexpr XrSystemId kSystem = 0x5e5;
+constexpr std::uint32_t kImagesPerSwapchain = 3;
+constexpr std::uint32_t kMaxLayers = 16;
+constexpr std::uint32_t kMaxSwapchainPx = 4096;
+constexpr const char* kTouch = "/interaction_profiles/oculus/touch_controller";
+constexpr const char* kSimple = "/interaction_profiles/khr/simple_controller";
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+// XrTime = CLOCK_MONOTONIC − epoch.
+const std::int64_t g_epoch_ns = monotonic_ns() - 1'000'000'000;
+XrTime to_xr(std::int64_t mono_ns) { return mono_ns - g_epoch_ns; }
+std::int64_t to_mono(XrTime t) { return t + g_epoch_ns; }
+double xr_seconds(XrTime t) { return static_cast<double>(t) * 1e-9; }
+
+std::string result_name(XrResult r) {
+#define CURVLAB_RT_RESULT(name, value) \
+  case name:                           \
+    return #name;
+  switch (r) {
+    XR_LIST_ENUM_XrResult(CURVLAB_RT_RESULT)
+    default:
+      break;
+  }
+#undef CURVLAB_RT_RESULT
+  return "XR_RESULT_" + std::to_string(static_cast<int>(r));
+}
+
+std::string state_name(XrSessionState s) {
+#define CURVLAB_RT_STATE(name, value) \
+  case name:                          \
+    return #name;
+  switch (s) {
+    XR_LIST_ENUM_XrSessionState(CURVLAB_RT_STATE)
+    default:
+      break;
+  }
+#undef CURVLAB_RT_STATE
+  return "XR_SESSION_STATE_" + std::to_string(static_cast<int>(s));
+}
+
+// ---- objects ---------------------------------------------------------------
+
+struct Instance;
+struct Session;
+struct ActionSet;
+
+struct Action {
+  ActionSet* set = nullptr;
+  std::string name;
+  XrActionType type = XR_ACTION_TYPE_BOOLEAN_INPUT;
+  std::vector<XrPath> subactions;
+  // Per subaction (index into subactions; one slot when there are none):
+  // the state reported by the last xrSyncActions.
+  struct State {
+    float value = 0.0f;
+    bool active = false;
+    bool changed = false;
+    XrTime last_change = 0;
+  };
+  std::vector<State> states;
+};
+
+struct ActionSet {
+  Instance* instance = nullptr;
+  std::string name;
+  std::vector<std::unique_ptr<Action>> actions;
+  Session* attached_to = nullptr;
+};
+
+struct Space {
+  Session* session = nullptr;
+  XrReferenceSpaceType reference = XR_REFERENCE_SPACE_TYPE_MAX_ENUM;  // or an action space
+  Action* action = nullptr;
+  int hand = -1;
+  Pose offset;
+};
+
+struct Swapchain {
+  Session* session = nullptr;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  std::uint32_t width = 0, height = 0, array_size = 1;
+  std::vector<VkImage> images;
+  std::vector<VkDeviceMemory> memory;
+  std::deque<std::uint32_t> acquired;  // in acquisition order
+  bool waited = false;                 // the oldest acquired image was waited
+  std::uint32_t next = 0;
+  std::optional<std::uint32_t> last_released;
+};
+
+struct VulkanDevice {
+  PFN_vkGetInstanceProcAddr gipa = nullptr;
+  PFN_vkGetDeviceProcAddr gdpa = nullptr;
+  VkInstance instance = VK_NULL_HANDLE;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+#define CURVLAB_RT_DEVICE_FNS(X)                                                                   \
+  X(vkGetDeviceQueue) X(vkCreateImage) X(vkDestroyImage) X(vkGetImageMemoryRequirements)        \
+  X(vkAllocateMemory) X(vkFreeMemory) X(vkBindImageMemory) X(vkCreateBuffer) X(vkDestroyBuffer) \
+  X(vkGetBufferMemoryRequirements) X(vkBindBufferMemory) X(vkMapMemory) X(vkUnmapMemory)        \
+  X(vkCreateCommandPool) X(vkDestroyCommandPool) X(vkAllocateCommandBuffers)                     \
+  X(vkBeginCommandBuffer) X(vkEndCommandBuffer) X(vkResetCommandBuffer) X(vkCmdPipelineBarrier) \
+  X(vkCmdCopyImageToBuffer) X(vkQueueSubmit) X(vkCreateFence) X(vkDestroyFence)                 \
+  X(vkWaitForFences) X(vkResetFences) X(vkDeviceWaitIdle)
+#define CURVLAB_RT_MEMBER(name) PFN_##name name = nullptr;
+  CURVLAB_RT_DEVICE_FNS(CURVLAB_RT_MEMBER)
+#undef CURVLAB_RT_MEMBER
+  PFN_vkGetPhysicalDeviceMemoryProperties vkGetPhysicalDeviceMemoryProperties = nullptr;
+};
+
+struct Session {
+  Instance* instance = nullptr;
+  XrSessionState state = XR_SESSION_STATE_UNKNOWN;
+  bool running = false;
+  bool exit_requested = false;
+  bool focused_once = false;
+  std::int64_t focus_t0_ns = 0;  // CLOCK_MONOTONIC when first FOCUSED
+  std::vector<int> unfocus_phase;  // per scripted spell: 0 pending, 1 unfocused, 2 done
+  VulkanDevice* vk = nullptr;
+  VkQueue queue = VK_NULL_HANDLE;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  VkFence fence = VK_NULL_HANDLE;
+  // Frame loop.
+  bool waited = false;  // xrWaitFrame returned, xrBeginFrame not yet called
+  bool begun = false;
+  std::int64_t last_wake_ns = 0;
+  XrTime waited_display = 0;
+  XrTime begun_display = 0;
+  std::int64_t frames_waited = 0;
+  std::int64_t frames_submitted = 0;
+  std::vector<ActionSet*> attached;
+  std::string active_profile;  // the interaction profile the controllers use
+  std::set<Space*> spaces;
+  std::set<Swapchain*> swapchains;
+};
+
+struct Instance {
+  bool timespec = false;
+  bool requirements_queried = false;
+  Script script;
+  std::deque<XrEventDataBuffer> events;
+  std::vector<std::string> paths;  // XrPath n ↔ paths[n − 1]
+  std::vector<std::unique_ptr<ActionSet>> sets;
+  std::map<std::string, std::vector<std::pair<Action*, std::string>>> suggested;  // profile → bindings
+  VulkanDevice vk;
+  std::unique_ptr<Session> session;
+  std::map<Space*, std::unique_ptr<Space>> spaces;
+  std::map<Swapchain*, std::unique_ptr<Swapchain>> swapchains;
+  std::ofstream log;
+};
+
+std::mutex g_mutex;
+std::unique_ptr<Instance> g_instance;
+
+template <class H, class T>
+H handle_of(T* p) {
+  return reinterpret_cast<H>(p);
+}
+
+Instance* instance_of(XrInstance h) {
+  return g_instance && handle_of<XrInstance>(g_instance.get()) == h ? g_instance.get() : nullptr;
+}
+
+Session* session_of(XrSession h) {
+  if (!g_instance || !g_instance->session) return nullptr;
+  return handle_of<XrSession>(g_instance->session.get()) == h ? g_instance->session.get() : nullptr;
+}
+
+Space* space_of(XrSpace h) {
+  if (!g_instance) return nullptr;
+  auto it = g_instance->spaces.find(reinterpret_cast<Space*>(h));
+  return it == g_instance->spaces.end() ? nullptr : it->second.get();
+}
+
+Swapchain* swapchain_of(XrSwapchain h) {
+  if (!g_instance) return nullptr;
+  auto it = g_instance->swapchains.find(reinterpret_cast<Swapchain*>(h));
+  return it == g_instance->swapchains.end() ? nullptr : it->second.get();
+}
+
+ActionSet* set_of(XrActionSet h) {
+  if (!g_instance) return nullptr;
+  for (auto& s : g_instance->sets)
+    if (handle_of<XrActionSet>(s.get()) == h) return s.get();
+  return nullptr;
+}
+
+Action* action_of(XrAction h) {
+  if (!g_instance) return nullptr;
+  for (auto& s : g_instance->sets)
+    for (auto& a : s->actions)
+      if (handle_of<XrAction>(a.get()) == h) return a.get();
+  return nullptr;
+}
+
+void log_line(const std::string& line) {
+  if (g_instance && g_instance->log.is_open()) {
+    g_instance->log << line << '\n';
+    g_instance->log.flush();
+  }
+}
+
+// A broken rule: the specification's error, logged.
+XrResult violation(const char* function, XrResult result, const std::string& what) {
+  const std::string line =
+      std::string("violation ") + function + " " + result_name(result) + ": " + what;
+  std::fprintf(stderr, "curvlab test runtime: %s\n", line.c_str());
+  log_line(line);
+  return result;
+}
+
+void warning(const char* function, const std::string& what) {
+  const std::string line = std::string("warning ") + function + ": " + what;
+  std::fprintf(stderr, "curvlab test runtime: %s\n", line.c_str());
+  log_line(line);
+}
+
+std::string path_text(const Instance& inst, XrPath p) {
+  return p >= 1 && p <= inst.paths.size() ? inst.paths[p - 1] : std::string();
+}
+
+// ---- session states and script ---------------------------------------------
+
+void queue_state(Session& s, XrSessionState next) {
+  XrEventDataBuffer buffer{};
+  auto* e = reinterpret_cast<XrEventDataSessionStateChanged*>(&buffer);
+  e->type = XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED;
+  e->session = handle_of<XrSession>(&s);
+  e->state = next;
+  const std::int64_t now = monotonic_ns();
+  e->time = to_xr(now);
+  s.instance->events.push_back(buffer);
+  s.state = next;
+  log_line("state " + state_name(next) + " monotonic_ns " + std::to_string(now));
+}
+
+// Runs the script up to now: focus spells and the exit request.
+void tick(Session& s) {
+  if (!s.focused_once) return;
+  const Script& script = s.instance->script;
+  const double t = static_cast<double>(monotonic_ns() - s.focus_t0_ns) * 1e-9;
+  if (script.exit_at_s && t >= *script.exit_at_s && !s.exit_requested && s.running) {
+    s.exit_requested = true;
+    if (s.state == XR_SESSION_STATE_FOCUSED) queue_state(s, XR_SESSION_STATE_VISIBLE);
+    if (s.state == XR_SESSION_STATE_VISIBLE) queue_state(s, XR_SESSION_STATE_SYNCHRONIZED);
+    queue_state(s, XR_SESSION_STATE_STOPPING);
+    return;
+  }
+  if (s.exit_requested) return;
+  for (std::size_t i = 0; i < script.unfocus.size(); ++i) {
+    const Unfocus& u = script.unfocus[i];
+    if (s.unfocus_phase[i] == 0 && t >= u.at_s && s.state == XR_SESSION_STATE_FOCUSED) {
+      queue_state(s, XR_SESSION_STATE_VISIBLE);
+      s.unfocus_phase[i] = 1;
+    } else if (s.unfocus_phase[i] == 1 && t >= u.at_s + u.for_s && s.state == XR_SESSION_STATE_VISIBLE) {
+      queue_state(s, XR_SESSION_STATE_FOCUSED);
+      s.unfocus_phase[i] = 2;
+    }
+  }
+}
+
+// ---- Vulkan helpers ---------------------------------------------------------
+
+std::optional<std::uint32_t> memory_type(const VulkanDevice& vk, std::uint32_t bits, VkMemoryPropertyFlags want) {
+  VkPhysicalDeviceMemoryProperties props{};
+  vk.vkGetPhysicalDeviceMemoryProperties(vk.physical, &props);
+  for (std::uint32_t i = 0; i < props.memoryTypeCount; ++i)
+    if ((bits & (1u << i)) != 0 && (props.memoryTypes[i].propertyFlags & want) == want) return i;
+  return std::nullopt;
+}
+
+// Records `record` into the session's command buffer, submits it on the
+// application's queue and waits. The application calls the runtime from its
+// frame-loop thread, so the queue is externally synchronised as Vulkan asks.
+template <class F>
+bool submit_and_wait(Session& s, F record) {
+  const VulkanDevice& vk = *s.vk;
+  vk.vkResetCommandBuffer(s.cmd, 0);
+  VkCommandBufferBeginInfo begin{};
+  begin.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  if (vk.vkBeginCommandBuffer(s.cmd, &begin) != VK_SUCCESS) return false;
+  record(s.cmd);
+  if (vk.vkEndCommandBuffer(s.cmd) != VK_SUCCESS) return false;
+  VkSubmitInfo submit{};
+  submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &s.cmd;
+  vk.vkResetFences(vk.device, 1, &s.fence);
+  if (vk.vkQueueSubmit(s.queue, 1, &submit, s.fence) != VK_SUCCESS) return false;
+  return vk.vkWaitForFences(vk.device, 1, &s.fence, VK_TRUE, UINT64_MAX) == VK_SUCCESS;
+}
+
+VkImageMemoryBarrier image_barrier(VkImage image, VkImageLayout from, VkImageLayout to, VkAccessFlags src,
+                                   VkAccessFlags dst) {
+  VkImageMemoryBarrier b{};
+  b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+  b.srcAccessMask = src;
+  b.dstAccessMask = dst;
+  b.oldLayout = from;
+  b.newLayout = to;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image;
+  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
+  return b;
+}
+
+// Reads the rectangle of a released swapchain image (in
+// COLOR_ATTACHMENT_OPTIMAL, as the application must leave it) back to the
+// CPU as RGB and writes it as PNG. The image is returned to
+// COLOR_ATTACHMENT_OPTIMAL, as a compositor would after sampling it.
+bool capture(Session& s, const Swapchain& sc, std::uint32_t index, const XrRect2Di& rect, std::uint32_t layer,
+             const std::string& path) {
+  const VulkanDevice& vk = *s.vk;
+  const auto w = static_cast<std::uint32_t>(rect.extent.width);
+  const auto h = static_cast<std::uint32_t>(rect.extent.height);
+  const VkDeviceSize size = VkDeviceSize{w} * h * 4;
+  VkBufferCreateInfo bi{};
+  bi.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
+  bi.size = size;
+  bi.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  if (vk.vkCreateBuffer(vk.device, &bi, nullptr, &buffer) != VK_SUCCESS) return false;
+  VkMemoryRequirements req{};
+  vk.vkGetBufferMemoryRequirements(vk.device, buffer, &req);
+  const auto type = memory_type(vk, req.memoryTypeBits,
+                                VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  bool ok = false;
+  if (type) {
+    VkMemoryAllocateInfo ai{};
+    ai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+    ai.allocationSize = req.size;
+    ai.memoryTypeIndex = *type;
+    ok = vk.vkAllocateMemory(vk.device, &ai, nullptr, &memory) == VK_SUCCESS &&
+         vk.vkBindBufferMemory(vk.device, buffer, memory, 0) == VK_SUCCESS;
+  }
+  const VkImage image = sc.images[index];
+  ok = ok && submit_and_wait(s, [&](VkCommandBuffer cb) {
+         auto to_src = image_barrier(image, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                                     VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                                     VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
+                                     VK_ACCESS_TRANSFER_READ_BIT);
+         vk.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0,
+                                 nullptr, 0, nullptr, 1, &to_src);
+         VkBufferImageCopy region{};
+         region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, layer, 1};
+         region.imageOffset = {rect.offset.x, rect.offset.y, 0};
+         region.imageExtent = {w, h, 1};
+         vk.vkCmdCopyImageToBuffer(cb, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer, 1, &region);
+         auto back = image_barrier(image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                                   VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_ACCESS_TRANSFER_READ_BIT,
+                                   VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT);
+         vk.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                 VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0, nullptr, 0, nullptr, 1,
+                                 &back);
+       });
+  if (ok) {
+    void* mapped = nullptr;
+    ok = vk.vkMapMemory(vk.device, memory, 0, size, 0, &mapped) == VK_SUCCESS;
+    if (ok) {
+      const auto* px = static_cast<const std::uint8_t*>(mapped);
+      const bool bgra = sc.format == VK_FORMAT_B8G8R8A8_UNORM || sc.format == VK_FORMAT_B8G8R8A8_SRGB;
+      std::vector<std::uint8_t> rgb(static_cast<std::size_t>(w) * h * 3);
+      for (std::size_t i = 0; i < static_cast<std::size_t>(w) * h; ++i) {
+        rgb[3 * i + 0] = px[4 * i + (bgra ? 2 : 0)];
+        rgb[3 * i + 1] = px[4 * i + 1];
+        rgb[3 * i + 2] = px[4 * i + (bgra ? 0 : 2)];
+      }
+      vk.vkUnmapMemory(vk.device, memory);
+      ok = stbi_write_png(path.c_str(), static_cast<int>(w), static_cast<int>(h), 3, rgb.data(),
+                          static_cast<int>(w * 3)) != 0;
+    }
+  }
+  vk.vkDestroyBuffer(vk.device, buffer, nullptr);
+  if (memory != VK_NULL_HANDLE) vk.vkFreeMemory(vk.device, memory, nullptr);
+  return ok;
+}
+
+// ---- controller inputs --------------------------------------------------------
+
+// Input paths of the two profiles the runtime emulates (OpenXR 1.0,
+// "Interaction Profile Paths").
+bool profile_has(const std::string& profile, const std::string& path) {
+  static const std::vector<std::string> both_touch = {
+      "squeeze/value", "trigger/value", "trigger/touch", "thumbstick/x", "thumbstick/y", "thumbstick/click",
+      "thumbstick/touch", "thumbrest/touch", "grip/pose", "aim/pose", "output/haptic"};
+  static const std::vector<std::string> left_touch = {"x/click", "x/touch", "y/click", "y/touch", "menu/click"};
+  static const std::vector<std::string> right_touch = {"a/click", "a/touch", "b/click", "b/touch", "system/click"};
+  static const std::vector<std::string> both_simple = {"select/click", "menu/click", "grip/pose", "aim/pose",
+                                                       "output/haptic"};
+  for (const std::string hand : {"left", "right"}) {
+    const std::string prefix = "/user/hand/" + hand + "/";
+    if (path.rfind(prefix, 0) != 0) continue;
+    std::string rest = path.substr(prefix.size());
+    if (rest.rfind("input/", 0) == 0) rest = rest.substr(6);
+    else if (rest != "output/haptic") return false;
+    auto in = [&rest](const std::vector<std::string>& list) {
+      return std::find(list.begin(), list.end(), rest) != list.end();
+    };
+    if (profile == kTouch) return in(both_touch) || in(hand == "left" ? left_touch : right_touch);
+    if (profile == kSimple) return in(both_simple);
+  }
+  return false;
+}
+
+// The physical input a scripted button drives, in the active profile.
+std::string input_path(const std::string& profile, const Press& p) {
+  std::string input;
+  if (profile == kTouch) {
+    if (p.button == "trigger") input = "trigger/value";
+    else if (p.button == "squeeze") input = "squeeze/value";
+    else input = p.button + "/click";
+  } else {
+    if (p.button == "trigger") input = "select/click";
+    else if (p.button == "menu") input = "menu/click";
+    else return {};
+  }
+  return "/user/hand/" + p.hand + "/input/" + input;
+}
+
+// Value of `binding` at time t (seconds after focus), and when it last changed.
+std::pair<float, std::optional<double>> input_value(const Session& s, const std::string& binding, double t) {
+  float value = 0.0f;
+  std::optional<double> changed;
+  for (const Press& p : s.instance->script.presses) {
+    if (input_path(s.active_profile, p) != binding) continue;
+    if (held_since(p, t)) value = 1.0f;
+    if (const auto c = last_change(p, t); c && (!changed || *c > *changed)) changed = c;
+  }
+  return {value, changed};
+}
+
+// ---- the API ------------------------------------------------------------------
+
+bool well_formed_name(const char* name, std::size_t capacity) {
+  const std::size_t n = strnlen(name, capacity);
+  if (n == 0 || n == capacity) return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const char c = name[i];
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.')) return false;
+  }
+  return true;
+}
+
+bool well_formed_path(const char* text) {
+  const std::size_t n = strnlen(text, XR_MAX_PATH_LENGTH);
+  if (n == 0 || n == XR_MAX_PATH_LENGTH || text[0] != '/' || text[n - 1] == '/') return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const char c = text[i];
+    if (c == '/' && i + 1 < n && text[i + 1] == '/') return false;
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.' || c == '/'))
+      return false;
+  }
+  return true;
+}
+
+XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layer, uint32_t capacity, uint32_t* count,
+                                                       XrExtensionProperties* props) {
+  std::lock_guard lock(g_mutex);
+  if (layer != nullptr && *layer != '\0')
+    return violation("xrEnumerateInstanceExtensionProperties", XR_ERROR_API_LAYER_NOT_PRESENT, layer);
+  static const std::pair<const char*, uint32_t> offered[] = {
+      {XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME, XR_KHR_vulkan_enable2_SPEC_VERSION},
+      {XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME, XR_KHR_convert_timespec_time_SPEC_VERSION}};
+  *count = 2;
+  if (capacity == 0) return XR_SUCCESS;
+  if (capacity < 2) return XR_ERROR_SIZE_INSUFFICIENT;
+  for (std::size_t i = 0; i < 2; ++i) {
+    if (props[i].type != XR_TYPE_EXTENSION_PROPERTIES)
+      return violation("xrEnumerateInstanceExtensionProperties", XR_ERROR_VALIDATION_FAILURE,
+                       "XrExtensionProperties without its type");
+    std::snprintf(props[i].extensionName, XR_MAX_EXTENSION_NAME_SIZE, "%s", offered[i].first);
+    props[i].extensionVersion = offered[i].second;
+  }
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* info, XrInstance* out) {
+  std::lock_guard lock(g_mutex);
+  if (info == nullptr || info->type != XR_TYPE_INSTANCE_CREATE_INFO)
+    return violation("xrCreateInstance", XR_ERROR_VALIDATION_FAILURE, "create info missing or untyped");
+  if (g_instance) return XR_ERROR_LIMIT_REACHED;  // one instance at a time
+  if (XR_VERSION_MAJOR(info->applicationInfo.apiVersion) != 1 ||
+      XR_VERSION_MINOR(info->applicationInfo.apiVersion) != 0)
+    return XR_ERROR_API_VERSION_UNSUPPORTED;
+  if (strnlen(info->applicationInfo.applicationName, XR_MAX_APPLICATION_NAME_SIZE) == 0)
+    return violation("xrCreateInstance", XR_ERROR_NAME_INVALID, "empty application name");
+  auto inst = std::make_unique<Instance>();
+  for (uint32_t i = 0; i < info->enabledExtensionCount; ++i) {
+    const std::string e = info->enabledExtensionNames[i];
+    if (e == XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME) inst->timespec = true;
+    else if (e != XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME) return XR_ERROR_EXTENSION_NOT_PRESENT;
+  }
+  std::string error;
+  auto script = read_script(error);
+  if (!script) {
+    std::fprintf(stderr, "curvlab test runtime: %s\n", error.c_str());
+    return XR_ERROR_RUNTIME_FAILURE;
+  }
+  inst->script = *script;
+  if (!inst->script.log_path.empty()) inst->log.open(inst->script.log_path, std::ios::app);
+  g_instance = std::move(inst);
+  log_line(std::string("instance application ") + info->applicationInfo.applicationName + " epoch_ns " +
+           std::to_string(g_epoch_ns));
+  *out = handle_of<XrInstance>(g_instance.get());
+  return XR_SUCCESS;
+}
+
+void destroy_swapchain(Swapchain& sc) {
+  const VulkanDevice& vk = *sc.session->vk;
+  vk.vkDeviceWaitIdle(vk.device);
+  for (VkImage i : sc.images) vk.vkDestroyImage(vk.device, i, nullptr);
+  for (VkDeviceMemory m : sc.memory) vk.vkFreeMemory(vk.device, m, nullptr);
+  sc.images.clear();
+  sc.memory.clear();
+}
+
+void destroy_session(Instance& inst) {
+  Session& s = *inst.session;
+  if (s.running) log_line("note xrDestroySession while the session is running");
+  for (Swapchain* sc : s.swapchains) {
+    destroy_swapchain(*sc);
+    inst.swapchains.erase(sc);
+  }
+  for (Space* sp : s.spaces) inst.spaces.erase(sp);
+  for (auto& set : inst.sets)
+    if (set->attached_to == &s) set->attached_to = nullptr;
+  const VulkanDevice& vk = *s.vk;
+  if (s.fence != VK_NULL_HANDLE) vk.vkDestroyFence(vk.device, s.fence, nullptr);
+  if (s.pool != VK_NULL_HANDLE) vk.vkDestroyCommandPool(vk.device, s.pool, nullptr);
+  // Events of the destroyed session are dropped, as the specification asks.
+  inst.events.erase(std::remove_if(inst.events.begin(), inst.events.end(),
+                                   [&s](const XrEventDataBuffer& e) {
+                                     return e.type == XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED &&
+                                            reinterpret_cast<const XrEventDataSessionStateChanged*>(&e)
+                                                    ->session == handle_of<XrSession>(&s);
+                                   }),
+                    inst.events.end());
+  inst.session.reset();
+}
+
+XrResult XRAPI_CALL DestroyInstance(XrInstance h) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  if (inst == nullptr) return violation("xrDestroyInstance", XR_ERROR_HANDLE_INVALID, "unknown instance");
+  if (inst->session) destroy_session(*inst);
+  log_line("instance destroyed");
+  g_instance.reset();
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetInstanceProperties(XrInstance h, XrInstanceProperties* props) {
+  std::lock_guard lock(g_mutex);
+  if (instance_of(h) == nullptr) return violation("xrGetInstanceProperties", XR_ERROR_HANDLE_INVALID, "");
+  if (props == nullptr || props->type != XR_TYPE_INSTANCE_PROPERTIES)
+    return violation("xrGetInstanceProperties", XR_ERROR_VALIDATION_FAILURE, "untyped properties");
+  props->runtimeVersion = XR_MAKE_VERSION(0, 1, 0);
+  std::snprintf(props->runtimeName, XR_MAX_RUNTIME_NAME_SIZE, "%s", "curvlab test runtime");
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL ResultToString(XrInstance h, XrResult value, char buffer[XR_MAX_RESULT_STRING_SIZE]) {
+  std::lock_guard lock(g_mutex);
+  if (instance_of(h) == nullptr) return violation("xrResultToString", XR_ERROR_HANDLE_INVALID, "");
+  std::snprintf(buffer, XR_MAX_RESULT_STRING_SIZE, "%s", result_name(value).c_str());
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL StructureTypeToString(XrInstance h, XrStructureType value,
+                                          char buffer[XR_MAX_STRUCTURE_NAME_SIZE]) {
+  std::lock_guard lock(g_mutex);
+  if (instance_of(h) == nullptr) return violation("xrStructureTypeToString", XR_ERROR_HANDLE_INVALID, "");
+  std::string name = "XR_UNKNOWN_STRUCTURE_TYPE_" + std::to_string(static_cast<int>(value));
+#define CURVLAB_RT_TYPE(n, v) \
+  if (value == n) name = #n;
+  XR_LIST_ENUM_XrStructureType(CURVLAB_RT_TYPE)
+#undef CURVLAB_RT_TYPE
+  std::snprintf(buffer, XR_MAX_STRUCTURE_NAME_SIZE, "%s", name.c_str());
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL PollEvent(XrInstance h, XrEventDataBuffer* event) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  if (inst == nullptr) return violation("xrPollEvent", XR_ERROR_HANDLE_INVALID, "");
+  if (event == nullptr || event->type != XR_TYPE_EVENT_DATA_BUFFER)
+    return violation("xrPollEvent", XR_ERROR_VALIDATION_FAILURE, "the buffer must be XR_TYPE_EVENT_DATA_BUFFER");
+  if (inst->session) tick(*inst->session);
+  if (inst->events.empty()) return XR_EVENT_UNAVAILABLE;
+  *event = inst->events.front();
+  inst->events.pop_front();
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetSystem(XrInstance h, const XrSystemGetInfo* info, XrSystemId* out) {
+  std::lock_guard lock(g_mutex);
+  if (instance_of(h) == nullptr) return violation("xrGetSystem", XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_SYSTEM_GET_INFO)
+    return violation("xrGetSystem", XR_ERROR_VALIDATION_FAILURE, "untyped get info");
+  if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY) return XR_ERROR_FORM_FACTOR_UNSUPPORTED;
+  *out = kSystem;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetSystemProperties(XrInstance h, XrSystemId system, XrSystemProperties* props) {
+  std::lock_guard lock(g_mutex);
+  if (instance_of(h) == nullptr) return violation("xrGetSystemProperties", XR_ERROR_HANDLE_INVALID, "");
+  if (system != kSystem) return violation("xrGetSystemProperties", XR_ERROR_SYSTEM_INVALID, "");
+  if (props == nullptr || props->type != XR_TYPE_SYSTEM_PROPERTIES)
+    return violation("xrGetSystemProperties", XR_ERROR_VALIDATION_FAILURE, "untyped properties");
+  props->systemId = kSystem;
+  props->vendorId = 0xc0de;
+  std::snprintf(props->systemName, XR_MAX_SYSTEM_NAME_SIZE, "%s", "curvlab scripted headset");
+  props->graphicsProperties.maxSwapchainImageWidth = kMaxSwapchainPx;
+  props->graphicsProperties.maxSwapchainImageHeight = kMaxSwapchainPx;
+  props->graphicsProperties.maxLayerCount = kMaxLayers;
+  props->trackingProperties.orientationTracking = XR_TRUE;
+  props->trackingProperties.positionTracking = XR_TRUE;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EnumerateViewConfigurationViews(XrInstance h, XrSystemId system, XrViewConfigurationType type,
+                                                    uint32_t capacity, uint32_t* count,
+                                                    XrViewConfigurationView* views) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  if (inst == nullptr) return violation("xrEnumerateViewConfigurationViews", XR_ERROR_HANDLE_INVALID, "");
+  if (system != kSystem) return violation("xrEnumerateViewConfigurationViews", XR_ERROR_SYSTEM_INVALID, "");
+  if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO) return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+  *count = 2;
+  if (capacity == 0) return XR_SUCCESS;
+  if (capacity < 2) return XR_ERROR_SIZE_INSUFFICIENT;
+  for (uint32_t i = 0; i < 2; ++i) {
+    if (views[i].type != XR_TYPE_VIEW_CONFIGURATION_VIEW)
+      return violation("xrEnumerateViewConfigurationViews", XR_ERROR_VALIDATION_FAILURE, "untyped view");
+    views[i].recommendedImageRectWidth = inst->script.eye_width_px;
+    views[i].recommendedImageRectHeight = inst->script.eye_height_px;
+    views[i].maxImageRectWidth = kMaxSwapchainPx;
+    views[i].maxImageRectHeight = kMaxSwapchainPx;
+    views[i].recommendedSwapchainSampleCount = 1;
+    views[i].maxSwapchainSampleCount = 1;
+  }
+  return XR_SUCCESS;
+}
+
+// ---- XR_KHR_vulkan_enable2 ------------------------------------------------------
+
+XrResult XRAPI_CALL GetVulkanGraphicsRequirements2(XrInstance h, XrSystemId system,
+                                                   XrGraphicsRequirementsVulkan2KHR* req) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  if (inst == nullptr) return violation("xrGetVulkanGraphicsRequirements2KHR", XR_ERROR_HANDLE_INVALID, "");
+  if (system != kSystem) return violation("xrGetVulkanGraphicsRequirements2KHR", XR_ERROR_SYSTEM_INVALID, "");
+  if (req == nullptr || req->type != XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR)
+    return violation("xrGetVulkanGraphicsRequirements2KHR", XR_ERROR_VALIDATION_FAILURE, "untyped requirements");
+  req->minApiVersionSupported = XR_MAKE_VERSION(1, 0, 0);
+  req->maxApiVersionSupported = XR_MAKE_VERSION(1, 3, 0);
+  inst->requirements_queried = true;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL CreateVulkanInstance(XrInstance h, const XrVulkanInstanceCreateInfoKHR* info,
+                                         VkInstance* out, VkResult* vk_result) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrCreateVulkanInstanceKHR";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR || info->vulkanCreateInfo == nullptr ||
+      info->pfnGetInstanceProcAddr == nullptr)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "create info, Vulkan create info or pfnGetInstanceProcAddr missing");
+  if (info->systemId != kSystem) return violation(fn, XR_ERROR_SYSTEM_INVALID, "");
+  if (!inst->requirements_queried)
+    return violation(fn, XR_ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING, "xrGetVulkanGraphicsRequirements2KHR first");
+  if (info->createFlags != 0) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "createFlags must be 0");
+  auto create = reinterpret_cast<PFN_vkCreateInstance>(info->pfnGetInstanceProcAddr(VK_NULL_HANDLE, "vkCreateInstance"));
+  if (create == nullptr) return XR_ERROR_RUNTIME_FAILURE;
+  *vk_result = create(static_cast<const VkInstanceCreateInfo*>(info->vulkanCreateInfo), nullptr, out);
+  if (*vk_result == VK_SUCCESS) {
+    inst->vk.gipa = info->pfnGetInstanceProcAddr;
+    inst->vk.instance = *out;
+  }
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetVulkanGraphicsDevice2(XrInstance h, const XrVulkanGraphicsDeviceGetInfoKHR* info,
+                                             VkPhysicalDevice* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrGetVulkanGraphicsDevice2KHR";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped get info");
+  if (info->systemId != kSystem) return violation(fn, XR_ERROR_SYSTEM_INVALID, "");
+  if (inst->vk.instance == VK_NULL_HANDLE || info->vulkanInstance != inst->vk.instance)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "not the instance made by xrCreateVulkanInstanceKHR");
+  auto enumerate = reinterpret_cast<PFN_vkEnumeratePhysicalDevices>(
+      inst->vk.gipa(inst->vk.instance, "vkEnumeratePhysicalDevices"));
+  std::uint32_t n = 0;
+  if (enumerate == nullptr || enumerate(inst->vk.instance, &n, nullptr) != VK_SUCCESS || n == 0)
+    return XR_ERROR_RUNTIME_FAILURE;
+  std::vector<VkPhysicalDevice> devices(n);
+  if (enumerate(inst->vk.instance, &n, devices.data()) != VK_SUCCESS) return XR_ERROR_RUNTIME_FAILURE;
+  // The "headset's GPU" is the first device (lavapipe on a machine without one).
+  inst->vk.physical = devices.front();
+  inst->vk.vkGetPhysicalDeviceMemoryProperties = reinterpret_cast<PFN_vkGetPhysicalDeviceMemoryProperties>(
+      inst->vk.gipa(inst->vk.instance, "vkGetPhysicalDeviceMemoryProperties"));
+  *out = inst->vk.physical;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL CreateVulkanDevice(XrInstance h, const XrVulkanDeviceCreateInfoKHR* info, VkDevice* out,
+                                       VkResult* vk_result) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrCreateVulkanDeviceKHR";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR || info->vulkanCreateInfo == nullptr ||
+      info->pfnGetInstanceProcAddr == nullptr)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "create info, Vulkan create info or pfnGetInstanceProcAddr missing");
+  if (info->systemId != kSystem) return violation(fn, XR_ERROR_SYSTEM_INVALID, "");
+  if (info->vulkanPhysicalDevice != inst->vk.physical || inst->vk.physical == VK_NULL_HANDLE)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE,
+                     "vulkanPhysicalDevice is not the one xrGetVulkanGraphicsDevice2KHR returned");
+  auto create = reinterpret_cast<PFN_vkCreateDevice>(info->pfnGetInstanceProcAddr(inst->vk.instance, "vkCreateDevice"));
+  if (create == nullptr) return XR_ERROR_RUNTIME_FAILURE;
+  *vk_result = create(info->vulkanPhysicalDevice, static_cast<const VkDeviceCreateInfo*>(info->vulkanCreateInfo),
+                      nullptr, out);
+  if (*vk_result != VK_SUCCESS) return XR_SUCCESS;
+  VulkanDevice& vk = inst->vk;
+  vk.device = *out;
+  vk.gdpa = reinterpret_cast<PFN_vkGetDeviceProcAddr>(vk.gipa(vk.instance, "vkGetDeviceProcAddr"));
+#define CURVLAB_RT_LOAD(name) vk.name = reinterpret_cast<PFN_##name>(vk.gdpa(vk.device, #name));
+  CURVLAB_RT_DEVICE_FNS(CURVLAB_RT_LOAD)
+#undef CURVLAB_RT_LOAD
+  return XR_SUCCESS;
+}
+
+// ---- session ----------------------------------------------------------------------
+
+XrResult XRAPI_CALL CreateSession(XrInstance h, const XrSessionCreateInfo* info, XrSession* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrCreateSession";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_SESSION_CREATE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
+  if (info->systemId != kSystem) return violation(fn, XR_ERROR_SYSTEM_INVALID, "");
+  if (!inst->requirements_queried)
+    return violation(fn, XR_ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING, "xrGetVulkanGraphicsRequirements2KHR first");
+  if (inst->session) return XR_ERROR_LIMIT_REACHED;
+  const XrGraphicsBindingVulkan2KHR* binding = nullptr;
+  for (auto* n = static_cast<const XrBaseInStructure*>(info->next); n != nullptr; n = n->next)
+    if (n->type == XR_TYPE_GRAPHICS_BINDING_VULKAN2_KHR) binding = reinterpret_cast<const XrGraphicsBindingVulkan2KHR*>(n);
+  if (binding == nullptr) return violation(fn, XR_ERROR_GRAPHICS_DEVICE_INVALID, "no XrGraphicsBindingVulkan2KHR");
+  VulkanDevice& vk = inst->vk;
+  if (binding->instance != vk.instance || binding->physicalDevice != vk.physical || binding->device != vk.device ||
+      vk.device == VK_NULL_HANDLE)
+    return violation(fn, XR_ERROR_GRAPHICS_DEVICE_INVALID,
+                     "the binding names Vulkan objects the runtime did not make (xrCreateVulkan*KHR)");
+  auto s = std::make_unique<Session>();
+  s->instance = inst;
+  s->vk = &vk;
+  s->unfocus_phase.assign(inst->script.unfocus.size(), 0);
+  vk.vkGetDeviceQueue(vk.device, binding->queueFamilyIndex, binding->queueIndex, &s->queue);
+  VkCommandPoolCreateInfo pi{};
+  pi.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO;
+  pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pi.queueFamilyIndex = binding->queueFamilyIndex;
+  VkCommandBufferAllocateInfo ai{};
+  ai.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
+  ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  ai.commandBufferCount = 1;
+  VkFenceCreateInfo fi{};
+  fi.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
+  if (s->queue == VK_NULL_HANDLE || vk.vkCreateCommandPool(vk.device, &pi, nullptr, &s->pool) != VK_SUCCESS ||
+      (ai.commandPool = s->pool, vk.vkAllocateCommandBuffers(vk.device, &ai, &s->cmd) != VK_SUCCESS) ||
+      vk.vkCreateFence(vk.device, &fi, nullptr, &s->fence) != VK_SUCCESS)
+    return XR_ERROR_RUNTIME_FAILURE;
+  inst->session = std::move(s);
+  Session& session = *inst->session;
+  queue_state(session, XR_SESSION_STATE_IDLE);
+  queue_state(session, XR_SESSION_STATE_READY);
+  *out = handle_of<XrSession>(&session);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL DestroySession(XrSession h) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  if (s == nullptr) return violation("xrDestroySession", XR_ERROR_HANDLE_INVALID, "");
+  destroy_session(*s->instance);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL BeginSession(XrSession h, const XrSessionBeginInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrBeginSession";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_SESSION_BEGIN_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped begin info");
+  if (s->running) return violation(fn, XR_ERROR_SESSION_RUNNING, "already running");
+  if (s->state != XR_SESSION_STATE_READY)
+    return violation(fn, XR_ERROR_SESSION_NOT_READY, "state is " + state_name(s->state));
+  if (info->primaryViewConfigurationType != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+    return violation(fn, XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED, "");
+  s->running = true;
+  log_line("begin_session monotonic_ns " + std::to_string(monotonic_ns()));
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EndSession(XrSession h) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrEndSession";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (!s->running) return violation(fn, XR_ERROR_SESSION_NOT_RUNNING, "");
+  if (s->state != XR_SESSION_STATE_STOPPING)
+    return violation(fn, XR_ERROR_SESSION_NOT_STOPPING, "state is " + state_name(s->state));
+  s->running = false;
+  s->waited = s->begun = false;
+  log_line("end_session monotonic_ns " + std::to_string(monotonic_ns()));
+  queue_state(*s, XR_SESSION_STATE_IDLE);
+  if (s->exit_requested) queue_state(*s, XR_SESSION_STATE_EXITING);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL RequestExitSession(XrSession h) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  if (s == nullptr) return violation("xrRequestExitSession", XR_ERROR_HANDLE_INVALID, "");
+  if (!s->running) return violation("xrRequestExitSession", XR_ERROR_SESSION_NOT_RUNNING, "");
+  if (!s->exit_requested) {
+    s->exit_requested = true;
+    if (s->state == XR_SESSION_STATE_FOCUSED) queue_state(*s, XR_SESSION_STATE_VISIBLE);
+    if (s->state == XR_SESSION_STATE_VISIBLE) queue_state(*s, XR_SESSION_STATE_SYNCHRONIZED);
+    queue_state(*s, XR_SESSION_STATE_STOPPING);
+  }
+  return XR_SUCCESS;
+}
+
+// ---- spaces -------------------------------------------------------------------------
+
+bool normalized(const XrQuaternionf& q) {
+  const double x = q.x, y = q.y, z = q.z, w = q.w;
+  const double n = x * x + y * y + z * z + w * w;
+  return std::abs(n - 1.0) < 1e-3;
+}
+
+Pose to_pose(const XrPosef& p) {
+  return {{p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w},
+          {p.position.x, p.position.y, p.position.z}};
+}
+
+XrPosef to_xr_pose(const Pose& p) {
+  XrPosef out{};
+  out.orientation = {static_cast<float>(p.orientation.x), static_cast<float>(p.orientation.y),
+                     static_cast<float>(p.orientation.z), static_cast<float>(p.orientation.w)};
+  out.position = {static_cast<float>(p.position_m.x), static_cast<float>(p.position_m.y),
+                  static_cast<float>(p.position_m.z)};
+  return out;
+}
+
+XrResult XRAPI_CALL CreateReferenceSpace(XrSession h, const XrReferenceSpaceCreateInfo* info, XrSpace* out) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrCreateReferenceSpace";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_REFERENCE_SPACE_CREATE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
+  if (info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_VIEW &&
+      info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_LOCAL &&
+      info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_STAGE)
+    return XR_ERROR_REFERENCE_SPACE_UNSUPPORTED;
+  if (!normalized(info->poseInReferenceSpace.orientation))
+    return violation(fn, XR_ERROR_POSE_INVALID, "orientation not a unit quaternion");
+  auto sp = std::make_unique<Space>();
+  sp->session = s;
+  sp->reference = info->referenceSpaceType;
+  sp->offset = to_pose(info->poseInReferenceSpace);
+  Space* raw = sp.get();
+  s->instance->spaces.emplace(raw, std::move(sp));
+  s->spaces.insert(raw);
+  *out = handle_of<XrSpace>(raw);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL CreateActionSpace(XrSession h, const XrActionSpaceCreateInfo* info, XrSpace* out) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrCreateActionSpace";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_ACTION_SPACE_CREATE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
+  Action* a = action_of(info->action);
+  if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "unknown action");
+  if (a->type != XR_ACTION_TYPE_POSE_INPUT) return violation(fn, XR_ERROR_ACTION_TYPE_MISMATCH, a->name);
+  int hand = -1;
+  if (info->subactionPath != XR_NULL_PATH) {
+    if (std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath) == a->subactions.end())
+      return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "subaction path not declared by " + a->name);
+    hand = path_text(*s->instance, info->subactionPath) == "/user/hand/left" ? 0 : 1;
+  }
+  if (!normalized(info->poseInActionSpace.orientation))
+    return violation(fn, XR_ERROR_POSE_INVALID, "orientation not a unit quaternion");
+  auto sp = std::make_unique<Space>();
+  sp->session = s;
+  sp->action = a;
+  sp->hand = hand < 0 ? 1 : hand;
+  sp->offset = to_pose(info->poseInActionSpace);
+  Space* raw = sp.get();
+  s->instance->spaces.emplace(raw, std::move(sp));
+  s->spaces.insert(raw);
+  *out = handle_of<XrSpace>(raw);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL DestroySpace(XrSpace h) {
+  std::lock_guard lock(g_mutex);
+  Space* sp = space_of(h);
+  if (sp == nullptr) return violation("xrDestroySpace", XR_ERROR_HANDLE_INVALID, "");
+  sp->session->spaces.erase(sp);
+  sp->session->instance->spaces.erase(sp);
+  return XR_SUCCESS;
+}
+
+// A space's pose in STAGE at time t, and whether it is tracked.
+std::pair<Pose, bool> stage_pose(const Space& sp, XrTime t) {
+  const double ts = xr_seconds(t);
+  Pose base;
+  bool tracked = true;
+  if (sp.action != nullptr) {
+    // Hands are tracked while the application has input focus and the pose
+    // action is bound in the active profile.
+    const Session& s = *sp.session;
+    tracked = s.state == XR_SESSION_STATE_FOCUSED && sp.action->set->attached_to == &s;
+    base = hand_pose(sp.hand, ts);
+  } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_VIEW) {
+    base = head_pose(ts);
+  } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_LOCAL) {
+    base = {Quat{}, {0.0, 1.6, 0.85}};
+  }
+  return {compose(base, sp.offset), tracked};
+}
+
+XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace base, XrTime time, XrSpaceLocation* location) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrLocateSpace";
+  Space* a = space_of(space);
+  Space* b = space_of(base);
+  if (a == nullptr || b == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "unknown space");
+  if (a->session != b->session) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "spaces of two sessions");
+  if (location == nullptr || location->type != XR_TYPE_SPACE_LOCATION)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped location");
+  if (time <= 0) return violation(fn, XR_ERROR_TIME_INVALID, "time " + std::to_string(time));
+  const auto [pa, ta] = stage_pose(*a, time);
+  const auto [pb, tb] = stage_pose(*b, time);
+  location->pose = to_xr_pose(compose(inverse(pb), pa));
+  location->locationFlags = ta && tb ? XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
+                                           XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
+                                           XR_SPACE_LOCATION_POSITION_TRACKED_BIT
+                                     : 0;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL LocateViews(XrSession h, const XrViewLocateInfo* info, XrViewState* state, uint32_t capacity,
+                                uint32_t* count, XrView* views) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrLocateViews";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_VIEW_LOCATE_INFO || state == nullptr ||
+      state->type != XR_TYPE_VIEW_STATE)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped locate info or view state");
+  if (info->viewConfigurationType != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+    return violation(fn, XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED, "");
+  Space* base = space_of(info->space);
+  if (base == nullptr || base->session != s) return violation(fn, XR_ERROR_HANDLE_INVALID, "unknown space");
+  if (info->displayTime <= 0) return violation(fn, XR_ERROR_TIME_INVALID, std::to_string(info->displayTime));
+  *count = 2;
+  if (capacity == 0) return XR_SUCCESS;
+  if (capacity < 2) return XR_ERROR_SIZE_INSUFFICIENT;
+  const Pose head = head_pose(xr_seconds(info->displayTime));
+  const auto [pb, tb] = stage_pose(*base, info->displayTime);
+  const Pose base_inv = inverse(pb);
+  for (uint32_t i = 0; i < 2; ++i) {
+    if (views[i].type != XR_TYPE_VIEW) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped view");
+    const double side = i == 0 ? -1.0 : 1.0;
+    const Pose eye = compose(head, Pose{Quat{}, {side * kIpdM / 2.0, 0.0, 0.0}});
+    views[i].pose = to_xr_pose(compose(base_inv, eye));
+    // Asymmetric, wider on the outer side, like a real headset's lenses.
+    const float outer = 0.87f, inner = 0.72f;
+    views[i].fov = {i == 0 ? -outer : -inner, i == 0 ? inner : outer, 0.80f, -0.88f};
+  }
+  state->viewStateFlags = tb ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
+                                   XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
+                             : 0;
+  return XR_SUCCESS;
+}
+
+// ---- swapchains ---------------------------------------------------------------------
+
+const std::vector<std::int64_t>& formats() {
+  // The runtime's preference first, as real runtimes list them: sRGB.
+  static const std::vector<std::int64_t> f = {VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB,
+                                              VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_UNORM};
+  return f;
+}
+
+XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession h, uint32_t capacity, uint32_t* count, int64_t* out) {
+  std::lock_guard lock(g_mutex);
+  if (session_of(h) == nullptr) return violation("xrEnumerateSwapchainFormats", XR_ERROR_HANDLE_INVALID, "");
+  *count = static_cast<uint32_t>(formats().size());
+  if (capacity == 0) return XR_SUCCESS;
+  if (capacity < formats().size()) return XR_ERROR_SIZE_INSUFFICIENT;
+  std::copy(formats().begin(), formats().end(), out);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL CreateSwapchain(XrSession h, const XrSwapchainCreateInfo* info, XrSwapchain* out) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrCreateSwapchain";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_SWAPCHAIN_CREATE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
+  if (std::find(formats().begin(), formats().end(), info->format) == formats().end())
+    return violation(fn, XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED, std::to_string(info->format));
+  if (info->sampleCount != 1 || info->faceCount != 1 || info->arraySize == 0 || info->mipCount != 1 ||
+      info->width == 0 || info->height == 0 || info->width > kMaxSwapchainPx || info->height > kMaxSwapchainPx)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "size, samples, faces, layers or mips out of range");
+  if ((info->usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT) != 0)
+    return violation(fn, XR_ERROR_FEATURE_UNSUPPORTED, "depth usage on a colour format");
+  const VulkanDevice& vk = *s->vk;
+  auto sc = std::make_unique<Swapchain>();
+  sc->session = s;
+  sc->format = static_cast<VkFormat>(info->format);
+  sc->width = info->width;
+  sc->height = info->height;
+  sc->array_size = info->arraySize;
+  VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;  // the compositor's
+  if ((info->usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT) != 0) usage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+  if ((info->usageFlags & XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT) != 0) usage |= VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  if ((info->usageFlags & XR_SWAPCHAIN_USAGE_UNORDERED_ACCESS_BIT) != 0) usage |= VK_IMAGE_USAGE_STORAGE_BIT;
+  for (std::uint32_t i = 0; i < kImagesPerSwapchain; ++i) {
+    VkImageCreateInfo ii{};
+    ii.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
+    if ((info->usageFlags & XR_SWAPCHAIN_USAGE_MUTABLE_FORMAT_BIT) != 0) ii.flags = VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT;
+    ii.imageType = VK_IMAGE_TYPE_2D;
+    ii.format = sc->format;
+    ii.extent = {info->width, info->height, 1};
+    ii.mipLevels = 1;
+    ii.arrayLayers = info->arraySize;
+    ii.samples = VK_SAMPLE_COUNT_1_BIT;
+    ii.tiling = VK_IMAGE_TILING_OPTIMAL;
+    ii.usage = usage;
+    ii.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    VkImage image = VK_NULL_HANDLE;
+    if (vk.vkCreateImage(vk.device, &ii, nullptr, &image) != VK_SUCCESS) {
+      destroy_swapchain(*sc);
+      return XR_ERROR_RUNTIME_FAILURE;
+    }
+    sc->images.push_back(image);
+    VkMemoryRequirements req{};
+    vk.vkGetImageMemoryRequirements(vk.device, image, &req);
+    auto type = memory_type(vk, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    if (!type) type = memory_type(vk, req.memoryTypeBits, 0);
+    VkMemoryAllocateInfo ai{};
+    ai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+    ai.allocationSize = req.size;
+    ai.memoryTypeIndex = type.value_or(0);
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    if (!type || vk.vkAllocateMemory(vk.device, &ai, nullptr, &memory) != VK_SUCCESS) {
+      destroy_swapchain(*sc);
+      return XR_ERROR_RUNTIME_FAILURE;
+    }
+    sc->memory.push_back(memory);
+    if (vk.vkBindImageMemory(vk.device, image, memory, 0) != VK_SUCCESS) {
+      destroy_swapchain(*sc);
+      return XR_ERROR_RUNTIME_FAILURE;
+    }
+  }
+  // Colour images are handed to the application in COLOR_ATTACHMENT_OPTIMAL
+  // (XR_KHR_vulkan_enable: the layout at acquire and at release).
+  if ((info->usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT) != 0 &&
+      !submit_and_wait(*s, [&](VkCommandBuffer cb) {
+        for (VkImage image : sc->images) {
+          auto b = image_barrier(image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, 0,
+                                 VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT);
+          vk.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                                  VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0, nullptr, 0, nullptr, 1, &b);
+        }
+      })) {
+    destroy_swapchain(*sc);
+    return XR_ERROR_RUNTIME_FAILURE;
+  }
+  Swapchain* raw = sc.get();
+  s->instance->swapchains.emplace(raw, std::move(sc));
+  s->swapchains.insert(raw);
+  *out = handle_of<XrSwapchain>(raw);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL DestroySwapchain(XrSwapchain h) {
+  std::lock_guard lock(g_mutex);
+  Swapchain* sc = swapchain_of(h);
+  if (sc == nullptr) return violation("xrDestroySwapchain", XR_ERROR_HANDLE_INVALID, "");
+  destroy_swapchain(*sc);
+  sc->session->swapchains.erase(sc);
+  sc->session->instance->swapchains.erase(sc);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EnumerateSwapchainImages(XrSwapchain h, uint32_t capacity, uint32_t* count,
+                                             XrSwapchainImageBaseHeader* images) {
+  std::lock_guard lock(g_mutex);
+  Swapchain* sc = swapchain_of(h);
+  constexpr const char* fn = "xrEnumerateSwapchainImages";
+  if (sc == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  *count = static_cast<uint32_t>(sc->images.size());
+  if (capacity == 0) return XR_SUCCESS;
+  if (capacity < sc->images.size()) return XR_ERROR_SIZE_INSUFFICIENT;
+  auto* out = reinterpret_cast<XrSwapchainImageVulkan2KHR*>(images);
+  for (std::size_t i = 0; i < sc->images.size(); ++i) {
+    if (out[i].type != XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR)
+      return violation(fn, XR_ERROR_VALIDATION_FAILURE, "images must be XrSwapchainImageVulkan2KHR");
+    out[i].image = sc->images[i];
+  }
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain h, const XrSwapchainImageAcquireInfo* info, uint32_t* index) {
+  std::lock_guard lock(g_mutex);
+  Swapchain* sc = swapchain_of(h);
+  constexpr const char* fn = "xrAcquireSwapchainImage";
+  if (sc == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info != nullptr && info->type != XR_TYPE_SWAPCHAIN_IMAGE_ACQUIRE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped acquire info");
+  if (sc->acquired.size() == sc->images.size())
+    return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "every image is already acquired");
+  *index = sc->next;
+  sc->acquired.push_back(sc->next);
+  sc->next = (sc->next + 1) % static_cast<std::uint32_t>(sc->images.size());
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL WaitSwapchainImage(XrSwapchain h, const XrSwapchainImageWaitInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Swapchain* sc = swapchain_of(h);
+  constexpr const char* fn = "xrWaitSwapchainImage";
+  if (sc == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped wait info");
+  if (sc->acquired.empty()) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "no image acquired");
+  if (sc->waited) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "an image is already waited and not released");
+  sc->waited = true;  // the images are never busy: the compositor reads on release
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL ReleaseSwapchainImage(XrSwapchain h, const XrSwapchainImageReleaseInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Swapchain* sc = swapchain_of(h);
+  constexpr const char* fn = "xrReleaseSwapchainImage";
+  if (sc == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info != nullptr && info->type != XR_TYPE_SWAPCHAIN_IMAGE_RELEASE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped release info");
+  if (!sc->waited) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "no image waited");
+  sc->waited = false;
+  sc->last_released = sc->acquired.front();
+  sc->acquired.pop_front();
+  return XR_SUCCESS;
+}
+
+// ---- frame loop ---------------------------------------------------------------------
+
+XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameState* state) {
+  std::unique_lock lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrWaitFrame";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if ((info != nullptr && info->type != XR_TYPE_FRAME_WAIT_INFO) || state == nullptr ||
+      state->type != XR_TYPE_FRAME_STATE)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped wait info or frame state");
+  if (!s->running) return violation(fn, XR_ERROR_SESSION_NOT_RUNNING, "");
+  const auto period = static_cast<std::int64_t>(std::llround(1e9 / s->instance->script.refresh_hz));
+  std::int64_t wake = monotonic_ns();
+  if (s->frames_waited > 0) {
+    // The next slot on the display's grid that has not passed.
+    const std::int64_t next = s->last_wake_ns + period;
+    wake = wake <= next ? next : s->last_wake_ns + ((wake - s->last_wake_ns + period - 1) / period) * period;
+  }
+  s->last_wake_ns = wake;
+  ++s->frames_waited;
+  const std::int64_t display = wake + period;
+  // Pace in real time without holding the lock.
+  lock.unlock();
+  timespec until{static_cast<time_t>(wake / 1'000'000'000), static_cast<long>(wake % 1'000'000'000)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) != 0) {
+  }
+  lock.lock();
+  if (session_of(h) != s) return XR_ERROR_SESSION_LOST;
+  tick(*s);
+  state->predictedDisplayTime = to_xr(display);
+  state->predictedDisplayPeriod = period;
+  state->shouldRender = s->state == XR_SESSION_STATE_VISIBLE || s->state == XR_SESSION_STATE_FOCUSED ? XR_TRUE : XR_FALSE;
+  s->waited = true;
+  s->waited_display = state->predictedDisplayTime;
+  const Pose head = head_pose(xr_seconds(state->predictedDisplayTime));
+  char line[320];
+  std::snprintf(line, sizeof line, "frame %lld xr_ns %lld monotonic_ns %lld head %.9f %.9f %.9f %.9f %.9f %.9f %.9f",
+                static_cast<long long>(s->frames_waited - 1), static_cast<long long>(state->predictedDisplayTime),
+                static_cast<long long>(display), head.position_m.x, head.position_m.y, head.position_m.z,
+                head.orientation.x, head.orientation.y, head.orientation.z, head.orientation.w);
+  log_line(line);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL BeginFrame(XrSession h, const XrFrameBeginInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrBeginFrame";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info != nullptr && info->type != XR_TYPE_FRAME_BEGIN_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped begin info");
+  if (!s->running) return violation(fn, XR_ERROR_SESSION_NOT_RUNNING, "");
+  if (!s->waited) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "no xrWaitFrame before it");
+  s->waited = false;
+  const bool discarded = s->begun;
+  s->begun = true;
+  s->begun_display = s->waited_display;
+  if (discarded) log_line("note xrBeginFrame discarded the frame begun before");
+  return discarded ? XR_FRAME_DISCARDED : XR_SUCCESS;
+}
+
+XrResult check_layer(const Session& s, const XrCompositionLayerBaseHeader* header) {
+  constexpr const char* fn = "xrEndFrame";
+  if (header == nullptr) return violation(fn, XR_ERROR_LAYER_INVALID, "null layer");
+  if (header->type != XR_TYPE_COMPOSITION_LAYER_PROJECTION)
+    return violation(fn, XR_ERROR_LAYER_INVALID, "only projection layers are supported");
+  const auto* layer = reinterpret_cast<const XrCompositionLayerProjection*>(header);
+  const Space* space = space_of(layer->space);
+  if (space == nullptr || space->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, "layer space");
+  if (layer->viewCount != 2 || layer->views == nullptr)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE,
+                     "a stereo projection layer needs 2 views, got " + std::to_string(layer->viewCount));
+  for (uint32_t i = 0; i < 2; ++i) {
+    const XrCompositionLayerProjectionView& v = layer->views[i];
+    const std::string which = "view " + std::to_string(i) + ": ";
+    if (v.type != XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW)
+      return violation(fn, XR_ERROR_VALIDATION_FAILURE, which + "untyped");
+    const Swapchain* sc = swapchain_of(v.subImage.swapchain);
+    if (sc == nullptr || sc->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, which + "swapchain");
+    if (!sc->last_released)
+      return violation(fn, XR_ERROR_LAYER_INVALID, which + "its swapchain has no released image");
+    if (!sc->acquired.empty())
+      return violation(fn, XR_ERROR_LAYER_INVALID, which + "its swapchain still has an acquired image");
+    const XrRect2Di& r = v.subImage.imageRect;
+    if (r.offset.x < 0 || r.offset.y < 0 || r.extent.width <= 0 || r.extent.height <= 0 ||
+        static_cast<std::uint32_t>(r.offset.x + r.extent.width) > sc->width ||
+        static_cast<std::uint32_t>(r.offset.y + r.extent.height) > sc->height)
+      return violation(fn, XR_ERROR_SWAPCHAIN_RECT_INVALID, which + "rectangle outside the swapchain");
+    if (v.subImage.imageArrayIndex >= sc->array_size)
+      return violation(fn, XR_ERROR_VALIDATION_FAILURE, which + "imageArrayIndex");
+    if (!normalized(v.pose.orientation)) return violation(fn, XR_ERROR_POSE_INVALID, which + "orientation");
+    if (!(v.fov.angleLeft < v.fov.angleRight && v.fov.angleDown < v.fov.angleUp))
+      return violation(fn, XR_ERROR_VALIDATION_FAILURE, which + "degenerate field of view");
+  }
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrEndFrame";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_FRAME_END_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped end info");
+  if (!s->running) return violation(fn, XR_ERROR_SESSION_NOT_RUNNING, "");
+  if (!s->begun) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "no xrBeginFrame before it");
+  s->begun = false;
+  if (info->displayTime <= 0) return violation(fn, XR_ERROR_TIME_INVALID, std::to_string(info->displayTime));
+  if (info->displayTime != s->begun_display)
+    warning(fn, "displayTime " + std::to_string(info->displayTime) + " is not the frame's predicted display time " +
+                    std::to_string(s->begun_display));
+  if (info->environmentBlendMode != XR_ENVIRONMENT_BLEND_MODE_OPAQUE)
+    return violation(fn, XR_ERROR_ENVIRONMENT_BLEND_MODE_UNSUPPORTED, "");
+  if (info->layerCount > kMaxLayers) return violation(fn, XR_ERROR_LAYER_LIMIT_EXCEEDED, "");
+  if (info->layerCount > 0 && info->layers == nullptr)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "layers missing");
+  for (uint32_t i = 0; i < info->layerCount; ++i)
+    if (const XrResult r = check_layer(*s, info->layers[i]); XR_FAILED(r)) return r;
+  // The left eye of the first layer, as the compositor would show it.
+  const Script& script = s->instance->script;
+  if (info->layerCount > 0) {
+    const std::int64_t n = s->frames_submitted++;
+    if (!script.capture_dir.empty() && n % script.capture_every == 0) {
+      const auto* layer = reinterpret_cast<const XrCompositionLayerProjection*>(info->layers[0]);
+      const XrCompositionLayerProjectionView& v = layer->views[0];
+      const Swapchain& sc = *swapchain_of(v.subImage.swapchain);
+      const std::string path = script.capture_dir + "/left_" + std::to_string(n) + "_" +
+                               std::to_string(to_mono(info->displayTime)) + ".png";
+      if (capture(*s, sc, *sc.last_released, v.subImage.imageRect, v.subImage.imageArrayIndex, path))
+        log_line("capture " + path + " monotonic_ns " + std::to_string(to_mono(info->displayTime)));
+      else
+        warning(fn, "could not capture " + path);
+    }
+  }
+  // The first frame ended: the session is synchronised with the display,
+  // visible and focused.
+  if (!s->focused_once && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
+    queue_state(*s, XR_SESSION_STATE_SYNCHRONIZED);
+    queue_state(*s, XR_SESSION_STATE_VISIBLE);
+    queue_state(*s, XR_SESSION_STATE_FOCUSED);
+    s->focused_once = true;
+    s->focus_t0_ns = monotonic_ns();
+  }
+  return XR_SUCCESS;
+}
+
+// ---- paths and actions ----------------------------------------------------------------
+
+XrResult XRAPI_CALL StringToPath(XrInstance h, const char* text, XrPath* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  if (inst == nullptr) return violation("xrStringToPath", XR_ERROR_HANDLE_INVALID, "");
+  if (text == nullptr || !well_formed_path(text))
+    return violation("xrStringToPath", XR_ERROR_PATH_FORMAT_INVALID, text == nullptr ? "null" : text);
+  const auto it = std::find(inst->paths.begin(), inst->paths.end(), text);
+  if (it == inst->paths.end()) {
+    inst->paths.emplace_back(text);
+    *out = inst->paths.size();
+  } else {
+    *out = static_cast<XrPath>(it - inst->paths.begin()) + 1;
+  }
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL PathToString(XrInstance h, XrPath path, uint32_t capacity, uint32_t* count, char* buffer) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  if (inst == nullptr) return violation("xrPathToString", XR_ERROR_HANDLE_INVALID, "");
+  const std::string text = path_text(*inst, path);
+  if (text.empty()) return violation("xrPathToString", XR_ERROR_PATH_INVALID, std::to_string(path));
+  *count = static_cast<uint32_t>(text.size() + 1);
+  if (capacity == 0) return XR_SUCCESS;
+  if (capacity < *count) return XR_ERROR_SIZE_INSUFFICIENT;
+  std::memcpy(buffer, text.c_str(), text.size() + 1);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL CreateActionSet(XrInstance h, const XrActionSetCreateInfo* info, XrActionSet* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrCreateActionSet";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_ACTION_SET_CREATE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
+  if (!well_formed_name(info->actionSetName, XR_MAX_ACTION_SET_NAME_SIZE))
+    return violation(fn, XR_ERROR_PATH_FORMAT_INVALID, "action set name");
+  if (strnlen(info->localizedActionSetName, XR_MAX_LOCALIZED_ACTION_SET_NAME_SIZE) == 0)
+    return violation(fn, XR_ERROR_LOCALIZED_NAME_INVALID, "empty localized name");
+  for (const auto& s : inst->sets)
+    if (s->name == info->actionSetName) return violation(fn, XR_ERROR_NAME_DUPLICATED, s->name);
+  auto set = std::make_unique<ActionSet>();
+  set->instance = inst;
+  set->name = info->actionSetName;
+  *out = handle_of<XrActionSet>(set.get());
+  inst->sets.push_back(std::move(set));
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL DestroyActionSet(XrActionSet h) {
+  std::lock_guard lock(g_mutex);
+  ActionSet* set = set_of(h);
+  if (set == nullptr) return violation("xrDestroyActionSet", XR_ERROR_HANDLE_INVALID, "");
+  Instance& inst = *set->instance;
+  // Its actions go with it; spaces made from them stay valid (the
+  // specification keeps action spaces alive) but no longer track.
+  for (auto& [raw, sp] : inst.spaces)
+    if (sp->action != nullptr && sp->action->set == set) sp->action = nullptr;
+  for (auto& [profile, bindings] : inst.suggested)
+    bindings.erase(std::remove_if(bindings.begin(), bindings.end(),
+                                  [set](const auto& b) { return b.first->set == set; }),
+                   bindings.end());
+  if (inst.session) {
+    auto& att = inst.session->attached;
+    att.erase(std::remove(att.begin(), att.end(), set), att.end());
+  }
+  inst.sets.erase(std::find_if(inst.sets.begin(), inst.sets.end(), [set](const auto& p) { return p.get() == set; }));
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL CreateAction(XrActionSet h, const XrActionCreateInfo* info, XrAction* out) {
+  std::lock_guard lock(g_mutex);
+  ActionSet* set = set_of(h);
+  constexpr const char* fn = "xrCreateAction";
+  if (set == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_ACTION_CREATE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
+  if (set->attached_to != nullptr) return violation(fn, XR_ERROR_ACTIONSETS_ALREADY_ATTACHED, set->name);
+  if (!well_formed_name(info->actionName, XR_MAX_ACTION_NAME_SIZE))
+    return violation(fn, XR_ERROR_PATH_FORMAT_INVALID, "action name");
+  if (strnlen(info->localizedActionName, XR_MAX_LOCALIZED_ACTION_NAME_SIZE) == 0)
+    return violation(fn, XR_ERROR_LOCALIZED_NAME_INVALID, "empty localized name");
+  for (const auto& a : set->actions)
+    if (a->name == info->actionName) return violation(fn, XR_ERROR_NAME_DUPLICATED, a->name);
+  switch (info->actionType) {
+    case XR_ACTION_TYPE_BOOLEAN_INPUT:
+    case XR_ACTION_TYPE_FLOAT_INPUT:
+    case XR_ACTION_TYPE_VECTOR2F_INPUT:
+    case XR_ACTION_TYPE_POSE_INPUT:
+    case XR_ACTION_TYPE_VIBRATION_OUTPUT:
+      break;
+    default:
+      return violation(fn, XR_ERROR_VALIDATION_FAILURE, "action type");
+  }
+  auto a = std::make_unique<Action>();
+  a->set = set;
+  a->name = info->actionName;
+  a->type = info->actionType;
+  for (uint32_t i = 0; i < info->countSubactionPaths; ++i) {
+    const std::string p = path_text(*set->instance, info->subactionPaths[i]);
+    if (p != "/user/hand/left" && p != "/user/hand/right" && p != "/user/head" && p != "/user/gamepad")
+      return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "subaction path '" + p + "'");
+    if (std::find(a->subactions.begin(), a->subactions.end(), info->subactionPaths[i]) != a->subactions.end())
+      return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "duplicated subaction path " + p);
+    a->subactions.push_back(info->subactionPaths[i]);
+  }
+  a->states.resize(std::max<std::size_t>(1, a->subactions.size()));
+  *out = handle_of<XrAction>(a.get());
+  set->actions.push_back(std::move(a));
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance h, const XrInteractionProfileSuggestedBinding* s) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrSuggestInteractionProfileBindings";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (s == nullptr || s->type != XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING || s->countSuggestedBindings == 0)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped or empty suggestion");
+  const std::string profile = path_text(*inst, s->interactionProfile);
+  if (profile != kTouch && profile != kSimple)
+    return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "unknown profile '" + profile + "'");
+  std::vector<std::pair<Action*, std::string>> bindings;
+  for (uint32_t i = 0; i < s->countSuggestedBindings; ++i) {
+    Action* a = action_of(s->suggestedBindings[i].action);
+    if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "binding " + std::to_string(i) + ": action");
+    if (a->set->attached_to != nullptr) return violation(fn, XR_ERROR_ACTIONSETS_ALREADY_ATTACHED, a->set->name);
+    const std::string path = path_text(*inst, s->suggestedBindings[i].binding);
+    if (!profile_has(profile, path))
+      return violation(fn, XR_ERROR_PATH_UNSUPPORTED, profile + " has no input '" + path + "'");
+    const bool pose_input = path.size() > 5 && path.compare(path.size() - 5, 5, "/pose") == 0;
+    if ((a->type == XR_ACTION_TYPE_POSE_INPUT) != pose_input)
+      return violation(fn, XR_ERROR_PATH_UNSUPPORTED, a->name + " bound to '" + path + "': pose type mismatch");
+    bindings.emplace_back(a, path);
+  }
+  inst->suggested[profile] = std::move(bindings);  // a later suggestion replaces an earlier one
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL AttachSessionActionSets(XrSession h, const XrSessionActionSetsAttachInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrAttachSessionActionSets";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO || info->countActionSets == 0)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped or empty attach info");
+  if (!s->attached.empty()) return violation(fn, XR_ERROR_ACTIONSETS_ALREADY_ATTACHED, "attach only once");
+  for (uint32_t i = 0; i < info->countActionSets; ++i) {
+    ActionSet* set = set_of(info->actionSets[i]);
+    if (set == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "action set");
+    s->attached.push_back(set);
+  }
+  for (ActionSet* set : s->attached) set->attached_to = s;
+  // The controllers the headset has: Touch if the application suggested
+  // bindings for it, else the simple controller.
+  s->active_profile = s->instance->suggested.count(kTouch) != 0 ? kTouch : kSimple;
+  log_line("profile " + s->active_profile);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL SyncActions(XrSession h, const XrActionsSyncInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrSyncActions";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_ACTIONS_SYNC_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped sync info");
+  std::set<ActionSet*> active;
+  for (uint32_t i = 0; i < info->countActiveActionSets; ++i) {
+    ActionSet* set = set_of(info->activeActionSets[i].actionSet);
+    if (set == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "action set");
+    if (set->attached_to != s) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, set->name);
+    active.insert(set);
+  }
+  tick(*s);
+  const bool focused = s->state == XR_SESSION_STATE_FOCUSED;
+  const std::int64_t now = monotonic_ns();
+  const double t = static_cast<double>(now - s->focus_t0_ns) * 1e-9;
+  const auto& bindings = s->instance->suggested[s->active_profile];
+  for (ActionSet* set : s->attached) {
+    for (auto& a : set->actions) {
+      for (std::size_t k = 0; k < a->states.size(); ++k) {
+        Action::State& st = a->states[k];
+        const std::string sub = a->subactions.empty() ? std::string() : path_text(*s->instance, a->subactions[k]);
+        float value = 0.0f;
+        std::optional<double> changed;
+        bool bound = false;
+        for (const auto& [action, path] : bindings) {
+          if (action != a.get() || (!sub.empty() && path.rfind(sub + "/", 0) != 0)) continue;
+          bound = true;
+          const auto [v, c] = input_value(*s, path, t);
+          value = std::max(value, v);
+          if (c && (!changed || *c > *changed)) changed = c;
+        }
+        const bool is_active = focused && active.count(set) != 0 && bound;
+        const float before = st.active ? st.value : 0.0f;
+        if (a->type == XR_ACTION_TYPE_BOOLEAN_INPUT) value = value > 0.5f ? 1.0f : 0.0f;
+        st.changed = is_active && st.active && value != before;
+        if (!is_active) value = 0.0f;
+        if (st.changed) {
+          st.last_change = to_xr(s->focus_t0_ns + static_cast<std::int64_t>(std::llround(changed.value_or(t) * 1e9)));
+          log_line("input " + a->name + (sub.empty() ? "" : " " + sub) + " " + std::to_string(value) +
+                   " monotonic_ns " + std::to_string(to_mono(st.last_change)));
+        }
+        st.active = is_active;
+        st.value = value;
+      }
+    }
+  }
+  return focused ? XR_SUCCESS : XR_SESSION_NOT_FOCUSED;
+}
+
+// Finds the state slot of (action, subaction) or fails as the specification says.
+XrResult state_slot(Session* s, const XrActionStateGetInfo* info, XrActionType want, const char* fn,
+                    Action::State** out) {
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_ACTION_STATE_GET_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped get info");
+  Action* a = action_of(info->action);
+  if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "action");
+  if (a->set->attached_to != s) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, a->set->name);
+  if (a->type != want) return violation(fn, XR_ERROR_ACTION_TYPE_MISMATCH, a->name);
+  if (info->subactionPath == XR_NULL_PATH) {
+    *out = &a->states.front();  // the first slot stands for "any"; curvlab always names the hand
+    return XR_SUCCESS;
+  }
+  const auto it = std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath);
+  if (it == a->subactions.end())
+    return violation(fn, XR_ERROR_PATH_UNSUPPORTED,
+                     a->name + " has no subaction path " + path_text(*s->instance, info->subactionPath));
+  *out = &a->states[static_cast<std::size_t>(it - a->subactions.begin())];
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetActionStateBoolean(XrSession h, const XrActionStateGetInfo* info, XrActionStateBoolean* state) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetActionStateBoolean";
+  Action::State* st = nullptr;
+  if (const XrResult r = state_slot(session_of(h), info, XR_ACTION_TYPE_BOOLEAN_INPUT, fn, &st); XR_FAILED(r))
+    return r;
+  if (state == nullptr || state->type != XR_TYPE_ACTION_STATE_BOOLEAN)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped state");
+  state->currentState = st->value > 0.5f ? XR_TRUE : XR_FALSE;
+  state->changedSinceLastSync = st->changed ? XR_TRUE : XR_FALSE;
+  state->lastChangeTime = st->last_change;
+  state->isActive = st->active ? XR_TRUE : XR_FALSE;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetActionStateFloat(XrSession h, const XrActionStateGetInfo* info, XrActionStateFloat* state) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetActionStateFloat";
+  Action::State* st = nullptr;
+  if (const XrResult r = state_slot(session_of(h), info, XR_ACTION_TYPE_FLOAT_INPUT, fn, &st); XR_FAILED(r))
+    return r;
+  if (state == nullptr || state->type != XR_TYPE_ACTION_STATE_FLOAT)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped state");
+  state->currentState = st->value;
+  state->changedSinceLastSync = st->changed ? XR_TRUE : XR_FALSE;
+  state->lastChangeTime = st->last_change;
+  state->isActive = st->active ? XR_TRUE : XR_FALSE;
+  return XR_SUCCESS;
+}
+
+// ---- XR_KHR_convert_timespec_time ----------------------------------------------------------
+
+XrResult XRAPI_CALL ConvertTimeToTimespecTime(XrInstance h, XrTime time, timespec* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrConvertTimeToTimespecTimeKHR";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (!inst->timespec) return violation(fn, XR_ERROR_FUNCTION_UNSUPPORTED, "extension not enabled");
+  if (time <= 0) return violation(fn, XR_ERROR_TIME_INVALID, std::to_string(time));
+  const std::int64_t mono = to_mono(time);
+  out->tv_sec = static_cast<time_t>(mono / 1'000'000'000);
+  out->tv_nsec = static_cast<long>(mono % 1'000'000'000);
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL ConvertTimespecTimeToTime(XrInstance h, const timespec* ts, XrTime* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrConvertTimespecTimeToTimeKHR";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (!inst->timespec) return violation(fn, XR_ERROR_FUNCTION_UNSUPPORTED, "extension not enabled");
+  const XrTime t = to_xr(std::int64_t{ts->tv_sec} * 1'000'000'000 + ts->tv_nsec);
+  if (t <= 0) return violation(fn, XR_ERROR_TIME_INVALID, "before the runtime's epoch");
+  *out = t;
+  return XR_SUCCESS;
+}
+
+// ---- dispatch -------------------------------------------------------------------------------
+
+XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVoidFunction* function);
+
+template <class F>
+PFN_xrVoidFunction fn_ptr(F f) {
+  return reinterpret_cast<PFN_xrVoidFunction>(f);
+}
+
+XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVoidFunction* function) {
+  if (name == nullptr || function == nullptr) return XR_ERROR_VALIDATION_FAILURE;
+  *function = nullptr;
+  const std::string n = name;
+  // Without an instance only these may be asked for (specification,
+  // xrGetInstanceProcAddr).
+  static const std::map<std::string, PFN_xrVoidFunction> global = {
+      {"xrGetInstanceProcAddr", fn_ptr(&GetInstanceProcAddr)},
+      {"xrEnumerateInstanceExtensionProperties", fn_ptr(&EnumerateInstanceExtensionProperties)},
+      {"xrCreateInstance", fn_ptr(&CreateInstance)},
+  };
+  static const std::map<std::string, PFN_xrVoidFunction> table = {
+      {"xrDestroyInstance", fn_ptr(&DestroyInstance)},
+      {"xrGetInstanceProperties", fn_ptr(&GetInstanceProperties)},
+      {"xrResultToString", fn_ptr(&ResultToString)},
+      {"xrStructureTypeToString", fn_ptr(&StructureTypeToString)},
+      {"xrPollEvent", fn_ptr(&PollEvent)},
+      {"xrGetSystem", fn_ptr(&GetSystem)},
+      {"xrGetSystemProperties", fn_ptr(&GetSystemProperties)},
+      {"xrEnumerateViewConfigurationViews", fn_ptr(&EnumerateViewConfigurationViews)},
+      {"xrGetVulkanGraphicsRequirements2KHR", fn_ptr(&GetVulkanGraphicsRequirements2)},
+      {"xrCreateVulkanInstanceKHR", fn_ptr(&CreateVulkanInstance)},
+      {"xrGetVulkanGraphicsDevice2KHR", fn_ptr(&GetVulkanGraphicsDevice2)},
+      {"xrCreateVulkanDeviceKHR", fn_ptr(&CreateVulkanDevice)},
+      {"xrCreateSession", fn_ptr(&CreateSession)},
+      {"xrDestroySession", fn_ptr(&DestroySession)},
+      {"xrBeginSession", fn_ptr(&BeginSession)},
+      {"xrEndSession", fn_ptr(&EndSession)},
+      {"xrRequestExitSession", fn_ptr(&RequestExitSession)},
+      {"xrCreateReferenceSpace", fn_ptr(&CreateReferenceSpace)},
+      {"xrCreateActionSpace", fn_ptr(&CreateActionSpace)},
+      {"xrDestroySpace", fn_ptr(&DestroySpace)},
+      {"xrLocateSpace", fn_ptr(&LocateSpace)},
+      {"xrLocateViews", fn_ptr(&LocateViews)},
+      {"xrEnumerateSwapchainFormats", fn_ptr(&EnumerateSwapchainFormats)},
+      {"xrCreateSwapchain", fn_ptr(&CreateSwapchain)},
+      {"xrDestroySwapchain", fn_ptr(&DestroySwapchain)},
+      {"xrEnumerateSwapchainImages", fn_ptr(&EnumerateSwapchainImages)},
+      {"xrAcquireSwapchainImage", fn_ptr(&AcquireSwapchainImage)},
+      {"xrWaitSwapchainImage", fn_ptr(&WaitSwapchainImage)},
+      {"xrReleaseSwapchainImage", fn_ptr(&ReleaseSwapchainImage)},
+      {"xrWaitFrame", fn_ptr(&WaitFrame)},
+      {"xrBeginFrame", fn_ptr(&BeginFrame)},
+      {"xrEndFrame", fn_ptr(&EndFrame)},
+      {"xrStringToPath", fn_ptr(&StringToPath)},
+      {"xrPathToString", fn_ptr(&PathToString)},
+      {"xrCreateActionSet", fn_ptr(&CreateActionSet)},
+      {"xrDestroyActionSet", fn_ptr(&DestroyActionSet)},
+      {"xrCreateAction", fn_ptr(&CreateAction)},
+      {"xrSuggestInteractionProfileBindings", fn_ptr(&SuggestInteractionProfileBindings)},
+      {"xrAttachSessionActionSets", fn_ptr(&AttachSessionActionSets)},
+      {"xrSyncActions", fn_ptr(&SyncActions)},
+      {"xrGetActionStateBoolean", fn_ptr(&GetActionStateBoolean)},
+      {"xrGetActionStateFloat", fn_ptr(&GetActionStateFloat)},
+      {"xrConvertTimeToTimespecTimeKHR", fn_ptr(&ConvertTimeToTimespecTime)},
+      {"xrConvertTimespecTimeToTimeKHR", fn_ptr(&ConvertTimespecTimeToTime)},
+  };
+  if (const auto it = global.find(n); it != global.end()) {
+    *function = it->second;
+    return XR_SUCCESS;
+  }
+  if (h == XR_NULL_HANDLE) return XR_ERROR_HANDLE_INVALID;
+  {
+    std::lock_guard lock(g_mutex);
+    if (instance_of(h) == nullptr) return XR_ERROR_HANDLE_INVALID;
+  }
+  const auto it = table.find(n);
+  if (it == table.end()) return XR_ERROR_FUNCTION_UNSUPPORTED;
+  *function = it->second;
+  return XR_SUCCESS;
+}
+
+}  // namespace
+}  // namespace curvlab::test_runtime
+
+extern "C" XrResult xrNegotiateLoaderRuntimeInterface(const XrNegotiateLoaderInfo* loaderInfo,
+                                                      XrNegotiateRuntimeRequest* runtimeRequest) {
+  using namespace curvlab::test_runtime;
+  if (loaderInfo == nullptr || runtimeRequest == nullptr ||
+      loaderInfo->structType != XR_LOADER_INTERFACE_STRUCT_LOADER_INFO ||
+      loaderInfo->structVersion != kLoaderInfoVersion || loaderInfo->structSize != sizeof(XrNegotiateLoaderInfo) ||
+      runtimeRequest->structType != XR_LOADER_INTERFACE_STRUCT_RUNTIME_REQUEST ||
+      runtimeRequest->structVersion != kRuntimeRequestVersion ||
+      runtimeRequest->structSize != sizeof(XrNegotiateRuntimeRequest))
+    return XR_ERROR_INITIALIZATION_FAILED;
+  if (loaderInfo->minInterfaceVersion > kRuntimeInterfaceVersion ||
+      loaderInfo->maxInterfaceVersion < kRuntimeInterfaceVersion ||
+      loaderInfo->minApiVersion > XR_CURRENT_API_VERSION ||
+      XR_VERSION_MAJOR(loaderInfo->maxApiVersion) < 1)
+    return XR_ERROR_INITIALIZATION_FAILED;
+  runtimeRequest->runtimeInterfaceVersion = kRuntimeInterfaceVersion;
+  runtimeRequest->runtimeApiVersion = XR_CURRENT_API_VERSION;
+  runtimeRequest->getInstanceProcAddr = &GetInstanceProcAddr;
+  return XR_SUCCESS;
+}

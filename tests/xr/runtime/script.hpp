@@ -1,0 +1,85 @@
+// What the test runtime's scripted headset does, read from the environment
+// (variables documented at the top of runtime.cpp): where the head and hands
+// are at a given time, which controller inputs are held, when focus is lost
+// and regained, and when the runtime asks the application to exit. Pure
+// functions of time, so the poses the runtime hands out can be logged and
+// checked against what the application stored.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::test_runtime {
+
+struct Vec3 {
+  double x = 0.0, y = 0.0, z = 0.0;
+};
+
+// Unit quaternion, OpenXR's order of members (x, y, z, w).
+struct Quat {
+  double x = 0.0, y = 0.0, z = 0.0, w = 1.0;
+};
+
+struct Pose {
+  Quat orientation;
+  Vec3 position_m;
+};
+
+Quat multiply(const Quat& a, const Quat& b);
+Vec3 rotate(const Quat& q, const Vec3& v);
+Quat conjugate(const Quat& q);
+Pose compose(const Pose& a, const Pose& b);  // a ∘ b: b expressed in a's frame
+Pose inverse(const Pose& p);
+
+// One scripted controller press: `button` of `hand` goes down at `at_s`
+// (seconds after the session first became FOCUSED), up `hold_s` later, and
+// again every `every_s` (0: once).
+struct Press {
+  std::string hand;    // "left" or "right"
+  std::string button;  // a b x y menu trigger squeeze
+  double at_s = 0.0;
+  double every_s = 0.0;
+  double hold_s = 0.08;
+};
+
+// A spell without input focus: FOCUSED → VISIBLE at `at_s`, back after `for_s`.
+struct Unfocus {
+  double at_s = 0.0;
+  double for_s = 0.0;
+};
+
+struct Script {
+  std::vector<Press> presses;
+  std::vector<Unfocus> unfocus;
+  std::optional<double> exit_at_s;  // request exit (STOPPING) at this time
+  std::string capture_dir;          // left-eye PNGs of submitted frames
+  int capture_every = 1;            // every n-th submitted frame
+  std::string log_path;             // what the runtime handed out and saw
+  double refresh_hz = 90.0;
+  std::uint32_t eye_width_px = 320;
+  std::uint32_t eye_height_px = 320;
+};
+
+// Reads the CURVLAB_TEST_XR_* variables; a malformed one is an error naming
+// the variable and what was expected.
+std::optional<Script> read_script(std::string& error);
+
+// Head pose in STAGE space at time t_s (seconds on the runtime's clock): a
+// person standing 0.35 m behind the near edge of a 1 m table centred at the
+// origin, eyes 1.6 m up, looking 25° down, swaying slowly.
+Pose head_pose(double t_s);
+// Left (hand 0) or right (hand 1) grip pose: resting on the near edge.
+Pose hand_pose(int hand, double t_s);
+
+// Interpupillary distance of the scripted headset.
+inline constexpr double kIpdM = 0.064;
+
+// Whether `press` holds its button down at time t_s, and if so since when.
+std::optional<double> held_since(const Press& press, double t_s);
+// The last time at or before t_s at which `press` changed its button (down
+// or up); nullopt before its first press.
+std::optional<double> last_change(const Press& press, double t_s);
+
+}  // namespace curvlab::test_runtime
