@@ -288,3 +288,38 @@ TEST(Interruptions, UnknownLossPolicyIsRejectedWithTheAllowedValues) {
   EXPECT_NE(message.find("on_loss"), std::string::npos) << message;
   EXPECT_NE(message.find("\"repeat\", \"flag\", \"abort\""), std::string::npos) << message;
 }
+
+// A pause in the inter-trial interval (the headset's focus lost between
+// trials) holds the session until it ends: the next trial starts only after
+// the resume, nothing is repeated, and the pause is logged with its length.
+TEST(Interruptions, APauseBetweenTrialsHoldsTheSessionUntilResumed) {
+  std::int64_t paused_at = -1;
+  std::int64_t resumed_at = -1;
+  const auto out = run_demo("iti_pause", "", true, [&](ScriptedBackend& b) {
+    b.inputs = [&](const rn::FrameTiming& t, const std::string& phase, std::vector<rn::InputEvent>&) {
+      if (paused_at < 0 && phase == "iti") {
+        paused_at = t.now_ns;
+        return rn::BackendSignal::pause;
+      }
+      if (paused_at >= 0 && resumed_at < 0 && t.now_ns >= paused_at + 700'000'000) {
+        resumed_at = t.now_ns;
+        return rn::BackendSignal::resume;
+      }
+      return rn::BackendSignal::none;
+    };
+  });
+  ASSERT_FALSE(out.db.empty());
+  ASSERT_GT(resumed_at, paused_at);
+  EXPECT_EQ(out.summary.trials_completed, 8);
+  EXPECT_EQ(out.summary.attempts_repeated, 0);
+  EXPECT_EQ(query(out.db, "SELECT COUNT(*) FROM events WHERE kind = 'trial_aborted'")[0][0], "0");
+  const auto pauses = query(out.db, "SELECT json_extract(detail, '$.phase') FROM events WHERE kind = 'paused'");
+  EXPECT_EQ(pauses, (Rows{{"iti"}}));
+  const auto held = query(out.db, "SELECT json_extract(detail, '$.paused_ms') FROM events WHERE kind = 'unpaused'");
+  ASSERT_EQ(held.size(), 1u);
+  EXPECT_NEAR(std::stod(held[0][0]), 700.0, 15.0);
+  // Trial 1 began after the resume, and no frame of the session was shown
+  // as a trial phase while paused.
+  EXPECT_GT(std::stoll(query(out.db, "SELECT onset_ns FROM trials WHERE trial_index = 1")[0][0]), resumed_at);
+  EXPECT_EQ(query(out.db, "SELECT status FROM sessions")[0][0], "completed");
+}

@@ -412,6 +412,14 @@ class Session {
             advance = true;
         first_frame = false;
         if (f.signal == BackendSignal::quit) return Outcome::quit;
+        if (f.signal == BackendSignal::pause) {
+          // The page stays; keys pressed while paused or held from then do not count.
+          if (hold(phase, trial_id) == Outcome::quit) return Outcome::quit;
+          advance = false;
+          first_frame = true;
+          if (!begin(f)) return Outcome::quit;
+          continue;
+        }
         end(f, overlay, false, trial_id);
         if (advance) break;
         if (!begin(f)) return Outcome::quit;
@@ -708,12 +716,19 @@ class Session {
       }
       check(store_.complete_trial(r));
 
-      // Inter-trial interval: nothing on screen.
-      const std::int64_t iti_end = clock_.now_ns() + tl.iti_ms * 1'000'000;
+      // Inter-trial interval: nothing on screen. A pause here holds the
+      // session; the interval starts again after it.
+      std::int64_t iti_end = clock_.now_ns() + tl.iti_ms * 1'000'000;
       scene_->show("iti", false);
       for (;;) {
         Frame g;
         if (!begin(g)) return Outcome::quit;
+        if (g.signal == BackendSignal::pause) {
+          if (hold("iti", trial_id) == Outcome::quit) return Outcome::quit;
+          scene_->show("iti", false);
+          iti_end = clock_.now_ns() + tl.iti_ms * 1'000'000;
+          continue;
+        }
         end(g, Overlay{"iti", line, false}, false, std::nullopt);
         if (g.signal == BackendSignal::quit) return Outcome::quit;
         if (g.timing.now_ns >= iti_end) break;
@@ -725,7 +740,17 @@ class Session {
   }
 
   // After an aborted attempt: wait for tracking (or the resume signal).
-  Outcome wait_until_ready(const std::string& reason, std::int64_t trial_id) {
+  // A pause outside a trial's attempt (instruction pages, breaks, the
+  // inter-trial interval): nothing to repeat, the session waits for resume.
+  Outcome hold(const std::string& phase, std::optional<std::int64_t> trial_id) {
+    const std::int64_t from = clock_.now_ns();
+    event(trial_id, "paused", Json{{"phase", phase}});
+    if (wait_until_ready("pause", trial_id) == Outcome::quit) return Outcome::quit;
+    event(trial_id, "unpaused", Json{{"phase", phase}, {"paused_ms", static_cast<double>(clock_.now_ns() - from) * 1e-6}});
+    return Outcome::done;
+  }
+
+  Outcome wait_until_ready(const std::string& reason, std::optional<std::int64_t> trial_id) {
     if (reason == "pause") check(store_.set_session_status(session_id_, data::SessionStatus::paused));
     scene_->show("", false);
     for (;;) {
