@@ -2,114 +2,29 @@
 // that a test decides when the head is lost, when a recenter comes and which
 // keys are pressed when: what the runner does with anticipations, tracking
 // loss under each `tracking.on_loss` policy, and `tracking.max_attempts`.
-#include "session_db.hpp"
+#include "in_process.hpp"
 
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
-#include "curvlab/harness/protocol/loader.hpp"
-#include "curvlab/harness/runner/headless.hpp"
-#include "curvlab/harness/runner/session.hpp"
-#include "curvlab/harness/runner/stimulus.hpp"
-
-#include <gtest/gtest.h>
-
-#include <fstream>
-#include <functional>
-#include <sstream>
 
 namespace {
 
 using namespace curvlab;
 using curvlab::testing::fresh_dir;
+using curvlab::testing::Outcome;
 using curvlab::testing::query;
+using curvlab::testing::run_protocol;
+using curvlab::testing::ScriptedBackend;
 namespace rn = harness::runner;
 namespace pr = harness::protocol;
 
 using Rows = std::vector<std::vector<std::string>>;
 
-// Forwards to a headless backend; the test's hooks may invalidate the head,
-// add inputs and raise signals. `phase` is the phase of the last submitted
-// frame, as a window would show it.
-class ScriptedBackend final : public rn::Backend {
- public:
-  explicit ScriptedBackend(rn::HeadlessBackend& inner) : inner_(inner) {}
-
-  std::function<bool(std::int64_t t_ns)> head_valid = [](std::int64_t) { return true; };
-  std::function<rn::BackendSignal(const rn::FrameTiming&, const std::string& phase,
-                                  std::vector<rn::InputEvent>&)>
-      inputs;
-
-  [[nodiscard]] rn::BackendInfo info() const override { return inner_.info(); }
-  std::optional<rn::FrameTiming> begin_frame() override {
-    auto t = inner_.begin_frame();
-    if (t) timing_ = *t;
-    return t;
-  }
-  geometry::LabFrame poses(const rn::FrameTiming& frame) override {
-    auto p = inner_.poses(frame);
-    p[geometry::Device::head].valid = head_valid(frame.now_ns);
-    return p;
-  }
-  rn::BackendSignal poll_input(std::vector<rn::InputEvent>& out) override {
-    const auto signal = inner_.poll_input(out);
-    if (inputs) {
-      const auto mine = inputs(timing_, phase_, out);
-      if (mine != rn::BackendSignal::none) return mine;
-    }
-    return signal;
-  }
-  renderer::StereoRig rig(const rn::FrameTiming& frame, double ipd_m) override {
-    return inner_.rig(frame, ipd_m);
-  }
-  renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
-                              const rn::Overlay& overlay, bool draw) override {
-    phase_ = overlay.phase;
-    return inner_.submit(scene, frame, overlay, draw);
-  }
-
- private:
-  rn::HeadlessBackend& inner_;
-  rn::FrameTiming timing_;
-  std::string phase_;
-};
-
-struct Outcome {
-  std::string db;
-  rn::SessionSummary summary;
-};
-
 // The demo protocol (8 trials: 100 ms fixation, 300 ms stimulus, 2.5 s
 // response window) with `extra` appended, run to the end.
 Outcome run_demo(const std::string& name, const std::string& extra, bool observer,
                  const std::function<void(ScriptedBackend&)>& script) {
-  const std::string path = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf() << '\n' << extra;
-  auto loaded = pr::load_protocol_text(text.str(), path);
-  EXPECT_TRUE(loaded.ok()) << (loaded.diagnostics.empty() ? "" : pr::format_diagnostic(loaded.diagnostics[0]));
-  if (!loaded.ok()) return {};
-  const auto& p = *loaded.protocol;
-  rn::HeadlessOptions ho;
-  ho.no_gpu = true;
-  ho.refresh_hz = p.refresh_hz;
-  ho.table = rn::nominal_calibration(p.session_settings());
-  auto made = rn::HeadlessBackend::create(ho);
-  EXPECT_TRUE(std::holds_alternative<std::unique_ptr<rn::HeadlessBackend>>(made));
-  if (!std::holds_alternative<std::unique_ptr<rn::HeadlessBackend>>(made)) return {};
-  auto& headless = *std::get<std::unique_ptr<rn::HeadlessBackend>>(made);
-  ScriptedBackend backend(headless);
-  script(backend);
-  rn::RunOptions o;
-  o.participant = "T01";
-  if (observer) o.observer = rn::ObserverParams{};
-  o.drawing = rn::FrameDrawing::none;
-  const auto db = (fresh_dir("interrupt_" + name) / "s.sqlite").string();
-  auto result = rn::run_session(p, text.str(), db, o, backend, headless.clock());
-  EXPECT_TRUE(std::holds_alternative<rn::SessionSummary>(result))
-      << std::get<rn::RunError>(result).message;
-  if (!std::holds_alternative<rn::SessionSummary>(result)) return {};
-  return {db, std::get<rn::SessionSummary>(result)};
+  return run_protocol("demo", name, extra, observer, script);
 }
 
 // The head untracked in [from, to) of session time, in milliseconds.
