@@ -105,7 +105,7 @@ void run_xr_check(bool as_json) {
   doc["max_swapchain"] = std::to_string(r.max_swapchain_width) + "x" +
                          std::to_string(r.max_swapchain_height);
   doc["api_layers"] = r.api_layers;
-  doc["extensions"] = r.extensions.size();
+  doc["extensions"] = r.extensions;
   print_result(doc, as_json);
 }
 

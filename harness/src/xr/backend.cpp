@@ -144,6 +144,7 @@ class XrBackend final : public Backend {
       : options_(options), instance_(std::move(instance)) {}
   // Drains the event queue; false when the session must end.
   bool poll_events();
+  void leave_session();
   void on_state(SessionState next);
   void fail(const std::string& message);
   void end_frame(bool with_layer);
@@ -178,6 +179,7 @@ class XrBackend final : public Backend {
 
   XrFrameState frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
   bool frame_begun_ = false;
+  bool leaving_ = false;  // leave_session asked the runtime to end the session
   std::int64_t frame_index_ = 0;
   std::array<XrView, 2> views_{tagged<XrView>(XR_TYPE_VIEW), tagged<XrView>(XR_TYPE_VIEW)};
   bool views_valid_ = false;
@@ -396,7 +398,32 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
 XrBackend::~XrBackend() {
   // A frame the runner began but never submitted must still end.
   if (frame_begun_) end_frame(false);
+  leave_session();
   if (renderer_) renderer_->wait_idle();
+}
+
+// The runner is done with a session the runtime still runs: ask the runtime
+// to end it (xrRequestExitSession), keep frames flowing without layers while
+// it steps down to STOPPING, and end it there, so the runtime sees an
+// orderly exit rather than a running session destroyed. Bounded to 2 s.
+void XrBackend::leave_session() {
+  if (failed_ || !state_.session_running()) return;
+  if (const XrResult r = xrRequestExitSession(session_.get()); XR_FAILED(r)) {
+    std::cerr << "curvlab: xr: " << failure_of(r, "xrRequestExitSession").message << '\n';
+    return;
+  }
+  leaving_ = true;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (!poll_events() || !state_.session_running()) break;
+    auto wait_info = tagged<XrFrameWaitInfo>(XR_TYPE_FRAME_WAIT_INFO);
+    frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
+    if (XR_FAILED(xrWaitFrame(session_.get(), &wait_info, &frame_state_))) break;
+    auto begin_info = tagged<XrFrameBeginInfo>(XR_TYPE_FRAME_BEGIN_INFO);
+    if (XR_FAILED(xrBeginFrame(session_.get(), &begin_info))) break;
+    frame_begun_ = true;
+    end_frame(false);
+  }
 }
 
 BackendInfo XrBackend::info() const {
@@ -415,7 +442,9 @@ void XrBackend::fail(const std::string& message) {
 void XrBackend::on_state(SessionState next) {
   const RunMode before = state_.mode();
   const SessionUpdate u = state_.on_state_changed(next);
-  if (!u.message.empty()) std::cerr << "curvlab: xr: " << u.message << '\n';
+  // While leaving on our own request, the step-down is expected: no pause
+  // or exit messages for the experimenter.
+  if (!u.message.empty() && !leaving_) std::cerr << "curvlab: xr: " << u.message << '\n';
   if (u.begin_session) {
     auto info = tagged<XrSessionBeginInfo>(XR_TYPE_SESSION_BEGIN_INFO);
     info.primaryViewConfigurationType = kViewConfig;
