@@ -25,6 +25,7 @@
 #include <chrono>
 #include <deque>
 #include <iostream>
+#include <limits>
 #include <thread>
 #include <utility>
 
@@ -145,6 +146,7 @@ class XrBackend final : public Backend {
   // Drains the event queue; false when the session must end.
   bool poll_events();
   void leave_session();
+  std::int64_t monotonic_to_session();
   void on_state(SessionState next);
   void fail(const std::string& message);
   void end_frame(bool with_layer);
@@ -180,6 +182,8 @@ class XrBackend final : public Backend {
   XrFrameState frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
   bool frame_begun_ = false;
   bool leaving_ = false;  // leave_session asked the runtime to end the session
+  std::int64_t offset_ns_ = 0;      // monotonic_to_session's estimate
+  std::int64_t offset_at_ns_ = -1;  // when it was made (CLOCK_MONOTONIC); -1 none
   std::int64_t frame_index_ = 0;
   std::array<XrView, 2> views_{tagged<XrView>(XR_TYPE_VIEW), tagged<XrView>(XR_TYPE_VIEW)};
   bool views_valid_ = false;
@@ -498,12 +502,32 @@ bool XrBackend::poll_events() {
   return !failed_ && state_.mode() != RunMode::Exit;
 }
 
+// CLOCK_MONOTONIC → session clock. Reading the two clocks one after the
+// other adds any preemption between the reads to the result, so the offset
+// comes from the tightest of a few bracketed reads (monotonic, session,
+// monotonic), kept for 5 s.
+std::int64_t XrBackend::monotonic_to_session() {
+  const std::int64_t mono = monotonic_now_ns();
+  if (offset_at_ns_ >= 0 && mono - offset_at_ns_ < 5'000'000'000) return offset_ns_;
+  std::int64_t narrowest = std::numeric_limits<std::int64_t>::max();
+  for (int i = 0; i < 5; ++i) {
+    const std::int64_t before = monotonic_now_ns();
+    const std::int64_t session = options_.clock->now_ns();
+    const std::int64_t after = monotonic_now_ns();
+    if (after - before < narrowest) {
+      narrowest = after - before;
+      offset_ns_ = session - (before + (after - before) / 2);
+    }
+  }
+  offset_at_ns_ = mono;
+  return offset_ns_;
+}
+
 std::int64_t XrBackend::to_session_ns(XrTime t) {
   if (to_timespec_ != nullptr) {
     timespec ts{};
     if (XR_SUCCEEDED(to_timespec_(instance_.handle(), t, &ts)))
-      return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec - monotonic_now_ns() +
-             options_.clock->now_ns();
+      return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec + monotonic_to_session();
   }
   return clock_map_.to_session(t);
 }
