@@ -68,7 +68,9 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "pr.sha256 AS protocol_sha256, b.block_index, b.name AS block_name, b.is_practice,",
     "t.trial_index, t.trial_in_block, t.status, t.attempt, t.onset_ns, t.response_ns,",
     "t.rt_ns, t.response, t.response_device, t.completed_utc, t.conditions, t.stimulus,",
-    "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct",
+    "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct,",
+    "(SELECT sum(json_extract(e.detail, '$.lost_ms')) FROM events e WHERE e.trial_id = t.trial_id",
+    "   AND e.kind = 'tracking_flagged') AS tracking_lost_ms",
     "FROM trials t",
     "JOIN sessions se ON se.session_id = t.session_id",
     "JOIN participants p ON p.participant_id = se.participant_id",
@@ -85,7 +87,7 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "SELECT s.session_id, p.pseudonym AS participant, s.session_number,",
     "pr.name AS protocol_name, pr.sha256 AS protocol_sha256, s.software_version,",
     "s.software_commit, s.backend, s.renderer_device, s.renderer_driver,",
-    "s.display_refresh_hz, CAST(s.seed AS TEXT) AS seed, s.table_calibration, s.status,",
+    "s.display_refresh_hz, printf('%llu', s.seed) AS seed, s.table_calibration, s.status,",
     "s.started_utc, s.ended_utc,",
     "(SELECT count(*) FROM trials t WHERE t.session_id = s.session_id) AS trials_planned,",
     "(SELECT count(*) FROM trials t WHERE t.session_id = s.session_id",
@@ -229,12 +231,12 @@ read_bids_motion <- function(dir) {
 normalise_trials <- function(trials) {
   int_cols <- c("session_id", "session_number", "block_index", "is_practice", "trial_index",
                 "trial_in_block", "attempt", "step_index", "is_reversal", "trial_id")
-  num_cols <- c("onset_ns", "response_ns", "rt_ns", "intensity")
+  num_cols <- c("onset_ns", "response_ns", "rt_ns", "intensity", "tracking_lost_ms")
   for (col in intersect(int_cols, names(trials))) trials[[col]] <- as.integer(trials[[col]])
   for (col in intersect(num_cols, names(trials))) trials[[col]] <- as.numeric(trials[[col]])
   for (col in grep("^cond_", names(trials), value = TRUE))
     trials[[col]] <- as.character(trials[[col]])
-  for (col in c("staircase", "step_index", "intensity", "is_reversal"))
+  for (col in c("staircase", "step_index", "intensity", "is_reversal", "tracking_lost_ms"))
     if (!col %in% names(trials)) trials[[col]] <- NA
   if (!"is_practice" %in% names(trials)) trials$is_practice <- 0L
   if (!"cond_judged" %in% names(trials)) trials$cond_judged <- "stick"

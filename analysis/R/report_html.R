@@ -96,7 +96,12 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
     seed = s$seed, started_utc = s$started_utc, status = s$status,
     completed = paste0(s$trials_completed, " / ", s$trials_planned),
     no_answer = vapply(s$session_id, function(id)
-      sum(trials$session_id == id & trials$status == "completed" & no_answer(trials)), 0L))
+      sum(trials$session_id == id & trials$status == "completed" & no_answer(trials)), 0L),
+    # Given up after tracking loss or max_attempts (tracking.on_loss, docs/protocols.md).
+    aborted = vapply(s$session_id, function(id) sum(trials$session_id == id & trials$status == "aborted"), 0L),
+    # Completed with the head lost for longer than tracking.loss_ms (on_loss = "flag").
+    tracking_flagged = vapply(s$session_id, function(id)
+      sum(trials$session_id == id & trials$status == "completed" & !is.na(trials$tracking_lost_ms)), 0L))
 
   model_html <- vapply(models, function(m) {
     paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",

@@ -48,6 +48,32 @@ check(file.exists(file.path(out2, "staircases.png")) && png_ok(file.path(out2, "
       "staircase track figure written and not blank")
 check(file.exists(file.path(out2, "staircase_thresholds.csv")), "staircase thresholds table written")
 
+cat("Aborted and tracking-flagged trials are counted in the provenance\n")
+marked <- scratch("report_marked.sqlite")
+invisible(file.copy(db, marked, overwrite = TRUE))
+con <- DBI::dbConnect(RSQLite::SQLite(), marked)
+first <- DBI::dbGetQuery(con, paste("SELECT trial_id, session_id FROM trials WHERE status = 'completed'",
+                                    "AND session_id = 1 ORDER BY trial_id LIMIT 2"))
+invisible(DBI::dbExecute(con, paste("UPDATE trials SET status = 'aborted', response = NULL, response_ns = NULL,",
+                                    "rt_ns = NULL, response_device = NULL, completed_utc = NULL",
+                                    "WHERE trial_id = ?"), params = list(first$trial_id[1])))
+invisible(DBI::dbExecute(con, paste("INSERT INTO events (session_id, trial_id, t_ns, kind, detail)",
+                                    "VALUES (1, ?, 0, 'tracking_flagged', ?)"),
+                         params = list(first$trial_id[2], '{"lost_ms": 480, "spells": 1, "attempt": 1}')))
+DBI::dbDisconnect(con)
+out3 <- scratch("report_marked")
+r <- run(rscript, c(report_r, "--db", marked, "--out", out3, "--quiet"))
+check(r$status == 0, paste("exit 0:", paste(utils::tail(r$out, 3), collapse = " | ")))
+html3 <- paste(readLines(file.path(out3, "report.html"), warn = FALSE), collapse = "\n")
+rows <- regmatches(html3, gregexpr("<tr>.*?</tr>", html3))[[1]]
+header <- rows[grepl("tracking_flagged", rows)][1]
+cells <- function(row) regmatches(row, gregexpr("(?<=<t[hd]>)[^<]*", row, perl = TRUE))[[1]]
+session1 <- rows[which(rows == header) + 1]
+got <- stats::setNames(cells(session1), cells(header))
+check(!is.na(header) && got[["completed"]] == "167 / 168" && got[["aborted"]] == "1" &&
+        got[["tracking_flagged"]] == "1",
+      paste("session 1: 167 / 168 completed, 1 aborted, 1 flagged; got", paste(names(got), got, collapse = ", ")))
+
 cat("The blank-figure check can fail\n")
 blank <- scratch("blank.png")
 grDevices::png(blank, 800, 600); graphics::plot.new(); invisible(grDevices::dev.off())
