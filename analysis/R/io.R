@@ -69,14 +69,15 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "t.trial_index, t.trial_in_block, t.status, t.attempt, t.onset_ns, t.response_ns,",
     "t.rt_ns, t.response, t.response_device, t.completed_utc, t.conditions, t.stimulus,",
     "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct,",
-    "(SELECT sum(json_extract(e.detail, '$.lost_ms')) FROM events e WHERE e.trial_id = t.trial_id",
-    "   AND e.kind = 'tracking_flagged') AS tracking_lost_ms",
+    "tf.lost_ms AS tracking_lost_ms",
     "FROM trials t",
     "JOIN sessions se ON se.session_id = t.session_id",
     "JOIN participants p ON p.participant_id = se.participant_id",
     "JOIN protocols pr ON pr.protocol_id = se.protocol_id",
     "JOIN blocks b ON b.block_id = t.block_id",
     "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id",
+    "LEFT JOIN (SELECT trial_id, sum(json_extract(detail, '$.lost_ms')) AS lost_ms FROM events",
+    "   WHERE kind = 'tracking_flagged' GROUP BY trial_id) tf ON tf.trial_id = t.trial_id",
     "ORDER BY t.session_id, t.trial_index"))
   cond <- expand_json_column(raw_trials$conditions, "cond_", path, "trials.conditions")
   stim <- expand_json_column(raw_trials$stimulus, "stim_", path, "trials.stimulus")

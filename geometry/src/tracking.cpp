@@ -319,6 +319,17 @@ void Tracker::measure_coherence(const std::array<RigidPose, kDeviceCount>& lab,
   }
 }
 
+void Tracker::follow_own_motion(std::size_t device, const RigidPose& lab) {
+  if (!placed_once_[device]) {
+    out_.pose[device] = table_placement(static_cast<int>(device), lab);
+    placed_once_[device] = true;
+  } else {
+    const RigidPose delta = last_lab_[device].inverse() * lab;
+    out_.pose[device] = reorthonormalize(space_, out_.pose[device] * curved_from_rigid(space_, delta));
+  }
+  last_lab_[device] = lab;
+}
+
 namespace {
 
 // Naive tracking (paper, "the problem"): every device's motion in its own
@@ -335,15 +346,7 @@ class NaiveTracker final : public Tracker {
              const std::array<bool, kDeviceCount>& ok) override {
     for (std::size_t i = 0; i < kDeviceCount; ++i) {
       out_.tracked[i] = ok[i];
-      if (!ok[i]) continue;
-      if (!placed_once_[i]) {
-        out_.pose[i] = table_placement(static_cast<int>(i), lab[i]);
-        placed_once_[i] = true;
-      } else {
-        const RigidPose delta = last_lab_[i].inverse() * lab[i];
-        out_.pose[i] = reorthonormalize(space_, out_.pose[i] * curved_from_rigid(space_, delta));
-      }
-      last_lab_[i] = lab[i];
+      if (ok[i]) follow_own_motion(i, lab[i]);
     }
   }
 };
@@ -361,17 +364,7 @@ class HeadAnchoredTracker final : public Tracker {
  private:
   void place(const std::array<RigidPose, kDeviceCount>& lab,
              const std::array<bool, kDeviceCount>& ok) override {
-    if (ok[kHead]) {
-      if (!placed_once_[kHead]) {
-        out_.pose[kHead] = table_placement(kHead, lab[kHead]);
-        placed_once_[kHead] = true;
-      } else {
-        const RigidPose delta = last_lab_[kHead].inverse() * lab[kHead];
-        out_.pose[kHead] =
-            reorthonormalize(space_, out_.pose[kHead] * curved_from_rigid(space_, delta));
-      }
-      last_lab_[kHead] = lab[kHead];
-    }
+    if (ok[kHead]) follow_own_motion(kHead, lab[kHead]);
     out_.tracked[kHead] = ok[kHead];
     for (std::size_t h = 1; h < kDeviceCount; ++h) {
       // A hand needs the head in the same frame; otherwise it holds.

@@ -32,6 +32,17 @@ void writes_before_transfer(const vk::raii::CommandBuffer& cb) {
                      {}, barrier, {}, {});
 }
 
+// The blit of all of `src` onto the rectangle from (x0, y0) to (x1, y1).
+vk::ImageBlit blit_onto(vk::Extent2D src, std::int32_t x0, std::int32_t y0, std::int32_t x1, std::int32_t y1) {
+  return vk::ImageBlit{
+      .srcSubresource = kColorLayer,
+      .srcOffsets = std::array<vk::Offset3D, 2>{
+          vk::Offset3D{0, 0, 0}, vk::Offset3D{static_cast<std::int32_t>(src.width),
+                                              static_cast<std::int32_t>(src.height), 1}},
+      .dstSubresource = kColorLayer,
+      .dstOffsets = std::array<vk::Offset3D, 2>{vk::Offset3D{x0, y0, 0}, vk::Offset3D{x1, y1, 1}}};
+}
+
 // The blit that shows `src` as large as fits in the rectangle, centred,
 // keeping its aspect ratio.
 vk::ImageBlit letterbox(vk::Extent2D src, std::int32_t x0, std::int32_t y0, std::uint32_t w,
@@ -42,26 +53,11 @@ vk::ImageBlit letterbox(vk::Extent2D src, std::int32_t x0, std::int32_t y0, std:
   const auto dh = static_cast<std::int32_t>(src.height * scale);
   const std::int32_t ox = x0 + (static_cast<std::int32_t>(w) - dw) / 2;
   const std::int32_t oy = y0 + (static_cast<std::int32_t>(h) - dh) / 2;
-  return vk::ImageBlit{
-      .srcSubresource = kColorLayer,
-      .srcOffsets = std::array<vk::Offset3D, 2>{
-          vk::Offset3D{0, 0, 0}, vk::Offset3D{static_cast<std::int32_t>(src.width),
-                                              static_cast<std::int32_t>(src.height), 1}},
-      .dstSubresource = kColorLayer,
-      .dstOffsets = std::array<vk::Offset3D, 2>{vk::Offset3D{ox, oy, 0},
-                                                vk::Offset3D{ox + dw, oy + dh, 1}}};
+  return blit_onto(src, ox, oy, ox + dw, oy + dh);
 }
 
 vk::ImageBlit whole(vk::Extent2D src, vk::Extent2D dst) {
-  return vk::ImageBlit{
-      .srcSubresource = kColorLayer,
-      .srcOffsets = std::array<vk::Offset3D, 2>{
-          vk::Offset3D{0, 0, 0}, vk::Offset3D{static_cast<std::int32_t>(src.width),
-                                              static_cast<std::int32_t>(src.height), 1}},
-      .dstSubresource = kColorLayer,
-      .dstOffsets = std::array<vk::Offset3D, 2>{
-          vk::Offset3D{0, 0, 0}, vk::Offset3D{static_cast<std::int32_t>(dst.width),
-                                              static_cast<std::int32_t>(dst.height), 1}}};
+  return blit_onto(src, 0, 0, static_cast<std::int32_t>(dst.width), static_cast<std::int32_t>(dst.height));
 }
 
 bool is_rgba8(vk::Format f) {

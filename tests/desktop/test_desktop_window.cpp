@@ -74,6 +74,24 @@ class DesktopWindow : public ::testing::Test {
     if (g_xserver == nullptr || !g_xserver->available())
       GTEST_SKIP() << "no X display: " << (g_xserver ? g_xserver->reason() : "not started");
   }
+  // Window options every test starts from: lavapipe, the test's clock.
+  DesktopOptions window(std::uint32_t eye_width_px, std::uint32_t eye_height_px) {
+    DesktopOptions o;
+    o.eye_width_px = eye_width_px;
+    o.eye_height_px = eye_height_px;
+    o.software = true;
+    o.clock = &clock_;
+    return o;
+  }
+  // The backend, or null with the factory's error reported as a failure.
+  static std::unique_ptr<desktop::DesktopBackend> open(const DesktopOptions& options) {
+    auto made = desktop::DesktopBackend::create(options);
+    if (auto* e = std::get_if<harness::runner::BackendError>(&made)) {
+      ADD_FAILURE() << e->message;
+      return nullptr;
+    }
+    return std::move(std::get<std::unique_ptr<desktop::DesktopBackend>>(made));
+  }
   devices::SteadyClock clock_;
 };
 
@@ -82,18 +100,13 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   const auto script = dir / "keys.txt";
   std::ofstream(script) << "# answer the first trial with key 2 after 40 ms\n2 40\n";
 
-  DesktopOptions options;
-  options.eye_width_px = 320;
-  options.eye_height_px = 320;
+  DesktopOptions options = window(320, 320);
   options.screenshot_dir = (dir / "shots").string();
   options.key_script = script.string();
-  options.software = true;
   options.validation = validation_layer_installed();
-  options.clock = &clock_;
-  auto made = desktop::DesktopBackend::create(options);
-  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<desktop::DesktopBackend>>(made))
-      << std::get<harness::runner::BackendError>(made).message;
-  auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(made);
+  const auto opened = open(options);
+  ASSERT_NE(opened, nullptr);
+  auto& backend = *opened;
   EXPECT_EQ(backend.info().name, "desktop");
   EXPECT_NE(backend.info().renderer_device.find("llvmpipe"), std::string::npos);
 
@@ -176,18 +189,13 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
 }
 
 TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
-  DesktopOptions options;
-  options.eye_width_px = 200;
-  options.eye_height_px = 150;
+  DesktopOptions options = window(200, 150);
   options.preview = harness::runner::DesktopPreview::right;
-  options.software = true;
   options.vsync = false;
   options.validation = validation_layer_installed();
-  options.clock = &clock_;
-  auto made = desktop::DesktopBackend::create(options);
-  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<desktop::DesktopBackend>>(made))
-      << std::get<harness::runner::BackendError>(made).message;
-  auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(made);
+  const auto opened = open(options);
+  ASSERT_NE(opened, nullptr);
+  auto& backend = *opened;
   auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::H3, renderer::SceneKind::stick, {});
   ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
   auto& s = std::get<renderer::StimulusScene>(stimulus);
@@ -241,16 +249,11 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
 TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
   if (std::system("command -v xdotool > /dev/null 2>&1") != 0)
     GTEST_SKIP() << "xdotool is not installed (apt-get install xdotool)";
-  DesktopOptions options;
-  options.eye_width_px = 64;
-  options.eye_height_px = 64;
-  options.software = true;
+  DesktopOptions options = window(64, 64);
   options.vsync = false;
-  options.clock = &clock_;
-  auto made = desktop::DesktopBackend::create(options);
-  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<desktop::DesktopBackend>>(made))
-      << std::get<harness::runner::BackendError>(made).message;
-  auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(made);
+  const auto opened = open(options);
+  ASSERT_NE(opened, nullptr);
+  auto& backend = *opened;
   renderer::Scene empty;
   auto frame = [&](std::vector<InputEvent>& events) {
     auto timing = backend.begin_frame();

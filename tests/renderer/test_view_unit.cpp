@@ -1,6 +1,8 @@
 // Pure tests of the renderer's math and plan (no device). Oracles are
 // independent closed forms in long double, written here, not calls back into
 // the code under test.
+#include "stimulus_fixtures.hpp"
+
 #include "curvlab/geometry/maps.hpp"
 #include "curvlab/renderer/plan.hpp"
 #include "curvlab/renderer/tiling.hpp"
@@ -12,30 +14,15 @@
 
 using namespace curvlab;
 using namespace curvlab::renderer;
+using curvlab::renderer::fixtures::frame_for;
+using curvlab::renderer::fixtures::make;
 using geometry::SpaceKind;
 
 namespace {
 
 constexpr long double kPiL = 3.141592653589793238462643383279502884L;
 
-StimulusScene make(SpaceKind kind, SceneKind scene, double yaw_rad = 0.0) {
-  StimulusOptions o;
-  o.yaw_rad = yaw_rad;
-  auto made = make_stimulus_scene(kind, scene, o);
-  EXPECT_TRUE(std::holds_alternative<StimulusScene>(made));
-  return std::get<StimulusScene>(std::move(made));
-}
 
-FrameDescription frame_for(const StimulusScene& s, ViewPreset preset, std::uint32_t px = 1024) {
-  FrameDescription f;
-  f.space = s.space;
-  f.settings = ViewSettings::preset(preset);
-  f.head = s.head;
-  f.rig = StereoRig::from_ipd(0.063, Fov::symmetric(std::numbers::pi / 2.0, 1.0));
-  f.width_px = px;
-  f.height_px = px;
-  return f;
-}
 
 // A point straight ahead (−z) at distance d metres, in long double.
 geometry::Point ahead(SpaceKind kind, long double rho, long double d) {

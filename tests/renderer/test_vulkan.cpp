@@ -1,5 +1,7 @@
 // Device tests on lavapipe (label "vulkan"), validation layer on: any
 // validation message fails the test.
+#include "stimulus_fixtures.hpp"
+
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/renderer.hpp"
 #include "curvlab/renderer/shader.hpp"
@@ -14,6 +16,8 @@
 
 using namespace curvlab;
 using namespace curvlab::renderer;
+using curvlab::renderer::fixtures::frame_for;
+using curvlab::renderer::fixtures::make;
 using geometry::SpaceKind;
 
 namespace {
@@ -35,24 +39,7 @@ class VulkanTest : public ::testing::Test {
   std::unique_ptr<Context> ctx_;
 };
 
-StimulusScene make(SpaceKind kind, SceneKind scene, double yaw_rad = 0.0) {
-  StimulusOptions o;
-  o.yaw_rad = yaw_rad;
-  auto made = make_stimulus_scene(kind, scene, o);
-  EXPECT_TRUE(std::holds_alternative<StimulusScene>(made));
-  return std::get<StimulusScene>(std::move(made));
-}
 
-FrameDescription frame_for(const StimulusScene& s, ViewPreset preset, std::uint32_t px) {
-  FrameDescription f;
-  f.space = s.space;
-  f.settings = ViewSettings::preset(preset);
-  f.head = s.head;
-  f.rig = StereoRig::from_ipd(0.063, Fov::symmetric(std::numbers::pi / 2.0, 1.0));
-  f.width_px = px;
-  f.height_px = px;
-  return f;
-}
 
 // True when every pixel equals the first (the cleared background).
 bool all_background(const Rgba8Image& img) {

@@ -29,6 +29,14 @@
 namespace curvlab::cli {
 namespace {
 
+// A runner error ({usage, message}) as the CLI's exit code: 2 for input a
+// person must fix, 1 otherwise.
+template <class Error>
+[[noreturn]] void raise(const Error& e) {
+  if (e.usage) throw UsageError(e.message);
+  throw RuntimeFailure(e.message);
+}
+
 namespace rn = curvlab::harness::runner;
 namespace pr = curvlab::harness::protocol;
 
@@ -200,10 +208,7 @@ void export_all(const std::string& db_path, std::int64_t session_id, const std::
 }
 
 void report(const rn::RunResult& result, const BackendArgs& a) {
-  if (const auto* e = std::get_if<rn::RunError>(&result)) {
-    if (e->usage) throw UsageError(e->message);
-    throw RuntimeFailure(e->message);
-  }
+  if (const auto* e = std::get_if<rn::RunError>(&result)) raise(*e);
   const auto& s = std::get<rn::SessionSummary>(result);
   Json doc;
   doc["db"] = s.db_path;
@@ -304,10 +309,7 @@ struct ResumeArgs {
 
 void resume_command(const ResumeArgs& a) {
   auto stored_v = rn::read_stored_session(a.db, a.session);
-  if (auto* e = std::get_if<rn::RunError>(&stored_v)) {
-    if (e->usage) throw UsageError(e->message);
-    throw RuntimeFailure(e->message);
-  }
+  if (auto* e = std::get_if<rn::RunError>(&stored_v)) raise(*e);
   const auto& stored = std::get<rn::StoredSession>(stored_v);
   auto loaded = pr::load_protocol_text(stored.protocol_text, stored.protocol_source);
   if (!loaded.ok())
@@ -444,10 +446,7 @@ struct ReplayArgs {
 void replay_command(ReplayArgs a) {
   a.request.frame_index = a.frame;
   auto r = rn::replay_frame(a.request);
-  if (auto* e = std::get_if<rn::ReplayError>(&r)) {
-    if (e->usage) throw UsageError(e->message);
-    throw RuntimeFailure(e->message);
-  }
+  if (auto* e = std::get_if<rn::ReplayError>(&r)) raise(*e);
   const auto& res = std::get<rn::ReplayResult>(r);
   Json doc;
   doc["frame_index"] = res.frame_index;

@@ -50,6 +50,14 @@ double incomplete_beta(double a, double b, double x) {
   return std::exp(log_front) * f / a;
 }
 
+// The virtual head of a participant standing at the nominal table, as the
+// protocol's tracking places it: where predictions view the stimulus from.
+geometry::Isometry standing_head(const World& world, const protocol::Settings& s) {
+  auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
+                                        physical_table(s, std::nullopt));
+  return tracker->update(standing_pose(nominal_calibration(s), 1.55, 0)).pose[0];
+}
+
 // The mean observer's P(positive) in one staircase condition, as a function
 // of the staircase's parameter; and the target crossings on [min, max].
 void locate_target(const protocol::PlannedTrial& t, const protocol::Judgement& j, const World& world,
@@ -57,13 +65,10 @@ void locate_target(const protocol::PlannedTrial& t, const protocol::Judgement& j
   std::size_t positive = 0;
   for (std::size_t k = 0; k < j.options.size(); ++k)
     if (j.options[k].value == j.positive) positive = k;
-  const auto fit = nominal_calibration(t.settings);
+  const geometry::Isometry head = standing_head(world, t.settings);  // the same for every value
   auto p_positive = [&](double x) {
     protocol::Settings s = t.settings;
     protocol::set_numeric_setting(s, j.parameter, x);
-    auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
-                                          physical_table(s, std::nullopt));
-    const auto head = tracker->update(standing_pose(fit, 1.55, 0)).pose[0];
     const double perceived = physical ? physical_sagitta_m(s)
                                       : perceived_sagitta_m(world, s, place_stimulus(world, s, head), head);
     return observer.choice_probabilities(perceived, j.options.size())[positive];
@@ -201,10 +206,7 @@ std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const
       auto made = make_world(t.settings);
       if (auto* e = std::get_if<std::string>(&made)) return *e;
       const World world = std::get<World>(made);
-      auto tracker = geometry::make_tracker(tracking_algorithm(t.settings), world.space, world.table,
-                                            physical_table(t.settings, std::nullopt));
-      const auto fit = nominal_calibration(t.settings);
-      const auto head = tracker->update(standing_pose(fit, 1.55, 0)).pose[0];
+      const geometry::Isometry head = standing_head(world, t.settings);
       const Placement placement = place_stimulus(world, t.settings, head);
       ConditionPrediction c;
       c.levels = t.levels;

@@ -242,19 +242,9 @@ std::variant<ProbeReport, XrFailure> probe(const std::string& application_name) 
 
   // The runtime provides the extension list, so this is where a missing
   // runtime first shows.
-  if (const XrResult r = xrEnumerateInstanceExtensionProperties(nullptr, 0, &count, nullptr);
-      XR_FAILED(r))
-    return failure(r, "xrEnumerateInstanceExtensionProperties");
-  std::vector<XrExtensionProperties> extensions(
-      count, tagged<XrExtensionProperties>(XR_TYPE_EXTENSION_PROPERTIES));
-  if (count > 0) {
-    if (const XrResult r =
-            xrEnumerateInstanceExtensionProperties(nullptr, count, &count, extensions.data());
-        XR_FAILED(r))
-      return failure(r, "xrEnumerateInstanceExtensionProperties");
-  }
-  for (std::uint32_t i = 0; i < count; ++i)
-    report.extensions.emplace_back(extensions[i].extensionName);
+  auto extensions = available_extensions();
+  if (auto* f = std::get_if<XrFailure>(&extensions)) return *f;
+  report.extensions = std::move(std::get<std::vector<std::string>>(extensions));
   if (std::find(report.extensions.begin(), report.extensions.end(), kVulkanEnable2) ==
       report.extensions.end())
     return failure(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");

@@ -205,6 +205,9 @@ class Tracker {
                      const std::array<bool, kDeviceCount>& ok) = 0;
   // Table-anchored placement of one device with the current correspondence.
   [[nodiscard]] Isometry table_placement(int device, const RigidPose& lab) const;
+  // Dead reckoning of one device: placed on the table the first time, then
+  // moved by its own lab motion since the last frame, applied in its frame.
+  void follow_own_motion(std::size_t device, const RigidPose& lab);
 
   TrackingAlgorithm algorithm_;
   Space space_;
