@@ -6,21 +6,6 @@
 
 namespace curvlab::data {
 
-const char* to_string(DataError::Kind kind) {
-  switch (kind) {
-    case DataError::Kind::io: return "io";
-    case DataError::Kind::read_only: return "read_only";
-    case DataError::Kind::disk_full: return "disk_full";
-    case DataError::Kind::newer_schema: return "newer_schema";
-    case DataError::Kind::not_curvlab: return "not_curvlab";
-    case DataError::Kind::corrupt: return "corrupt";
-    case DataError::Kind::busy: return "busy";
-    case DataError::Kind::bad_input: return "bad_input";
-    case DataError::Kind::not_found: return "not_found";
-  }
-  return "unknown";
-}
-
 DataError to_data_error(const SqliteFailure& failure, const std::string& path) {
   const std::string where = path + ": " + failure.what();
   switch (failure.code & 0xff) {
