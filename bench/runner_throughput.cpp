@@ -80,11 +80,11 @@ int main(int argc, char** argv) {
     o.lossless_logging = row.pace == rn::Pace::fast;
     const auto db = (tmp / ("run" + std::to_string(n++) + ".sqlite")).string();
     const auto result = rn::run_session(p, ss.str(), db, o, backend, backend.clock());
-    if (auto* e = std::get_if<rn::RunError>(&result)) {
-      std::fprintf(stderr, "%s\n", e->message.c_str());
+    if (!result) {
+      std::fprintf(stderr, "%s\n", result.error().message.c_str());
       return 1;
     }
-    const auto& s = std::get<rn::SessionSummary>(result);
+    const auto& s = result.value();
     const char* draw = row.drawing == rn::FrameDrawing::all ? "all" : row.drawing == rn::FrameDrawing::onset ? "onset" : "none";
     std::printf("%-20s %-8s %-6s %7lld %8lld %9.1f %8.2f %11.4f %11.4f %10.1f\n", row.protocol,
                 row.pace == rn::Pace::fast ? "fast" : "realtime", draw,

@@ -136,9 +136,9 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
     f.head = s.head;
     f.rig = backend.rig(*timing, 0.063);
     Overlay overlay;
-    overlay.phase = frames < 2 ? "fixation" : frames < 4 ? "stimulus" : "response";
+    overlay.phase = frames < 2 ? harness::runner::Phase::fixation : frames < 4 ? harness::runner::Phase::stimulus : harness::runner::Phase::response;
     overlay.text = "block 1 · trial 1 of 8 · E3 tourist";
-    overlay.waiting_for_input = overlay.phase == "response";
+    overlay.waiting_for_input = overlay.phase == harness::runner::Phase::response;
     const auto stats = backend.submit(s.scene, f, overlay, true);
     EXPECT_EQ(stats.views, 2);
   }

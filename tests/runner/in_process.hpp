@@ -59,7 +59,7 @@ class ScriptedBackend final : public rn::Backend {
   }
   renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
                               const rn::Overlay& overlay, bool draw) override {
-    phase_ = overlay.phase;
+    phase_ = std::string(rn::to_string(overlay.phase));
     return inner_.submit(scene, frame, overlay, draw);
   }
 
@@ -102,10 +102,9 @@ inline Outcome run_protocol(const std::string& protocol, const std::string& name
   o.drawing = rn::FrameDrawing::none;
   const auto db = (fresh_dir("in_process_" + name) / "s.sqlite").string();
   auto result = rn::run_session(p, text.str(), db, o, backend, headless.clock());
-  EXPECT_TRUE(std::holds_alternative<rn::SessionSummary>(result))
-      << std::get<rn::RunError>(result).message;
-  if (!std::holds_alternative<rn::SessionSummary>(result)) return {};
-  return {db, std::get<rn::SessionSummary>(result)};
+  EXPECT_TRUE(result.has_value()) << (result ? "" : result.error().message);
+  if (!result) return {};
+  return {db, result.value()};
 }
 
 }  // namespace curvlab::testing

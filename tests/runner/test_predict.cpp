@@ -27,8 +27,8 @@ TEST(Predict, TheProposedStudyFollowsThePerceptionModel) {
   o.participants = 12;
   o.simulations = 100;
   auto r = rn::predict(*loaded.protocol, o);
-  ASSERT_TRUE(std::holds_alternative<rn::Prediction>(r)) << std::get<std::string>(r);
-  const auto& pred = std::get<rn::Prediction>(r);
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  const auto& pred = r.value();
   auto level = [](const rn::ConditionPrediction& c, const std::string& f) {
     for (const auto& [n, l] : c.levels)
       if (n == f) return l;
@@ -116,8 +116,8 @@ TEST(Predict, PhysicalObserverStaircasesConvergeOnTheClosedForm) {
     o.observer.slope_per_m = 250.0;
     o.observer.lapse = 0.04;
     auto r = rn::predict(*loaded.protocol, o);
-    ASSERT_TRUE(std::holds_alternative<rn::Prediction>(r)) << std::get<std::string>(r);
-    const auto& pred = std::get<rn::Prediction>(r);
+    ASSERT_TRUE(r.has_value()) << r.error().message;
+    const auto& pred = r.value();
     ASSERT_EQ(pred.staircases.size(), 8u);  // 2 spaces × 2 projections × 2 staircases
     const double target = down == 1 ? 0.5 : std::sqrt(0.5);
     const double expected = normal_quantile((target - 0.02) / 0.96) / 250.0 - 0.01;
@@ -136,8 +136,8 @@ TEST(Predict, TheStickPseStaircasesConvergeInsideTheirRanges) {
   auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
   ASSERT_TRUE(loaded.ok());
   auto r = rn::predict(*loaded.protocol, rn::PredictOptions{});
-  ASSERT_TRUE(std::holds_alternative<rn::Prediction>(r)) << std::get<std::string>(r);
-  const auto& pred = std::get<rn::Prediction>(r);
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  const auto& pred = r.value();
   ASSERT_EQ(pred.staircases.size(), 8u);
   EXPECT_TRUE(pred.notes.empty()) << pred.notes.front();
   for (const auto& sp : pred.staircases) {
@@ -158,8 +158,8 @@ TEST(Predict, AStaircaseRangeThatMissesTheTargetIsReported) {
   auto loaded = curvlab::harness::protocol::load_protocol_text(text, "narrow.toml");
   ASSERT_TRUE(loaded.ok()) << curvlab::harness::protocol::format_diagnostic(loaded.diagnostics.at(0));
   auto r = rn::predict(*loaded.protocol, rn::PredictOptions{});
-  ASSERT_TRUE(std::holds_alternative<rn::Prediction>(r));
-  const auto& pred = std::get<rn::Prediction>(r);
+  ASSERT_TRUE(r.has_value());
+  const auto& pred = r.value();
   int missing = 0;
   for (const auto& sp : pred.staircases) missing += sp.target_value ? 0 : 1;
   EXPECT_EQ(missing, 6);  // everything but S3 native, whose target is above 0.005

@@ -28,9 +28,9 @@ TEST(StaircaseRun, PseStaircasesSettleWherePredicted) {
   auto loaded = pr::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
   ASSERT_TRUE(loaded.ok());
   auto predicted = rn::predict(*loaded.protocol, rn::PredictOptions{});
-  ASSERT_TRUE(std::holds_alternative<rn::Prediction>(predicted));
+  ASSERT_TRUE(predicted.has_value());
   std::map<std::string, double> expected;  // "space projection" → value
-  for (const auto& sp : std::get<rn::Prediction>(predicted).staircases) {
+  for (const auto& sp : predicted.value().staircases) {
     std::string space, projection;
     for (const auto& [f, l] : sp.levels) (f == "space" ? space : projection) = l;
     ASSERT_TRUE(sp.target_value.has_value());

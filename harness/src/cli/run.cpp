@@ -31,9 +31,13 @@ namespace {
 
 // A runner error ({usage, message}) as the CLI's exit code: 2 for input a
 // person must fix, 1 otherwise.
-template <class Error>
-[[noreturn]] void raise(const Error& e) {
+template <class E>
+[[noreturn]] void raise(const E& e) {
   if (e.usage) throw UsageError(e.message);
+  throw RuntimeFailure(e.message);
+}
+[[noreturn]] void raise(const harness::Error& e) {
+  if (harness::exit_code(e) == 2) throw UsageError(e.message);
   throw RuntimeFailure(e.message);
 }
 
@@ -208,8 +212,8 @@ void export_all(const std::string& db_path, std::int64_t session_id, const std::
 }
 
 void report(const rn::RunResult& result, const BackendArgs& a) {
-  if (const auto* e = std::get_if<rn::RunError>(&result)) raise(*e);
-  const auto& s = std::get<rn::SessionSummary>(result);
+  if (!result) raise(result.error());
+  const auto& s = result.value();
   Json doc;
   doc["db"] = s.db_path;
   doc["session_id"] = s.session_id;
@@ -309,8 +313,8 @@ struct ResumeArgs {
 
 void resume_command(const ResumeArgs& a) {
   auto stored_v = rn::read_stored_session(a.db, a.session);
-  if (auto* e = std::get_if<rn::RunError>(&stored_v)) raise(*e);
-  const auto& stored = std::get<rn::StoredSession>(stored_v);
+  if (!stored_v) raise(stored_v.error());
+  const auto& stored = stored_v.value();
   auto loaded = pr::load_protocol_text(stored.protocol_text, stored.protocol_source);
   if (!loaded.ok())
     throw RuntimeFailure("the stored protocol no longer loads: " +
@@ -357,8 +361,8 @@ void predict_command(const PredictArgs& a) {
     if (!p.find_factor(o.factor)) throw UsageError("--effect: the protocol has no factor \"" + o.factor + "\"");
   }
   auto r = rn::predict(p, o);
-  if (auto* e = std::get_if<std::string>(&r)) throw UsageError(*e);
-  const auto& pred = std::get<rn::Prediction>(r);
+  if (!r) raise(r.error());
+  const auto& pred = r.value();
   Json doc;
   doc["protocol"] = p.meta.name;
   doc["participants"] = pred.participants;

@@ -1,6 +1,7 @@
 #include "curvlab/harness/data/sample_writer.hpp"
 
 #include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/session_store.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 
 #include <sqlite3.h>
@@ -9,6 +10,8 @@
 #include <condition_variable>
 #include <cstring>
 #include <ctime>
+#include <deque>
+#include <optional>
 #include <mutex>
 #include <thread>
 #include <type_traits>
@@ -82,10 +85,11 @@ constexpr const char* insert_event_sql =
 }  // namespace
 
 struct SampleWriter::Impl {
-  Impl(Connection c, SampleWriterConfig cfg)
+  Impl(Connection c, SessionStore s, SampleWriterConfig cfg)
       : config(cfg),
         tracking(cfg.tracking_capacity),
         frames(cfg.frame_capacity),
+        store(std::move(s)),
         connection(std::move(c)),
         insert_tracking(connection, insert_tracking_sql),
         insert_frame(connection, insert_frame_sql),
@@ -114,8 +118,14 @@ struct SampleWriter::Impl {
   std::uint64_t failure_count = 0;
   std::string error;
   DataError::Kind error_kind = DataError::Kind::io;
+  std::vector<JournalEntry> journal_queue;  // journalled, not yet taken by the writer
+  std::uint64_t journal_pushed = 0;         // tickets handed out (1, 2, …)
+  std::uint64_t journal_taken = 0;          // ticket of the last entry taken
+  std::uint64_t journal_done = 0;           // ticket of the last entry applied
 
   // Owned by the writer thread only.
+  SessionStore store;  // its own connection, synchronous = FULL
+  std::deque<JournalEntry> journal_pending;
   Connection connection;
   Statement insert_tracking, insert_frame, insert_event;
   std::vector<TrackingSample> pending_tracking;
@@ -184,16 +194,7 @@ struct SampleWriter::Impl {
       }
       txn.commit();
     } catch (const SqliteFailure& failure) {
-      failed_transactions.fetch_add(1, std::memory_order_relaxed);
-      const DataError e = to_data_error(failure, connection.path());
-      is_paused.store(true, std::memory_order_release);
-      {
-        std::lock_guard lock(mutex);
-        error = "tracking/frame logging paused: " + e.message;
-        error_kind = e.kind;
-        ++failure_count;
-      }
-      progress.notify_all();
+      note_failure(to_data_error(failure, connection.path()), "tracking/frame logging paused");
       return false;
     }
     if (log_drops) {
@@ -209,6 +210,73 @@ struct SampleWriter::Impl {
     return true;
   }
 
+  void note_failure(const DataError& e, const char* what) {
+    failed_transactions.fetch_add(1, std::memory_order_relaxed);
+    is_paused.store(true, std::memory_order_release);
+    {
+      std::lock_guard lock(mutex);
+      error = std::string(what) + ": " + e.message;
+      error_kind = e.kind;
+      ++failure_count;
+    }
+    progress.notify_all();
+  }
+
+  // One journal entry, or a run of consecutive events in one transaction;
+  // returns how many entries were applied.
+  Expected<std::size_t> apply_front() {
+    if (std::holds_alternative<EventRecord>(journal_pending.front())) {
+      std::vector<EventRecord> events;
+      for (const auto& e : journal_pending) {
+        if (!std::holds_alternative<EventRecord>(e) || events.size() == 256) break;
+        events.push_back(std::get<EventRecord>(e));
+      }
+      if (auto r = store.record_events(events); !r) return r.error();
+      return events.size();
+    }
+    auto done = std::visit(
+        [&](const auto& entry) -> Expected<Done> {
+          using T = std::decay_t<decltype(entry)>;
+          if constexpr (std::is_same_v<T, BeginTrial>) {
+            auto r = store.begin_trial(entry.trial_id);
+            if (!r) return r.error();
+            return Done{};
+          } else if constexpr (std::is_same_v<T, TrialResult>) {
+            return store.complete_trial(entry);
+          } else if constexpr (std::is_same_v<T, EndUnanswered>) {
+            return entry.aborted ? store.abort_trial(entry.trial_id) : store.skip_trial(entry.trial_id);
+          } else if constexpr (std::is_same_v<T, StatusChange>) {
+            return entry.close ? store.close_session(entry.session_id, entry.status)
+                               : store.set_session_status(entry.session_id, entry.status);
+          } else {
+            return Done{};
+          }
+        },
+        journal_pending.front());
+    if (!done) return done.error();
+    return std::size_t{1};
+  }
+
+  // Applies the taken entries in order; stops at the first failure, which
+  // stays at the front to be retried.
+  bool apply_journal() {
+    while (!journal_pending.empty()) {
+      auto applied = apply_front();
+      if (!applied) {
+        note_failure(applied.error(), "event and trial logging paused");
+        return false;
+      }
+      for (std::size_t i = 0; i < applied.value(); ++i) journal_pending.pop_front();
+      {
+        std::lock_guard lock(mutex);
+        journal_done = journal_taken - journal_pending.size();
+      }
+      progress.notify_all();
+    }
+    is_paused.store(false, std::memory_order_release);
+    return true;
+  }
+
   void run() {
     for (;;) {
       std::uint64_t ticket = 0;
@@ -219,6 +287,11 @@ struct SampleWriter::Impl {
         wake.wait_for(lock, interval, [&] { return stop || flush_requested != flush_done; });
         ticket = flush_requested;
         stopping = stop;
+        // Taken before the rings are drained: samples pushed before an
+        // entry are committed before it.
+        for (auto& e : journal_queue) journal_pending.push_back(std::move(e));
+        journal_queue.clear();
+        journal_taken = journal_pushed;
       }
       // Drain and write until the rings are empty (or a write fails), so a
       // flush ticket read above covers everything pushed before it.
@@ -234,6 +307,7 @@ struct SampleWriter::Impl {
         ok = write_pending();
         if (!ok || !had_work) break;
       }
+      if (ok) ok = apply_journal();
       writer_cpu_s.store(thread_cpu_seconds(), std::memory_order_relaxed);
       if (ok) {
         std::lock_guard lock(mutex);
@@ -252,15 +326,16 @@ struct SampleWriter::Impl {
 
 Expected<std::unique_ptr<SampleWriter>> SampleWriter::open(const std::string& path,
                                                            SampleWriterConfig config) {
+  // The journal's connection: synchronous = FULL, so an applied entry is on disk.
   auto db = Database::open(path, OpenMode::open_existing);
   if (!db) return db.error();
   try {
     Connection c = Connection::open(path, OpenFlags::read_write);
     // NORMAL: a batch commit does not wait for fsync; WAL keeps the file
-    // consistent after a crash, and the next trial commit (FULL) syncs the
-    // WAL including these batches.
+    // consistent after a crash, and the next journal commit (FULL) syncs
+    // the WAL including these batches.
     configure_connection(c, false);
-    auto impl = std::make_unique<Impl>(std::move(c), config);
+    auto impl = std::make_unique<Impl>(std::move(c), SessionStore(std::move(db).value()), config);
     std::unique_ptr<SampleWriter> writer(new SampleWriter(std::move(impl)));
     return writer;
   } catch (const SqliteFailure& failure) {
@@ -315,6 +390,33 @@ Expected<Done> SampleWriter::flush(std::chrono::milliseconds timeout) {
   return DataError{impl_->error_kind, impl_->error};
 }
 
+std::uint64_t SampleWriter::journal(JournalEntry entry) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->journal_queue.push_back(std::move(entry));
+  return ++impl_->journal_pushed;
+}
+
+bool SampleWriter::durable(std::uint64_t ticket) const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->journal_done >= ticket;
+}
+
+Expected<Done> SampleWriter::wait_durable(std::uint64_t ticket, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(impl_->mutex);
+  if (impl_->journal_done >= ticket) return Done{};
+  ++impl_->flush_requested;  // wakes the writer now rather than at its next interval
+  const std::uint64_t failures_before = impl_->failure_count;
+  impl_->wake.notify_all();
+  const bool finished = impl_->progress.wait_for(lock, timeout, [&] {
+    return impl_->journal_done >= ticket || impl_->failure_count != failures_before;
+  });
+  if (impl_->journal_done >= ticket) return Done{};
+  if (!finished)
+    return DataError{DataError::Kind::busy, "writing the session's trial record timed out after " +
+                                                std::to_string(timeout.count()) + " ms"};
+  return DataError{impl_->error_kind, impl_->error};
+}
+
 SampleWriterStats SampleWriter::stats() const {
   SampleWriterStats s;
   s.pushed_tracking = impl_->pushed_tracking.load();
@@ -326,6 +428,11 @@ SampleWriterStats SampleWriter::stats() const {
   s.transactions = impl_->transactions.load();
   s.failed_transactions = impl_->failed_transactions.load();
   s.writer_cpu_s = impl_->writer_cpu_s.load();
+  {
+    std::lock_guard lock(impl_->mutex);
+    s.journalled = impl_->journal_pushed;
+    s.journal_applied = impl_->journal_done;
+  }
   return s;
 }
 

@@ -350,6 +350,20 @@ Expected<std::int64_t> SessionStore::record_event(const EventRecord& e) {
   });
 }
 
+Expected<Done> SessionStore::record_events(const std::vector<EventRecord>& events) {
+  return guarded(db_, [&]() -> Done {
+    Transaction txn(db_.connection());
+    auto& s = stmts_->insert_event;
+    for (const auto& e : events) {
+      s.bind(1, e.session_id).bind(2, e.trial_id).bind(3, e.t_ns);
+      s.bind(4, std::string_view(e.kind)).bind(5, std::string_view(e.detail_json));
+      s.run();
+    }
+    txn.commit();
+    return Done{};
+  });
+}
+
 Expected<Done> SessionStore::set_session_status(std::int64_t session_id, SessionStatus status) {
   return guarded(db_, [&]() -> Expected<Done> {
     Transaction txn(db_.connection());

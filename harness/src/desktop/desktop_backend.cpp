@@ -359,7 +359,7 @@ std::string DesktopBackend::banner_text(const Overlay& overlay) const {
     if (!text.empty()) text += " — ";
     text += part;
   };
-  add(overlay.phase);
+  add(std::string(harness::runner::to_string(overlay.phase)));
   add(overlay.text);
   if (overlay.waiting_for_input) add("waiting for a key");
   return text;
@@ -387,7 +387,7 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
     failed_ = true;
     return stats;
   }
-  const bool onset = overlay.phase == "stimulus" && last_phase_ != "stimulus";
+  const bool onset = overlay.phase == harness::runner::Phase::stimulus && last_phase_ != harness::runner::Phase::stimulus;
   last_phase_ = overlay.phase;
   if (!std::get<bool>(ready)) return stats;  // minimised: nothing to draw into
 

@@ -79,7 +79,7 @@ class DesktopBackend final : public harness::runner::Backend {
   double refresh_hz_ = 60.0;
   std::optional<glm::dvec2> cursor_px_;
   bool f12_ = false;
-  std::string last_phase_;
+  harness::runner::Phase last_phase_ = harness::runner::Phase::iti;
   std::string banner_;
   int stimulus_onsets_ = 0;
   int f12_count_ = 0;

@@ -137,64 +137,97 @@ double student_t_two_sided_p(double t, double df) {
   return incomplete_beta(df / 2.0, 0.5, df / (df + t * t));
 }
 
-std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const PredictOptions& o) {
-  if (o.participants < 2) return std::string("--participants must be at least 2");
-  if (o.simulations < 1) return std::string("--simulations must be at least 1");
-  if (auto e = check_observer(o.observer)) return "observer: " + *e;
-  Prediction out;
-  out.participants = o.participants;
+namespace {
 
-  // Conditions of participant 1's design (every participant sees the same
-  // conditions; only order and counterbalancing differ).
+using PredictResult = Result<Prediction>;
+
+Error predict_error(std::string message) { return Error{Error::Kind::usage, std::move(message)}; }
+
+std::string condition_key(const protocol::PlannedTrial& t, const std::string& judged_name) {
+  std::string key = t.block + "|" + judged_name;
+  for (const auto& [f, l] : t.levels) key += "|" + f + "=" + l;
+  return key;
+}
+
+std::string staircase_note(const StaircasePrediction& sp) {
+  std::string label;
+  for (const auto& [f, l] : sp.levels) label += (label.empty() ? "" : " ") + f + "=" + l;
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "block %s, %s, staircase %s: the value it converges on lies outside [%g, %g] "
+                "(P(%s) is %.2f at %g and %.2f at %g; it targets %.2f): widen the range or change "
+                "the stimulus",
+                sp.block.c_str(), label.c_str(), sp.staircase.c_str(), sp.min, sp.max, sp.positive.c_str(),
+                sp.p_at_min, sp.min, sp.p_at_max, sp.max, sp.target_p);
+  return buf;
+}
+
+// Where each staircase of a staircase condition converges for the mean observer.
+Result<Done> predict_staircases(const protocol::Protocol& p, const protocol::PlannedTrial& t,
+                                const std::string& judged_name, const SimulatedObserver& mean_observer,
+                                bool physical, Prediction& out) {
+  const protocol::Block* block = nullptr;
+  for (const auto& b : p.blocks)
+    if (b.name == t.block) block = &b;
+  if (block == nullptr) return Done{};
+  auto made = make_world(t.settings);
+  if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
+  const World world = std::get<World>(made);
+  const auto& j = block->judgement;
+  for (const auto& sc : j.staircases) {
+    StaircasePrediction sp;
+    sp.block = t.block;
+    sp.levels = t.levels;
+    sp.judged = judged_name;
+    sp.staircase = sc.name;
+    sp.parameter = j.parameter;
+    sp.positive = j.positive;
+    sp.up = sc.up;
+    sp.down = sc.down;
+    sp.min = sc.min;
+    sp.max = sc.max;
+    sp.target_p = staircase_target_probability(sc.up, sc.down);
+    locate_target(t, j, world, mean_observer, physical, sp);
+    if (!sp.target_value) out.notes.push_back(staircase_note(sp));
+    out.staircases.push_back(std::move(sp));
+  }
+  return Done{};
+}
+
+// A choice condition: the judged quantity for a participant standing at the table.
+Result<ConditionPrediction> predict_condition(const protocol::Protocol& p, const protocol::PlannedTrial& t,
+                                              const std::string& judged_name, bool physical) {
+  auto made = make_world(t.settings);
+  if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
+  const World world = std::get<World>(made);
+  const geometry::Isometry head = standing_head(world, t.settings);
+  const Placement placement = place_stimulus(world, t.settings, head);
+  ConditionPrediction c;
+  c.levels = t.levels;
+  c.judged = judged_name;
+  c.perceived_m = physical ? physical_sagitta_m(t.settings) : perceived_sagitta_m(world, t.settings, placement, head);
+  for (const auto& b : p.blocks)
+    if (b.name == t.block)
+      for (const auto& opt : b.judgement.options) c.options.push_back(opt.value);
+  return c;
+}
+
+// The distinct conditions of participant 1's design (every participant sees
+// the same conditions; only order and counterbalancing differ).
+Result<Done> collect_conditions(const protocol::Protocol& p, const PredictOptions& o, Prediction& out) {
   const protocol::Design design = protocol::expand_design(p, 1);
   std::map<std::string, std::size_t> index;  // condition key → out.conditions
-  std::map<std::string, bool> staircase_seen;  // condition key → predicted
+  std::map<std::string, bool> staircase_seen;
   const SimulatedObserver mean_observer(o.observer);
   const bool physical = o.observer.model == ObserverModel::physical;
   bool skipped_other = false;
   for (const auto& t : design.trials) {
     if (t.practice) continue;
     const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
-    std::string key = t.block + "|" + judged_name;
-    for (const auto& [f, l] : t.levels) key += "|" + f + "=" + l;
+    const std::string key = condition_key(t, judged_name);
     if (t.judgement == protocol::JudgementType::staircase) {
       if (!staircase_seen.emplace(key, true).second) continue;
-      const protocol::Block* block = nullptr;
-      for (const auto& b : p.blocks)
-        if (b.name == t.block) block = &b;
-      if (block == nullptr) continue;
-      auto made = make_world(t.settings);
-      if (auto* e = std::get_if<std::string>(&made)) return *e;
-      const World world = std::get<World>(made);
-      const auto& j = block->judgement;
-      for (const auto& sc : j.staircases) {
-        StaircasePrediction sp;
-        sp.block = t.block;
-        sp.levels = t.levels;
-        sp.judged = judged_name;
-        sp.staircase = sc.name;
-        sp.parameter = j.parameter;
-        sp.positive = j.positive;
-        sp.up = sc.up;
-        sp.down = sc.down;
-        sp.min = sc.min;
-        sp.max = sc.max;
-        sp.target_p = staircase_target_probability(sc.up, sc.down);
-        locate_target(t, j, world, mean_observer, physical, sp);
-        if (!sp.target_value) {
-          std::string label;
-          for (const auto& [f, l] : sp.levels) label += (label.empty() ? "" : " ") + f + "=" + l;
-          char buf[320];
-          std::snprintf(buf, sizeof buf,
-                        "block %s, %s, staircase %s: the value it converges on lies outside [%g, %g] "
-                        "(P(%s) is %.2f at %g and %.2f at %g; it targets %.2f): widen the range or change "
-                        "the stimulus",
-                        sp.block.c_str(), label.c_str(), sp.staircase.c_str(), sp.min, sp.max,
-                        sp.positive.c_str(), sp.p_at_min, sp.min, sp.p_at_max, sp.max, sp.target_p);
-          out.notes.emplace_back(buf);
-        }
-        out.staircases.push_back(std::move(sp));
-      }
+      if (auto r = predict_staircases(p, t, judged_name, mean_observer, physical, out); !r) return r.error();
       continue;
     }
     if (t.judgement != protocol::JudgementType::choice) {
@@ -203,119 +236,165 @@ std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const
     }
     auto it = index.find(key);
     if (it == index.end()) {
-      auto made = make_world(t.settings);
-      if (auto* e = std::get_if<std::string>(&made)) return *e;
-      const World world = std::get<World>(made);
-      const geometry::Isometry head = standing_head(world, t.settings);
-      const Placement placement = place_stimulus(world, t.settings, head);
-      ConditionPrediction c;
-      c.levels = t.levels;
-      c.judged = judged_name;
-      c.perceived_m = physical
-                          ? physical_sagitta_m(t.settings)
-                          : perceived_sagitta_m(world, t.settings, placement, head);
-      for (const auto& b : p.blocks)
-        if (b.name == t.block)
-          for (const auto& opt : b.judgement.options) c.options.push_back(opt.value);
+      auto c = predict_condition(p, t, judged_name, physical);
+      if (!c) return c.error();
       it = index.emplace(key, out.conditions.size()).first;
-      out.conditions.push_back(std::move(c));
+      out.conditions.push_back(std::move(c).value());
     }
     ++out.conditions[it->second].trials_per_participant;
   }
   if (skipped_other) out.notes.push_back("adjustment blocks are not predicted (choice and staircase only)");
-  if (out.conditions.empty() && out.staircases.empty())
-    return std::string("the protocol has no choice or staircase trials outside practice to predict");
-  if (out.conditions.empty()) return out;
+  return Done{};
+}
 
-  // Participants drawn from the population; proportions are their mean.
-  protocol::Engine rng(protocol::mix_seed(o.observer.seed ^ 0x70726564696374ULL));
-  auto draw_participant = [&]() {
-    ObserverParams q = o.observer;
-    q.bias_m += o.bias_sd_m * standard_normal(rng);
-    q.slope_per_m *= std::exp(o.slope_sd_log * standard_normal(rng));
+// Participants drawn from the population around the mean observer.
+class Population {
+ public:
+  explicit Population(const PredictOptions& o)
+      : o_(o), rng_(protocol::mix_seed(o.observer.seed ^ 0x70726564696374ULL)) {}
+  ObserverParams draw() {
+    ObserverParams q = o_.observer;
+    q.bias_m += o_.bias_sd_m * standard_normal(rng_);
+    q.slope_per_m *= std::exp(o_.slope_sd_log * standard_normal(rng_));
     return q;
-  };
-  const int population = 400;
+  }
+  protocol::Engine& rng() { return rng_; }
+
+ private:
+  const PredictOptions& o_;
+  protocol::Engine rng_;
+};
+
+// Expected proportions per condition: the mean over 400 drawn participants.
+void expected_proportions(Population& population, Prediction& out) {
+  constexpr int n = 400;
   for (auto& c : out.conditions) c.proportions.assign(c.options.size(), 0.0);
   std::vector<ObserverParams> people;
-  for (int k = 0; k < population; ++k) people.push_back(draw_participant());
+  for (int k = 0; k < n; ++k) people.push_back(population.draw());
   for (const auto& q : people) {
     SimulatedObserver obs(q);
     for (auto& c : out.conditions) {
       const auto probs = obs.choice_probabilities(c.perceived_m, c.options.size());
-      for (std::size_t k = 0; k < probs.size(); ++k) c.proportions[k] += probs[k] / population;
+      for (std::size_t k = 0; k < probs.size(); ++k) c.proportions[k] += probs[k] / n;
     }
   }
+}
 
-  // Power per factor: P(first option) at level a versus level b.
+std::string level_of(const ConditionPrediction& c, const std::string& f) {
+  for (const auto& [name, label] : c.levels)
+    if (name == f) return label;
+  return {};
+}
+
+// One simulated study: the paired difference in P(first option) between
+// levels a and b, tested with Student's t. True when significant.
+bool simulated_study_significant(Population& population, const Prediction& out, const PredictOptions& o,
+                                 const std::string& f, const std::string& a, const std::string& b) {
+  double sum = 0.0, sum2 = 0.0;
+  for (int k = 0; k < o.participants; ++k) {
+    const SimulatedObserver obs(population.draw());
+    double na = 0.0, ka = 0.0, nb = 0.0, kb = 0.0;
+    for (const auto& c : out.conditions) {
+      const auto l = level_of(c, f);
+      if (l != a && l != b) continue;
+      const double pf = obs.choice_probabilities(c.perceived_m, c.options.size())[0];
+      const auto hits = static_cast<double>(binomial(population.rng(), c.trials_per_participant, pf));
+      const auto trials = static_cast<double>(c.trials_per_participant);
+      if (l == a) {
+        na += trials;
+        ka += hits;
+      } else {
+        nb += trials;
+        kb += hits;
+      }
+    }
+    const double d = ka / na - kb / nb;
+    sum += d;
+    sum2 += d * d;
+  }
+  const double n = o.participants;
+  const double mean = sum / n;
+  const double var = (sum2 - n * mean * mean) / (n - 1.0);
+  const double t =
+      var > 0.0 ? mean / std::sqrt(var / n) : (mean != 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+  return student_t_two_sided_p(t, n - 1.0) < o.alpha;
+}
+
+// The two levels of factor f to compare: the options' when given, else the
+// pair whose predicted P(first option) differs most.
+Result<std::pair<std::string, std::string>> levels_to_compare(
+    const std::map<std::string, std::pair<double, double>>& by_level, const PredictOptions& o, const std::string& f) {
+  std::string a = o.level_a, b = o.level_b;
+  if (!o.factor.empty() && (!by_level.count(a) || !by_level.count(b)))
+    return predict_error("factor \"" + f + "\" has no choice trials at level \"" + (by_level.count(a) ? b : a) + "\"");
+  if (a.empty()) {
+    double best = -1.0;
+    for (const auto& [la, va] : by_level)
+      for (const auto& [lb, vb] : by_level) {
+        const double d = std::abs(va.first / va.second - vb.first / vb.second);
+        if (la < lb && d > best) {
+          best = d;
+          a = la;
+          b = lb;
+        }
+      }
+  }
+  return std::pair{a, b};
+}
+
+// Power to detect factor f's effect on P(first option); nullopt when f has
+// fewer than two levels among the choice trials (and was not asked for).
+Result<std::optional<PowerEstimate>> estimate_power(Population& population, const Prediction& out,
+                                                    const PredictOptions& o, const std::string& f) {
+  std::map<std::string, std::pair<double, double>> by_level;  // label → (sum P, count)
+  for (const auto& c : out.conditions) {
+    const auto l = level_of(c, f);
+    if (l.empty() || c.proportions.empty()) continue;
+    by_level[l].first += c.proportions[0];
+    by_level[l].second += 1.0;
+  }
+  if (by_level.size() < 2) {
+    if (!o.factor.empty()) return predict_error("factor \"" + f + "\" has fewer than two levels among the choice trials");
+    return std::optional<PowerEstimate>{};
+  }
+  auto levels = levels_to_compare(by_level, o, f);
+  if (!levels) return levels.error();
+  const auto& [a, b] = levels.value();
+  PowerEstimate pe;
+  pe.factor = f;
+  pe.level_a = a;
+  pe.level_b = b;
+  pe.predicted_difference = by_level.at(a).first / by_level.at(a).second - by_level.at(b).first / by_level.at(b).second;
+  pe.simulations = o.simulations;
+  int significant = 0;
+  for (int sim = 0; sim < o.simulations; ++sim)
+    if (simulated_study_significant(population, out, o, f, a, b)) ++significant;
+  pe.power = static_cast<double>(significant) / o.simulations;
+  return std::optional<PowerEstimate>{pe};
+}
+
+}  // namespace
+
+Result<Prediction> predict(const protocol::Protocol& p, const PredictOptions& o) {
+  if (o.participants < 2) return predict_error("--participants must be at least 2");
+  if (o.simulations < 1) return predict_error("--simulations must be at least 1");
+  if (auto e = check_observer(o.observer)) return predict_error("observer: " + *e);
+  Prediction out;
+  out.participants = o.participants;
+  if (auto r = collect_conditions(p, o, out); !r) return r.error();
+  if (out.conditions.empty() && out.staircases.empty())
+    return predict_error("the protocol has no choice or staircase trials outside practice to predict");
+  if (out.conditions.empty()) return out;
+  Population population(o);
+  expected_proportions(population, out);
   std::vector<std::string> factors;
   if (!o.factor.empty()) factors.push_back(o.factor);
   else
     for (const auto& f : p.factors) factors.push_back(f.name);
-  auto level_of = [](const ConditionPrediction& c, const std::string& f) -> std::string {
-    for (const auto& [name, label] : c.levels)
-      if (name == f) return label;
-    return {};
-  };
   for (const auto& f : factors) {
-    std::map<std::string, std::pair<double, double>> by_level;  // label → (sum P, count)
-    for (const auto& c : out.conditions) {
-      const auto l = level_of(c, f);
-      if (l.empty() || c.proportions.empty()) continue;
-      by_level[l].first += c.proportions[0];
-      by_level[l].second += 1.0;
-    }
-    if (by_level.size() < 2) {
-      if (!o.factor.empty()) return "factor \"" + f + "\" has fewer than two levels among the choice trials";
-      continue;
-    }
-    std::string a = o.level_a, b = o.level_b;
-    if (!o.factor.empty() && (!by_level.count(a) || !by_level.count(b)))
-      return "factor \"" + f + "\" has no choice trials at level \"" + (by_level.count(a) ? b : a) + "\"";
-    if (a.empty()) {
-      double best = -1.0;
-      for (const auto& [la, va] : by_level)
-        for (const auto& [lb, vb] : by_level) {
-          const double d = std::abs(va.first / va.second - vb.first / vb.second);
-          if (la < lb && d > best) {
-            best = d;
-            a = la;
-            b = lb;
-          }
-        }
-    }
-    PowerEstimate pe;
-    pe.factor = f;
-    pe.level_a = a;
-    pe.level_b = b;
-    pe.predicted_difference = by_level[a].first / by_level[a].second - by_level[b].first / by_level[b].second;
-    pe.simulations = o.simulations;
-    int significant = 0;
-    for (int sim = 0; sim < o.simulations; ++sim) {
-      double sum = 0.0, sum2 = 0.0;
-      for (int k = 0; k < o.participants; ++k) {
-        const SimulatedObserver obs(draw_participant());
-        double na = 0.0, ka = 0.0, nb = 0.0, kb = 0.0;
-        for (const auto& c : out.conditions) {
-          const auto l = level_of(c, f);
-          if (l != a && l != b) continue;
-          const double pf = obs.choice_probabilities(c.perceived_m, c.options.size())[0];
-          const auto hits = static_cast<double>(binomial(rng, c.trials_per_participant, pf));
-          const auto n = static_cast<double>(c.trials_per_participant);
-          if (l == a) { na += n; ka += hits; } else { nb += n; kb += hits; }
-        }
-        const double d = ka / na - kb / nb;
-        sum += d;
-        sum2 += d * d;
-      }
-      const double n = o.participants;
-      const double mean = sum / n;
-      const double var = (sum2 - n * mean * mean) / (n - 1.0);
-      const double t = var > 0.0 ? mean / std::sqrt(var / n) : (mean != 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
-      if (student_t_two_sided_p(t, n - 1.0) < o.alpha) ++significant;
-    }
-    pe.power = static_cast<double>(significant) / o.simulations;
-    out.power.push_back(pe);
+    auto pe = estimate_power(population, out, o, f);
+    if (!pe) return pe.error();
+    if (pe.value()) out.power.push_back(*pe.value());
   }
   return out;
 }

@@ -35,8 +35,8 @@ geometry::Isometry from_json(const Json& a) {
 
 std::variant<ReplayResult, ReplayError> replay_frame(const ReplayRequest& rq) {
   auto stored_v = read_stored_session(rq.db_path, rq.session_id);
-  if (auto* e = std::get_if<RunError>(&stored_v)) return ReplayError{e->usage, e->message};
-  const auto& stored = std::get<StoredSession>(stored_v);
+  if (!stored_v) return ReplayError{exit_code(stored_v.error()) == 2, stored_v.error().message};
+  const auto& stored = stored_v.value();
   auto loaded = protocol::load_protocol_text(stored.protocol_text, stored.protocol_source);
   if (!loaded.ok())
     return ReplayError{false, "the stored protocol no longer loads: " +
@@ -110,9 +110,9 @@ std::variant<ReplayResult, ReplayError> replay_frame(const ReplayRequest& rq) {
 
   const std::int64_t onset_ns = onset.value("predicted_display_ns", std::int64_t{0});
   const auto& tl = s.timeline;
-  std::string phase = "fixation";
-  if (frame_display_ns >= onset_ns) phase = "stimulus";
-  if (frame_display_ns >= onset_ns + tl.stimulus_ms * 1'000'000) phase = "response";
+  Phase phase = Phase::fixation;
+  if (frame_display_ns >= onset_ns) phase = Phase::stimulus;
+  if (frame_display_ns >= onset_ns + tl.stimulus_ms * 1'000'000) phase = Phase::response;
 
   auto made = make_world(s);
   if (auto* e = std::get_if<std::string>(&made)) return ReplayError{false, *e};
@@ -150,7 +150,7 @@ std::variant<ReplayResult, ReplayError> replay_frame(const ReplayRequest& rq) {
   if (ec) return ReplayError{false, "cannot create " + rq.out_dir + ": " + ec.message()};
   ReplayResult out;
   out.frame_index = frame;
-  out.phase = phase;
+  out.phase = std::string(to_string(phase));
   out.device = ctx.device_name();
   for (auto [eye, name] : {std::pair{renderer::Eye::left, "left.png"}, std::pair{renderer::Eye::right, "right.png"}}) {
     const auto path = (std::filesystem::path(rq.out_dir) / name).string();
@@ -162,7 +162,7 @@ std::variant<ReplayResult, ReplayError> replay_frame(const ReplayRequest& rq) {
   j["trial_index"] = rq.trial_index;
   j["trial_id"] = trial_id;
   j["frame_index"] = frame;
-  j["phase"] = phase;
+  j["phase"] = std::string(to_string(phase));
   j["space"] = std::string(geometry::to_string(world.space.kind));
   j["radius_m"] = world.space.radius_m;
   j["view"] = view_name(s);

@@ -288,18 +288,18 @@ void TrialScene::set_stimulus(const Settings& s, const Placement& placement) {
   }
 }
 
-void TrialScene::show(const std::string& phase, bool stimulus_during_response) {
+void TrialScene::show(Phase phase, bool stimulus_during_response) {
   const bool stimulus =
-      phase == "stimulus" || (phase == "response" && stimulus_during_response);
+      phase == Phase::stimulus || (phase == Phase::response && stimulus_during_response);
   auto set = [&](std::size_t i, bool v) {
     if (scene_.objects()[i].visible != v) scene_.edit(i).visible = v;
   };
   if (has_table_) set(table_, stimulus);
   for (auto b : balls_) set(b, stimulus);
   if (has_stick_) set(stick_, stimulus);
-  set(fixation_, phase == "fixation");
-  set(prompt_, phase == "response");
-  set(page_, phase == "instructions" || phase == "break" || phase == "done");
+  set(fixation_, phase == Phase::fixation);
+  set(prompt_, phase == Phase::response);
+  set(page_, phase == Phase::instructions || phase == Phase::break_page || phase == Phase::done);
 }
 
 std::optional<std::string> TrialScene::set_page(const std::string& text, const Isometry& head) {

@@ -14,15 +14,23 @@
 // absorb the meantime and then drop. A kill at any instant loses at most the
 // records not yet committed: the rings plus one batch.
 //
-// Thread-safety: push_tracking() and push_frame() must be called from one
-// producer thread (the frame loop). flush(), stats(), paused() and
-// last_error() may be called from any thread. The writer thread is owned by
+// The session's events and trial-state changes go the same way, in order,
+// through journal(): the entry is queued under a mutex that is never held
+// during disk I/O, and the writer applies it after the samples pushed before
+// it, through a second connection with synchronous = FULL, so an applied
+// entry is on disk. A failed entry is kept (with the ones after it) and
+// retried like a failed batch; wait_durable() reports the failure.
+//
+// Thread-safety: push_tracking(), push_frame() and journal() must be called
+// from one producer thread (the frame loop). flush(), wait_durable(),
+// durable(), stats(), paused() and last_error() may be called from any thread. The writer thread is owned by
 // this object; the destructor writes what is left (bounded by
 // shutdown_timeout) and joins it. Move is not offered: the thread refers to
 // the object.
 #pragma once
 
 #include "curvlab/harness/data/error.hpp"
+#include "curvlab/harness/data/journal.hpp"
 #include "curvlab/harness/data/records.hpp"
 
 #include <chrono>
@@ -55,6 +63,8 @@ struct SampleWriterStats {
   std::uint64_t committed_frames = 0;
   std::uint64_t transactions = 0;
   std::uint64_t failed_transactions = 0;
+  std::uint64_t journalled = 0;  // events and trial-state changes queued
+  std::uint64_t journal_applied = 0;
   double writer_cpu_s = 0.0;  // CPU time of the writer thread
 };
 
@@ -70,6 +80,16 @@ class SampleWriter {
   // Producer side: never blocks; false when the record was dropped.
   bool push_tracking(const TrackingSample& sample) noexcept;
   bool push_frame(const FrameRecord& frame) noexcept;
+
+  // Queues an event or trial-state change; never blocks on the disk. The
+  // returned ticket is durable once the writer has applied the entry.
+  std::uint64_t journal(JournalEntry entry);
+  [[nodiscard]] bool durable(std::uint64_t ticket) const;
+  // Blocks until the entry with `ticket` (and every one before it) is on
+  // disk, or returns the writer's error, or a busy error after `timeout`.
+  // Call it between trials, never inside a frame.
+  Expected<Done> wait_durable(std::uint64_t ticket,
+                              std::chrono::milliseconds timeout = std::chrono::seconds(10));
 
   // Blocks until every record pushed before the call is committed (call it at
   // a trial's end, not inside the frame loop), or returns the writer's error

@@ -51,6 +51,8 @@ class SessionStore {
   Expected<Done> skip_trial(std::int64_t trial_id);
   Expected<Done> abort_trial(std::int64_t trial_id);
   Expected<std::int64_t> record_event(const EventRecord& event);
+  // Several events in one transaction, in order.
+  Expected<Done> record_events(const std::vector<EventRecord>& events);
   Expected<Done> set_session_status(std::int64_t session_id, SessionStatus status);
   // Sets the final status and the end time.
   Expected<Done> close_session(std::int64_t session_id, SessionStatus status);

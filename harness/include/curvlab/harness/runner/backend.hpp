@@ -16,6 +16,7 @@
 #pragma once
 
 #include "curvlab/geometry/tracking.hpp"
+#include "curvlab/harness/runner/phase.hpp"
 #include "curvlab/renderer/plan.hpp"
 #include "curvlab/renderer/renderer.hpp"
 
@@ -60,12 +61,11 @@ struct InputEvent {
 enum class BackendSignal { none, pause, resume, quit, recenter };
 
 // What the runner shows besides the scene (for desktop windows and logs).
-// Phases: "instructions", "fixation", "stimulus", "response", "iti",
-// "break", "done". Instruction pages and breaks advance on the key "space"
-// or "enter", or a button named "continue"; responses come from the keys and
-// buttons of the judgement's options.
+// Instruction pages and breaks advance on the key "space" or "enter", or a
+// button named "continue"; responses come from the keys and buttons of the
+// judgement's options.
 struct Overlay {
-  std::string phase;
+  Phase phase = Phase::iti;
   std::string text;   // trial information line (block, trial, condition)
   bool waiting_for_input = false;  // instructions, response window, break
 };

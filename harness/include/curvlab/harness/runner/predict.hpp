@@ -10,6 +10,7 @@
 #pragma once
 
 #include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/harness/result.hpp"
 #include "curvlab/harness/runner/observer.hpp"
 
 #include <optional>
@@ -80,7 +81,7 @@ struct Prediction {
   std::vector<std::string> notes;
 };
 
-std::variant<Prediction, std::string> predict(const protocol::Protocol& p, const PredictOptions& options);
+Result<Prediction> predict(const protocol::Protocol& p, const PredictOptions& options);
 
 // Two-sided p value of Student's t with `df` degrees of freedom.
 double student_t_two_sided_p(double t, double df);

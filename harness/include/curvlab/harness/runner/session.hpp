@@ -5,13 +5,20 @@
 // Each completed trial commits in its own transaction before the next one
 // starts; tracking samples and frame records go through the SampleWriter.
 //
-// Per frame: poses → tracking → input → phase logic → scene → submit → log.
-// Phases of a trial: fixation → stimulus → response window → inter-trial
-// interval; responses count from stimulus onset to the window's end. A lost
-// head (or a recenter) during a trial aborts the attempt and repeats the
-// trial once tracking is back; a pause does the same after resuming. The
-// protocol's [tracking] section may flag losses instead, give such trials
-// up, or cap the attempts (protocol::TrackingLoss).
+// Per frame: poses → tracking → input → trial state → scene → submit → log.
+// Phases of a trial (trial_state.hpp): fixation → stimulus → response window
+// → inter-trial interval; responses count from stimulus onset to the
+// window's end. A lost head (or a recenter) during a trial aborts the
+// attempt and repeats the trial once tracking is back; a pause does the same
+// after resuming. The protocol's [tracking] section may flag losses instead,
+// give such trials up, or cap the attempts (protocol::TrackingLoss).
+//
+// The frame loop never waits on the disk: events and trial state go through
+// the SampleWriter's journal like samples, and a completed trial is on disk
+// before the next one starts. Random streams derive from (session seed,
+// trial index, attempt), so a resumed simulated session answers as the
+// uninterrupted one would. A backend failure (a Vulkan or OpenXR error) ends
+// the run `interrupted`, resumable, with every completed trial kept.
 #pragma once
 
 #include "curvlab/geometry/calibration.hpp"
@@ -19,13 +26,13 @@
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/harness/result.hpp"
 #include "curvlab/harness/runner/backend.hpp"
 #include "curvlab/harness/runner/observer.hpp"
 
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <variant>
 #include <vector>
 
 namespace curvlab::harness::runner {
@@ -70,12 +77,8 @@ struct SessionSummary {
   std::vector<std::string> images;
 };
 
-struct RunError {
-  bool usage = false;  // bad input (exit 2) rather than a run-time failure
-  std::string message;
-};
-
-using RunResult = std::variant<SessionSummary, RunError>;
+// A failure's kind decides the exit code (result.hpp: bad input 2, run-time 1).
+using RunResult = Result<SessionSummary>;
 
 // Starts a new session of `protocol` (loaded from `protocol_text`).
 RunResult run_session(const protocol::Protocol& protocol, const std::string& protocol_text,
@@ -96,8 +99,7 @@ struct StoredSession {
   std::optional<ObserverParams> observer;
   std::int64_t last_t_ns = 0;  // latest time stamp logged (a resumed clock starts after it)
 };
-std::variant<StoredSession, RunError> read_stored_session(const std::string& db_path,
-                                                          std::int64_t session_id);
+Result<StoredSession> read_stored_session(const std::string& db_path, std::int64_t session_id);
 
 // Continues a session from its first incomplete trial. `stored` is what
 // read_stored_session returned and `protocol` its protocol text, loaded; the

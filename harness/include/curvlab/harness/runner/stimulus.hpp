@@ -5,6 +5,8 @@
 // observer judges (DESIGN.md §5).
 #pragma once
 
+#include "curvlab/harness/runner/phase.hpp"
+
 #include "curvlab/geometry/calibration.hpp"
 #include "curvlab/geometry/perception.hpp"
 #include "curvlab/geometry/table.hpp"
@@ -80,9 +82,8 @@ class TrialScene {
                                                      const protocol::Settings& s,
                                                      const std::string& prompt,
                                                      const std::string& font_path);
-  // Visibility for a phase ("fixation", "stimulus", "response", …) and the
-  // stimulus placement (fixed at onset).
-  void show(const std::string& phase, bool stimulus_during_response);
+  // Visibility for a phase and the stimulus placement (fixed at onset).
+  void show(Phase phase, bool stimulus_during_response);
   void place(const Placement& placement, const geometry::Isometry& head_at_onset);
   // A changed stimulus during the trial (method of adjustment): the stick's
   // shape and pose and the cloth's convexity follow the settings.

@@ -1,0 +1,42 @@
+// The simulated observer's key presses for one trial (DESIGN.md §5): the
+// session schedules them on the session clock and feeds each to the trial as
+// an input when its time has come, exactly as a participant's presses arrive.
+#pragma once
+
+#include "curvlab/harness/protocol/adjustment.hpp"
+#include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/harness/runner/observer.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::harness::runner {
+
+struct ScheduledKey {
+  std::int64_t t_ns = 0;
+  std::string name;
+};
+
+struct ObserverAnswer {
+  std::vector<ScheduledKey> keys;  // in time order
+  double perceived_m = 0.0;        // the judged quantity at onset (logged with the onset)
+};
+
+// The seed of the observer's random stream for one attempt of one trial:
+// from the observer's and the session's seeds, the trial's index and the
+// attempt (numbered from 1), never from what happened before, so that a
+// resumed session draws what the uninterrupted one would have.
+std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_seed, std::size_t trial_index,
+                           std::int64_t attempt);
+
+// What `observer` presses for a trial whose stimulus came up at `onset_ns`
+// (session clock of the onset frame) with the head at `head`.
+ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, const protocol::Judgement& j,
+                           const protocol::Settings& s, const Placement& placement,
+                           const geometry::Isometry& head, std::int64_t onset_ns,
+                           const std::optional<protocol::Adjustment>& adjustment);
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,40 @@
+// The terminal progress bar of a session: one line on stderr, redrawn in
+// place, only when stderr is a terminal. Owned by the session thread.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <unistd.h>
+
+namespace curvlab::harness::runner {
+
+class Progress {
+ public:
+  explicit Progress(bool on) : on_(on && isatty(STDERR_FILENO) != 0) {}
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+  ~Progress() {
+    if (drawn_) std::fputc('\n', stderr);
+  }
+
+  void update(std::int64_t done, std::int64_t total, const std::string& block) {
+    if (!on_ || total <= 0) return;
+    constexpr int width = 30;
+    const auto filled = static_cast<std::size_t>(width * done / total);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    std::fprintf(stderr, "\r[%s%s] %lld/%lld trials  %-16.16s %5.0f s", std::string(filled, '#').c_str(),
+                 std::string(static_cast<std::size_t>(width) - filled, '.').c_str(), static_cast<long long>(done),
+                 static_cast<long long>(total), block.c_str(), s);
+    std::fflush(stderr);
+    drawn_ = true;
+  }
+
+ private:
+  bool on_;
+  bool drawn_ = false;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,707 @@
+#include "session_loop.hpp"
+
+#include "observer_keys.hpp"
+#include "progress.hpp"
+#include "session_records.hpp"
+
+#include "curvlab/harness/protocol/adjustment.hpp"
+#include "curvlab/harness/protocol/staircase.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/trial_state.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <deque>
+#include <exception>
+#include <filesystem>
+#include <map>
+
+namespace curvlab::harness::runner {
+
+namespace {
+
+using geometry::Isometry;
+using protocol::JudgementType;
+using protocol::PlannedTrial;
+using protocol::Settings;
+using SteadyTime = std::chrono::steady_clock;
+
+enum class Outcome { done, quit };
+
+// Ends the run with an error; caught at the top of SessionLoop::run.
+struct Stop {
+  Error error;
+};
+
+FrameSignal to_frame_signal(BackendSignal s) {
+  switch (s) {
+    case BackendSignal::pause: return FrameSignal::pause;
+    case BackendSignal::resume: return FrameSignal::resume;
+    case BackendSignal::quit: return FrameSignal::quit;
+    case BackendSignal::recenter: return FrameSignal::recenter;
+    case BackendSignal::none: break;
+  }
+  return FrameSignal::none;
+}
+
+std::string trial_line(const PlannedTrial& t) {
+  std::string line = t.block + "  trial " + std::to_string(t.trial_in_block + 1);
+  for (const auto& [f, l] : t.levels) line += "  " + f + "=" + l;
+  return line;
+}
+
+}  // namespace
+
+class SessionLoop::Impl {
+ public:
+  explicit Impl(SessionSetup s)
+      : p_(*s.protocol),
+        design_(std::move(s.design)),
+        store_(*s.store),
+        writer_(*s.writer),
+        backend_(*s.backend),
+        clock_(*s.clock),
+        options_(std::move(s.options)),
+        session_id_(s.session_id),
+        trial_ids_(std::move(s.trial_ids)),
+        frame_index_(s.frame_offset),
+        first_trial_attempts_(s.first_trial_attempts),
+        first_trial_aborts_(s.first_trial_aborts),
+        progress_(options_.progress) {
+    dominant_ = options_.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
+    restore_staircases(s.staircase_history);
+  }
+
+  RunResult run(std::size_t first, bool start_pages) {
+    const auto wall0 = SteadyTime::now();
+    session_start_ns_ = clock_.now_ns();
+    summary_.session_id = session_id_;
+    summary_.trials_planned = static_cast<std::int64_t>(design_.trials.size());
+    // One entry per frame: reserved up front so the frame loop does not grow it.
+    cpu_ns_.reserve(static_cast<std::size_t>(design_.estimated_duration_ms() * p_.refresh_hz / 1000) + 1024);
+    try {
+      const Outcome outcome = run_trials(first, start_pages);
+      end_session(outcome == Outcome::done ? data::SessionStatus::completed : data::SessionStatus::interrupted);
+    } catch (const Stop& stop) {
+      return interrupted(stop.error);
+    } catch (const std::exception& e) {
+      // Backend failures (BackendFailure: a Vulkan or OpenXR call, named
+      // with its result) and anything else thrown from the frame loop.
+      return interrupted(Error{Error::Kind::api, e.what()});
+    }
+    summarize(wall0);
+    return summary_;
+  }
+
+ private:
+  // ---- the session: pages, blocks, breaks, trials ------------------------
+
+  Outcome run_trials(std::size_t first, bool start_pages) {
+    // Pages are shown in the scene of the trial that follows them (the
+    // first here, the previous one later): each trial prepares its own.
+    prepare(design_.trials[std::min(first, design_.trials.size() - 1)].settings);
+    if (start_pages && pages(p_.instructions_start, Phase::instructions, 0, std::nullopt) == Outcome::quit)
+      return Outcome::quit;
+    for (std::size_t i = first; i < design_.trials.size(); ++i) {
+      const PlannedTrial& t = design_.trials[i];
+      if (enter_block(i, first) == Outcome::quit || take_break(i, first) == Outcome::quit) return Outcome::quit;
+      if (staircase_finished(t)) {
+        writer_.journal(data::EndUnanswered{trial_ids_[i], false});
+        ++summary_.trials_skipped;
+        continue;
+      }
+      if (run_trial(i) == Outcome::quit) return Outcome::quit;
+      progress_.update(static_cast<std::int64_t>(i + 1), summary_.trials_planned, t.block);
+    }
+    return pages(p_.instructions_end, Phase::done, 0, std::nullopt);
+  }
+
+  Outcome enter_block(std::size_t i, std::size_t first) {
+    const PlannedTrial& t = design_.trials[i];
+    if (block_position_ == t.block_position) return Outcome::done;
+    block_position_ = t.block_position;
+    const auto& pb = design_.blocks.at(t.block_position);
+    event(std::nullopt, "block_start", Json{{"block", pb.name}, {"block_index", t.block_position}});
+    if (t.trial_in_block != 0 && i != first) return Outcome::done;
+    return pages(pb.instructions, Phase::instructions, 0, std::nullopt);
+  }
+
+  Outcome take_break(std::size_t i, std::size_t first) {
+    const PlannedTrial& t = design_.trials[i];
+    if (!t.break_before || i == first) return Outcome::done;
+    const auto& b = block_of(p_, t.block);
+    return pages({b.break_text.empty() ? std::string("Break") : b.break_text}, Phase::break_page,
+                 b.break_min_ms * 1'000'000, trial_ids_[i]);
+  }
+
+  bool staircase_finished(const PlannedTrial& t) {
+    return t.staircase >= 0 && staircases_for(t).at(static_cast<std::size_t>(t.staircase)).finished();
+  }
+
+  void end_session(data::SessionStatus status) {
+    event(std::nullopt, "session_end", Json{{"status", data::to_string(status)}});
+    const auto ticket = writer_.journal(data::StatusChange{session_id_, status, true});
+    check(writer_.wait_durable(ticket));
+    check(writer_.flush());
+    summary_.status = data::to_string(status);
+  }
+
+  // Leaves the session resumable: completed trials are on disk already.
+  RunResult interrupted(const Error& error) {
+    const auto ticket = writer_.journal(data::StatusChange{session_id_, data::SessionStatus::interrupted, false});
+    if (!writer_.wait_durable(ticket, std::chrono::seconds(5)))
+      (void)store_.set_session_status(session_id_, data::SessionStatus::interrupted);
+    return Error{error.kind, error.message};
+  }
+
+  void summarize(SteadyTime::time_point wall0) {
+    summary_.wall_s = std::chrono::duration<double>(SteadyTime::now() - wall0).count();
+    summary_.session_s = static_cast<double>(clock_.now_ns() - session_start_ns_) * 1e-9;
+    summary_.samples_dropped = writer_.stats().dropped_tracking + writer_.stats().dropped_frames;
+    if (!cpu_ns_.empty()) {
+      std::sort(cpu_ns_.begin(), cpu_ns_.end());
+      summary_.frame_cpu_median_ms = static_cast<double>(cpu_ns_[cpu_ns_.size() / 2]) * 1e-6;
+      summary_.frame_cpu_p95_ms = static_cast<double>(cpu_ns_[cpu_ns_.size() * 95 / 100]) * 1e-6;
+    }
+    if (auto completed = store_.count_trials(session_id_, "completed")) summary_.trials_completed = completed.value();
+  }
+
+  template <class T>
+  T check(Result<T> r) {
+    if (!r) throw Stop{r.error()};
+    return std::move(r).value();
+  }
+
+  void event(std::optional<std::int64_t> trial_id, std::string kind, const Json& detail) {
+    writer_.journal(data::EventRecord{session_id_, trial_id, clock_.now_ns(), std::move(kind), detail.dump()});
+  }
+
+  protocol::InterleavedStaircases& staircases_for(const PlannedTrial& t) {
+    const auto key = std::pair{t.block_position, t.cell};
+    auto it = staircases_.find(key);
+    if (it == staircases_.end())
+      it = staircases_.emplace(key, protocol::InterleavedStaircases(block_of(p_, t.block).judgement.staircases)).first;
+    return it->second;
+  }
+
+  void restore_staircases(const std::vector<std::pair<std::int64_t, bool>>& history) {
+    std::map<std::int64_t, std::size_t> index_of;
+    for (std::size_t i = 0; i < trial_ids_.size(); ++i) index_of[trial_ids_[i]] = i;
+    for (const auto& [trial_id, positive] : history) {
+      const auto it = index_of.find(trial_id);
+      if (it == index_of.end()) continue;
+      const auto& t = design_.trials[it->second];
+      if (t.staircase >= 0) staircases_for(t).at(static_cast<std::size_t>(t.staircase)).respond(positive);
+    }
+  }
+
+  // World, tracker and scene for these settings (the tracker is kept while
+  // the world stays the same, so the edge correspondence carries over).
+  void prepare(const Settings& s) {
+    auto made = make_world(s);
+    if (auto* e = std::get_if<std::string>(&made)) throw Stop{{Error::Kind::bad_input, "impossible table: " + *e}};
+    World world = std::get<World>(made);
+    const auto algorithm = tracking_algorithm(s);
+    if (!tracker_ || !world_ || !world_->same_as(world) || tracker_->algorithm() != algorithm) {
+      tracker_ = geometry::make_tracker(algorithm, world.space, world.table, physical_table(s, options_.calibration));
+      if (tracker_ && last_lab_) tracker_->update(*last_lab_);
+    }
+    world_ = world;
+    settings_ = s;
+    std::string prompt;
+    if (current_trial_) prompt = block_of(p_, design_.trials[*current_trial_].block).judgement.prompt;
+    auto built = TrialScene::build(*world_, settings_, prompt, font());
+    if (auto* e = std::get_if<std::string>(&built)) throw Stop{{Error::Kind::io, *e}};
+    scene_.emplace(std::move(std::get<TrialScene>(built)));
+  }
+
+  std::string font() const {
+    return options_.font_path.empty() ? std::string(CURVLAB_DEFAULT_FONT) : options_.font_path;
+  }
+  double ipd() const { return options_.ipd_m.value_or(settings_.viewing.ipd_m); }
+  Isometry head() const { return tracker_ ? tracker_->output().pose[0] : Isometry::identity(); }
+
+  // ---- one frame ---------------------------------------------------------
+
+  struct Frame {
+    FrameTiming timing;
+    std::vector<InputEvent> inputs;
+    BackendSignal signal = BackendSignal::none;
+    bool head_tracked = false;
+    SteadyTime::time_point started;
+
+    [[nodiscard]] FrameFacts facts() const {
+      return {timing.now_ns, timing.predicted_display_ns, head_tracked, to_frame_signal(signal)};
+    }
+  };
+
+  // Begins a frame: timing, poses, tracking, input (with the observer's key
+  // presses that are due). false: the backend has ended the session.
+  bool begin(Frame& f) {
+    auto timing = backend_.begin_frame();
+    if (!timing) return false;
+    f.started = SteadyTime::now();
+    f.timing = *timing;
+    lab_ = backend_.poses(f.timing);
+    last_lab_ = lab_;
+    if (tracker_) tracker_->update(lab_);
+    f.head_tracked = tracker_ && tracker_->output().tracked[0];
+    f.inputs.clear();
+    f.signal = backend_.poll_input(f.inputs);
+    while (!scheduled_.empty() && scheduled_.front().t_ns <= f.timing.now_ns) {
+      f.inputs.push_back({scheduled_.front().t_ns, scheduled_.front().name, "observer", true});
+      scheduled_.pop_front();
+    }
+    return true;
+  }
+
+  // Ends a frame: draw (or plan), then log the frame and its samples.
+  renderer::FrameStats end(Frame& f, const Overlay& overlay, bool onset, std::optional<std::int64_t> trial_id) {
+    renderer::FrameDescription desc;
+    desc.space = world_->space;
+    desc.settings = view_settings(settings_, dominant_);
+    desc.head = head();
+    desc.rig = backend_.rig(f.timing, ipd());
+    desc.width_px = static_cast<std::uint32_t>(p_.resolution_width);
+    desc.height_px = static_cast<std::uint32_t>(p_.resolution_height);
+    const bool draw = options_.drawing == FrameDrawing::all || (options_.drawing == FrameDrawing::onset && onset);
+    const auto before_submit = SteadyTime::now();
+    const renderer::FrameStats stats = backend_.submit(scene_->scene(), desc, overlay, draw);
+    const auto after_submit = SteadyTime::now();
+    log_frame(f, stats, trial_id);
+    const auto own = std::chrono::duration_cast<std::chrono::nanoseconds>((before_submit - f.started) +
+                                                                          (SteadyTime::now() - after_submit));
+    cpu_ns_.push_back(own.count() + static_cast<std::int64_t>(stats.cpu_ms * 1e6));
+    ++summary_.frames;
+    ++frame_index_;
+    return stats;
+  }
+
+  // Hands a record to the logger. Fast runs wait for the writer rather than
+  // lose samples; real-time runs never wait (the writer counts the drop).
+  template <class Push>
+  void push(Push&& try_push) {
+    if (try_push() || !options_.lossless_logging) return;
+    for (int i = 0; i < 100; ++i) {
+      check(writer_.flush());
+      if (try_push()) return;
+    }
+  }
+
+  data::TrackingSample sample(const Frame& f, std::int64_t trial_id, int d) const {
+    const auto& out = tracker_->output();
+    const auto& pose = lab_.pose[static_cast<std::size_t>(d)];
+    static constexpr data::TrackedDevice devices[] = {data::TrackedDevice::head, data::TrackedDevice::left_hand,
+                                                      data::TrackedDevice::right_hand};
+    data::TrackingSample s;
+    s.session_id = session_id_;
+    s.trial_id = trial_id;
+    s.frame_index = frame_index_;
+    s.t_ns = f.timing.predicted_display_ns;
+    s.device = devices[d];
+    s.position_valid = s.orientation_valid = pose.valid;
+    s.lab_position_m = {pose.position_m.x, pose.position_m.y, pose.position_m.z};
+    s.lab_orientation_xyzw = {pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w};
+    s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)];
+    const auto& m = out.pose[static_cast<std::size_t>(d)].m;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) s.virtual_pose[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
+    s.has_state = true;
+    s.state.physical_edge = out.state.physical_edge;
+    s.state.virtual_edge = out.state.virtual_edge;
+    s.state.laps = out.state.physical_laps;
+    s.state.anchor_fraction = out.state.anchor_fraction;
+    if (d > 0) {
+      const auto& c = out.coherence[static_cast<std::size_t>(d - 1)];
+      s.state.coherence_error_m = c.error_m;
+      s.state.coherence_error_rad = c.error_rad;
+    }
+    return s;
+  }
+
+  void log_frame(const Frame& f, const renderer::FrameStats& stats, std::optional<std::int64_t> trial_id) {
+    const std::int64_t tid = trial_id.value_or(-1);
+    if (tracker_)
+      for (int d = 0; d < geometry::kDeviceCount; ++d) {
+        const auto s = sample(f, tid, d);
+        push([&] { return writer_.push_tracking(s); });
+      }
+    data::FrameRecord fr;
+    fr.session_id = session_id_;
+    fr.trial_id = tid;
+    fr.frame_index = frame_index_;
+    fr.t_ns = f.timing.now_ns;
+    fr.predicted_display_ns = f.timing.predicted_display_ns;
+    fr.cpu_time_ns = static_cast<std::int64_t>(stats.cpu_ms * 1e6);
+    fr.gpu_time_ns = stats.gpu_ms > 0.0 ? static_cast<std::int64_t>(stats.gpu_ms * 1e6) : -1;
+    fr.views = stats.views;
+    fr.passes = stats.reused ? 0 : stats.passes;
+    fr.draws = stats.draws;
+    fr.triangles = static_cast<std::int64_t>(stats.triangles);
+    push([&] { return writer_.push_frame(fr); });
+  }
+
+  // ---- pages and holds: instructions, breaks, the end, pauses ------------
+
+  Outcome pages(const std::vector<std::string>& texts, Phase phase, std::int64_t min_ns,
+                std::optional<std::int64_t> trial_id) {
+    for (std::size_t k = 0; k < texts.size(); ++k)
+      if (page(texts[k], k, phase, min_ns, trial_id) == Outcome::quit) return Outcome::quit;
+    scene_->show(Phase::iti, false);
+    return Outcome::done;
+  }
+
+  Outcome page(const std::string& text, std::size_t k, Phase phase, std::int64_t min_ns,
+               std::optional<std::int64_t> trial_id) {
+    Frame f;
+    if (!begin(f)) return Outcome::quit;
+    if (auto err = scene_->set_page(text, head())) throw Stop{{Error::Kind::io, *err}};
+    scene_->show(phase, false);
+    Page state(f.timing.now_ns, min_ns);
+    if (observer_params()) scheduled_.push_back({f.timing.now_ns + min_ns + 300'000'000, "space"});
+    event(trial_id, std::string(to_string(phase)), Json{{"page", k}, {"text", text}});
+    const Overlay overlay{phase, text, true};
+    for (;;) {
+      const bool advance = state.frame(f.timing.now_ns, f.inputs);
+      if (f.signal == BackendSignal::quit) return Outcome::quit;
+      if (f.signal == BackendSignal::pause) {
+        // The page stays; keys pressed while paused or held from then do not count.
+        if (hold(phase, trial_id) == Outcome::quit) return Outcome::quit;
+        state.restart();
+      } else {
+        end(f, overlay, false, trial_id);
+        if (advance) return Outcome::done;
+      }
+      if (!begin(f)) return Outcome::quit;
+    }
+  }
+
+  // A pause outside a trial's attempt (pages, the inter-trial interval):
+  // nothing to repeat; the session waits for the resume.
+  Outcome hold(Phase phase, std::optional<std::int64_t> trial_id) {
+    const std::int64_t from = clock_.now_ns();
+    event(trial_id, "paused", Json{{"phase", to_string(phase)}});
+    if (wait_until_ready(AbortReason::pause, trial_id) == Outcome::quit) return Outcome::quit;
+    event(trial_id, "unpaused",
+          Json{{"phase", to_string(phase)}, {"paused_ms", static_cast<double>(clock_.now_ns() - from) * 1e-6}});
+    return Outcome::done;
+  }
+
+  // After an abort: wait for the resume (pause) or for the head (otherwise),
+  // so that one loss does not abort the trials after it as well.
+  Outcome wait_until_ready(AbortReason reason, std::optional<std::int64_t> trial_id) {
+    const bool paused = reason == AbortReason::pause;
+    if (paused) writer_.journal(data::StatusChange{session_id_, data::SessionStatus::paused, false});
+    scene_->show(Phase::iti, false);
+    const Overlay overlay{paused ? Phase::paused : Phase::tracking_lost, "waiting", false};
+    for (;;) {
+      Frame f;
+      if (!begin(f)) return Outcome::quit;
+      end(f, overlay, false, trial_id);
+      if (f.signal == BackendSignal::quit) return Outcome::quit;
+      if (paused ? f.signal == BackendSignal::resume : f.head_tracked) break;
+    }
+    if (paused) writer_.journal(data::StatusChange{session_id_, data::SessionStatus::running, false});
+    return Outcome::done;
+  }
+
+  // ---- one trial -----------------------------------------------------------
+
+  struct TrialRun {
+    std::size_t index = 0;
+    std::int64_t id = 0;
+    const PlannedTrial* planned = nullptr;
+    const protocol::Judgement* judgement = nullptr;
+    Settings settings;
+    std::optional<double> staircase_value;
+    std::string line;
+    std::int64_t attempts = 0;  // attempts made so far, stored ones included
+    std::int64_t aborts = 0;    // of which ended in a logged abort
+  };
+
+  struct AttemptRun {
+    std::int64_t number = 1;
+    std::optional<protocol::Adjustment> adjustment;
+    Isometry head_at_onset;
+    Placement placement;
+    std::optional<std::pair<std::string, InputEvent>> answer;
+    std::optional<AbortReason> abort;
+    bool backend_ended = false;  // begin_frame gave no frame: no abort event
+    std::optional<std::int64_t> onset_ns;
+    int lost_spells = 0;
+    std::int64_t lost_ns = 0;
+  };
+
+  TrialRun start_trial(std::size_t i) {
+    TrialRun t;
+    t.index = i;
+    t.id = trial_ids_[i];
+    t.planned = &design_.trials[i];
+    t.judgement = &block_of(p_, t.planned->block).judgement;
+    t.settings = t.planned->settings;
+    t.line = trial_line(*t.planned);
+    if (t.planned->staircase >= 0) {
+      t.staircase_value = staircases_for(*t.planned).at(static_cast<std::size_t>(t.planned->staircase)).value();
+      protocol::set_numeric_setting(t.settings, t.judgement->parameter, *t.staircase_value);
+    }
+    if (!resumed_trial_started_) {
+      // The first trial of a resumed run may have attempts stored already.
+      t.attempts = first_trial_attempts_;
+      t.aborts = first_trial_aborts_;
+      resumed_trial_started_ = true;
+    }
+    current_trial_ = i;
+    return t;
+  }
+
+  Outcome run_trial(std::size_t i) {
+    TrialRun t = start_trial(i);
+    for (;;) {
+      AttemptRun a = run_attempt(t);
+      if (!a.abort) {
+        complete(t, a);
+        const Outcome o = inter_trial_interval(t);
+        current_trial_.reset();
+        return o;
+      }
+      if (a.backend_ended) return Outcome::quit;
+      event(t.id, "trial_aborted", Json{{"reason", to_string(*a.abort)}, {"attempt", a.number}});
+      if (*a.abort == AbortReason::quit) return Outcome::quit;
+      ++t.aborts;
+      if (wait_until_ready(*a.abort, t.id) == Outcome::quit) return Outcome::quit;
+      if (after_abort(*a.abort, a.number, t.settings.tracking_loss) == AfterAbort::give_up) {
+        give_up(t, *a.abort, a.number);
+        return Outcome::done;
+      }
+      event(t.id, "trial_repeated", Json{{"reason", to_string(*a.abort)}});
+    }
+  }
+
+  void give_up(const TrialRun& t, AbortReason reason, std::int64_t attempts) {
+    writer_.journal(data::EndUnanswered{t.id, true});
+    event(t.id, "trial_abandoned", Json{{"reason", to_string(reason)}, {"attempts", attempts}});
+    ++summary_.trials_aborted;
+    current_trial_.reset();
+  }
+
+  // A new attempt: the stimulus from its start values, the observer's
+  // stream for (session, trial, attempt), the attempt counted in the store.
+  AttemptRun begin_attempt(TrialRun& t) {
+    AttemptRun a;
+    a.number = ++t.attempts;
+    if (a.number > 1) ++summary_.attempts_repeated;
+    const auto& j = *t.judgement;
+    if (j.type == JudgementType::adjustment && j.adjustment) {
+      a.adjustment.emplace(*j.adjustment, t.planned->adjustment_start.value_or(j.adjustment->start_min));
+      protocol::set_numeric_setting(t.settings, j.adjustment->parameter, a.adjustment->value());
+    }
+    prepare(t.settings);
+    writer_.journal(data::BeginTrial{t.id});
+    if (const auto& base = observer_params()) {
+      ObserverParams op = *base;
+      op.seed = attempt_seed(base->seed, design_.seed, t.index, t.aborts + 1);
+      observer_.emplace(op);
+    }
+    scheduled_.clear();
+    return a;
+  }
+
+  AttemptRun run_attempt(TrialRun& t) {
+    AttemptRun a = begin_attempt(t);
+    Frame f;
+    if (!begin(f)) {
+      a.abort = AbortReason::quit;
+      a.backend_ended = true;
+      return a;
+    }
+    Attempt state(t.settings.timeline, t.settings.tracking_loss, f.timing.now_ns);
+    scene_->place(place_stimulus(*world_, t.settings, head()), head());
+    for (;;) {
+      const AttemptStep step = state.advance(f.facts());
+      if (step.abort) {
+        a.abort = step.abort;
+        break;
+      }
+      if (step.onset) present_onset(t, a, f);
+      take_inputs(t, a, state, f);
+      scene_->show(step.phase, t.settings.timeline.stimulus_during_response);
+      const Overlay overlay{step.phase, t.line, step.phase == Phase::response || step.phase == Phase::stimulus};
+      const auto stats = end(f, overlay, step.onset, t.id);
+      if (step.onset) log_onset(t, a, stats, f.timing.predicted_display_ns);
+      if (state.over(f.timing.now_ns)) break;
+      if (!begin(f)) {
+        a.abort = AbortReason::quit;
+        a.backend_ended = true;
+        break;
+      }
+    }
+    state.finish(clock_.now_ns());
+    a.onset_ns = state.onset_display_ns();
+    a.lost_spells = state.loss().spells();
+    a.lost_ns = state.loss().lost_ns();
+    return a;
+  }
+
+  // Onset: the stimulus is placed once, from the head at this frame.
+  void present_onset(const TrialRun& t, AttemptRun& a, const Frame& f) {
+    a.head_at_onset = head();
+    a.placement = place_stimulus(*world_, t.settings, a.head_at_onset);
+    scene_->place(a.placement, a.head_at_onset);
+    if (!observer_) return;
+    auto answer = plan_answer(*observer_, *world_, *t.judgement, t.settings, a.placement, a.head_at_onset,
+                              f.timing.now_ns, a.adjustment);
+    scheduled_.assign(answer.keys.begin(), answer.keys.end());
+    last_perceived_ = answer.perceived_m;
+  }
+
+  // Responses count from the onset's display to the end of the window; a
+  // press before the stimulus was on the display is an anticipation.
+  void take_inputs(TrialRun& t, AttemptRun& a, Attempt& state, const Frame& f) {
+    for (const auto& in : f.inputs) {
+      if (!in.pressed || a.answer) continue;
+      const auto verdict = classify_input(*t.judgement, in.name, state.answerable(in.t_ns));
+      switch (verdict.use) {
+        case InputUse::ignored: break;
+        case InputUse::early:
+          event(t.id, "early_input", Json{{"name", in.name}, {"device", in.device}, {"t_ns", in.t_ns}});
+          break;
+        case InputUse::choose:
+          a.answer = std::pair{t.judgement->options[verdict.option].value, in};
+          state.answered();
+          break;
+        case InputUse::increase:
+        case InputUse::decrease:
+          verdict.use == InputUse::increase ? a.adjustment->increase() : a.adjustment->decrease();
+          protocol::set_numeric_setting(t.settings, t.judgement->adjustment->parameter, a.adjustment->value());
+          a.placement = place_stimulus(*world_, t.settings, a.head_at_onset);
+          scene_->set_stimulus(t.settings, a.placement);
+          event(t.id, "adjusted",
+                Json{{"value", a.adjustment->value()}, {"t_ns", in.t_ns}, {"frame_index", frame_index_}});
+          break;
+        case InputUse::confirm: {
+          a.adjustment->confirm();
+          char buf[64];
+          std::snprintf(buf, sizeof buf, "%.9g", a.adjustment->value());
+          a.answer = std::pair{std::string(buf), in};
+          state.answered();
+          break;
+        }
+      }
+    }
+  }
+
+  void log_onset(const TrialRun& t, const AttemptRun& a, const renderer::FrameStats& stats,
+                 std::int64_t display_ns) {
+    Json detail{{"frame_index", frame_index_ - 1},
+                {"predicted_display_ns", display_ns},
+                {"attempt", a.number},
+                {"head_pose", matrix_json(a.head_at_onset)},
+                {"stick_pose", matrix_json(a.placement.stick_pose)},
+                {"views", stats.views},
+                {"draws", stats.draws}};
+    if (observer_) detail["perceived_sagitta_m"] = last_perceived_;
+    if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "trial_%04zu", t.index);
+      const auto files = backend_.save_frame((std::filesystem::path(options_.images_dir) / stem).string());
+      detail["images"] = files;
+      summary_.images.insert(summary_.images.end(), files.begin(), files.end());
+    }
+    event(t.id, "onset", detail);
+  }
+
+  // The answer (or the timeout), the staircase's step and the lost tracking,
+  // journalled; durable before the next trial starts.
+  void complete(TrialRun& t, const AttemptRun& a) {
+    if (a.lost_spells > 0) {
+      event(t.id, "tracking_flagged",
+            Json{{"lost_ms", static_cast<double>(a.lost_ns) * 1e-6}, {"spells", a.lost_spells}, {"attempt", a.number}});
+      ++summary_.trials_flagged;
+    }
+    data::TrialResult r;
+    r.trial_id = t.id;
+    r.onset_ns = *a.onset_ns;
+    if (a.answer) {
+      r.response = a.answer->first;
+      r.response_ns = a.answer->second.t_ns;
+      r.response_device = a.answer->second.device;
+    } else {
+      r.response = "timeout";
+      r.response_ns = clock_.now_ns();
+      r.response_device = "none";
+    }
+    if (t.staircase_value && a.answer) {
+      auto& stair = staircases_for(*t.planned).at(static_cast<std::size_t>(t.planned->staircase));
+      const int reversals = stair.reversals();
+      const int step = stair.trials();
+      const bool positive = a.answer->first == t.judgement->positive;
+      stair.respond(positive);
+      r.staircase_step = data::StaircaseStep{staircase_key(p_, *t.planned), step, *t.staircase_value, positive,
+                                             stair.reversals() > reversals, stair.value()};
+    }
+    completed_ticket_ = writer_.journal(std::move(r));
+  }
+
+  // Nothing on screen. A pause here holds the session; the interval starts
+  // again after it. The trial just completed is on disk before this returns.
+  Outcome inter_trial_interval(const TrialRun& t) {
+    std::int64_t iti_end = clock_.now_ns() + t.settings.timeline.iti_ms * 1'000'000;
+    scene_->show(Phase::iti, false);
+    for (;;) {
+      Frame g;
+      if (!begin(g)) return Outcome::quit;
+      if (g.signal == BackendSignal::pause) {
+        if (hold(Phase::iti, t.id) == Outcome::quit) return Outcome::quit;
+        scene_->show(Phase::iti, false);
+        iti_end = clock_.now_ns() + t.settings.timeline.iti_ms * 1'000'000;
+        continue;
+      }
+      end(g, Overlay{Phase::iti, t.line, false}, false, std::nullopt);
+      if (g.signal == BackendSignal::quit) return Outcome::quit;
+      if (g.timing.now_ns >= iti_end) break;
+    }
+    check(writer_.wait_durable(completed_ticket_));
+    return Outcome::done;
+  }
+
+  const std::optional<ObserverParams>& observer_params() const { return options_.observer; }
+
+  const protocol::Protocol& p_;
+  protocol::Design design_;
+  data::SessionStore& store_;
+  data::SampleWriter& writer_;
+  Backend& backend_;
+  const devices::Clock& clock_;
+  RunOptions options_;
+  std::int64_t session_id_;
+  std::vector<std::int64_t> trial_ids_;
+  std::int64_t frame_index_;
+  std::int64_t first_trial_attempts_ = 0;
+  std::int64_t first_trial_aborts_ = 0;
+  bool resumed_trial_started_ = false;
+  Progress progress_;
+  std::optional<SimulatedObserver> observer_;
+  renderer::Eye dominant_ = renderer::Eye::right;
+  std::map<std::pair<std::size_t, std::size_t>, protocol::InterleavedStaircases> staircases_;
+  std::optional<World> world_;
+  Settings settings_;
+  std::unique_ptr<geometry::Tracker> tracker_;
+  std::optional<TrialScene> scene_;
+  std::optional<std::size_t> current_trial_;
+  std::optional<std::size_t> block_position_;
+  geometry::LabFrame lab_;
+  std::optional<geometry::LabFrame> last_lab_;
+  std::deque<ScheduledKey> scheduled_;
+  double last_perceived_ = 0.0;
+  std::uint64_t completed_ticket_ = 0;
+  std::int64_t session_start_ns_ = 0;
+  std::vector<std::int64_t> cpu_ns_;
+  SessionSummary summary_;
+};
+
+SessionLoop::SessionLoop(SessionSetup setup) : impl_(std::make_unique<Impl>(std::move(setup))) {}
+SessionLoop::~SessionLoop() = default;
+RunResult SessionLoop::run(std::size_t first, bool start_pages) { return impl_->run(first, start_pages); }
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,89 @@
+#include "session_records.hpp"
+
+#include "curvlab/harness/runner/session.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace curvlab::harness::runner {
+
+using protocol::PlannedTrial;
+using protocol::Protocol;
+
+const protocol::Block& block_of(const Protocol& p, const std::string& name) {
+  for (const auto& b : p.blocks)
+    if (b.name == name) return b;
+  std::fprintf(stderr, "curvlab: planned trial names block '%s', which protocol %s lacks\n", name.c_str(),
+               p.file.c_str());
+  std::abort();
+}
+
+std::string staircase_key(const Protocol& p, const PlannedTrial& t) {
+  const auto& b = block_of(p, t.block);
+  std::string key = t.block + ":";
+  if (protocol::block_cells(p, b).size() > 1) key += "cell" + std::to_string(t.cell) + ":";
+  return key + b.judgement.staircases.at(static_cast<std::size_t>(t.staircase)).name;
+}
+
+Json matrix_json(const geometry::Isometry& iso) {
+  Json a = Json::array();
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) a.push_back(iso.m[c][r]);
+  return a;
+}
+
+std::vector<data::BlockPlan> block_plans(const Protocol& p, const protocol::Design& d) {
+  std::vector<data::BlockPlan> out;
+  for (const auto& b : d.blocks) {
+    data::BlockPlan bp;
+    bp.name = b.name;
+    bp.is_practice = b.practice;
+    Json settings{{"instructions", b.instructions}, {"break_min_ms", b.break_min_ms}};
+    bp.settings_json = settings.dump();
+    for (std::size_t k = 0; k < b.trial_count; ++k) {
+      const auto& t = d.trials.at(b.first_trial + k);
+      bp.trials.push_back({conditions_json(p, t), stimulus_json(t)});
+    }
+    out.push_back(std::move(bp));
+  }
+  return out;
+}
+
+std::string conditions_json(const Protocol& p, const PlannedTrial& t) {
+  Json j;
+  for (const auto& [factor, label] : t.levels) j[factor] = label;
+  const auto& s = t.settings;
+  auto add = [&](const char* key, const std::string& v) {
+    if (!j.contains(key)) j[key] = v;
+  };
+  add("space", std::string(geometry::to_string(s.space.kind)));
+  add("view", view_name(s));
+  add("projection", std::string(protocol::to_string(s.viewing.projection)));
+  add("eyes", std::string(protocol::to_string(s.viewing.eyes)));
+  add("judged", judged(s) == Judged::stick ? "stick" : "table");
+  if (t.staircase >= 0)
+    add("staircase", block_of(p, t.block).judgement.staircases.at(static_cast<std::size_t>(t.staircase)).name);
+  return j.dump();
+}
+
+std::string stimulus_json(const PlannedTrial& t) {
+  const auto& s = t.settings;
+  Json j;
+  j["stick_sagitta_m"] = s.stimulus.stick_sagitta_m;
+  j["table_sagitta_m"] = s.stimulus.table_sagitta_m;
+  j["stick_length_m"] = s.stimulus.stick_length_m;
+  j["stick_distance_m"] = s.stimulus.stick_distance_m;
+  j["stick_height_m"] = s.stimulus.stick_height_m;
+  j["stick_anchor"] = std::string(protocol::to_string(s.stimulus.stick_anchor));
+  j["show_stick"] = s.stimulus.show_stick;
+  j["show_table"] = s.stimulus.show_table;
+  j["radius_m"] = t.derived.radius_m;
+  j["table_sides"] = t.derived.table_sides;
+  j["tracking"] = std::string(protocol::to_string(s.tracking));
+  j["ipd_m"] = s.viewing.ipd_m;
+  if (t.adjustment_start) j["adjustment_start"] = *t.adjustment_start;
+  return j.dump();
+}
+
+}  // namespace curvlab::harness::runner

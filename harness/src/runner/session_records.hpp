@@ -1,0 +1,30 @@
+// What a session stores about its plan and its frames, as JSON and records
+// (data_schema/codebook.md): shared by the session loop, run and resume.
+#pragma once
+
+#include "curvlab/geometry/isometry.hpp"
+#include "curvlab/harness/data/records.hpp"
+#include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/protocol.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace curvlab::harness::runner {
+
+using Json = nlohmann::ordered_json;
+
+// The block a planned trial belongs to. Its name comes from the design of
+// the same protocol, so a miss is a broken contract: it aborts.
+const protocol::Block& block_of(const protocol::Protocol& p, const std::string& name);
+// Staircases are named uniquely within a session: the block, the cell when
+// the block has several, and the staircase's own name.
+std::string staircase_key(const protocol::Protocol& p, const protocol::PlannedTrial& t);
+// A 4×4 isometry as 16 numbers, column-major.
+Json matrix_json(const geometry::Isometry& iso);
+// Every block and trial of a design, as the store keeps them.
+std::vector<data::BlockPlan> block_plans(const protocol::Protocol& p, const protocol::Design& d);
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,100 @@
+#include "curvlab/harness/runner/trial_state.hpp"
+
+#include <algorithm>
+
+namespace curvlab::harness::runner {
+
+namespace {
+
+constexpr std::int64_t ms(std::int64_t v) { return v * 1'000'000; }
+
+bool listed(const std::vector<std::string>& keys, const std::vector<std::string>& buttons,
+            const std::string& name) {
+  return std::find(keys.begin(), keys.end(), name) != keys.end() ||
+         std::find(buttons.begin(), buttons.end(), name) != buttons.end();
+}
+
+}  // namespace
+
+bool TrackingLossMonitor::update(std::int64_t now_ns, bool tracked) {
+  if (tracked) {
+    finish(now_ns);
+    untracked_since_ = -1;
+    return false;
+  }
+  if (untracked_since_ < 0) untracked_since_ = now_ns;
+  if (now_ns - untracked_since_ < ms(policy_.loss_ms)) return false;
+  if (policy_.on_loss != protocol::OnTrackingLoss::flag) return true;
+  in_spell_ = true;
+  return false;
+}
+
+void TrackingLossMonitor::finish(std::int64_t now_ns) {
+  if (!in_spell_) return;
+  lost_ns_ += now_ns - untracked_since_;
+  ++spells_;
+  in_spell_ = false;
+}
+
+Attempt::Attempt(const protocol::Timeline& timeline, const protocol::TrackingLoss& loss, std::int64_t start_ns)
+    : timeline_(timeline), loss_(loss), start_ns_(start_ns) {}
+
+AttemptStep Attempt::advance(const FrameFacts& frame) {
+  AttemptStep step;
+  switch (frame.signal) {
+    case FrameSignal::quit: step.abort = AbortReason::quit; return step;
+    case FrameSignal::pause: step.abort = AbortReason::pause; break;
+    case FrameSignal::recenter: step.abort = AbortReason::recenter; break;
+    default: break;
+  }
+  // The loss is tracked even when the frame is aborted for another reason,
+  // so that a spell's time is complete.
+  const bool lost = loss_.update(frame.now_ns, frame.head_tracked);
+  if (!step.abort && lost) step.abort = AbortReason::tracking_lost;
+  if (step.abort) return step;
+
+  if (!onset_frame_ns_ && frame.now_ns - start_ns_ >= ms(timeline_.fixation_ms)) {
+    onset_frame_ns_ = frame.now_ns;
+    onset_display_ns_ = frame.display_ns;
+    step.onset = true;
+  }
+  if (!onset_frame_ns_) step.phase = Phase::fixation;
+  else if (frame.now_ns - *onset_frame_ns_ < ms(timeline_.stimulus_ms)) step.phase = Phase::stimulus;
+  else step.phase = Phase::response;
+  return step;
+}
+
+bool Attempt::over(std::int64_t now_ns) const {
+  if (answered_) return true;
+  return onset_frame_ns_ && now_ns - *onset_frame_ns_ >= ms(timeline_.stimulus_ms + timeline_.response_ms);
+}
+
+AfterAbort after_abort(AbortReason reason, std::int64_t attempt, const protocol::TrackingLoss& policy) {
+  // A quit attempt is run again when the session is resumed.
+  if (reason == AbortReason::quit) return AfterAbort::repeat;
+  if (reason == AbortReason::tracking_lost && policy.on_loss == protocol::OnTrackingLoss::abort)
+    return AfterAbort::give_up;
+  if (policy.max_attempts > 0 && attempt >= policy.max_attempts) return AfterAbort::give_up;
+  return AfterAbort::repeat;
+}
+
+InputVerdict classify_input(const protocol::Judgement& j, const std::string& name, bool answerable) {
+  if (!answerable) return {InputUse::early};
+  if (j.type == protocol::JudgementType::adjustment) {
+    if (!j.adjustment) return {};
+    const auto& a = *j.adjustment;
+    if (listed(a.keys_increase, a.buttons_increase, name)) return {InputUse::increase};
+    if (listed(a.keys_decrease, a.buttons_decrease, name)) return {InputUse::decrease};
+    if (listed(a.keys_confirm, a.buttons_confirm, name)) return {InputUse::confirm};
+    return {};
+  }
+  for (std::size_t k = 0; k < j.options.size(); ++k)
+    if (listed(j.options[k].keys, j.options[k].buttons, name)) return {InputUse::choose, k};
+  return {};
+}
+
+bool Page::is_continue(const std::string& name) {
+  return name == "space" || name == "enter" || name == "return" || name == "continue";
+}
+
+}  // namespace curvlab::harness::runner

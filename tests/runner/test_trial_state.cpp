@@ -1,0 +1,197 @@
+// The trial state machine driven frame by frame with made-up facts: no
+// backend, no clock, no database.
+#include "curvlab/harness/runner/trial_state.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace rn = curvlab::harness::runner;
+namespace pr = curvlab::harness::protocol;
+
+namespace {
+
+constexpr std::int64_t kMs = 1'000'000;
+constexpr std::int64_t kPeriod = 11'111'111;  // 90 Hz
+constexpr std::int64_t kLatency = 20 * kMs;   // frame start → display
+
+pr::Timeline timeline() {
+  pr::Timeline t;
+  t.fixation_ms = 500;
+  t.stimulus_ms = 1000;
+  t.response_ms = 2000;
+  return t;
+}
+
+rn::FrameFacts frame(std::int64_t k, bool tracked = true, rn::FrameSignal signal = rn::FrameSignal::none) {
+  return {k * kPeriod, k * kPeriod + kLatency, tracked, signal};
+}
+
+struct Press {
+  std::string name;
+  bool pressed = true;
+};
+
+}  // namespace
+
+TEST(TrialState, PhasesFollowTheTimelineAndTheOnsetIsOneFrame) {
+  rn::Attempt a(timeline(), {}, 0);
+  std::vector<rn::Phase> phases;
+  int onsets = 0;
+  std::int64_t k = 0;
+  for (; !a.over(k * kPeriod); ++k) {
+    const auto step = a.advance(frame(k));
+    ASSERT_FALSE(step.abort);
+    phases.push_back(step.phase);
+    onsets += step.onset ? 1 : 0;
+    if (step.onset) {
+      EXPECT_EQ(step.phase, rn::Phase::stimulus);
+      EXPECT_GE(k * kPeriod, 500 * kMs);
+      EXPECT_LT((k - 1) * kPeriod, 500 * kMs);
+    }
+  }
+  EXPECT_EQ(onsets, 1);
+  EXPECT_EQ(phases.front(), rn::Phase::fixation);
+  EXPECT_EQ(phases.back(), rn::Phase::response);
+  // The window ends stimulus + response after the onset frame.
+  const std::int64_t onset_frame = *a.onset_frame_ns();
+  EXPECT_GE((k - 1) * kPeriod - onset_frame, 3000 * kMs);
+  EXPECT_LT((k - 2) * kPeriod - onset_frame, 3000 * kMs);
+  EXPECT_EQ(*a.onset_display_ns(), onset_frame + kLatency);
+}
+
+TEST(TrialState, AnswersCountOnlyFromTheOnsetsDisplayTime) {
+  rn::Attempt a(timeline(), {}, 0);
+  std::int64_t k = 0;
+  while (!a.advance(frame(k)).onset) {
+    EXPECT_FALSE(a.answerable(k * kPeriod));
+    ++k;
+  }
+  const std::int64_t display = k * kPeriod + kLatency;
+  EXPECT_FALSE(a.answerable(display - 1));  // in the onset frame, before the image is shown
+  EXPECT_TRUE(a.answerable(display));
+  EXPECT_FALSE(a.over(k * kPeriod));
+  a.answered();
+  EXPECT_TRUE(a.over(k * kPeriod));
+}
+
+TEST(TrialState, SignalsAbortTheAttempt) {
+  for (const auto [signal, reason] :
+       {std::pair{rn::FrameSignal::pause, rn::AbortReason::pause},
+        std::pair{rn::FrameSignal::recenter, rn::AbortReason::recenter},
+        std::pair{rn::FrameSignal::quit, rn::AbortReason::quit}}) {
+    rn::Attempt a(timeline(), {}, 0);
+    EXPECT_FALSE(a.advance(frame(0)).abort);
+    const auto step = a.advance(frame(1, true, signal));
+    ASSERT_TRUE(step.abort);
+    EXPECT_EQ(*step.abort, reason);
+  }
+  // A resume signal is not an abort.
+  rn::Attempt a(timeline(), {}, 0);
+  EXPECT_FALSE(a.advance(frame(0, true, rn::FrameSignal::resume)).abort);
+}
+
+TEST(TrialState, TrackingLostLongerThanTheThresholdAborts) {
+  pr::TrackingLoss loss;
+  loss.loss_ms = 250;
+  rn::Attempt a(timeline(), loss, 0);
+  // Lost from frame 3: frames until 250 ms later go on, then the abort.
+  std::int64_t k = 0;
+  for (; k < 3; ++k) EXPECT_FALSE(a.advance(frame(k)).abort);
+  std::optional<rn::AbortReason> reason;
+  for (; !reason; ++k) reason = a.advance(frame(k, false)).abort;
+  EXPECT_EQ(*reason, rn::AbortReason::tracking_lost);
+  const std::int64_t lost_for = (k - 1 - 3) * kPeriod;
+  EXPECT_GE(lost_for, 250 * kMs);
+  EXPECT_LT(lost_for - kPeriod, 250 * kMs);
+  // A short loss does not.
+  rn::Attempt b(timeline(), loss, 0);
+  for (k = 0; k < 10; ++k) EXPECT_FALSE(b.advance(frame(k, k < 5 || k > 7)).abort);
+}
+
+TEST(TrialState, FlagCountsLostSpellsAndTheirTime) {
+  pr::TrackingLoss loss;
+  loss.loss_ms = 100;
+  loss.on_loss = pr::OnTrackingLoss::flag;
+  rn::Attempt a(timeline(), loss, 0);
+  // Two spells of 30 frames (333 ms) and one of 3 frames (below the threshold).
+  for (std::int64_t k = 0; k < 200; ++k) {
+    const bool lost = (k >= 10 && k < 40) || (k >= 80 && k < 110) || (k >= 150 && k < 153);
+    EXPECT_FALSE(a.advance(frame(k, !lost)).abort) << k;
+  }
+  a.finish(200 * kPeriod);
+  EXPECT_EQ(a.loss().spells(), 2);
+  EXPECT_EQ(a.loss().lost_ns(), 60 * kPeriod);
+  // A spell still open when the attempt ends is closed at its end.
+  rn::Attempt b(timeline(), loss, 0);
+  for (std::int64_t k = 0; k < 50; ++k) b.advance(frame(k, k < 20));
+  b.finish(50 * kPeriod);
+  EXPECT_EQ(b.loss().spells(), 1);
+  EXPECT_EQ(b.loss().lost_ns(), 30 * kPeriod);
+}
+
+TEST(TrialState, AfterAnAbortThePolicyRepeatsOrGivesUp) {
+  pr::TrackingLoss repeat;
+  EXPECT_EQ(rn::after_abort(rn::AbortReason::tracking_lost, 7, repeat), rn::AfterAbort::repeat);
+  EXPECT_EQ(rn::after_abort(rn::AbortReason::pause, 1, repeat), rn::AfterAbort::repeat);
+  pr::TrackingLoss abort = repeat;
+  abort.on_loss = pr::OnTrackingLoss::abort;
+  EXPECT_EQ(rn::after_abort(rn::AbortReason::tracking_lost, 1, abort), rn::AfterAbort::give_up);
+  EXPECT_EQ(rn::after_abort(rn::AbortReason::recenter, 1, abort), rn::AfterAbort::repeat);
+  pr::TrackingLoss capped = repeat;
+  capped.max_attempts = 2;
+  EXPECT_EQ(rn::after_abort(rn::AbortReason::pause, 1, capped), rn::AfterAbort::repeat);
+  EXPECT_EQ(rn::after_abort(rn::AbortReason::pause, 2, capped), rn::AfterAbort::give_up);
+  // A quit attempt runs again when the session is resumed.
+  EXPECT_EQ(rn::after_abort(rn::AbortReason::quit, 9, capped), rn::AfterAbort::repeat);
+}
+
+TEST(TrialState, InputsAreChoicesAdjustmentsOrAnticipations) {
+  pr::Judgement choice;
+  choice.type = pr::JudgementType::choice;
+  choice.options = {{"convex", "", {"1"}, {"x"}}, {"straight", "", {"2"}, {}}, {"concave", "", {"3"}, {"b"}}};
+  EXPECT_EQ(rn::classify_input(choice, "1", false).use, rn::InputUse::early);
+  EXPECT_EQ(rn::classify_input(choice, "9", true).use, rn::InputUse::ignored);
+  const auto by_button = rn::classify_input(choice, "b", true);
+  EXPECT_EQ(by_button.use, rn::InputUse::choose);
+  EXPECT_EQ(by_button.option, 2u);
+  EXPECT_EQ(rn::classify_input(choice, "2", true).option, 1u);
+
+  pr::Judgement adjust;
+  adjust.type = pr::JudgementType::adjustment;
+  adjust.adjustment.emplace();
+  adjust.adjustment->keys_increase = {"up"};
+  adjust.adjustment->keys_decrease = {"down"};
+  adjust.adjustment->buttons_confirm = {"a"};
+  EXPECT_EQ(rn::classify_input(adjust, "up", true).use, rn::InputUse::increase);
+  EXPECT_EQ(rn::classify_input(adjust, "down", true).use, rn::InputUse::decrease);
+  EXPECT_EQ(rn::classify_input(adjust, "a", true).use, rn::InputUse::confirm);
+  EXPECT_EQ(rn::classify_input(adjust, "up", false).use, rn::InputUse::early);
+}
+
+TEST(TrialState, PagesIgnoreHeldKeysAndWaitTheirMinimumTime) {
+  rn::Page page(0, 1000 * kMs);
+  const std::vector<Press> space{{"space"}};
+  EXPECT_FALSE(page.frame(2000 * kMs, space));  // first frame: a key held from before
+  EXPECT_TRUE(page.frame(2000 * kMs, space));
+  rn::Page early(0, 1000 * kMs);
+  early.frame(0, std::vector<Press>{});
+  EXPECT_FALSE(early.frame(500 * kMs, space));  // too soon
+  EXPECT_FALSE(early.frame(1500 * kMs, std::vector<Press>{{"space", false}}));  // a release
+  EXPECT_FALSE(early.frame(1500 * kMs, std::vector<Press>{{"x"}}));
+  EXPECT_TRUE(early.frame(1500 * kMs, std::vector<Press>{{"continue"}}));
+  early.restart();  // after a pause: the next frame's keys were held through it
+  EXPECT_FALSE(early.frame(1600 * kMs, space));
+  EXPECT_TRUE(early.frame(1700 * kMs, space));
+}
+
+TEST(TrialState, NamesRoundTrip) {
+  for (auto p : {rn::Phase::instructions, rn::Phase::fixation, rn::Phase::stimulus, rn::Phase::response,
+                 rn::Phase::iti, rn::Phase::break_page, rn::Phase::done, rn::Phase::paused, rn::Phase::tracking_lost})
+    EXPECT_EQ(rn::parse_phase(rn::to_string(p)), p);
+  for (auto r : {rn::AbortReason::pause, rn::AbortReason::recenter, rn::AbortReason::tracking_lost,
+                 rn::AbortReason::quit})
+    EXPECT_EQ(rn::parse_abort_reason(rn::to_string(r)), r);
+  EXPECT_EQ(rn::to_string(rn::Phase::break_page), "break");
+  EXPECT_FALSE(rn::parse_phase("Stimulus"));
+}
