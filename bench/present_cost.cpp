@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
       }
       auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(backend_made);
       std::vector<double> window_ms;
-      const harness::runner::Overlay overlay{"stimulus", "block 1 · trial 3 of 8 · H3 native", false};
+      const harness::runner::Overlay overlay{harness::runner::Phase::stimulus, "block 1 · trial 3 of 8 · H3 native", false};
       Clock::time_point last{};
       for (int i = 0; i < frames + 3; ++i) {
         auto timing = backend.begin_frame();

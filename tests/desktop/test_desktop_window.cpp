@@ -206,7 +206,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
     f.space = s.space;
     f.head = s.head;
     f.rig = backend.rig(*timing, 0.063);
-    backend.submit(s.scene, f, Overlay{"stimulus", "", false}, true);
+    backend.submit(s.scene, f, Overlay{harness::runner::Phase::stimulus, "", false}, true);
   }
   // One eye: the window is that eye plus the banner.
   const auto window = backend.target().read_window();
@@ -228,7 +228,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
     f.space = s.space;
     f.head = s.head;
     f.rig = backend.rig(*timing, 0.063);
-    backend.submit(s.scene, f, Overlay{"stimulus", "", false}, true);
+    backend.submit(s.scene, f, Overlay{harness::runner::Phase::stimulus, "", false}, true);
   }
   EXPECT_EQ(backend.target().recreations(), 2u);
   const auto resized = backend.target().read_window();
@@ -261,7 +261,7 @@ TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
     const BackendSignal signal = backend.poll_input(events);
     renderer::FrameDescription f;
     f.rig = backend.rig(*timing, 0.063);
-    backend.submit(empty, f, Overlay{"response", "", true}, true);
+    backend.submit(empty, f, Overlay{harness::runner::Phase::response, "", true}, true);
     return std::optional<BackendSignal>(signal);
   };
   std::vector<InputEvent> events;

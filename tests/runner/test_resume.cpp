@@ -10,6 +10,7 @@
 #include <csignal>
 #include <fstream>
 #include <fcntl.h>
+#include <functional>
 #include <random>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -25,10 +26,12 @@ namespace {
 
 const std::string kProtocols = std::string(CURVLAB_SOURCE_DIR) + "/protocols/";
 
-// Starts the program with its output discarded, waits `delay`, kills it
-// with SIGKILL. Returns true when the kill landed (the program was still
-// running), false when it had already exited.
-bool run_and_kill(const std::vector<std::string>& args, std::chrono::milliseconds delay) {
+// Starts the program with its output discarded, waits until `ready()` (polled
+// every 20 ms, at most 60 s) and then `delay`, and kills it with SIGKILL.
+// Returns true when the kill landed (the program was still running), false
+// when it had already exited.
+bool run_and_kill(const std::vector<std::string>& args, std::chrono::milliseconds delay,
+                  const std::function<bool()>& ready = [] { return true; }) {
   std::vector<char*> argv;
   std::string bin = CURVLAB_BIN;
   argv.push_back(bin.data());
@@ -43,8 +46,12 @@ bool run_and_kill(const std::vector<std::string>& args, std::chrono::millisecond
   const int rc = posix_spawn(&pid, bin.c_str(), &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) return false;
-  std::this_thread::sleep_for(delay);
   int status = 0;
+  for (int i = 0; i < 3000 && !ready(); ++i) {
+    if (waitpid(pid, &status, WNOHANG) != 0) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(delay);
   const bool running = waitpid(pid, &status, WNOHANG) == 0;
   if (running) {
     kill(pid, SIGKILL);
@@ -71,7 +78,8 @@ TEST(Resume, KillNineAtRandomPointsThenResumeCompletesEveryTrialOnce) {
               "--quiet"};
     else
       args = {"resume", "--db", db, "--session", sessions[0][0], "--render", "none", "--quiet"};
-    if (run_and_kill(args, std::chrono::milliseconds(delay_ms(rng)))) {
+    auto stored = [&] { return !query(db, "SELECT 1 FROM sessions").empty(); };
+    if (run_and_kill(args, std::chrono::milliseconds(delay_ms(rng)), stored)) {
       ++kills;
       const auto done = query(db, "SELECT COUNT(*) FROM trials WHERE status = 'completed'");
       if (!done.empty() && std::stoi(done[0][0]) > 0) ++interrupted_mid_session;
@@ -140,7 +148,10 @@ TEST(Resume, KilledAndResumedSessionAnswersAsTheUninterruptedOne) {
                                        "--quiet"}
             : std::vector<std::string>{"resume", "--db", pieces, "--session", sessions[0][0], "--render", "none",
                                        "--quiet"};
-    if (run_and_kill(args, std::chrono::milliseconds(delay_ms(rng)))) ++kills;
+    // Killed at a random instant once the session is stored (a machine
+    // under load may take longer than the delay to get there).
+    auto stored = [&] { return !query(pieces, "SELECT 1 FROM sessions").empty(); };
+    if (run_and_kill(args, std::chrono::milliseconds(delay_ms(rng)), stored)) ++kills;
   }
   const auto sessions = query(pieces, "SELECT session_id, status FROM sessions");
   ASSERT_EQ(sessions.size(), 1u);

@@ -23,7 +23,11 @@ const std::string kProtocols = std::string(CURVLAB_SOURCE_DIR) + "/protocols/";
 // The proposed study with two simulated participants: on the straight stick
 // the native H3 view is mostly judged convex (bowed toward the viewer), the
 // native S3 view concave, and the tourist and one-eye views straight
-// (DESIGN.md §5; paper, "Mental models of space").
+// (DESIGN.md §5; paper, "Mental models of space"). Each cell has 6 trials;
+// the model answers "straight" to a straight stick seen with one eye or as a
+// tourist with P = 0.92 (criterion 6 mm, slope 300 /m, lapse 0.02), so the
+// bound for those cells is at least half of them (P(X ≤ 2 of 6) < 0.001);
+// native H3 and S3 answer convex and concave with P > 0.99.
 TEST(RunHeadless, TheProposedStudyFollowsThePerceptionModel) {
   const auto dir = fresh_dir("study");
   const auto db = (dir / "study.sqlite").string();
@@ -48,8 +52,8 @@ TEST(RunHeadless, TheProposedStudyFollowsThePerceptionModel) {
   EXPECT_GE(share("H3 native", "convex"), 0.8);
   EXPECT_GE(share("S3 native", "concave"), 0.8);
   for (const char* space : {"S3", "E3", "H3"}) {
-    EXPECT_GE(share(std::string(space) + " tourist", "straight"), 0.8) << space;
-    EXPECT_GE(share(std::string(space) + " monocular", "straight"), 0.8) << space;
+    EXPECT_GE(share(std::string(space) + " tourist", "straight"), 0.5) << space;
+    EXPECT_GE(share(std::string(space) + " monocular", "straight"), 0.5) << space;
   }
   // Complete: every planned trial answered, samples and frames logged, the
   // observer's parameters and the provenance stored.

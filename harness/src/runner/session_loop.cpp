@@ -576,8 +576,7 @@ class SessionLoop::Impl {
           protocol::set_numeric_setting(t.settings, t.judgement->adjustment->parameter, a.adjustment->value());
           a.placement = place_stimulus(*world_, t.settings, a.head_at_onset);
           scene_->set_stimulus(t.settings, a.placement);
-          event(t.id, "adjusted",
-                Json{{"value", a.adjustment->value()}, {"t_ns", in.t_ns}, {"frame_index", frame_index_}});
+          event(t.id, "adjustment", Json{{"value", a.adjustment->value()}, {"frame_index", frame_index_}});
           break;
         case InputUse::confirm: {
           a.adjustment->confirm();

@@ -4,8 +4,10 @@
 // events, the desktop window's status line.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string_view>
+#include <utility>
 
 namespace curvlab::harness::runner {
 
@@ -28,9 +30,48 @@ enum class AbortReason {
   quit,           // the backend ended the session (window closed, runtime exiting)
 };
 
-std::string_view to_string(Phase phase);
-std::string_view to_string(AbortReason reason);
-std::optional<Phase> parse_phase(std::string_view name);
-std::optional<AbortReason> parse_abort_reason(std::string_view name);
+namespace phase_names {
+inline constexpr std::array<std::pair<Phase, std::string_view>, 9> phases{{
+    {Phase::instructions, "instructions"},
+    {Phase::fixation, "fixation"},
+    {Phase::stimulus, "stimulus"},
+    {Phase::response, "response"},
+    {Phase::iti, "iti"},
+    {Phase::break_page, "break"},
+    {Phase::done, "done"},
+    {Phase::paused, "paused"},
+    {Phase::tracking_lost, "tracking_lost"},
+}};
+inline constexpr std::array<std::pair<AbortReason, std::string_view>, 4> reasons{{
+    {AbortReason::pause, "pause"},
+    {AbortReason::recenter, "recenter"},
+    {AbortReason::tracking_lost, "tracking_lost"},
+    {AbortReason::quit, "quit"},
+}};
+}  // namespace phase_names
+
+constexpr std::string_view to_string(Phase phase) {
+  for (const auto& [p, name] : phase_names::phases)
+    if (p == phase) return name;
+  return "unknown";
+}
+
+constexpr std::string_view to_string(AbortReason reason) {
+  for (const auto& [r, name] : phase_names::reasons)
+    if (r == reason) return name;
+  return "unknown";
+}
+
+constexpr std::optional<Phase> parse_phase(std::string_view name) {
+  for (const auto& [p, n] : phase_names::phases)
+    if (n == name) return p;
+  return std::nullopt;
+}
+
+constexpr std::optional<AbortReason> parse_abort_reason(std::string_view name) {
+  for (const auto& [r, n] : phase_names::reasons)
+    if (n == name) return r;
+  return std::nullopt;
+}
 
 }  // namespace curvlab::harness::runner
