@@ -184,29 +184,71 @@ Expected<std::int64_t> SessionStore::add_participant(const ParticipantRecord& p)
   });
 }
 
+std::int64_t SessionStore::insert_session(const SessionRecord& r) {
+  std::int64_t number = 0;
+  if (r.session_number) {
+    number = *r.session_number;
+  } else {
+    auto& n = stmts_->next_session_number;
+    n.bind(1, r.participant_id);
+    n.step();
+    number = n.column_int(0);
+    n.reset();
+  }
+  auto& s = stmts_->insert_session;
+  s.bind(1, r.protocol_id).bind(2, r.participant_id).bind(3, number);
+  s.bind(4, std::string_view(r.software_version)).bind(5, std::string_view(r.software_commit));
+  s.bind_static(6, to_string(r.backend));
+  s.bind(7, std::string_view(r.renderer_device)).bind(8, std::string_view(r.renderer_driver));
+  s.bind(9, r.display_refresh_hz).bind(10, r.seed);
+  if (r.table_calibration_json) s.bind(11, std::string_view(*r.table_calibration_json));
+  else s.bind_null(11);
+  s.run();
+  return db_.connection().last_insert_rowid();
+}
+
+Expected<std::vector<std::int64_t>> SessionStore::insert_plan(std::int64_t session_id,
+                                                              const std::vector<BlockPlan>& blocks) {
+  auto& count = stmts_->count_plan;
+  count.bind(1, session_id);
+  count.step();
+  const std::int64_t existing = count.column_int(0);
+  count.reset();
+  if (existing != 0)
+    return DataError{DataError::Kind::bad_input, "session " + std::to_string(session_id) + " already has a trial plan"};
+  std::vector<std::int64_t> ids;
+  std::int64_t trial_index = 0;
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const BlockPlan& block = blocks[b];
+    auto& ib = stmts_->insert_block;
+    ib.bind(1, session_id).bind(2, static_cast<std::int64_t>(b)).bind(3, std::string_view(block.name));
+    ib.bind(4, block.is_practice ? 1 : 0).bind(5, std::string_view(block.settings_json));
+    ib.run();
+    const std::int64_t block_id = db_.connection().last_insert_rowid();
+    for (std::size_t t = 0; t < block.trials.size(); ++t) {
+      auto& it = stmts_->insert_trial;
+      it.bind(1, session_id).bind(2, block_id).bind(3, trial_index++);
+      it.bind(4, static_cast<std::int64_t>(t));
+      it.bind(5, std::string_view(block.trials[t].conditions_json));
+      it.bind(6, std::string_view(block.trials[t].stimulus_json));
+      it.run();
+      ids.push_back(db_.connection().last_insert_rowid());
+    }
+  }
+  return ids;
+}
+
+void SessionStore::insert_event(const EventRecord& e) {
+  auto& s = stmts_->insert_event;
+  s.bind(1, e.session_id).bind(2, e.trial_id).bind(3, e.t_ns);
+  s.bind(4, std::string_view(e.kind)).bind(5, std::string_view(e.detail_json));
+  s.run();
+}
+
 Expected<std::int64_t> SessionStore::create_session(const SessionRecord& r) {
   return guarded(db_, [&]() -> std::int64_t {
     Transaction txn(db_.connection());
-    std::int64_t number = 0;
-    if (r.session_number) {
-      number = *r.session_number;
-    } else {
-      auto& n = stmts_->next_session_number;
-      n.bind(1, r.participant_id);
-      n.step();
-      number = n.column_int(0);
-      n.reset();
-    }
-    auto& s = stmts_->insert_session;
-    s.bind(1, r.protocol_id).bind(2, r.participant_id).bind(3, number);
-    s.bind(4, std::string_view(r.software_version)).bind(5, std::string_view(r.software_commit));
-    s.bind_static(6, to_string(r.backend));
-    s.bind(7, std::string_view(r.renderer_device)).bind(8, std::string_view(r.renderer_driver));
-    s.bind(9, r.display_refresh_hz).bind(10, r.seed);
-    if (r.table_calibration_json) s.bind(11, std::string_view(*r.table_calibration_json));
-    else s.bind_null(11);
-    s.run();
-    const std::int64_t id = db_.connection().last_insert_rowid();
+    const std::int64_t id = insert_session(r);
     txn.commit();
     return id;
   });
@@ -216,35 +258,28 @@ Expected<std::vector<std::int64_t>> SessionStore::store_plan(std::int64_t sessio
                                                              const std::vector<BlockPlan>& blocks) {
   return guarded(db_, [&]() -> Expected<std::vector<std::int64_t>> {
     Transaction txn(db_.connection());
-    auto& count = stmts_->count_plan;
-    count.bind(1, session_id);
-    count.step();
-    const std::int64_t existing = count.column_int(0);
-    count.reset();
-    if (existing != 0)
-      return DataError{DataError::Kind::bad_input,
-                       "session " + std::to_string(session_id) + " already has a trial plan"};
-    std::vector<std::int64_t> ids;
-    std::int64_t trial_index = 0;
-    for (std::size_t b = 0; b < blocks.size(); ++b) {
-      const BlockPlan& block = blocks[b];
-      auto& ib = stmts_->insert_block;
-      ib.bind(1, session_id).bind(2, static_cast<std::int64_t>(b)).bind(3, std::string_view(block.name));
-      ib.bind(4, block.is_practice ? 1 : 0).bind(5, std::string_view(block.settings_json));
-      ib.run();
-      const std::int64_t block_id = db_.connection().last_insert_rowid();
-      for (std::size_t t = 0; t < block.trials.size(); ++t) {
-        auto& it = stmts_->insert_trial;
-        it.bind(1, session_id).bind(2, block_id).bind(3, trial_index++);
-        it.bind(4, static_cast<std::int64_t>(t));
-        it.bind(5, std::string_view(block.trials[t].conditions_json));
-        it.bind(6, std::string_view(block.trials[t].stimulus_json));
-        it.run();
-        ids.push_back(db_.connection().last_insert_rowid());
-      }
+    auto ids = insert_plan(session_id, blocks);
+    if (ids) txn.commit();
+    return ids;
+  });
+}
+
+Expected<StartedSession> SessionStore::start_session(const SessionRecord& session,
+                                                     const std::vector<BlockPlan>& blocks,
+                                                     const std::vector<EventRecord>& events) {
+  return guarded(db_, [&]() -> Expected<StartedSession> {
+    Transaction txn(db_.connection());
+    StartedSession out;
+    out.session_id = insert_session(session);
+    auto ids = insert_plan(out.session_id, blocks);
+    if (!ids) return ids.error();
+    out.trial_ids = std::move(ids).value();
+    for (EventRecord e : events) {
+      e.session_id = out.session_id;
+      insert_event(e);
     }
     txn.commit();
-    return ids;
+    return out;
   });
 }
 
@@ -340,10 +375,7 @@ Expected<Done> SessionStore::abort_trial(std::int64_t trial_id) { return end_una
 Expected<std::int64_t> SessionStore::record_event(const EventRecord& e) {
   return guarded(db_, [&]() -> std::int64_t {
     Transaction txn(db_.connection());
-    auto& s = stmts_->insert_event;
-    s.bind(1, e.session_id).bind(2, e.trial_id).bind(3, e.t_ns);
-    s.bind(4, std::string_view(e.kind)).bind(5, std::string_view(e.detail_json));
-    s.run();
+    insert_event(e);
     const std::int64_t id = db_.connection().last_insert_rowid();
     txn.commit();
     return id;
@@ -353,12 +385,7 @@ Expected<std::int64_t> SessionStore::record_event(const EventRecord& e) {
 Expected<Done> SessionStore::record_events(const std::vector<EventRecord>& events) {
   return guarded(db_, [&]() -> Done {
     Transaction txn(db_.connection());
-    auto& s = stmts_->insert_event;
-    for (const auto& e : events) {
-      s.bind(1, e.session_id).bind(2, e.trial_id).bind(3, e.t_ns);
-      s.bind(4, std::string_view(e.kind)).bind(5, std::string_view(e.detail_json));
-      s.run();
-    }
+    for (const auto& e : events) insert_event(e);
     txn.commit();
     return Done{};
   });

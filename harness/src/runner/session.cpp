@@ -54,9 +54,10 @@ data::SessionRecord session_record(std::int64_t protocol_id, std::int64_t partic
   return rec;
 }
 
-// The session's rows before its first frame: protocol, participant,
-// session with provenance, the whole plan, the start and observer events.
-Result<std::pair<std::int64_t, std::vector<std::int64_t>>> create(
+// The session's rows before its first frame: protocol, participant, then in
+// one transaction the session with provenance, the whole plan, the start and
+// observer events.
+Result<data::StartedSession> create(
     data::SessionStore& store, const protocol::Protocol& p, const std::string& protocol_text,
     const RunOptions& options, const BackendInfo& info, const protocol::Design& design,
     const geometry::PhysicalTableFit& calibration, const devices::Clock& clock) {
@@ -64,21 +65,17 @@ Result<std::pair<std::int64_t, std::vector<std::int64_t>>> create(
   if (!protocol_id) return protocol_id.error();
   auto participant_id = store.add_participant({options.participant, options.ipd_m, options.dominant_eye});
   if (!participant_id) return participant_id.error();
-  auto session_id = store.create_session(session_record(*protocol_id, *participant_id, info, design, calibration));
-  if (!session_id) return session_id.error();
-  auto ids = store.store_plan(*session_id, block_plans(p, design));
-  if (!ids) return ids.error();
   Json start{{"participant_number", options.participant_number},
              {"seed", design.seed},
              {"protocol_seed", design.protocol_seed},
              {"backend", info.name},
              {"trials", design.trials.size()}};
   if (design.counterbalance_row) start["counterbalance_row"] = *design.counterbalance_row;
-  std::vector<data::EventRecord> events{{*session_id, std::nullopt, clock.now_ns(), "session_start", start.dump()}};
+  std::vector<data::EventRecord> events{{0, std::nullopt, clock.now_ns(), "session_start", start.dump()}};
   if (options.observer)
-    events.push_back({*session_id, std::nullopt, clock.now_ns(), "observer", observer_json(*options.observer)});
-  if (auto r = store.record_events(events); !r) return r.error();
-  return std::pair{*session_id, std::move(ids).value()};
+    events.push_back({0, std::nullopt, clock.now_ns(), "observer", observer_json(*options.observer)});
+  return store.start_session(session_record(*protocol_id, *participant_id, info, design, calibration),
+                             block_plans(p, design), events);
 }
 
 }  // namespace
@@ -105,8 +102,8 @@ RunResult run_session(const protocol::Protocol& p, const std::string& protocol_t
   setup.clock = &clock;
   setup.options = options;
   setup.options.calibration = calibration;
-  setup.session_id = created->first;
-  setup.trial_ids = std::move(created->second);
+  setup.session_id = created->session_id;
+  setup.trial_ids = std::move(created->trial_ids);
   auto result = SessionLoop(std::move(setup)).run(0, true);
   if (result) result->db_path = db_path;
   return result;

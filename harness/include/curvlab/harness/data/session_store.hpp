@@ -16,6 +16,11 @@
 
 namespace curvlab::data {
 
+struct StartedSession {
+  std::int64_t session_id = 0;
+  std::vector<std::int64_t> trial_ids;  // in the plan's order
+};
+
 // Owns a Database and its prepared statements. Move-only; not thread-safe:
 // use it from the session (trial) thread only. Tracking samples and frame
 // records go through SampleWriter instead.
@@ -35,6 +40,12 @@ class SessionStore {
   // Returns the existing id when the pseudonym is already known.
   Expected<std::int64_t> add_participant(const ParticipantRecord& participant);
   Expected<std::int64_t> create_session(const SessionRecord& session);
+  // A session, its whole plan and its start events (their session_id is
+  // set to the new session's) in one transaction: a kill at any instant
+  // leaves either all of it or none, so a stored session can always be
+  // resumed.
+  Expected<StartedSession> start_session(const SessionRecord& session, const std::vector<BlockPlan>& blocks,
+                                         const std::vector<EventRecord>& events);
   // Stores every block and trial of the session in one transaction; the
   // returned ids follow the plan's order. Fails if the session has a plan.
   Expected<std::vector<std::int64_t>> store_plan(std::int64_t session_id,
@@ -60,6 +71,10 @@ class SessionStore {
 
  private:
   Expected<Done> end_unanswered(std::int64_t trial_id, const char* status);
+  // Statement bodies without a transaction of their own; they throw SqliteFailure.
+  std::int64_t insert_session(const SessionRecord& session);
+  Expected<std::vector<std::int64_t>> insert_plan(std::int64_t session_id, const std::vector<BlockPlan>& blocks);
+  void insert_event(const EventRecord& event);
   struct Statements;
   Database db_;
   std::unique_ptr<Statements> stmts_;
