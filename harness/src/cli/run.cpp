@@ -137,8 +137,8 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
     o.start_ns = start_ns;
     if (!a.trajectory.empty()) {
       auto file = harness::read_trajectory_csv(a.trajectory);
-      if (auto* e = std::get_if<harness::InputError>(&file)) throw UsageError(e->message);
-      o.trajectory = std::get<harness::TrajectoryFile>(file).samples;
+      if (!file) raise(file.error());
+      o.trajectory = file.value().samples;
       if (o.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
     }
     auto made = rn::HeadlessBackend::create(o);
