@@ -34,22 +34,87 @@ read_curvlab <- function(path, max_tracking_per_device = 20000L) {
 # ---------------------------------------------------------------------------
 # SQLite
 
+# Damaged and foreign files get the same messages as the curvlab command
+# (harness/src/data/database.cpp, docs/data.md "Damaged or foreign files"):
+# whether the file can be read at all, and how to recover committed data.
+recover_command <- function(path) {
+  quoted <- if (grepl("^[A-Za-z0-9/._+,:@%=-]+$", path)) path
+            else paste0("'", gsub("'", "'\\''", path, fixed = TRUE), "'")
+  paste0("sqlite3 ", quoted, " .recover | sqlite3 recovered.sqlite")
+}
+corrupt_error <- function(path, ...) {
+  input_error(path, ": damaged curvlab data file: ", ..., ", so only part of it can be read. ",
+              "Recover the committed data into a new file with the SQLite shell: ", recover_command(path),
+              "; then use recovered.sqlite (", path,
+              " is left as it is; docs/data.md shows how without .recover)")
+}
+
+# Checks the file itself before SQLite reads it: the header's magic string,
+# then its length against the page size and page count the header records
+# (sqlite.org/fileformat.html, "The Database Header").
+check_database_file <- function(path) {
+  size <- file.info(path)$size
+  header <- tryCatch(readBin(path, "raw", 100L), error = function(e) raw(0))
+  magic <- c(charToRaw("SQLite format 3"), as.raw(0))
+  n <- min(length(header), 16L)
+  if (n == 0L || !identical(header[seq_len(n)], magic[seq_len(n)]))
+    input_error(path, ": not an SQLite database (it does not begin with \"SQLite format 3\"), so it ",
+                "cannot be read at all and is not a curvlab data file. If it should hold curvlab data it ",
+                "was overwritten: use a backup, or save whatever SQLite pages remain with the SQLite shell: ",
+                recover_command(path))
+  bytes <- function(n) format(n, scientific = FALSE, trim = TRUE)
+  if (length(header) < 100L)
+    corrupt_error(path, "truncated to ", bytes(size), " bytes, shorter than the 100-byte SQLite header")
+  be <- function(b) sum(as.numeric(as.integer(b)) * 256^(rev(seq_along(b)) - 1))
+  page_size <- be(header[17:18])
+  if (page_size == 1) page_size <- 65536
+  if (page_size < 512 || page_size > 65536 || bitwAnd(page_size, page_size - 1) != 0)
+    corrupt_error(path, "its header is damaged (page size ", page_size, ")")
+  # A pending write-ahead log is reconciled by SQLite on open.
+  wal <- paste0(path, "-wal")
+  if (file.exists(wal) && isTRUE(file.info(wal)$size > 0)) return(invisible(TRUE))
+  pages <- be(header[29:32])
+  if (pages > 0 && be(header[25:28]) == be(header[93:96]) && size < pages * page_size)
+    corrupt_error(path, "truncated to ", bytes(size), " bytes where its header records ",
+                  bytes(pages * page_size), " (", bytes(pages), " pages of ", bytes(page_size), " bytes)")
+  invisible(TRUE)
+}
+
+# SQLite's own words for a damaged file, as raised by RSQLite.
+is_corruption_message <- function(msg)
+  grepl("malformed|not a database|disk image|database corrupt", msg, ignore.case = TRUE)
+
 read_database <- function(path, max_tracking_per_device = 20000L) {
-  header <- tryCatch(readBin(path, "raw", 16L), error = function(e) raw(0))
-  if (length(header) < 16L || rawToChar(header[1:15]) != "SQLite format 3")
-    input_error(path, ": not an SQLite database (expected a curvlab data file ",
-                "written by `curvlab run`, or an export directory)")
+  check_database_file(path)
   con <- tryCatch(
-    DBI::dbConnect(RSQLite::SQLite(), path, flags = RSQLite::SQLITE_RO, bigint = "numeric"),
-    error = function(e) input_error(path, ": cannot open read-only: ", conditionMessage(e)))
+    suppressWarnings(
+      DBI::dbConnect(RSQLite::SQLite(), path, flags = RSQLite::SQLITE_RO, bigint = "numeric")),
+    error = function(e) {
+      if (is_corruption_message(conditionMessage(e)))
+        corrupt_error(path, "SQLite reports \"", conditionMessage(e), "\"")
+      input_error(path, ": cannot open read-only: ", conditionMessage(e))
+    })
   on.exit(DBI::dbDisconnect(con), add = TRUE)
-  q <- function(sql, params = NULL) DBI::dbGetQuery(con, sql, params = params)
+  q <- function(sql, params = NULL) {
+    tryCatch(DBI::dbGetQuery(con, sql, params = params), error = function(e) {
+      if (is_corruption_message(conditionMessage(e)))
+        corrupt_error(path, "SQLite reports \"", conditionMessage(e), "\"")
+      stop(e)
+    })
+  }
 
   app_id <- q("PRAGMA application_id")[[1]]
   version <- q("PRAGMA user_version")[[1]]
   if (app_id != curvlab_application_id)
-    input_error(path, ": not a curvlab data file (PRAGMA application_id is ", app_id,
-                ", expected ", curvlab_application_id, " = \"CVLB\")")
+    input_error(path, ": not a curvlab data file: a readable SQLite database written by another ",
+                "program (application_id ", app_id, "; curvlab writes ", curvlab_application_id,
+                ", \"CVLB\"). It was not modified and there is nothing to recover; give the file ",
+                "curvlab run wrote (by default results/<protocol name>.sqlite)")
+  # The whole file is about to be read: check every page's structure first, so
+  # damage is reported as such rather than as a failed query half-way.
+  checked <- q("PRAGMA quick_check")[[1]]
+  if (!identical(checked, "ok"))
+    corrupt_error(path, "SQLite's quick_check reports \"", checked[1], "\"")
   if (version != curvlab_schema_version)
     input_error(path, ": schema version ", version, ", expected ", curvlab_schema_version,
                 if (version < curvlab_schema_version)

@@ -18,8 +18,10 @@ class RecordedSource final : public ReportSource {
  public:
   explicit RecordedSource(std::vector<std::vector<std::uint8_t>> reports)
       : reports_(std::move(reports)) {}
-  std::variant<std::size_t, DeviceError> read(std::span<std::uint8_t> buffer, int) override {
-    if (next_ >= reports_.size()) return DeviceError{"button box stopped responding: No such device"};
+  curvlab::harness::Result<std::size_t> read(std::span<std::uint8_t> buffer, int) override {
+    if (next_ >= reports_.size())
+      return curvlab::harness::Error{curvlab::harness::Error::Kind::device,
+                                     "button box stopped responding: No such device"};
     const auto& r = reports_[next_++];
     std::copy(r.begin(), r.end(), buffer.begin());
     return r.size();
@@ -79,7 +81,7 @@ TEST(DeviceReader, QueuesTimestampedEventsAndReportsUnplug) {
 // A source that never delivers: the destructor must still stop the thread.
 class SilentSource final : public ReportSource {
  public:
-  std::variant<std::size_t, DeviceError> read(std::span<std::uint8_t>, int) override {
+  curvlab::harness::Result<std::size_t> read(std::span<std::uint8_t>, int) override {
     return std::size_t{0};
   }
   std::string label() const override { return "silent"; }
@@ -97,11 +99,11 @@ TEST(DeviceReader, DestructorStopsAReaderThatIsStillReading) {
 
 TEST(HidLibrary, EnumerationWithoutDevicesIsEmptyNotAnError) {
   auto lib = HidLibrary::open();
-  ASSERT_TRUE(std::holds_alternative<HidLibrary>(lib)) << std::get<DeviceError>(lib).message;
+  ASSERT_TRUE(lib) << lib.error().message;
   // Two references at once are fine (hidapi's state is counted).
   auto second = HidLibrary::open();
-  ASSERT_TRUE(std::holds_alternative<HidLibrary>(second));
-  for (const auto& d : std::get<HidLibrary>(lib).enumerate()) EXPECT_FALSE(d.path.empty());
+  ASSERT_TRUE(second);
+  for (const auto& d : lib.value().enumerate()) EXPECT_FALSE(d.path.empty());
 }
 
 }  // namespace
@@ -115,8 +117,9 @@ TEST(HidDevice, OpeningAMissingDeviceIsAnErrorNamingIt) {
   info.product = "Dual Action";
   info.path = "/dev/hidraw-curvlab-missing";
   auto opened = curvlab::devices::HidDevice::open(info);
-  ASSERT_TRUE(std::holds_alternative<curvlab::devices::DeviceError>(opened));
-  const std::string msg = std::get<curvlab::devices::DeviceError>(opened).message;
+  ASSERT_FALSE(opened);
+  EXPECT_EQ(opened.error().kind, curvlab::harness::Error::Kind::device);
+  const std::string msg = opened.error().message;
   EXPECT_NE(msg.find("cannot open 046d:c216 Dual Action"), std::string::npos) << msg;
   EXPECT_NE(msg.find("/dev/hidraw-curvlab-missing"), std::string::npos) << msg;
 }

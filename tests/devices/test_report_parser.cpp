@@ -14,11 +14,11 @@ using namespace curvlab::devices;
 
 MappingFile parse_ok(const std::string& text) {
   auto r = parse_mapping(text, "test.toml");
-  if (auto* e = std::get_if<MappingError>(&r)) {
-    ADD_FAILURE() << e->what();
+  if (!r) {
+    ADD_FAILURE() << r.error().message;
     return {};
   }
-  return std::get<MappingFile>(r);
+  return std::move(r).value();
 }
 
 std::string summary(const std::vector<ResponseEvent>& events) {

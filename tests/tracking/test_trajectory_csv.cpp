@@ -9,17 +9,16 @@
 namespace {
 
 using namespace curvlab::geometry;
-using curvlab::harness::InputError;
 using curvlab::harness::TrajectoryFile;
 
-std::variant<TrajectoryFile, InputError> parse(const std::string& text) {
+curvlab::harness::Result<TrajectoryFile> parse(const std::string& text) {
   std::istringstream in(text);
   return curvlab::harness::parse_trajectory_csv(in, "t.csv");
 }
 
 std::string error_of(const std::string& text) {
   auto r = parse(text);
-  if (auto* e = std::get_if<InputError>(&r)) return e->message;
+  if (!r) return r.error().message;
   return "(no error)";
 }
 
@@ -38,8 +37,8 @@ TEST(TrajectoryCsv, RoundTripIsLossless) {
   std::stringstream ss;
   curvlab::harness::write_trajectory_csv(ss, t, table);
   auto r = curvlab::harness::parse_trajectory_csv(ss, "mem");
-  ASSERT_TRUE(std::holds_alternative<TrajectoryFile>(r)) << std::get<InputError>(r).message;
-  const auto& f = std::get<TrajectoryFile>(r);
+  ASSERT_TRUE(r) << r.error().message;
+  const auto& f = r.value();
   EXPECT_TRUE(f.table_given);
   EXPECT_EQ(f.table.yaw_rad, table.yaw_rad);
   EXPECT_EQ(f.table.edge_m, table.edge_m);
@@ -72,8 +71,8 @@ TEST(TrajectoryCsv, ErrorsNameLineColumnAndField) {
 TEST(TrajectoryCsv, LostDevicesMayCarryNoPose) {
   const std::string h = curvlab::harness::trajectory_csv_header() + "\n";
   auto r = parse(h + "0,0,,,,,,,,1,-0.25,0.78,0.45,1,0,0,0,0,nan,nan,nan,nan,nan,nan,nan\n");
-  ASSERT_TRUE(std::holds_alternative<TrajectoryFile>(r)) << std::get<InputError>(r).message;
-  const auto& f = std::get<TrajectoryFile>(r);
+  ASSERT_TRUE(r) << r.error().message;
+  const auto& f = r.value();
   EXPECT_FALSE(f.samples[0].frame[Device::head].valid);
   EXPECT_TRUE(f.samples[0].frame[Device::left_hand].valid);
   EXPECT_FALSE(f.samples[0].frame[Device::right_hand].valid);

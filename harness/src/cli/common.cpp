@@ -1,5 +1,7 @@
 #include "common.hpp"
 
+#include "curvlab/harness/data/database.hpp"
+
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -40,6 +42,15 @@ void print_human(const Json& doc, const std::string& indent) {
 }
 
 }  // namespace
+
+void raise(const harness::Error& e) {
+  if (harness::exit_code(e) == 2) throw UsageError(e.message);
+  throw RuntimeFailure(e.message);
+}
+
+void check_db_argument(const std::string& path) {
+  if (auto checked = data::check_data_file(path); !checked) raise(checked.error());
+}
 
 void print_result(const Json& doc, bool as_json) {
   if (as_json) {

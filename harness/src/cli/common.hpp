@@ -11,6 +11,7 @@
 
 #include "curvlab/geometry/space.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/harness/result.hpp"
 
 namespace CLI {
 class App;
@@ -29,6 +30,15 @@ struct RuntimeFailure : std::runtime_error {
 };
 
 using Json = nlohmann::ordered_json;
+
+// Throws an Error from any library as the matching CLI failure: UsageError
+// when harness::exit_code() says 2 (bad input: a missing, damaged or foreign
+// file…), RuntimeFailure otherwise.
+[[noreturn]] void raise(const harness::Error& e);
+
+// Refuses a --db file that is not SQLite, or damaged or truncated, before a
+// command starts a window or headset (data::check_data_file): exit 2.
+void check_db_argument(const std::string& path);
 
 // Prints `doc` as indented JSON, or as aligned "key: value" lines.
 void print_result(const Json& doc, bool as_json);

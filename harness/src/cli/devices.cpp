@@ -25,12 +25,12 @@ void run_devices(const DevicesArgs& a) {
   std::optional<MappingFile> mapping;
   if (!a.mapping.empty()) {
     auto loaded = load_mapping(a.mapping);
-    if (auto* e = std::get_if<MappingError>(&loaded)) throw UsageError(e->what());
-    mapping = std::move(std::get<MappingFile>(loaded));
+    if (!loaded) raise(loaded.error());
+    mapping = std::move(loaded).value();
   }
   auto opened = HidLibrary::open();
-  if (auto* e = std::get_if<DeviceError>(&opened)) throw RuntimeFailure(e->message);
-  const auto found = std::get<HidLibrary>(opened).enumerate();
+  if (!opened) raise(opened.error());
+  const auto found = opened.value().enumerate();
 
   Json doc;
   Json list = Json::array();

@@ -19,21 +19,10 @@ struct ExportArgs {
   bool json = false;
 };
 
-[[noreturn]] void fail(const data::DataError& e) {
-  // Missing files and sessions are the user's input to fix (exit 2); the
-  // rest are run-time failures (exit 1).
-  if (e.kind == data::DataError::Kind::not_found || e.kind == data::DataError::Kind::not_curvlab ||
-      e.kind == data::DataError::Kind::newer_schema || e.kind == data::DataError::Kind::corrupt)
-    throw UsageError(e.message);
-  if (e.kind == data::DataError::Kind::io && e.message.find("no such file") != std::string::npos)
-    throw UsageError(e.message);
-  throw RuntimeFailure(e.message);
-}
-
 void run_export(const ExportArgs& a, bool session_given) {
   if (a.out_dir.empty()) throw UsageError("--out must name a folder");
   auto db = data::Database::open(a.db_path, data::OpenMode::open_existing);
-  if (!db) fail(db.error());
+  if (!db) raise(db.error());
   data::ExportOptions options{a.out_dir, std::nullopt};
   if (session_given) options.session_id = a.session;
   Json doc;
@@ -43,7 +32,7 @@ void run_export(const ExportArgs& a, bool session_given) {
   auto run = [&](const char* name, auto fn) {
     if (a.format != "all" && a.format != name) return;
     auto result = fn(db.value(), options);
-    if (!result) fail(result.error());
+    if (!result) raise(result.error());
     doc[std::string(name) + "_rows"] = result.value().rows;
     for (const auto& f : result.value().files) files.push_back(f);
   };

@@ -29,17 +29,15 @@
 namespace curvlab::cli {
 namespace {
 
-// A runner error ({usage, message}) as the CLI's exit code: 2 for input a
-// person must fix, 1 otherwise.
-template <class E>
-[[noreturn]] void raise(const E& e) {
+// A runner error still shaped {usage, message} as the CLI's exit code: 2 for
+// input a person must fix, 1 otherwise. Runner results that carry a
+// harness::Error take the common raise() (exit_code() of its kind) instead.
+template <class LegacyError>
+[[noreturn]] void raise(const LegacyError& e) {
   if (e.usage) throw UsageError(e.message);
   throw RuntimeFailure(e.message);
 }
-[[noreturn]] void raise(const harness::Error& e) {
-  if (harness::exit_code(e) == 2) throw UsageError(e.message);
-  throw RuntimeFailure(e.message);
-}
+using cli::raise;  // the harness::Error overload (common.hpp) wins for an Error
 
 namespace rn = curvlab::harness::runner;
 namespace pr = curvlab::harness::protocol;
@@ -139,8 +137,8 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
     o.start_ns = start_ns;
     if (!a.trajectory.empty()) {
       auto file = harness::read_trajectory_csv(a.trajectory);
-      if (auto* e = std::get_if<harness::InputError>(&file)) throw UsageError(e->message);
-      o.trajectory = std::get<harness::TrajectoryFile>(file).samples;
+      if (!file) raise(file.error());
+      o.trajectory = file.value().samples;
       if (o.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
     }
     auto made = rn::HeadlessBackend::create(o);
@@ -197,7 +195,7 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
 
 void export_all(const std::string& db_path, std::int64_t session_id, const std::string& dir, Json& doc) {
   auto db = data::Database::open(db_path, data::OpenMode::open_existing);
-  if (!db) throw RuntimeFailure(db.error().message);
+  if (!db) raise(db.error());
   Json files = Json::array();
   for (auto [name, fn] : {std::pair{"csv", &data::export_trials_csv}, std::pair{"psychds", &data::export_psychds},
                           std::pair{"bids", &data::export_bids_motion}}) {
@@ -205,7 +203,7 @@ void export_all(const std::string& db_path, std::int64_t session_id, const std::
     o.out_dir = (std::filesystem::path(dir) / name).string();
     o.session_id = session_id;
     auto r = fn(db.value(), o);
-    if (!r) throw RuntimeFailure(r.error().message);
+    if (!r) raise(r.error());
     for (const auto& f : r.value().files) files.push_back((std::filesystem::path(o.out_dir) / f).string());
   }
   doc["exports"] = files;
@@ -294,6 +292,7 @@ void run_command(const RunArgs& a) {
   const std::string db = a.db.empty()
                              ? (std::filesystem::path("results") / (p.meta.name + ".sqlite")).string()
                              : a.db;
+  check_db_argument(db);
   const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
   auto backend = open_backend(a.backend, p, table, 0);
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
@@ -312,6 +311,7 @@ struct ResumeArgs {
 };
 
 void resume_command(const ResumeArgs& a) {
+  check_db_argument(a.db);
   auto stored_v = rn::read_stored_session(a.db, a.session);
   if (!stored_v) raise(stored_v.error());
   const auto& stored = stored_v.value();
@@ -449,6 +449,7 @@ struct ReplayArgs {
 
 void replay_command(ReplayArgs a) {
   a.request.frame_index = a.frame;
+  check_db_argument(a.request.db_path);
   auto r = rn::replay_frame(a.request);
   if (auto* e = std::get_if<rn::ReplayError>(&r)) raise(*e);
   const auto& res = std::get<rn::ReplayResult>(r);

@@ -166,8 +166,8 @@ TableShape resolve_table(const TrackArgs& a, bool radius_given, bool edge_given,
 
 void run_track(const TrackArgs& a, bool radius_given, bool edge_given) {
   auto parsed = harness::read_trajectory_csv(a.trajectory);
-  if (const auto* e = std::get_if<harness::InputError>(&parsed)) throw UsageError(e->message);
-  const auto& file = std::get<harness::TrajectoryFile>(parsed);
+  if (!parsed) raise(parsed.error());
+  const auto& file = parsed.value();
   const TableShape table = resolve_table(a, radius_given, edge_given, file.table);
   const Space space{a.kind, table.radius_m};
   const auto algorithm = *parse_tracking_algorithm(a.algorithm);

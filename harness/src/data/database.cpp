@@ -4,7 +4,11 @@
 #include <sys/statvfs.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <system_error>
 
 namespace curvlab::data {
@@ -46,6 +50,30 @@ std::optional<DataError> check_writable_location(const std::string& path) {
   return std::nullopt;
 }
 
+// A path as a shell needs it in a command the message suggests.
+std::string shell_quoted(const std::string& path) {
+  static constexpr std::string_view plain =
+      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-+,:@%=";
+  if (!path.empty() && path.find_first_not_of(plain) == std::string::npos) return path;
+  std::string out = "'";
+  for (const char c : path) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string recover_command(const std::string& path) {
+  return "sqlite3 " + shell_quoted(path) + " .recover | sqlite3 recovered.sqlite";
+}
+
+std::uint32_t big_endian(const unsigned char* p, int bytes) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+// The database header (sqlite.org/fileformat.html, "The Database Header").
+constexpr std::size_t header_bytes = 100;
+constexpr std::string_view sqlite_magic("SQLite format 3\0", 16);
+
 bool is_empty_database(Connection& c) {
   return c.query_int("SELECT count(*) FROM sqlite_master") == 0;
 }
@@ -82,6 +110,73 @@ void migrate(Connection& c, std::int64_t from) {
 
 }  // namespace
 
+DataError foreign_file_error(const std::string& path, std::int64_t application_id) {
+  return DataError{DataError::Kind::not_curvlab,
+                   path + ": not a curvlab data file: a readable SQLite database written by another "
+                          "program (application_id " + std::to_string(application_id) + "; curvlab writes " +
+                       std::to_string(curvlab_application_id) +
+                       ", \"CVLB\"). It was not modified and there is nothing to recover; give the "
+                       "file curvlab run wrote (by default results/<protocol name>.sqlite)"};
+}
+
+DataError corrupt_file_error(const std::string& path, const std::string& what) {
+  return DataError{DataError::Kind::corrupt,
+                   path + ": damaged curvlab data file: " + what +
+                       ", so only part of it can be read. Recover the committed data into a new file "
+                       "with the SQLite shell: " + recover_command(path) +
+                       "; then use recovered.sqlite (" + path +
+                       " is left as it is; docs/data.md shows how without .recover)"};
+}
+
+Expected<Done> check_data_file(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return Done{};  // missing or a folder: Database::open says so
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec || size == 0) return Done{};  // empty: becomes a new curvlab file
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Done{};  // unreadable: SQLite's own error names the cause
+  std::array<unsigned char, header_bytes> h{};
+  in.read(reinterpret_cast<char*>(h.data()), h.size());
+  const auto got = static_cast<std::size_t>(in.gcount());
+  if (std::memcmp(h.data(), sqlite_magic.data(), std::min(got, sqlite_magic.size())) != 0) {
+    return DataError{DataError::Kind::not_curvlab,
+                     path + ": not an SQLite database (it does not begin with \"SQLite format 3\"), so it "
+                            "cannot be read at all and is not a curvlab data file. If it should hold curvlab "
+                            "data it was overwritten: use a backup, or save whatever SQLite pages remain with "
+                            "the SQLite shell: " + recover_command(path)};
+  }
+  if (got < header_bytes) {
+    return corrupt_file_error(path, "truncated to " + std::to_string(size) +
+                                        " bytes, shorter than the 100-byte SQLite header");
+  }
+  std::uint32_t page_size = big_endian(&h[16], 2);
+  if (page_size == 1) page_size = 65536;
+  if (page_size < 512 || page_size > 65536 || (page_size & (page_size - 1)) != 0)
+    return corrupt_file_error(path, "its header is damaged (page size " + std::to_string(page_size) + ")");
+  // While a write-ahead log is pending, SQLite finishes an interrupted
+  // checkpoint on open, and the file may legitimately be shorter until then.
+  const fs::path wal(path + "-wal");
+  if (fs::exists(wal, ec) && fs::file_size(wal, ec) > 0 && !ec) return Done{};
+  // The page count in the header is valid when its "version-valid-for" number
+  // equals the change counter (always, for files written since SQLite 3.7.0).
+  const std::uint32_t pages = big_endian(&h[28], 4);
+  if (pages != 0 && big_endian(&h[24], 4) == big_endian(&h[92], 4)) {
+    const std::uintmax_t expected = std::uintmax_t{pages} * page_size;
+    if (size < expected)
+      return corrupt_file_error(path, "truncated to " + std::to_string(size) + " bytes where its header records " +
+                                          std::to_string(expected) + " (" + std::to_string(pages) +
+                                          " pages of " + std::to_string(page_size) + " bytes)");
+  }
+  // Another program's database, with the exceptions Database::open makes: a
+  // schema-version-1 file (before application_id was set) and an empty
+  // database of one page, which becomes a curvlab file.
+  const std::uint32_t app_id = big_endian(&h[68], 4);
+  const std::uint32_t user_version = big_endian(&h[60], 4);
+  if (app_id != curvlab_application_id && !(app_id == 0 && user_version == 1) && pages > 1)
+    return foreign_file_error(path, app_id);
+  return Done{};
+}
+
 void configure_connection(Connection& c, bool synchronous_full) {
   sqlite3_busy_timeout(c.get(), 5000);
   c.exec("PRAGMA foreign_keys = ON");
@@ -93,9 +188,10 @@ Expected<Database> Database::open(const std::string& path, OpenMode mode) {
   std::error_code ec;
   const bool exists = std::filesystem::exists(path, ec);
   if (mode != OpenMode::create_or_open && !exists)
-    return DataError{DataError::Kind::io, path + ": no such file"};
+    return DataError{DataError::Kind::not_found, path + ": no such file"};
   if (exists && std::filesystem::is_directory(path, ec))
     return DataError{DataError::Kind::io, path + ": is a folder, expected a database file"};
+  if (auto checked = check_data_file(path); !checked) return checked.error();
   if (mode == OpenMode::create_or_open) {
     if (auto problem = check_writable_location(path)) return *problem;
   }
@@ -109,9 +205,7 @@ Expected<Database> Database::open(const std::string& path, OpenMode mode) {
     const std::int64_t app_id = c.query_int("PRAGMA application_id");
     const bool empty = is_empty_database(c);
     if (!empty && app_id != curvlab_application_id && !(app_id == 0 && version == 1)) {
-      return DataError{DataError::Kind::not_curvlab,
-                       path + ": not a curvlab data file (application_id " +
-                           std::to_string(app_id) + ")"};
+      return foreign_file_error(path, app_id);
     }
     if (version > current_schema_version) {
       return DataError{DataError::Kind::newer_schema,

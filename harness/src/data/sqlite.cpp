@@ -1,5 +1,7 @@
 #include "curvlab/harness/data/sqlite.hpp"
 
+#include "curvlab/harness/data/database.hpp"
+
 #include <sqlite3.h>
 
 #include <cstring>
@@ -23,7 +25,7 @@ DataError to_data_error(const SqliteFailure& failure, const std::string& path) {
       return {DataError::Kind::busy, where + " (another process is writing this file)"};
     case SQLITE_CORRUPT:
     case SQLITE_NOTADB:
-      return {DataError::Kind::corrupt, where + " (not a valid database file)"};
+      return corrupt_file_error(path, std::string("SQLite reports \"") + failure.what() + "\"");
     case SQLITE_CONSTRAINT:
     case SQLITE_MISMATCH:
     case SQLITE_RANGE:

@@ -43,12 +43,16 @@ std::string hex4(std::uint16_t v) {
   return buf;
 }
 
+harness::Error device_error(std::string message) {
+  return {harness::Error::Kind::device, std::move(message)};
+}
+
 }  // namespace
 
-std::variant<HidLibrary, DeviceError> HidLibrary::open() {
+harness::Result<HidLibrary> HidLibrary::open() {
   const std::lock_guard lock(g_library_mutex);
   if (g_library_refs == 0 && hid_init() != 0)
-    return DeviceError{"hidapi could not start: " + utf8(hid_error(nullptr))};
+    return device_error("hidapi could not start: " + utf8(hid_error(nullptr)));
   ++g_library_refs;
   HidLibrary library;
   library.owns_ = true;
@@ -97,21 +101,20 @@ std::vector<HidDeviceInfo> HidLibrary::enumerate() const {
 
 void HidDevice::Closer::operator()(hid_device_* device) const noexcept { hid_close(device); }
 
-std::variant<HidDevice, DeviceError> HidDevice::open(const HidDeviceInfo& info) {
+harness::Result<HidDevice> HidDevice::open(const HidDeviceInfo& info) {
   auto library = HidLibrary::open();
-  if (auto* e = std::get_if<DeviceError>(&library)) return *e;
+  if (!library) return library.error();
   hid_device* device = hid_open_path(info.path.c_str());
   if (device == nullptr)
-    return DeviceError{"cannot open " + describe(info) + " at " + info.path + ": " +
-                       utf8(hid_error(nullptr)) +
-                       " (is the user allowed to read it? see docs/devices.md, udev rule)"};
-  return HidDevice(std::move(std::get<HidLibrary>(library)), device, describe(info));
+    return device_error("cannot open " + describe(info) + " at " + info.path + ": " +
+                        utf8(hid_error(nullptr)) +
+                        " (is the user allowed to read it? see docs/devices.md, udev rule)");
+  return HidDevice(std::move(library).value(), device, describe(info));
 }
 
-std::variant<std::size_t, DeviceError> HidDevice::read(std::span<std::uint8_t> buffer,
-                                                      int timeout_ms) {
+harness::Result<std::size_t> HidDevice::read(std::span<std::uint8_t> buffer, int timeout_ms) {
   const int n = hid_read_timeout(device_.get(), buffer.data(), buffer.size(), timeout_ms);
-  if (n < 0) return DeviceError{label_ + " stopped responding: " + utf8(hid_error(device_.get()))};
+  if (n < 0) return device_error(label_ + " stopped responding: " + utf8(hid_error(device_.get())));
   return static_cast<std::size_t>(n);
 }
 

@@ -1,6 +1,6 @@
 #include "curvlab/harness/devices/mapping.hpp"
 
-#include <toml++/toml.h>
+#include "toml_reader.hpp"
 
 #include <fstream>
 #include <set>
@@ -9,43 +9,56 @@
 namespace curvlab::devices {
 namespace {
 
-// Thrown inside the parser only, turned into a MappingError value at its edge.
+namespace tr = harness::toml_reader;
+using tr::FieldStatus;
+
+// Thrown inside the parser only, turned into an Error value at its edge.
 struct Fail {
-  MappingError error;
+  harness::Error error;
 };
 
+// "file:line:column: field: message", the form every mapping error takes.
+harness::Error mapping_error(const std::string& file, tr::Pos pos, const std::string& field,
+                             const std::string& message) {
+  std::ostringstream os;
+  os << file << ':' << pos.line << ':' << pos.column << ": " << field << ": " << message;
+  return {harness::Error::Kind::bad_input, os.str()};
+}
+
+// Reads one mapping file, stopping at the first problem (a short file: one
+// error at a time reads best). Field look-ups and type checks are the shared
+// TOML readers'; the words are this format's own (docs/devices.md).
 class Reader {
  public:
   explicit Reader(std::string file) : file_(std::move(file)) {}
 
   [[noreturn]] void fail(const toml::source_region& where, const std::string& field,
                          const std::string& message) const {
-    throw Fail{{file_, static_cast<int>(where.begin.line), static_cast<int>(where.begin.column),
-                field, message}};
+    throw Fail{mapping_error(file_, tr::pos_of(where), field, message)};
   }
 
   void only_keys(const toml::table& table, const std::string& prefix,
                  const std::set<std::string>& allowed) const {
-    for (const auto& [key, node] : table) {
-      if (allowed.count(std::string(key.str())) != 0) continue;
-      std::string list;
-      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      fail(node.source(), prefix + std::string(key.str()), "unknown key (expected one of: " + list + ")");
-    }
+    const auto unknown = tr::unknown_keys(table, {allowed.begin(), allowed.end()});
+    if (unknown.empty()) return;
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    fail(unknown.front().node->source(), prefix + unknown.front().key,
+         "unknown key (expected one of: " + list + ")");
   }
 
   std::int64_t integer(const toml::table& table, const std::string& key, const std::string& prefix,
                        std::int64_t min, std::int64_t max) const {
-    const toml::node* node = table.get(key);
-    if (node == nullptr) fail(table.source(), prefix + key, "missing (expected an integer)");
-    const auto* value = node->as_integer();
-    if (value == nullptr) fail(node->source(), prefix + key, "expected an integer");
-    const std::int64_t v = value->get();
-    if (v < min || v > max)
-      fail(node->source(), prefix + key,
-           "expected an integer in " + std::to_string(min) + " … " + std::to_string(max) +
-               ", got " + std::to_string(v));
-    return v;
+    const auto f = tr::read_integer(table, key, min, max);
+    switch (f.status) {
+      case FieldStatus::ok: return f.value;
+      case FieldStatus::absent: fail(table.source(), prefix + key, "missing (expected an integer)");
+      case FieldStatus::out_of_range:
+        fail(f.node->source(), prefix + key,
+             "expected an integer in " + std::to_string(min) + " … " + std::to_string(max) +
+                 ", got " + std::to_string(f.value));
+      default: fail(f.node->source(), prefix + key, "expected an integer");
+    }
   }
 
   std::optional<std::int64_t> optional_integer(const toml::table& table, const std::string& key,
@@ -57,12 +70,18 @@ class Reader {
 
   std::string string(const toml::table& table, const std::string& key,
                      const std::string& prefix) const {
-    const toml::node* node = table.get(key);
-    if (node == nullptr) fail(table.source(), prefix + key, "missing (expected a string)");
-    const auto* value = node->as_string();
-    if (value == nullptr || value->get().empty())
-      fail(node->source(), prefix + key, "expected a non-empty string");
-    return value->get();
+    const auto f = tr::read_string(table, key, /*allow_empty=*/false);
+    if (f.ok()) return f.value;
+    if (!f.present()) fail(table.source(), prefix + key, "missing (expected a string)");
+    fail(f.node->source(), prefix + key, "expected a non-empty string");
+  }
+
+  const toml::array& tables(const toml::table& t, const std::string& key, const std::string& prefix,
+                            const std::string& missing, const std::string& expected) const {
+    const auto f = tr::read_array_of_tables(t, key);
+    if (!f.present()) fail(t.source(), prefix + key, missing);
+    if (!f.ok()) fail(f.node->source(), prefix + key, expected);
+    return *f.value;
   }
 
   Binding binding(const toml::table& t, const std::string& prefix) const {
@@ -90,9 +109,9 @@ class Reader {
       a.bits = static_cast<int>(optional_integer(t, "bits", prefix, 8, 16).value_or(8));
       if (a.bits != 8 && a.bits != 16)
         fail(t.get("bits")->source(), prefix + "bits", "expected 8 or 16");
-      if (const toml::node* s = t.get("signed")) {
-        if (!s->is_boolean()) fail(s->source(), prefix + "signed", "expected true or false");
-        a.is_signed = s->as_boolean()->get();
+      if (const auto s = tr::read_bool(t, "signed"); s.present()) {
+        if (!s.ok()) fail(s.node->source(), prefix + "signed", "expected true or false");
+        a.is_signed = s.value;
       }
       const std::int64_t lo = a.is_signed ? -(std::int64_t{1} << (a.bits - 1)) : 0;
       const std::int64_t hi = a.is_signed ? (std::int64_t{1} << (a.bits - 1)) - 1
@@ -135,16 +154,22 @@ class Reader {
            "(see `curvlab devices`)");
     if (auto id = optional_integer(t, "report_id", prefix, 1, 255))
       d.report_id = static_cast<std::uint8_t>(*id);
-    const toml::node* bindings = t.get("binding");
-    if (bindings == nullptr)
-      fail(t.source(), prefix + "binding", "missing: add at least one [[device.binding]]");
-    const auto* array = bindings->as_array();
-    if (array == nullptr || !array->is_array_of_tables() || array->empty())
-      fail(bindings->source(), prefix + "binding", "expected an array of tables ([[device.binding]])");
-    for (std::size_t i = 0; i < array->size(); ++i)
-      d.bindings.push_back(binding(*array->get(i)->as_table(),
-                                   prefix + "binding[" + std::to_string(i) + "]."));
+    const toml::array& bindings = tables(t, "binding", prefix, "missing: add at least one [[device.binding]]",
+                                         "expected an array of tables ([[device.binding]])");
+    for (std::size_t i = 0; i < bindings.size(); ++i)
+      d.bindings.push_back(binding(*bindings.get(i)->as_table(), prefix + "binding[" + std::to_string(i) + "]."));
     return d;
+  }
+
+  MappingFile file(const toml::table& root) const {
+    only_keys(root, "", {"device"});
+    const toml::array& devices = tables(root, "device", "", "missing: add at least one [[device]] table",
+                                        "expected an array of tables ([[device]])");
+    MappingFile out;
+    out.file = file_;
+    for (std::size_t i = 0; i < devices.size(); ++i)
+      out.devices.push_back(device(*devices.get(i)->as_table(), "device[" + std::to_string(i) + "]."));
+    return out;
   }
 
  private:
@@ -152,12 +177,6 @@ class Reader {
 };
 
 }  // namespace
-
-std::string MappingError::what() const {
-  std::ostringstream os;
-  os << file << ':' << line << ':' << column << ": " << field << ": " << message;
-  return os.str();
-}
 
 bool DeviceMatch::matches(const HidDeviceInfo& info) const {
   return (!vendor_id || *vendor_id == info.vendor_id) &&
@@ -171,39 +190,26 @@ const DeviceMapping* MappingFile::find(const HidDeviceInfo& info) const {
   return nullptr;
 }
 
-std::variant<MappingFile, MappingError> parse_mapping(std::string_view text,
-                                                      const std::string& file_name) {
-  toml::table root;
+harness::Result<MappingFile> parse_mapping(std::string_view text, const std::string& file_name) {
+  // The same guarded parse as protocol files: toml++ 3.3 never sees text that
+  // would reach its undefined behaviour.
+  auto parsed = tr::parse(text, file_name);
+  if (const auto* problem = std::get_if<tr::SyntaxProblem>(&parsed))
+    return mapping_error(file_name, problem->pos, "(syntax)", problem->message);
   try {
-    root = toml::parse(text, file_name);
-  } catch (const toml::parse_error& e) {
-    return MappingError{file_name, static_cast<int>(e.source().begin.line),
-                        static_cast<int>(e.source().begin.column), "(syntax)",
-                        std::string(e.description())};
-  }
-  const Reader reader(file_name);
-  try {
-    reader.only_keys(root, "", {"device"});
-    const toml::node* devices = root.get("device");
-    if (devices == nullptr)
-      reader.fail(root.source(), "device", "missing: add at least one [[device]] table");
-    const auto* array = devices->as_array();
-    if (array == nullptr || !array->is_array_of_tables() || array->empty())
-      reader.fail(devices->source(), "device", "expected an array of tables ([[device]])");
-    MappingFile out;
-    out.file = file_name;
-    for (std::size_t i = 0; i < array->size(); ++i)
-      out.devices.push_back(
-          reader.device(*array->get(i)->as_table(), "device[" + std::to_string(i) + "]."));
-    return out;
+    return Reader(file_name).file(std::get<toml::table>(parsed));
   } catch (const Fail& f) {
     return f.error;
   }
 }
 
-std::variant<MappingFile, MappingError> load_mapping(const std::filesystem::path& path) {
+harness::Result<MappingFile> load_mapping(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return MappingError{path.string(), 0, 0, "(file)", "cannot be read"};
+  if (!in) {
+    harness::Error e = mapping_error(path.string(), {}, "(file)", "cannot be read");
+    e.kind = harness::Error::Kind::not_found;
+    return e;
+  }
   std::ostringstream text;
   text << in.rdbuf();
   return parse_mapping(text.str(), path.string());

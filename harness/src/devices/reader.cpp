@@ -52,18 +52,18 @@ void DeviceReader::run() {
     // Timestamp first: the report reached user space just now. (USB polling
     // adds up to one bInterval, typically 1–8 ms, before this; docs/devices.md.)
     const std::int64_t t_ns = clock_.now_ns();
-    if (const auto* error = std::get_if<DeviceError>(&result)) {
+    if (!result) {
       for (auto& e : parser_.release_all(t_ns))
         queue_.push({DeviceEvent::Kind::Response, std::move(e), label, "", t_ns});
       DeviceEvent gone;
       gone.kind = DeviceEvent::Kind::Disconnected;
       gone.device = label;
-      gone.message = error->message + "; reconnect it and resume the session";
+      gone.message = result.error().message + "; reconnect it and resume the session";
       gone.t_ns = t_ns;
       queue_.push(std::move(gone));
       break;
     }
-    const std::size_t n = std::get<std::size_t>(result);
+    const std::size_t n = result.value();
     if (n == 0) continue;
     for (auto& e : parser_.parse(std::span<const std::uint8_t>(buffer.data(), n), t_ns))
       queue_.push({DeviceEvent::Kind::Response, std::move(e), label, "", t_ns});

@@ -145,7 +145,8 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
         const double u = uniform01(rng);
         t.adjustment_start = a.start_min + u * (a.start_max - a.start_min);
       }
-      t.derived = derive(t.settings, nullptr).value_or(Derived{});
+      const auto derived = derive(t.settings);
+      t.derived = derived ? derived.value() : Derived{};
       t.break_before = b.break_every_trials > 0 && k > 0 &&
                        k % static_cast<std::size_t>(b.break_every_trials) == 0;
       d.trials.push_back(std::move(t));

@@ -25,18 +25,22 @@ Square williams_design(std::size_t n) {
   return sq;
 }
 
-std::optional<std::string> check_latin(const Square& square, std::size_t n) {
-  if (square.empty()) return "the square has no rows";
+namespace {
+Error not_latin(std::string reason) { return {Error::Kind::bad_input, std::move(reason)}; }
+}  // namespace
+
+Result<Done> check_latin(const Square& square, std::size_t n) {
+  if (square.empty()) return not_latin("the square has no rows");
   if (square.size() % n != 0)
-    return "expected a multiple of " + std::to_string(n) + " rows (one per order), found " +
-           std::to_string(square.size());
+    return not_latin("expected a multiple of " + std::to_string(n) + " rows (one per order), found " +
+           std::to_string(square.size()));
   for (std::size_t r = 0; r < square.size(); ++r) {
     if (square[r].size() != n)
-      return "row " + std::to_string(r + 1) + " has " + std::to_string(square[r].size()) +
-             " entries, expected " + std::to_string(n);
+      return not_latin("row " + std::to_string(r + 1) + " has " + std::to_string(square[r].size()) +
+             " entries, expected " + std::to_string(n));
     std::vector<bool> seen(n, false);
     for (std::size_t v : square[r]) {
-      if (v >= n || seen[v]) return "row " + std::to_string(r + 1) + " is not a permutation";
+      if (v >= n || seen[v]) return not_latin("row " + std::to_string(r + 1) + " is not a permutation");
       seen[v] = true;
     }
   }
@@ -47,13 +51,13 @@ std::optional<std::string> check_latin(const Square& square, std::size_t n) {
       for (std::size_t r = base; r < base + n; ++r) {
         const std::size_t v = square[r][c];
         if (seen[v])
-          return "column " + std::to_string(c + 1) + " repeats an entry in rows " +
-                 std::to_string(base + 1) + "–" + std::to_string(base + n);
+          return not_latin("column " + std::to_string(c + 1) + " repeats an entry in rows " +
+                 std::to_string(base + 1) + "–" + std::to_string(base + n));
         seen[v] = true;
       }
     }
   }
-  return std::nullopt;
+  return Done{};
 }
 
 std::size_t row_for_participant(const Square& square, std::uint64_t participant) {

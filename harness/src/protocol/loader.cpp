@@ -6,8 +6,7 @@
 
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/latin_square.hpp"
-
-#include <toml++/toml.h>
+#include "toml_reader.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -24,25 +23,12 @@ constexpr std::size_t kMaxFileBytes = 1u << 20;
 constexpr std::size_t kMaxCells = 100000;
 constexpr std::size_t kMaxTrials = 1000000;
 
-SourcePos pos_of(const toml::source_region& r) {
-  return {static_cast<int>(r.begin.line), static_cast<int>(r.begin.column)};
-}
-SourcePos pos_of(const toml::node& n) { return pos_of(n.source()); }
+namespace tr = toml_reader;
+using tr::type_name;
 
-std::string type_name(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a float";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::date: return "a date";
-    case toml::node_type::time: return "a time";
-    case toml::node_type::date_time: return "a date-time";
-    default: return "nothing";
-  }
-}
+SourcePos to_source_pos(tr::Pos p) { return {p.line, p.column}; }
+SourcePos pos_of(const toml::source_region& r) { return to_source_pos(tr::pos_of(r)); }
+SourcePos pos_of(const toml::node& n) { return to_source_pos(tr::pos_of(n)); }
 
 std::string join(const std::string& prefix, std::string_view key) {
   return prefix.empty() ? std::string(key) : prefix + "." + std::string(key);
@@ -98,161 +84,19 @@ std::vector<std::string> numeric_paths() {
   return out;
 }
 
-// toml++ 3.3 (Debian 12) reaches __builtin_unreachable() — undefined
-// behaviour, found by our fuzzer and known upstream (marzer/tomlplusplus#190,
-// #295, fixed after 3.3) — when it asks whether certain non-ASCII code points
-// are whitespace: U+00A1–U+0499, U+2D8E–U+3187 and U+FB46–U+FEFE (except
-// U+3000). It asks for characters outside strings, inside keys (quoted keys
-// are recorded character by character) and after a line-ending backslash in a
-// multi-line basic string. Value strings and comments are safe, so
-// instructions may be written in any language. This scan finds the unsafe
-// places first and reports them as syntax errors instead of calling the parser.
-bool unsafe_for_toml33(char32_t c) {
-  if (c < 0xA1 || c > 0xFEFF || c == 0x3000 || c == 0xFEFF) return false;
-  const auto child = (static_cast<std::uint64_t>(c) - 0xA0u) / 0x3FAu;
-  return child == 0 || child == 11 || child == 63;
-}
-
-struct Hazard {
-  SourcePos pos;
-  std::string message;
-};
-
-std::string hex4(char32_t c) {
-  static const char* digits = "0123456789ABCDEF";
-  std::string out;
-  for (int shift = c > 0xFFFF ? 20 : 12; shift >= 0; shift -= 4) out += digits[(c >> shift) & 0xFu];
-  return out;
-}
-
-bool is_toml_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
-
-std::optional<Hazard> find_toml33_hazard(std::string_view text) {
-  int line = 1, column = 1;
-  std::size_t i = 0;
-  // Decodes the code point at i (invalid UTF-8: the byte itself; toml++
-  // reports those cleanly) and advances i, line and column.
-  const auto next = [&]() -> char32_t {
-    const auto b0 = static_cast<unsigned char>(text[i]);
-    std::size_t len = b0 < 0x80 ? 1 : (b0 >> 5) == 6 ? 2 : (b0 >> 4) == 14 ? 3 : (b0 >> 3) == 30 ? 4 : 1;
-    if (i + len > text.size()) len = 1;
-    char32_t c = len == 1 ? b0 : len == 2 ? (b0 & 0x1Fu) : len == 3 ? (b0 & 0x0Fu) : (b0 & 0x07u);
-    for (std::size_t k = 1; k < len; ++k) {
-      const auto b = static_cast<unsigned char>(text[i + k]);
-      if ((b >> 6) != 2) {
-        len = 1;
-        c = b0;
-        break;
-      }
-      c = (c << 6) | (b & 0x3Fu);
-    }
-    i += len;
-    if (c == U'\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-    return c;
-  };
-  const auto here = [&] { return SourcePos{line, column}; };
-  const auto starts = [&](std::string_view s) { return text.substr(i, s.size()) == s; };
-
-  std::vector<char> nest;  // '[' array, '{' inline table (value side only)
-  bool key_position = true;
-  char prev = '\n';  // the last character outside strings and comments
-  while (i < text.size()) {
-    const SourcePos at = here();
-    const char ch = text[i];
-    if (ch == '#') {
-      while (i < text.size() && text[i] != '\n') next();
-      prev = ' ';
-      continue;
-    }
-    if (ch == '"' || ch == '\'') {
-      // A quote glued to a bare value (`0"x"`) is a syntax error, but toml++
-      // first scans the whole run of characters as one value — into the
-      // "string" — classifying each, so report it here.
-      if (std::string_view(" \t\r\n=[{,.").find(prev) == std::string_view::npos)
-        return Hazard{at, std::string("unexpected quote right after '") + prev +
-                              "': expected whitespace, '=', '[', '{', ',' or '.' before a string"};
-      prev = ch;
-      const std::string_view delim = ch == '"' ? std::string_view("\"\"\"") : std::string_view("'''");
-      const bool triple = starts(delim);
-      const bool basic = ch == '"';
-      const bool is_key = key_position;
-      for (int k = 0; k < (triple ? 3 : 1); ++k) next();
-      while (i < text.size()) {
-        if (triple ? starts(delim) : text[i] == ch) {
-          for (int k = 0; k < (triple ? 3 : 1); ++k) next();
-          // A closing delimiter may be followed by up to two more quotes.
-          while (triple && i < text.size() && text[i] == ch) next();
-          break;
-        }
-        if (!triple && text[i] == '\n') break;  // unterminated: toml++ reports it
-        const SourcePos cp_at = here();
-        if (basic && text[i] == '\\') {
-          next();
-          if (i >= text.size()) break;
-          if (triple && is_toml_space(text[i])) {
-            while (i < text.size() && is_toml_space(text[i])) next();
-            const SourcePos after = here();
-            if (i < text.size() && static_cast<unsigned char>(text[i]) >= 0x80) {
-              const char32_t c = next();
-              if (unsafe_for_toml33(c))
-                return Hazard{after, "U+" + hex4(c) +
-                                         " right after a line-ending backslash cannot be read by the TOML "
-                                         "library (toml++ 3.3); write it as the escape \\u" + hex4(c)};
-            }
-            continue;
-          }
-          next();  // the escaped character
-          continue;
-        }
-        const char32_t c = next();
-        if (is_key && c >= 0x80)
-          return Hazard{cp_at, "non-ASCII character U+" + hex4(c) + " in a key: protocol keys are ASCII names"};
-      }
-      continue;
-    }
-    const char32_t c = next();
-    prev = static_cast<char>(c);
-    if (c >= 0x80)
-      return Hazard{at, "non-ASCII character U+" + hex4(c) +
-                            " outside a string or comment (TOML allows it only inside quotes or after #)"};
-    switch (c) {
-      case U'=': key_position = false; break;
-      case U'\n': if (nest.empty()) key_position = true; break;
-      case U'[': if (!(key_position && nest.empty())) nest.push_back('['); break;
-      case U']': if (!nest.empty() && nest.back() == '[') nest.pop_back(); break;
-      case U'{': nest.push_back('{'); key_position = true; break;
-      case U'}': if (!nest.empty()) nest.pop_back(); key_position = false; break;
-      case U',': if (!nest.empty() && nest.back() == '{') key_position = true; break;
-      default: break;
-    }
-  }
-  return std::nullopt;
-}
-
 class Loader {
  public:
   explicit Loader(std::string file) : file_(std::move(file)) {}
 
   LoadResult run(std::string_view text) {
     LoadResult result;
-    toml::table root;
-    if (const auto hazard = find_toml33_hazard(text)) {
-      error(hazard->pos, "syntax", hazard->message);
+    auto parsed = tr::parse(text, file_);
+    if (const auto* problem = std::get_if<tr::SyntaxProblem>(&parsed)) {
+      error(to_source_pos(problem->pos), "syntax", problem->message);
       result.diagnostics = std::move(diags_);
       return result;
     }
-    try {
-      root = toml::parse(text, file_);
-    } catch (const toml::parse_error& e) {
-      error(pos_of(e.source()), "syntax", std::string(e.description()));
-      result.diagnostics = std::move(diags_);
-      return result;
-    }
+    const toml::table& root = std::get<toml::table>(parsed);
     Protocol p;
     p.file = file_;
     read_root(root, p);
@@ -270,14 +114,12 @@ class Loader {
   // ---- generic readers -------------------------------------------------
   void check_keys(const toml::table& t, const std::string& prefix,
                   const std::vector<std::string>& allowed) {
-    for (auto&& [k, v] : t) {
-      const std::string key(k.str());
-      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-      std::string msg = "unknown key \"" + key + "\"";
-      const std::string guess = closest_match(key, allowed);
+    for (const auto& unknown : tr::unknown_keys(t, allowed)) {
+      std::string msg = "unknown key \"" + unknown.key + "\"";
+      const std::string guess = closest_match(unknown.key, allowed);
       if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
       msg += " Expected one of: " + quoted_list(allowed);
-      error(pos_of(k.source()), join(prefix, key), msg);
+      error(to_source_pos(unknown.pos), join(prefix, unknown.key), msg);
     }
   }
 
@@ -291,36 +133,32 @@ class Loader {
 
   std::optional<std::string> get_string(const toml::table& t, std::string_view key,
                                         const std::string& prefix, bool required) {
-    const toml::node* n = t.get(key);
-    if (!n) {
-      if (required) error(pos_of(t), join(prefix, key), "missing required string");
-      return std::nullopt;
-    }
-    if (const auto* s = n->as_string()) return s->get();
-    error(pos_of(*n), join(prefix, key), "expected a string, found " + type_name(*n));
+    const auto f = tr::read_string(t, key);
+    if (f.ok()) return f.value;
+    if (f.present()) error(pos_of(*f.node), join(prefix, key), "expected a string, found " + type_name(*f.node));
+    else if (required) error(pos_of(t), join(prefix, key), "missing required string");
     return std::nullopt;
   }
 
   std::optional<std::int64_t> get_int(const toml::table& t, std::string_view key,
                                       const std::string& prefix, std::int64_t lo, std::int64_t hi,
                                       bool required) {
-    const toml::node* n = t.get(key);
+    const auto f = tr::read_integer(t, key, lo, hi);
     const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-    if (!n) {
-      if (required) error(pos_of(t), join(prefix, key), "missing required integer in " + range);
-      return std::nullopt;
+    switch (f.status) {
+      case tr::FieldStatus::ok: return f.value;
+      case tr::FieldStatus::absent:
+        if (required) error(pos_of(t), join(prefix, key), "missing required integer in " + range);
+        break;
+      case tr::FieldStatus::out_of_range:
+        error(pos_of(*f.node), join(prefix, key),
+              "expected an integer in " + range + ", found " + std::to_string(f.value));
+        break;
+      default:
+        error(pos_of(*f.node), join(prefix, key), "expected an integer in " + range + ", found " + type_name(*f.node));
+        break;
     }
-    const auto* i = n->as_integer();
-    if (!i) {
-      error(pos_of(*n), join(prefix, key), "expected an integer in " + range + ", found " + type_name(*n));
-      return std::nullopt;
-    }
-    if (i->get() < lo || i->get() > hi) {
-      error(pos_of(*n), join(prefix, key),
-            "expected an integer in " + range + ", found " + std::to_string(i->get()));
-      return std::nullopt;
-    }
-    return i->get();
+    return std::nullopt;
   }
 
   std::optional<double> node_number(const toml::node& n) {
@@ -331,26 +169,24 @@ class Loader {
 
   std::optional<double> get_number(const toml::table& t, std::string_view key,
                                    const std::string& prefix, bool required) {
-    const toml::node* n = t.get(key);
-    if (!n) {
+    const auto f = tr::read_number(t, key);
+    if (f.ok()) return f.value;
+    if (!f.present()) {
       if (required) error(pos_of(t), join(prefix, key), "missing required number");
       return std::nullopt;
     }
-    const auto v = node_number(*n);
-    if (!v || !std::isfinite(*v)) {
-      error(pos_of(*n), join(prefix, key), "expected a finite number, found " +
-                                               (v ? std::string("a non-finite float") : type_name(*n)));
-      return std::nullopt;
-    }
-    return v;
+    error(pos_of(*f.node), join(prefix, key),
+          "expected a finite number, found " +
+              (f.status == tr::FieldStatus::not_finite ? std::string("a non-finite float") : type_name(*f.node)));
+    return std::nullopt;
   }
 
   std::optional<bool> get_bool(const toml::table& t, std::string_view key, const std::string& prefix) {
-    const toml::node* n = t.get(key);
-    if (!n) return std::nullopt;
-    if (const auto* b = n->as_boolean()) return b->get();
-    error(pos_of(*n), join(prefix, key), "expected true or false, found " + type_name(*n));
-    return std::nullopt;
+    const auto f = tr::read_bool(t, key);
+    if (f.status == tr::FieldStatus::wrong_type)
+      error(pos_of(*f.node), join(prefix, key), "expected true or false, found " + type_name(*f.node));
+    if (!f.ok()) return std::nullopt;
+    return f.value;
   }
 
   std::optional<std::string> get_enum(const toml::table& t, std::string_view key,
@@ -431,10 +267,12 @@ class Loader {
         const SettingInfo* info = find_setting(path);
         if (!info) continue;  // reported by check_keys
         const auto value = to_value(v);
-        const auto problem = value ? check_setting(*info, *value)
-                                   : std::optional<std::string>("expected a value, found " + type_name(v));
-        if (problem) {
-          error(pos_of(v), join(prefix, path), with_found(*problem, v));
+        if (!value) {
+          error(pos_of(v), join(prefix, path), with_found("expected a value, found " + type_name(v), v));
+          continue;
+        }
+        if (const auto checked = check_setting(*info, *value); !checked) {
+          error(pos_of(v), join(prefix, path), with_found(checked.error().message, v));
           continue;
         }
         out.push_back({path, *value, pos_of(v)});
@@ -593,8 +431,8 @@ class Loader {
             continue;
           }
           if (info) {
-            if (const auto problem = check_setting(*info, *value)) {
-              error(pos_of(e), field, with_found(*problem, e) + " (levels of " + f.sets + ")");
+            if (const auto checked = check_setting(*info, *value); !checked) {
+              error(pos_of(e), field, with_found(checked.error().message, e) + " (levels of " + f.sets + ")");
               continue;
             }
           } else if (!std::holds_alternative<std::string>(*value) && !t->contains("sets")) {
@@ -1017,9 +855,10 @@ class Loader {
       }
       square.push_back(idx);
     }
-    if (const auto problem = check_latin(square, main.size())) {
+    if (const auto checked = check_latin(square, main.size()); !checked) {
       error(pos_of(*sq), "counterbalance.square",
-            "not a Latin square over the " + std::to_string(main.size()) + " non-practice blocks: " + *problem);
+            "not a Latin square over the " + std::to_string(main.size()) + " non-practice blocks: " +
+                checked.error().message);
       return;
     }
     p.square = square;
@@ -1121,8 +960,8 @@ class Loader {
   // Checks that need a whole resolved set of settings.
   template <typename Report>
   static void check_settings(const Settings& s, const Report& report) {
-    std::string why;
-    if (!derive(s, &why)) report(s.space.table_sides > 0 ? "space.table_sides" : "space.kind", why);
+    if (const auto derived = derive(s); !derived)
+      report(s.space.table_sides > 0 ? "space.table_sides" : "space.kind", derived.error().message);
     if (s.stimulus.stick_anchor == StickAnchor::head && s.stimulus.stick_distance_m < 0.1)
       report("stimulus.stick_distance_m",
              "a head-anchored stick must be at least 0.1 m from the eyes, found " +

@@ -56,7 +56,7 @@ const Factor* Protocol::find_factor(const std::string& name) const {
   return nullptr;
 }
 
-std::variant<geometry::TableShape, std::string> table_shape(const Settings& s) {
+Result<geometry::TableShape> table_shape(const Settings& s) {
   const auto kind = s.space.kind;
   const int sides = s.space.table_sides > 0 ? s.space.table_sides : geometry::default_table_sides(kind);
   std::variant<geometry::TableShape, geometry::GeometryError> shape;
@@ -67,17 +67,15 @@ std::variant<geometry::TableShape, std::string> table_shape(const Settings& s) {
     const double e3_radius = s.space.radius_m.value_or(s.space.e3_radius_m);
     shape = geometry::right_angled_table_from_edge(kind, s.table.edge_m, sides, e3_radius);
   }
-  if (const auto* err = std::get_if<geometry::GeometryError>(&shape)) return err->message;
+  if (const auto* err = std::get_if<geometry::GeometryError>(&shape))
+    return Error{Error::Kind::bad_input, err->message};
   return std::get<geometry::TableShape>(shape);
 }
 
-std::optional<Derived> derive(const Settings& s, std::string* error) {
+Result<Derived> derive(const Settings& s) {
   auto shape = table_shape(s);
-  if (const auto* err = std::get_if<std::string>(&shape)) {
-    if (error) *error = *err;
-    return std::nullopt;
-  }
-  const auto& t = std::get<geometry::TableShape>(shape);
+  if (!shape) return shape.error();
+  const auto& t = shape.value();
   Derived d;
   d.radius_m = t.radius_m;
   d.table_sides = t.sides;

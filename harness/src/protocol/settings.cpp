@@ -161,41 +161,46 @@ std::string value_label(const SettingValue& v) {
   return std::get<std::string>(v);
 }
 
-std::optional<std::string> check_setting(const SettingInfo& info, const SettingValue& value) {
+// What check_setting found wrong: the protocol's to fix (bad_input).
+namespace {
+Error setting_problem(std::string message) { return {Error::Kind::bad_input, std::move(message)}; }
+}  // namespace
+
+Result<Done> check_setting(const SettingInfo& info, const SettingValue& value) {
   switch (info.kind) {
     case K::boolean:
-      if (!std::holds_alternative<bool>(value)) return "expected true or false";
-      return std::nullopt;
+      if (!std::holds_alternative<bool>(value)) return setting_problem("expected true or false");
+      return Done{};
     case K::integer: {
       const auto* i = std::get_if<std::int64_t>(&value);
-      if (!i) return "expected an integer in " + range_text(info);
+      if (!i) return setting_problem("expected an integer in " + range_text(info));
       if (static_cast<double>(*i) < info.min || static_cast<double>(*i) > info.max)
-        return "expected an integer in " + range_text(info) + ", found " + std::to_string(*i);
-      return std::nullopt;
+        return setting_problem("expected an integer in " + range_text(info) + ", found " + std::to_string(*i));
+      return Done{};
     }
     case K::number_or_from_table:
       if (const auto* s = std::get_if<std::string>(&value)) {
-        if (*s == "from_table") return std::nullopt;
-        return "expected a number of metres in " + range_text(info) +
-               " or \"from_table\", found \"" + *s + "\"";
+        if (*s == "from_table") return Done{};
+        return setting_problem("expected a number of metres in " + range_text(info) +
+               " or \"from_table\", found \"" + *s + "\"");
       }
       [[fallthrough]];
     case K::number: {
       const auto n = as_number(value);
-      if (!n) return "expected a number in " + range_text(info);
+      if (!n) return setting_problem("expected a number in " + range_text(info));
       if (!std::isfinite(*n) || *n < info.min || *n > info.max)
-        return "expected a number in " + range_text(info) + ", found " + number_text(*n);
-      return std::nullopt;
+        return setting_problem("expected a number in " + range_text(info) + ", found " + number_text(*n));
+      return Done{};
     }
     case K::enumeration: {
       const auto* s = std::get_if<std::string>(&value);
-      if (!s) return "expected one of " + choices_text(info);
+      if (!s) return setting_problem("expected one of " + choices_text(info));
       for (auto c : info.choices)
-        if (c == *s) return std::nullopt;
-      return "unknown value \"" + *s + "\": expected one of " + choices_text(info);
+        if (c == *s) return Done{};
+      return setting_problem("unknown value \"" + *s + "\": expected one of " + choices_text(info));
     }
   }
-  return "unsupported setting";
+  return setting_problem("unsupported setting");
 }
 
 void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& value) {

@@ -24,8 +24,8 @@ bool World::same_as(const World& other) const {
 
 std::variant<World, std::string> make_world(const Settings& s) {
   auto shape = protocol::table_shape(s);
-  if (auto* e = std::get_if<std::string>(&shape)) return *e;
-  const auto& t = std::get<geometry::TableShape>(shape);
+  if (!shape) return shape.error().message;
+  const auto& t = shape.value();
   return World{geometry::Space{s.space.kind, t.radius_m}, t};
 }
 

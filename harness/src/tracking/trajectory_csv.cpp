@@ -71,14 +71,14 @@ class Reader {
  public:
   explicit Reader(const std::string& name) : name_(name) {}
 
-  [[nodiscard]] InputError error(std::size_t line, std::size_t column, const std::string& field,
-                                 const std::string& what) const {
+  [[nodiscard]] Error error(std::size_t line, std::size_t column, const std::string& field,
+                            const std::string& what) const {
     std::ostringstream os;
     os << name_ << ':' << line << ':' << column << ": field '" << field << "': " << what;
-    return {os.str()};
+    return {Error::Kind::bad_input, os.str()};
   }
 
-  std::optional<InputError> number(std::size_t line, const Field& f, const std::string& field,
+  std::optional<Error> number(std::size_t line, const Field& f, const std::string& field,
                                    double* out) const {
     double v = 0.0;
     const auto* first = f.text.data();
@@ -95,7 +95,7 @@ class Reader {
   std::string name_;
 };
 
-std::optional<InputError> parse_table_line(const Reader& r, std::size_t line_no,
+std::optional<Error> parse_table_line(const Reader& r, std::size_t line_no,
                                            std::string_view line, PhysicalTable* table) {
   // "# physical_table key=value key=value …"
   const std::string_view tag = "physical_table";
@@ -150,8 +150,7 @@ const std::string& tracking_csv_header() {
   return h;
 }
 
-std::variant<TrajectoryFile, InputError> parse_trajectory_csv(std::istream& in,
-                                                              const std::string& name) {
+Result<TrajectoryFile> parse_trajectory_csv(std::istream& in, const std::string& name) {
   const Reader r(name);
   TrajectoryFile file;
   std::string line;
@@ -257,9 +256,9 @@ std::variant<TrajectoryFile, InputError> parse_trajectory_csv(std::istream& in,
   return file;
 }
 
-std::variant<TrajectoryFile, InputError> read_trajectory_csv(const std::string& path) {
+Result<TrajectoryFile> read_trajectory_csv(const std::string& path) {
   std::ifstream in(path);
-  if (!in) return InputError{path + ": cannot open the trajectory file for reading"};
+  if (!in) return Error{Error::Kind::not_found, path + ": cannot open the trajectory file for reading"};
   return parse_trajectory_csv(in, path);
 }
 

@@ -5,19 +5,13 @@
 
 #include "curvlab/geometry/tracking.hpp"
 #include "curvlab/geometry/trajectory.hpp"
+#include "curvlab/harness/result.hpp"
 
 #include <iosfwd>
 #include <optional>
 #include <string>
-#include <variant>
 
 namespace curvlab::harness {
-
-// A problem a person must fix in an input file: the message names
-// file:line:column, the field and what was expected.
-struct InputError {
-  std::string message;
-};
 
 struct TrajectoryFile {
   geometry::Trajectory samples;
@@ -29,9 +23,11 @@ struct TrajectoryFile {
 // The CSV header row (25 columns: t_ns, then valid, x, y, z, qw, qx, qy, qz per device).
 const std::string& trajectory_csv_header();
 
-std::variant<TrajectoryFile, InputError> parse_trajectory_csv(std::istream& in,
-                                                              const std::string& name);
-std::variant<TrajectoryFile, InputError> read_trajectory_csv(const std::string& path);
+// A problem a person must fix in the file is an Error of kind bad_input whose
+// message names file:line:column, the field and what was expected; a file
+// that cannot be opened is not_found.
+Result<TrajectoryFile> parse_trajectory_csv(std::istream& in, const std::string& name);
+Result<TrajectoryFile> read_trajectory_csv(const std::string& path);
 
 // Writes the format read above (17 significant digits: lossless for doubles).
 void write_trajectory_csv(std::ostream& out, const geometry::Trajectory& trajectory,

@@ -51,6 +51,23 @@ class Database {
   Connection connection_;
 };
 
+// Checks an existing file without SQLite, before anything opens or writes it:
+// a file that is not SQLite at all, or another program's SQLite database, is
+// refused as not_curvlab, one shorter than its own header says (a copy cut
+// off, a disk that filled while copying) as corrupt. A missing or empty file passes (it is created). Database::open
+// calls it first; commands call it before they start a window or headset, so
+// a bad --db is reported at once. The messages say whether the file can be
+// read at all and how to recover committed data (docs/data.md, "Damaged or
+// foreign files").
+Expected<Done> check_data_file(const std::string& path);
+
+// The error for another program's SQLite file (application_id ≠ "CVLB").
+DataError foreign_file_error(const std::string& path, std::int64_t application_id);
+
+// The error for a damaged curvlab file: `what` says what is wrong; the message
+// adds that only part of it can be read and the SQLite shell's .recover.
+DataError corrupt_file_error(const std::string& path, const std::string& what);
+
 // The connection settings every curvlab connection uses (WAL, busy timeout…).
 void configure_connection(Connection& connection, bool synchronous_full);
 

@@ -2,22 +2,17 @@
 // hidapi's hidraw backend: library lifetime, enumeration, and one open device.
 #pragma once
 
+#include "curvlab/harness/result.hpp"
+
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
-#include <variant>
 #include <vector>
 
 struct hid_device_;
 
 namespace curvlab::devices {
-
-// An expected failure (no permission, device gone…) with a message a person
-// can act on.
-struct DeviceError {
-  std::string message;
-};
 
 struct HidDeviceInfo {
   std::uint16_t vendor_id = 0;
@@ -39,7 +34,9 @@ struct HidDeviceInfo {
 // any number of HidLibrary objects may exist on any threads. Move-only.
 class HidLibrary {
  public:
-  static std::variant<HidLibrary, DeviceError> open();
+  // An expected failure (no permission, device gone…) is an Error of kind
+  // `device`, with a message a person can act on.
+  static harness::Result<HidLibrary> open();
   HidLibrary(HidLibrary&& other) noexcept;
   HidLibrary& operator=(HidLibrary&& other) noexcept;
   HidLibrary(const HidLibrary&) = delete;
@@ -57,12 +54,11 @@ class HidLibrary {
 
 // Where reports come from: an open HID device, or (in tests and replays) a
 // recorded sequence. read() blocks at most timeout_ms and returns the report
-// length, 0 on timeout, or a DeviceError when the device is gone.
+// length, 0 on timeout, or an Error (kind `device`) when the device is gone.
 class ReportSource {
  public:
   virtual ~ReportSource() = default;
-  virtual std::variant<std::size_t, DeviceError> read(std::span<std::uint8_t> buffer,
-                                                      int timeout_ms) = 0;
+  virtual harness::Result<std::size_t> read(std::span<std::uint8_t> buffer, int timeout_ms) = 0;
   [[nodiscard]] virtual std::string label() const = 0;
 };
 
@@ -71,9 +67,8 @@ class ReportSource {
 // Not thread-safe: one thread reads it (DeviceReader's).
 class HidDevice final : public ReportSource {
  public:
-  static std::variant<HidDevice, DeviceError> open(const HidDeviceInfo& info);
-  std::variant<std::size_t, DeviceError> read(std::span<std::uint8_t> buffer,
-                                              int timeout_ms) override;
+  static harness::Result<HidDevice> open(const HidDeviceInfo& info);
+  harness::Result<std::size_t> read(std::span<std::uint8_t> buffer, int timeout_ms) override;
   [[nodiscard]] std::string label() const override { return label_; }
 
  private:

@@ -3,26 +3,16 @@
 #pragma once
 
 #include "curvlab/harness/devices/hid.hpp"
+#include "curvlab/harness/result.hpp"
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <variant>
 #include <vector>
 
 namespace curvlab::devices {
-
-// A bad mapping file: where (file:line:column), which field, what was expected.
-struct MappingError {
-  std::string file;
-  int line = 0;
-  int column = 0;
-  std::string field;
-  std::string message;
-  [[nodiscard]] std::string what() const;  // "file:line:column: field: message"
-};
 
 // A button that is one bit of one byte (gamepads, button boxes, keyboard
 // modifiers).
@@ -80,8 +70,10 @@ struct MappingFile {
   [[nodiscard]] const DeviceMapping* find(const HidDeviceInfo& info) const;
 };
 
-std::variant<MappingFile, MappingError> parse_mapping(std::string_view text,
-                                                      const std::string& file_name);
-std::variant<MappingFile, MappingError> load_mapping(const std::filesystem::path& path);
+// A bad file is an Error (kind bad_input; not_found when it cannot be read)
+// whose message is "file:line:column: field: message": where, which field,
+// what was expected.
+harness::Result<MappingFile> parse_mapping(std::string_view text, const std::string& file_name);
+harness::Result<MappingFile> load_mapping(const std::filesystem::path& path);
 
 }  // namespace curvlab::devices

@@ -6,6 +6,7 @@
 #include "curvlab/geometry/table.hpp"
 #include "curvlab/harness/protocol/diagnostic.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
+#include "curvlab/harness/result.hpp"
 
 #include <cstdint>
 #include <map>
@@ -148,9 +149,10 @@ struct Derived {
   double table_apothem_m = 0.0;
 };
 
-// nullopt with a message when the settings describe an impossible table.
-std::optional<Derived> derive(const Settings& s, std::string* error);
-// The virtual table the settings describe, or why there is none.
-std::variant<geometry::TableShape, std::string> table_shape(const Settings& s);
+// The derived values, or why the settings describe an impossible table
+// (bad_input).
+Result<Derived> derive(const Settings& s);
+// The virtual table the settings describe, or why there is none (bad_input).
+Result<geometry::TableShape> table_shape(const Settings& s);
 
 }  // namespace curvlab::harness::protocol

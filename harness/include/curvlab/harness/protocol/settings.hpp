@@ -7,6 +7,7 @@
 #pragma once
 
 #include "curvlab/geometry/space.hpp"
+#include "curvlab/harness/result.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -123,8 +124,9 @@ const SettingInfo* find_setting(std::string_view path);
 std::vector<std::string> setting_keys(std::string_view section);
 bool is_setting_section(std::string_view section);
 
-// nullopt when the value fits; otherwise what was expected.
-std::optional<std::string> check_setting(const SettingInfo& info, const SettingValue& value);
+// Done when the value fits; otherwise an Error (bad_input) saying what was
+// expected — a fragment the loader places and completes with what was found.
+Result<Done> check_setting(const SettingInfo& info, const SettingValue& value);
 // Applies a value that check_setting accepted.
 void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& value);
 // Reads a numeric setting (for staircases and adjustment); nullopt if not numeric.
