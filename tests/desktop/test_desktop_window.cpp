@@ -86,11 +86,11 @@ class DesktopWindow : public ::testing::Test {
   // The backend, or null with the factory's error reported as a failure.
   static std::unique_ptr<desktop::DesktopBackend> open(const DesktopOptions& options) {
     auto made = desktop::DesktopBackend::create(options);
-    if (auto* e = std::get_if<harness::runner::BackendError>(&made)) {
-      ADD_FAILURE() << e->message;
+    if (!made) {
+      ADD_FAILURE() << made.error().message;
       return nullptr;
     }
-    return std::move(std::get<std::unique_ptr<desktop::DesktopBackend>>(made));
+    return std::move(made).value();
   }
   devices::SteadyClock clock_;
 };
