@@ -90,16 +90,8 @@ using SessionHandle = Handle<XrSession, xrDestroySession>;
 using SpaceHandle = Handle<XrSpace, xrDestroySpace>;
 using SwapchainHandle = Handle<XrSwapchain, xrDestroySwapchain>;
 
-// A factory failure: no runtime or no headset is a missing device; any
-// other failing call is an API failure.
-Error error(const XrFailure& f) {
-  const bool missing = f.result == XR_ERROR_RUNTIME_UNAVAILABLE || f.result == XR_ERROR_RUNTIME_FAILURE ||
-                       f.result == XR_ERROR_FORM_FACTOR_UNAVAILABLE ||
-                       f.result == XR_ERROR_EXTENSION_NOT_PRESENT ||
-                       f.result == XR_ERROR_API_VERSION_UNSUPPORTED;
-  return Error{missing ? Error::Kind::device : Error::Kind::api, f.message};
-}
-Error error(XrResult r, const char* call) { return error(failure_of(r, call)); }
+// A factory failure (kind device or api, instance.hpp).
+Error error(XrResult r, const char* call) { return failure_of(r, call); }
 
 // Results after which the session cannot go on, whichever call returned
 // them; other failures of per-frame queries (a button, a pose) are logged or
@@ -221,8 +213,8 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
   // The extension list comes from the runtime: without one, this is where
   // XR_ERROR_RUNTIME_UNAVAILABLE shows, before anything is created.
   auto offered = available_extensions();
-  if (auto* f = std::get_if<XrFailure>(&offered)) return error(*f);
-  const auto& names = std::get<std::vector<std::string>>(offered);
+  if (!offered) return offered.error();
+  const auto& names = offered.value();
   auto has = [&names](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
   if (!has(XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME))
     return error(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
@@ -234,15 +226,15 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
   const bool refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
   if (refresh) extra.emplace_back(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
   auto made = Instance::create(options.application_name, extra);
-  if (auto* f = std::get_if<XrFailure>(&made)) return error(*f);
-  std::unique_ptr<XrBackend> b(new XrBackend(std::get<Instance>(std::move(made)), options));
+  if (!made) return made.error();
+  std::unique_ptr<XrBackend> b(new XrBackend(std::move(made).value(), options));
   const XrInstance xr = b->instance_.handle();
   if (timespec && XR_FAILED(load(xr, "xrConvertTimeToTimespecTimeKHR", b->to_timespec_)))
     b->to_timespec_ = nullptr;
 
   auto system = b->instance_.hmd_system();
-  if (auto* f = std::get_if<XrFailure>(&system)) return error(*f);
-  b->system_ = std::get<XrSystemId>(system);
+  if (!system) return system.error();
+  b->system_ = system.value();
   const XrSystemId sys = b->system_;
 
   PFN_xrGetVulkanGraphicsRequirements2KHR requirements_fn = nullptr;
@@ -321,8 +313,8 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
 
   // The action set exists before the session so it can be attached to it.
   auto set = ActionSet::create(b->instance_, curvlab_action_set());
-  if (auto* f = std::get_if<XrFailure>(&set)) return error(*f);
-  b->actions_.emplace(std::get<ActionSet>(std::move(set)));
+  if (!set) return set.error();
+  b->actions_.emplace(std::move(set).value());
 
   auto binding = tagged<XrGraphicsBindingVulkan2KHR>(XR_TYPE_GRAPHICS_BINDING_VULKAN2_KHR);
   binding.instance = static_cast<VkInstance>(*c.instance());
