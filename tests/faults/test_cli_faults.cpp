@@ -14,6 +14,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <string>
@@ -92,6 +93,23 @@ void expect_interrupted(const curvlab::testing::CliResult& r, const fs::path& db
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM trials WHERE status = 'completed' AND response IS NULL"), "0");
 }
 
+// The runtime's log after a fault: the fault happened, curvlab broke no
+// rule while tearing down, and the instance was destroyed.
+void expect_clean_teardown(const fs::path& log_path, const std::string& fault) {
+  std::ifstream in(log_path);
+  std::string line;
+  bool faulted = false;
+  bool destroyed = false;
+  while (std::getline(in, line)) {
+    EXPECT_NE(line.rfind("violation", 0), 0u) << line;
+    EXPECT_NE(line.rfind("warning", 0), 0u) << line;
+    faulted = faulted || line == "fault " + fault;
+    destroyed = destroyed || line == "instance destroyed";
+  }
+  EXPECT_TRUE(faulted) << "no 'fault " << fault << "' line in " << log_path;
+  EXPECT_TRUE(destroyed) << "the OpenXR instance was not destroyed";
+}
+
 }  // namespace
 
 TEST(CliFaults, HeadlessDeviceLossExitsOneNamingItAndResumes) {
@@ -126,10 +144,13 @@ TEST(CliFaults, XrSessionLostInWaitFrameExitsOneNamingItAndResumes) {
   const auto dir = fresh_dir("xr_wait");
   const auto db = dir / "xr.db";
   {
-    XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses}, {"CURVLAB_TEST_XR_FAIL", "xrWaitFrame@2.5:XR_ERROR_SESSION_LOST"}});
+    XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                   {"CURVLAB_TEST_XR_FAIL", "xrWaitFrame@2.5:XR_ERROR_SESSION_LOST"},
+                   {"CURVLAB_TEST_XR_LOG", (dir / "runtime.log").string()}});
     const auto r = run_cli("run " + kXrProtocol + " --participant X05 --backend xr --db " + db.string() + " --quiet");
     expect_interrupted(r, db, "xrWaitFrame: XR_ERROR_SESSION_LOST");
   }
+  expect_clean_teardown(dir / "runtime.log", "xrWaitFrame XR_ERROR_SESSION_LOST");
   XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses}});
   const auto r = run_cli("resume --db " + db.string() + " --session 1 --backend xr --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -142,10 +163,13 @@ TEST(CliFaults, XrRuntimeFailureInEndFrameExitsOneNamingItAndResumes) {
   const auto dir = fresh_dir("xr_end");
   const auto db = dir / "xr.db";
   {
-    XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses}, {"CURVLAB_TEST_XR_FAIL", "xrEndFrame@2.5:XR_ERROR_RUNTIME_FAILURE"}});
+    XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                   {"CURVLAB_TEST_XR_FAIL", "xrEndFrame@2.5:XR_ERROR_RUNTIME_FAILURE"},
+                   {"CURVLAB_TEST_XR_LOG", (dir / "runtime.log").string()}});
     const auto r = run_cli("run " + kXrProtocol + " --participant X06 --backend xr --db " + db.string() + " --quiet");
     expect_interrupted(r, db, "xrEndFrame: XR_ERROR_RUNTIME_FAILURE");
   }
+  expect_clean_teardown(dir / "runtime.log", "xrEndFrame XR_ERROR_RUNTIME_FAILURE");
   XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses}});
   const auto r = run_cli("resume --db " + db.string() + " --session 1 --backend xr --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.out;
