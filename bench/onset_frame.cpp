@@ -123,11 +123,11 @@ int main(int argc, char** argv) {
     ho.refresh_hz = p.refresh_hz;
     ho.table = rn::nominal_calibration(p.session_settings());
     auto made = rn::HeadlessBackend::create(ho);
-    if (!std::holds_alternative<std::unique_ptr<rn::HeadlessBackend>>(made)) {
-      std::fprintf(stderr, "headless backend: %s\n", std::get<rn::BackendError>(made).message.c_str());
+    if (!made) {
+      std::fprintf(stderr, "headless backend: %s\n", made.error().message.c_str());
       return 1;
     }
-    auto& headless = *std::get<std::unique_ptr<rn::HeadlessBackend>>(made);
+    auto& headless = *made.value();
     TimingBackend backend(headless);
     rn::RunOptions o;
     o.participant = "B01";

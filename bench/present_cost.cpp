@@ -86,11 +86,11 @@ int main(int argc, char** argv) {
       o.vsync = false;
       o.clock = &clock;
       auto backend_made = desktop::DesktopBackend::create(o);
-      if (auto* e = std::get_if<harness::runner::BackendError>(&backend_made)) {
-        std::fprintf(stderr, "%s\n", e->message.c_str());
+      if (!backend_made) {
+        std::fprintf(stderr, "%s\n", backend_made.error().message.c_str());
         return 1;
       }
-      auto& backend = *std::get<std::unique_ptr<desktop::DesktopBackend>>(backend_made);
+      auto& backend = *backend_made.value();
       std::vector<double> window_ms;
       const harness::runner::Overlay overlay{harness::runner::Phase::stimulus, "block 1 · trial 3 of 8 · H3 native", false};
       Clock::time_point last{};

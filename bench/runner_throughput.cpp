@@ -67,11 +67,11 @@ int main(int argc, char** argv) {
     ho.height_px = static_cast<std::uint32_t>(p.resolution_height);
     ho.table = rn::nominal_calibration(p.session_settings());
     auto made = rn::HeadlessBackend::create(ho);
-    if (auto* e = std::get_if<rn::BackendError>(&made)) {
-      std::fprintf(stderr, "%s\n", e->message.c_str());
+    if (!made) {
+      std::fprintf(stderr, "%s\n", made.error().message.c_str());
       return 1;
     }
-    auto& backend = *std::get<std::unique_ptr<rn::HeadlessBackend>>(made);
+    auto& backend = *made.value();
     rn::RunOptions o;
     o.participant = "B01";
     o.participant_number = 1;

@@ -253,6 +253,34 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
   return c;
 }
 
+void Context::submit(vk::CommandBuffer cb, vk::Fence fence) const {
+  const VkCommandBuffer raw = cb;
+  VkSubmitInfo info{};
+  info.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+  info.commandBufferCount = 1;
+  info.pCommandBuffers = &raw;
+  const VkResult r = device_.getDispatcher()->vkQueueSubmit(static_cast<VkQueue>(*queue_), 1, &info,
+                                                            static_cast<VkFence>(fence));
+  if (r != VK_SUCCESS) throw VulkanFailure("vkQueueSubmit", r);
+}
+
+void Context::wait_for(vk::Fence fence) const {
+  const VkFence raw = fence;
+  const VkResult r = device_.getDispatcher()->vkWaitForFences(static_cast<VkDevice>(*device_), 1, &raw,
+                                                              VK_TRUE, UINT64_MAX);
+  if (r != VK_SUCCESS) throw VulkanFailure("vkWaitForFences", r);
+}
+
+void Context::wait_idle_noexcept() const noexcept {
+  if (!*device_) return;
+  // Result ignored on purpose: see the declaration.
+  (void)device_.getDispatcher()->vkDeviceWaitIdle(static_cast<VkDevice>(*device_));
+}
+
+void Context::throw_vulkan_failure(const vk::SystemError& e) {
+  throw VulkanFailure(vk_call_name(e.what()), e.code().value());
+}
+
 std::uint32_t Context::memory_type(std::uint32_t type_bits, vk::MemoryPropertyFlags props) const {
   const auto mem = physical_.getMemoryProperties();
   for (std::uint32_t i = 0; i < mem.memoryTypeCount; ++i)

@@ -184,12 +184,24 @@ struct Renderer::Impl {
     blank = upload_texture(CoverageBitmap{1, 1, {0}});
   }
 
-  ~Impl() { wait_all(); }
+  // The GPU may still read what the members own: wait before they go. A
+  // destructor cannot report a lost device, and after one there is nothing
+  // to wait for, so the results are ignored (the failure surfaced as a
+  // VulkanFailure from the call that met it).
+  ~Impl() {
+    for (auto& s : slots)
+      if (s.pending) {
+        const VkFence fence = *s.fence;
+        (void)ctx.device().getDispatcher()->vkWaitForFences(static_cast<VkDevice>(*ctx.device()), 1,
+                                                            &fence, VK_TRUE, UINT64_MAX);
+        s.pending = false;
+      }
+  }
 
   void wait_all() {
     for (auto& s : slots)
       if (s.pending) {
-        (void)ctx.device().waitForFences({*s.fence}, VK_TRUE, UINT64_MAX);
+        ctx.wait_for(*s.fence);
         s.pending = false;
       }
   }
@@ -351,7 +363,16 @@ Renderer::~Renderer() = default;
 Renderer::Renderer(Renderer&&) noexcept = default;
 
 const RenderPlan& Renderer::last_plan() const { return impl_->last_plan; }
-void Renderer::wait_idle() { impl_->wait_all(); }
+void Renderer::wait_idle() {
+  try {
+    impl_->wait_all();
+  } catch (const vk::SystemError& e) {
+    Context::throw_vulkan_failure(e);
+  }
+}
+void Renderer::wait_idle_noexcept() noexcept {
+  if (impl_) impl_->ctx.wait_idle_noexcept();
+}
 
 namespace {
 
@@ -388,6 +409,7 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
   const auto t0 = Clock::now();
   Impl& r = *impl_;
   FrameStats stats;
+  try {
 
   auto signature = frame_signature(scene, frame, target);
   if (target.preserves_contents() && signature == r.last_signature) {
@@ -400,7 +422,7 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
   FrameSlot& slot = r.slots[r.next_slot];
   r.next_slot = (r.next_slot + 1) % r.slots.size();
   if (slot.pending) {
-    (void)r.ctx.device().waitForFences({*slot.fence}, VK_TRUE, UINT64_MAX);
+    r.ctx.wait_for(*slot.fence);
     slot.pending = false;
   }
   slot.garbage.clear();  // everything in it was last used by this slot's finished frame
@@ -514,11 +536,12 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
   if (r.timestamps) cb.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *slot.queries, 1);
   cb.end();
   const auto t_recorded = Clock::now();
-  const vk::CommandBuffer raw = *cb;
-  r.ctx.queue().submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &raw}, *slot.fence);
+  // Submit and wait name their calls in a VulkanFailure (a lost device
+  // shows here first); a frame that failed stays pending for the destructor.
+  r.ctx.submit(*cb, *slot.fence);
   slot.pending = true;
   if (target.preserves_contents()) {
-    (void)r.ctx.device().waitForFences({*slot.fence}, VK_TRUE, UINT64_MAX);
+    r.ctx.wait_for(*slot.fence);
     slot.pending = false;
     if (r.timestamps) {
       std::array<std::uint64_t, 2> ts{};
@@ -537,6 +560,9 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
   r.last_plan = std::move(plan);
   r.last_signature = std::move(signature);
   return stats;
+  } catch (const vk::SystemError& e) {
+    Context::throw_vulkan_failure(e);
+  }
 }
 
 }  // namespace curvlab::renderer

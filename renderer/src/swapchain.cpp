@@ -275,8 +275,9 @@ std::variant<bool, RenderError> SwapchainTarget::begin_frame(vk::Extent2D frameb
     }
     return false;
   } catch (const vk::SystemError& e) {
-    failure_ = RenderError{std::string("presenting to the window failed: ") + e.what()};
-    return *failure_;
+    const VulkanFailure f(vk_call_name(e.what()), e.code().value());
+    failure_ = RenderError{std::string(f.what()) + " (presenting to the window)"};
+    throw f;
   }
 }
 
@@ -389,7 +390,9 @@ void SwapchainTarget::frame_finished() {
     }
     ++presented_;
   } catch (const vk::SystemError& e) {
-    failure_ = RenderError{std::string("presenting to the window failed: ") + e.what()};
+    const VulkanFailure f(vk_call_name(e.what()), e.code().value());
+    failure_ = RenderError{std::string(f.what()) + " (presenting to the window)"};
+    throw f;
   }
 }
 

@@ -139,8 +139,9 @@ TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
   curvlab::harness::runner::DesktopOptions options;
   options.clock = &clock;
   auto made = curvlab::harness::runner::make_desktop_backend(options);
-  ASSERT_TRUE(std::holds_alternative<curvlab::harness::runner::BackendError>(made));
-  const auto& message = std::get<curvlab::harness::runner::BackendError>(made).message;
+  ASSERT_FALSE(made.has_value());
+  EXPECT_EQ(made.error().kind, curvlab::harness::Error::Kind::device);
+  const auto& message = made.error().message;
   EXPECT_NE(message.find("glfwInit failed"), std::string::npos) << message;
   EXPECT_NE(message.find("GLFW_PLATFORM_ERROR"), std::string::npos) << message;
   EXPECT_NE(message.find("DISPLAY"), std::string::npos) << message;
@@ -152,13 +153,12 @@ TEST(DesktopBackend, BadOptionsAreRefusedBeforeAnyWindow) {
   curvlab::devices::SteadyClock clock;
   curvlab::harness::runner::DesktopOptions options;
   auto no_clock = curvlab::harness::runner::make_desktop_backend(options);
-  ASSERT_TRUE(std::holds_alternative<curvlab::harness::runner::BackendError>(no_clock));
+  ASSERT_FALSE(no_clock.has_value());
   options.clock = &clock;
   options.key_script = "/nonexistent/keys.txt";
   auto no_script = curvlab::harness::runner::make_desktop_backend(options);
-  ASSERT_TRUE(std::holds_alternative<curvlab::harness::runner::BackendError>(no_script));
-  EXPECT_NE(std::get<curvlab::harness::runner::BackendError>(no_script).message.find("keys.txt"),
-            std::string::npos);
+  ASSERT_FALSE(no_script.has_value());
+  EXPECT_NE(no_script.error().message.find("keys.txt"), std::string::npos);
 }
 
 }  // namespace

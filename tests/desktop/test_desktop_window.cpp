@@ -5,6 +5,8 @@
 #include "desktop_backend.hpp"
 #include "xvfb.hpp"
 
+#include "../faults/fault_env.hpp"
+
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/renderer/image_io.hpp"
 #include "curvlab/renderer/scene.hpp"
@@ -86,11 +88,11 @@ class DesktopWindow : public ::testing::Test {
   // The backend, or null with the factory's error reported as a failure.
   static std::unique_ptr<desktop::DesktopBackend> open(const DesktopOptions& options) {
     auto made = desktop::DesktopBackend::create(options);
-    if (auto* e = std::get_if<harness::runner::BackendError>(&made)) {
-      ADD_FAILURE() << e->message;
+    if (!made) {
+      ADD_FAILURE() << made.error().message;
       return nullptr;
     }
-    return std::move(std::get<std::unique_ptr<desktop::DesktopBackend>>(made));
+    return std::move(made).value();
   }
   devices::SteadyClock clock_;
 };
@@ -290,6 +292,43 @@ TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
   ASSERT_FALSE(events.empty());
   EXPECT_EQ(events.front().name, "escape");
   EXPECT_FALSE(backend.begin_frame().has_value()) << "the session ends after Escape";
+}
+
+
+// A GPU lost while the window presents (the test Vulkan layer fails the 6th
+// vkQueueSubmit: the renderer's or the composition's): submit() throws
+// BackendFailure naming the call and result, and the window, swapchain and
+// device are torn down without throwing or terminating.
+TEST_F(DesktopWindow, DeviceLossWhilePresentingThrowsBackendFailureAndTeardownEnds) {
+  const curvlab::testing::VulkanFault fault("vkQueueSubmit@6");
+  DesktopOptions options = window(160, 160);
+  options.vsync = false;
+  auto backend = open(options);
+  ASSERT_NE(backend, nullptr);
+  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3, renderer::SceneKind::stick, {});
+  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
+  auto& s = std::get<renderer::StimulusScene>(stimulus);
+  std::optional<harness::runner::BackendFailure> failure;
+  int frames = 0;
+  for (; frames < 20 && !failure; ++frames) {
+    auto timing = backend->begin_frame();
+    ASSERT_TRUE(timing.has_value());
+    renderer::FrameDescription f;
+    f.space = s.space;
+    f.head = s.head;
+    f.rig = backend->rig(*timing, 0.063);
+    try {
+      (void)backend->submit(s.scene, f, Overlay{curvlab::harness::runner::Phase::stimulus, "", false}, true);
+    } catch (const harness::runner::BackendFailure& e) {
+      failure = e;
+    }
+  }
+  ASSERT_TRUE(failure.has_value()) << "no failure in 20 frames";
+  EXPECT_GT(frames, 1);
+  EXPECT_EQ(failure->call, "vkQueueSubmit");
+  EXPECT_EQ(failure->result, "VK_ERROR_DEVICE_LOST");
+  EXPECT_EQ(std::string(failure->what()).rfind("vkQueueSubmit: VK_ERROR_DEVICE_LOST", 0), 0u) << failure->what();
+  backend.reset();  // never throws, a lost device included
 }
 
 }  // namespace

@@ -91,9 +91,9 @@ inline Outcome run_protocol(const std::string& protocol, const std::string& name
   ho.refresh_hz = p.refresh_hz;
   ho.table = rn::nominal_calibration(p.session_settings());
   auto made = rn::HeadlessBackend::create(ho);
-  EXPECT_TRUE(std::holds_alternative<std::unique_ptr<rn::HeadlessBackend>>(made));
-  if (!std::holds_alternative<std::unique_ptr<rn::HeadlessBackend>>(made)) return {};
-  auto& headless = *std::get<std::unique_ptr<rn::HeadlessBackend>>(made);
+  EXPECT_TRUE(made.has_value()) << (made ? "" : made.error().message);
+  if (!made) return {};
+  auto& headless = *made.value();
   ScriptedBackend backend(headless);
   script(backend);
   rn::RunOptions o;

@@ -36,19 +36,24 @@ TEST(XrProbe, WithoutARuntimeFailsCleanlyAndWritesNothing) {
   std::filesystem::current_path(old);
   const bool empty = std::filesystem::is_empty(dir);
   std::filesystem::remove_all(dir);
-  if (std::holds_alternative<ProbeReport>(result)) GTEST_SKIP() << "an OpenXR runtime is present";
-  const auto& f = std::get<XrFailure>(result);
-  EXPECT_EQ(f.result, XR_ERROR_RUNTIME_UNAVAILABLE);
-  EXPECT_NE(f.message.find("XR_ERROR_RUNTIME_UNAVAILABLE (-51)"), std::string::npos) << f.message;
-  EXPECT_NE(f.message.find("monado-service"), std::string::npos);
-  EXPECT_NE(f.message.find("SteamVR"), std::string::npos);
-  EXPECT_NE(f.message.find("XR_RUNTIME_JSON"), std::string::npos);
+  if (result) GTEST_SKIP() << "an OpenXR runtime is present";
+  const auto& e = result.error();
+  EXPECT_EQ(e.kind, curvlab::harness::Error::Kind::device);
+  const auto f = failed_call(e);
+  ASSERT_TRUE(f) << e.message;
+  EXPECT_EQ(f->result, XR_ERROR_RUNTIME_UNAVAILABLE);
+  EXPECT_NE(e.message.find("XR_ERROR_RUNTIME_UNAVAILABLE (-51)"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("monado-service"), std::string::npos);
+  EXPECT_NE(e.message.find("SteamVR"), std::string::npos);
+  EXPECT_NE(e.message.find("XR_RUNTIME_JSON"), std::string::npos);
   EXPECT_TRUE(empty) << "the probe wrote files into the working directory";
   // Creating the instance directly fails the same way.
   auto instance = Instance::create("curvlab test");
-  ASSERT_TRUE(std::holds_alternative<XrFailure>(instance));
-  EXPECT_EQ(std::get<XrFailure>(instance).call, "xrCreateInstance");
-  EXPECT_EQ(std::get<XrFailure>(instance).result, XR_ERROR_RUNTIME_UNAVAILABLE);
+  ASSERT_FALSE(instance.has_value());
+  const auto call = failed_call(instance.error());
+  ASSERT_TRUE(call) << instance.error().message;
+  EXPECT_EQ(call->call, "xrCreateInstance");
+  EXPECT_EQ(call->result, XR_ERROR_RUNTIME_UNAVAILABLE);
 }
 
 TEST(SessionState, NumberingMatchesOpenXR) {

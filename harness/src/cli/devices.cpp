@@ -83,19 +83,22 @@ void run_devices(const DevicesArgs& a) {
 
 void run_xr_check(bool as_json) {
   auto result = curvlab::xr::probe("curvlab xr-check");
-  if (auto* f = std::get_if<curvlab::xr::XrFailure>(&result)) {
+  if (!result) {
+    const auto& e = result.error();
     if (as_json) {
       Json doc;
       doc["ok"] = false;
-      doc["call"] = f->call;
-      doc["result"] = curvlab::xr::result_name(f->result);
-      doc["result_code"] = static_cast<int>(f->result);
-      doc["message"] = f->message;
+      if (const auto f = curvlab::xr::failed_call(e)) {
+        doc["call"] = f->call;
+        doc["result"] = curvlab::xr::result_name(f->result);
+        doc["result_code"] = static_cast<int>(f->result);
+      }
+      doc["message"] = e.message;
       print_result(doc, true);
     }
-    throw RuntimeFailure("xr backend unavailable: " + f->message);
+    throw RuntimeFailure("xr backend unavailable: " + e.message);
   }
-  const auto& r = std::get<curvlab::xr::ProbeReport>(result);
+  const auto& r = result.value();
   Json doc;
   doc["ok"] = true;
   doc["runtime"] = r.runtime_name + " " + r.runtime_version;

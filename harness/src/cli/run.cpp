@@ -142,8 +142,8 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
       if (o.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
     }
     auto made = rn::HeadlessBackend::create(o);
-    if (auto* e = std::get_if<rn::BackendError>(&made)) throw RuntimeFailure(e->message);
-    auto& hb = std::get<std::unique_ptr<rn::HeadlessBackend>>(made);
+    if (!made) raise(made.error());
+    auto& hb = made.value();
     out.clock = &hb->clock();
     out.backend = std::move(hb);
     return out;
@@ -162,16 +162,16 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
     o.software = a.software;
     o.clock = out.clock;
     auto made = rn::make_desktop_backend(o);
-    if (auto* e = std::get_if<rn::BackendError>(&made)) throw RuntimeFailure(e->message);
-    out.backend = std::get<std::unique_ptr<rn::Backend>>(std::move(made));
+    if (!made) raise(made.error());
+    out.backend = std::move(made).value();
     return out;
   }
   if (a.backend == "xr") {
     xr::XrBackendOptions o;
     o.clock = out.clock;
     auto made = xr::make_xr_backend(o);
-    if (auto* e = std::get_if<rn::BackendError>(&made)) throw RuntimeFailure(e->message);
-    out.backend = std::get<std::unique_ptr<rn::Backend>>(std::move(made));
+    if (!made) raise(made.error());
+    out.backend = std::move(made).value();
     return out;
   }
   throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");

@@ -14,7 +14,9 @@
 
 namespace curvlab::desktop {
 
-using harness::runner::BackendError;
+using harness::Error;
+using harness::Result;
+using harness::runner::BackendFailure;
 using harness::runner::BackendInfo;
 using harness::runner::BackendSignal;
 using harness::runner::DesktopOptions;
@@ -28,7 +30,7 @@ namespace {
 constexpr double kHorizontalFovRad = 90.0 * std::numbers::pi / 180.0;
 
 // GLFW reports errors through one process-wide callback; the last one is
-// kept to name it in a BackendError.
+// kept to name it in an Error.
 std::mutex g_error_mutex;
 std::string g_last_error;
 
@@ -86,19 +88,20 @@ renderer::WindowLayout layout_of(DesktopPreview preview) {
 class GlfwLibrary {
  public:
   // One GLFW per process, shared by every window (glfwInit is reference-free).
-  static std::variant<std::shared_ptr<GlfwLibrary>, BackendError> acquire() {
+  static Result<std::shared_ptr<GlfwLibrary>> acquire() {
     static std::mutex mutex;
     static std::weak_ptr<GlfwLibrary> current;
     const std::lock_guard lock(mutex);
     if (auto live = current.lock()) return live;
     glfwSetErrorCallback(&on_glfw_error);
     if (glfwInit() != GLFW_TRUE)
-      return BackendError{"cannot open a window: glfwInit failed: " + take_last_error() +
-                          ". The desktop backend needs a display: run under a desktop "
-                          "session or xvfb-run (e.g. `xvfb-run -a curvlab run …`)"};
+      return Error{Error::Kind::device,
+                   "cannot open a window: glfwInit failed: " + take_last_error() +
+                       ". The desktop backend needs a display: run under a desktop "
+                       "session or xvfb-run (e.g. `xvfb-run -a curvlab run …`)"};
     std::shared_ptr<GlfwLibrary> made(new GlfwLibrary);
     current = made;
-    return made;
+    return std::shared_ptr<GlfwLibrary>(std::move(made));
   }
   ~GlfwLibrary() { glfwTerminate(); }
   GlfwLibrary(const GlfwLibrary&) = delete;
@@ -159,31 +162,31 @@ DesktopBackend::DesktopBackend(const DesktopOptions& options) : options_(options
 DesktopBackend::~DesktopBackend() {
   // Members go in reverse order: renderer (waits for its frames), target
   // (waits for the device), context (surface, device, instance), window, GLFW.
-  if (renderer_) renderer_->wait_idle();
+  // None of them throws, a lost device included.
+  if (renderer_) renderer_->wait_idle_noexcept();
 }
 
-std::variant<std::unique_ptr<DesktopBackend>, BackendError> DesktopBackend::create(
-    const DesktopOptions& options) {
+Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOptions& options) {
   if (options.clock == nullptr)
-    return BackendError{"the desktop backend needs the session clock (DesktopOptions::clock)"};
+    return Error{Error::Kind::usage, "the desktop backend needs the session clock (DesktopOptions::clock)"};
   if (options.eye_width_px < 16 || options.eye_height_px < 16 || options.eye_width_px > 8192 ||
       options.eye_height_px > 8192)
-    return BackendError{"the desktop window's eye size must lie between 16 and 8192 pixels, got " +
-                        std::to_string(options.eye_width_px) + "x" +
-                        std::to_string(options.eye_height_px)};
+    return Error{Error::Kind::usage, "the desktop window's eye size must lie between 16 and 8192 pixels, got " +
+                                         std::to_string(options.eye_width_px) + "x" +
+                                         std::to_string(options.eye_height_px)};
   std::unique_ptr<DesktopBackend> b(new DesktopBackend(options));
   if (!options.key_script.empty()) {
     auto loaded = load_key_script(options.key_script);
-    if (auto* e = std::get_if<KeyScriptError>(&loaded)) return BackendError{e->message};
+    if (auto* e = std::get_if<KeyScriptError>(&loaded)) return Error{Error::Kind::bad_input, e->message};
     b->script_.emplace(std::get<std::vector<ScriptedKey>>(std::move(loaded)));
   }
 
   auto lib = GlfwLibrary::acquire();
-  if (auto* e = std::get_if<BackendError>(&lib)) return *e;
-  b->glfw_ = std::get<std::shared_ptr<GlfwLibrary>>(std::move(lib));
+  if (!lib) return lib.error();
+  b->glfw_ = std::move(lib).value();
   if (glfwVulkanSupported() != GLFW_TRUE)
-    return BackendError{"cannot open a Vulkan window: GLFW finds no Vulkan loader (" +
-                        take_last_error() + "); install libvulkan1 and mesa-vulkan-drivers"};
+    return Error{Error::Kind::device, "cannot open a Vulkan window: GLFW finds no Vulkan loader (" +
+                                          take_last_error() + "); install libvulkan1 and mesa-vulkan-drivers"};
 
   renderer::SwapchainOptions sc;
   sc.eye_extent = vk::Extent2D{options.eye_width_px, options.eye_height_px};
@@ -195,8 +198,8 @@ std::variant<std::unique_ptr<DesktopBackend>, BackendError> DesktopBackend::crea
   b->window_.reset(glfwCreateWindow(static_cast<int>(size.width), static_cast<int>(size.height),
                                     "curvlab", nullptr, nullptr));
   if (!b->window_)
-    return BackendError{"cannot open a window: glfwCreateWindow failed: " + take_last_error() +
-                        ". Run under a desktop session or xvfb-run"};
+    return Error{Error::Kind::device, "cannot open a window: glfwCreateWindow failed: " + take_last_error() +
+                                          ". Run under a desktop session or xvfb-run"};
   GLFWwindow* window = b->window_.get();
   glfwSetWindowUserPointer(window, b.get());
   glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int mods) {
@@ -227,14 +230,22 @@ std::variant<std::unique_ptr<DesktopBackend>, BackendError> DesktopBackend::crea
   };
   auto ctx = renderer::Context::create(co, window_embedding);
   if (auto* e = std::get_if<renderer::RenderError>(&ctx))
-    return BackendError{"cannot render to the desktop window: " + e->message};
+    return Error{Error::Kind::device, "cannot render to the desktop window: " + e->message};
   b->context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));
 
   auto target = renderer::SwapchainTarget::create(*b->context_, framebuffer_extent(window), sc);
   if (auto* e = std::get_if<renderer::RenderError>(&target))
-    return BackendError{"cannot render to the desktop window: " + e->message};
+    return Error{Error::Kind::device, "cannot render to the desktop window: " + e->message};
   b->target_ = std::get<std::unique_ptr<renderer::SwapchainTarget>>(std::move(target));
-  b->renderer_ = std::make_unique<renderer::Renderer>(*b->context_);
+  try {
+    b->renderer_ = std::make_unique<renderer::Renderer>(*b->context_);
+  } catch (const renderer::VulkanFailure& f) {
+    return Error{Error::Kind::api, std::string("cannot render to the desktop window: ") + f.what()};
+  } catch (const vk::SystemError& e) {
+    return Error{Error::Kind::api, "cannot render to the desktop window: " +
+                                       renderer::vk_call_name(e.what()) + ": " +
+                                       renderer::vk_result_name(e.code().value())};
+  }
   b->last_frame_ns_ = options.clock->now_ns();
   return b;
 }
@@ -381,11 +392,22 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
   }
   if (failed_) return stats;
 
-  auto ready = target_->begin_frame(framebuffer_extent(window_.get()));
-  if (auto* e = std::get_if<renderer::RenderError>(&ready)) {
-    std::cerr << "curvlab: desktop window: " << e->message << '\n';
+  // A failing Vulkan call ends the session through the runner (BackendFailure).
+  auto fail = [this](const renderer::VulkanFailure& f) {
     failed_ = true;
-    return stats;
+    return BackendFailure(f.call, renderer::vk_result_name(f.result), "desktop window");
+  };
+  std::variant<bool, renderer::RenderError> ready = false;
+  try {
+    ready = target_->begin_frame(framebuffer_extent(window_.get()));
+  } catch (const renderer::VulkanFailure& f) {
+    throw fail(f);
+  }
+  if (auto* e = std::get_if<renderer::RenderError>(&ready)) {
+    // The window's swapchain could not be made again (a resize to a surface
+    // the device cannot draw to).
+    failed_ = true;
+    throw BackendFailure("vkCreateSwapchainKHR", "unusable surface", e->message);
   }
   const bool onset = overlay.phase == harness::runner::Phase::stimulus && last_phase_ != harness::runner::Phase::stimulus;
   last_phase_ = overlay.phase;
@@ -396,15 +418,8 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
   f.height_px = options_.eye_height_px;
   try {
     stats = renderer_->render(scene, f, *target_);
-  } catch (const vk::SystemError& e) {
-    std::cerr << "curvlab: desktop window: rendering failed: " << e.what() << '\n';
-    failed_ = true;
-    return stats;
-  }
-  if (const auto& failure = target_->failure()) {
-    std::cerr << "curvlab: desktop window: " << failure->message << '\n';
-    failed_ = true;
-    return stats;
+  } catch (const renderer::VulkanFailure& e) {
+    throw fail(e);
   }
   if (onset && !options_.screenshot_dir.empty()) {
     char name[32];
@@ -446,8 +461,13 @@ std::vector<std::string> DesktopBackend::save_frame(const std::string& stem) {
     write(target_->read_eye(renderer::Eye::left), "_left.png");
     write(target_->read_eye(renderer::Eye::right), "_right.png");
     write(target_->read_window(), "_window.png");
+  } catch (const renderer::VulkanFailure& f) {
+    failed_ = true;
+    throw BackendFailure(f.call, renderer::vk_result_name(f.result), "reading the window back");
   } catch (const vk::SystemError& e) {
-    std::cerr << "curvlab: screenshot not saved: " << e.what() << '\n';
+    failed_ = true;
+    throw BackendFailure(renderer::vk_call_name(e.what()), renderer::vk_result_name(e.code().value()),
+                         "reading the window back");
   }
   screenshots_.insert(screenshots_.end(), written.begin(), written.end());
   return written;
@@ -457,10 +477,10 @@ std::vector<std::string> DesktopBackend::save_frame(const std::string& stem) {
 
 namespace curvlab::harness::runner {
 
-std::variant<std::unique_ptr<Backend>, BackendError> make_desktop_backend(const DesktopOptions& options) {
+Result<std::unique_ptr<Backend>> make_desktop_backend(const DesktopOptions& options) {
   auto made = desktop::DesktopBackend::create(options);
-  if (auto* e = std::get_if<BackendError>(&made)) return *e;
-  return std::unique_ptr<Backend>(std::get<std::unique_ptr<desktop::DesktopBackend>>(std::move(made)));
+  if (!made) return made.error();
+  return std::unique_ptr<Backend>(std::move(made).value());
 }
 
 }  // namespace curvlab::harness::runner

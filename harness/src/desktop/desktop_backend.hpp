@@ -5,6 +5,7 @@
 
 #include "curvlab/harness/runner/desktop.hpp"
 #include "curvlab/renderer/context.hpp"
+#include "curvlab/renderer/renderer.hpp"
 #include "curvlab/renderer/swapchain.hpp"
 
 #include "key_script.hpp"
@@ -29,11 +30,15 @@ struct WindowDeleter {
 // Owns, in order of destruction: the renderer, the swapchain target, the
 // Vulkan context (with the window's surface), the window, GLFW. Runs on the
 // thread that created it (GLFW's event processing must be on the main
-// thread); not thread-safe.
+// thread); not thread-safe. A failing Vulkan call in submit() or
+// save_frame() throws BackendFailure naming it.
 class DesktopBackend final : public harness::runner::Backend {
  public:
-  static std::variant<std::unique_ptr<DesktopBackend>, harness::runner::BackendError> create(
+  // No display, no Vulkan: an Error of kind `device`; a bad option or key
+  // script: `usage` / `bad_input`.
+  static harness::Result<std::unique_ptr<DesktopBackend>> create(
       const harness::runner::DesktopOptions& options);
+  // Never throws, a lost device included.
   ~DesktopBackend() override;
 
   [[nodiscard]] harness::runner::BackendInfo info() const override;

@@ -63,10 +63,9 @@ struct HeadlessBackend::Impl {
   }
 };
 
-std::variant<std::unique_ptr<HeadlessBackend>, BackendError> HeadlessBackend::create(
-    const HeadlessOptions& options) {
+Result<std::unique_ptr<HeadlessBackend>> HeadlessBackend::create(const HeadlessOptions& options) {
   if (!(options.refresh_hz >= 1.0 && options.refresh_hz <= 1000.0))
-    return BackendError{"headless: refresh rate must lie in [1, 1000] Hz"};
+    return Error{Error::Kind::usage, "headless: refresh rate must lie in [1, 1000] Hz"};
   auto impl = std::make_unique<Impl>(options);
   impl->period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.refresh_hz));
   if (!options.no_gpu) {
@@ -74,10 +73,18 @@ std::variant<std::unique_ptr<HeadlessBackend>, BackendError> HeadlessBackend::cr
         {.device = options.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
          .validation = false});
     if (auto* e = std::get_if<renderer::RenderError>(&created))
-      return BackendError{"headless: cannot start Vulkan: " + e->message};
+      return Error{Error::Kind::device, "headless: cannot start Vulkan: " + e->message};
     impl->ctx.emplace(std::move(std::get<renderer::Context>(created)));
-    impl->renderer.emplace(*impl->ctx);
-    impl->target.emplace(*impl->ctx, options.width_px, options.height_px);
+    try {
+      impl->renderer.emplace(*impl->ctx);
+      impl->target.emplace(*impl->ctx, options.width_px, options.height_px);
+    } catch (const renderer::VulkanFailure& f) {
+      return Error{Error::Kind::api, std::string("headless: cannot start the renderer: ") + f.what()};
+    } catch (const vk::SystemError& e) {
+      return Error{Error::Kind::api, "headless: cannot start the renderer: " +
+                                         renderer::vk_call_name(e.what()) + ": " +
+                                         renderer::vk_result_name(e.code().value())};
+    }
   }
   impl->first_ns = options.pace == Pace::fast ? options.start_ns : impl->steady.now_ns();
   return std::unique_ptr<HeadlessBackend>(new HeadlessBackend(std::move(impl)));
@@ -85,7 +92,9 @@ std::variant<std::unique_ptr<HeadlessBackend>, BackendError> HeadlessBackend::cr
 
 HeadlessBackend::HeadlessBackend(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 HeadlessBackend::~HeadlessBackend() {
-  if (impl_ && impl_->renderer) impl_->renderer->wait_idle();
+  // The members' destructors wait for their own GPU work without throwing;
+  // this waits for everything first (a lost device: nothing to wait for).
+  if (impl_ && impl_->ctx) impl_->ctx->wait_idle_noexcept();
 }
 
 const devices::Clock& HeadlessBackend::clock() const { return impl_->clock(); }
@@ -152,8 +161,13 @@ renderer::FrameStats HeadlessBackend::submit(const renderer::Scene& scene,
   auto& m = *impl_;
   if (!m.renderer) return {};
   if (draw) {
-    m.drawn = true;
-    return m.renderer->render(scene, frame, *m.target);
+    try {
+      renderer::FrameStats stats = m.renderer->render(scene, frame, *m.target);
+      m.drawn = true;
+      return stats;
+    } catch (const renderer::VulkanFailure& f) {
+      throw BackendFailure(f.call, renderer::vk_result_name(f.result), "headless rendering");
+    }
   }
   // Planned, not drawn: the counts the frame would have had, its CPU cost.
   const auto start = std::chrono::steady_clock::now();

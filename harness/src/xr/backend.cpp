@@ -32,7 +32,9 @@
 namespace curvlab::xr {
 
 using harness::runner::Backend;
-using harness::runner::BackendError;
+using harness::Error;
+using harness::Result;
+using harness::runner::BackendFailure;
 using harness::runner::BackendInfo;
 using harness::runner::BackendSignal;
 using harness::runner::FrameTiming;
@@ -88,8 +90,15 @@ using SessionHandle = Handle<XrSession, xrDestroySession>;
 using SpaceHandle = Handle<XrSpace, xrDestroySpace>;
 using SwapchainHandle = Handle<XrSwapchain, xrDestroySwapchain>;
 
-BackendError error(const XrFailure& f) { return BackendError{f.message}; }
-BackendError error(XrResult r, const char* call) { return error(failure_of(r, call)); }
+// A factory failure (kind device or api, instance.hpp).
+Error error(XrResult r, const char* call) { return failure_of(r, call); }
+
+// Results after which the session cannot go on, whichever call returned
+// them; other failures of per-frame queries (a button, a pose) are logged or
+// taken as lost tracking, and the session continues.
+bool fatal(XrResult r) {
+  return r == XR_ERROR_SESSION_LOST || r == XR_ERROR_INSTANCE_LOST || r == XR_ERROR_RUNTIME_FAILURE;
+}
 
 template <class F>
 XrResult load(XrInstance instance, const char* name, F& fn) {
@@ -121,7 +130,9 @@ std::string vk_result(VkResult r) { return vk::to_string(static_cast<vk::Result>
 // runner's frame loop); not thread-safe.
 class XrBackend final : public Backend {
  public:
-  static std::variant<std::unique_ptr<Backend>, BackendError> create(const XrBackendOptions& options);
+  static Result<std::unique_ptr<Backend>> create(const XrBackendOptions& options);
+  // Ends a begun frame and the session as far as the runtime still answers;
+  // never throws (a lost session or device included).
   ~XrBackend() override;
 
   [[nodiscard]] BackendInfo info() const override;
@@ -148,8 +159,12 @@ class XrBackend final : public Backend {
   void leave_session();
   std::int64_t monotonic_to_session();
   void on_state(SessionState next);
-  void fail(const std::string& message);
-  void end_frame(bool with_layer);
+  // Marks the backend failed and throws BackendFailure naming the call.
+  [[noreturn]] void fail(XrResult r, const char* call);
+  [[noreturn]] void fail(const renderer::VulkanFailure& f);
+  // xrEndFrame; its result is left to the caller (the frame loop fails on
+  // it, teardown ignores it).
+  [[nodiscard]] XrResult end_frame(bool with_layer);
   std::int64_t to_session_ns(XrTime t);
   void read_buttons(std::vector<InputEvent>& out);
   // Logs a failed action-state query once per call name (it repeats every
@@ -192,14 +207,14 @@ class XrBackend final : public Backend {
   std::array<bool, 2> trigger_down_{false, false};
 };
 
-std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrBackendOptions& options) {
+Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& options) {
   if (options.clock == nullptr)
-    return BackendError{"the OpenXR backend needs the session clock (XrBackendOptions::clock)"};
+    return Error{Error::Kind::usage, "the OpenXR backend needs the session clock (XrBackendOptions::clock)"};
   // The extension list comes from the runtime: without one, this is where
   // XR_ERROR_RUNTIME_UNAVAILABLE shows, before anything is created.
   auto offered = available_extensions();
-  if (auto* f = std::get_if<XrFailure>(&offered)) return error(*f);
-  const auto& names = std::get<std::vector<std::string>>(offered);
+  if (!offered) return offered.error();
+  const auto& names = offered.value();
   auto has = [&names](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
   if (!has(XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME))
     return error(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
@@ -211,15 +226,15 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
   const bool refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
   if (refresh) extra.emplace_back(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
   auto made = Instance::create(options.application_name, extra);
-  if (auto* f = std::get_if<XrFailure>(&made)) return error(*f);
-  std::unique_ptr<XrBackend> b(new XrBackend(std::get<Instance>(std::move(made)), options));
+  if (!made) return made.error();
+  std::unique_ptr<XrBackend> b(new XrBackend(std::move(made).value(), options));
   const XrInstance xr = b->instance_.handle();
   if (timespec && XR_FAILED(load(xr, "xrConvertTimeToTimespecTimeKHR", b->to_timespec_)))
     b->to_timespec_ = nullptr;
 
   auto system = b->instance_.hmd_system();
-  if (auto* f = std::get_if<XrFailure>(&system)) return error(*f);
-  b->system_ = std::get<XrSystemId>(system);
+  if (!system) return system.error();
+  b->system_ = system.value();
   const XrSystemId sys = b->system_;
 
   PFN_xrGetVulkanGraphicsRequirements2KHR requirements_fn = nullptr;
@@ -242,8 +257,8 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
     return error(r, "xrGetVulkanGraphicsRequirements2KHR");
   const XrVersion needed = XR_MAKE_VERSION(1, 3, 0);
   if (req.minApiVersionSupported > needed)
-    return BackendError{"the OpenXR runtime needs a newer Vulkan than 1.3, which curvlab uses; "
-                        "update curvlab or use another runtime"};
+    return Error{Error::Kind::device, "the OpenXR runtime needs a newer Vulkan than 1.3, which curvlab uses; "
+                                      "update curvlab or use another runtime"};
   if (XR_VERSION_MAJOR(req.maxApiVersionSupported) == 1 &&
       XR_VERSION_MINOR(req.maxApiVersionSupported) < 3)
     std::cerr << "curvlab: xr: the runtime was tested with Vulkan up to "
@@ -292,14 +307,14 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
   };
   auto ctx = renderer::Context::create(renderer::ContextOptions{}, runtime_made);
   if (auto* e = std::get_if<renderer::RenderError>(&ctx))
-    return BackendError{"cannot render for the headset: " + e->message};
+    return Error{Error::Kind::device, "cannot render for the headset: " + e->message};
   b->context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));
   const renderer::Context& c = *b->context_;
 
   // The action set exists before the session so it can be attached to it.
   auto set = ActionSet::create(b->instance_, curvlab_action_set());
-  if (auto* f = std::get_if<XrFailure>(&set)) return error(*f);
-  b->actions_.emplace(std::get<ActionSet>(std::move(set)));
+  if (!set) return set.error();
+  b->actions_.emplace(std::move(set).value());
 
   auto binding = tagged<XrGraphicsBindingVulkan2KHR>(XR_TYPE_GRAPHICS_BINDING_VULKAN2_KHR);
   binding.instance = static_cast<VkInstance>(*c.instance());
@@ -323,9 +338,10 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
   space_info.poseInReferenceSpace = kIdentityPose;
   space_info.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_STAGE;
   if (const XrResult r = xrCreateReferenceSpace(session, &space_info, b->stage_.out()); XR_FAILED(r))
-    return BackendError{failure_of(r, "xrCreateReferenceSpace").message +
-                        " (STAGE space: set up the play area / room boundary in the runtime, so "
-                        "that the floor and the table are where curvlab's lab frame says)"};
+    return Error{Error::Kind::device,
+                 failure_of(r, "xrCreateReferenceSpace").message +
+                     " (STAGE space: set up the play area / room boundary in the runtime, so "
+                     "that the floor and the table are where curvlab's lab frame says)"};
   space_info.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_VIEW;
   if (const XrResult r = xrCreateReferenceSpace(session, &space_info, b->view_.out()); XR_FAILED(r))
     return error(r, "xrCreateReferenceSpace");
@@ -358,8 +374,8 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
       XR_FAILED(r))
     return error(r, "xrEnumerateViewConfigurationViews");
   if (count != 2)
-    return BackendError{"the headset's stereo view configuration has " + std::to_string(count) +
-                        " views; curvlab needs 2"};
+    return Error{Error::Kind::device, "the headset's stereo view configuration has " + std::to_string(count) +
+                                          " views; curvlab needs 2"};
   if (const XrResult r = xrEnumerateSwapchainFormats(session, 0, &count, nullptr); XR_FAILED(r))
     return error(r, "xrEnumerateSwapchainFormats");
   std::vector<std::int64_t> formats(count);
@@ -367,8 +383,8 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
     return error(r, "xrEnumerateSwapchainFormats");
   const auto format = choose_swapchain_format(formats);
   if (!format)
-    return BackendError{"the OpenXR runtime offers no 8-bit RGBA or BGRA swapchain format "
-                        "(xrEnumerateSwapchainFormats); curvlab cannot show its images"};
+    return Error{Error::Kind::device, "the OpenXR runtime offers no 8-bit RGBA or BGRA swapchain format "
+                                      "(xrEnumerateSwapchainFormats); curvlab cannot show its images"};
   b->swapchain_format_ = *format;
   for (std::size_t i = 0; i < 2; ++i) {
     EyeSwapchain& sc = b->swapchains_[i];
@@ -394,16 +410,29 @@ std::variant<std::unique_ptr<Backend>, BackendError> XrBackend::create(const XrB
         XR_FAILED(r))
       return error(r, "xrEnumerateSwapchainImages");
   }
-  b->renderer_ = std::make_unique<renderer::Renderer>(c);
+  try {
+    b->renderer_ = std::make_unique<renderer::Renderer>(c);
+  } catch (const renderer::VulkanFailure& f) {
+    return Error{Error::Kind::api, std::string("cannot render for the headset: ") + f.what()};
+  } catch (const vk::SystemError& e) {
+    return Error{Error::Kind::api, "cannot render for the headset: " + renderer::vk_call_name(e.what()) +
+                                       ": " + renderer::vk_result_name(e.code().value())};
+  }
   b->target_ = std::make_unique<renderer::ExternalImagesTarget>(c);
   return std::unique_ptr<Backend>(std::move(b));
 }
 
 XrBackend::~XrBackend() {
-  // A frame the runner began but never submitted must still end.
-  if (frame_begun_) end_frame(false);
-  leave_session();
-  if (renderer_) renderer_->wait_idle();
+  // A frame the runner began but never submitted must still end; after a
+  // failure the runtime may answer with errors, which nothing can act on
+  // here (the failure was reported where it happened).
+  try {
+    if (frame_begun_) (void)end_frame(false);
+    leave_session();
+  } catch (...) {
+    // poll_events() throws for a runtime that fails while we leave: leave anyway.
+  }
+  if (renderer_) renderer_->wait_idle_noexcept();
 }
 
 // The runner is done with a session the runtime still runs: ask the runtime
@@ -426,7 +455,7 @@ void XrBackend::leave_session() {
     auto begin_info = tagged<XrFrameBeginInfo>(XR_TYPE_FRAME_BEGIN_INFO);
     if (XR_FAILED(xrBeginFrame(session_.get(), &begin_info))) break;
     frame_begun_ = true;
-    end_frame(false);
+    if (XR_FAILED(end_frame(false))) break;
   }
 }
 
@@ -437,10 +466,14 @@ BackendInfo XrBackend::info() const {
   return {"xr", context_->device_name(), context_->driver_info(), period > 0.0 ? 1e9 / period : refresh_hz_};
 }
 
-void XrBackend::fail(const std::string& message) {
-  std::cerr << "curvlab: xr: " << message << '\n';
+void XrBackend::fail(XrResult r, const char* call) {
   failed_ = true;
-  signals_.push_back(BackendSignal::quit);
+  throw BackendFailure(call, result_name(r));
+}
+
+void XrBackend::fail(const renderer::VulkanFailure& f) {
+  failed_ = true;
+  throw BackendFailure(f.call, renderer::vk_result_name(f.result), "rendering for the headset");
 }
 
 void XrBackend::on_state(SessionState next) {
@@ -452,11 +485,10 @@ void XrBackend::on_state(SessionState next) {
   if (u.begin_session) {
     auto info = tagged<XrSessionBeginInfo>(XR_TYPE_SESSION_BEGIN_INFO);
     info.primaryViewConfigurationType = kViewConfig;
-    if (const XrResult r = xrBeginSession(session_.get(), &info); XR_FAILED(r))
-      return fail(failure_of(r, "xrBeginSession").message);
+    if (const XrResult r = xrBeginSession(session_.get(), &info); XR_FAILED(r)) fail(r, "xrBeginSession");
   }
   if (u.end_session) {
-    if (frame_begun_) end_frame(false);
+    if (frame_begun_) (void)end_frame(false);  // the session is ending: only xrEndSession counts
     if (const XrResult r = xrEndSession(session_.get()); XR_FAILED(r))
       std::cerr << "curvlab: xr: " << failure_of(r, "xrEndSession").message << '\n';
   }
@@ -470,10 +502,7 @@ bool XrBackend::poll_events() {
     auto event = tagged<XrEventDataBuffer>(XR_TYPE_EVENT_DATA_BUFFER);
     const XrResult r = xrPollEvent(instance_.handle(), &event);
     if (r == XR_EVENT_UNAVAILABLE) break;
-    if (XR_FAILED(r)) {
-      fail(failure_of(r, "xrPollEvent").message);
-      return false;
-    }
+    if (XR_FAILED(r)) fail(r, "xrPollEvent");
     switch (event.type) {
       case XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED: {
         const auto& e = *reinterpret_cast<const XrEventDataSessionStateChanged*>(&event);
@@ -481,9 +510,9 @@ bool XrBackend::poll_events() {
         break;
       }
       case XR_TYPE_EVENT_DATA_INSTANCE_LOSS_PENDING:
-        fail("the OpenXR runtime is going away (instance loss pending); the session is saved "
-             "and can be resumed");
-        return false;
+        failed_ = true;
+        throw BackendFailure("xrPollEvent", "XR_TYPE_EVENT_DATA_INSTANCE_LOSS_PENDING",
+                             "the OpenXR runtime is going away");
       case XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING: {
         const auto& e = *reinterpret_cast<const XrEventDataReferenceSpaceChangePending*>(&event);
         // The play area was recentred or redrawn: the lab frame moved under
@@ -532,7 +561,7 @@ std::int64_t XrBackend::to_session_ns(XrTime t) {
   return clock_map_.to_session(t);
 }
 
-void XrBackend::end_frame(bool with_layer) {
+XrResult XrBackend::end_frame(bool with_layer) {
   std::array<XrCompositionLayerProjectionView, 2> views{};
   for (std::size_t i = 0; i < 2; ++i) {
     views[i] = tagged<XrCompositionLayerProjectionView>(XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW);
@@ -555,8 +584,7 @@ void XrBackend::end_frame(bool with_layer) {
   info.layerCount = with_layer ? 1 : 0;
   info.layers = with_layer ? &header : nullptr;
   frame_begun_ = false;
-  if (const XrResult r = xrEndFrame(session_.get(), &info); XR_FAILED(r))
-    fail(failure_of(r, "xrEndFrame").message);
+  return xrEndFrame(session_.get(), &info);
 }
 
 std::optional<FrameTiming> XrBackend::begin_frame() {
@@ -567,20 +595,15 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
     if (state_.session_running()) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  if (frame_begun_) end_frame(false);
+  if (frame_begun_)
+    if (const XrResult r = end_frame(false); XR_FAILED(r)) fail(r, "xrEndFrame");
   const XrSession session = session_.get();
   auto wait_info = tagged<XrFrameWaitInfo>(XR_TYPE_FRAME_WAIT_INFO);
   frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
-  if (const XrResult r = xrWaitFrame(session, &wait_info, &frame_state_); XR_FAILED(r)) {
-    fail(failure_of(r, "xrWaitFrame").message);
-    return std::nullopt;
-  }
+  if (const XrResult r = xrWaitFrame(session, &wait_info, &frame_state_); XR_FAILED(r)) fail(r, "xrWaitFrame");
   const std::int64_t now = options_.clock->now_ns();
   auto begin_info = tagged<XrFrameBeginInfo>(XR_TYPE_FRAME_BEGIN_INFO);
-  if (const XrResult r = xrBeginFrame(session, &begin_info); XR_FAILED(r)) {
-    fail(failure_of(r, "xrBeginFrame").message);
-    return std::nullopt;
-  }
+  if (const XrResult r = xrBeginFrame(session, &begin_info); XR_FAILED(r)) fail(r, "xrBeginFrame");
   frame_begun_ = true;
   const XrTime t = frame_state_.predictedDisplayTime;
   // Without XR_KHR_convert_timespec_time: the first frame's image is taken
@@ -593,8 +616,8 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
     auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
     sync.countActiveActionSets = 1;
     sync.activeActionSets = &active;
-    if (const XrResult r = xrSyncActions(session, &sync); XR_FAILED(r))
-      std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
+    if (const XrResult r = xrSyncActions(session, &sync); fatal(r)) fail(r, "xrSyncActions");
+    else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
   }
 
   // Views and devices where they will be when this frame is seen.
@@ -606,12 +629,15 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   std::uint32_t n = 0;
   views_ = {tagged<XrView>(XR_TYPE_VIEW), tagged<XrView>(XR_TYPE_VIEW)};
   const XrResult located_views = xrLocateViews(session, &locate_info, &view_state, 2, &n, views_.data());
+  if (fatal(located_views)) fail(located_views, "xrLocateViews");
   views_valid_ = XR_SUCCEEDED(located_views) && n == 2 &&
                  (view_state.viewStateFlags & XR_VIEW_STATE_POSITION_VALID_BIT) != 0 &&
                  (view_state.viewStateFlags & XR_VIEW_STATE_ORIENTATION_VALID_BIT) != 0;
   auto locate = [&](XrSpace space) {
     auto loc = tagged<XrSpaceLocation>(XR_TYPE_SPACE_LOCATION);
-    const bool ok = XR_SUCCEEDED(xrLocateSpace(space, stage_.get(), t, &loc)) && located(loc.locationFlags);
+    const XrResult r = xrLocateSpace(space, stage_.get(), t, &loc);
+    if (fatal(r)) fail(r, "xrLocateSpace");
+    const bool ok = XR_SUCCEEDED(r) && located(loc.locationFlags);
     return std::pair{to_lab_pose(loc.pose), ok};
   };
   const auto [head, head_ok] = locate(view_.get());
@@ -643,6 +669,7 @@ renderer::StereoRig XrBackend::rig(const FrameTiming& frame, double ipd_m) {
 }
 
 void XrBackend::report_once(XrResult r, const char* call) {
+  if (fatal(r)) fail(r, call);
   if (std::find(reported_.begin(), reported_.end(), call) != reported_.end()) return;
   reported_.emplace_back(call);
   std::cerr << "curvlab: xr: " << failure_of(r, call).message << '\n';
@@ -715,7 +742,7 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
   if (!frame_begun_) return stats;
   const bool render = frame_state_.shouldRender == XR_TRUE && views_valid_;
   if (!render) {
-    end_frame(false);
+    if (const XrResult r = end_frame(false); XR_FAILED(r)) fail(r, "xrEndFrame");
     return stats;
   }
   std::array<bool, 2> acquired{false, false};
@@ -732,18 +759,14 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
     auto acquire = tagged<XrSwapchainImageAcquireInfo>(XR_TYPE_SWAPCHAIN_IMAGE_ACQUIRE_INFO);
     if (const XrResult r = xrAcquireSwapchainImage(sc.handle.get(), &acquire, &index); XR_FAILED(r)) {
       release_all();
-      fail(failure_of(r, "xrAcquireSwapchainImage").message);
-      end_frame(false);
-      return stats;
+      fail(r, "xrAcquireSwapchainImage");  // the destructor ends the begun frame
     }
     acquired[i] = true;
     auto wait = tagged<XrSwapchainImageWaitInfo>(XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO);
     wait.timeout = XR_INFINITE_DURATION;
     if (const XrResult r = xrWaitSwapchainImage(sc.handle.get(), &wait); XR_FAILED(r)) {
       release_all();
-      fail(failure_of(r, "xrWaitSwapchainImage").message);
-      end_frame(false);
-      return stats;
+      fail(r, "xrWaitSwapchainImage");
     }
     target_->set_image(i == 0 ? renderer::Eye::left : renderer::Eye::right,
                        {sc.images[index].image, static_cast<vk::Format>(swapchain_format_),
@@ -756,14 +779,12 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
   try {
     // render() submits before returning, as xrReleaseSwapchainImage requires.
     stats = renderer_->render(scene, f, *target_);
-  } catch (const vk::SystemError& e) {
+  } catch (const renderer::VulkanFailure& e) {
     release_all();
-    fail(std::string("rendering for the headset failed: ") + e.what());
-    end_frame(false);
-    return stats;
+    fail(e);
   }
   release_all();
-  end_frame(true);
+  if (const XrResult r = end_frame(true); XR_FAILED(r)) fail(r, "xrEndFrame");
   return stats;
 }
 
@@ -780,13 +801,15 @@ std::vector<std::string> XrBackend::save_frame(const std::string& stem) {
       }
       written.push_back(path);
     }
+  } catch (const renderer::VulkanFailure& e) {
+    fail(e);
   } catch (const vk::SystemError& e) {
-    std::cerr << "curvlab: xr: frame not saved: " << e.what() << '\n';
+    fail(renderer::VulkanFailure(renderer::vk_call_name(e.what()), e.code().value()));
   }
   return written;
 }
 
-std::variant<std::unique_ptr<Backend>, BackendError> make_xr_backend(const XrBackendOptions& options) {
+Result<std::unique_ptr<Backend>> make_xr_backend(const XrBackendOptions& options) {
   return XrBackend::create(options);
 }
 

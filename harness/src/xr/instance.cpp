@@ -44,8 +44,11 @@ std::string hint(XrResult result) {
   }
 }
 
-XrFailure failure(XrResult result, const char* call) {
-  return {result, call,
+harness::Error failure(XrResult result, const char* call) {
+  const bool missing = result == XR_ERROR_RUNTIME_UNAVAILABLE || result == XR_ERROR_RUNTIME_FAILURE ||
+                       result == XR_ERROR_FORM_FACTOR_UNAVAILABLE ||
+                       result == XR_ERROR_EXTENSION_NOT_PRESENT || result == XR_ERROR_API_VERSION_UNSUPPORTED;
+  return {missing ? harness::Error::Kind::device : harness::Error::Kind::api,
           std::string(call) + " returned " + result_name(result) + " (" +
               std::to_string(static_cast<int>(result)) + "): " + hint(result)};
 }
@@ -72,9 +75,24 @@ std::string result_name(XrResult result) {
   return "XR_RESULT_" + std::to_string(static_cast<int>(result));
 }
 
-XrFailure failure_of(XrResult result, const char* call) { return failure(result, call); }
+harness::Error failure_of(XrResult result, const char* call) { return failure(result, call); }
 
-std::variant<std::vector<std::string>, XrFailure> available_extensions() {
+std::optional<FailedCall> failed_call(const harness::Error& error) {
+  // "CALL returned NAME (CODE): …", as failure() writes it.
+  const std::string& m = error.message;
+  const auto returned = m.find(" returned ");
+  const auto open = m.find(" (", returned == std::string::npos ? 0 : returned);
+  const auto close = m.find("):", open == std::string::npos ? 0 : open);
+  if (returned == std::string::npos || open == std::string::npos || close == std::string::npos)
+    return std::nullopt;
+  try {
+    return FailedCall{m.substr(0, returned), static_cast<XrResult>(std::stoi(m.substr(open + 2, close - open - 2)))};
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+harness::Result<std::vector<std::string>> available_extensions() {
   std::uint32_t count = 0;
   if (const XrResult r = xrEnumerateInstanceExtensionProperties(nullptr, 0, &count, nullptr);
       XR_FAILED(r))
@@ -92,12 +110,12 @@ std::variant<std::vector<std::string>, XrFailure> available_extensions() {
   return names;
 }
 
-std::variant<Instance, XrFailure> Instance::create(const std::string& application_name) {
+harness::Result<Instance> Instance::create(const std::string& application_name) {
   return create(application_name, {});
 }
 
-std::variant<Instance, XrFailure> Instance::create(const std::string& application_name,
-                                                   const std::vector<std::string>& extra_extensions) {
+harness::Result<Instance> Instance::create(const std::string& application_name,
+                                           const std::vector<std::string>& extra_extensions) {
   auto info = tagged<XrInstanceCreateInfo>(XR_TYPE_INSTANCE_CREATE_INFO);
   std::strncpy(info.applicationInfo.applicationName, application_name.c_str(),
                XR_MAX_APPLICATION_NAME_SIZE - 1);
@@ -132,7 +150,7 @@ Instance::~Instance() {
   if (instance_ != XR_NULL_HANDLE) xrDestroyInstance(instance_);
 }
 
-std::variant<XrSystemId, XrFailure> Instance::hmd_system() const {
+harness::Result<XrSystemId> Instance::hmd_system() const {
   auto info = tagged<XrSystemGetInfo>(XR_TYPE_SYSTEM_GET_INFO);
   info.formFactor = XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY;
   XrSystemId system = XR_NULL_SYSTEM_ID;
@@ -148,8 +166,7 @@ std::string Instance::path_string(XrPath path) const {
   return buffer;
 }
 
-std::variant<ActionSet, XrFailure> ActionSet::create(const Instance& instance,
-                                                     const ActionSetDef& def) {
+harness::Result<ActionSet> ActionSet::create(const Instance& instance, const ActionSetDef& def) {
   ActionSet out;
   auto set_info = tagged<XrActionSetCreateInfo>(XR_TYPE_ACTION_SET_CREATE_INFO);
   std::strncpy(set_info.actionSetName, def.name.c_str(), XR_MAX_ACTION_SET_NAME_SIZE - 1);
@@ -227,7 +244,7 @@ XrAction ActionSet::action(std::string_view name) const {
   return XR_NULL_HANDLE;
 }
 
-std::variant<ProbeReport, XrFailure> probe(const std::string& application_name) {
+harness::Result<ProbeReport> probe(const std::string& application_name) {
   ProbeReport report;
   std::uint32_t count = 0;
   if (const XrResult r = xrEnumerateApiLayerProperties(0, &count, nullptr); XR_FAILED(r))
@@ -243,15 +260,15 @@ std::variant<ProbeReport, XrFailure> probe(const std::string& application_name) 
   // The runtime provides the extension list, so this is where a missing
   // runtime first shows.
   auto extensions = available_extensions();
-  if (auto* f = std::get_if<XrFailure>(&extensions)) return *f;
-  report.extensions = std::move(std::get<std::vector<std::string>>(extensions));
+  if (!extensions) return extensions.error();
+  report.extensions = std::move(extensions).value();
   if (std::find(report.extensions.begin(), report.extensions.end(), kVulkanEnable2) ==
       report.extensions.end())
     return failure(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
 
   auto created = Instance::create(application_name);
-  if (auto* f = std::get_if<XrFailure>(&created)) return *f;
-  const Instance& instance = std::get<Instance>(created);
+  if (!created) return created.error();
+  const Instance& instance = created.value();
 
   auto props = tagged<XrInstanceProperties>(XR_TYPE_INSTANCE_PROPERTIES);
   if (const XrResult r = xrGetInstanceProperties(instance.handle(), &props); XR_FAILED(r))
@@ -260,9 +277,9 @@ std::variant<ProbeReport, XrFailure> probe(const std::string& application_name) 
   report.runtime_version = version_string(props.runtimeVersion);
 
   auto system = instance.hmd_system();
-  if (auto* f = std::get_if<XrFailure>(&system)) return *f;
+  if (!system) return system.error();
   auto sys = tagged<XrSystemProperties>(XR_TYPE_SYSTEM_PROPERTIES);
-  if (const XrResult r = xrGetSystemProperties(instance.handle(), std::get<XrSystemId>(system), &sys);
+  if (const XrResult r = xrGetSystemProperties(instance.handle(), system.value(), &sys);
       XR_FAILED(r))
     return failure(r, "xrGetSystemProperties");
   report.system_name = sys.systemName;

@@ -21,6 +21,12 @@
 //   CURVLAB_TEST_XR_EXIT     SECONDS: the runtime asks the application to exit
 //                            (VISIBLE, SYNCHRONIZED, STOPPING; after
 //                            xrEndSession IDLE and EXITING)
+//   CURVLAB_TEST_XR_FAIL     CALL@SECONDS:RESULT: from SECONDS after focus on,
+//                            CALL (xrWaitFrame or xrEndFrame) returns RESULT
+//                            (XR_ERROR_SESSION_LOST, XR_ERROR_RUNTIME_FAILURE
+//                            or XR_ERROR_INSTANCE_LOST), as a runtime whose
+//                            session or compositor died does; a "fault" line
+//                            in the log
 //   CURVLAB_TEST_XR_CAPTURE_DIR   write the left eye of submitted frames here
 //                            as PNG (left_<frame>_<monotonic ns>.png, the
 //                            frame's predicted display time on CLOCK_MONOTONIC)
@@ -221,6 +227,7 @@ struct Session {
   bool running = false;
   bool exit_requested = false;
   bool focused_once = false;
+  bool faulted = false;  // the scripted fault (CURVLAB_TEST_XR_FAIL) has happened
   std::int64_t focus_t0_ns = 0;  // CLOCK_MONOTONIC when first FOCUSED
   std::vector<int> unfocus_phase;  // per scripted spell: 0 pending, 1 unfocused, 2 done
   VulkanDevice* vk = nullptr;
@@ -365,6 +372,20 @@ void tick(Session& s) {
       s.unfocus_phase[i] = 2;
     }
   }
+}
+
+// The scripted fault of `call`, if it is due: its result (logged once).
+std::optional<XrResult> scripted_fault(Session& s, const char* call) {
+  const auto& fault = s.instance->script.fault;
+  if (!fault || fault->call != call || !s.focused_once) return std::nullopt;
+  const double t = static_cast<double>(monotonic_ns() - s.focus_t0_ns) * 1e-9;
+  if (t < fault->at_s) return std::nullopt;
+  const XrResult r = fault->result == "XR_ERROR_SESSION_LOST"    ? XR_ERROR_SESSION_LOST
+                     : fault->result == "XR_ERROR_INSTANCE_LOST" ? XR_ERROR_INSTANCE_LOST
+                                                                 : XR_ERROR_RUNTIME_FAILURE;
+  if (!s.faulted) log_line(std::string("fault ") + call + " " + fault->result);
+  s.faulted = true;
+  return r;
 }
 
 // ---- Vulkan helpers ---------------------------------------------------------
@@ -1292,6 +1313,7 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
       state->type != XR_TYPE_FRAME_STATE)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped wait info or frame state");
   if (!s->running) return violation(fn, XR_ERROR_SESSION_NOT_RUNNING, "");
+  if (const auto r = scripted_fault(*s, fn)) return *r;
   const auto period = static_cast<std::int64_t>(std::llround(1e9 / s->instance->script.refresh_hz));
   std::int64_t wake = monotonic_ns();
   if (s->frames_waited > 0) {
@@ -1388,6 +1410,7 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
   if (!s->running) return violation(fn, XR_ERROR_SESSION_NOT_RUNNING, "");
   if (!s->begun) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "no xrBeginFrame before it");
   s->begun = false;
+  if (const auto r = scripted_fault(*s, fn)) return *r;
   if (info->displayTime <= 0) return violation(fn, XR_ERROR_TIME_INVALID, std::to_string(info->displayTime));
   if (info->displayTime != s->begun_display)
     warning(fn, "displayTime " + std::to_string(info->displayTime) + " is not the frame's predicted display time " +

@@ -128,6 +128,27 @@ std::optional<Script> read_script(std::string& error) {
     }
     s.exit_at_s = *at;
   }
+  if (const char* v = env("CURVLAB_TEST_XR_FAIL")) {
+    const std::string text(v);
+    const auto at = text.find('@');
+    const auto colon = text.find(':', at == std::string::npos ? 0 : at);
+    Fault f;
+    f.call = text.substr(0, at);
+    const auto seconds = at == std::string::npos || colon == std::string::npos
+                             ? std::nullopt
+                             : number(text.substr(at + 1, colon - at - 1));
+    f.result = colon == std::string::npos ? "" : text.substr(colon + 1);
+    if ((f.call != "xrWaitFrame" && f.call != "xrEndFrame") || !seconds || *seconds < 0.0 ||
+        (f.result != "XR_ERROR_SESSION_LOST" && f.result != "XR_ERROR_RUNTIME_FAILURE" &&
+         f.result != "XR_ERROR_INSTANCE_LOST")) {
+      error = "CURVLAB_TEST_XR_FAIL: '" + text +
+              "': expected CALL@SECONDS:RESULT with CALL xrWaitFrame or xrEndFrame and RESULT "
+              "XR_ERROR_SESSION_LOST, XR_ERROR_RUNTIME_FAILURE or XR_ERROR_INSTANCE_LOST";
+      return std::nullopt;
+    }
+    f.at_s = *seconds;
+    s.fault = f;
+  }
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_DIR")) s.capture_dir = v;
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_EVERY")) {
     const auto n = number(v);

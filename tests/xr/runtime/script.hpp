@@ -50,8 +50,17 @@ struct Unfocus {
   double for_s = 0.0;
 };
 
+// A runtime fault: from the first call of `call` at or after `at_s` on,
+// that call returns `result` (a lost session stays lost).
+struct Fault {
+  std::string call;    // xrWaitFrame or xrEndFrame
+  double at_s = 0.0;   // seconds after the session first became FOCUSED
+  std::string result;  // XR_ERROR_SESSION_LOST, XR_ERROR_RUNTIME_FAILURE or XR_ERROR_INSTANCE_LOST
+};
+
 struct Script {
   std::vector<Press> presses;
+  std::optional<Fault> fault;
   std::vector<Unfocus> unfocus;
   std::optional<double> exit_at_s;  // request exit (STOPPING) at this time
   std::string capture_dir;          // left-eye PNGs of submitted frames

@@ -4,6 +4,8 @@
 // tests can fail on any of them.
 #pragma once
 
+#include "curvlab/renderer/vulkan_failure.hpp"
+
 #include <vulkan/vulkan_raii.hpp>
 
 #include <functional>
@@ -118,20 +120,37 @@ class Context {
                                           vk::MemoryPropertyFlags props) const;
 
   // Records with `record` into a one-time command buffer, submits and waits.
+  // Throws VulkanFailure when a call fails (a lost device).
   template <class F>
   void submit_and_wait(F&& record) const {
-    vk::raii::CommandBuffers cbs(device_, {.commandPool = *command_pool_,
-                                           .level = vk::CommandBufferLevel::ePrimary,
-                                           .commandBufferCount = 1});
-    const vk::raii::CommandBuffer& cb = cbs.front();
-    cb.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
-    record(cb);
-    cb.end();
-    vk::raii::Fence fence(device_, vk::FenceCreateInfo{});
-    const vk::CommandBuffer raw = *cb;
-    queue_.submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &raw}, *fence);
-    (void)device_.waitForFences({*fence}, VK_TRUE, UINT64_MAX);
+    try {
+      vk::raii::CommandBuffers cbs(device_, {.commandPool = *command_pool_,
+                                             .level = vk::CommandBufferLevel::ePrimary,
+                                             .commandBufferCount = 1});
+      const vk::raii::CommandBuffer& cb = cbs.front();
+      cb.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+      record(cb);
+      cb.end();
+      vk::raii::Fence fence(device_, vk::FenceCreateInfo{});
+      submit(*cb, *fence);
+      wait_for(*fence);
+    } catch (const vk::SystemError& e) {
+      throw_vulkan_failure(e);
+    }
   }
+
+  // vkQueueSubmit of one command buffer signalling `fence`, and
+  // vkWaitForFences on one fence without a timeout: through the device's
+  // dispatch table, a failure thrown as a VulkanFailure naming the call.
+  void submit(vk::CommandBuffer cb, vk::Fence fence) const;
+  void wait_for(vk::Fence fence) const;
+  // Teardown: waits for the device to finish everything submitted. A lost
+  // device has nothing left to wait for, and a destructor cannot report it,
+  // so the result is ignored (the failure was reported where it happened).
+  void wait_idle_noexcept() const noexcept;
+
+  // A Vulkan-Hpp exception as the renderer's VulkanFailure.
+  [[noreturn]] static void throw_vulkan_failure(const vk::SystemError& e);
 
  private:
   Context() = default;

@@ -69,7 +69,8 @@ class SwapchainTarget final : public RenderTarget {
   [[nodiscard]] std::uint64_t identity() const override { return identity_; }
 
   // A failure during composition or presentation (device or surface lost);
-  // the frame loop should stop.
+  // the frame loop should stop. The failing call also throws VulkanFailure
+  // (from begin_frame, or from frame_finished inside Renderer::render).
   [[nodiscard]] const std::optional<RenderError>& failure() const { return failure_; }
 
   // The last presented frame: one eye as rendered, or the whole window as

@@ -11,24 +11,46 @@
 // Three implementations: headless (offscreen renderer, generated or replayed
 // poses, simulated observer; headless.hpp), desktop (GLFW window, keyboard
 // and mouse move the head; desktop.hpp) and xr (OpenXR; xr/backend.hpp).
-// A backend that cannot start (no runtime, no display) fails in its factory
-// with a BackendError before the runner writes anything.
+// A backend that cannot start (no runtime, no display, no GPU) fails in its
+// factory with an Error (result.hpp; kind `device`, or `api` for a call that
+// failed) before the runner writes anything. Once running, a failing Vulkan
+// or OpenXR call throws BackendFailure (below) from whichever method met it.
+//
+// This header stays free of Vulkan: it needs the frame's plain structs
+// (plan.hpp, frame_stats.hpp), not the renderer.
 #pragma once
 
 #include "curvlab/geometry/tracking.hpp"
+#include "curvlab/harness/result.hpp"
 #include "curvlab/harness/runner/phase.hpp"
+#include "curvlab/renderer/frame_stats.hpp"
 #include "curvlab/renderer/plan.hpp"
-#include "curvlab/renderer/renderer.hpp"
 
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace curvlab::harness::runner {
 
-struct BackendError {
-  std::string message;  // names the failing call or result and what to do about it
+// A Vulkan or OpenXR call that failed while a session runs: a lost device, a
+// lost session, a runtime that failed. It is the only exception a backend
+// method throws (STYLE.md: exceptions for what the frame loop cannot go on
+// from, caught by the session runner). The message names the call and its
+// result as the C APIs spell them — "vkQueueSubmit: VK_ERROR_DEVICE_LOST",
+// "xrWaitFrame: XR_ERROR_SESSION_LOST" — followed by any detail. The runner
+// ends the session `interrupted` (completed trials are already committed),
+// and it can be resumed. A backend that threw is not used again, only
+// destroyed; destructors never throw.
+struct BackendFailure : std::runtime_error {
+  BackendFailure(std::string call_name, std::string result_name, const std::string& detail = {})
+      : std::runtime_error(call_name + ": " + result_name + (detail.empty() ? "" : " (" + detail + ")")),
+        call(std::move(call_name)),
+        result(std::move(result_name)) {}
+
+  std::string call;    // "vkQueueSubmit", "xrWaitFrame"
+  std::string result;  // "VK_ERROR_DEVICE_LOST", "XR_ERROR_SESSION_LOST"
 };
 
 // Provenance the session stores (DESIGN.md §7).
@@ -78,6 +100,8 @@ class Backend {
   Backend& operator=(const Backend&) = delete;
 
   [[nodiscard]] virtual BackendInfo info() const = 0;
+  // Every method below may throw BackendFailure (and nothing else).
+  //
   // Waits until the next frame should be prepared (real time) or returns at
   // once (fast headless); nullopt ends the session (window closed, runtime
   // exiting, replay finished).

@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <memory>
 #include <string>
-#include <variant>
 #include <vector>
 
 namespace curvlab::harness::runner {
@@ -35,6 +34,7 @@ struct DesktopOptions {
   const devices::Clock* clock = nullptr;  // the session's; required
 };
 
-std::variant<std::unique_ptr<Backend>, BackendError> make_desktop_backend(const DesktopOptions& options);
+// No display or no Vulkan: an Error of kind `device`.
+Result<std::unique_ptr<Backend>> make_desktop_backend(const DesktopOptions& options);
 
 }  // namespace curvlab::harness::runner

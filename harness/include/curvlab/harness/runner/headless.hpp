@@ -13,7 +13,6 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
-#include <variant>
 
 namespace curvlab::harness::runner {
 
@@ -47,10 +46,14 @@ struct HeadlessOptions {
   bool no_gpu = false;
 };
 
+// A failing Vulkan call in submit() or save_frame() (a lost device) throws
+// BackendFailure naming it. Owns its Vulkan context, renderer and target;
+// not thread-safe.
 class HeadlessBackend final : public Backend {
  public:
-  static std::variant<std::unique_ptr<HeadlessBackend>, BackendError> create(
-      const HeadlessOptions& options);
+  // No Vulkan device: an Error of kind `device`; a bad option: `usage`.
+  static Result<std::unique_ptr<HeadlessBackend>> create(const HeadlessOptions& options);
+  // Waits for the GPU; never throws, a lost device included.
   ~HeadlessBackend() override;
 
   // The clock the session must use: simulated (fast) or steady (real time).

@@ -9,7 +9,6 @@
 
 #include <memory>
 #include <string>
-#include <variant>
 
 namespace curvlab::xr {
 
@@ -18,7 +17,10 @@ struct XrBackendOptions {
   const devices::Clock* clock = nullptr;  // the session's; required
 };
 
-std::variant<std::unique_ptr<harness::runner::Backend>, harness::runner::BackendError>
-make_xr_backend(const XrBackendOptions& options);
+// No runtime or no headset: an Error of kind `device` naming the OpenXR
+// result and what to install; another failing call: `api`. Once running, a
+// failing OpenXR or Vulkan call throws BackendFailure
+// ("xrWaitFrame: XR_ERROR_SESSION_LOST").
+harness::Result<std::unique_ptr<harness::runner::Backend>> make_xr_backend(const XrBackendOptions& options);
 
 }  // namespace curvlab::xr

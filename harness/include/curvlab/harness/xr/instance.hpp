@@ -1,18 +1,20 @@
 // The OpenXR instance path: loader → API layers and extensions → instance
 // with XR_KHR_vulkan_enable2 → head-mounted-display system. On a machine
 // without a runtime this fails at xrCreateInstance (or at the extension
-// query) with XR_ERROR_RUNTIME_UNAVAILABLE; the failure is a value whose
-// message names the result and what to install.
+// query) with XR_ERROR_RUNTIME_UNAVAILABLE; the failure is a value (the
+// harness's Error, result.hpp) whose message names the result and what to
+// install.
 #pragma once
 
+#include "curvlab/harness/result.hpp"
 #include "curvlab/harness/xr/actions.hpp"
 
 #include <openxr/openxr.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
-#include <variant>
 #include <vector>
 
 namespace curvlab::xr {
@@ -22,11 +24,17 @@ namespace curvlab::xr {
 // when the runtime is). Unknown codes read "XR_RESULT_<n>".
 std::string result_name(XrResult result);
 
-struct XrFailure {
+// Every failure here is a harness::Error: kind `device` when there is no
+// runtime or headset to answer (XR_ERROR_RUNTIME_UNAVAILABLE,
+// XR_ERROR_RUNTIME_FAILURE, XR_ERROR_FORM_FACTOR_UNAVAILABLE, a missing
+// extension or API version), `api` for any other failing call. Its message
+// reads "CALL returned NAME (CODE): what to do"; failed_call() reads the
+// call and result back (for `curvlab xr-check --json`).
+struct FailedCall {
+  std::string call;  // the OpenXR function that failed
   XrResult result = XR_SUCCESS;
-  std::string call;     // the OpenXR function that failed
-  std::string message;  // what happened and what to do, for a person
 };
+std::optional<FailedCall> failed_call(const harness::Error& error);
 
 struct ProbeReport {
   std::vector<std::string> api_layers;
@@ -45,11 +53,11 @@ struct ProbeReport {
 // destroyed by the destructor. Not thread-safe.
 class Instance {
  public:
-  static std::variant<Instance, XrFailure> create(const std::string& application_name);
+  static harness::Result<Instance> create(const std::string& application_name);
   // With further extensions besides XR_KHR_vulkan_enable2 (each must be
   // offered by the runtime: check with available_extensions()).
-  static std::variant<Instance, XrFailure> create(const std::string& application_name,
-                                                  const std::vector<std::string>& extra_extensions);
+  static harness::Result<Instance> create(const std::string& application_name,
+                                          const std::vector<std::string>& extra_extensions);
   Instance(Instance&& other) noexcept;
   Instance& operator=(Instance&& other) noexcept;
   Instance(const Instance&) = delete;
@@ -59,7 +67,7 @@ class Instance {
   [[nodiscard]] XrInstance handle() const { return instance_; }
   // The head-mounted display; fails with XR_ERROR_FORM_FACTOR_UNAVAILABLE
   // while the headset is off or unplugged.
-  std::variant<XrSystemId, XrFailure> hmd_system() const;
+  harness::Result<XrSystemId> hmd_system() const;
   [[nodiscard]] std::string path_string(XrPath path) const;
 
  private:
@@ -71,8 +79,7 @@ class Instance {
 class ActionSet {
  public:
   // Creates the set and actions and suggests the bindings of every profile.
-  static std::variant<ActionSet, XrFailure> create(const Instance& instance,
-                                                   const ActionSetDef& def);
+  static harness::Result<ActionSet> create(const Instance& instance, const ActionSetDef& def);
   ActionSet(ActionSet&& other) noexcept;
   ActionSet& operator=(ActionSet&& other) noexcept;
   ActionSet(const ActionSet&) = delete;
@@ -90,14 +97,14 @@ class ActionSet {
 
 // The failure of `call` with `result`, its message naming the result and
 // what to do (the same wording as every other failure here).
-XrFailure failure_of(XrResult result, const char* call);
+harness::Error failure_of(XrResult result, const char* call);
 
 // The instance extensions the loader and runtime offer; this is where a
 // missing runtime first shows (XR_ERROR_RUNTIME_UNAVAILABLE).
-std::variant<std::vector<std::string>, XrFailure> available_extensions();
+harness::Result<std::vector<std::string>> available_extensions();
 
 // Runs the whole path up to the system (no session: that needs the
 // renderer's Vulkan device) and describes what it found.
-std::variant<ProbeReport, XrFailure> probe(const std::string& application_name);
+harness::Result<ProbeReport> probe(const std::string& application_name);
 
 }  // namespace curvlab::xr
