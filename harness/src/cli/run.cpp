@@ -446,8 +446,11 @@ struct ReplayArgs {
 void replay_command(ReplayArgs a) {
   a.request.frame_index = a.frame;
   auto r = rn::replay_frame(a.request);
-  if (auto* e = std::get_if<rn::ReplayError>(&r)) raise(*e);
-  const auto& res = std::get<rn::ReplayResult>(r);
+  if (!r) {
+    if (curvlab::harness::exit_code(r.error()) == 2) throw UsageError(r.error().message);
+    throw RuntimeFailure(r.error().message);
+  }
+  const auto& res = r.value();
   Json doc;
   doc["frame_index"] = res.frame_index;
   doc["phase"] = res.phase;
