@@ -8,6 +8,7 @@
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/staircase.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/view_record.hpp"
 #include "curvlab/harness/version.hpp"
 
 #include <nlohmann/json.hpp>
@@ -125,6 +126,8 @@ class Session {
         progress_(options.progress) {
     if (options.observer) observer_.emplace(*options.observer);
     dominant_ = options.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
+    eye_size_ = eye_image_size(backend.info(), static_cast<std::uint32_t>(p.resolution_width),
+                               static_cast<std::uint32_t>(p.resolution_height));
   }
 
   // Staircase state from the steps already committed (resume).
@@ -317,7 +320,7 @@ class Session {
     const auto before_submit = SteadyTime::now();
     const renderer::FrameStats stats = backend_.submit(scene_->scene(), desc, overlay, really_draw);
     const auto after_submit = SteadyTime::now();
-    log_frame(f, stats, trial_id);
+    log_frame(f, stats, trial_id, desc.rig);
     const auto done = SteadyTime::now();
     const auto own = std::chrono::duration_cast<std::chrono::nanoseconds>((before_submit - f.started) +
                                                                           (done - after_submit))
@@ -340,7 +343,8 @@ class Session {
     }
   }
 
-  void log_frame(const Frame& f, const renderer::FrameStats& stats, std::optional<std::int64_t> trial_id) {
+  void log_frame(const Frame& f, const renderer::FrameStats& stats, std::optional<std::int64_t> trial_id,
+                 const renderer::StereoRig& rig) {
     const std::int64_t tid = trial_id.value_or(-1);
     if (tracker_) {
       const auto& out = tracker_->output();
@@ -388,6 +392,8 @@ class Session {
     fr.passes = stats.reused ? 0 : stats.passes;
     fr.draws = stats.draws;
     fr.triangles = static_cast<std::int64_t>(stats.triangles);
+    fr.has_view_geometry = true;
+    fr.view_geometry = record_view_geometry(rig, eye_size_.first, eye_size_.second);
     push([&] { return writer_.push_frame(fr); });
   }
 
@@ -631,6 +637,7 @@ class Session {
               continue;
             }
             protocol::set_numeric_setting(s, a.parameter, adjustment->value());
+            event(trial_id, "adjustment", Json{{"value", adjustment->value()}, {"frame_index", frame_index_}});
             placement = place_stimulus(*world_, s, head_at_onset);
             scene_->set_stimulus(s, placement);
           } else if (auto k = option_for(j, in)) {
@@ -778,6 +785,7 @@ class Session {
   Progress progress_;
   std::optional<SimulatedObserver> observer_;
   renderer::Eye dominant_ = renderer::Eye::right;
+  std::pair<std::uint32_t, std::uint32_t> eye_size_;  // each eye's image as the backend draws it
   std::map<std::pair<std::size_t, std::size_t>, protocol::InterleavedStaircases> staircases_;
   std::optional<World> world_;
   Settings settings_;
