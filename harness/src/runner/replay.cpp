@@ -44,6 +44,7 @@ struct StoredFrame {
   data::DominantEye dominant_eye = data::DominantEye::unknown;
   std::optional<data::ViewGeometry> views;  // nullopt: not recorded (schema version 2)
   bool adjusted = false;                   // an adjustment after onset changed the stimulus
+  std::optional<double> adjustment_value;  // an adjustment trial's value shown at the frame
 };
 
 // The session's protocol, re-expanded for its participant: the trial's
@@ -63,8 +64,10 @@ Result<Done> read_trial_settings(const data::SessionProvenance& prov, const Repl
   out.settings = planned.settings;
   for (const auto& b : out.protocol.blocks)
     if (b.name == planned.block) out.block = b;
-  if (planned.adjustment_start && out.block && out.block->judgement.adjustment)
+  if (planned.adjustment_start && out.block && out.block->judgement.adjustment) {
     protocol::set_numeric_setting(out.settings, out.block->judgement.adjustment->parameter, *planned.adjustment_start);
+    out.adjustment_value = *planned.adjustment_start;
+  }
   return Done{};
 }
 
@@ -82,6 +85,7 @@ Result<Done> read_shown_value(data::Database& db, StoredFrame& out) {
   if (*adjusted) {
     protocol::set_numeric_setting(out.settings, j.adjustment->parameter, **adjusted);
     out.adjusted = true;
+    out.adjustment_value = **adjusted;
   }
   return Done{};
 }
@@ -165,6 +169,7 @@ Result<ReplayResult> write_outputs(const ReplayRequest& rq, const StoredFrame& f
   j["radius_m"] = world.space.radius_m;
   j["view"] = view_name(f.settings);
   j["eye_geometry"] = f.views ? "recorded" : "assumed";
+  if (f.adjustment_value) j["adjustment_value"] = *f.adjustment_value;
   j["views"] = stats.views;
   j["draws"] = stats.draws;
   j["device"] = device;
