@@ -309,7 +309,7 @@ TEST(SessionReader, ReadsWhatResumeNeeds) {
   ASSERT_TRUE(store.complete_trial({ids[0], 1'000, 2'000, "convex", "keyboard",
                                     StaircaseStep{"s1", 0, 0.02, false, false, 0.025}}));
 
-  auto& db = store.database();
+  auto db = Database::open((dir / "r.db").string(), OpenMode::read_only).value();
   const auto prov = read_session_provenance(db, session);
   ASSERT_TRUE(prov) << prov.error().message;
   EXPECT_EQ(prov->protocol_text, "name = \"billiards\"\n");

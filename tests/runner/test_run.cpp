@@ -121,6 +121,24 @@ TEST(RunHeadless, ReplayReproducesTheStimulusImage) {
       EXPECT_EQ(diff.differing_pixels, 0) << "trial " << trial << " " << eye;
     }
   }
+  // Frames stored without eye geometry (schema version 2) are replayed with
+  // the headless backend's: the same image here, marked "assumed".
+  {
+    auto c = curvlab::data::Connection::open(db, curvlab::data::OpenFlags::read_write);
+    c.exec("UPDATE frames SET eye_width_px = NULL, eye_height_px = NULL, eye_views = NULL");
+  }
+  const auto assumed = (dir / "assumed").string();
+  r = run_cli("replay --db " + db + " --session 1 --trial 5 --out " + assumed);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  {
+    std::ifstream json(assumed + "/replay.json");
+    EXPECT_EQ(nlohmann::json::parse(json)["eye_geometry"], "assumed");
+    curvlab::renderer::Rgba8Image saved, replayed;
+    std::string err;
+    ASSERT_TRUE(curvlab::renderer::read_png(images + "/trial_0005_left.png", saved, err)) << err;
+    ASSERT_TRUE(curvlab::renderer::read_png(assumed + "/left.png", replayed, err)) << err;
+    EXPECT_EQ(curvlab::renderer::diff_images(saved, replayed, 0).differing_pixels, 0);
+  }
   // A frame outside the trial is refused with the trial's frame range.
   r = run_cli("replay --db " + db + " --session 1 --trial 2 --frame 0 --out " + (dir / "x").string());
   EXPECT_EQ(r.exit_code, 2);
