@@ -1,8 +1,10 @@
 // Logger benchmark (DESIGN.md §8): sustained real-time logging of 3 tracked
 // devices at 1 kHz plus 90 Hz frame records, then unpaced throughput of the
 // SampleWriter against a raw prepared-statement SQLite loop writing the same
-// rows, both measured in this run on the same disk.
-//   bench_logger_throughput [--seconds S] [--dir DIR] [--rows N]
+// rows, both measured in this run on the same disk. Frame records carry eye
+// geometry as the session fills it: the same every frame (headless, desktop;
+// stored once), changing every frame (an OpenXR runtime's worst case), or none.
+//   bench_logger_throughput [--seconds S] [--dir DIR] [--rows N] [--views same|changing|none]
 #include "curvlab/harness/data/sample_writer.hpp"
 #include "curvlab/harness/data/session_store.hpp"
 
@@ -106,10 +108,16 @@ int main(int argc, char** argv) {
   double seconds = 60.0;
   std::string dir = std::filesystem::temp_directory_path().string();
   std::int64_t rows = 600'000;
+  std::string views = "same";
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::stod(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--dir")) dir = argv[i + 1];
     else if (!std::strcmp(argv[i], "--rows")) rows = std::stoll(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--views")) views = argv[i + 1];
+  }
+  if (views != "same" && views != "changing" && views != "none") {
+    std::fprintf(stderr, "--views: expected same, changing or none\n");
+    return 2;
   }
   const std::string path = dir + "/curvlab_bench_logger.db";
 
@@ -137,6 +145,18 @@ int main(int argc, char** argv) {
         f.passes = 2;
         f.draws = 12;
         f.triangles = 5000;
+        if (views != "none") {
+          // Two eyes 63 mm apart with an asymmetric field of view; "changing"
+          // moves them a micrometre every frame, as runtime views may.
+          f.has_view_geometry = true;
+          f.view_geometry.width_px = 1832;
+          f.view_geometry.height_px = 1920;
+          const double jitter = views == "changing" ? 1e-6 * static_cast<double>(frames % 2) : 0.0;
+          for (std::size_t e = 0; e < 2; ++e) {
+            f.view_geometry.eyes[e].position_m = {e == 0 ? -0.0315 + jitter : 0.0315, 0.0, 0.0};
+            f.view_geometry.eyes[e].fov_rad = {e == 0 ? -0.87 : -0.72, e == 0 ? 0.72 : 0.87, 0.80, -0.88};
+          }
+        }
         writer->push_frame(f);
       }
       max_push_us = std::max(max_push_us, std::chrono::duration<double, std::micro>(Clock::now() - p0).count());
@@ -146,16 +166,22 @@ int main(int argc, char** argv) {
     cpu_s = process_cpu_s() - cpu0;
     st = writer->stats();
   }
-  std::printf("sustained logging, paced in real time (%s)\n", path.c_str());
-  std::printf("| seconds | samples | frames | dropped | committed | transactions | writer CPU | process CPU | max push |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|\n");
-  std::printf("| %.1f | %llu | %llu | %llu | %llu | %llu | %.2f %% | %.2f %% | %.1f us |\n\n", wall_s,
+  auto bytes = [](const std::string& file) {
+    std::error_code ec;
+    const auto n = std::filesystem::file_size(file, ec);
+    return ec ? std::uintmax_t{0} : n;
+  };
+  const auto file_bytes = bytes(path) + bytes(path + "-wal");
+  std::printf("sustained logging, paced in real time (%s), eye geometry: %s\n", path.c_str(), views.c_str());
+  std::printf("| seconds | samples | frames | dropped | committed | transactions | writer CPU | process CPU | max push | file MiB |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| %.1f | %llu | %llu | %llu | %llu | %llu | %.2f %% | %.2f %% | %.1f us | %.2f |\n\n", wall_s,
               static_cast<unsigned long long>(st.pushed_tracking),
               static_cast<unsigned long long>(st.pushed_frames),
               static_cast<unsigned long long>(st.dropped_tracking + st.dropped_frames),
               static_cast<unsigned long long>(st.committed_tracking + st.committed_frames),
               static_cast<unsigned long long>(st.transactions), 100.0 * st.writer_cpu_s / wall_s,
-              100.0 * cpu_s / wall_s, max_push_us);
+              100.0 * cpu_s / wall_s, max_push_us, static_cast<double>(file_bytes) / (1 << 20));
 
   // 2. Unpaced: the writer against a raw loop on the same rows and disk.
   session = setup(path);

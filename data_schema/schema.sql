@@ -1,10 +1,10 @@
--- curvlab data schema, version 2 (current). The program embeds this file at
+-- curvlab data schema, version 3 (current). The program embeds this file at
 -- build time and executes it verbatim to create a new database; the codebook
 -- (codebook.md) gives every column its meaning and unit. Times: *_ns are
 -- nanoseconds of the session's monotonic clock, *_utc are ISO 8601 UTC text.
 -- Adding or changing anything here means a new version, a migration in
 -- migrations/, and a codebook entry: no column is ever added at run time.
-PRAGMA user_version = 2;
+PRAGMA user_version = 3;
 
 CREATE TABLE schema_migrations (
   version INTEGER PRIMARY KEY,
@@ -132,10 +132,15 @@ CREATE TABLE frames (
   views INTEGER NOT NULL,
   passes INTEGER NOT NULL,
   draws INTEGER NOT NULL,
-  triangles INTEGER NOT NULL
+  triangles INTEGER NOT NULL,
+  eye_width_px INTEGER CHECK (eye_width_px IS NULL OR eye_width_px > 0),
+  eye_height_px INTEGER CHECK (eye_height_px IS NULL OR eye_height_px > 0),
+  eye_views BLOB CHECK (eye_views IS NULL OR length(eye_views) = 256)
 ) STRICT;
 
 CREATE INDEX frames_by_session_frame ON frames (session_id, frame_index);
+-- The frames that record eye geometry (the first of each run, then each change).
+CREATE INDEX frames_with_eye_views ON frames (session_id, frame_index) WHERE eye_views IS NOT NULL;
 
 CREATE TABLE events (
   event_id INTEGER PRIMARY KEY,

@@ -1,6 +1,7 @@
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/sample_writer.hpp"
+#include "curvlab/harness/data/session_reader.hpp"
 #include "curvlab/harness/data/session_store.hpp"
 #include "curvlab/harness/data/sha256.hpp"
 
@@ -47,6 +48,9 @@ std::vector<std::string> master_rows(Connection& c, bool normalize) {
     if (normalize) {
       sql = std::regex_replace(sql, std::regex("--[^\n]*"), "");
       sql = std::regex_replace(sql, std::regex("\\s+"), " ");
+      // ALTER TABLE ADD COLUMN (migrations) splices ", column" in before the
+      // closing parenthesis: spacing around it carries no meaning.
+      sql = std::regex_replace(sql, std::regex(" ?([,)])"), "$1");
       sql = std::regex_replace(sql, std::regex("\"(\\w+)\""), "$1");
     }
     rows.push_back(s.column_text(0) + "|" + s.column_text(1) + "|" + s.column_text(2) + "|" + sql);
@@ -134,7 +138,7 @@ TEST(Schema, MigratesVersion1FileAndKeepsItsData) {
   }
   auto db = Database::open(path, OpenMode::open_existing);
   ASSERT_TRUE(db) << db.error().message;
-  EXPECT_EQ(db.value().schema_version(), 2);
+  EXPECT_EQ(db.value().schema_version(), current_schema_version);
   EXPECT_EQ(db.value().integrity_check(), "ok");
 
   auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
@@ -167,14 +171,14 @@ TEST(Schema, NewerFileIsRefusedAndLeftUntouched) {
   {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec("PRAGMA user_version = 3");
+    db.value().connection().exec("PRAGMA user_version = 4");
   }
   auto db = Database::open(path, OpenMode::create_or_open);
   ASSERT_FALSE(db);
   EXPECT_EQ(db.error().kind, DataError::Kind::newer_schema);
-  EXPECT_NE(db.error().message.find("schema version 3"), std::string::npos);
+  EXPECT_NE(db.error().message.find("schema version 4"), std::string::npos);
   auto c = Connection::open(path, OpenFlags::read_only);
-  EXPECT_EQ(c.query_int("PRAGMA user_version"), 3);
+  EXPECT_EQ(c.query_int("PRAGMA user_version"), 4);
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {
@@ -233,9 +237,11 @@ TEST(Session, PlanResumeAndIdempotentCompletion) {
   EXPECT_EQ(next->block_index, 1);
   ASSERT_TRUE(store.skip_trial(ids[1]));
   EXPECT_EQ(store.count_trials(session, "completed").value(), 1);
-  EXPECT_EQ(store.database().connection().query_int(
-                "SELECT rt_ns FROM trials WHERE trial_id = " + std::to_string(ids[0])), 350'000);
-  EXPECT_EQ(store.database().connection().query_int("SELECT count(*) FROM staircase_steps"), 1);
+  auto check = Database::open((dir / "s.db").string(), OpenMode::read_only);  // its own connection
+  ASSERT_TRUE(check);
+  EXPECT_EQ(check->connection().query_int("SELECT rt_ns FROM trials WHERE trial_id = " + std::to_string(ids[0])),
+            350'000);
+  EXPECT_EQ(check->connection().query_int("SELECT count(*) FROM staircase_steps"), 1);
   ASSERT_TRUE(store.close_session(session, SessionStatus::completed));
   EXPECT_FALSE(store.close_session(session + 100, SessionStatus::completed));
 }
@@ -295,6 +301,198 @@ TEST(SampleWriter, CommitsEverythingAndCountsDropsWhenFull) {
                                       "events WHERE kind = 'logger_drops'"), 96);
   EXPECT_EQ(db.connection().query_int(
                 "SELECT count(*) FROM tracking_samples WHERE length(virtual_pose) = 128"), 5000);
+}
+
+// What resume reads back: provenance with the session_start and observer
+// events, the plan in trial_index order, the last frame, staircase outcomes.
+TEST(SessionReader, ReadsWhatResumeNeeds) {
+  const auto dir = fresh_dir("reader");
+  auto store = make_store(dir / "r.db");
+  const auto session = make_session(store, "P03");
+  const auto ids = store.store_plan(session, two_blocks()).value();
+  ASSERT_TRUE(store.record_event({session, std::nullopt, 5, "session_start", "{\"participant_number\":3}"}));
+  ASSERT_TRUE(store.record_event({session, std::nullopt, 6, "observer",
+                                  "{\"model\":\"physical\",\"bias_m\":0.002,\"seed\":11}"}));
+  ASSERT_TRUE(store.record_event({session, ids[0], 9'000, "note", "{}"}));
+  ASSERT_TRUE(store.begin_trial(ids[0]));
+  ASSERT_TRUE(store.complete_trial({ids[0], 1'000, 2'000, "convex", "keyboard",
+                                    StaircaseStep{"s1", 0, 0.02, false, false, 0.025}}));
+
+  auto db = Database::open((dir / "r.db").string(), OpenMode::read_only).value();
+  const auto prov = read_session_provenance(db, session);
+  ASSERT_TRUE(prov) << prov.error().message;
+  EXPECT_EQ(prov->protocol_text, "name = \"billiards\"\n");
+  EXPECT_FALSE(prov->protocol_source_path);
+  EXPECT_EQ(prov->pseudonym, "P03");
+  EXPECT_EQ(prov->dominant_eye, DominantEye::left);
+  EXPECT_EQ(prov->seed, 7);
+  EXPECT_EQ(prov->status, SessionStatus::running);
+  EXPECT_EQ(prov->backend, Backend::headless);
+  EXPECT_EQ(prov->table_calibration_json, "{\"edge_m\":1.2}");
+  EXPECT_EQ(prov->participant_number, 3u);
+  ASSERT_TRUE(prov->observer);
+  EXPECT_EQ(prov->observer->model, "physical");
+  EXPECT_DOUBLE_EQ(prov->observer->bias_m, 0.002);
+  EXPECT_DOUBLE_EQ(prov->observer->slope_per_m, 300.0);  // absent: the runner's default
+  EXPECT_EQ(prov->observer->seed, 11u);
+  EXPECT_EQ(prov->last_t_ns, 9'000);
+  const auto missing = read_session_provenance(db, session + 1);
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().kind, DataError::Kind::not_found);
+
+  const auto trials = store.trial_list(session).value();
+  ASSERT_EQ(trials.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(trials[i].trial_id, ids[i]);
+    EXPECT_EQ(trials[i].trial_index, static_cast<std::int64_t>(i));
+  }
+  EXPECT_EQ(trials[0].conditions_json, "{\"space\":\"E3\",\"mode\":\"tourist\"}");
+  EXPECT_EQ(store.last_frame_index(session).value(), -1);
+  const auto steps = store.staircase_responses(session).value();
+  ASSERT_EQ(steps.size(), 1u);
+  EXPECT_EQ(steps[0].trial_id, ids[0]);
+  EXPECT_EQ(steps[0].response_correct, false);
+  EXPECT_EQ(read_staircase_intensity(db, ids[0]).value(), 0.02);
+  EXPECT_FALSE(read_staircase_intensity(db, ids[1]).value());
+}
+
+namespace {
+
+ViewGeometry test_views(double fov_left_rad) {
+  ViewGeometry g;
+  g.width_px = 320;
+  g.height_px = 300;
+  g.eyes[0].position_m = {-0.032, 0.001, 0.0};
+  g.eyes[1].position_m = {0.032, 0.001, 0.0};
+  g.eyes[0].fov_rad = {fov_left_rad, 0.72, 0.80, -0.88};
+  g.eyes[1].fov_rad = {-0.72, 0.87, 0.80, -0.88};
+  g.eyes[1].rotation = {0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0};
+  return g;
+}
+
+}  // namespace
+
+// Replay's reads: the onset, the head pose of a frame (its blob's size
+// checked), the adjustment in force, and the eye geometry — stored by the
+// writer only when it changes, read back as in force at any frame.
+TEST(SessionReader, ReadsWhatReplayNeeds) {
+  const auto dir = fresh_dir("replay_reads");
+  const auto path = dir / "r.db";
+  std::int64_t session = 0;
+  std::vector<std::int64_t> ids;
+  {
+    auto store = make_store(path);
+    session = make_session(store, "P04");
+    ids = store.store_plan(session, two_blocks()).value();
+    std::string pose = "[";
+    for (int i = 0; i < 16; ++i) pose += std::string(i ? "," : "") + (i % 5 == 0 ? "1" : "0");
+    pose += "]";
+    ASSERT_TRUE(store.record_event({session, ids[1], 10, "onset",
+                                    "{\"frame_index\":3,\"predicted_display_ns\":40,\"attempt\":1,\"head_pose\":" +
+                                        pose + ",\"stick_pose\":" + pose + "}"}));
+    ASSERT_TRUE(store.record_event({session, ids[1], 11, "adjustment", "{\"value\":0.01,\"frame_index\":5}"}));
+    ASSERT_TRUE(store.record_event({session, ids[1], 12, "trial_aborted", "{\"reason\":\"pause\"}"}));
+    ASSERT_TRUE(store.record_event({session, ids[1], 20, "onset",
+                                    "{\"frame_index\":7,\"predicted_display_ns\":80,\"attempt\":2,\"head_pose\":" +
+                                        pose + ",\"stick_pose\":" + pose + "}"}));
+    ASSERT_TRUE(store.record_event({session, ids[1], 21, "adjustment", "{\"value\":0.02,\"frame_index\":8}"}));
+    ASSERT_TRUE(store.record_event({session, ids[1], 22, "adjustment", "{\"value\":0.03,\"frame_index\":9}"}));
+    ASSERT_TRUE(store.record_event({session, ids[2], 30, "onset", "{\"frame_index\":9,\"head_pose\":[1,2]}"}));
+  }
+  {
+    auto writer = SampleWriter::open(path.string()).value();
+    for (int i = 0; i < 12; ++i) {
+      FrameRecord f;
+      f.session_id = session;
+      f.trial_id = ids[1];
+      f.frame_index = i;
+      f.has_view_geometry = i != 0;  // frame 0 knows none
+      f.view_geometry = test_views(i < 6 ? -0.87 : -0.90);
+      while (!writer->push_frame(f)) std::this_thread::yield();
+      TrackingSample s;
+      s.session_id = session;
+      s.trial_id = ids[1];
+      s.frame_index = i;
+      s.t_ns = 100 + i;
+      s.has_virtual_pose = true;
+      s.virtual_pose[0] = i;
+      while (!writer->push_tracking(s)) std::this_thread::yield();
+    }
+    ASSERT_TRUE(writer->flush());
+  }
+  auto db = Database::open(path.string(), OpenMode::read_only).value();
+  // Stored twice: frame 1 (the first that knew it) and frame 6 (the change).
+  EXPECT_EQ(db.connection().query_int("SELECT count(*) FROM frames WHERE eye_views IS NOT NULL"), 2);
+  {
+    Statement stored(db.connection(), "SELECT group_concat(frame_index) FROM frames WHERE eye_views IS NOT NULL");
+    ASSERT_TRUE(stored.step());
+    EXPECT_EQ(stored.column_text(0), "1,6");
+  }
+  EXPECT_FALSE(read_view_geometry(db, session, 0).value());
+  EXPECT_EQ(read_view_geometry(db, session, 1).value(), test_views(-0.87));
+  EXPECT_EQ(read_view_geometry(db, session, 5).value(), test_views(-0.87));
+  EXPECT_EQ(read_view_geometry(db, session, 6).value(), test_views(-0.90));
+  EXPECT_EQ(read_view_geometry(db, session, 11).value(), test_views(-0.90));
+
+  EXPECT_EQ(read_trial_id(db, session, 1).value(), ids[1]);
+  EXPECT_EQ(read_trial_id(db, session, 9).error().kind, DataError::Kind::not_found);
+  const auto onset = read_onset(db, ids[1]).value();
+  ASSERT_TRUE(onset);  // the last attempt's
+  EXPECT_EQ(onset->frame_index, 7);
+  EXPECT_EQ(onset->attempt, 2);
+  EXPECT_EQ(onset->predicted_display_ns, 80);
+  EXPECT_EQ(onset->head_pose[5], 1.0);
+  EXPECT_FALSE(read_onset(db, ids[0]).value());
+  EXPECT_EQ(read_onset(db, ids[2]).error().kind, DataError::Kind::corrupt);
+  // Only this attempt's changes count, each from its frame on.
+  EXPECT_FALSE(read_adjustment_at(db, ids[1], onset->event_id, 7).value());
+  EXPECT_EQ(read_adjustment_at(db, ids[1], onset->event_id, 8).value(), 0.02);
+  EXPECT_EQ(read_adjustment_at(db, ids[1], onset->event_id, 20).value(), 0.03);
+
+  const auto head = read_head_at_frame(db, session, 4).value();
+  ASSERT_TRUE(head);
+  EXPECT_EQ(head->virtual_pose[0], 4.0);
+  EXPECT_EQ(head->t_ns, 104);
+  EXPECT_EQ(head->trial_id, ids[1]);
+  EXPECT_FALSE(read_head_at_frame(db, session, 40).value());
+  const auto span = read_trial_frame_span(db, ids[1]).value();
+  ASSERT_TRUE(span);
+  EXPECT_EQ(span->first, 0);
+  EXPECT_EQ(span->last, 11);
+  EXPECT_EQ(read_last_frame_index(db, session).value(), 11);
+}
+
+// A pose or eye-geometry blob of the wrong size is a clear error, not a
+// read past its end. (The schema's CHECK keeps curvlab from writing one; a
+// file edited by other tools may still hold one, so CHECKs are bypassed
+// here the way such a tool could, with ignore_check_constraints.)
+TEST(SessionReader, WrongSizedBlobsAreReportedAsCorrupt) {
+  const auto dir = fresh_dir("blobs");
+  const auto path = dir / "b.db";
+  std::int64_t session = 0;
+  {
+    auto store = make_store(path);
+    session = make_session(store, "P05");
+  }
+  {
+    auto c = Connection::open(path.string(), OpenFlags::read_write);
+    c.exec("PRAGMA ignore_check_constraints = ON");
+    c.exec("INSERT INTO tracking_samples (session_id, frame_index, device, t_ns, lab_px_m, lab_py_m, lab_pz_m, "
+           "lab_qx, lab_qy, lab_qz, lab_qw, position_valid, orientation_valid, virtual_pose) VALUES (" +
+           std::to_string(session) + ", 2, 'head', 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, zeroblob(40))");
+    c.exec("INSERT INTO frames (session_id, frame_index, t_ns, cpu_time_ns, views, passes, draws, triangles, "
+           "eye_width_px, eye_height_px, eye_views) VALUES (" +
+           std::to_string(session) + ", 2, 0, 0, 2, 2, 1, 1, 64, 64, zeroblob(100))");
+  }
+  auto db = Database::open(path.string(), OpenMode::read_only).value();
+  const auto head = read_head_at_frame(db, session, 2);
+  ASSERT_FALSE(head);
+  EXPECT_EQ(head.error().kind, DataError::Kind::corrupt);
+  EXPECT_NE(head.error().message.find("40 bytes, not 128"), std::string::npos) << head.error().message;
+  const auto views = read_view_geometry(db, session, 3);
+  ASSERT_FALSE(views);
+  EXPECT_EQ(views.error().kind, DataError::Kind::corrupt);
+  EXPECT_NE(views.error().message.find("100 bytes, not 256"), std::string::npos) << views.error().message;
 }
 
 TEST(Crash, KillNineNeverLosesACommittedTrial) {

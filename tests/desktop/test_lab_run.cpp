@@ -89,6 +89,50 @@ TEST(LabRun, DesktopPilotOfTheDemoCompletesWithScriptedKeys) {
   std::filesystem::remove_all(dir);
 }
 
+// Replay redraws a desktop session's onset frames from the recorded eye
+// geometry — the window's eye size and field of view, not the protocol's
+// resolution and the headless 90° — pixel for pixel as the window showed them.
+TEST(LabRun, ReplayReproducesTheDesktopOnsetFrame) {
+  curvlab::test::XServer x;
+  if (!x.available()) GTEST_SKIP() << "no X display: " << x.reason();
+  const auto dir = fresh_dir("desktop_replay");
+  std::ofstream keys(dir / "keys.txt");
+  keys << "space 100\n";
+  for (int i = 0; i < 8; ++i) keys << "2 100\n";
+  keys << "space 100\nspace 100\n";
+  keys.close();
+  const auto db = (dir / "pilot.db").string();
+  const auto shots = dir / "shots";
+  // A window eye that is neither square nor the protocol's resolution.
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/demo.toml --participant T2 --db " +
+                         db + " --backend desktop --software --window-size 240x160 --key-script " +
+                         (dir / "keys.txt").string() + " --screenshot " + shots.string() + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  for (int trial : {0, 5}) {
+    const auto out = dir / ("replay" + std::to_string(trial));
+    const auto rp = run_cli("replay --db " + db + " --session 1 --trial " + std::to_string(trial) + " --out " +
+                            out.string() + " --software");
+    ASSERT_EQ(rp.exit_code, 0) << rp.out;
+    std::ifstream json(out / "replay.json");
+    const auto doc = nlohmann::json::parse(json);
+    EXPECT_EQ(doc["eye_geometry"], "recorded");
+    for (const char* eye : {"left", "right"}) {
+      char name[48];
+      std::snprintf(name, sizeof name, "stimulus_%03d_%s.png", trial + 1, eye);
+      curvlab::renderer::Rgba8Image shown, replayed;
+      std::string error;
+      ASSERT_TRUE(curvlab::renderer::read_png((shots / name).string(), shown, error)) << error;
+      ASSERT_TRUE(curvlab::renderer::read_png((out / (std::string(eye) + ".png")).string(), replayed, error))
+          << error;
+      EXPECT_EQ(replayed.width, 240);
+      EXPECT_EQ(replayed.height, 160);
+      const auto diff = curvlab::renderer::diff_images(shown, replayed, 0);
+      EXPECT_EQ(diff.differing_pixels, 0) << name << ": largest channel difference " << diff.max_channel_diff;
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(LabRun, XrWithoutARuntimeExitsWithTheResultAndWritesNothing) {
   const auto dir = fresh_dir("xr");
   const auto db = dir / "s.db";

@@ -7,12 +7,15 @@
 
 #include <filesystem>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace curvlab::testing {
 
+// One folder per test and process: suites of two checkouts may run at once.
 inline std::filesystem::path fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("curvlab_runner_" + name);
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("curvlab_runner_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <fstream>
 #include <map>
 
 using curvlab::testing::fresh_dir;
@@ -124,10 +125,71 @@ TEST(RunHeadless, ReplayReproducesTheStimulusImage) {
       EXPECT_EQ(diff.differing_pixels, 0) << "trial " << trial << " " << eye;
     }
   }
+  // Frames stored without eye geometry (schema version 2) are replayed with
+  // the headless backend's: the same image here, marked "assumed".
+  {
+    auto c = curvlab::data::Connection::open(db, curvlab::data::OpenFlags::read_write);
+    c.exec("UPDATE frames SET eye_width_px = NULL, eye_height_px = NULL, eye_views = NULL");
+  }
+  const auto assumed = (dir / "assumed").string();
+  r = run_cli("replay --db " + db + " --session 1 --trial 5 --out " + assumed);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  {
+    std::ifstream json(assumed + "/replay.json");
+    EXPECT_EQ(nlohmann::json::parse(json)["eye_geometry"], "assumed");
+    curvlab::renderer::Rgba8Image saved, replayed;
+    std::string err;
+    ASSERT_TRUE(curvlab::renderer::read_png(images + "/trial_0005_left.png", saved, err)) << err;
+    ASSERT_TRUE(curvlab::renderer::read_png(assumed + "/left.png", replayed, err)) << err;
+    EXPECT_EQ(curvlab::renderer::diff_images(saved, replayed, 0).differing_pixels, 0);
+  }
   // A frame outside the trial is refused with the trial's frame range.
   r = run_cli("replay --db " + db + " --session 1 --trial 2 --frame 0 --out " + (dir / "x").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find("its frames:"), std::string::npos) << r.out;
+}
+
+// Method of adjustment: replay shows the value in force at the replayed
+// frame (the attempt's last logged change at or before it), not the start.
+TEST(RunHeadless, ReplayShowsTheAdjustmentInForceAtTheFrame) {
+  const auto dir = fresh_dir("replay_adjustment");
+  const auto db = (dir / "bc.sqlite").string();
+  auto r = run_cli("run " + kProtocols + "body_coherence.toml --participant P01 --db " + db +
+                   " --render none --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto trial = query(db, "SELECT trial_id, response, stimulus FROM trials WHERE trial_index = 0");
+  ASSERT_EQ(trial.size(), 1u);
+  const auto changes = query(db, "SELECT json_extract(detail, '$.frame_index'), json_extract(detail, '$.value') "
+                                 "FROM events WHERE kind = 'adjustment' AND trial_id = " + trial[0][0] +
+                                 " ORDER BY event_id");
+  ASSERT_GE(changes.size(), 3u) << "the observer adjusts in steps";
+  auto replay = [&](const std::string& frame, const std::string& out_name) {
+    const auto out = dir / out_name;
+    const auto rr = run_cli("replay --db " + db + " --session 1 --trial 0 --frame " + frame + " --out " + out.string());
+    EXPECT_EQ(rr.exit_code, 0) << rr.out;
+    std::ifstream json(out / "replay.json");
+    return nlohmann::json::parse(json);
+  };
+  // Before the first change: the start value; at a change: that value; at
+  // the last change (then confirmed): the answer.
+  const auto start = nlohmann::json::parse(trial[0][2]).at("adjustment_start").get<double>();
+  EXPECT_DOUBLE_EQ(replay(std::to_string(std::stoll(changes[0][0]) - 1), "before")["adjustment_value"].get<double>(),
+                   start);
+  // (The query's text form of a real keeps 15 digits.)
+  EXPECT_NEAR(replay(changes[2][0], "third")["adjustment_value"].get<double>(), std::stod(changes[2][1]), 1e-12);
+  EXPECT_NEAR(replay(changes.back()[0], "last")["adjustment_value"].get<double>(), std::stod(trial[0][1]), 1e-8);
+
+  // The change shows: without the logged changes the same frame looks different.
+  {
+    auto c = curvlab::data::Connection::open(db, curvlab::data::OpenFlags::read_write);
+    c.exec("DELETE FROM events WHERE kind = 'adjustment'");
+  }
+  EXPECT_DOUBLE_EQ(replay(changes.back()[0], "unadjusted")["adjustment_value"].get<double>(), start);
+  curvlab::renderer::Rgba8Image adjusted, unadjusted;
+  std::string err;
+  ASSERT_TRUE(curvlab::renderer::read_png((dir / "last" / "left.png").string(), adjusted, err)) << err;
+  ASSERT_TRUE(curvlab::renderer::read_png((dir / "unadjusted" / "left.png").string(), unadjusted, err)) << err;
+  EXPECT_GT(curvlab::renderer::diff_images(adjusted, unadjusted, 0).differing_pixels, 100);
 }
 
 TEST(RunHeadless, BadInputIsRefusedAndWritesNothing) {

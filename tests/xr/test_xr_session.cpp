@@ -369,6 +369,50 @@ TEST(XrSession, DemoRunsThroughTheRuntimeWithControllersAndAFocusLoss) {
   fs::remove_all(dir);
 }
 
+// Replay redraws an OpenXR session's onset frames from the recorded views —
+// the runtime's asymmetric fields of view and eye poses, its swapchain size —
+// pixel for pixel as the runtime received the left eye's image.
+TEST(XrSession, ReplayReproducesTheOnsetFrameTheRuntimeReceived) {
+  const auto dir = fresh_dir("replay");
+  const auto captures = dir / "captures";
+  fs::create_directories(captures);
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  {
+    // A swapchain that is neither square nor the protocol's resolution.
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_SIZE", "288x256"},
+                    {"CURVLAB_TEST_XR_CAPTURE_DIR", captures.string()},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli("run " + kProtocol + " --participant X03 --backend xr --db " + db.string() + " --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  }
+  const RuntimeLog log(log_path);
+  const auto trials = query(db, "SELECT trial_index, onset_ns FROM trials WHERE trial_index IN (1, 6) "
+                                "ORDER BY trial_index");
+  ASSERT_EQ(trials.size(), 2u);
+  for (const auto& t : trials) {
+    SCOPED_TRACE("trial " + t[0]);
+    const std::string png = log.capture_at(std::stoll(t[1]));
+    ASSERT_FALSE(png.empty()) << "no capture of the onset frame";
+    const auto out = dir / ("replay" + t[0]);
+    const auto rp = run_cli("replay --db " + db.string() + " --session 1 --trial " + t[0] + " --out " +
+                            out.string() + " --software");
+    ASSERT_EQ(rp.exit_code, 0) << rp.out;
+    std::ifstream json(out / "replay.json");
+    EXPECT_EQ(nlohmann::json::parse(json)["eye_geometry"], "recorded");
+    curvlab::renderer::Rgba8Image received, replayed;
+    std::string err;
+    ASSERT_TRUE(curvlab::renderer::read_png(png, received, err)) << err;
+    ASSERT_TRUE(curvlab::renderer::read_png((out / "left.png").string(), replayed, err)) << err;
+    EXPECT_EQ(replayed.width, 288);
+    EXPECT_EQ(replayed.height, 256);
+    const auto diff = curvlab::renderer::diff_images(received, replayed, 0);
+    EXPECT_EQ(diff.differing_pixels, 0) << png << ": largest channel difference " << diff.max_channel_diff;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(XrSession, RuntimeExitRequestLeavesTheSessionResumable) {
   const auto dir = fresh_dir("exit");
   const auto db = dir / "xr.db";

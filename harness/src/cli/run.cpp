@@ -451,8 +451,11 @@ void replay_command(ReplayArgs a) {
   a.request.frame_index = a.frame;
   check_db_argument(a.request.db_path);
   auto r = rn::replay_frame(a.request);
-  if (auto* e = std::get_if<rn::ReplayError>(&r)) raise(*e);
-  const auto& res = std::get<rn::ReplayResult>(r);
+  if (!r) {
+    if (curvlab::harness::exit_code(r.error()) == 2) throw UsageError(r.error().message);
+    throw RuntimeFailure(r.error().message);
+  }
+  const auto& res = r.value();
   Json doc;
   doc["frame_index"] = res.frame_index;
   doc["phase"] = res.phase;

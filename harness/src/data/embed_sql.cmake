@@ -3,7 +3,8 @@
 # Inputs: SCHEMA_DIR, OUTPUT.
 file(READ "${SCHEMA_DIR}/schema.sql" schema)
 file(READ "${SCHEMA_DIR}/migrations/0002_from_v1.sql" m2)
-foreach(text IN ITEMS "${schema}" "${m2}")
+file(READ "${SCHEMA_DIR}/migrations/0003_from_v2.sql" m3)
+foreach(text IN ITEMS "${schema}" "${m2}" "${m3}")
   string(FIND "${text}" ")curvlab_sql\"" clash)
   if(NOT clash EQUAL -1)
     message(FATAL_ERROR "SQL text contains the raw-string delimiter")
@@ -16,12 +17,14 @@ namespace curvlab::data {
 namespace {
 constexpr std::string_view k_schema = R\"curvlab_sql(${schema})curvlab_sql\";
 constexpr std::string_view k_migration_2 = R\"curvlab_sql(${m2})curvlab_sql\";
+constexpr std::string_view k_migration_3 = R\"curvlab_sql(${m3})curvlab_sql\";
 }  // namespace
 
 std::string_view schema_sql() { return k_schema; }
 
 std::string_view migration_sql(std::int64_t to) {
   if (to == 2) return k_migration_2;
+  if (to == 3) return k_migration_3;
   return {};
 }
 

@@ -13,8 +13,10 @@
 #include <deque>
 #include <optional>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace curvlab::data {
@@ -76,8 +78,9 @@ constexpr const char* insert_tracking_sql =
     "?15, ?16, ?17, ?18, ?19, ?20, ?21)";
 constexpr const char* insert_frame_sql =
     "INSERT INTO frames (session_id, trial_id, frame_index, t_ns, predicted_display_ns, "
-    "cpu_time_ns, gpu_time_ns, dropped_frames, views, passes, draws, triangles) VALUES (?1, ?2, "
-    "?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)";
+    "cpu_time_ns, gpu_time_ns, dropped_frames, views, passes, draws, triangles, eye_width_px, "
+    "eye_height_px, eye_views) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, "
+    "?14, ?15)";
 constexpr const char* insert_event_sql =
     "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) VALUES (?1, NULL, ?2, "
     "'logger_drops', json_object('dropped_tracking', ?3, 'dropped_frames', ?4))";
@@ -132,6 +135,9 @@ struct SampleWriter::Impl {
   std::vector<FrameRecord> pending_frames;
   std::uint64_t logged_drops_tracking = 0, logged_drops_frames = 0;
   std::int64_t last_session_id = 0;
+  // (session, eye geometry) of the last frame row that stored one: committed,
+  // and within the batch being written.
+  std::optional<std::pair<std::int64_t, ViewGeometry>> last_views, batch_views;
   std::thread thread;
 
   void bind_sample(const TrackingSample& s) {
@@ -168,6 +174,22 @@ struct SampleWriter::Impl {
     if (f.gpu_time_ns >= 0) st.bind(7, f.gpu_time_ns); else st.bind_null(7);
     st.bind(8, std::int64_t{f.dropped_frames}).bind(9, std::int64_t{f.views});
     st.bind(10, std::int64_t{f.passes}).bind(11, std::int64_t{f.draws}).bind(12, f.triangles);
+    // Eye geometry only where it differs from the last stored for the
+    // session (the first frame of each run, then each change): an OpenXR
+    // runtime may change the views every frame, most backends never do.
+    const bool changed = f.has_view_geometry &&
+                         (!batch_views || batch_views->first != f.session_id ||
+                          !(batch_views->second == f.view_geometry));
+    if (changed) {
+      const auto& g = f.view_geometry;
+      std::array<double, eye_views_doubles> packed{};
+      encode_eye_views(g, packed);
+      st.bind(13, std::int64_t{g.width_px}).bind(14, std::int64_t{g.height_px});
+      st.bind_blob(15, std::as_bytes(std::span<const double, eye_views_doubles>(packed)));
+      batch_views = std::pair{f.session_id, g};
+    } else {
+      for (int i = 13; i <= 15; ++i) st.bind_null(i);
+    }
   }
 
   // Writes the pending batch in one transaction; on failure keeps it.
@@ -177,6 +199,9 @@ struct SampleWriter::Impl {
     const bool log_drops =
         (dt != logged_drops_tracking || df != logged_drops_frames) && last_session_id > 0;
     if (pending_tracking.empty() && pending_frames.empty() && !log_drops) return true;
+    // The geometry last stored advances only with a committed batch: a
+    // batch that fails is written again from the same starting point.
+    batch_views = last_views;
     try {
       Transaction txn(connection);
       for (const auto& s : pending_tracking) {
@@ -197,6 +222,7 @@ struct SampleWriter::Impl {
       note_failure(to_data_error(failure, connection.path()), "tracking/frame logging paused");
       return false;
     }
+    last_views = batch_views;
     if (log_drops) {
       logged_drops_tracking = dt;
       logged_drops_frames = df;

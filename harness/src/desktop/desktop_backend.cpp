@@ -251,7 +251,8 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
 }
 
 BackendInfo DesktopBackend::info() const {
-  return {"desktop", context_->device_name(), context_->driver_info(), refresh_hz_};
+  return {"desktop", context_->device_name(), context_->driver_info(), refresh_hz_, options_.eye_width_px,
+          options_.eye_height_px};
 }
 
 std::size_t DesktopBackend::scripted_keys_pressed() const {

@@ -103,6 +103,8 @@ BackendInfo HeadlessBackend::info() const {
   BackendInfo i;
   i.name = "headless";
   i.refresh_hz = impl_->options.refresh_hz;
+  i.eye_width_px = impl_->options.width_px;
+  i.eye_height_px = impl_->options.height_px;
   if (impl_->ctx) {
     i.renderer_device = impl_->ctx->device_name();
     i.renderer_driver = impl_->ctx->driver_info();

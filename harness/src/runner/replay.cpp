@@ -1,11 +1,11 @@
 #include "curvlab/harness/runner/replay.hpp"
 
 #include "curvlab/harness/data/database.hpp"
-#include "curvlab/harness/data/sqlite.hpp"
+#include "curvlab/harness/data/session_reader.hpp"
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
-#include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/view_record.hpp"
 #include "curvlab/renderer/context.hpp"
 #include "curvlab/renderer/image_io.hpp"
 #include "curvlab/renderer/offscreen.hpp"
@@ -13,7 +13,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -21,160 +20,219 @@
 namespace curvlab::harness::runner {
 
 using Json = nlohmann::ordered_json;
+using Kind = Error::Kind;
 
 namespace {
 
-geometry::Isometry from_json(const Json& a) {
+geometry::Isometry isometry(const std::array<double, 16>& m) {
   geometry::Isometry iso;
   for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) iso.m[c][r] = a.at(static_cast<std::size_t>(c * 4 + r)).get<double>();
+    for (int r = 0; r < 4; ++r) iso.m[c][r] = m[static_cast<std::size_t>(c * 4 + r)];
   return iso;
 }
 
-}  // namespace
-
-std::variant<ReplayResult, ReplayError> replay_frame(const ReplayRequest& rq) {
-  auto stored_v = read_stored_session(rq.db_path, rq.session_id);
-  if (!stored_v) return ReplayError{exit_code(stored_v.error()) == 2, stored_v.error().message};
-  const auto& stored = stored_v.value();
-  auto loaded = protocol::load_protocol_text(stored.protocol_text, stored.protocol_source);
-  if (!loaded.ok())
-    return ReplayError{false, "the stored protocol no longer loads: " +
-                                  protocol::format_diagnostic(loaded.diagnostics.front())};
-  const protocol::Protocol& p = *loaded.protocol;
-  const protocol::Design design = protocol::expand_design(p, stored.participant_number);
-  if (rq.trial_index < 0 || rq.trial_index >= static_cast<std::int64_t>(design.trials.size()))
-    return ReplayError{true, "--trial must lie in [0, " + std::to_string(design.trials.size() - 1) +
-                                 "] for session " + std::to_string(rq.session_id)};
-  const auto& planned = design.trials[static_cast<std::size_t>(rq.trial_index)];
-  protocol::Settings s = planned.settings;
-  const protocol::Block* block = nullptr;
-  for (const auto& b : p.blocks)
-    if (b.name == planned.block) block = &b;
-
-  auto db = data::Database::open(rq.db_path, data::OpenMode::read_only);
-  if (!db) return ReplayError{false, db.error().message};
-  auto& conn = db.value().connection();
+// Everything the replayed frame depends on, read from the database.
+struct StoredFrame {
+  protocol::Protocol protocol;
+  protocol::Settings settings;  // the trial's, with the value shown at that frame
+  std::optional<protocol::Block> block;
   std::int64_t trial_id = 0;
-  Json onset;
+  std::int64_t frame_index = 0;
+  std::int64_t display_ns = 0;  // the frame's predicted display time
+  data::OnsetRecord onset;
   geometry::Isometry head;
-  std::int64_t frame = 0;
-  std::int64_t frame_display_ns = 0;
-  std::string dominant = "unknown";
-  try {
-    data::Statement t(conn, "SELECT trial_id FROM trials WHERE session_id = ?1 AND trial_index = ?2");
-    t.bind(1, rq.session_id).bind(2, rq.trial_index);
-    if (!t.step()) return ReplayError{true, "no trial " + std::to_string(rq.trial_index) + " in session " +
-                                                std::to_string(rq.session_id)};
-    trial_id = t.column_int(0);
-    data::Statement e(conn, "SELECT detail FROM events WHERE trial_id = ?1 AND kind = 'onset' "
-                            "ORDER BY event_id DESC LIMIT 1");
-    e.bind(1, trial_id);
-    if (!e.step())
-      return ReplayError{true, "trial " + std::to_string(rq.trial_index) +
-                                   " never reached its stimulus onset (not run yet, or skipped)"};
-    onset = Json::parse(e.column_text(0));
-    data::Statement st(conn, "SELECT intensity FROM staircase_steps WHERE trial_id = ?1");
-    st.bind(1, trial_id);
-    if (st.step() && block) protocol::set_numeric_setting(s, block->judgement.parameter, st.column_double(0));
-    if (planned.adjustment_start && block && block->judgement.adjustment)
-      protocol::set_numeric_setting(s, block->judgement.adjustment->parameter, *planned.adjustment_start);
-    frame = rq.frame_index.value_or(onset.at("frame_index").get<std::int64_t>());
-    data::Statement h(conn, "SELECT virtual_pose, t_ns, trial_id FROM tracking_samples WHERE session_id = ?1 "
-                            "AND frame_index = ?2 AND device = 'head' ORDER BY sample_id DESC LIMIT 1");
-    h.bind(1, rq.session_id).bind(2, frame);
-    bool ok = h.step() && !h.is_null(0) && h.column_opt_int(2) == trial_id;
-    if (!ok) {
-      data::Statement range(conn, "SELECT MIN(frame_index), MAX(frame_index) FROM tracking_samples "
-                                  "WHERE trial_id = ?1 AND device = 'head'");
-      range.bind(1, trial_id);
-      std::string span = "none logged";
-      if (range.step() && !range.is_null(0))
-        span = std::to_string(range.column_int(0)) + ".." + std::to_string(range.column_int(1));
-      return ReplayError{true, "frame " + std::to_string(frame) + " has no logged head pose of trial " +
-                                   std::to_string(rq.trial_index) + " (its frames: " + span + ")"};
-    }
-    const auto blob = h.column_blob(0);
-    double m[16];
-    std::memcpy(m, blob.data(), sizeof m);
-    for (int c = 0; c < 4; ++c)
-      for (int r = 0; r < 4; ++r) head.m[c][r] = m[c * 4 + r];
-    frame_display_ns = h.column_int(1);
-    data::Statement d(conn, "SELECT p.dominant_eye FROM sessions se JOIN participants p "
-                            "ON p.participant_id = se.participant_id WHERE se.session_id = ?1");
-    d.bind(1, rq.session_id);
-    if (d.step()) dominant = d.column_text(0);
-  } catch (const std::exception& f) {
-    return ReplayError{false, rq.db_path + ": " + f.what()};
+  data::DominantEye dominant_eye = data::DominantEye::unknown;
+  std::optional<data::ViewGeometry> views;  // nullopt: not recorded (schema version 2)
+  bool adjusted = false;                   // an adjustment after onset changed the stimulus
+  std::optional<double> adjustment_value;  // an adjustment trial's value shown at the frame
+};
+
+// The session's protocol, re-expanded for its participant: the trial's
+// settings and block.
+Result<Done> read_trial_settings(const data::SessionProvenance& prov, const ReplayRequest& rq, StoredFrame& out) {
+  auto loaded = protocol::load_protocol_text(prov.protocol_text,
+                                             prov.protocol_source_path.value_or("stored protocol"));
+  if (!loaded.ok())
+    return Error{Kind::bad_input, "the stored protocol no longer loads: " +
+                                      protocol::format_diagnostic(loaded.diagnostics.front())};
+  out.protocol = *loaded.protocol;
+  const protocol::Design design = protocol::expand_design(out.protocol, prov.participant_number.value_or(1));
+  if (rq.trial_index < 0 || rq.trial_index >= static_cast<std::int64_t>(design.trials.size()))
+    return Error{Kind::usage, "--trial must lie in [0, " + std::to_string(design.trials.size() - 1) +
+                                  "] for session " + std::to_string(rq.session_id)};
+  const auto& planned = design.trials[static_cast<std::size_t>(rq.trial_index)];
+  out.settings = planned.settings;
+  for (const auto& b : out.protocol.blocks)
+    if (b.name == planned.block) out.block = b;
+  if (planned.adjustment_start && out.block && out.block->judgement.adjustment) {
+    protocol::set_numeric_setting(out.settings, out.block->judgement.adjustment->parameter, *planned.adjustment_start);
+    out.adjustment_value = *planned.adjustment_start;
   }
+  return Done{};
+}
 
-  const std::int64_t onset_ns = onset.value("predicted_display_ns", std::int64_t{0});
-  const auto& tl = s.timeline;
-  Phase phase = Phase::fixation;
-  if (frame_display_ns >= onset_ns) phase = Phase::stimulus;
-  if (frame_display_ns >= onset_ns + tl.stimulus_ms * 1'000'000) phase = Phase::response;
+// The value the trial showed: the staircase's intensity, and an adjustment's
+// value as last changed at or before the frame.
+Result<Done> read_shown_value(data::Database& db, StoredFrame& out) {
+  if (!out.block) return Done{};
+  const auto& j = out.block->judgement;
+  auto intensity = data::read_staircase_intensity(db, out.trial_id);
+  if (!intensity) return intensity.error();
+  if (*intensity) protocol::set_numeric_setting(out.settings, j.parameter, **intensity);
+  if (!j.adjustment) return Done{};
+  auto adjusted = data::read_adjustment_at(db, out.trial_id, out.onset.event_id, out.frame_index);
+  if (!adjusted) return adjusted.error();
+  if (*adjusted) {
+    protocol::set_numeric_setting(out.settings, j.adjustment->parameter, **adjusted);
+    out.adjusted = true;
+    out.adjustment_value = **adjusted;
+  }
+  return Done{};
+}
 
-  auto made = make_world(s);
-  if (auto* e = std::get_if<std::string>(&made)) return ReplayError{false, *e};
-  const World world = std::get<World>(made);
-  auto built = TrialScene::build(world, s, block ? block->judgement.prompt : std::string(),
-                                 CURVLAB_DEFAULT_FONT);
-  if (auto* e = std::get_if<std::string>(&built)) return ReplayError{false, *e};
-  auto& scene = std::get<TrialScene>(built);
-  Placement placement = place_stimulus(world, s, from_json(onset.at("head_pose")));
-  placement.stick_pose = from_json(onset.at("stick_pose"));
-  scene.place(placement, from_json(onset.at("head_pose")));
-  scene.show(phase, tl.stimulus_during_response);
+// The head's virtual pose and display time of the replayed frame, which must
+// belong to the trial.
+Result<Done> read_head(data::Database& db, const ReplayRequest& rq, StoredFrame& out) {
+  auto head = data::read_head_at_frame(db, rq.session_id, out.frame_index);
+  if (!head) return head.error();
+  if (!*head || (*head)->trial_id != out.trial_id) {
+    auto span = data::read_trial_frame_span(db, out.trial_id);
+    if (!span) return span.error();
+    const std::string frames = *span ? std::to_string((*span)->first) + ".." + std::to_string((*span)->last)
+                                     : std::string("none logged");
+    return Error{Kind::not_found, "frame " + std::to_string(out.frame_index) + " has no logged head pose of trial " +
+                                      std::to_string(rq.trial_index) + " (its frames: " + frames + ")"};
+  }
+  out.head = isometry((*head)->virtual_pose);
+  out.display_ns = (*head)->t_ns;
+  return Done{};
+}
 
-  auto created = renderer::Context::create(
-      {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
-       .validation = false});
-  if (auto* e = std::get_if<renderer::RenderError>(&created)) return ReplayError{false, e->message};
-  const auto& ctx = std::get<renderer::Context>(created);
-  renderer::Renderer r(ctx);
-  const auto w = static_cast<std::uint32_t>(p.resolution_width);
-  const auto hgt = static_cast<std::uint32_t>(p.resolution_height);
-  renderer::OffscreenTarget target(ctx, w, hgt);
-  renderer::FrameDescription desc;
-  desc.space = world.space;
-  desc.settings = view_settings(s, dominant == "left" ? renderer::Eye::left : renderer::Eye::right);
-  desc.head = head;
-  desc.rig = renderer::StereoRig::from_ipd(
-      s.viewing.ipd_m, renderer::Fov::symmetric(std::numbers::pi / 2.0, double(w) / double(hgt)));
-  desc.width_px = w;
-  desc.height_px = hgt;
-  const auto stats = r.render(scene.scene(), desc, target);
+Result<StoredFrame> read_stored_frame(const ReplayRequest& rq) {
+  if (!std::filesystem::exists(rq.db_path)) return Error{Kind::not_found, rq.db_path + ": no such database"};
+  // Like export and resume, an older file is migrated first (its frames then
+  // have no eye geometry, and replay assumes the headless one).
+  auto opened = data::Database::open(rq.db_path, data::OpenMode::open_existing);
+  if (!opened) return opened.error();
+  auto& db = opened.value();
+  auto prov = data::read_session_provenance(db, rq.session_id);
+  if (!prov) return prov.error();
+  StoredFrame out;
+  out.dominant_eye = prov->dominant_eye;
+  if (auto r = read_trial_settings(*prov, rq, out); !r) return r.error();
+  auto trial_id = data::read_trial_id(db, rq.session_id, rq.trial_index);
+  if (!trial_id) return trial_id.error();
+  out.trial_id = *trial_id;
+  auto onset = data::read_onset(db, out.trial_id);
+  if (!onset) return onset.error();
+  if (!*onset)
+    return Error{Kind::not_found, "trial " + std::to_string(rq.trial_index) +
+                                      " never reached its stimulus onset (not run yet, or skipped)"};
+  out.onset = **onset;
+  out.frame_index = rq.frame_index.value_or(out.onset.frame_index);
+  if (auto r = read_shown_value(db, out); !r) return r.error();
+  if (auto r = read_head(db, rq, out); !r) return r.error();
+  auto views = data::read_view_geometry(db, rq.session_id, out.frame_index);
+  if (!views) return views.error();
+  out.views = *views;
+  return out;
+}
 
+// fixation, stimulus or response at the frame, from the onset and the timeline.
+Phase phase_at(const StoredFrame& f) {
+  const std::int64_t onset_ns = f.onset.predicted_display_ns;
+  if (f.display_ns < onset_ns) return Phase::fixation;
+  if (f.display_ns < onset_ns + f.settings.timeline.stimulus_ms * 1'000'000) return Phase::stimulus;
+  return Phase::response;
+}
+
+Result<ReplayResult> write_outputs(const ReplayRequest& rq, const StoredFrame& f, const World& world,
+                                   Phase phase, const renderer::OffscreenTarget& target,
+                                   const renderer::FrameStats& stats, const std::string& device) {
   std::error_code ec;
   std::filesystem::create_directories(rq.out_dir, ec);
-  if (ec) return ReplayError{false, "cannot create " + rq.out_dir + ": " + ec.message()};
+  if (ec) return Error{Kind::io, "cannot create " + rq.out_dir + ": " + ec.message()};
   ReplayResult out;
-  out.frame_index = frame;
+  out.frame_index = f.frame_index;
   out.phase = std::string(to_string(phase));
-  out.device = ctx.device_name();
+  out.device = device;
   for (auto [eye, name] : {std::pair{renderer::Eye::left, "left.png"}, std::pair{renderer::Eye::right, "right.png"}}) {
     const auto path = (std::filesystem::path(rq.out_dir) / name).string();
-    if (auto err = renderer::write_png(path, target.image(eye)); !err.empty()) return ReplayError{false, err};
+    if (auto err = renderer::write_png(path, target.image(eye)); !err.empty()) return Error{Kind::io, err};
     out.files.push_back(path);
   }
   Json j;
   j["session_id"] = rq.session_id;
   j["trial_index"] = rq.trial_index;
-  j["trial_id"] = trial_id;
-  j["frame_index"] = frame;
+  j["trial_id"] = f.trial_id;
+  j["frame_index"] = f.frame_index;
   j["phase"] = std::string(to_string(phase));
   j["space"] = std::string(geometry::to_string(world.space.kind));
   j["radius_m"] = world.space.radius_m;
-  j["view"] = view_name(s);
+  j["view"] = view_name(f.settings);
+  j["eye_geometry"] = f.views ? "recorded" : "assumed";
+  if (f.adjustment_value) j["adjustment_value"] = *f.adjustment_value;
   j["views"] = stats.views;
   j["draws"] = stats.draws;
-  j["device"] = ctx.device_name();
+  j["device"] = device;
   const auto json_path = (std::filesystem::path(rq.out_dir) / "replay.json").string();
-  std::ofstream f(json_path);
-  f << j.dump(2) << '\n';
-  if (!f) return ReplayError{false, "cannot write " + json_path};
+  std::ofstream file(json_path);
+  file << j.dump(2) << '\n';
+  if (!file) return Error{Kind::io, "cannot write " + json_path};
   out.files.push_back(json_path);
   return out;
+}
+
+}  // namespace
+
+Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
+  auto stored = read_stored_frame(rq);
+  if (!stored) return stored.error();
+  const StoredFrame& f = *stored;
+  const Phase phase = phase_at(f);
+
+  auto made = make_world(f.settings);
+  if (auto* e = std::get_if<std::string>(&made)) return Error{Kind::bad_input, *e};
+  const World world = std::get<World>(made);
+  auto built = TrialScene::build(world, f.settings, f.block ? f.block->judgement.prompt : std::string(),
+                                 CURVLAB_DEFAULT_FONT);
+  if (auto* e = std::get_if<std::string>(&built)) return Error{Kind::bad_input, *e};
+  auto& scene = std::get<TrialScene>(built);
+  // The stimulus stays where onset placed it; an adjustment re-places it
+  // from the head at onset, as the session did.
+  const geometry::Isometry head_at_onset = isometry(f.onset.head_pose);
+  Placement placement = place_stimulus(world, f.settings, head_at_onset);
+  if (!f.adjusted) placement.stick_pose = isometry(f.onset.stick_pose);
+  scene.place(placement, head_at_onset);
+  scene.show(phase, f.settings.timeline.stimulus_during_response);
+
+  auto created = renderer::Context::create(
+      {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
+       .validation = false});
+  if (auto* e = std::get_if<renderer::RenderError>(&created)) return Error{Kind::device, e->message};
+  const auto& ctx = std::get<renderer::Context>(created);
+  renderer::Renderer r(ctx);
+  renderer::FrameDescription desc;
+  desc.space = world.space;
+  desc.settings =
+      view_settings(f.settings, f.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right);
+  desc.head = f.head;
+  if (f.views) {
+    desc.rig = rig_from_record(*f.views);
+    desc.width_px = f.views->width_px;
+    desc.height_px = f.views->height_px;
+  } else {
+    // Recorded before frames stored their eye geometry: what the headless
+    // backend uses (the protocol's IPD and resolution, 90° across).
+    desc.width_px = static_cast<std::uint32_t>(f.protocol.resolution_width);
+    desc.height_px = static_cast<std::uint32_t>(f.protocol.resolution_height);
+    desc.rig = renderer::StereoRig::from_ipd(
+        f.settings.viewing.ipd_m,
+        renderer::Fov::symmetric(std::numbers::pi / 2.0, double(desc.width_px) / double(desc.height_px)));
+  }
+  renderer::OffscreenTarget target(ctx, desc.width_px, desc.height_px);
+  const auto stats = r.render(scene.scene(), desc, target);
+  return write_outputs(rq, f, world, phase, target, stats, ctx.device_name());
 }
 
 }  // namespace curvlab::harness::runner

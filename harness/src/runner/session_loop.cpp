@@ -8,6 +8,7 @@
 #include "curvlab/harness/protocol/staircase.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
+#include "curvlab/harness/runner/view_record.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -70,6 +71,8 @@ class SessionLoop::Impl {
         first_trial_aborts_(s.first_trial_aborts),
         progress_(options_.progress) {
     dominant_ = options_.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
+    eye_size_ = eye_image_size(backend_.info(), static_cast<std::uint32_t>(p_.resolution_width),
+                               static_cast<std::uint32_t>(p_.resolution_height));
     restore_staircases(s.staircase_history);
   }
 
@@ -269,7 +272,7 @@ class SessionLoop::Impl {
     const auto before_submit = SteadyTime::now();
     const renderer::FrameStats stats = backend_.submit(scene_->scene(), desc, overlay, draw);
     const auto after_submit = SteadyTime::now();
-    log_frame(f, stats, trial_id);
+    log_frame(f, stats, trial_id, desc.rig);
     const auto own = std::chrono::duration_cast<std::chrono::nanoseconds>((before_submit - f.started) +
                                                                           (SteadyTime::now() - after_submit));
     cpu_ns_.push_back(own.count() + static_cast<std::int64_t>(stats.cpu_ms * 1e6));
@@ -320,7 +323,10 @@ class SessionLoop::Impl {
     return s;
   }
 
-  void log_frame(const Frame& f, const renderer::FrameStats& stats, std::optional<std::int64_t> trial_id) {
+  // The frame record carries the eye geometry it was drawn with, so that
+  // replay draws from what was recorded (the writer stores only changes).
+  void log_frame(const Frame& f, const renderer::FrameStats& stats, std::optional<std::int64_t> trial_id,
+                 const renderer::StereoRig& rig) {
     const std::int64_t tid = trial_id.value_or(-1);
     if (tracker_)
       for (int d = 0; d < geometry::kDeviceCount; ++d) {
@@ -339,6 +345,8 @@ class SessionLoop::Impl {
     fr.passes = stats.reused ? 0 : stats.passes;
     fr.draws = stats.draws;
     fr.triangles = static_cast<std::int64_t>(stats.triangles);
+    fr.has_view_geometry = true;
+    fr.view_geometry = record_view_geometry(rig, eye_size_.first, eye_size_.second);
     push([&] { return writer_.push_frame(fr); });
   }
 
@@ -682,6 +690,7 @@ class SessionLoop::Impl {
   Progress progress_;
   std::optional<SimulatedObserver> observer_;
   renderer::Eye dominant_ = renderer::Eye::right;
+  std::pair<std::uint32_t, std::uint32_t> eye_size_;  // each eye's image as the backend draws it
   std::map<std::pair<std::size_t, std::size_t>, protocol::InterleavedStaircases> staircases_;
   std::optional<World> world_;
   Settings settings_;

@@ -463,7 +463,8 @@ BackendInfo XrBackend::info() const {
   // Once frames run, the runtime's frame period; before, the display's
   // reported rate (XR_FB_display_refresh_rate) or 90 Hz, the common rate.
   const double period = static_cast<double>(frame_state_.predictedDisplayPeriod);
-  return {"xr", context_->device_name(), context_->driver_info(), period > 0.0 ? 1e9 / period : refresh_hz_};
+  return {"xr", context_->device_name(), context_->driver_info(), period > 0.0 ? 1e9 / period : refresh_hz_,
+          swapchains_[0].width, swapchains_[0].height};
 }
 
 void XrBackend::fail(XrResult r, const char* call) {

@@ -119,6 +119,51 @@ struct TrackingSample {
   TrackingState state{};
 };
 
+// One eye as the renderer placed it, relative to the head (nose) pose in lab
+// metres: OpenXR's view pose minus the head pose, or ±IPD/2 along the head's
+// x axis (DESIGN.md §4, "Eye model"). Plain arrays so the record stays
+// trivially copyable and free of renderer types.
+struct EyeView {
+  std::array<double, 3> position_m{};  // in the head's frame
+  std::array<double, 9> rotation{1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};  // column-major 3×3
+  // Field of view as XrFovf: angle_left, angle_right, angle_up, angle_down
+  // in radians from the view axis, left and down negative.
+  std::array<double, 4> fov_rad{};
+  bool operator==(const EyeView&) const = default;
+};
+
+// The eye geometry a frame was drawn with: what the backend reported (the
+// OpenXR views of that frame, the desktop window's eye size and field of
+// view, the headless target's) — everything replay needs to put the same
+// pixels in the same places.
+struct ViewGeometry {
+  std::uint32_t width_px = 0;  // each eye's image
+  std::uint32_t height_px = 0;
+  std::array<EyeView, 2> eyes{};  // left, right
+  bool operator==(const ViewGeometry&) const = default;
+};
+
+// frames.eye_views: per eye (left, then right) 16 doubles — position_m[3],
+// rotation[9], fov_rad[4] — little-endian IEEE doubles like
+// tracking_samples.virtual_pose: 256 bytes.
+inline constexpr std::size_t eye_views_doubles = 32;
+inline void encode_eye_views(const ViewGeometry& g, std::array<double, eye_views_doubles>& out) {
+  std::size_t k = 0;
+  for (const auto& e : g.eyes) {
+    for (double v : e.position_m) out[k++] = v;
+    for (double v : e.rotation) out[k++] = v;
+    for (double v : e.fov_rad) out[k++] = v;
+  }
+}
+inline void decode_eye_views(const std::array<double, eye_views_doubles>& in, ViewGeometry& g) {
+  std::size_t k = 0;
+  for (auto& e : g.eyes) {
+    for (double& v : e.position_m) v = in[k++];
+    for (double& v : e.rotation) v = in[k++];
+    for (double& v : e.fov_rad) v = in[k++];
+  }
+}
+
 struct FrameRecord {
   std::int64_t session_id = 0;
   std::int64_t trial_id = -1;  // -1: between trials (stored as NULL)
@@ -132,6 +177,13 @@ struct FrameRecord {
   std::int32_t passes = 0;
   std::int32_t draws = 0;
   std::int64_t triangles = 0;
+  // The eye geometry this frame was drawn with; false: not known (stored as
+  // NULL, replay then assumes the protocol's IPD and a 90° field of view).
+  // The writer stores it only when it differs from the last frame it wrote
+  // for the session (frames.eye_views NULL means "unchanged"), so filling it
+  // on every frame costs a comparison, not a row's worth of bytes.
+  bool has_view_geometry = false;
+  ViewGeometry view_geometry{};
 };
 
 }  // namespace curvlab::data

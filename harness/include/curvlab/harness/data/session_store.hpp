@@ -8,6 +8,7 @@
 
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/records.hpp"
+#include "curvlab/harness/data/session_reader.hpp"
 
 #include <memory>
 #include <optional>
@@ -31,7 +32,6 @@ class SessionStore {
   SessionStore& operator=(SessionStore&&) noexcept;
   ~SessionStore();
 
-  Database& database() { return db_; }
 
   // Stores the full protocol text with its SHA-256; the same text twice
   // returns the same id.
@@ -68,6 +68,17 @@ class SessionStore {
   // Sets the final status and the end time.
   Expected<Done> close_session(std::int64_t session_id, SessionStatus status);
   Expected<std::int64_t> count_trials(std::int64_t session_id, const std::string& status);
+
+  // Reading the session back to resume it, through this store's connection
+  // (the same functions as session_reader.hpp's).
+  Expected<std::vector<StoredTrial>> trial_list(std::int64_t session_id) { return read_trial_list(db_, session_id); }
+  Expected<std::int64_t> last_frame_index(std::int64_t session_id) { return read_last_frame_index(db_, session_id); }
+  Expected<std::vector<StoredStaircaseResponse>> staircase_responses(std::int64_t session_id) {
+    return read_staircase_responses(db_, session_id);
+  }
+  Expected<std::int64_t> trial_event_count(std::int64_t trial_id, const std::string& kind) {
+    return read_trial_event_count(db_, trial_id, kind);
+  }
 
  private:
   Expected<Done> end_unanswered(std::int64_t trial_id, const char* status);

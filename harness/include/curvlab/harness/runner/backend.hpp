@@ -59,6 +59,10 @@ struct BackendInfo {
   std::string renderer_device;
   std::string renderer_driver;
   double refresh_hz = 90.0;
+  // Each eye's image as the backend draws it (the window's eye viewport, the
+  // OpenXR swapchain, the offscreen target); 0: the protocol's resolution.
+  std::uint32_t eye_width_px = 0;
+  std::uint32_t eye_height_px = 0;
 };
 
 struct FrameTiming {

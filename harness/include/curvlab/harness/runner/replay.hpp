@@ -1,14 +1,18 @@
 // `curvlab replay`: re-renders what a participant saw in one frame of a
-// stored trial, from the logged poses — the head's virtual pose of that
-// frame (tracking_samples.virtual_pose) and the stimulus placement logged at
-// onset — with the trial's stored settings (the protocol re-expanded for the
-// session's participant, the staircase's intensity where there was one).
+// stored trial, from what was recorded — the head's virtual pose of that
+// frame (tracking_samples.virtual_pose), the stimulus placement logged at
+// onset, the eye geometry the frame was drawn with (frames.eye_views: eye
+// offsets, asymmetric fields of view, image size), and the trial's settings
+// (the protocol re-expanded for the session's participant, the staircase's
+// intensity, an adjustment's value at that frame). Everything is read
+// through data/session_reader.hpp.
 #pragma once
+
+#include "curvlab/harness/result.hpp"
 
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <variant>
 #include <vector>
 
 namespace curvlab::harness::runner {
@@ -29,11 +33,9 @@ struct ReplayResult {
   std::string device;
 };
 
-struct ReplayError {
-  bool usage = false;
-  std::string message;
-};
-
-std::variant<ReplayResult, ReplayError> replay_frame(const ReplayRequest& request);
+// Errors: not_found (no database, session, trial, onset or head pose at the
+// frame; exit 2), usage (a trial index out of range), corrupt (a stored pose
+// or eye geometry of the wrong size), device (no Vulkan device), io.
+Result<ReplayResult> replay_frame(const ReplayRequest& request);
 
 }  // namespace curvlab::harness::runner

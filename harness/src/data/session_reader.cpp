@@ -1,0 +1,279 @@
+#include "curvlab/harness/data/session_reader.hpp"
+
+#include "curvlab/harness/data/sqlite.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstring>
+#include <span>
+
+namespace curvlab::data {
+namespace {
+
+using Json = nlohmann::json;
+using Kind = DataError::Kind;
+
+// Runs `body`; SQLite failures become DataError values naming the file.
+template <class F>
+auto guarded(Database& db, F&& body) -> decltype(body()) {
+  try {
+    return body();
+  } catch (const SqliteFailure& failure) {
+    return to_data_error(failure, db.path());
+  }
+}
+
+DataError corrupt(Database& db, const std::string& what) {
+  return DataError{Kind::corrupt, db.path() + ": " + what};
+}
+
+std::optional<SessionStatus> parse_status(const std::string& s) {
+  for (auto v : {SessionStatus::running, SessionStatus::paused, SessionStatus::completed,
+                 SessionStatus::aborted, SessionStatus::interrupted})
+    if (s == to_string(v)) return v;
+  return std::nullopt;
+}
+
+std::optional<Backend> parse_backend(const std::string& s) {
+  for (auto v : {Backend::headless, Backend::desktop, Backend::xr})
+    if (s == to_string(v)) return v;
+  return std::nullopt;
+}
+
+DominantEye parse_eye(const std::string& s) {
+  if (s == "left") return DominantEye::left;
+  if (s == "right") return DominantEye::right;
+  return DominantEye::unknown;
+}
+
+// Copies a blob of exactly N doubles; false when its size differs.
+template <std::size_t N>
+bool read_doubles(std::span<const std::byte> blob, std::array<double, N>& out) {
+  if (blob.size() != N * sizeof(double)) return false;
+  std::memcpy(out.data(), blob.data(), blob.size());
+  return true;
+}
+
+// A JSON array of 16 numbers (column-major 4×4), as the runner logs poses.
+bool read_matrix(const Json& j, std::array<double, 16>& out) {
+  if (!j.is_array() || j.size() != 16) return false;
+  for (std::size_t i = 0; i < 16; ++i) {
+    if (!j[i].is_number()) return false;
+    out[i] = j[i].get<double>();
+  }
+  return true;
+}
+
+StoredObserver observer_from(const Json& d) {
+  StoredObserver o;
+  o.model = d.value("model", o.model);
+  o.bias_m = d.value("bias_m", o.bias_m);
+  o.slope_per_m = d.value("slope_per_m", o.slope_per_m);
+  o.lapse = d.value("lapse", o.lapse);
+  o.criterion_m = d.value("criterion_m", o.criterion_m);
+  o.rt_base_ms = d.value("rt_base_ms", o.rt_base_ms);
+  o.rt_mean_extra_ms = d.value("rt_mean_extra_ms", o.rt_mean_extra_ms);
+  o.seed = d.value("seed", o.seed);
+  return o;
+}
+
+}  // namespace
+
+Expected<SessionProvenance> read_session_provenance(Database& db, std::int64_t session_id) {
+  return guarded(db, [&]() -> Expected<SessionProvenance> {
+    auto& c = db.connection();
+    Statement s(c,
+                "SELECT pr.text, pr.source_path, p.pseudonym, p.dominant_eye, p.ipd_m, se.seed, se.status, "
+                "se.backend, se.table_calibration FROM sessions se "
+                "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
+                "JOIN participants p ON p.participant_id = se.participant_id WHERE se.session_id = ?1");
+    s.bind(1, session_id);
+    if (!s.step())
+      return DataError{Kind::not_found, db.path() + ": no session with id " + std::to_string(session_id)};
+    SessionProvenance out;
+    out.session_id = session_id;
+    out.protocol_text = s.column_text(0);
+    out.protocol_source_path = s.column_opt_text(1);
+    out.pseudonym = s.column_text(2);
+    out.dominant_eye = parse_eye(s.column_text(3));
+    out.ipd_m = s.column_opt_double(4);
+    out.seed = s.column_int(5);
+    const auto status = parse_status(s.column_text(6));
+    if (!status) return corrupt(db, "session " + std::to_string(session_id) + " has an unknown status");
+    out.status = *status;
+    out.backend = parse_backend(s.column_text(7));
+    out.table_calibration_json = s.column_opt_text(8);
+
+    Statement last(c, "SELECT MAX(COALESCE((SELECT MAX(t_ns) FROM frames WHERE session_id = ?1), 0), "
+                      "COALESCE((SELECT MAX(t_ns) FROM events WHERE session_id = ?1), 0))");
+    last.bind(1, session_id);
+    if (last.step()) out.last_t_ns = last.column_int(0);
+
+    Statement ev(c, "SELECT kind, detail FROM events WHERE session_id = ?1 AND kind IN "
+                    "('session_start', 'observer') ORDER BY event_id");
+    ev.bind(1, session_id);
+    while (ev.step()) {
+      const Json d = Json::parse(ev.column_text(1), nullptr, false);
+      if (d.is_discarded() || !d.is_object()) continue;
+      if (ev.column_text(0) == "session_start")
+        out.participant_number = d.value("participant_number", std::uint64_t{1});
+      else
+        out.observer = observer_from(d);
+    }
+    return out;
+  });
+}
+
+Expected<std::vector<StoredTrial>> read_trial_list(Database& db, std::int64_t session_id) {
+  return guarded(db, [&]() -> Expected<std::vector<StoredTrial>> {
+    Statement s(db.connection(), "SELECT trial_id, trial_index, conditions FROM trials WHERE session_id = ?1 "
+                                 "ORDER BY trial_index");
+    s.bind(1, session_id);
+    std::vector<StoredTrial> out;
+    while (s.step()) out.push_back({s.column_int(0), s.column_int(1), s.column_text(2)});
+    return out;
+  });
+}
+
+Expected<std::int64_t> read_last_frame_index(Database& db, std::int64_t session_id) {
+  return guarded(db, [&]() -> Expected<std::int64_t> {
+    Statement s(db.connection(), "SELECT COALESCE(MAX(frame_index), -1) FROM frames WHERE session_id = ?1");
+    s.bind(1, session_id);
+    return s.step() ? s.column_int(0) : std::int64_t{-1};
+  });
+}
+
+Expected<std::vector<StoredStaircaseResponse>> read_staircase_responses(Database& db,
+                                                                        std::int64_t session_id) {
+  return guarded(db, [&]() -> Expected<std::vector<StoredStaircaseResponse>> {
+    Statement s(db.connection(), "SELECT trial_id, response_correct FROM staircase_steps "
+                                 "WHERE session_id = ?1 AND trial_id IS NOT NULL ORDER BY step_id");
+    s.bind(1, session_id);
+    std::vector<StoredStaircaseResponse> out;
+    while (s.step()) {
+      StoredStaircaseResponse r{s.column_int(0), std::nullopt};
+      if (!s.is_null(1)) r.response_correct = s.column_int(1) != 0;
+      out.push_back(r);
+    }
+    return out;
+  });
+}
+
+Expected<std::int64_t> read_trial_id(Database& db, std::int64_t session_id, std::int64_t trial_index) {
+  return guarded(db, [&]() -> Expected<std::int64_t> {
+    Statement s(db.connection(), "SELECT trial_id FROM trials WHERE session_id = ?1 AND trial_index = ?2");
+    s.bind(1, session_id).bind(2, trial_index);
+    if (!s.step())
+      return DataError{Kind::not_found, db.path() + ": no trial " + std::to_string(trial_index) +
+                                            " in session " + std::to_string(session_id)};
+    return s.column_int(0);
+  });
+}
+
+Expected<std::optional<OnsetRecord>> read_onset(Database& db, std::int64_t trial_id) {
+  return guarded(db, [&]() -> Expected<std::optional<OnsetRecord>> {
+    Statement s(db.connection(), "SELECT event_id, detail FROM events WHERE trial_id = ?1 AND kind = 'onset' "
+                                 "ORDER BY event_id DESC LIMIT 1");
+    s.bind(1, trial_id);
+    if (!s.step()) return std::optional<OnsetRecord>{};
+    OnsetRecord o;
+    o.event_id = s.column_int(0);
+    const Json d = Json::parse(s.column_text(1), nullptr, false);
+    const bool ok = d.is_object() && d.contains("frame_index") && d["frame_index"].is_number_integer() &&
+                    d.contains("head_pose") && read_matrix(d["head_pose"], o.head_pose) &&
+                    d.contains("stick_pose") && read_matrix(d["stick_pose"], o.stick_pose);
+    if (!ok)
+      return corrupt(db, "the onset event " + std::to_string(o.event_id) +
+                             " lacks frame_index, head_pose or stick_pose (16 numbers each)");
+    o.frame_index = d["frame_index"].get<std::int64_t>();
+    o.predicted_display_ns = d.value("predicted_display_ns", std::int64_t{0});
+    o.attempt = d.value("attempt", std::int64_t{1});
+    return std::optional<OnsetRecord>{o};
+  });
+}
+
+Expected<std::optional<double>> read_staircase_intensity(Database& db, std::int64_t trial_id) {
+  return guarded(db, [&]() -> Expected<std::optional<double>> {
+    Statement s(db.connection(), "SELECT intensity FROM staircase_steps WHERE trial_id = ?1");
+    s.bind(1, trial_id);
+    if (!s.step()) return std::optional<double>{};
+    return std::optional<double>{s.column_double(0)};
+  });
+}
+
+Expected<std::optional<double>> read_adjustment_at(Database& db, std::int64_t trial_id,
+                                                   std::int64_t onset_event_id, std::int64_t frame_index) {
+  return guarded(db, [&]() -> Expected<std::optional<double>> {
+    Statement s(db.connection(),
+                "SELECT json_extract(detail, '$.value') FROM events WHERE trial_id = ?1 AND kind = 'adjustment' "
+                "AND event_id > ?2 AND event_id < COALESCE((SELECT MIN(event_id) FROM events "
+                "WHERE trial_id = ?1 AND kind = 'onset' AND event_id > ?2), 9223372036854775807) "
+                "AND json_extract(detail, '$.frame_index') <= ?3 ORDER BY event_id DESC LIMIT 1");
+    s.bind(1, trial_id).bind(2, onset_event_id).bind(3, frame_index);
+    if (!s.step() || s.is_null(0)) return std::optional<double>{};
+    return std::optional<double>{s.column_double(0)};
+  });
+}
+
+Expected<std::optional<HeadAtFrame>> read_head_at_frame(Database& db, std::int64_t session_id,
+                                                        std::int64_t frame_index) {
+  return guarded(db, [&]() -> Expected<std::optional<HeadAtFrame>> {
+    Statement s(db.connection(), "SELECT virtual_pose, t_ns, trial_id FROM tracking_samples WHERE session_id = ?1 "
+                                 "AND frame_index = ?2 AND device = 'head' AND virtual_pose IS NOT NULL "
+                                 "ORDER BY sample_id DESC LIMIT 1");
+    s.bind(1, session_id).bind(2, frame_index);
+    if (!s.step()) return std::optional<HeadAtFrame>{};
+    HeadAtFrame h;
+    const auto blob = s.column_blob(0);
+    if (!read_doubles(blob, h.virtual_pose))
+      return corrupt(db, "the head pose of frame " + std::to_string(frame_index) + " is " +
+                             std::to_string(blob.size()) + " bytes, not 128 (16 doubles)");
+    h.t_ns = s.column_int(1);
+    h.trial_id = s.column_opt_int(2);
+    return std::optional<HeadAtFrame>{h};
+  });
+}
+
+Expected<std::optional<FrameSpan>> read_trial_frame_span(Database& db, std::int64_t trial_id) {
+  return guarded(db, [&]() -> Expected<std::optional<FrameSpan>> {
+    Statement s(db.connection(), "SELECT MIN(frame_index), MAX(frame_index) FROM tracking_samples "
+                                 "WHERE trial_id = ?1 AND device = 'head'");
+    s.bind(1, trial_id);
+    if (!s.step() || s.is_null(0)) return std::optional<FrameSpan>{};
+    return std::optional<FrameSpan>{FrameSpan{s.column_int(0), s.column_int(1)}};
+  });
+}
+
+Expected<std::int64_t> read_trial_event_count(Database& db, std::int64_t trial_id, const std::string& kind) {
+  return guarded(db, [&]() -> Expected<std::int64_t> {
+    Statement s(db.connection(), "SELECT COUNT(*) FROM events WHERE trial_id = ?1 AND kind = ?2");
+    s.bind(1, trial_id).bind(2, std::string_view(kind));
+    s.step();
+    return s.column_int(0);
+  });
+}
+
+Expected<std::optional<ViewGeometry>> read_view_geometry(Database& db, std::int64_t session_id,
+                                                         std::int64_t frame_index) {
+  return guarded(db, [&]() -> Expected<std::optional<ViewGeometry>> {
+    Statement s(db.connection(), "SELECT frame_index, eye_width_px, eye_height_px, eye_views FROM frames "
+                                 "WHERE session_id = ?1 AND frame_index <= ?2 AND eye_views IS NOT NULL "
+                                 "ORDER BY frame_index DESC LIMIT 1");
+    s.bind(1, session_id).bind(2, frame_index);
+    if (!s.step()) return std::optional<ViewGeometry>{};
+    const std::string where = "the eye geometry of frame " + std::to_string(s.column_int(0));
+    const auto w = s.column_opt_int(1), h = s.column_opt_int(2);
+    if (!w || !h || *w <= 0 || *h <= 0) return corrupt(db, where + " has no eye image size");
+    std::array<double, eye_views_doubles> packed{};
+    const auto blob = s.column_blob(3);
+    if (!read_doubles(blob, packed))
+      return corrupt(db, where + " is " + std::to_string(blob.size()) + " bytes, not 256 (32 doubles)");
+    ViewGeometry g;
+    g.width_px = static_cast<std::uint32_t>(*w);
+    g.height_px = static_cast<std::uint32_t>(*h);
+    decode_eye_views(packed, g);
+    return std::optional<ViewGeometry>{g};
+  });
+}
+
+}  // namespace curvlab::data
