@@ -54,7 +54,7 @@ window.addEventListener('load', () => {
   const panels = document.querySelectorAll('section.condition').length;
   const out = document.createElement('pre');
   out.id = 'probe';
-  out.textContent = 'PROBE images=' + imgs.length + ' loaded=' + ok + ' panels=' + panels + ' END';
+  out.textContent = ['images', imgs.length, 'loaded', ok, 'panels', panels].join(' ');
   document.body.appendChild(out);
 });
 </script>"""
@@ -66,18 +66,27 @@ timeout 120 "$chromium_bin" --headless --no-sandbox --disable-gpu --disable-quic
   --user-data-dir="$work/chromium-profile" --virtual-time-budget=10000 \
   --dump-dom "file://$work/probe.html" >"$work/dom.html" 2>"$work/chromium.log"
 crc=$?
-probe=$(grep -o 'PROBE [^<]* END' "$work/dom.html" | head -1)
+probe=$(grep -o '<pre id="probe">[^<]*</pre>' "$work/dom.html" | head -1)
 if [ -z "$probe" ]; then
   echo "FAIL: Chromium (exit $crc) produced no probe result"; tail -20 "$work/chromium.log"; exit 1
 fi
 echo "chromium: $probe"
-images=$(sed -E 's/.*images=([0-9]+).*/\1/' <<<"$probe")
-loaded=$(sed -E 's/.*loaded=([0-9]+).*/\1/' <<<"$probe")
-panels=$(sed -E 's/.*panels=([0-9]+).*/\1/' <<<"$probe")
+images=$(sed -E 's/.*images ([0-9]+).*/\1/' <<<"$probe")
+loaded=$(sed -E 's/.*loaded ([0-9]+).*/\1/' <<<"$probe")
+panels=$(sed -E 's/.*panels ([0-9]+).*/\1/' <<<"$probe")
 [ "$images" -gt 0 ] || { echo "FAIL: the sheet has no images"; fail=1; }
 [ "$loaded" -eq "$images" ] || { echo "FAIL: $((images - loaded)) of $images images did not load"; fail=1; }
 [ "$panels" -eq "$expected" ] || { echo "FAIL: $panels condition panels, curvlab design has $expected conditions"; fail=1; }
 [ "$images" -eq $((3 * panels)) ] || { echo "FAIL: expected left, right and anaglyph per panel"; fail=1; }
+
+# The probe notices a broken image: the same page with one image's data cut.
+sed '0,/data:image\/png;base64,/s//data:image\/png;base64,AAAA/' "$work/probe.html" >"$work/broken.html"
+timeout 120 "$chromium_bin" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+  --disable-background-networking --disable-component-update --disable-sync \
+  --user-data-dir="$work/chromium-profile" --virtual-time-budget=10000 \
+  --dump-dom "file://$work/broken.html" 2>/dev/null | grep -o '<pre id="probe">[^<]*</pre>' >"$work/broken.txt"
+grep -q "loaded $((images - 1)) " "$work/broken.txt" ||
+  { echo "FAIL: the probe did not notice a broken image: $(cat "$work/broken.txt")"; fail=1; }
 
 # 4. The sheet names the protocol's SHA-256 and the software version.
 sha=$(sha256sum "$protocol" | cut -d' ' -f1)

@@ -199,6 +199,13 @@ std::vector<PreviewCondition> preview_conditions(const protocol::Design& design)
     if (found == per_block.end()) per_block.emplace_back(t.block, 1);
     else ++found->second;
   }
+  // Block by block in run order, each in factorial order (the last factor
+  // varying fastest), rather than in the shuffled order of the trials.
+  std::stable_sort(out.begin(), out.end(), [&](const PreviewCondition& a, const PreviewCondition& b) {
+    const auto& ta = design.trials[a.first_trial];
+    const auto& tb = design.trials[b.first_trial];
+    return std::pair{ta.block_position, ta.cell} < std::pair{tb.block_position, tb.cell};
+  });
   return out;
 }
 
@@ -353,31 +360,28 @@ std::variant<PreviewResult, PreviewError> write_preview(const protocol::Protocol
   }
   o << "</table>\n";
 
-  // Texts the participant reads.
-  o << "<h2>Instructions and break texts</h2>\n";
-  const auto pages = [&](const std::string& title, const std::vector<std::string>& texts) {
-    if (texts.empty()) return;
-    o << "<h3>" << html(title) << "</h3>\n";
-    for (const auto& t : texts) o << "<div class=\"text\">" << html(t) << "</div>\n";
+  // Texts the participant reads, in the order they appear.
+  const auto texts = [](const std::vector<std::string>& pages) {
+    std::string out;
+    for (const auto& t : pages) out += "<div class=\"text\">" + html(t) + "</div>";
+    return out.empty() ? std::string("—") : out;
   };
-  pages("before the first block", p.instructions_start);
-  std::vector<std::string> seen_breaks;
+  o << "<h2>Instructions, prompts and break texts</h2>\n<table>\n<tr><th>when</th><th>text</th></tr>\n";
+  if (!p.instructions_start.empty())
+    o << "<tr><td>before the first block</td><td>" << texts(p.instructions_start) << "</td></tr>\n";
   for (const auto& pb : design.blocks) {
-    pages("before block " + pb.name, pb.instructions);
     const protocol::Block* b = find_block(p, pb.name);
-    if (b && b->break_every_trials > 0 &&
-        std::find(seen_breaks.begin(), seen_breaks.end(), b->break_text) == seen_breaks.end()) {
-      seen_breaks.push_back(b->break_text);
-      pages("break (block " + pb.name + ")", {b->break_text});
-    }
-    if (b && !b->judgement.prompt.empty()) {
-      const std::string title = "prompt (block " + pb.name + ")";
-      pages(title, {b->judgement.prompt});
-    }
+    if (!pb.instructions.empty())
+      o << "<tr><td>before block " << html(pb.name) << "</td><td>" << texts(pb.instructions) << "</td></tr>\n";
+    if (b && !b->judgement.prompt.empty())
+      o << "<tr><td>prompt in block " << html(pb.name) << "</td><td>" << texts({b->judgement.prompt})
+        << "</td></tr>\n";
+    if (b && b->break_every_trials > 0)
+      o << "<tr><td>break in block " << html(pb.name) << "</td><td>" << texts({b->break_text}) << "</td></tr>\n";
   }
-  pages("after the last block", p.instructions_end);
-  if (p.instructions_start.empty() && p.instructions_end.empty() && seen_breaks.empty())
-    o << "<p class=\"small\">This protocol has no instruction pages and no breaks.</p>\n";
+  if (!p.instructions_end.empty())
+    o << "<tr><td>after the last block</td><td>" << texts(p.instructions_end) << "</td></tr>\n";
+  o << "</table>\n";
 
   // One panel per distinct condition.
   o << "<h2>Conditions (" << conditions.size() << ")</h2>\n<p class=\"small\">Each stereo pair is the first "

@@ -31,7 +31,8 @@ struct PreviewCondition {
   std::vector<std::pair<std::string, std::size_t>> trials_per_block;  // run order
 };
 
-// The distinct conditions of a design, in order of first appearance. Pure.
+// The distinct conditions of a design, block by block in run order (the
+// block where each first appears) and in factorial order within it. Pure.
 std::vector<PreviewCondition> preview_conditions(const protocol::Design& design);
 
 struct PreviewRequest {
