@@ -434,7 +434,7 @@ std::variant<PreviewResult, PreviewError> write_preview(const protocol::Protocol
         rows += "<tr><td>" + html(sp.staircase) + " (" + std::to_string(sp.up) + "-up/" +
                 std::to_string(sp.down) + "-down, " + fixed(sp.target_p * 100.0, 1) + " % " + html(sp.positive) +
                 ")</td><td>" +
-                (sp.target_value ? html(sp.parameter) + " = " + num(*sp.target_value)
+                (sp.target_value ? html(sp.parameter) + " = " + fixed(*sp.target_value, 4)
                                  : "outside [" + num(sp.min) + ", " + num(sp.max) + "]") +
                 "</td></tr>\n";
       }
