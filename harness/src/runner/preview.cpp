@@ -262,7 +262,8 @@ std::variant<PreviewResult, PreviewError> write_preview(const protocol::Protocol
     if (t.adjustment_start && block && block->judgement.adjustment) {
       protocol::set_numeric_setting(s, block->judgement.adjustment->parameter, *t.adjustment_start);
       out.note = "adjustment start of trial " + std::to_string(t.index) + ": " +
-                 block->judgement.adjustment->parameter + " = " + num(*t.adjustment_start);
+                 block->judgement.adjustment->parameter + " = " + fixed(*t.adjustment_start, 4) +
+                 " (the settings below are the protocol's)";
     }
     auto made = make_world(s);
     if (auto* e = std::get_if<std::string>(&made)) return PreviewError{false, *e};
