@@ -24,10 +24,6 @@ struct LoadResult {
 LoadResult load_protocol_text(std::string_view text, const std::string& file);
 LoadResult load_protocol_file(const std::string& path);
 
-}  // namespace curvlab::harness::protocol
-
-namespace curvlab::harness::protocol {
-
 // The names the loader accepts in `keys` and `buttons` arrays (the JSON
 // Schema lists the same).
 const std::vector<std::string>& response_key_names();
