@@ -14,6 +14,7 @@ packages=(
   python3-mpmath
   r-base-core r-cran-lme4 r-cran-ggplot2 r-cran-rsqlite r-cran-jsonlite python3-pandas python3-matplotlib
   xdotool
+  chromium
 )
 
 missing=()
@@ -23,15 +24,31 @@ for p in "${packages[@]}"; do
   fi
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "deps: all ${#packages[@]} packages present"
-  exit 0
+# npm comes with the nodejs of some repositories and separately in Debian's.
+if ! command -v npm >/dev/null; then
+  command -v node >/dev/null || missing+=(nodejs)
+  missing+=(npm)
 fi
 
-echo "deps: installing ${#missing[@]} missing packages: ${missing[*]}"
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get -o DPkg::Lock::Timeout=900 update -qq
-$SUDO apt-get -o DPkg::Lock::Timeout=900 install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-echo "deps: done"
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "deps: all ${#packages[@]} packages present"
+else
+  echo "deps: installing ${#missing[@]} missing packages: ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get -o DPkg::Lock::Timeout=900 update -qq
+  $SUDO apt-get -o DPkg::Lock::Timeout=900 install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  echo "deps: done"
+fi
+
+# npm tools pinned by tools/package-lock.json (taplo checks protocols against
+# protocols/schema.json), installed into tools/node_modules.
+tools="$(cd "$(dirname "$0")/.." && pwd)/tools"
+# The stamp is the lock file that was last installed.
+stamp="$tools/node_modules/.installed-package-lock.json"
+if ! cmp -s "$tools/package-lock.json" "$stamp" 2>/dev/null || [ ! -x "$tools/node_modules/.bin/taplo" ]; then
+  echo "deps: installing npm tools into $tools/node_modules"
+  npm ci --prefix "$tools" --no-audit --no-fund --loglevel=error
+  cp "$tools/package-lock.json" "$stamp"
+fi

@@ -60,6 +60,7 @@ void add_export_commands(CLI::App& app);
 void add_track_commands(CLI::App& app);  // trajectory, track, inspect vergence/stick
 void add_render_commands(CLI::App& app);
 void add_protocol_commands(CLI::App& app);
+void add_authoring_commands(CLI::App& app);  // schema, new, preview
 void add_run_commands(CLI::App& app);
 // Reads and loads a protocol file, or prints every diagnostic and throws a
 // UsageError (exit 2). `text`, when given, receives the text that was loaded

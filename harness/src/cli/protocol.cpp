@@ -39,6 +39,17 @@ Json settings_json(const pr::Settings& s, const pr::Derived& d) {
   j["stick_distance_m"] = s.stimulus.stick_distance_m;
   j["table_sagitta_m"] = s.stimulus.table_sagitta_m;
   j["table_edge_m"] = s.table.edge_m;
+  // The rest of what a participant sees, so that trials with equal levels
+  // and equal settings are the same condition (`curvlab preview`'s panels).
+  j["stick_radius_m"] = s.stimulus.stick_radius_m;
+  j["stick_height_m"] = s.stimulus.stick_height_m;
+  j["stick_yaw_deg"] = s.stimulus.stick_yaw_deg;
+  j["show_stick"] = s.stimulus.show_stick;
+  j["show_table"] = s.stimulus.show_table;
+  j["balls"] = s.stimulus.balls;
+  j["ball_radius_m"] = s.stimulus.ball_radius_m;
+  j["table_height_m"] = s.table.height_m;
+  j["stimulus_during_response"] = s.timeline.stimulus_during_response;
   return j;
 }
 

@@ -1015,3 +1015,10 @@ LoadResult load_protocol_file(const std::string& path) {
 }
 
 }  // namespace curvlab::harness::protocol
+
+namespace curvlab::harness::protocol {
+
+const std::vector<std::string>& response_key_names() { return key_names(); }
+const std::vector<std::string>& response_button_names() { return button_names(); }
+
+}  // namespace curvlab::harness::protocol

@@ -24,4 +24,9 @@ struct LoadResult {
 LoadResult load_protocol_text(std::string_view text, const std::string& file);
 LoadResult load_protocol_file(const std::string& path);
 
+// The names the loader accepts in `keys` and `buttons` arrays (the JSON
+// Schema lists the same).
+const std::vector<std::string>& response_key_names();
+const std::vector<std::string>& response_button_names();
+
 }  // namespace curvlab::harness::protocol

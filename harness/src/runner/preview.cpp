@@ -1,0 +1,472 @@
+#include "curvlab/harness/runner/preview.hpp"
+
+#include "curvlab/harness/data/sha256.hpp"
+#include "curvlab/harness/runner/headless.hpp"
+#include "curvlab/harness/runner/predict.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/version.hpp"
+#include "curvlab/renderer/context.hpp"
+#include "curvlab/renderer/image_io.hpp"
+#include "curvlab/renderer/offscreen.hpp"
+#include "curvlab/renderer/renderer.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <sstream>
+#include <tuple>
+
+namespace curvlab::harness::runner {
+namespace {
+
+namespace fs = std::filesystem;
+using protocol::Settings;
+
+std::string num(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+std::string duration_text(std::int64_t ms) {
+  const std::int64_t s = (ms + 500) / 1000;
+  return std::to_string(s / 60) + " min " + std::to_string(s % 60) + " s";
+}
+
+// Everything a trial's stimulus and timing depend on, as shown on the sheet;
+// two trials with equal rows and levels show the participant the same thing.
+std::vector<std::pair<std::string, std::string>> settings_rows(const Settings& s,
+                                                               const protocol::Derived& d) {
+  const auto yes = [](bool b) { return std::string(b ? "yes" : "no"); };
+  const auto& st = s.stimulus;
+  return {
+      {"space", std::string(geometry::to_string(s.space.kind))},
+      {"radius", fixed(d.radius_m, 4) + " m" + (s.space.radius_m ? "" : " (from the table)")},
+      {"virtual table", std::to_string(d.table_sides) + " sides of " + fixed(d.side_rad, 4) + " rad"},
+      {"view", std::string(protocol::to_string(s.viewing.projection)) + ", " +
+                   std::string(protocol::to_string(s.viewing.eyes)) + " eye" +
+                   (s.viewing.eyes == protocol::Eyes::both ? "s" : "")},
+      {"back hemisphere", yes(s.viewing.back_hemisphere) + (s.space.kind == geometry::SpaceKind::S3 ? "" : " (drawn in S3 only)")},
+      {"IPD", num(s.viewing.ipd_m * 1000.0) + " mm"},
+      {"tracking", std::string(protocol::to_string(s.tracking))},
+      {"stick", st.show_stick ? num(st.stick_length_m) + " m long, " + num(st.stick_radius_m * 1000.0) +
+                                    " mm radius, sagitta " + num(st.stick_sagitta_m * 1000.0) + " mm"
+                              : "hidden"},
+      {"stick pose", std::string(protocol::to_string(st.stick_anchor)) + " anchor, " +
+                         num(st.stick_distance_m) + " m away, height " + num(st.stick_height_m) +
+                         " m, yaw " + num(st.stick_yaw_deg) + "°"},
+      {"table top", st.show_table ? "sagitta " + num(st.table_sagitta_m * 1000.0) + " mm" : "hidden"},
+      {"balls", std::to_string(st.balls) + " × " + num(st.ball_radius_m * 1000.0) + " mm radius"},
+      {"physical table", num(s.table.edge_m) + " m edge, " + num(s.table.height_m) + " m high"},
+      {"timeline", std::to_string(s.timeline.fixation_ms) + " / " + std::to_string(s.timeline.stimulus_ms) +
+                       " / " + std::to_string(s.timeline.response_ms) + " / " +
+                       std::to_string(s.timeline.iti_ms) + " ms" +
+                       (s.timeline.stimulus_during_response ? "" : ", stimulus hidden while answering")},
+  };
+}
+
+std::string html(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const auto b0 = static_cast<unsigned char>(bytes[i]);
+    const auto b1 = i + 1 < bytes.size() ? static_cast<unsigned char>(bytes[i + 1]) : 0u;
+    const auto b2 = i + 2 < bytes.size() ? static_cast<unsigned char>(bytes[i + 2]) : 0u;
+    const unsigned v = (b0 << 16) | (b1 << 8) | b2;
+    out += table[(v >> 18) & 63];
+    out += table[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? table[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? table[v & 63] : '=';
+  }
+  return out;
+}
+
+// A grey red/cyan anaglyph: the left eye's luminance in red, the right's in
+// green and blue (grey rather than colour anaglyphs avoid retinal rivalry
+// on the green cloth). Computed on the sRGB-encoded values: a quick look,
+// not a stimulus.
+renderer::Rgba8Image anaglyph(const renderer::Rgba8Image& left, const renderer::Rgba8Image& right) {
+  renderer::Rgba8Image out{left.width, left.height, std::vector<std::uint8_t>(left.pixels.size())};
+  for (std::size_t i = 0; i + 3 < left.pixels.size(); i += 4) {
+    const auto luma = [](const std::vector<std::uint8_t>& p, std::size_t k) {
+      return static_cast<std::uint8_t>(std::lround(0.299 * p[k] + 0.587 * p[k + 1] + 0.114 * p[k + 2]));
+    };
+    const auto r = luma(right.pixels, i);
+    out.pixels[i] = luma(left.pixels, i);
+    out.pixels[i + 1] = r;
+    out.pixels[i + 2] = r;
+    out.pixels[i + 3] = 255;
+  }
+  return out;
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The virtual head at onset: a participant standing at the nominal table,
+// placed by the protocol's tracking algorithm — where the headless runner's
+// participant stands, and where `curvlab predict` views the stimulus from.
+geometry::Isometry standing_head(const World& world, const Settings& s) {
+  auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
+                                        physical_table(s, std::nullopt));
+  return tracker->update(standing_pose(nominal_calibration(s), 1.55, 0)).pose[0];
+}
+
+const protocol::Block* find_block(const protocol::Protocol& p, const std::string& name) {
+  for (const auto& b : p.blocks)
+    if (b.name == name) return &b;
+  return nullptr;
+}
+
+std::string levels_text(const std::vector<std::pair<std::string, std::string>>& levels) {
+  std::string out;
+  for (const auto& [f, l] : levels) out += (out.empty() ? "" : ", ") + f + " = " + l;
+  return out.empty() ? "(no factors)" : out;
+}
+
+struct Rendered {
+  std::string left, right, anaglyph;  // file names under images/
+  std::string note;                   // how the stimulus value was chosen
+};
+
+constexpr const char* kStyle = R"(
+body { font: 15px/1.4 "DejaVu Sans", sans-serif; margin: 24px; color: #1d1d1f; background: #fafafa; }
+h1 { margin-bottom: 4px; } h2 { margin-top: 32px; border-bottom: 1px solid #ccc; }
+table { border-collapse: collapse; margin: 8px 0; } td, th { border: 1px solid #ddd; padding: 3px 8px;
+ text-align: left; vertical-align: top; } th { background: #eee; }
+.meta td:first-child { font-weight: bold; } code { font-size: 13px; word-break: break-all; }
+.conditions { display: grid; grid-template-columns: repeat(auto-fill, minmax(620px, 1fr)); gap: 16px; }
+.condition { background: #fff; border: 1px solid #ccc; border-radius: 6px; padding: 12px; }
+.condition h3 { margin: 0 0 8px 0; font-size: 16px; }
+.pair { display: flex; gap: 6px; } .pair figure { margin: 0; flex: 1; } .pair img { width: 100%; display: block;
+ border: 1px solid #999; background: #000; } figcaption { font-size: 12px; color: #555; text-align: center; }
+.small { font-size: 12px; color: #555; } .text { white-space: pre-wrap; background: #fff; border: 1px solid #ddd;
+ padding: 8px; margin: 4px 0; }
+.bar { display: inline-block; height: 10px; background: #4a7bd0; vertical-align: middle; }
+)";
+
+}  // namespace
+
+std::vector<PreviewCondition> preview_conditions(const protocol::Design& design) {
+  std::vector<PreviewCondition> out;
+  std::map<std::string, std::size_t> index;
+  for (const auto& t : design.trials) {
+    auto rows = settings_rows(t.settings, t.derived);
+    std::string key;
+    for (const auto& [f, l] : t.levels) key += f + "=" + l + "\x1f";
+    key += "\x1e";
+    for (const auto& [n, v] : rows) key += n + "=" + v + "\x1f";
+    auto it = index.find(key);
+    if (it == index.end()) {
+      it = index.emplace(key, out.size()).first;
+      out.push_back({t.levels, std::move(rows), t.index, {}});
+    }
+    auto& per_block = out[it->second].trials_per_block;
+    const auto found = std::find_if(per_block.begin(), per_block.end(),
+                                    [&](const auto& e) { return e.first == t.block; });
+    if (found == per_block.end()) per_block.emplace_back(t.block, 1);
+    else ++found->second;
+  }
+  // Block by block in run order, each in factorial order (the last factor
+  // varying fastest), rather than in the shuffled order of the trials.
+  std::stable_sort(out.begin(), out.end(), [&](const PreviewCondition& a, const PreviewCondition& b) {
+    const auto& ta = design.trials[a.first_trial];
+    const auto& tb = design.trials[b.first_trial];
+    return std::pair{ta.block_position, ta.cell} < std::pair{tb.block_position, tb.cell};
+  });
+  return out;
+}
+
+Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRequest& rq) {
+  const protocol::Design design = protocol::expand_design(p, rq.participant);
+  const auto conditions = preview_conditions(design);
+  const auto report = [&](std::size_t done, const std::string& what) {
+    if (rq.progress) rq.progress(done, conditions.size(), what);
+  };
+
+  std::uint32_t w = static_cast<std::uint32_t>(p.resolution_width);
+  std::uint32_t h = static_cast<std::uint32_t>(p.resolution_height);
+  if (rq.size) {
+    std::tie(w, h) = *rq.size;
+  } else if (w > 480) {
+    h = std::max<std::uint32_t>(16, static_cast<std::uint32_t>(std::lround(480.0 * h / w)));
+    w = 480;
+  }
+
+  std::error_code ec;
+  const fs::path dir(rq.out_dir);
+  fs::create_directories(dir / "images", ec);
+  if (ec) return Error{Error::Kind::io, "cannot create " + (dir / "images").string() + ": " + ec.message()};
+
+  // Mesa keeps a shader cache under the home folder; the sheet writes only
+  // under its own folder.
+  ::setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
+  auto created = renderer::Context::create(
+      {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
+       .validation = false});
+  if (auto* e = std::get_if<renderer::RenderError>(&created)) return Error{Error::Kind::io, e->message};
+  const auto& ctx = std::get<renderer::Context>(created);
+  renderer::Renderer r(ctx);
+  renderer::OffscreenTarget target(ctx, w, h);
+
+  // Onset stereo pairs, one per condition.
+  report(0, "");
+  std::vector<Rendered> images;
+  for (std::size_t k = 0; k < conditions.size(); ++k) {
+    const auto& c = conditions[k];
+    const auto& t = design.trials[c.first_trial];
+    Settings s = t.settings;
+    Rendered out;
+    const protocol::Block* block = find_block(p, t.block);
+    const std::string prompt = block ? block->judgement.prompt : std::string();
+    // The stimulus value the runner shows at this trial's onset.
+    if (block && block->judgement.type == protocol::JudgementType::staircase &&
+        !block->judgement.staircases.empty()) {
+      const auto& sc = block->judgement.staircases[t.staircase >= 0 ? static_cast<std::size_t>(t.staircase) : 0];
+      protocol::set_numeric_setting(s, block->judgement.parameter, sc.start);
+      out.note = "staircase \"" + sc.name + "\" at its start value, " + block->judgement.parameter + " = " +
+                 num(sc.start);
+    }
+    if (t.adjustment_start && block && block->judgement.adjustment) {
+      protocol::set_numeric_setting(s, block->judgement.adjustment->parameter, *t.adjustment_start);
+      out.note = "adjustment start of trial " + std::to_string(t.index) + ": " +
+                 block->judgement.adjustment->parameter + " = " + fixed(*t.adjustment_start, 4) +
+                 " (the settings below are the protocol's)";
+    }
+    auto made = make_world(s);
+    if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
+    const World world = std::get<World>(made);
+    auto built = TrialScene::build(world, s, prompt, CURVLAB_DEFAULT_FONT);
+    if (auto* e = std::get_if<std::string>(&built)) return Error{Error::Kind::io, *e};
+    auto& scene = std::get<TrialScene>(built);
+    const geometry::Isometry head = standing_head(world, s);
+    const Placement placement = place_stimulus(world, s, head);
+    scene.place(placement, head);
+    scene.show(Phase::stimulus, s.timeline.stimulus_during_response);
+
+    renderer::FrameDescription desc;
+    desc.space = world.space;
+    desc.settings = view_settings(s, renderer::Eye::right);
+    desc.head = head;
+    desc.rig = renderer::StereoRig::from_ipd(
+        s.viewing.ipd_m, renderer::Fov::symmetric(std::numbers::pi / 2.0, double(w) / double(h)));
+    desc.width_px = w;
+    desc.height_px = h;
+    (void)r.render(scene.scene(), desc, target);
+
+    const std::string stem = "condition_" + std::to_string(k + 1);
+    out.left = stem + "_left.png";
+    out.right = stem + "_right.png";
+    out.anaglyph = stem + "_anaglyph.png";
+    const auto& left = target.image(renderer::Eye::left);
+    const auto& right = target.image(renderer::Eye::right);
+    for (const auto& [name, image] : {std::pair{out.left, &left}, std::pair{out.right, &right}})
+      if (auto err = renderer::write_png((dir / "images" / name).string(), *image); !err.empty())
+        return Error{Error::Kind::io, err};
+    if (auto err = renderer::write_png((dir / "images" / out.anaglyph).string(), anaglyph(left, right));
+        !err.empty())
+      return Error{Error::Kind::io, err};
+    images.push_back(std::move(out));
+    report(k + 1, levels_text(c.levels));
+  }
+
+  // Predicted proportions from the simulated observer (choice and
+  // staircase blocks; practice is not predicted).
+  PredictOptions po;
+  po.simulations = 1;  // proportions only; power is `curvlab predict`'s job
+  std::optional<Prediction> prediction;
+  std::string prediction_note;
+  auto predicted = predict(p, po);
+  if (!predicted) prediction_note = predicted.error().message;
+  else prediction = std::move(predicted).value();
+
+  // ---- the page ------------------------------------------------------------
+  const auto sha = curvlab::data::sha256_hex(rq.protocol_text);
+  std::ostringstream o;
+  o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
+    << html(p.meta.name + " " + p.meta.version) << " — curvlab preview</title>\n<style>" << kStyle
+    << "</style>\n</head>\n<body>\n";
+  o << "<h1>" << html(p.meta.name) << " <span class=\"small\">" << html(p.meta.version) << "</span></h1>\n";
+  if (!p.meta.description.empty()) o << "<p>" << html(p.meta.description) << "</p>\n";
+  o << "<table class=\"meta\">\n"
+    << "<tr><td>protocol file</td><td><code>" << html(rq.protocol_path) << "</code></td></tr>\n"
+    << "<tr><td>protocol SHA-256</td><td><code id=\"sha256\">" << sha << "</code></td></tr>\n"
+    << "<tr><td>software</td><td>curvlab " << html(std::string(software_version())) << " ("
+    << html(std::string(git_commit())) << ")</td></tr>\n"
+    << "<tr><td>renderer</td><td>" << html(ctx.device_name()) << ", " << w << "×" << h
+    << " px per eye, 90° horizontal field of view</td></tr>\n"
+    << "<tr><td>participant</td><td>" << design.participant << " (seed " << design.seed;
+  if (design.counterbalance_row) o << ", counterbalance row " << *design.counterbalance_row + 1;
+  o << ")</td></tr>\n"
+    << "<tr><td>trials</td><td>" << design.trials.size() << " in " << design.blocks.size() << " blocks, "
+    << conditions.size() << " distinct conditions</td></tr>\n"
+    << "<tr><td>estimated duration</td><td>" << duration_text(design.estimated_duration_ms())
+    << " (timelines and minimum breaks; reading instructions not included)</td></tr>\n</table>\n";
+
+  // Block order and timelines.
+  o << "<h2>Block order for participant " << design.participant << "</h2>\n<table>\n"
+    << "<tr><th>#</th><th>block</th><th>trials</th><th>judgement</th><th>timeline (fixation / stimulus / "
+       "response / ITI)</th><th>breaks</th></tr>\n";
+  for (std::size_t i = 0; i < design.blocks.size(); ++i) {
+    const auto& pb = design.blocks[i];
+    const protocol::Block* b = find_block(p, pb.name);
+    std::string timeline = "—";
+    if (pb.trial_count > 0) {
+      const auto& tl = design.trials[pb.first_trial].settings.timeline;
+      timeline = std::to_string(tl.fixation_ms) + " / " + std::to_string(tl.stimulus_ms) + " / " +
+                 std::to_string(tl.response_ms) + " / " + std::to_string(tl.iti_ms) + " ms (" +
+                 num(static_cast<double>(tl.total_ms()) / 1000.0) + " s per trial at most)";
+    }
+    std::string judgement = b ? std::string(protocol::to_string(b->judgement.type)) : "";
+    if (b && b->judgement.type == protocol::JudgementType::staircase) judgement += " (trial count at most)";
+    std::string breaks = "none";
+    if (b && b->break_every_trials > 0)
+      breaks = "every " + std::to_string(b->break_every_trials) + " trials, at least " +
+               duration_text(b->break_min_ms);
+    o << "<tr><td>" << i + 1 << "</td><td>" << html(pb.name) << (pb.practice ? " (practice)" : "") << "</td><td>"
+      << pb.trial_count << "</td><td>" << html(judgement) << "</td><td>" << timeline << "</td><td>"
+      << html(breaks) << "</td></tr>\n";
+  }
+  o << "</table>\n";
+
+  // Texts the participant reads, in the order they appear.
+  const auto texts = [](const std::vector<std::string>& pages) {
+    std::string out;
+    for (const auto& t : pages) out += "<div class=\"text\">" + html(t) + "</div>";
+    return out.empty() ? std::string("—") : out;
+  };
+  o << "<h2>Instructions, prompts and break texts</h2>\n<table>\n<tr><th>when</th><th>text</th></tr>\n";
+  if (!p.instructions_start.empty())
+    o << "<tr><td>before the first block</td><td>" << texts(p.instructions_start) << "</td></tr>\n";
+  for (const auto& pb : design.blocks) {
+    const protocol::Block* b = find_block(p, pb.name);
+    if (!pb.instructions.empty())
+      o << "<tr><td>before block " << html(pb.name) << "</td><td>" << texts(pb.instructions) << "</td></tr>\n";
+    if (b && !b->judgement.prompt.empty())
+      o << "<tr><td>prompt in block " << html(pb.name) << "</td><td>" << texts({b->judgement.prompt})
+        << "</td></tr>\n";
+    if (b && b->break_every_trials > 0)
+      o << "<tr><td>break in block " << html(pb.name) << "</td><td>" << texts({b->break_text}) << "</td></tr>\n";
+  }
+  if (!p.instructions_end.empty())
+    o << "<tr><td>after the last block</td><td>" << texts(p.instructions_end) << "</td></tr>\n";
+  o << "</table>\n";
+
+  // One panel per distinct condition.
+  o << "<h2>Conditions (" << conditions.size() << ")</h2>\n<p class=\"small\">Each stereo pair is the first "
+       "frame of the stimulus as the headless runner renders it, seen by a participant standing at the "
+       "nominal table (the same viewpoint `curvlab predict` uses); a monocular condition's other eye shows "
+       "the background (the dominant eye is taken to be the right). Predicted proportions are the simulated "
+       "observer's over a population of 400 observers.</p>\n<div class=\"conditions\">\n";
+  for (std::size_t k = 0; k < conditions.size(); ++k) {
+    const auto& c = conditions[k];
+    const auto& img = images[k];
+    const auto& t = design.trials[c.first_trial];
+    o << "<section class=\"condition\" id=\"condition-" << k + 1 << "\">\n<h3>" << k + 1 << ". "
+      << html(levels_text(c.levels)) << "</h3>\n<div class=\"pair\">\n";
+    for (const auto& [file, caption] : {std::pair{img.left, "left eye"}, std::pair{img.right, "right eye"},
+                                        std::pair{img.anaglyph, "anaglyph (red left, cyan right)"}})
+      o << "<figure><img alt=\"" << caption << "\" src=\"data:image/png;base64,"
+        << base64(read_bytes((dir / "images" / file).string())) << "\"><figcaption>" << caption
+        << "</figcaption></figure>\n";
+    o << "</div>\n";
+    if (!img.note.empty()) o << "<p class=\"small\">Rendered with the " << html(img.note) << ".</p>\n";
+    o << "<table>\n";
+    for (const auto& [name, value] : c.settings)
+      o << "<tr><th>" << html(name) << "</th><td>" << html(value) << "</td></tr>\n";
+    o << "<tr><th>trials per block</th><td>";
+    for (std::size_t i = 0; i < c.trials_per_block.size(); ++i)
+      o << (i ? ", " : "") << html(c.trials_per_block[i].first) << ": " << c.trials_per_block[i].second;
+    o << "</td></tr>\n</table>\n";
+    // Predictions for these levels and this judged object.
+    bool any = false;
+    if (prediction) {
+      const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
+      for (const auto& pc : prediction->conditions) {
+        if (pc.levels != c.levels || pc.judged != judged_name) continue;
+        o << "<p class=\"small\">Predicted responses (perceived " << judged_name << " sagitta "
+          << fixed(pc.perceived_m * 1000.0, 2) << " mm):</p>\n<table>\n";
+        for (std::size_t i = 0; i < pc.options.size() && i < pc.proportions.size(); ++i)
+          o << "<tr><td>" << html(pc.options[i]) << "</td><td>" << fixed(pc.proportions[i], 3)
+            << "</td><td><span class=\"bar\" style=\"width:" << std::lround(pc.proportions[i] * 200.0)
+            << "px\"></span></td></tr>\n";
+        o << "</table>\n";
+        any = true;
+        break;
+      }
+      std::string rows;
+      for (const auto& sp : prediction->staircases) {
+        if (sp.levels != c.levels) continue;
+        if (std::none_of(c.trials_per_block.begin(), c.trials_per_block.end(),
+                         [&](const auto& e) { return e.first == sp.block; }))
+          continue;
+        rows += "<tr><td>" + html(sp.staircase) + " (" + std::to_string(sp.up) + "-up/" +
+                std::to_string(sp.down) + "-down, " + fixed(sp.target_p * 100.0, 1) + " % " + html(sp.positive) +
+                ")</td><td>" +
+                (sp.target_value ? html(sp.parameter) + " = " + fixed(*sp.target_value, 4)
+                                 : "outside [" + num(sp.min) + ", " + num(sp.max) + "]") +
+                "</td></tr>\n";
+      }
+      if (!rows.empty()) {
+        o << "<p class=\"small\">Predicted staircase convergence (mean observer):</p>\n<table>\n" << rows
+          << "</table>\n";
+        any = true;
+      }
+    }
+    if (!any) {
+      std::string why = "no prediction: ";
+      if (t.practice) why += "practice trials are not predicted";
+      else if (t.judgement == protocol::JudgementType::adjustment) why += "adjustment is not predicted";
+      else why += prediction_note.empty() ? "none for this condition" : prediction_note;
+      o << "<p class=\"small\">" << html(why) << "</p>\n";
+    }
+    o << "</section>\n";
+  }
+  o << "</div>\n<p class=\"small\">Written by <code>curvlab preview</code>.</p>\n</body>\n</html>\n";
+
+  const fs::path index = dir / "index.html";
+  const fs::path partial = dir / "index.html.partial";
+  {
+    std::ofstream f(partial, std::ios::binary | std::ios::trunc);
+    f << o.str();
+    f.close();
+    if (!f) return Error{Error::Kind::io, "cannot write " + partial.string()};
+  }
+  fs::rename(partial, index, ec);
+  if (ec) return Error{Error::Kind::io, "cannot write " + index.string() + ": " + ec.message()};
+  return PreviewResult{index.string(), conditions.size(), images.size() * 3, ctx.device_name()};
+}
+
+}  // namespace curvlab::harness::runner
