@@ -13,9 +13,13 @@
 namespace curvlab::testing {
 
 // One folder per test and process: suites of two checkouts may run at once.
+inline std::filesystem::path test_dir(const std::string& name) {
+  return std::filesystem::temp_directory_path() / ("curvlab_runner_" + name + "_" + std::to_string(::getpid()));
+}
+
+// test_dir(name), emptied.
 inline std::filesystem::path fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("curvlab_runner_" + name + "_" + std::to_string(::getpid()));
+  const auto dir = test_dir(name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

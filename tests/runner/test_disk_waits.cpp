@@ -31,7 +31,7 @@ TEST(DiskWaits, NoSyncFromTheFrameThreadAndEachTrialIsDurableBeforeTheNext) {
       if (syncs_before_loop < 0) {
         frame_thread = std::this_thread::get_id();
         syncs_before_loop = vfs::syncs_from(frame_thread);
-        db_path = (std::filesystem::temp_directory_path() / "curvlab_runner_in_process_disk_waits" / "s.sqlite").string();
+        db_path = (test_dir("in_process_disk_waits") / "s.sqlite").string();  // where run_protocol writes
       }
       loop_syncs = vfs::syncs_from(frame_thread) - syncs_before_loop;
       if (phase == "fixation" && last_phase != "fixation") {

@@ -209,112 +209,88 @@ std::vector<PreviewCondition> preview_conditions(const protocol::Design& design)
   return out;
 }
 
-Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRequest& rq) {
-  const protocol::Design design = protocol::expand_design(p, rq.participant);
-  const auto conditions = preview_conditions(design);
-  const auto report = [&](std::size_t done, const std::string& what) {
-    if (rq.progress) rq.progress(done, conditions.size(), what);
-  };
+namespace {
 
-  std::uint32_t w = static_cast<std::uint32_t>(p.resolution_width);
-  std::uint32_t h = static_cast<std::uint32_t>(p.resolution_height);
-  if (rq.size) {
-    std::tie(w, h) = *rq.size;
-  } else if (w > 480) {
+// The sheet's image size per eye: the request's, else the protocol's scaled
+// down to at most 480 px wide.
+std::pair<std::uint32_t, std::uint32_t> sheet_size(const protocol::Protocol& p, const PreviewRequest& rq) {
+  if (rq.size) return *rq.size;
+  auto w = static_cast<std::uint32_t>(p.resolution_width);
+  auto h = static_cast<std::uint32_t>(p.resolution_height);
+  if (w > 480) {
     h = std::max<std::uint32_t>(16, static_cast<std::uint32_t>(std::lround(480.0 * h / w)));
     w = 480;
   }
+  return {w, h};
+}
 
-  std::error_code ec;
-  const fs::path dir(rq.out_dir);
-  fs::create_directories(dir / "images", ec);
-  if (ec) return Error{Error::Kind::io, "cannot create " + (dir / "images").string() + ": " + ec.message()};
-
-  // Mesa keeps a shader cache under the home folder; the sheet writes only
-  // under its own folder.
-  ::setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
-  auto created = renderer::Context::create(
-      {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
-       .validation = false});
-  if (auto* e = std::get_if<renderer::RenderError>(&created)) return Error{Error::Kind::io, e->message};
-  const auto& ctx = std::get<renderer::Context>(created);
-  renderer::Renderer r(ctx);
-  renderer::OffscreenTarget target(ctx, w, h);
-
-  // Onset stereo pairs, one per condition.
-  report(0, "");
-  std::vector<Rendered> images;
-  for (std::size_t k = 0; k < conditions.size(); ++k) {
-    const auto& c = conditions[k];
-    const auto& t = design.trials[c.first_trial];
-    Settings s = t.settings;
-    Rendered out;
-    const protocol::Block* block = find_block(p, t.block);
-    const std::string prompt = block ? block->judgement.prompt : std::string();
-    // The stimulus value the runner shows at this trial's onset.
-    if (block && block->judgement.type == protocol::JudgementType::staircase &&
-        !block->judgement.staircases.empty()) {
-      const auto& sc = block->judgement.staircases[t.staircase >= 0 ? static_cast<std::size_t>(t.staircase) : 0];
-      protocol::set_numeric_setting(s, block->judgement.parameter, sc.start);
-      out.note = "staircase \"" + sc.name + "\" at its start value, " + block->judgement.parameter + " = " +
-                 num(sc.start);
-    }
-    if (t.adjustment_start && block && block->judgement.adjustment) {
-      protocol::set_numeric_setting(s, block->judgement.adjustment->parameter, *t.adjustment_start);
-      out.note = "adjustment start of trial " + std::to_string(t.index) + ": " +
-                 block->judgement.adjustment->parameter + " = " + fixed(*t.adjustment_start, 4) +
-                 " (the settings below are the protocol's)";
-    }
-    auto made = make_world(s);
-    if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
-    const World world = std::get<World>(made);
-    auto built = TrialScene::build(world, s, prompt, CURVLAB_DEFAULT_FONT);
-    if (auto* e = std::get_if<std::string>(&built)) return Error{Error::Kind::io, *e};
-    auto& scene = std::get<TrialScene>(built);
-    const geometry::Isometry head = standing_head(world, s);
-    const Placement placement = place_stimulus(world, s, head);
-    scene.place(placement, head);
-    scene.show(Phase::stimulus, s.timeline.stimulus_during_response);
-
-    renderer::FrameDescription desc;
-    desc.space = world.space;
-    desc.settings = view_settings(s, renderer::Eye::right);
-    desc.head = head;
-    desc.rig = renderer::StereoRig::from_ipd(
-        s.viewing.ipd_m, renderer::Fov::symmetric(std::numbers::pi / 2.0, double(w) / double(h)));
-    desc.width_px = w;
-    desc.height_px = h;
-    (void)r.render(scene.scene(), desc, target);
-
-    const std::string stem = "condition_" + std::to_string(k + 1);
-    out.left = stem + "_left.png";
-    out.right = stem + "_right.png";
-    out.anaglyph = stem + "_anaglyph.png";
-    const auto& left = target.image(renderer::Eye::left);
-    const auto& right = target.image(renderer::Eye::right);
-    for (const auto& [name, image] : {std::pair{out.left, &left}, std::pair{out.right, &right}})
-      if (auto err = renderer::write_png((dir / "images" / name).string(), *image); !err.empty())
-        return Error{Error::Kind::io, err};
-    if (auto err = renderer::write_png((dir / "images" / out.anaglyph).string(), anaglyph(left, right));
-        !err.empty())
-      return Error{Error::Kind::io, err};
-    images.push_back(std::move(out));
-    report(k + 1, levels_text(c.levels));
+// The stimulus value the runner shows at this trial's onset: a staircase's
+// start, an adjustment trial's drawn start. Returns the note for the panel.
+std::string onset_value(const protocol::Block* block, const protocol::PlannedTrial& t, Settings& s) {
+  std::string note;
+  if (block && block->judgement.type == protocol::JudgementType::staircase && !block->judgement.staircases.empty()) {
+    const auto& sc = block->judgement.staircases[t.staircase >= 0 ? static_cast<std::size_t>(t.staircase) : 0];
+    protocol::set_numeric_setting(s, block->judgement.parameter, sc.start);
+    note = "staircase \"" + sc.name + "\" at its start value, " + block->judgement.parameter + " = " + num(sc.start);
   }
+  if (t.adjustment_start && block && block->judgement.adjustment) {
+    protocol::set_numeric_setting(s, block->judgement.adjustment->parameter, *t.adjustment_start);
+    note = "adjustment start of trial " + std::to_string(t.index) + ": " + block->judgement.adjustment->parameter +
+           " = " + fixed(*t.adjustment_start, 4) + " (the settings below are the protocol's)";
+  }
+  return note;
+}
 
-  // Predicted proportions from the simulated observer (choice and
-  // staircase blocks; practice is not predicted).
-  PredictOptions po;
-  po.simulations = 1;  // proportions only; power is `curvlab predict`'s job
-  std::optional<Prediction> prediction;
-  std::string prediction_note;
-  auto predicted = predict(p, po);
-  if (!predicted) prediction_note = predicted.error().message;
-  else prediction = std::move(predicted).value();
+struct SheetRenderer {
+  renderer::Renderer& r;
+  renderer::OffscreenTarget& target;
+  std::uint32_t w, h;
+  fs::path dir;
+};
 
-  // ---- the page ------------------------------------------------------------
-  const auto sha = curvlab::data::sha256_hex(rq.protocol_text);
-  std::ostringstream o;
+// One condition's onset stereo pair and anaglyph, written under images/.
+Result<Rendered> render_condition(const protocol::Protocol& p, const protocol::PlannedTrial& t, std::size_t k,
+                                  SheetRenderer& out_to) {
+  Settings s = t.settings;
+  Rendered out;
+  const protocol::Block* block = find_block(p, t.block);
+  out.note = onset_value(block, t, s);
+  auto made = make_world(s);
+  if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
+  const World world = std::get<World>(made);
+  auto built = TrialScene::build(world, s, block ? block->judgement.prompt : std::string(), CURVLAB_DEFAULT_FONT);
+  if (auto* e = std::get_if<std::string>(&built)) return Error{Error::Kind::io, *e};
+  auto& scene = std::get<TrialScene>(built);
+  const geometry::Isometry head = standing_head(world, s);
+  scene.place(place_stimulus(world, s, head), head);
+  scene.show(Phase::stimulus, s.timeline.stimulus_during_response);
+  renderer::FrameDescription desc;
+  desc.space = world.space;
+  desc.settings = view_settings(s, renderer::Eye::right);
+  desc.head = head;
+  desc.rig = renderer::StereoRig::from_ipd(
+      s.viewing.ipd_m, renderer::Fov::symmetric(std::numbers::pi / 2.0, double(out_to.w) / double(out_to.h)));
+  desc.width_px = out_to.w;
+  desc.height_px = out_to.h;
+  (void)out_to.r.render(scene.scene(), desc, out_to.target);
+  const std::string stem = "condition_" + std::to_string(k + 1);
+  out.left = stem + "_left.png";
+  out.right = stem + "_right.png";
+  out.anaglyph = stem + "_anaglyph.png";
+  const auto& left = out_to.target.image(renderer::Eye::left);
+  const auto& right = out_to.target.image(renderer::Eye::right);
+  for (const auto& [name, image] : {std::pair{out.left, &left}, std::pair{out.right, &right}})
+    if (auto err = renderer::write_png((out_to.dir / "images" / name).string(), *image); !err.empty())
+      return Error{Error::Kind::io, err};
+  if (auto err = renderer::write_png((out_to.dir / "images" / out.anaglyph).string(), anaglyph(left, right));
+      !err.empty())
+    return Error{Error::Kind::io, err};
+  return out;
+}
+
+void write_header(std::ostringstream& o, const protocol::Protocol& p, const PreviewRequest& rq,
+                  const protocol::Design& design, std::size_t conditions, const std::string& device,
+                  std::uint32_t w, std::uint32_t h) {
   o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
     << html(p.meta.name + " " + p.meta.version) << " — curvlab preview</title>\n<style>" << kStyle
     << "</style>\n</head>\n<body>\n";
@@ -322,20 +298,23 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
   if (!p.meta.description.empty()) o << "<p>" << html(p.meta.description) << "</p>\n";
   o << "<table class=\"meta\">\n"
     << "<tr><td>protocol file</td><td><code>" << html(rq.protocol_path) << "</code></td></tr>\n"
-    << "<tr><td>protocol SHA-256</td><td><code id=\"sha256\">" << sha << "</code></td></tr>\n"
+    << "<tr><td>protocol SHA-256</td><td><code id=\"sha256\">" << curvlab::data::sha256_hex(rq.protocol_text)
+    << "</code></td></tr>\n"
     << "<tr><td>software</td><td>curvlab " << html(std::string(software_version())) << " ("
     << html(std::string(git_commit())) << ")</td></tr>\n"
-    << "<tr><td>renderer</td><td>" << html(ctx.device_name()) << ", " << w << "×" << h
+    << "<tr><td>renderer</td><td>" << html(device) << ", " << w << "×" << h
     << " px per eye, 90° horizontal field of view</td></tr>\n"
     << "<tr><td>participant</td><td>" << design.participant << " (seed " << design.seed;
   if (design.counterbalance_row) o << ", counterbalance row " << *design.counterbalance_row + 1;
   o << ")</td></tr>\n"
     << "<tr><td>trials</td><td>" << design.trials.size() << " in " << design.blocks.size() << " blocks, "
-    << conditions.size() << " distinct conditions</td></tr>\n"
+    << conditions << " distinct conditions</td></tr>\n"
     << "<tr><td>estimated duration</td><td>" << duration_text(design.estimated_duration_ms())
     << " (timelines and minimum breaks; reading instructions not included)</td></tr>\n</table>\n";
+}
 
-  // Block order and timelines.
+// Block order and timelines.
+void write_blocks(std::ostringstream& o, const protocol::Protocol& p, const protocol::Design& design) {
   o << "<h2>Block order for participant " << design.participant << "</h2>\n<table>\n"
     << "<tr><th>#</th><th>block</th><th>trials</th><th>judgement</th><th>timeline (fixation / stimulus / "
        "response / ITI)</th><th>breaks</th></tr>\n";
@@ -353,15 +332,16 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
     if (b && b->judgement.type == protocol::JudgementType::staircase) judgement += " (trial count at most)";
     std::string breaks = "none";
     if (b && b->break_every_trials > 0)
-      breaks = "every " + std::to_string(b->break_every_trials) + " trials, at least " +
-               duration_text(b->break_min_ms);
+      breaks = "every " + std::to_string(b->break_every_trials) + " trials, at least " + duration_text(b->break_min_ms);
     o << "<tr><td>" << i + 1 << "</td><td>" << html(pb.name) << (pb.practice ? " (practice)" : "") << "</td><td>"
       << pb.trial_count << "</td><td>" << html(judgement) << "</td><td>" << timeline << "</td><td>"
       << html(breaks) << "</td></tr>\n";
   }
   o << "</table>\n";
+}
 
-  // Texts the participant reads, in the order they appear.
+// Texts the participant reads, in the order they appear.
+void write_texts(std::ostringstream& o, const protocol::Protocol& p, const protocol::Design& design) {
   const auto texts = [](const std::vector<std::string>& pages) {
     std::string out;
     for (const auto& t : pages) out += "<div class=\"text\">" + html(t) + "</div>";
@@ -383,90 +363,152 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
   if (!p.instructions_end.empty())
     o << "<tr><td>after the last block</td><td>" << texts(p.instructions_end) << "</td></tr>\n";
   o << "</table>\n";
+}
 
-  // One panel per distinct condition.
+// The predictions for a condition's levels and judged object; false when none.
+bool write_predictions(std::ostringstream& o, const Prediction& prediction, const PreviewCondition& c,
+                       const protocol::PlannedTrial& t) {
+  bool any = false;
+  const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
+  for (const auto& pc : prediction.conditions) {
+    if (pc.levels != c.levels || pc.judged != judged_name) continue;
+    o << "<p class=\"small\">Predicted responses (perceived " << judged_name << " sagitta "
+      << fixed(pc.perceived_m * 1000.0, 2) << " mm):</p>\n<table>\n";
+    for (std::size_t i = 0; i < pc.options.size() && i < pc.proportions.size(); ++i)
+      o << "<tr><td>" << html(pc.options[i]) << "</td><td>" << fixed(pc.proportions[i], 3)
+        << "</td><td><span class=\"bar\" style=\"width:" << std::lround(pc.proportions[i] * 200.0)
+        << "px\"></span></td></tr>\n";
+    o << "</table>\n";
+    any = true;
+    break;
+  }
+  std::string rows;
+  for (const auto& sp : prediction.staircases) {
+    if (sp.levels != c.levels) continue;
+    if (std::none_of(c.trials_per_block.begin(), c.trials_per_block.end(),
+                     [&](const auto& e) { return e.first == sp.block; }))
+      continue;
+    rows += "<tr><td>" + html(sp.staircase) + " (" + std::to_string(sp.up) + "-up/" + std::to_string(sp.down) +
+            "-down, " + fixed(sp.target_p * 100.0, 1) + " % " + html(sp.positive) + ")</td><td>" +
+            (sp.target_value ? html(sp.parameter) + " = " + fixed(*sp.target_value, 4)
+                             : "outside [" + num(sp.min) + ", " + num(sp.max) + "]") +
+            "</td></tr>\n";
+  }
+  if (!rows.empty()) {
+    o << "<p class=\"small\">Predicted staircase convergence (mean observer):</p>\n<table>\n" << rows << "</table>\n";
+    any = true;
+  }
+  return any;
+}
+
+// One panel: the images, the settings, trials per block, the predictions.
+void write_panel(std::ostringstream& o, std::size_t k, const PreviewCondition& c, const Rendered& img,
+                 const protocol::PlannedTrial& t, const std::optional<Prediction>& prediction,
+                 const std::string& prediction_note, const fs::path& dir) {
+  o << "<section class=\"condition\" id=\"condition-" << k + 1 << "\">\n<h3>" << k + 1 << ". "
+    << html(levels_text(c.levels)) << "</h3>\n<div class=\"pair\">\n";
+  for (const auto& [file, caption] : {std::pair{img.left, "left eye"}, std::pair{img.right, "right eye"},
+                                      std::pair{img.anaglyph, "anaglyph (red left, cyan right)"}})
+    o << "<figure><img alt=\"" << caption << "\" src=\"data:image/png;base64,"
+      << base64(read_bytes((dir / "images" / file).string())) << "\"><figcaption>" << caption
+      << "</figcaption></figure>\n";
+  o << "</div>\n";
+  if (!img.note.empty()) o << "<p class=\"small\">Rendered with the " << html(img.note) << ".</p>\n";
+  o << "<table>\n";
+  for (const auto& [name, value] : c.settings)
+    o << "<tr><th>" << html(name) << "</th><td>" << html(value) << "</td></tr>\n";
+  o << "<tr><th>trials per block</th><td>";
+  for (std::size_t i = 0; i < c.trials_per_block.size(); ++i)
+    o << (i ? ", " : "") << html(c.trials_per_block[i].first) << ": " << c.trials_per_block[i].second;
+  o << "</td></tr>\n</table>\n";
+  if (!prediction || !write_predictions(o, *prediction, c, t)) {
+    std::string why = "no prediction: ";
+    if (t.practice) why += "practice trials are not predicted";
+    else if (t.judgement == protocol::JudgementType::adjustment) why += "adjustment is not predicted";
+    else why += prediction_note.empty() ? "none for this condition" : prediction_note;
+    o << "<p class=\"small\">" << html(why) << "</p>\n";
+  }
+  o << "</section>\n";
+}
+
+// index.html appears whole or not at all.
+Result<std::string> write_atomically(const fs::path& dir, const std::string& text) {
+  const fs::path index = dir / "index.html";
+  const fs::path partial = dir / "index.html.partial";
+  {
+    std::ofstream f(partial, std::ios::binary | std::ios::trunc);
+    f << text;
+    f.close();
+    if (!f) return Error{Error::Kind::io, "cannot write " + partial.string()};
+  }
+  std::error_code ec;
+  fs::rename(partial, index, ec);
+  if (ec) return Error{Error::Kind::io, "cannot write " + index.string() + ": " + ec.message()};
+  return index.string();
+}
+
+}  // namespace
+
+Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRequest& rq) {
+  const protocol::Design design = protocol::expand_design(p, rq.participant);
+  const auto conditions = preview_conditions(design);
+  const auto report = [&](std::size_t done, const std::string& what) {
+    if (rq.progress) rq.progress(done, conditions.size(), what);
+  };
+  const auto [w, h] = sheet_size(p, rq);
+  std::error_code ec;
+  const fs::path dir(rq.out_dir);
+  fs::create_directories(dir / "images", ec);
+  if (ec) return Error{Error::Kind::io, "cannot create " + (dir / "images").string() + ": " + ec.message()};
+
+  // Mesa keeps a shader cache under the home folder; the sheet writes only
+  // under its own folder.
+  ::setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
+  auto created = renderer::Context::create(
+      {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
+       .validation = false});
+  if (auto* e = std::get_if<renderer::RenderError>(&created)) return Error{Error::Kind::device, e->message};
+  const auto& ctx = std::get<renderer::Context>(created);
+  renderer::Renderer r(ctx);
+  renderer::OffscreenTarget target(ctx, w, h);
+  SheetRenderer sheet{r, target, w, h, dir};
+
+  // Onset stereo pairs, one per condition.
+  report(0, "");
+  std::vector<Rendered> images;
+  for (std::size_t k = 0; k < conditions.size(); ++k) {
+    auto rendered = render_condition(p, design.trials[conditions[k].first_trial], k, sheet);
+    if (!rendered) return rendered.error();
+    images.push_back(std::move(rendered).value());
+    report(k + 1, levels_text(conditions[k].levels));
+  }
+
+  // Predicted proportions from the simulated observer (choice and
+  // staircase blocks; practice is not predicted).
+  PredictOptions po;
+  po.simulations = 1;  // proportions only; power is `curvlab predict`'s job
+  std::optional<Prediction> prediction;
+  std::string prediction_note;
+  auto predicted = predict(p, po);
+  if (!predicted) prediction_note = predicted.error().message;
+  else prediction = std::move(predicted).value();
+
+  std::ostringstream o;
+  write_header(o, p, rq, design, conditions.size(), ctx.device_name(), w, h);
+  write_blocks(o, p, design);
+  write_texts(o, p, design);
   o << "<h2>Conditions (" << conditions.size() << ")</h2>\n<p class=\"small\">Each stereo pair is the first "
        "frame of the stimulus as the headless runner renders it, seen by a participant standing at the "
        "nominal table (the same viewpoint `curvlab predict` uses); a monocular condition's other eye shows "
        "the background (the dominant eye is taken to be the right). Predicted proportions are the simulated "
        "observer's over a population of 400 observers.</p>\n<div class=\"conditions\">\n";
-  for (std::size_t k = 0; k < conditions.size(); ++k) {
-    const auto& c = conditions[k];
-    const auto& img = images[k];
-    const auto& t = design.trials[c.first_trial];
-    o << "<section class=\"condition\" id=\"condition-" << k + 1 << "\">\n<h3>" << k + 1 << ". "
-      << html(levels_text(c.levels)) << "</h3>\n<div class=\"pair\">\n";
-    for (const auto& [file, caption] : {std::pair{img.left, "left eye"}, std::pair{img.right, "right eye"},
-                                        std::pair{img.anaglyph, "anaglyph (red left, cyan right)"}})
-      o << "<figure><img alt=\"" << caption << "\" src=\"data:image/png;base64,"
-        << base64(read_bytes((dir / "images" / file).string())) << "\"><figcaption>" << caption
-        << "</figcaption></figure>\n";
-    o << "</div>\n";
-    if (!img.note.empty()) o << "<p class=\"small\">Rendered with the " << html(img.note) << ".</p>\n";
-    o << "<table>\n";
-    for (const auto& [name, value] : c.settings)
-      o << "<tr><th>" << html(name) << "</th><td>" << html(value) << "</td></tr>\n";
-    o << "<tr><th>trials per block</th><td>";
-    for (std::size_t i = 0; i < c.trials_per_block.size(); ++i)
-      o << (i ? ", " : "") << html(c.trials_per_block[i].first) << ": " << c.trials_per_block[i].second;
-    o << "</td></tr>\n</table>\n";
-    // Predictions for these levels and this judged object.
-    bool any = false;
-    if (prediction) {
-      const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
-      for (const auto& pc : prediction->conditions) {
-        if (pc.levels != c.levels || pc.judged != judged_name) continue;
-        o << "<p class=\"small\">Predicted responses (perceived " << judged_name << " sagitta "
-          << fixed(pc.perceived_m * 1000.0, 2) << " mm):</p>\n<table>\n";
-        for (std::size_t i = 0; i < pc.options.size() && i < pc.proportions.size(); ++i)
-          o << "<tr><td>" << html(pc.options[i]) << "</td><td>" << fixed(pc.proportions[i], 3)
-            << "</td><td><span class=\"bar\" style=\"width:" << std::lround(pc.proportions[i] * 200.0)
-            << "px\"></span></td></tr>\n";
-        o << "</table>\n";
-        any = true;
-        break;
-      }
-      std::string rows;
-      for (const auto& sp : prediction->staircases) {
-        if (sp.levels != c.levels) continue;
-        if (std::none_of(c.trials_per_block.begin(), c.trials_per_block.end(),
-                         [&](const auto& e) { return e.first == sp.block; }))
-          continue;
-        rows += "<tr><td>" + html(sp.staircase) + " (" + std::to_string(sp.up) + "-up/" +
-                std::to_string(sp.down) + "-down, " + fixed(sp.target_p * 100.0, 1) + " % " + html(sp.positive) +
-                ")</td><td>" +
-                (sp.target_value ? html(sp.parameter) + " = " + fixed(*sp.target_value, 4)
-                                 : "outside [" + num(sp.min) + ", " + num(sp.max) + "]") +
-                "</td></tr>\n";
-      }
-      if (!rows.empty()) {
-        o << "<p class=\"small\">Predicted staircase convergence (mean observer):</p>\n<table>\n" << rows
-          << "</table>\n";
-        any = true;
-      }
-    }
-    if (!any) {
-      std::string why = "no prediction: ";
-      if (t.practice) why += "practice trials are not predicted";
-      else if (t.judgement == protocol::JudgementType::adjustment) why += "adjustment is not predicted";
-      else why += prediction_note.empty() ? "none for this condition" : prediction_note;
-      o << "<p class=\"small\">" << html(why) << "</p>\n";
-    }
-    o << "</section>\n";
-  }
+  for (std::size_t k = 0; k < conditions.size(); ++k)
+    write_panel(o, k, conditions[k], images[k], design.trials[conditions[k].first_trial], prediction,
+                prediction_note, dir);
   o << "</div>\n<p class=\"small\">Written by <code>curvlab preview</code>.</p>\n</body>\n</html>\n";
-
-  const fs::path index = dir / "index.html";
-  const fs::path partial = dir / "index.html.partial";
-  {
-    std::ofstream f(partial, std::ios::binary | std::ios::trunc);
-    f << o.str();
-    f.close();
-    if (!f) return Error{Error::Kind::io, "cannot write " + partial.string()};
-  }
-  fs::rename(partial, index, ec);
-  if (ec) return Error{Error::Kind::io, "cannot write " + index.string() + ": " + ec.message()};
-  return PreviewResult{index.string(), conditions.size(), images.size() * 3, ctx.device_name()};
+  auto index = write_atomically(dir, o.str());
+  if (!index) return index.error();
+  return PreviewResult{*index, conditions.size(), images.size() * 3, ctx.device_name()};
 }
 
 }  // namespace curvlab::harness::runner
