@@ -7,7 +7,11 @@
 // it for stimulus-onset frames and for all frames, with the disk syncs
 // issued from the frame thread and from other threads.
 //
-//   bench_onset_frame [protocol] [delays_ms,...]     (default: demo 0,8,30)
+//   bench_onset_frame [protocol] [delays_ms,...] [fast|realtime]   (default: demo 0,8,30 fast)
+//
+// Fast pace runs the inter-trial interval in no time, so a trial's durable
+// commit, which the real-time runner overlaps with the interval, shows as
+// a long interval frame there; realtime shows what a participant gets.
 #include "sync_vfs.hpp"
 
 #include "curvlab/harness/protocol/loader.hpp"
@@ -97,6 +101,7 @@ int main(int argc, char** argv) {
     std::stringstream list(argv[2]);
     for (std::string item; std::getline(list, item, ',');) delays.push_back(std::stoi(item));
   }
+  const bool realtime = argc > 3 && std::string(argv[3]) == "realtime";
   vfs::install();
   const std::string path = CURVLAB_SOURCE_DIR "/protocols/" + name + ".toml";
   std::ifstream in(path);
@@ -112,13 +117,14 @@ int main(int argc, char** argv) {
   std::filesystem::remove_all(tmp);
   std::filesystem::create_directories(tmp);
 
-  std::printf("protocol %s, headless fast pace, nothing drawn, simulated observer\n", name.c_str());
+  std::printf("protocol %s, headless %s pace, nothing drawn, simulated observer\n", name.c_str(),
+              realtime ? "realtime" : "fast");
   std::printf("%8s %7s %7s | %9s %9s %9s | %9s %9s %9s | %10s %11s %11s\n", "sync_ms", "trials", "frames",
               "onset_p50", "onset_p99", "onset_max", "all_p50", "all_p99", "all_max", "syncs_loop",
               "syncs_setup", "syncs_other");
   for (const int delay_ms : delays) {
     rn::HeadlessOptions ho;
-    ho.pace = rn::Pace::fast;
+    ho.pace = realtime ? rn::Pace::realtime : rn::Pace::fast;
     ho.no_gpu = true;
     ho.refresh_hz = p.refresh_hz;
     ho.table = rn::nominal_calibration(p.session_settings());
@@ -133,6 +139,7 @@ int main(int argc, char** argv) {
     o.participant = "B01";
     o.observer = rn::ObserverParams{};
     o.drawing = rn::FrameDrawing::none;
+    o.lossless_logging = !realtime;
     std::string file = "delay_";
     file += std::to_string(delay_ms);
     file += ".sqlite";
