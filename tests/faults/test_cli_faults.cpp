@@ -140,17 +140,25 @@ TEST(CliFaults, HeadlessDeviceLossExitsOneNamingItAndResumes) {
   fs::remove_all(dir);
 }
 
-TEST(CliFaults, XrSessionLostInWaitFrameExitsOneNamingItAndResumes) {
-  const auto dir = fresh_dir("xr_wait");
+namespace {
+
+// A headset run that meets `fault` (CURVLAB_TEST_XR_FAIL) ends interrupted
+// with `named` in its message, tears down cleanly, and resumes to the end.
+void xr_fault_then_resume(const std::string& name, const std::string& participant, const std::string& fault,
+                          const std::string& named) {
+  const auto dir = fresh_dir(name);
   const auto db = dir / "xr.db";
   {
     XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses},
-                   {"CURVLAB_TEST_XR_FAIL", "xrWaitFrame@2.5:XR_ERROR_SESSION_LOST"},
+                   {"CURVLAB_TEST_XR_FAIL", fault},
                    {"CURVLAB_TEST_XR_LOG", (dir / "runtime.log").string()}});
-    const auto r = run_cli("run " + kXrProtocol + " --participant X05 --backend xr --db " + db.string() + " --quiet");
-    expect_interrupted(r, db, "xrWaitFrame: XR_ERROR_SESSION_LOST");
+    const auto r =
+        run_cli("run " + kXrProtocol + " --participant " + participant + " --backend xr --db " + db.string() + " --quiet");
+    expect_interrupted(r, db, named);
   }
-  expect_clean_teardown(dir / "runtime.log", "xrWaitFrame XR_ERROR_SESSION_LOST");
+  std::string logged = named;
+  logged.replace(logged.find(": "), 2, " ");
+  expect_clean_teardown(dir / "runtime.log", logged);
   XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses}});
   const auto r = run_cli("resume --db " + db.string() + " --session 1 --backend xr --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -159,21 +167,13 @@ TEST(CliFaults, XrSessionLostInWaitFrameExitsOneNamingItAndResumes) {
   fs::remove_all(dir);
 }
 
+}  // namespace
+
+TEST(CliFaults, XrSessionLostInWaitFrameExitsOneNamingItAndResumes) {
+  xr_fault_then_resume("xr_wait", "X05", "xrWaitFrame@2.5:XR_ERROR_SESSION_LOST", "xrWaitFrame: XR_ERROR_SESSION_LOST");
+}
+
 TEST(CliFaults, XrRuntimeFailureInEndFrameExitsOneNamingItAndResumes) {
-  const auto dir = fresh_dir("xr_end");
-  const auto db = dir / "xr.db";
-  {
-    XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses},
-                   {"CURVLAB_TEST_XR_FAIL", "xrEndFrame@2.5:XR_ERROR_RUNTIME_FAILURE"},
-                   {"CURVLAB_TEST_XR_LOG", (dir / "runtime.log").string()}});
-    const auto r = run_cli("run " + kXrProtocol + " --participant X06 --backend xr --db " + db.string() + " --quiet");
-    expect_interrupted(r, db, "xrEndFrame: XR_ERROR_RUNTIME_FAILURE");
-  }
-  expect_clean_teardown(dir / "runtime.log", "xrEndFrame XR_ERROR_RUNTIME_FAILURE");
-  XrRuntime env({{"CURVLAB_TEST_XR_PRESS", kPresses}});
-  const auto r = run_cli("resume --db " + db.string() + " --session 1 --backend xr --quiet");
-  ASSERT_EQ(r.exit_code, 0) << r.out;
-  EXPECT_EQ(scalar(db, "SELECT status FROM sessions"), "completed");
-  EXPECT_EQ(completed(db), 8);
-  fs::remove_all(dir);
+  xr_fault_then_resume("xr_end", "X06", "xrEndFrame@2.5:XR_ERROR_RUNTIME_FAILURE",
+                       "xrEndFrame: XR_ERROR_RUNTIME_FAILURE");
 }

@@ -134,20 +134,13 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   auto writer = data::SampleWriter::open(db_path);
   if (!writer) return writer.error();
 
-  SessionSetup setup;
-  setup.protocol = &p;
-  setup.design = std::move(design);
-  setup.store = &store;
-  setup.writer = writer.value().get();
-  setup.backend = &backend;
-  setup.clock = &clock;
-  setup.options = options;
-  setup.options.participant = stored.participant;
-  setup.options.participant_number = stored.participant_number;
-  if (!setup.options.observer) setup.options.observer = stored.observer;
-  if (!setup.options.calibration) setup.options.calibration = stored.calibration;
-  setup.session_id = session_id;
-  setup.trial_ids = std::move(point->trial_ids);
+  RunOptions o = options;
+  o.participant = stored.participant;
+  o.participant_number = stored.participant_number;
+  if (!o.observer) o.observer = stored.observer;
+  if (!o.calibration) o.calibration = stored.calibration;
+  auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), backend, clock, std::move(o),
+                                session_id, std::move(point->trial_ids));
   setup.frame_offset = point->frame_offset;
   setup.first_trial_attempts = point->attempts;
   setup.first_trial_aborts = point->aborts;

@@ -93,17 +93,10 @@ RunResult run_session(const protocol::Protocol& p, const std::string& protocol_t
   auto writer = data::SampleWriter::open(db_path);
   if (!writer) return writer.error();
 
-  SessionSetup setup;
-  setup.protocol = &p;
-  setup.design = std::move(design);
-  setup.store = &store;
-  setup.writer = writer.value().get();
-  setup.backend = &backend;
-  setup.clock = &clock;
-  setup.options = options;
-  setup.options.calibration = calibration;
-  setup.session_id = created->session_id;
-  setup.trial_ids = std::move(created->trial_ids);
+  RunOptions o = options;
+  o.calibration = calibration;
+  auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), backend, clock, std::move(o),
+                                created->session_id, std::move(created->trial_ids));
   auto result = SessionLoop(std::move(setup)).run(0, true);
   if (result) result->db_path = db_path;
   return result;

@@ -37,6 +37,23 @@ struct SessionSetup {
   std::int64_t first_trial_aborts = 0;
   // Committed staircase answers, in order (resume): trial id → positive.
   std::vector<std::pair<std::int64_t, bool>> staircase_history;
+
+  // What every run sets; a resumed run adds where it continues.
+  static SessionSetup of(const protocol::Protocol& p, protocol::Design design, data::SessionStore& store,
+                         data::SampleWriter& writer, Backend& backend, const devices::Clock& clock,
+                         RunOptions options, std::int64_t session_id, std::vector<std::int64_t> trial_ids) {
+    SessionSetup s;
+    s.protocol = &p;
+    s.design = std::move(design);
+    s.store = &store;
+    s.writer = &writer;
+    s.backend = &backend;
+    s.clock = &clock;
+    s.options = std::move(options);
+    s.session_id = session_id;
+    s.trial_ids = std::move(trial_ids);
+    return s;
+  }
 };
 
 class SessionLoop {
