@@ -84,7 +84,7 @@ TEST(Observer, AdjustmentSettlesWhereThePerceivedBowVanishes) {
 }
 
 TEST(Observer, RejectsImpossibleParameters) {
-  EXPECT_TRUE(rn::check_observer(params(0.0, -1.0, 0.0)).has_value());
-  EXPECT_TRUE(rn::check_observer(params(0.0, 100.0, 1.5)).has_value());
-  EXPECT_FALSE(rn::check_observer(params(0.01, 100.0, 0.02)).has_value());
+  EXPECT_FALSE(rn::check_observer(params(0.0, -1.0, 0.0)).has_value());
+  EXPECT_FALSE(rn::check_observer(params(0.0, 100.0, 1.5)).has_value());
+  EXPECT_TRUE(rn::check_observer(params(0.01, 100.0, 0.02)).has_value());
 }

@@ -75,7 +75,7 @@ std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::ui
   p.lapse = a.lapse;
   p.criterion_m = a.criterion_m;
   p.seed = a.seed.value_or(default_seed);
-  if (auto e = rn::check_observer(p)) throw UsageError("--observer-*: " + *e);
+  if (auto ok = rn::check_observer(p); !ok) throw UsageError("--observer-*: " + ok.error().message);
   return p;
 }
 
@@ -268,8 +268,8 @@ std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& pa
   std::stringstream text;
   text << in.rdbuf();
   auto fit = rn::parse_calibration_json(text.str());
-  if (auto* e = std::get_if<std::string>(&fit)) throw UsageError(path + ": " + *e);
-  return std::get<geometry::PhysicalTableFit>(fit);
+  if (!fit) throw UsageError(path + ": " + fit.error().message);
+  return *fit;
 }
 
 void run_command(const RunArgs& a) {

@@ -24,15 +24,15 @@ std::optional<ObserverModel> parse_observer_model(std::string_view text) {
   return std::nullopt;
 }
 
-std::optional<std::string> check_observer(const ObserverParams& p) {
-  if (!(std::abs(p.bias_m) <= 1.0)) return "bias_m must lie in [-1, 1] metres";
+Result<Done> check_observer(const ObserverParams& p) {
+  const auto bad = [](const char* m) { return Error{Error::Kind::usage, m}; };
+  if (!(std::abs(p.bias_m) <= 1.0)) return bad("bias_m must lie in [-1, 1] metres");
   if (!(p.slope_per_m > 0.0 && p.slope_per_m <= 1e6))
-    return "slope_per_m must be a positive number (1 / noise SD in metres)";
-  if (!(p.lapse >= 0.0 && p.lapse <= 1.0)) return "lapse must lie in [0, 1]";
-  if (!(p.criterion_m >= 0.0 && p.criterion_m <= 1.0)) return "criterion_m must lie in [0, 1] metres";
-  if (!(p.rt_base_ms >= 0.0 && p.rt_mean_extra_ms >= 0.0))
-    return "response-time parameters must not be negative";
-  return std::nullopt;
+    return bad("slope_per_m must be a positive number (1 / noise SD in metres)");
+  if (!(p.lapse >= 0.0 && p.lapse <= 1.0)) return bad("lapse must lie in [0, 1]");
+  if (!(p.criterion_m >= 0.0 && p.criterion_m <= 1.0)) return bad("criterion_m must lie in [0, 1] metres");
+  if (!(p.rt_base_ms >= 0.0 && p.rt_mean_extra_ms >= 0.0)) return bad("response-time parameters must not be negative");
+  return Done{};
 }
 
 std::string observer_json(const ObserverParams& p) {

@@ -171,8 +171,8 @@ Result<Done> predict_staircases(const protocol::Protocol& p, const protocol::Pla
     if (b.name == t.block) block = &b;
   if (block == nullptr) return Done{};
   auto made = make_world(t.settings);
-  if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
-  const World world = std::get<World>(made);
+  if (!made) return made.error();
+  const World world = std::move(made).value();
   const auto& j = block->judgement;
   for (const auto& sc : j.staircases) {
     StaircasePrediction sp;
@@ -198,8 +198,8 @@ Result<Done> predict_staircases(const protocol::Protocol& p, const protocol::Pla
 Result<ConditionPrediction> predict_condition(const protocol::Protocol& p, const protocol::PlannedTrial& t,
                                               const std::string& judged_name, bool physical) {
   auto made = make_world(t.settings);
-  if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
-  const World world = std::get<World>(made);
+  if (!made) return made.error();
+  const World world = std::move(made).value();
   const geometry::Isometry head = standing_head(world, t.settings);
   const Placement placement = place_stimulus(world, t.settings, head);
   ConditionPrediction c;
@@ -378,7 +378,7 @@ Result<std::optional<PowerEstimate>> estimate_power(Population& population, cons
 Result<Prediction> predict(const protocol::Protocol& p, const PredictOptions& o) {
   if (o.participants < 2) return predict_error("--participants must be at least 2");
   if (o.simulations < 1) return predict_error("--simulations must be at least 1");
-  if (auto e = check_observer(o.observer)) return predict_error("observer: " + *e);
+  if (auto ok = check_observer(o.observer); !ok) return predict_error("observer: " + ok.error().message);
   Prediction out;
   out.participants = o.participants;
   if (auto r = collect_conditions(p, o, out); !r) return r.error();

@@ -256,11 +256,11 @@ Result<Rendered> render_condition(const protocol::Protocol& p, const protocol::P
   const protocol::Block* block = find_block(p, t.block);
   out.note = onset_value(block, t, s);
   auto made = make_world(s);
-  if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::bad_input, *e};
-  const World world = std::get<World>(made);
+  if (!made) return made.error();
+  const World world = std::move(made).value();
   auto built = TrialScene::build(world, s, block ? block->judgement.prompt : std::string(), CURVLAB_DEFAULT_FONT);
-  if (auto* e = std::get_if<std::string>(&built)) return Error{Error::Kind::io, *e};
-  auto& scene = std::get<TrialScene>(built);
+  if (!built) return built.error();
+  auto& scene = built.value();
   const geometry::Isometry head = standing_head(world, s);
   scene.place(place_stimulus(world, s, head), head);
   scene.show(Phase::stimulus, s.timeline.stimulus_during_response);

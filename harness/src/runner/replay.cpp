@@ -192,12 +192,12 @@ Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
   const Phase phase = phase_at(f);
 
   auto made = make_world(f.settings);
-  if (auto* e = std::get_if<std::string>(&made)) return Error{Kind::bad_input, *e};
-  const World world = std::get<World>(made);
+  if (!made) return made.error();
+  const World world = std::move(made).value();
   auto built = TrialScene::build(world, f.settings, f.block ? f.block->judgement.prompt : std::string(),
                                  CURVLAB_DEFAULT_FONT);
-  if (auto* e = std::get_if<std::string>(&built)) return Error{Kind::bad_input, *e};
-  auto& scene = std::get<TrialScene>(built);
+  if (!built) return built.error();
+  auto& scene = built.value();
   // The stimulus stays where onset placed it; an adjustment re-places it
   // from the head at onset, as the session did.
   const geometry::Isometry head_at_onset = isometry(f.onset.head_pose);

@@ -107,7 +107,7 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
   out.backend = prov->backend ? data::to_string(*prov->backend) : "unknown";
   if (prov->table_calibration_json) {
     auto fit = parse_calibration_json(*prov->table_calibration_json);
-    if (auto* f = std::get_if<geometry::PhysicalTableFit>(&fit)) out.calibration = *f;
+    if (fit) out.calibration = *fit;
   }
   if (prov->observer) out.observer = observer_params(*prov->observer);
   out.last_t_ns = prov->last_t_ns;

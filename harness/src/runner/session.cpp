@@ -33,7 +33,8 @@ Result<Done> check_options(const protocol::Protocol& p, const RunOptions& option
                      options.participant + "'"};
   if (options.participant_number < 1) return Error{Error::Kind::usage, "the participant number must be at least 1"};
   if (options.observer)
-    if (auto e = check_observer(*options.observer)) return Error{Error::Kind::usage, "observer: " + *e};
+    if (auto ok = check_observer(*options.observer); !ok)
+      return Error{Error::Kind::usage, "observer: " + ok.error().message};
   if (design.trials.empty()) return Error{Error::Kind::bad_input, p.file + ": the design has no trials"};
   return Done{};
 }

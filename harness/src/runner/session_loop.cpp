@@ -203,8 +203,8 @@ class SessionLoop::Impl {
   // the world stays the same, so the edge correspondence carries over).
   void prepare(const Settings& s) {
     auto made = make_world(s);
-    if (auto* e = std::get_if<std::string>(&made)) throw Stop{{Error::Kind::bad_input, "impossible table: " + *e}};
-    World world = std::get<World>(made);
+    if (!made) throw Stop{{made.error().kind, "impossible table: " + made.error().message}};
+    World world = std::move(made).value();
     const auto algorithm = tracking_algorithm(s);
     if (!tracker_ || !world_ || !world_->same_as(world) || tracker_->algorithm() != algorithm) {
       tracker_ = geometry::make_tracker(algorithm, world.space, world.table, physical_table(s, options_.calibration));
@@ -215,8 +215,8 @@ class SessionLoop::Impl {
     std::string prompt;
     if (current_trial_) prompt = block_of(p_, design_.trials[*current_trial_].block).judgement.prompt;
     auto built = TrialScene::build(*world_, settings_, prompt, font());
-    if (auto* e = std::get_if<std::string>(&built)) throw Stop{{Error::Kind::io, *e}};
-    scene_.emplace(std::move(std::get<TrialScene>(built)));
+    if (!built) throw Stop{built.error()};
+    scene_.emplace(std::move(built).value());
   }
 
   std::string font() const {
@@ -364,7 +364,7 @@ class SessionLoop::Impl {
                std::optional<std::int64_t> trial_id) {
     Frame f;
     if (!begin(f)) return Outcome::quit;
-    if (auto err = scene_->set_page(text, head())) throw Stop{{Error::Kind::io, *err}};
+    if (auto shown = scene_->set_page(text, head()); !shown) throw Stop{shown.error()};
     scene_->show(phase, false);
     Page state(f.timing.now_ns, min_ns);
     if (observer_params()) scheduled_.push_back({f.timing.now_ns + min_ns + 300'000'000, "space"});

@@ -22,9 +22,9 @@ bool World::same_as(const World& other) const {
          table.sides == other.table.sides && table.side_rad == other.table.side_rad;
 }
 
-std::variant<World, std::string> make_world(const Settings& s) {
+Result<World> make_world(const Settings& s) {
   auto shape = protocol::table_shape(s);
-  if (!shape) return shape.error().message;
+  if (!shape) return shape.error();
   const auto& t = shape.value();
   return World{geometry::Space{s.space.kind, t.radius_m}, t};
 }
@@ -70,10 +70,11 @@ std::string calibration_json(const geometry::PhysicalTableFit& fit) {
   return j.dump();
 }
 
-std::variant<geometry::PhysicalTableFit, std::string> parse_calibration_json(const std::string& text) {
+Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text) {
+  const auto bad = [](std::string m) { return Error{Error::Kind::bad_input, std::move(m)}; };
   const auto j = nlohmann::json::parse(text, nullptr, false);
   if (j.is_discarded() || !j.is_object())
-    return std::string("expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
+    return bad("expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
   geometry::PhysicalTableFit fit;
   try {
     fit.centre_m = {j.at("centre_x_m").get<double>(), j.at("centre_z_m").get<double>()};
@@ -84,10 +85,10 @@ std::variant<geometry::PhysicalTableFit, std::string> parse_calibration_json(con
     fit.max_residual_m = j.value("max_residual_m", 0.0);
     fit.corners_used = j.value("corners_used", 0);
   } catch (const nlohmann::json::exception& e) {
-    return std::string(e.what()) + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)";
+    return bad(std::string(e.what()) + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
   }
   if (!(fit.edge_m > 0.2 && fit.edge_m < 5.0 && fit.height_m > 0.3 && fit.height_m < 1.5))
-    return std::string("edge_m must lie in (0.2, 5) m and height_m in (0.3, 1.5) m");
+    return bad("edge_m must lie in (0.2, 5) m and height_m in (0.3, 1.5) m");
   return fit;
 }
 
@@ -210,9 +211,8 @@ double physical_sagitta_m(const Settings& s) {
   return judged(s) == Judged::stick ? s.stimulus.stick_sagitta_m : s.stimulus.table_sagitta_m;
 }
 
-std::variant<TrialScene, std::string> TrialScene::build(const World& world, const Settings& s,
-                                                        const std::string& prompt,
-                                                        const std::string& font_path) {
+Result<TrialScene> TrialScene::build(const World& world, const Settings& s, const std::string& prompt,
+                                     const std::string& font_path) {
   TrialScene t;
   t.world_ = world;
   t.font_path_ = font_path;
@@ -253,7 +253,7 @@ std::variant<TrialScene, std::string> TrialScene::build(const World& world, cons
         std::tuple{&t.page_, "page", std::string(" "), 1.0, 0.5}}) {
     auto made = renderer::text_panel_object(space, name, text.empty() ? std::string(" ") : text, font_path,
                                             w, h, Isometry::identity());
-    if (auto* e = std::get_if<std::string>(&made)) return *e;
+    if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::io, *e};  // the font
     *index = t.scene_.add(hidden(std::move(std::get<renderer::SceneObject>(made))));
   }
   return t;
@@ -302,17 +302,17 @@ void TrialScene::show(Phase phase, bool stimulus_during_response) {
   set(page_, phase == Phase::instructions || phase == Phase::break_page || phase == Phase::done);
 }
 
-std::optional<std::string> TrialScene::set_page(const std::string& text, const Isometry& head) {
+Result<Done> TrialScene::set_page(const std::string& text, const Isometry& head) {
   if (text != page_text_) {
     auto made = renderer::text_panel_object(world_.space, "page", text.empty() ? std::string(" ") : text,
                                             font_path_, 1.0, 0.5, Isometry::identity());
-    if (auto* e = std::get_if<std::string>(&made)) return *e;
+    if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::io, *e};  // the font
     auto& o = std::get<renderer::SceneObject>(made);
     scene_.replace_mesh(page_, std::move(o.build), std::move(o.info), std::move(o.text));
     page_text_ = text;
   }
   scene_.edit(page_).pose = head * geometry::translation_m(world_.space, Vec3(0.0, 0.0, -1.2));
-  return std::nullopt;
+  return Done{};
 }
 
 }  // namespace curvlab::harness::runner

@@ -18,6 +18,7 @@
 #pragma once
 
 #include "curvlab/harness/protocol/random.hpp"
+#include "curvlab/harness/result.hpp"
 
 #include <cstdint>
 #include <functional>
@@ -47,8 +48,8 @@ struct ObserverParams {
   std::uint64_t seed = 1;
 };
 
-// nullopt when every value is in range; otherwise what was expected.
-std::optional<std::string> check_observer(const ObserverParams& p);
+// Done when every value is in range; otherwise what was expected.
+Result<Done> check_observer(const ObserverParams& p);
 std::string observer_json(const ObserverParams& p);
 
 // Standard normal CDF.

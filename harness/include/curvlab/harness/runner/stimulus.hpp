@@ -5,6 +5,7 @@
 // observer judges (DESIGN.md §5).
 #pragma once
 
+#include "curvlab/harness/result.hpp"
 #include "curvlab/harness/runner/phase.hpp"
 
 #include "curvlab/geometry/calibration.hpp"
@@ -29,7 +30,7 @@ struct World {
   // from trial to trial.
   [[nodiscard]] bool same_as(const World& other) const;
 };
-std::variant<World, std::string> make_world(const protocol::Settings& s);
+Result<World> make_world(const protocol::Settings& s);
 
 // The physical table of the tracking code, from calibration (centre, yaw)
 // and the protocol (edge, height).
@@ -46,7 +47,7 @@ geometry::TrackingAlgorithm tracking_algorithm(const protocol::Settings& s);
 // The calibration as stored with a session (sessions.table_calibration), and
 // back; parsing names what is missing or out of range.
 std::string calibration_json(const geometry::PhysicalTableFit& fit);
-std::variant<geometry::PhysicalTableFit, std::string> parse_calibration_json(const std::string& text);
+Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text);
 
 enum class Judged { stick, table };
 Judged judged(const protocol::Settings& s);
@@ -78,10 +79,8 @@ double physical_sagitta_m(const protocol::Settings& s);
 // fixation mark, with visibility switched per phase.
 class TrialScene {
  public:
-  static std::variant<TrialScene, std::string> build(const World& world,
-                                                     const protocol::Settings& s,
-                                                     const std::string& prompt,
-                                                     const std::string& font_path);
+  static Result<TrialScene> build(const World& world, const protocol::Settings& s, const std::string& prompt,
+                                  const std::string& font_path);
   // Visibility for a phase and the stimulus placement (fixed at onset).
   void show(Phase phase, bool stimulus_during_response);
   void place(const Placement& placement, const geometry::Isometry& head_at_onset);
@@ -89,7 +88,7 @@ class TrialScene {
   // shape and pose and the cloth's convexity follow the settings.
   void set_stimulus(const protocol::Settings& s, const Placement& placement);
   // A page of text in front of the head (instructions, breaks); empty hides it.
-  std::optional<std::string> set_page(const std::string& text, const geometry::Isometry& head);
+  Result<Done> set_page(const std::string& text, const geometry::Isometry& head);
   renderer::Scene& scene() { return scene_; }
 
  private:
