@@ -42,6 +42,7 @@ std::string fixed(double v, int digits) {
 
 std::string duration_text(std::int64_t ms) {
   const std::int64_t s = (ms + 500) / 1000;
+  if (s < 60) return std::to_string(s) + " s";
   return std::to_string(s / 60) + " min " + std::to_string(s % 60) + " s";
 }
 
