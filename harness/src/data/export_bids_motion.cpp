@@ -163,11 +163,15 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
 
         OJson ch_json;
         ch_json["reference_frame"]["Description"] = "Frame the positions and orientations are in";
+        // Orientations are unit quaternions, so no Euler rotation order
+        // applies; RotationOrder (a SHOULD) is left out rather than given
+        // as "n/a", which the BIDS validator's channels schema refuses.
         ch_json["reference_frame"]["Levels"]["lab"] = {
-            {"Description", "Tracking space of the lab, origin at the runtime's stage origin"},
+            {"Description",
+             "Tracking space of the lab, origin at the runtime's stage origin; orientations as unit quaternions "
+             "(x, y, z, w)"},
             {"SpatialAxes", "RSP"},
-            {"RotationRule", "right-hand"},
-            {"RotationOrder", "n/a"}};
+            {"RotationRule", "right-hand"}};
         if (auto e = write_text(root + "/" + base + "_channels.json", ch_json.dump(2) + "\n")) return *e;
 
         int pos = 0, ornt = 0, misc = 0, lat = 0;
