@@ -29,16 +29,6 @@
 namespace curvlab::cli {
 namespace {
 
-// A runner error still shaped {usage, message} as the CLI's exit code: 2 for
-// input a person must fix, 1 otherwise. Runner results that carry a
-// harness::Error take the common raise() (exit_code() of its kind) instead.
-template <class LegacyError>
-[[noreturn]] void raise(const LegacyError& e) {
-  if (e.usage) throw UsageError(e.message);
-  throw RuntimeFailure(e.message);
-}
-using cli::raise;  // the harness::Error overload (common.hpp) wins for an Error
-
 namespace rn = curvlab::harness::runner;
 namespace pr = curvlab::harness::protocol;
 

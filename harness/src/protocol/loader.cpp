@@ -75,14 +75,6 @@ const std::vector<std::string>& button_names() {
   return buttons;
 }
 
-// What a judgement's numeric parameter may name.
-std::vector<std::string> numeric_paths() {
-  std::vector<std::string> out;
-  const Settings s;
-  for (const auto& info : all_settings())
-    if (numeric_setting(s, info.path)) out.emplace_back(info.path);
-  return out;
-}
 
 class Loader {
  public:
@@ -502,7 +494,7 @@ class Loader {
     const auto param = get_string(j, "parameter", prefix, true);
     if (!param) return "";
     const SourcePos at = pos_of(*j.get("parameter"));
-    const auto paths = numeric_paths();
+    const auto paths = numeric_setting_paths();
     if (std::find(paths.begin(), paths.end(), *param) == paths.end()) {
       std::string msg = "unknown parameter \"" + *param + "\"";
       const std::string guess = closest_match(*param, paths);

@@ -175,14 +175,6 @@ Json factor_schema() {
 
 // ---- judgements -------------------------------------------------------------
 
-std::vector<std::string> numeric_paths() {
-  std::vector<std::string> out;
-  const Settings s;
-  for (const auto& info : all_settings())
-    if (numeric_setting(s, info.path)) out.emplace_back(info.path);
-  return out;
-}
-
 Json option_schema() {
   Json props = {
       {"value", {{"type", "string"}, {"pattern", kIdentifierPattern},
@@ -228,7 +220,7 @@ Json judgement_schema() {
       {"prompt", string_field("shown on the in-headset panel")},
       {"options", {{"type", "array"}, {"minItems", 2}, {"items", option_schema()},
                    {"description", "choice and staircase: one table per answer"}}},
-      {"parameter", {{"type", "string"}, {"enum", strings(numeric_paths())},
+      {"parameter", {{"type", "string"}, {"enum", strings(numeric_setting_paths())},
                      {"description", "adjustment and staircase: the numeric setting that is varied; "
                                      "not one a factor varies"}}},
       {"positive", string_field("staircase: the option value that counts as a positive response")},

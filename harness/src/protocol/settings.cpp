@@ -287,6 +287,14 @@ auto numeric_field(S& s, std::string_view p) -> decltype(&s.space.e3_radius_m) {
 }
 }  // namespace
 
+std::vector<std::string> numeric_setting_paths() {
+  std::vector<std::string> out;
+  const Settings s;
+  for (const auto& info : all_settings())
+    if (numeric_setting(s, info.path)) out.emplace_back(info.path);
+  return out;
+}
+
 std::optional<double> numeric_setting(const Settings& s, std::string_view path) {
   if (const double* f = numeric_field(s, path)) return *f;
   return std::nullopt;

@@ -35,17 +35,6 @@ struct Stop {
   Error error;
 };
 
-FrameSignal to_frame_signal(BackendSignal s) {
-  switch (s) {
-    case BackendSignal::pause: return FrameSignal::pause;
-    case BackendSignal::resume: return FrameSignal::resume;
-    case BackendSignal::quit: return FrameSignal::quit;
-    case BackendSignal::recenter: return FrameSignal::recenter;
-    case BackendSignal::none: break;
-  }
-  return FrameSignal::none;
-}
-
 std::string trial_line(const PlannedTrial& t) {
   std::string line = t.block + "  trial " + std::to_string(t.trial_in_block + 1);
   for (const auto& [f, l] : t.levels) line += "  " + f + "=" + l;
@@ -144,9 +133,10 @@ class SessionLoop::Impl {
 
   void end_session(data::SessionStatus status) {
     event(std::nullopt, "session_end", Json{{"status", data::to_string(status)}});
+    // The writer applies an entry after the samples pushed before it: once
+    // the closing status is durable, so is everything the session logged.
     const auto ticket = writer_.journal(data::StatusChange{session_id_, status, true});
     check(writer_.wait_durable(ticket));
-    check(writer_.flush());
     summary_.status = data::to_string(status);
   }
 
@@ -235,7 +225,7 @@ class SessionLoop::Impl {
     SteadyTime::time_point started;
 
     [[nodiscard]] FrameFacts facts() const {
-      return {timing.now_ns, timing.predicted_display_ns, head_tracked, to_frame_signal(signal)};
+      return {timing.now_ns, timing.predicted_display_ns, head_tracked, signal};
     }
   };
 

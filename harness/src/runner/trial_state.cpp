@@ -42,9 +42,9 @@ Attempt::Attempt(const protocol::Timeline& timeline, const protocol::TrackingLos
 AttemptStep Attempt::advance(const FrameFacts& frame) {
   AttemptStep step;
   switch (frame.signal) {
-    case FrameSignal::quit: step.abort = AbortReason::quit; return step;
-    case FrameSignal::pause: step.abort = AbortReason::pause; break;
-    case FrameSignal::recenter: step.abort = AbortReason::recenter; break;
+    case BackendSignal::quit: step.abort = AbortReason::quit; return step;
+    case BackendSignal::pause: step.abort = AbortReason::pause; break;
+    case BackendSignal::recenter: step.abort = AbortReason::recenter; break;
     default: break;
   }
   // The loss is tracked even when the frame is aborted for another reason,

@@ -131,6 +131,9 @@ Result<Done> check_setting(const SettingInfo& info, const SettingValue& value);
 void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& value);
 // Reads a numeric setting (for staircases and adjustment); nullopt if not numeric.
 std::optional<double> numeric_setting(const Settings& s, std::string_view path);
+// The paths numeric_setting reads: what a staircase's or an adjustment's
+// parameter may name (the loader checks it, the JSON Schema lists it).
+std::vector<std::string> numeric_setting_paths();
 // Writes a numeric setting (staircase/adjustment value for one trial).
 bool set_numeric_setting(Settings& s, std::string_view path, double value);
 

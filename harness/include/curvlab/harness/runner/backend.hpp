@@ -83,9 +83,6 @@ struct InputEvent {
   bool pressed = true;
 };
 
-// Something the backend wants the runner to know (pause, resume, quit).
-enum class BackendSignal { none, pause, resume, quit, recenter };
-
 // What the runner shows besides the scene (for desktop windows and logs).
 // Instruction pages and breaks advance on the key "space" or "enter", or a
 // button named "continue"; responses come from the keys and buttons of the

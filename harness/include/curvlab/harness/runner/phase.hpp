@@ -23,6 +23,11 @@ enum class Phase {
   tracking_lost, // held until the head is tracked again
 };
 
+// Something the backend wants the runner to know in a frame: the participant
+// paused (focus lost, headset off) or resumed, the view was recentred, or the
+// session is to end (window closed, runtime exiting).
+enum class BackendSignal { none, pause, resume, quit, recenter };
+
 enum class AbortReason {
   pause,          // the participant or operator paused (focus lost, pause key)
   recenter,       // the view was recentred mid-trial

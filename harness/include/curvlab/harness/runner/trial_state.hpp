@@ -25,15 +25,11 @@
 
 namespace curvlab::harness::runner {
 
-// What the backend said about the session in one frame (backend.hpp's
-// BackendSignal, restated here so the machine needs no backend header).
-enum class FrameSignal { none, pause, resume, quit, recenter };
-
 struct FrameFacts {
   std::int64_t now_ns = 0;         // when the frame began (session clock)
   std::int64_t display_ns = 0;     // when its image will be shown
   bool head_tracked = true;
-  FrameSignal signal = FrameSignal::none;
+  BackendSignal signal = BackendSignal::none;
 };
 
 struct AttemptStep {
