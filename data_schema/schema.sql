@@ -1,10 +1,10 @@
--- curvlab data schema, version 3 (current). The program embeds this file at
+-- curvlab data schema, version 4 (current). The program embeds this file at
 -- build time and executes it verbatim to create a new database; the codebook
 -- (codebook.md) gives every column its meaning and unit. Times: *_ns are
 -- nanoseconds of the session's monotonic clock, *_utc are ISO 8601 UTC text.
 -- Adding or changing anything here means a new version, a migration in
 -- migrations/, and a codebook entry: no column is ever added at run time.
-PRAGMA user_version = 3;
+PRAGMA user_version = 4;
 
 CREATE TABLE schema_migrations (
   version INTEGER PRIMARY KEY,
@@ -46,8 +46,13 @@ CREATE TABLE sessions (
     CHECK (status IN ('running', 'paused', 'completed', 'aborted', 'interrupted')),
   started_utc TEXT NOT NULL,
   ended_utc TEXT,
+  session_uuid TEXT CHECK (session_uuid IS NULL OR (length(session_uuid) = 36 AND
+    session_uuid GLOB '[0-9a-f][0-9a-f][0-9a-f][0-9a-f][0-9a-f][0-9a-f][0-9a-f][0-9a-f]-*')),
   UNIQUE (participant_id, session_number)
 ) STRICT;
+
+-- A session's identity across files and machines (RFC 9562 UUID, lower case).
+CREATE UNIQUE INDEX sessions_by_uuid ON sessions (session_uuid);
 
 CREATE TABLE blocks (
   block_id INTEGER PRIMARY KEY,
@@ -76,6 +81,7 @@ CREATE TABLE trials (
   rt_ns INTEGER,
   response_device TEXT,
   completed_utc TEXT,
+  end_reason TEXT,
   UNIQUE (session_id, trial_index)
 ) STRICT;
 
@@ -135,7 +141,9 @@ CREATE TABLE frames (
   triangles INTEGER NOT NULL,
   eye_width_px INTEGER CHECK (eye_width_px IS NULL OR eye_width_px > 0),
   eye_height_px INTEGER CHECK (eye_height_px IS NULL OR eye_height_px > 0),
-  eye_views BLOB CHECK (eye_views IS NULL OR length(eye_views) = 256)
+  eye_views BLOB CHECK (eye_views IS NULL OR length(eye_views) = 256),
+  display_period_ns INTEGER CHECK (display_period_ns IS NULL OR display_period_ns > 0),
+  late INTEGER NOT NULL DEFAULT 0 CHECK (late IN (0, 1))
 ) STRICT;
 
 CREATE INDEX frames_by_session_frame ON frames (session_id, frame_index);

@@ -3,6 +3,7 @@
 #include "curvlab/harness/data/sample_writer.hpp"
 #include "curvlab/harness/data/session_reader.hpp"
 #include "curvlab/harness/data/session_store.hpp"
+#include "curvlab/harness/data/uuid.hpp"
 #include "curvlab/harness/data/sha256.hpp"
 
 #include <gtest/gtest.h>
@@ -16,6 +17,7 @@
 #include <fstream>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -165,20 +167,118 @@ TEST(Schema, MigratesVersion1FileAndKeepsItsData) {
   EXPECT_EQ(next->trial_index, 1);
 }
 
+TEST(Schema, MigratesVersion3FileGivingEachSessionAUuid) {
+  const auto dir = fresh_dir("migrate3");
+  const auto path = (dir / "v3.db").string();
+  {
+    auto c = Connection::open(path, OpenFlags::read_write_create);
+    c.exec(read_file(fs::path(CURVLAB_SCHEMA_DIR) / "v3.sql"));
+    c.exec("PRAGMA application_id = " + std::to_string(curvlab_application_id));
+    c.exec("INSERT INTO protocols VALUES (1, 'p', '" + sha256_hex("p") + "', 'p', NULL);"
+           "INSERT INTO participants VALUES (1, 'P07', NULL, 'left', '2026-01-01T00:00:00Z');"
+           "INSERT INTO sessions (protocol_id, participant_id, session_number, software_version, "
+           "software_commit, backend, renderer_device, renderer_driver, seed, status, started_utc) "
+           "VALUES (1, 1, 1, '0.3', 'c', 'xr', 'd', 'r', 5, 'completed', 't'),"
+           " (1, 1, 2, '0.3', 'c', 'xr', 'd', 'r', 6, 'running', 't');"
+           "INSERT INTO blocks (session_id, block_index, name) VALUES (1, 0, 'b'), (2, 0, 'b');"
+           "INSERT INTO trials (session_id, block_id, trial_index, trial_in_block, conditions, "
+           "status, response) VALUES (1, 1, 0, 0, '{}', 'completed', 'convex'),"
+           " (2, 2, 0, 0, '{}', 'skipped', NULL), (2, 2, 1, 1, '{}', 'pending', NULL);"
+           "INSERT INTO frames (session_id, frame_index, t_ns, cpu_time_ns, views, passes, draws, "
+           "triangles) VALUES (1, 0, 10, 5, 2, 2, 4, 100);");
+  }
+  auto db = Database::open(path, OpenMode::open_existing);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(db.value().schema_version(), current_schema_version);
+  EXPECT_EQ(db.value().integrity_check(), "ok");
+  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(fresh);
+  auto fresh_db = std::move(fresh).value();
+  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh_db.connection(), true));
+
+  auto& c = db.value().connection();
+  Statement u(c, "SELECT session_uuid FROM sessions ORDER BY session_id");
+  std::vector<std::string> uuids;
+  while (u.step()) uuids.push_back(u.column_text(0));
+  ASSERT_EQ(uuids.size(), 2u);
+  for (const auto& id : uuids) {
+    EXPECT_TRUE(is_session_uuid(id)) << id;
+    EXPECT_EQ(id[14], '4') << id;  // random UUIDs for sessions made before version 4
+  }
+  EXPECT_NE(uuids[0], uuids[1]);
+  EXPECT_EQ(c.query_int("SELECT count(*) FROM trials WHERE status = 'skipped' AND end_reason IS NULL"), 1);
+  EXPECT_EQ(c.query_int("SELECT count(*) FROM trials t JOIN blocks b USING (block_id) "
+                        "WHERE t.session_id = b.session_id"), 3);
+  EXPECT_EQ(c.query_int("SELECT late FROM frames"), 0);
+  EXPECT_EQ(c.query_int("SELECT count(*) FROM frames WHERE display_period_ns IS NULL"), 1);
+  // The unfinished session resumes where it stopped.
+  SessionStore store(std::move(db).value());
+  auto next = store.next_incomplete_trial(2).value();
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->trial_index, 1);
+}
+
+TEST(SessionUuid, Rfc9562Version7LayoutAndUniqueness) {
+  // RFC 9562 Appendix A.6, the version 7 example.
+  EXPECT_EQ(session_uuid_v7(0x017F22E279B0ull, 0xCC3, 0x18C4DC0C0C07398Full),
+            "017f22e2-79b0-7cc3-98c4-dc0c0c07398f");
+  EXPECT_TRUE(is_session_uuid("017f22e2-79b0-7cc3-98c4-dc0c0c07398f"));
+  EXPECT_FALSE(is_session_uuid("017F22E2-79B0-7CC3-98C4-DC0C0C07398F"));  // canonical is lower case
+  EXPECT_FALSE(is_session_uuid("017f22e2-79b0-7cc3-c8c4-dc0c0c07398f"));  // variant 110
+  EXPECT_FALSE(is_session_uuid("017f22e279b07cc398c4dc0c0c07398f"));
+  std::set<std::string> seen;
+  for (int i = 0; i < 1000; ++i) {
+    const std::string id = new_session_uuid();
+    ASSERT_TRUE(is_session_uuid(id)) << id;
+    EXPECT_EQ(id[14], '7');
+    seen.insert(id);
+  }
+  EXPECT_EQ(seen.size(), 1000u);
+}
+
+TEST(SessionUuid, EachStoredSessionGetsOneAndAGivenOneIsKept) {
+  const auto dir = fresh_dir("uuid");
+  auto store = make_store(dir / "u.db");
+  const auto a = make_session(store, "P01");
+  const auto b = make_session(store, "P01");
+  auto c = Connection::open((dir / "u.db").string(), OpenFlags::read_only);
+  {
+    Statement s(c, "SELECT session_uuid FROM sessions WHERE session_id IN (?1, ?2) ORDER BY session_id");
+    s.bind(1, a).bind(2, b);
+    ASSERT_TRUE(s.step());
+    const std::string first = s.column_text(0);
+    ASSERT_TRUE(s.step());
+    EXPECT_TRUE(is_session_uuid(first));
+    EXPECT_NE(first, s.column_text(0));
+  }  // ends the read transaction, so the reads below see later commits
+  SessionRecord r;
+  r.protocol_id = 1;
+  r.participant_id = 1;
+  r.session_uuid = "017f22e2-79b0-7cc3-98c4-dc0c0c07398f";
+  ASSERT_TRUE(store.create_session(r));
+  EXPECT_EQ(c.query_int("SELECT count(*) FROM sessions WHERE session_uuid = "
+                        "'017f22e2-79b0-7cc3-98c4-dc0c0c07398f'"), 1);
+  r.session_number = 9;
+  auto again = store.create_session(r);  // the same identity twice is refused
+  ASSERT_FALSE(again);
+  r.session_uuid = "not-a-uuid";
+  EXPECT_FALSE(store.create_session(r));
+}
+
 TEST(Schema, NewerFileIsRefusedAndLeftUntouched) {
   const auto dir = fresh_dir("newer");
   const auto path = (dir / "future.db").string();
   {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec("PRAGMA user_version = 4");
+    db.value().connection().exec("PRAGMA user_version = 5");
   }
   auto db = Database::open(path, OpenMode::create_or_open);
   ASSERT_FALSE(db);
   EXPECT_EQ(db.error().kind, DataError::Kind::newer_schema);
-  EXPECT_NE(db.error().message.find("schema version 4"), std::string::npos);
+  EXPECT_NE(db.error().message.find("schema version 5"), std::string::npos);
   auto c = Connection::open(path, OpenFlags::read_only);
-  EXPECT_EQ(c.query_int("PRAGMA user_version"), 4);
+  EXPECT_EQ(c.query_int("PRAGMA user_version"), 5);
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {

@@ -110,6 +110,10 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
       {"trial_index", "Trial position in the session, from 0", ""},
       {"trial_in_block", "Trial position in its block, from 0", ""},
       {"status", "pending, running, completed, skipped or aborted", ""},
+      {"end_reason",
+       "Skipped or aborted trials: why (staircase_finished, operator, tracking_lost, pause, "
+       "recenter, quit); empty otherwise",
+       ""},
       {"attempt", "How many times the trial was started (more than 1 after a resume)", ""},
       {"onset_ns", "Stimulus onset on the session's monotonic clock", "ns"},
       {"response_ns", "Response time stamp on the session's monotonic clock", "ns"},
@@ -130,8 +134,8 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
   try {
     Statement s(db.connection(),
                 "SELECT t.session_id, p.pseudonym, se.session_number, pr.sha256, b.block_index, "
-                "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.attempt, "
-                "t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
+                "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.end_reason, "
+                "t.attempt, t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
                 "t.completed_utc, st.staircase, st.step_index, st.intensity, st.is_reversal, "
                 "tf.lost_ms, t.conditions, t.stimulus FROM trials t "
                 "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
@@ -151,8 +155,8 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
     while (s.step()) {
       std::vector<Cell> row;
       for (int c = 0; c < static_cast<int>(fixed); ++c) row.push_back(s.column_opt_text(c));
-      auto cond = nlohmann::ordered_json::parse(s.column_text(22), nullptr, false);
-      auto stim = nlohmann::ordered_json::parse(s.column_text(23), nullptr, false);
+      auto cond = nlohmann::ordered_json::parse(s.column_text(23), nullptr, false);
+      auto stim = nlohmann::ordered_json::parse(s.column_text(24), nullptr, false);
       for (auto [obj, names, pos] : {std::tie(cond, cond_names, cond_pos),
                                      std::tie(stim, stim_names, stim_pos)}) {
         if (!obj.is_object()) continue;

@@ -79,8 +79,8 @@ constexpr const char* insert_tracking_sql =
 constexpr const char* insert_frame_sql =
     "INSERT INTO frames (session_id, trial_id, frame_index, t_ns, predicted_display_ns, "
     "cpu_time_ns, gpu_time_ns, dropped_frames, views, passes, draws, triangles, eye_width_px, "
-    "eye_height_px, eye_views) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, "
-    "?14, ?15)";
+    "eye_height_px, eye_views, display_period_ns, late) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, "
+    "?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)";
 constexpr const char* insert_event_sql =
     "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) VALUES (?1, NULL, ?2, "
     "'logger_drops', json_object('dropped_tracking', ?3, 'dropped_frames', ?4))";
@@ -174,6 +174,8 @@ struct SampleWriter::Impl {
     if (f.gpu_time_ns >= 0) st.bind(7, f.gpu_time_ns); else st.bind_null(7);
     st.bind(8, std::int64_t{f.dropped_frames}).bind(9, std::int64_t{f.views});
     st.bind(10, std::int64_t{f.passes}).bind(11, std::int64_t{f.draws}).bind(12, f.triangles);
+    if (f.display_period_ns > 0) st.bind(16, f.display_period_ns); else st.bind_null(16);
+    st.bind(17, std::int64_t{f.late ? 1 : 0});
     // Eye geometry only where it differs from the last stored for the
     // session (the first frame of each run, then each change): an OpenXR
     // runtime may change the views every frame, most backends never do.
@@ -270,7 +272,8 @@ struct SampleWriter::Impl {
           } else if constexpr (std::is_same_v<T, TrialResult>) {
             return store.complete_trial(entry);
           } else if constexpr (std::is_same_v<T, EndUnanswered>) {
-            return entry.aborted ? store.abort_trial(entry.trial_id) : store.skip_trial(entry.trial_id);
+            return entry.aborted ? store.abort_trial(entry.trial_id, entry.reason)
+                                 : store.skip_trial(entry.trial_id, entry.reason);
           } else if constexpr (std::is_same_v<T, StatusChange>) {
             return entry.close ? store.close_session(entry.session_id, entry.status)
                                : store.set_session_status(entry.session_id, entry.status);

@@ -1,6 +1,9 @@
 #include "curvlab/harness/data/session_store.hpp"
 
 #include "curvlab/harness/data/sha256.hpp"
+#include "curvlab/harness/data/uuid.hpp"
+
+#include <sqlite3.h>
 
 #include <algorithm>
 
@@ -89,9 +92,9 @@ struct SessionStore::Statements {
                                       "session_number, software_version, software_commit, "
                                       "backend, renderer_device, renderer_driver, "
                                       "display_refresh_hz, seed, table_calibration, status, "
-                                      "started_utc) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, "
-                                      "?10, ?11, 'running', ") +
-                              utc_now + ")"),
+                                      "started_utc, session_uuid) VALUES (?1, ?2, ?3, ?4, ?5, ?6, "
+                                      "?7, ?8, ?9, ?10, ?11, 'running', ") +
+                              utc_now + ", ?12)"),
         count_plan(c, "SELECT count(*) FROM blocks WHERE session_id = ?1"),
         insert_block(c, "INSERT INTO blocks (session_id, block_index, name, is_practice, "
                         "settings) VALUES (?1, ?2, ?3, ?4, ?5)"),
@@ -112,7 +115,7 @@ struct SessionStore::Statements {
         insert_step(c, "INSERT OR REPLACE INTO staircase_steps (session_id, staircase, "
                        "step_index, trial_id, intensity, response_correct, is_reversal, "
                        "next_intensity) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)"),
-        end_unanswered(c, "UPDATE trials SET status = ?2 WHERE trial_id = ?1 AND "
+        end_unanswered(c, "UPDATE trials SET status = ?2, end_reason = ?3 WHERE trial_id = ?1 AND "
                           "status IN ('pending', 'running')"),
         insert_event(c, "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) "
                         "VALUES (?1, ?2, ?3, ?4, ?5)"),
@@ -203,6 +206,10 @@ std::int64_t SessionStore::insert_session(const SessionRecord& r) {
   s.bind(9, r.display_refresh_hz).bind(10, r.seed);
   if (r.table_calibration_json) s.bind(11, std::string_view(*r.table_calibration_json));
   else s.bind_null(11);
+  if (!r.session_uuid.empty() && !is_session_uuid(r.session_uuid))
+    throw SqliteFailure(SQLITE_CONSTRAINT, "session_uuid \"" + r.session_uuid + "\" is not an RFC 9562 UUID");
+  const std::string uuid = r.session_uuid.empty() ? new_session_uuid() : r.session_uuid;
+  s.bind(12, std::string_view(uuid));
   s.run();
   return db_.connection().last_insert_rowid();
 }
@@ -359,18 +366,26 @@ Expected<Done> SessionStore::complete_trial(const TrialResult& r) {
   });
 }
 
-Expected<Done> SessionStore::end_unanswered(std::int64_t trial_id, const char* status) {
+Expected<Done> SessionStore::end_unanswered(std::int64_t trial_id, const char* status,
+                                            const std::string& reason) {
   return guarded(db_, [&]() -> Done {
     Transaction txn(db_.connection());
-    stmts_->end_unanswered.bind(1, trial_id).bind(2, std::string_view(status)).run();
+    auto& s = stmts_->end_unanswered;
+    s.bind(1, trial_id).bind(2, std::string_view(status));
+    if (reason.empty()) s.bind_null(3); else s.bind(3, std::string_view(reason));
+    s.run();
     txn.commit();
     return Done{};
   });
 }
 
-Expected<Done> SessionStore::skip_trial(std::int64_t trial_id) { return end_unanswered(trial_id, "skipped"); }
+Expected<Done> SessionStore::skip_trial(std::int64_t trial_id, const std::string& reason) {
+  return end_unanswered(trial_id, "skipped", reason);
+}
 
-Expected<Done> SessionStore::abort_trial(std::int64_t trial_id) { return end_unanswered(trial_id, "aborted"); }
+Expected<Done> SessionStore::abort_trial(std::int64_t trial_id, const std::string& reason) {
+  return end_unanswered(trial_id, "aborted", reason);
+}
 
 Expected<std::int64_t> SessionStore::record_event(const EventRecord& e) {
   return guarded(db_, [&]() -> std::int64_t {

@@ -99,7 +99,7 @@ class SessionLoop::Impl {
       const PlannedTrial& t = design_.trials[i];
       if (enter_block(i, first) == Outcome::quit || take_break(i, first) == Outcome::quit) return Outcome::quit;
       if (staircase_finished(t)) {
-        writer_.journal(data::EndUnanswered{trial_ids_[i], false});
+        writer_.journal(data::EndUnanswered{trial_ids_[i], false, "staircase_finished"});
         ++summary_.trials_skipped;
         continue;
       }
@@ -477,7 +477,7 @@ class SessionLoop::Impl {
   }
 
   void give_up(const TrialRun& t, AbortReason reason, std::int64_t attempts) {
-    writer_.journal(data::EndUnanswered{t.id, true});
+    writer_.journal(data::EndUnanswered{t.id, true, std::string(to_string(reason))});
     event(t.id, "trial_abandoned", Json{{"reason", to_string(reason)}, {"attempts", attempts}});
     ++summary_.trials_aborted;
     current_trial_.reset();

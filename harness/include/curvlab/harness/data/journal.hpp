@@ -8,6 +8,7 @@
 #include "curvlab/harness/data/records.hpp"
 
 #include <cstdint>
+#include <string>
 #include <variant>
 
 namespace curvlab::data {
@@ -21,6 +22,7 @@ struct BeginTrial {
 struct EndUnanswered {
   std::int64_t trial_id = 0;
   bool aborted = false;
+  std::string reason;  // trials.end_reason
 };
 // A session's status; `close` also sets its end time.
 struct StatusChange {

@@ -40,6 +40,8 @@ struct SessionRecord {
   std::optional<double> display_refresh_hz;
   std::int64_t seed = 0;
   std::optional<std::string> table_calibration_json;
+  // The session's identity across files (uuid.hpp); empty: a new v7 UUID.
+  std::string session_uuid;
 };
 
 // The design as expanded at session start: stored in full so a crash resumes
@@ -173,6 +175,8 @@ struct FrameRecord {
   std::int64_t cpu_time_ns = 0;
   std::int64_t gpu_time_ns = -1;  // -1: unknown (NULL)
   std::int32_t dropped_frames = 0;
+  std::int64_t display_period_ns = -1;  // -1: unknown (NULL)
+  bool late = false;  // missed its display time, or the runtime said not to render
   std::int32_t views = 0;
   std::int32_t passes = 0;
   std::int32_t draws = 0;

@@ -58,9 +58,10 @@ class SessionStore {
   // Commits the response (and its staircase step) in one transaction.
   Expected<Done> complete_trial(const TrialResult& result);
   // A trial that ends without an answer: skipped (a stopped staircase's
-  // slot) or aborted (given up after interruptions). Either is final.
-  Expected<Done> skip_trial(std::int64_t trial_id);
-  Expected<Done> abort_trial(std::int64_t trial_id);
+  // slot) or aborted (given up after interruptions). Either is final;
+  // `reason` (trials.end_reason) says why, empty for none.
+  Expected<Done> skip_trial(std::int64_t trial_id, const std::string& reason = {});
+  Expected<Done> abort_trial(std::int64_t trial_id, const std::string& reason = {});
   Expected<std::int64_t> record_event(const EventRecord& event);
   // Several events in one transaction, in order.
   Expected<Done> record_events(const std::vector<EventRecord>& events);
@@ -81,7 +82,7 @@ class SessionStore {
   }
 
  private:
-  Expected<Done> end_unanswered(std::int64_t trial_id, const char* status);
+  Expected<Done> end_unanswered(std::int64_t trial_id, const char* status, const std::string& reason);
   // Statement bodies without a transaction of their own; they throw SqliteFailure.
   std::int64_t insert_session(const SessionRecord& session);
   Expected<std::vector<std::int64_t>> insert_plan(std::int64_t session_id, const std::vector<BlockPlan>& blocks);

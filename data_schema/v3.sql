@@ -1,0 +1,149 @@
+-- curvlab data schema, version 3, kept so that the migration from it to
+-- version 4 (migrations/0004_from_v3.sql) can be tested.
+-- Do not edit: a released schema version is frozen.
+PRAGMA user_version = 3;
+
+CREATE TABLE schema_migrations (
+  version INTEGER PRIMARY KEY,
+  applied_utc TEXT NOT NULL,
+  note TEXT NOT NULL
+) STRICT;
+
+CREATE TABLE protocols (
+  protocol_id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  sha256 TEXT NOT NULL UNIQUE CHECK (length(sha256) = 64),
+  text TEXT NOT NULL,
+  source_path TEXT
+) STRICT;
+
+CREATE TABLE participants (
+  participant_id INTEGER PRIMARY KEY,
+  pseudonym TEXT NOT NULL UNIQUE CHECK (length(pseudonym) > 0),
+  ipd_m REAL CHECK (ipd_m IS NULL OR (ipd_m > 0.04 AND ipd_m < 0.09)),
+  dominant_eye TEXT NOT NULL DEFAULT 'unknown'
+    CHECK (dominant_eye IN ('left', 'right', 'unknown')),
+  created_utc TEXT NOT NULL
+) STRICT;
+
+CREATE TABLE sessions (
+  session_id INTEGER PRIMARY KEY,
+  protocol_id INTEGER NOT NULL REFERENCES protocols(protocol_id),
+  participant_id INTEGER NOT NULL REFERENCES participants(participant_id),
+  session_number INTEGER NOT NULL CHECK (session_number >= 1),
+  software_version TEXT NOT NULL,
+  software_commit TEXT NOT NULL,
+  backend TEXT NOT NULL CHECK (backend IN ('headless', 'desktop', 'xr', 'unknown')),
+  renderer_device TEXT NOT NULL,
+  renderer_driver TEXT NOT NULL,
+  display_refresh_hz REAL CHECK (display_refresh_hz IS NULL OR display_refresh_hz > 0),
+  seed INTEGER NOT NULL,
+  table_calibration TEXT CHECK (table_calibration IS NULL OR json_valid(table_calibration)),
+  status TEXT NOT NULL
+    CHECK (status IN ('running', 'paused', 'completed', 'aborted', 'interrupted')),
+  started_utc TEXT NOT NULL,
+  ended_utc TEXT,
+  UNIQUE (participant_id, session_number)
+) STRICT;
+
+CREATE TABLE blocks (
+  block_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  block_index INTEGER NOT NULL CHECK (block_index >= 0),
+  name TEXT NOT NULL,
+  is_practice INTEGER NOT NULL DEFAULT 0 CHECK (is_practice IN (0, 1)),
+  settings TEXT NOT NULL DEFAULT '{}' CHECK (json_valid(settings)),
+  UNIQUE (session_id, block_index)
+) STRICT;
+
+CREATE TABLE trials (
+  trial_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  block_id INTEGER NOT NULL REFERENCES blocks(block_id),
+  trial_index INTEGER NOT NULL CHECK (trial_index >= 0),
+  trial_in_block INTEGER NOT NULL CHECK (trial_in_block >= 0),
+  conditions TEXT NOT NULL CHECK (json_valid(conditions)),
+  stimulus TEXT NOT NULL DEFAULT '{}' CHECK (json_valid(stimulus)),
+  status TEXT NOT NULL DEFAULT 'pending'
+    CHECK (status IN ('pending', 'running', 'completed', 'skipped', 'aborted')),
+  attempt INTEGER NOT NULL DEFAULT 0 CHECK (attempt >= 0),
+  onset_ns INTEGER,
+  response_ns INTEGER,
+  response TEXT,
+  rt_ns INTEGER,
+  response_device TEXT,
+  completed_utc TEXT,
+  UNIQUE (session_id, trial_index)
+) STRICT;
+
+CREATE TABLE staircase_steps (
+  step_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  staircase TEXT NOT NULL,
+  step_index INTEGER NOT NULL CHECK (step_index >= 0),
+  trial_id INTEGER REFERENCES trials(trial_id),
+  intensity REAL NOT NULL,
+  response_correct INTEGER CHECK (response_correct IS NULL OR response_correct IN (0, 1)),
+  is_reversal INTEGER NOT NULL DEFAULT 0 CHECK (is_reversal IN (0, 1)),
+  next_intensity REAL,
+  UNIQUE (session_id, staircase, step_index)
+) STRICT;
+
+CREATE TABLE tracking_samples (
+  sample_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER,
+  frame_index INTEGER NOT NULL,
+  device TEXT NOT NULL CHECK (device IN ('head', 'left_hand', 'right_hand', 'other')),
+  t_ns INTEGER NOT NULL,
+  lab_px_m REAL NOT NULL,
+  lab_py_m REAL NOT NULL,
+  lab_pz_m REAL NOT NULL,
+  lab_qx REAL NOT NULL,
+  lab_qy REAL NOT NULL,
+  lab_qz REAL NOT NULL,
+  lab_qw REAL NOT NULL,
+  position_valid INTEGER NOT NULL CHECK (position_valid IN (0, 1)),
+  orientation_valid INTEGER NOT NULL CHECK (orientation_valid IN (0, 1)),
+  virtual_pose BLOB CHECK (virtual_pose IS NULL OR length(virtual_pose) = 128),
+  physical_edge INTEGER,
+  virtual_edge INTEGER,
+  laps REAL,
+  anchor_fraction REAL,
+  coherence_error_m REAL,
+  coherence_error_rad REAL
+) STRICT;
+
+CREATE INDEX tracking_samples_by_session_time ON tracking_samples (session_id, t_ns);
+
+CREATE TABLE frames (
+  frame_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER,
+  frame_index INTEGER NOT NULL,
+  t_ns INTEGER NOT NULL,
+  predicted_display_ns INTEGER,
+  cpu_time_ns INTEGER NOT NULL,
+  gpu_time_ns INTEGER,
+  dropped_frames INTEGER NOT NULL DEFAULT 0 CHECK (dropped_frames >= 0),
+  views INTEGER NOT NULL,
+  passes INTEGER NOT NULL,
+  draws INTEGER NOT NULL,
+  triangles INTEGER NOT NULL,
+  eye_width_px INTEGER CHECK (eye_width_px IS NULL OR eye_width_px > 0),
+  eye_height_px INTEGER CHECK (eye_height_px IS NULL OR eye_height_px > 0),
+  eye_views BLOB CHECK (eye_views IS NULL OR length(eye_views) = 256)
+) STRICT;
+
+CREATE INDEX frames_by_session_frame ON frames (session_id, frame_index);
+-- The frames that record eye geometry (the first of each run, then each change).
+CREATE INDEX frames_with_eye_views ON frames (session_id, frame_index) WHERE eye_views IS NOT NULL;
+
+CREATE TABLE events (
+  event_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER,
+  t_ns INTEGER NOT NULL,
+  kind TEXT NOT NULL,
+  detail TEXT NOT NULL DEFAULT '{}' CHECK (json_valid(detail))
+) STRICT;
