@@ -147,6 +147,66 @@ class RuntimeRules : public ::testing::Test {
     return sc;
   }
 
+  XrPath path(const char* text) {
+    XrPath p = XR_NULL_PATH;
+    EXPECT_EQ(xrStringToPath(instance_, text, &p), XR_SUCCESS) << text;
+    return p;
+  }
+
+  // An action set like a game's: a grab value, a hand pose and a vibration
+  // for either hand.
+  struct HandActions {
+    XrActionSet set = XR_NULL_HANDLE;
+    std::array<XrPath, 2> hands{};
+    XrAction grab = XR_NULL_HANDLE, pose = XR_NULL_HANDLE, buzz = XR_NULL_HANDLE;
+  };
+  HandActions hand_actions() {
+    HandActions h;
+    auto si = tagged<XrActionSetCreateInfo>(XR_TYPE_ACTION_SET_CREATE_INFO);
+    std::strcpy(si.actionSetName, "hands");
+    std::strcpy(si.localizedActionSetName, "Hands");
+    EXPECT_EQ(xrCreateActionSet(instance_, &si, &h.set), XR_SUCCESS);
+    h.hands = {path("/user/hand/left"), path("/user/hand/right")};
+    auto action = [&h](const char* name, XrActionType type) {
+      auto ai = tagged<XrActionCreateInfo>(XR_TYPE_ACTION_CREATE_INFO);
+      std::strcpy(ai.actionName, name);
+      std::strcpy(ai.localizedActionName, name);
+      ai.actionType = type;
+      ai.countSubactionPaths = 2;
+      ai.subactionPaths = h.hands.data();
+      XrAction a = XR_NULL_HANDLE;
+      EXPECT_EQ(xrCreateAction(h.set, &ai, &a), XR_SUCCESS) << name;
+      return a;
+    };
+    h.grab = action("grab", XR_ACTION_TYPE_FLOAT_INPUT);
+    h.pose = action("pose", XR_ACTION_TYPE_POSE_INPUT);
+    h.buzz = action("buzz", XR_ACTION_TYPE_VIBRATION_OUTPUT);
+    return h;
+  }
+
+  XrResult suggest(const char* profile, std::vector<XrActionSuggestedBinding> bindings) {
+    auto s = tagged<XrInteractionProfileSuggestedBinding>(XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING);
+    s.interactionProfile = path(profile);
+    s.countSuggestedBindings = static_cast<std::uint32_t>(bindings.size());
+    s.suggestedBindings = bindings.data();
+    return xrSuggestInteractionProfileBindings(instance_, &s);
+  }
+
+  XrResult suggest_touch(const HandActions& h) {
+    return suggest("/interaction_profiles/oculus/touch_controller",
+                   {{h.grab, path("/user/hand/left/input/squeeze/value")},
+                    {h.grab, path("/user/hand/right/input/squeeze/value")},
+                    {h.pose, path("/user/hand/right/input/grip/pose")},
+                    {h.buzz, path("/user/hand/right/output/haptic")}});
+  }
+
+  void attach(XrActionSet set) {
+    auto info = tagged<XrSessionActionSetsAttachInfo>(XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO);
+    info.countActionSets = 1;
+    info.actionSets = &set;
+    ASSERT_EQ(xrAttachSessionActionSets(session_, &info), XR_SUCCESS);
+  }
+
   std::filesystem::path log_;
   XrInstance instance_ = XR_NULL_HANDLE;
   XrSystemId system_ = XR_NULL_SYSTEM_ID;
@@ -444,66 +504,28 @@ TEST_F(RuntimeRules, EnumerationsAndSpaces) {
   EXPECT_EQ(violations(), 1);  // the one in SetUp
 }
 
-// Bindings for any OpenXR 1.0 profile, the profile in use and its sources
-// by name, pose states, haptics and destroyed actions.
-TEST_F(RuntimeRules, ProfilesSourcesAndHaptics) {
-  auto si = tagged<XrActionSetCreateInfo>(XR_TYPE_ACTION_SET_CREATE_INFO);
-  std::strcpy(si.actionSetName, "rules");
-  std::strcpy(si.localizedActionSetName, "Rules");
-  XrActionSet set = XR_NULL_HANDLE;
-  ASSERT_EQ(xrCreateActionSet(instance_, &si, &set), XR_SUCCESS);
-  auto path = [this](const char* text) {
-    XrPath p = XR_NULL_PATH;
-    EXPECT_EQ(xrStringToPath(instance_, text, &p), XR_SUCCESS) << text;
-    return p;
-  };
-  const std::array<XrPath, 2> hands{path("/user/hand/left"), path("/user/hand/right")};
-  auto action = [&](const char* name, XrActionType type) {
-    auto ai = tagged<XrActionCreateInfo>(XR_TYPE_ACTION_CREATE_INFO);
-    std::strcpy(ai.actionName, name);
-    std::strcpy(ai.localizedActionName, name);
-    ai.actionType = type;
-    ai.countSubactionPaths = 2;
-    ai.subactionPaths = hands.data();
-    XrAction a = XR_NULL_HANDLE;
-    EXPECT_EQ(xrCreateAction(set, &ai, &a), XR_SUCCESS) << name;
-    return a;
-  };
-  const XrAction grab = action("grab", XR_ACTION_TYPE_FLOAT_INPUT);
-  const XrAction pose = action("pose", XR_ACTION_TYPE_POSE_INPUT);
-  const XrAction buzz = action("buzz", XR_ACTION_TYPE_VIBRATION_OUTPUT);
-  auto suggest = [&](const char* profile, std::vector<XrActionSuggestedBinding> bindings) {
-    auto s = tagged<XrInteractionProfileSuggestedBinding>(XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING);
-    s.interactionProfile = path(profile);
-    s.countSuggestedBindings = static_cast<std::uint32_t>(bindings.size());
-    s.suggestedBindings = bindings.data();
-    return xrSuggestInteractionProfileBindings(instance_, &s);
-  };
+// Bindings for any OpenXR 1.0 profile; the profile in use and its sources
+// by name.
+TEST_F(RuntimeRules, ProfilesAndTheirSources) {
+  const HandActions h = hand_actions();
   EXPECT_EQ(suggest("/interaction_profiles/htc/vive_controller",
-                    {{grab, path("/user/hand/left/input/trigger")}, {pose, path("/user/hand/left/input/grip/pose")},
-                     {buzz, path("/user/hand/left/output/haptic")}}),
+                    {{h.grab, path("/user/hand/left/input/trigger")},
+                     {h.pose, path("/user/hand/left/input/grip/pose")},
+                     {h.buzz, path("/user/hand/left/output/haptic")}}),
             XR_SUCCESS);
-  EXPECT_EQ(suggest("/interaction_profiles/acme/glove", {{grab, path("/user/hand/left/input/trigger/value")}}),
+  EXPECT_EQ(suggest("/interaction_profiles/acme/glove", {{h.grab, path("/user/hand/left/input/trigger/value")}}),
             XR_ERROR_PATH_UNSUPPORTED);
-  ASSERT_EQ(suggest("/interaction_profiles/oculus/touch_controller",
-                    {{grab, path("/user/hand/left/input/squeeze/value")},
-                     {grab, path("/user/hand/right/input/squeeze/value")},
-                     {pose, path("/user/hand/right/input/grip/pose")},
-                     {buzz, path("/user/hand/right/output/haptic")}}),
-            XR_SUCCESS);
+  ASSERT_EQ(suggest_touch(h), XR_SUCCESS);
   auto profile = tagged<XrInteractionProfileState>(XR_TYPE_INTERACTION_PROFILE_STATE);
-  EXPECT_EQ(xrGetCurrentInteractionProfile(session_, hands[0], &profile), XR_ERROR_ACTIONSET_NOT_ATTACHED);
-  auto attach = tagged<XrSessionActionSetsAttachInfo>(XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO);
-  attach.countActionSets = 1;
-  attach.actionSets = &set;
-  ASSERT_EQ(xrAttachSessionActionSets(session_, &attach), XR_SUCCESS);
+  EXPECT_EQ(xrGetCurrentInteractionProfile(session_, h.hands[0], &profile), XR_ERROR_ACTIONSET_NOT_ATTACHED);
+  attach(h.set);
   // IDLE, READY, then the controllers' profile.
   XrStructureType last = XR_TYPE_UNKNOWN;
   for (auto e = tagged<XrEventDataBuffer>(XR_TYPE_EVENT_DATA_BUFFER); xrPollEvent(instance_, &e) == XR_SUCCESS;
        e = tagged<XrEventDataBuffer>(XR_TYPE_EVENT_DATA_BUFFER))
     last = e.type;
   EXPECT_EQ(last, XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED);
-  ASSERT_EQ(xrGetCurrentInteractionProfile(session_, hands[1], &profile), XR_SUCCESS);
+  ASSERT_EQ(xrGetCurrentInteractionProfile(session_, h.hands[1], &profile), XR_SUCCESS);
   EXPECT_EQ(profile.interactionProfile, path("/interaction_profiles/oculus/touch_controller"));
   ASSERT_EQ(xrGetCurrentInteractionProfile(session_, path("/user/head"), &profile), XR_SUCCESS);
   EXPECT_EQ(profile.interactionProfile, XR_NULL_PATH);
@@ -511,7 +533,7 @@ TEST_F(RuntimeRules, ProfilesSourcesAndHaptics) {
             XR_ERROR_PATH_UNSUPPORTED);
 
   auto bound = tagged<XrBoundSourcesForActionEnumerateInfo>(XR_TYPE_BOUND_SOURCES_FOR_ACTION_ENUMERATE_INFO);
-  bound.action = grab;
+  bound.action = h.grab;
   std::array<XrPath, 2> sources{};
   std::uint32_t n = 0;
   ASSERT_EQ(xrEnumerateBoundSourcesForAction(session_, &bound, 2, &n, sources.data()), XR_SUCCESS);
@@ -526,31 +548,39 @@ TEST_F(RuntimeRules, ProfilesSourcesAndHaptics) {
   std::string name(n, '\0');
   ASSERT_EQ(xrGetInputSourceLocalizedName(session_, &name_info, n, &n, name.data()), XR_SUCCESS);
   EXPECT_STREQ(name.c_str(), "Left Hand Oculus Touch Controller Squeeze Value");
+  EXPECT_EQ(violations(), 4);  // with the one in SetUp
+  xrDestroyActionSet(h.set);
+}
 
+// Pose states and haptics follow input focus and action types; a destroyed
+// action is an invalid handle.
+TEST_F(RuntimeRules, PosesHapticsAndDestroyedActions) {
+  const HandActions h = hand_actions();
+  ASSERT_EQ(suggest_touch(h), XR_SUCCESS);
+  attach(h.set);
   // Not focused yet (no frame submitted): inactive poses, haptics ignored.
   auto get = tagged<XrActionStateGetInfo>(XR_TYPE_ACTION_STATE_GET_INFO);
-  get.action = pose;
+  get.action = h.pose;
   auto pose_state = tagged<XrActionStatePose>(XR_TYPE_ACTION_STATE_POSE);
   ASSERT_EQ(xrGetActionStatePose(session_, &get, &pose_state), XR_SUCCESS);
   EXPECT_EQ(pose_state.isActive, XR_FALSE);
   auto haptic = tagged<XrHapticActionInfo>(XR_TYPE_HAPTIC_ACTION_INFO);
-  haptic.action = buzz;
-  haptic.subactionPath = hands[1];
+  haptic.action = h.buzz;
+  haptic.subactionPath = h.hands[1];
   auto vibration = tagged<XrHapticVibration>(XR_TYPE_HAPTIC_VIBRATION);
   vibration.duration = XR_MIN_HAPTIC_DURATION;
   vibration.amplitude = 0.5f;
   const auto* feedback = reinterpret_cast<const XrHapticBaseHeader*>(&vibration);
   EXPECT_EQ(xrApplyHapticFeedback(session_, &haptic, feedback), XR_SESSION_NOT_FOCUSED);
-  haptic.action = grab;
+  haptic.action = h.grab;
   EXPECT_EQ(xrApplyHapticFeedback(session_, &haptic, feedback), XR_ERROR_ACTION_TYPE_MISMATCH);
   EXPECT_EQ(xrStopHapticFeedback(session_, &haptic), XR_ERROR_ACTION_TYPE_MISMATCH);
 
-  ASSERT_EQ(xrDestroyAction(grab), XR_SUCCESS);
-  get.action = grab;
+  ASSERT_EQ(xrDestroyAction(h.grab), XR_SUCCESS);
+  get.action = h.grab;
   auto as_float = tagged<XrActionStateFloat>(XR_TYPE_ACTION_STATE_FLOAT);
   EXPECT_EQ(xrGetActionStateFloat(session_, &get, &as_float), XR_ERROR_HANDLE_INVALID);
-  EXPECT_EQ(violations(), 7);  // with the one in SetUp
-  xrDestroyActionSet(set);
+  EXPECT_EQ(violations(), 4);  // with the one in SetUp
+  xrDestroyActionSet(h.set);
 }
-
 }  // namespace

@@ -2,10 +2,12 @@
 // Khronos loader loads through XR_RUNTIME_JSON (the manifest is generated in
 // the build folder next to this library), so the real `curvlab run --backend
 // xr` drives a whole session on a machine without a headset. It implements
-// what curvlab's backend calls and checks the rules of the OpenXR 1.0
-// specification that are cheap to check (call order of the frame loop and of
-// swapchain images, session states, action-set attachment, action types and
-// subaction paths, layers referencing released images, …). A broken rule
+// every OpenXR 1.0 core function, XR_KHR_vulkan_enable2 and
+// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it), and
+// checks the rules of the OpenXR 1.0 specification that are cheap to check
+// (call order of the frame loop and of swapchain images, session states,
+// action-set attachment, action types and subaction paths, layers
+// referencing released images, …). A broken rule
 // returns the specification's error and writes a "violation" line to the log
 // and to stderr, so a test fails even where the application ignores a result.
 //
@@ -33,8 +35,10 @@
 //   CURVLAB_TEST_XR_CAPTURE_EVERY every n-th submitted frame (default 1)
 //   CURVLAB_TEST_XR_LOG      a text log: one "frame" line per xrWaitFrame with
 //                            the predicted display time (XrTime and
-//                            CLOCK_MONOTONIC ns) and the head pose at it; "state",
-//                            "input", "capture", "violation", "warning" lines
+//                            CLOCK_MONOTONIC ns) and the head pose at it; one
+//                            "end_frame N layers K" line per xrEndFrame that
+//                            succeeded; "state", "profile", "input", "haptic",
+//                            "capture", "violation", "warning" lines
 //   CURVLAB_TEST_XR_SIZE     recommended eye size WxH (default 320x320)
 //
 // XrTime is CLOCK_MONOTONIC minus an epoch taken when the library loads (so
@@ -1157,6 +1161,9 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace base, XrTime time, XrSpac
   const auto [pa, ta] = stage_pose(*a, time);
   const auto [pb, tb] = stage_pose(*b, time);
   location->pose = to_xr_pose(compose(inverse(pb), pa));
+  // A chained XrSpaceVelocity must be filled: the scripted poses report none.
+  for (auto* n = static_cast<XrBaseOutStructure*>(location->next); n != nullptr; n = n->next)
+    if (n->type == XR_TYPE_SPACE_VELOCITY) reinterpret_cast<XrSpaceVelocity*>(n)->velocityFlags = 0;
   location->locationFlags = ta && tb ? XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
                                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
                                            XR_SPACE_LOCATION_POSITION_TRACKED_BIT
