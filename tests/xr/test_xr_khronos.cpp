@@ -12,6 +12,8 @@
 //    reports reach the file the tests read.
 #include "khronos_layer.hpp"
 
+#include "curvlab/renderer/image_io.hpp"
+
 #include <openxr/openxr.h>
 
 #include <gtest/gtest.h>
@@ -153,6 +155,26 @@ struct RuntimeLog {
   }
 };
 
+// Pixels of hello_xr's cubes (faces in pure red, green or blue) in a left-eye
+// image the runtime received, and pixels of its clear colour (the corner's).
+struct CubePixels {
+  int cube = 0;
+  int clear = 0;
+};
+
+CubePixels cube_pixels(const curvlab::renderer::Rgba8Image& img) {
+  CubePixels n;
+  const std::uint8_t* corner = img.pixels.data();
+  for (std::size_t i = 0; i + 3 < img.pixels.size(); i += 4) {
+    const std::uint8_t* p = &img.pixels[i];
+    const int hi = std::max({p[0], p[1], p[2]});
+    const int lo = std::min({p[0], p[1], p[2]});
+    n.cube += hi > 180 && lo < 60 ? 1 : 0;
+    n.clear += std::equal(p, p + 3, corner) ? 1 : 0;
+  }
+  return n;
+}
+
 TEST(KhronosCoreValidation, ReportsAMisuseToItsFile) {
   const auto dir = fresh_dir("misuse");
   const CoreValidation layer(dir / "core_validation.txt");
@@ -187,12 +209,16 @@ TEST(KhronosHelloXr, RunsThroughTheTestRuntimeAndExitsWhenAsked) {
   const auto dir = fresh_dir("hello_xr");
   const auto log_path = dir / "runtime.log";
   const auto output = dir / "hello_xr.txt";
+  const auto captures = dir / "captures";
+  fs::create_directories(captures);
   const CoreValidation layer(dir / "core_validation.txt");
   auto vars = layer.environment();
   vars["XR_RUNTIME_JSON"] = CURVLAB_TEST_XR_RUNTIME_JSON;
   vars["CURVLAB_TEST_XR_LOG"] = log_path.string();
   vars["CURVLAB_TEST_XR_EXIT"] = "5.5";
   vars["CURVLAB_TEST_XR_PRESS"] = "left:squeeze@1.0~0.3";
+  vars["CURVLAB_TEST_XR_CAPTURE_DIR"] = captures.string();
+  vars["CURVLAB_TEST_XR_CAPTURE_EVERY"] = "60";
   if (fs::exists(CURVLAB_LAVAPIPE_ICD)) vars["VK_ICD_FILENAMES"] = CURVLAB_LAVAPIPE_ICD;
   const Exit exit = run_program({CURVLAB_HELLO_XR, "-g", "Vulkan2"}, vars, output, std::chrono::seconds(90));
   const std::string out = read_text(output);
@@ -216,12 +242,24 @@ TEST(KhronosHelloXr, RunsThroughTheTestRuntimeAndExitsWhenAsked) {
   EXPECT_FALSE(log.has("note xrDestroySession while the session is running"));
   EXPECT_TRUE(log.has("instance destroyed"));
   EXPECT_GE(log.frames_with_layers, 10) << out;
+  // What it rendered reached the runtime: its cubes on its clear colour.
+  std::vector<fs::path> pngs;
+  for (const auto& e : fs::directory_iterator(captures)) pngs.push_back(e.path());
+  ASSERT_FALSE(pngs.empty());
+  std::sort(pngs.begin(), pngs.end());
+  curvlab::renderer::Rgba8Image img;
+  std::string error;
+  ASSERT_TRUE(curvlab::renderer::read_png(pngs.back().string(), img, error)) << error;
+  const CubePixels px = cube_pixels(img);
+  EXPECT_GT(px.cube, 100) << pngs.back();
+  EXPECT_GT(px.clear, img.width * img.height / 2) << pngs.back();
   // Its grab action read the scripted squeeze and it answered with haptics;
   // it named the bound sources through xrGetInputSourceLocalizedName.
   EXPECT_GE(log.haptics, 1);
   EXPECT_NE(out.find("Left Hand Oculus Touch Controller Squeeze Value"), std::string::npos) << out;
   EXPECT_EQ(layer.messages(), "") << "the core validation layer reported";
-  std::cout << "hello_xr: " << log.frames_with_layers << " frames with layers, "
+  std::cout << "hello_xr: " << log.frames_with_layers << " frames with layers (" << px.cube << " cube pixels, "
+            << px.clear << " clear ones in " << pngs.back().filename().string() << "), "
             << static_cast<double>(stopping_ns - focused_ns) * 1e-9 << " s focused, exit code " << exit.code
             << "\n";
   fs::remove_all(dir);
