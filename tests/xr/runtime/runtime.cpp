@@ -1098,8 +1098,8 @@ XrResult XRAPI_CALL DestroySpace(XrSpace h) {
 }
 
 const std::vector<XrReferenceSpaceType>& reference_spaces() {
-  static const std::vector<XrReferenceSpaceType> types = {XR_REFERENCE_SPACE_TYPE_VIEW, XR_REFERENCE_SPACE_TYPE_LOCAL,
-                                                          XR_REFERENCE_SPACE_TYPE_STAGE};
+  static const std::vector<XrReferenceSpaceType> types = {
+      XR_REFERENCE_SPACE_TYPE_VIEW, XR_REFERENCE_SPACE_TYPE_LOCAL, XR_REFERENCE_SPACE_TYPE_STAGE};
   return types;
 }
 
@@ -1934,7 +1934,8 @@ XrResult XRAPI_CALL ApplyHapticFeedback(XrSession h, const XrHapticActionInfo* i
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "feedback must be XrHapticVibration");
   const auto* v = reinterpret_cast<const XrHapticVibration*>(feedback);
   if (!(v->amplitude >= 0.0f && v->amplitude <= 1.0f))
-    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "amplitude " + std::to_string(v->amplitude) + " outside [0, 1]");
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE,
+                     "amplitude " + std::to_string(v->amplitude) + " outside [0, 1]");
   if (s->state != XR_SESSION_STATE_FOCUSED) return XR_SESSION_NOT_FOCUSED;
   log_line("haptic " + a->name + " " + path_text(*s->instance, info->subactionPath) + " duration_ns " +
            std::to_string(v->duration) + " amplitude " + std::to_string(v->amplitude));
