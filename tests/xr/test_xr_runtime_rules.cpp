@@ -11,7 +11,11 @@
 #include <openxr/openxr.h>
 #include <openxr/openxr_platform.h>
 
+#include "runtime/loader_interface.hpp"
+
 #include <gtest/gtest.h>
+
+#include <dlfcn.h>
 
 #include <array>
 #include <cstdlib>
@@ -20,6 +24,7 @@
 #include <fstream>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 namespace {
 
@@ -140,6 +145,66 @@ class RuntimeRules : public ::testing::Test {
     XrSwapchain sc = XR_NULL_HANDLE;
     EXPECT_EQ(xrCreateSwapchain(session_, &info, &sc), XR_SUCCESS);
     return sc;
+  }
+
+  XrPath path(const char* text) {
+    XrPath p = XR_NULL_PATH;
+    EXPECT_EQ(xrStringToPath(instance_, text, &p), XR_SUCCESS) << text;
+    return p;
+  }
+
+  // An action set like a game's: a grab value, a hand pose and a vibration
+  // for either hand.
+  struct HandActions {
+    XrActionSet set = XR_NULL_HANDLE;
+    std::array<XrPath, 2> hands{};
+    XrAction grab = XR_NULL_HANDLE, pose = XR_NULL_HANDLE, buzz = XR_NULL_HANDLE;
+  };
+  HandActions hand_actions() {
+    HandActions h;
+    auto si = tagged<XrActionSetCreateInfo>(XR_TYPE_ACTION_SET_CREATE_INFO);
+    std::strcpy(si.actionSetName, "hands");
+    std::strcpy(si.localizedActionSetName, "Hands");
+    EXPECT_EQ(xrCreateActionSet(instance_, &si, &h.set), XR_SUCCESS);
+    h.hands = {path("/user/hand/left"), path("/user/hand/right")};
+    auto action = [&h](const char* name, XrActionType type) {
+      auto ai = tagged<XrActionCreateInfo>(XR_TYPE_ACTION_CREATE_INFO);
+      std::strcpy(ai.actionName, name);
+      std::strcpy(ai.localizedActionName, name);
+      ai.actionType = type;
+      ai.countSubactionPaths = 2;
+      ai.subactionPaths = h.hands.data();
+      XrAction a = XR_NULL_HANDLE;
+      EXPECT_EQ(xrCreateAction(h.set, &ai, &a), XR_SUCCESS) << name;
+      return a;
+    };
+    h.grab = action("grab", XR_ACTION_TYPE_FLOAT_INPUT);
+    h.pose = action("pose", XR_ACTION_TYPE_POSE_INPUT);
+    h.buzz = action("buzz", XR_ACTION_TYPE_VIBRATION_OUTPUT);
+    return h;
+  }
+
+  XrResult suggest(const char* profile, std::vector<XrActionSuggestedBinding> bindings) {
+    auto s = tagged<XrInteractionProfileSuggestedBinding>(XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING);
+    s.interactionProfile = path(profile);
+    s.countSuggestedBindings = static_cast<std::uint32_t>(bindings.size());
+    s.suggestedBindings = bindings.data();
+    return xrSuggestInteractionProfileBindings(instance_, &s);
+  }
+
+  XrResult suggest_touch(const HandActions& h) {
+    return suggest("/interaction_profiles/oculus/touch_controller",
+                   {{h.grab, path("/user/hand/left/input/squeeze/value")},
+                    {h.grab, path("/user/hand/right/input/squeeze/value")},
+                    {h.pose, path("/user/hand/right/input/grip/pose")},
+                    {h.buzz, path("/user/hand/right/output/haptic")}});
+  }
+
+  void attach(XrActionSet set) {
+    auto info = tagged<XrSessionActionSetsAttachInfo>(XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO);
+    info.countActionSets = 1;
+    info.actionSets = &set;
+    ASSERT_EQ(xrAttachSessionActionSets(session_, &info), XR_SUCCESS);
   }
 
   std::filesystem::path log_;
@@ -352,4 +417,170 @@ TEST_F(RuntimeRules, ActionsAndBindings) {
   xrDestroyActionSet(set);
 }
 
+// Every OpenXR 1.0 core function (the 55 entry points of openxr.h 1.0.20
+// without an extension suffix), asked of the runtime itself rather than of
+// the loader, whose trampolines exist whether or not the runtime has the
+// function: a null pointer there is a crash in an application.
+TEST(RuntimeDispatch, EveryCoreFunctionHasAnEntryPoint) {
+  void* lib = dlopen(CURVLAB_TEST_XR_RUNTIME_LIBRARY, RTLD_NOW | RTLD_LOCAL);
+  ASSERT_NE(lib, nullptr) << dlerror();
+  auto negotiate = reinterpret_cast<PFN_xrNegotiateLoaderRuntimeInterface>(
+      dlsym(lib, "xrNegotiateLoaderRuntimeInterface"));
+  ASSERT_NE(negotiate, nullptr);
+  XrNegotiateLoaderInfo loader{XR_LOADER_INTERFACE_STRUCT_LOADER_INFO, 1, sizeof(XrNegotiateLoaderInfo), 1, 1,
+                               XR_MAKE_VERSION(1, 0, 0), XR_CURRENT_API_VERSION};
+  XrNegotiateRuntimeRequest request{XR_LOADER_INTERFACE_STRUCT_RUNTIME_REQUEST, 1, sizeof(XrNegotiateRuntimeRequest),
+                                    0, 0, nullptr};
+  ASSERT_EQ(negotiate(&loader, &request), XR_SUCCESS);
+  const PFN_xrGetInstanceProcAddr gipa = request.getInstanceProcAddr;
+  PFN_xrCreateInstance create = nullptr;
+  ASSERT_EQ(gipa(XR_NULL_HANDLE, "xrCreateInstance", reinterpret_cast<PFN_xrVoidFunction*>(&create)), XR_SUCCESS);
+  auto info = tagged<XrInstanceCreateInfo>(XR_TYPE_INSTANCE_CREATE_INFO);
+  std::strcpy(info.applicationInfo.applicationName, "dispatch");
+  info.applicationInfo.apiVersion = XR_MAKE_VERSION(1, 0, 0);
+  XrInstance instance = XR_NULL_HANDLE;
+  ASSERT_EQ(create(&info, &instance), XR_SUCCESS);
+  const std::vector<std::string> core = {
+      "xrGetInstanceProcAddr", "xrEnumerateApiLayerProperties", "xrEnumerateInstanceExtensionProperties",
+      "xrCreateInstance", "xrDestroyInstance", "xrGetInstanceProperties", "xrPollEvent", "xrResultToString",
+      "xrStructureTypeToString", "xrGetSystem", "xrGetSystemProperties", "xrEnumerateEnvironmentBlendModes",
+      "xrCreateSession", "xrDestroySession", "xrEnumerateReferenceSpaces", "xrCreateReferenceSpace",
+      "xrGetReferenceSpaceBoundsRect", "xrCreateActionSpace", "xrLocateSpace", "xrDestroySpace",
+      "xrEnumerateViewConfigurations", "xrGetViewConfigurationProperties", "xrEnumerateViewConfigurationViews",
+      "xrEnumerateSwapchainFormats", "xrCreateSwapchain", "xrDestroySwapchain", "xrEnumerateSwapchainImages",
+      "xrAcquireSwapchainImage", "xrWaitSwapchainImage", "xrReleaseSwapchainImage", "xrBeginSession",
+      "xrEndSession", "xrRequestExitSession", "xrWaitFrame", "xrBeginFrame", "xrEndFrame", "xrLocateViews",
+      "xrStringToPath", "xrPathToString", "xrCreateActionSet", "xrDestroyActionSet", "xrCreateAction",
+      "xrDestroyAction", "xrSuggestInteractionProfileBindings", "xrAttachSessionActionSets",
+      "xrGetCurrentInteractionProfile", "xrGetActionStateBoolean", "xrGetActionStateFloat",
+      "xrGetActionStateVector2f", "xrGetActionStatePose", "xrSyncActions", "xrEnumerateBoundSourcesForAction",
+      "xrGetInputSourceLocalizedName", "xrApplyHapticFeedback", "xrStopHapticFeedback"};
+  EXPECT_EQ(core.size(), 55u);
+  for (const std::string& name : core) {
+    PFN_xrVoidFunction fn = nullptr;
+    EXPECT_EQ(gipa(instance, name.c_str(), &fn), XR_SUCCESS) << name;
+    EXPECT_NE(fn, nullptr) << name;
+  }
+  PFN_xrVoidFunction none = nullptr;
+  EXPECT_EQ(gipa(instance, "xrNoSuchFunction", &none), XR_ERROR_FUNCTION_UNSUPPORTED);
+  EXPECT_EQ(none, nullptr);
+  PFN_xrDestroyInstance destroy = nullptr;
+  ASSERT_EQ(gipa(instance, "xrDestroyInstance", reinterpret_cast<PFN_xrVoidFunction*>(&destroy)), XR_SUCCESS);
+  EXPECT_EQ(destroy(instance), XR_SUCCESS);
+  dlclose(lib);
+}
+
+TEST_F(RuntimeRules, EnumerationsAndSpaces) {
+  std::uint32_t n = 0;
+  std::array<XrViewConfigurationType, 2> configs{};
+  ASSERT_EQ(xrEnumerateViewConfigurations(instance_, system_, 0, &n, nullptr), XR_SUCCESS);
+  ASSERT_EQ(n, 1u);
+  ASSERT_EQ(xrEnumerateViewConfigurations(instance_, system_, 2, &n, configs.data()), XR_SUCCESS);
+  EXPECT_EQ(configs[0], XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO);
+  auto props = tagged<XrViewConfigurationProperties>(XR_TYPE_VIEW_CONFIGURATION_PROPERTIES);
+  EXPECT_EQ(xrGetViewConfigurationProperties(instance_, system_, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_MONO, &props),
+            XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED);
+  ASSERT_EQ(xrGetViewConfigurationProperties(instance_, system_, configs[0], &props), XR_SUCCESS);
+  EXPECT_EQ(props.viewConfigurationType, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO);
+  XrEnvironmentBlendMode mode = XR_ENVIRONMENT_BLEND_MODE_MAX_ENUM;
+  ASSERT_EQ(xrEnumerateEnvironmentBlendModes(instance_, system_, configs[0], 1, &n, &mode), XR_SUCCESS);
+  EXPECT_EQ(mode, XR_ENVIRONMENT_BLEND_MODE_OPAQUE);
+  // The two-call idiom: too small a capacity is refused, with the count.
+  std::array<XrReferenceSpaceType, 3> spaces{};
+  EXPECT_EQ(xrEnumerateReferenceSpaces(session_, 2, &n, spaces.data()), XR_ERROR_SIZE_INSUFFICIENT);
+  EXPECT_EQ(n, 3u);
+  ASSERT_EQ(xrEnumerateReferenceSpaces(session_, 3, &n, spaces.data()), XR_SUCCESS);
+  EXPECT_EQ(spaces[2], XR_REFERENCE_SPACE_TYPE_STAGE);
+  XrExtent2Df bounds{};
+  ASSERT_EQ(xrGetReferenceSpaceBoundsRect(session_, XR_REFERENCE_SPACE_TYPE_STAGE, &bounds), XR_SUCCESS);
+  EXPECT_GT(bounds.width, 1.0f);
+  EXPECT_EQ(xrGetReferenceSpaceBoundsRect(session_, XR_REFERENCE_SPACE_TYPE_LOCAL, &bounds),
+            XR_SPACE_BOUNDS_UNAVAILABLE);
+  char text[XR_MAX_PATH_LENGTH];
+  XrPath path = XR_NULL_PATH;
+  ASSERT_EQ(xrStringToPath(instance_, "/user/hand/left", &path), XR_SUCCESS);
+  EXPECT_EQ(xrPathToString(instance_, path, 4, &n, text), XR_ERROR_SIZE_INSUFFICIENT);
+  EXPECT_EQ(n, 16u) << "15 characters and the terminating null";
+  EXPECT_EQ(violations(), 1);  // the one in SetUp
+}
+
+// Bindings for any OpenXR 1.0 profile; the profile in use and its sources
+// by name.
+TEST_F(RuntimeRules, ProfilesAndTheirSources) {
+  const HandActions h = hand_actions();
+  EXPECT_EQ(suggest("/interaction_profiles/htc/vive_controller",
+                    {{h.grab, path("/user/hand/left/input/trigger")},
+                     {h.pose, path("/user/hand/left/input/grip/pose")},
+                     {h.buzz, path("/user/hand/left/output/haptic")}}),
+            XR_SUCCESS);
+  EXPECT_EQ(suggest("/interaction_profiles/acme/glove", {{h.grab, path("/user/hand/left/input/trigger/value")}}),
+            XR_ERROR_PATH_UNSUPPORTED);
+  ASSERT_EQ(suggest_touch(h), XR_SUCCESS);
+  auto profile = tagged<XrInteractionProfileState>(XR_TYPE_INTERACTION_PROFILE_STATE);
+  EXPECT_EQ(xrGetCurrentInteractionProfile(session_, h.hands[0], &profile), XR_ERROR_ACTIONSET_NOT_ATTACHED);
+  attach(h.set);
+  // IDLE, READY, then the controllers' profile.
+  XrStructureType last = XR_TYPE_UNKNOWN;
+  for (auto e = tagged<XrEventDataBuffer>(XR_TYPE_EVENT_DATA_BUFFER); xrPollEvent(instance_, &e) == XR_SUCCESS;
+       e = tagged<XrEventDataBuffer>(XR_TYPE_EVENT_DATA_BUFFER))
+    last = e.type;
+  EXPECT_EQ(last, XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED);
+  ASSERT_EQ(xrGetCurrentInteractionProfile(session_, h.hands[1], &profile), XR_SUCCESS);
+  EXPECT_EQ(profile.interactionProfile, path("/interaction_profiles/oculus/touch_controller"));
+  ASSERT_EQ(xrGetCurrentInteractionProfile(session_, path("/user/head"), &profile), XR_SUCCESS);
+  EXPECT_EQ(profile.interactionProfile, XR_NULL_PATH);
+  EXPECT_EQ(xrGetCurrentInteractionProfile(session_, path("/user/hand/left/input"), &profile),
+            XR_ERROR_PATH_UNSUPPORTED);
+
+  auto bound = tagged<XrBoundSourcesForActionEnumerateInfo>(XR_TYPE_BOUND_SOURCES_FOR_ACTION_ENUMERATE_INFO);
+  bound.action = h.grab;
+  std::array<XrPath, 2> sources{};
+  std::uint32_t n = 0;
+  ASSERT_EQ(xrEnumerateBoundSourcesForAction(session_, &bound, 2, &n, sources.data()), XR_SUCCESS);
+  ASSERT_EQ(n, 2u);
+  EXPECT_EQ(sources[0], path("/user/hand/left/input/squeeze/value"));
+  auto name_info = tagged<XrInputSourceLocalizedNameGetInfo>(XR_TYPE_INPUT_SOURCE_LOCALIZED_NAME_GET_INFO);
+  name_info.sourcePath = sources[0];
+  name_info.whichComponents = XR_INPUT_SOURCE_LOCALIZED_NAME_USER_PATH_BIT |
+                              XR_INPUT_SOURCE_LOCALIZED_NAME_INTERACTION_PROFILE_BIT |
+                              XR_INPUT_SOURCE_LOCALIZED_NAME_COMPONENT_BIT;
+  ASSERT_EQ(xrGetInputSourceLocalizedName(session_, &name_info, 0, &n, nullptr), XR_SUCCESS);
+  std::string name(n, '\0');
+  ASSERT_EQ(xrGetInputSourceLocalizedName(session_, &name_info, n, &n, name.data()), XR_SUCCESS);
+  EXPECT_STREQ(name.c_str(), "Left Hand Oculus Touch Controller Squeeze Value");
+  EXPECT_EQ(violations(), 4);  // with the one in SetUp
+  xrDestroyActionSet(h.set);
+}
+
+// Pose states and haptics follow input focus and action types; a destroyed
+// action is an invalid handle.
+TEST_F(RuntimeRules, PosesHapticsAndDestroyedActions) {
+  const HandActions h = hand_actions();
+  ASSERT_EQ(suggest_touch(h), XR_SUCCESS);
+  attach(h.set);
+  // Not focused yet (no frame submitted): inactive poses, haptics ignored.
+  auto get = tagged<XrActionStateGetInfo>(XR_TYPE_ACTION_STATE_GET_INFO);
+  get.action = h.pose;
+  auto pose_state = tagged<XrActionStatePose>(XR_TYPE_ACTION_STATE_POSE);
+  ASSERT_EQ(xrGetActionStatePose(session_, &get, &pose_state), XR_SUCCESS);
+  EXPECT_EQ(pose_state.isActive, XR_FALSE);
+  auto haptic = tagged<XrHapticActionInfo>(XR_TYPE_HAPTIC_ACTION_INFO);
+  haptic.action = h.buzz;
+  haptic.subactionPath = h.hands[1];
+  auto vibration = tagged<XrHapticVibration>(XR_TYPE_HAPTIC_VIBRATION);
+  vibration.duration = XR_MIN_HAPTIC_DURATION;
+  vibration.amplitude = 0.5f;
+  const auto* feedback = reinterpret_cast<const XrHapticBaseHeader*>(&vibration);
+  EXPECT_EQ(xrApplyHapticFeedback(session_, &haptic, feedback), XR_SESSION_NOT_FOCUSED);
+  haptic.action = h.grab;
+  EXPECT_EQ(xrApplyHapticFeedback(session_, &haptic, feedback), XR_ERROR_ACTION_TYPE_MISMATCH);
+  EXPECT_EQ(xrStopHapticFeedback(session_, &haptic), XR_ERROR_ACTION_TYPE_MISMATCH);
+
+  ASSERT_EQ(xrDestroyAction(h.grab), XR_SUCCESS);
+  get.action = h.grab;
+  auto as_float = tagged<XrActionStateFloat>(XR_TYPE_ACTION_STATE_FLOAT);
+  EXPECT_EQ(xrGetActionStateFloat(session_, &get, &as_float), XR_ERROR_HANDLE_INVALID);
+  EXPECT_EQ(violations(), 4);  // with the one in SetUp
+  xrDestroyActionSet(h.set);
+}
 }  // namespace

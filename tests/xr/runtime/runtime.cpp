@@ -2,10 +2,12 @@
 // Khronos loader loads through XR_RUNTIME_JSON (the manifest is generated in
 // the build folder next to this library), so the real `curvlab run --backend
 // xr` drives a whole session on a machine without a headset. It implements
-// what curvlab's backend calls and checks the rules of the OpenXR 1.0
-// specification that are cheap to check (call order of the frame loop and of
-// swapchain images, session states, action-set attachment, action types and
-// subaction paths, layers referencing released images, …). A broken rule
+// every OpenXR 1.0 core function, XR_KHR_vulkan_enable2 and
+// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it), and
+// checks the rules of the OpenXR 1.0 specification that are cheap to check
+// (call order of the frame loop and of swapchain images, session states,
+// action-set attachment, action types and subaction paths, layers
+// referencing released images, …). A broken rule
 // returns the specification's error and writes a "violation" line to the log
 // and to stderr, so a test fails even where the application ignores a result.
 //
@@ -33,8 +35,10 @@
 //   CURVLAB_TEST_XR_CAPTURE_EVERY every n-th submitted frame (default 1)
 //   CURVLAB_TEST_XR_LOG      a text log: one "frame" line per xrWaitFrame with
 //                            the predicted display time (XrTime and
-//                            CLOCK_MONOTONIC ns) and the head pose at it; "state",
-//                            "input", "capture", "violation", "warning" lines
+//                            CLOCK_MONOTONIC ns) and the head pose at it; one
+//                            "end_frame N layers K" line per xrEndFrame that
+//                            succeeded; "state", "profile", "input", "haptic",
+//                            "capture", "violation", "warning" lines
 //   CURVLAB_TEST_XR_SIZE     recommended eye size WxH (default 320x320)
 //
 // XrTime is CLOCK_MONOTONIC minus an epoch taken when the library loads (so
@@ -42,6 +46,7 @@
 // are paced in real time at 90 Hz.
 //
 // Not thread-safe beyond a global lock: one application thread at a time.
+#include "profiles.hpp"
 #include "script.hpp"
 
 #include <time.h>
@@ -70,33 +75,9 @@
 #include <string>
 #include <vector>
 
-// The loader ↔ runtime negotiation structures (OpenXR loader specification,
-// "Runtime Interface Negotiation"); Debian's libopenxr-dev 1.0.20 does not
-// install the header that declares them.
+#include "loader_interface.hpp"
+
 extern "C" {
-enum XrLoaderInterfaceStructs {
-  XR_LOADER_INTERFACE_STRUCT_UNINTIALIZED = 0,
-  XR_LOADER_INTERFACE_STRUCT_LOADER_INFO = 1,
-  XR_LOADER_INTERFACE_STRUCT_API_LAYER_REQUEST = 2,
-  XR_LOADER_INTERFACE_STRUCT_RUNTIME_REQUEST = 3,
-};
-struct XrNegotiateLoaderInfo {
-  XrLoaderInterfaceStructs structType;
-  uint32_t structVersion;
-  size_t structSize;
-  uint32_t minInterfaceVersion;
-  uint32_t maxInterfaceVersion;
-  XrVersion minApiVersion;
-  XrVersion maxApiVersion;
-};
-struct XrNegotiateRuntimeRequest {
-  XrLoaderInterfaceStructs structType;
-  uint32_t structVersion;
-  size_t structSize;
-  uint32_t runtimeInterfaceVersion;
-  XrVersion runtimeApiVersion;
-  PFN_xrGetInstanceProcAddr getInstanceProcAddr;
-};
 __attribute__((visibility("default"))) XrResult xrNegotiateLoaderRuntimeInterface(
     const XrNegotiateLoaderInfo* loaderInfo, XrNegotiateRuntimeRequest* runtimeRequest);
 }
@@ -111,8 +92,6 @@ constexpr XrSystemId kSystem = 0x5e5;
 constexpr std::uint32_t kImagesPerSwapchain = 3;
 constexpr std::uint32_t kMaxLayers = 16;
 constexpr std::uint32_t kMaxSwapchainPx = 4096;
-constexpr const char* kTouch = "/interaction_profiles/oculus/touch_controller";
-constexpr const char* kSimple = "/interaction_profiles/khr/simple_controller";
 
 std::int64_t monotonic_ns() {
   timespec ts{};
@@ -244,7 +223,8 @@ struct Session {
   std::int64_t frames_waited = 0;
   std::int64_t frames_submitted = 0;
   std::vector<ActionSet*> attached;
-  std::string active_profile;  // the interaction profile the controllers use
+  std::string active_profile;  // the interaction profile the controllers use ("" none)
+  std::int64_t frames_ended = 0;  // successful xrEndFrame calls
   std::set<Space*> spaces;
   std::set<Swapchain*> swapchains;
 };
@@ -334,6 +314,14 @@ std::string path_text(const Instance& inst, XrPath p) {
   return p >= 1 && p <= inst.paths.size() ? inst.paths[p - 1] : std::string();
 }
 
+// The XrPath of a well-formed path string, made on first use.
+XrPath intern(Instance& inst, const std::string& text) {
+  const auto it = std::find(inst.paths.begin(), inst.paths.end(), text);
+  if (it != inst.paths.end()) return static_cast<XrPath>(it - inst.paths.begin()) + 1;
+  inst.paths.push_back(text);
+  return inst.paths.size();
+}
+
 // ---- session states and script ---------------------------------------------
 
 void queue_state(Session& s, XrSessionState next) {
@@ -347,6 +335,16 @@ void queue_state(Session& s, XrSessionState next) {
   s.instance->events.push_back(buffer);
   s.state = next;
   log_line("state " + state_name(next) + " monotonic_ns " + std::to_string(now));
+}
+
+// The controllers' interaction profile changed (OpenXR 1.0 §11.4): the
+// application may now ask which profile and which sources its actions use.
+void queue_profile_changed(Session& s) {
+  XrEventDataBuffer buffer{};
+  auto* e = reinterpret_cast<XrEventDataInteractionProfileChanged*>(&buffer);
+  e->type = XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED;
+  e->session = handle_of<XrSession>(&s);
+  s.instance->events.push_back(buffer);
 }
 
 // Runs the script up to now: focus spells and the exit request.
@@ -509,31 +507,6 @@ bool capture(Session& s, const Swapchain& sc, std::uint32_t index, const XrRect2
 
 // ---- controller inputs --------------------------------------------------------
 
-// Input paths of the two profiles the runtime emulates (OpenXR 1.0,
-// "Interaction Profile Paths").
-bool profile_has(const std::string& profile, const std::string& path) {
-  static const std::vector<std::string> both_touch = {
-      "squeeze/value", "trigger/value", "trigger/touch", "thumbstick/x", "thumbstick/y", "thumbstick/click",
-      "thumbstick/touch", "thumbrest/touch", "grip/pose", "aim/pose", "output/haptic"};
-  static const std::vector<std::string> left_touch = {"x/click", "x/touch", "y/click", "y/touch", "menu/click"};
-  static const std::vector<std::string> right_touch = {"a/click", "a/touch", "b/click", "b/touch", "system/click"};
-  static const std::vector<std::string> both_simple = {"select/click", "menu/click", "grip/pose", "aim/pose",
-                                                       "output/haptic"};
-  for (const std::string hand : {"left", "right"}) {
-    const std::string prefix = "/user/hand/" + hand + "/";
-    if (path.rfind(prefix, 0) != 0) continue;
-    std::string rest = path.substr(prefix.size());
-    if (rest.rfind("input/", 0) == 0) rest = rest.substr(6);
-    else if (rest != "output/haptic") return false;
-    auto in = [&rest](const std::vector<std::string>& list) {
-      return std::find(list.begin(), list.end(), rest) != list.end();
-    };
-    if (profile == kTouch) return in(both_touch) || in(hand == "left" ? left_touch : right_touch);
-    if (profile == kSimple) return in(both_simple);
-  }
-  return false;
-}
-
 // The physical input a scripted button drives, in the active profile.
 std::string input_path(const std::string& profile, const Press& p) {
   std::string input;
@@ -541,10 +514,12 @@ std::string input_path(const std::string& profile, const Press& p) {
     if (p.button == "trigger") input = "trigger/value";
     else if (p.button == "squeeze") input = "squeeze/value";
     else input = p.button + "/click";
-  } else {
+  } else if (profile == kSimple) {
     if (p.button == "trigger") input = "select/click";
     else if (p.button == "menu") input = "menu/click";
     else return {};
+  } else {
+    return {};  // no controllers: the application suggested neither profile
   }
   return "/user/hand/" + p.hand + "/input/" + input;
 }
@@ -554,7 +529,10 @@ std::pair<float, std::optional<double>> input_value(const Session& s, const std:
   float value = 0.0f;
   std::optional<double> changed;
   for (const Press& p : s.instance->script.presses) {
-    if (input_path(s.active_profile, p) != binding) continue;
+    // A binding to an identifier (…/input/trigger) takes the component the
+    // press drives (…/input/trigger/value).
+    const std::string input = input_path(s.active_profile, p);
+    if (input.empty() || (input != binding && input.rfind(binding + "/", 0) != 0)) continue;
     if (held_since(p, t)) value = 1.0f;
     if (const auto c = last_change(p, t); c && (!changed || *c > *changed)) changed = c;
   }
@@ -585,6 +563,26 @@ bool well_formed_path(const char* text) {
   return true;
 }
 
+// The two-call idiom (OpenXR 1.0 §2.11, "Buffer Size Parameters"): capacity
+// 0 asks for the count only; a capacity too small is
+// XR_ERROR_SIZE_INSUFFICIENT with the count still written.
+template <class T>
+XrResult enumerate(const char* fn, const std::vector<T>& items, uint32_t capacity, uint32_t* count, T* out) {
+  if (count == nullptr) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "null count output");
+  *count = static_cast<uint32_t>(items.size());
+  if (capacity == 0) return XR_SUCCESS;
+  if (capacity < items.size()) return XR_ERROR_SIZE_INSUFFICIENT;
+  if (out == nullptr) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "null array with a capacity");
+  std::copy(items.begin(), items.end(), out);
+  return XR_SUCCESS;
+}
+
+// A string by the two-call idiom; the count includes the terminating null.
+XrResult enumerate_string(const char* fn, const std::string& text, uint32_t capacity, uint32_t* count,
+                          char* out) {
+  return enumerate(fn, std::vector<char>(text.c_str(), text.c_str() + text.size() + 1), capacity, count, out);
+}
+
 XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layer, uint32_t capacity, uint32_t* count,
                                                        XrExtensionProperties* props) {
   std::lock_guard lock(g_mutex);
@@ -604,6 +602,12 @@ XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layer, uint
     props[i].extensionVersion = offered[i].second;
   }
   return XR_SUCCESS;
+}
+
+// The loader answers this itself; a runtime has no layers to report.
+XrResult XRAPI_CALL EnumerateApiLayerProperties(uint32_t capacity, uint32_t* count, XrApiLayerProperties* props) {
+  std::lock_guard lock(g_mutex);
+  return enumerate<XrApiLayerProperties>("xrEnumerateApiLayerProperties", {}, capacity, count, props);
 }
 
 XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* info, XrInstance* out) {
@@ -662,7 +666,8 @@ void destroy_session(Instance& inst) {
   // Events of the destroyed session are dropped, as the specification asks.
   inst.events.erase(std::remove_if(inst.events.begin(), inst.events.end(),
                                    [&s](const XrEventDataBuffer& e) {
-                                     return e.type == XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED &&
+                                     return (e.type == XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED ||
+                                             e.type == XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED) &&
                                             reinterpret_cast<const XrEventDataSessionStateChanged*>(&e)
                                                     ->session == handle_of<XrSession>(&s);
                                    }),
@@ -772,6 +777,43 @@ XrResult XRAPI_CALL EnumerateViewConfigurationViews(XrInstance h, XrSystemId sys
     views[i].maxSwapchainSampleCount = 1;
   }
   return XR_SUCCESS;
+}
+
+// The instance and system checks every system query starts with.
+XrResult check_system(XrInstance h, XrSystemId system, const char* fn) {
+  if (instance_of(h) == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (system != kSystem) return violation(fn, XR_ERROR_SYSTEM_INVALID, std::to_string(system));
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EnumerateViewConfigurations(XrInstance h, XrSystemId system, uint32_t capacity, uint32_t* count,
+                                                XrViewConfigurationType* out) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrEnumerateViewConfigurations";
+  if (const XrResult r = check_system(h, system, fn); XR_FAILED(r)) return r;
+  return enumerate<XrViewConfigurationType>(fn, {XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO}, capacity, count, out);
+}
+
+XrResult XRAPI_CALL GetViewConfigurationProperties(XrInstance h, XrSystemId system, XrViewConfigurationType type,
+                                                   XrViewConfigurationProperties* props) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetViewConfigurationProperties";
+  if (const XrResult r = check_system(h, system, fn); XR_FAILED(r)) return r;
+  if (props == nullptr || props->type != XR_TYPE_VIEW_CONFIGURATION_PROPERTIES)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped properties");
+  if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO) return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+  props->viewConfigurationType = type;
+  props->fovMutable = XR_TRUE;  // xrEndFrame takes any field of view
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EnumerateEnvironmentBlendModes(XrInstance h, XrSystemId system, XrViewConfigurationType type,
+                                                   uint32_t capacity, uint32_t* count, XrEnvironmentBlendMode* out) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrEnumerateEnvironmentBlendModes";
+  if (const XrResult r = check_system(h, system, fn); XR_FAILED(r)) return r;
+  if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO) return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+  return enumerate<XrEnvironmentBlendMode>(fn, {XR_ENVIRONMENT_BLEND_MODE_OPAQUE}, capacity, count, out);
 }
 
 // ---- XR_KHR_vulkan_enable2 ------------------------------------------------------
@@ -1055,6 +1097,36 @@ XrResult XRAPI_CALL DestroySpace(XrSpace h) {
   return XR_SUCCESS;
 }
 
+const std::vector<XrReferenceSpaceType>& reference_spaces() {
+  static const std::vector<XrReferenceSpaceType> types = {
+      XR_REFERENCE_SPACE_TYPE_VIEW, XR_REFERENCE_SPACE_TYPE_LOCAL, XR_REFERENCE_SPACE_TYPE_STAGE};
+  return types;
+}
+
+XrResult XRAPI_CALL EnumerateReferenceSpaces(XrSession h, uint32_t capacity, uint32_t* count,
+                                             XrReferenceSpaceType* out) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrEnumerateReferenceSpaces";
+  if (session_of(h) == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  return enumerate(fn, reference_spaces(), capacity, count, out);
+}
+
+// The scripted play area: 3 m wide, 2.5 m deep, centred on STAGE's origin.
+XrResult XRAPI_CALL GetReferenceSpaceBoundsRect(XrSession h, XrReferenceSpaceType type, XrExtent2Df* bounds) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetReferenceSpaceBoundsRect";
+  if (session_of(h) == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (bounds == nullptr) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "null bounds");
+  const auto& types = reference_spaces();
+  if (std::find(types.begin(), types.end(), type) == types.end()) return XR_ERROR_REFERENCE_SPACE_UNSUPPORTED;
+  if (type != XR_REFERENCE_SPACE_TYPE_STAGE) {
+    *bounds = {0.0f, 0.0f};
+    return XR_SPACE_BOUNDS_UNAVAILABLE;
+  }
+  *bounds = {3.0f, 2.5f};
+  return XR_SUCCESS;
+}
+
 // A space's pose in STAGE at time t, and whether it is tracked.
 std::pair<Pose, bool> stage_pose(const Space& sp, XrTime t) {
   const double ts = xr_seconds(t);
@@ -1066,6 +1138,8 @@ std::pair<Pose, bool> stage_pose(const Space& sp, XrTime t) {
     const Session& s = *sp.session;
     tracked = s.state == XR_SESSION_STATE_FOCUSED && sp.action->set->attached_to == &s;
     base = hand_pose(sp.hand, ts);
+  } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_MAX_ENUM) {
+    tracked = false;  // an action space whose action was destroyed
   } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_VIEW) {
     base = head_pose(ts);
   } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_LOCAL) {
@@ -1087,6 +1161,9 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace base, XrTime time, XrSpac
   const auto [pa, ta] = stage_pose(*a, time);
   const auto [pb, tb] = stage_pose(*b, time);
   location->pose = to_xr_pose(compose(inverse(pb), pa));
+  // A chained XrSpaceVelocity must be filled: the scripted poses report none.
+  for (auto* n = static_cast<XrBaseOutStructure*>(location->next); n != nullptr; n = n->next)
+    if (n->type == XR_TYPE_SPACE_VELOCITY) reinterpret_cast<XrSpaceVelocity*>(n)->velocityFlags = 0;
   location->locationFlags = ta && tb ? XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
                                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
                                            XR_SPACE_LOCATION_POSITION_TRACKED_BIT
@@ -1438,6 +1515,7 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
         warning(fn, "could not capture " + path);
     }
   }
+  log_line("end_frame " + std::to_string(s->frames_ended++) + " layers " + std::to_string(info->layerCount));
   // The first frame ended: the session is synchronised with the display,
   // visible and focused.
   if (!s->focused_once && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
@@ -1458,13 +1536,7 @@ XrResult XRAPI_CALL StringToPath(XrInstance h, const char* text, XrPath* out) {
   if (inst == nullptr) return violation("xrStringToPath", XR_ERROR_HANDLE_INVALID, "");
   if (text == nullptr || !well_formed_path(text))
     return violation("xrStringToPath", XR_ERROR_PATH_FORMAT_INVALID, text == nullptr ? "null" : text);
-  const auto it = std::find(inst->paths.begin(), inst->paths.end(), text);
-  if (it == inst->paths.end()) {
-    inst->paths.emplace_back(text);
-    *out = inst->paths.size();
-  } else {
-    *out = static_cast<XrPath>(it - inst->paths.begin()) + 1;
-  }
+  *out = intern(*inst, text);
   return XR_SUCCESS;
 }
 
@@ -1474,11 +1546,7 @@ XrResult XRAPI_CALL PathToString(XrInstance h, XrPath path, uint32_t capacity, u
   if (inst == nullptr) return violation("xrPathToString", XR_ERROR_HANDLE_INVALID, "");
   const std::string text = path_text(*inst, path);
   if (text.empty()) return violation("xrPathToString", XR_ERROR_PATH_INVALID, std::to_string(path));
-  *count = static_cast<uint32_t>(text.size() + 1);
-  if (capacity == 0) return XR_SUCCESS;
-  if (capacity < *count) return XR_ERROR_SIZE_INSUFFICIENT;
-  std::memcpy(buffer, text.c_str(), text.size() + 1);
-  return XR_SUCCESS;
+  return enumerate_string("xrPathToString", text, capacity, count, buffer);
 }
 
 XrResult XRAPI_CALL CreateActionSet(XrInstance h, const XrActionSetCreateInfo* info, XrActionSet* out) {
@@ -1502,19 +1570,24 @@ XrResult XRAPI_CALL CreateActionSet(XrInstance h, const XrActionSetCreateInfo* i
   return XR_SUCCESS;
 }
 
+// Before actions are destroyed: spaces made from them stay valid (the
+// specification keeps action spaces alive) but no longer track, and their
+// suggested bindings go.
+template <class Pred>
+void forget_actions(Instance& inst, Pred doomed) {
+  for (auto& [raw, sp] : inst.spaces)
+    if (sp->action != nullptr && doomed(sp->action)) sp->action = nullptr;
+  for (auto& [profile, bindings] : inst.suggested)
+    bindings.erase(std::remove_if(bindings.begin(), bindings.end(), [&](const auto& b) { return doomed(b.first); }),
+                   bindings.end());
+}
+
 XrResult XRAPI_CALL DestroyActionSet(XrActionSet h) {
   std::lock_guard lock(g_mutex);
   ActionSet* set = set_of(h);
   if (set == nullptr) return violation("xrDestroyActionSet", XR_ERROR_HANDLE_INVALID, "");
   Instance& inst = *set->instance;
-  // Its actions go with it; spaces made from them stay valid (the
-  // specification keeps action spaces alive) but no longer track.
-  for (auto& [raw, sp] : inst.spaces)
-    if (sp->action != nullptr && sp->action->set == set) sp->action = nullptr;
-  for (auto& [profile, bindings] : inst.suggested)
-    bindings.erase(std::remove_if(bindings.begin(), bindings.end(),
-                                  [set](const auto& b) { return b.first->set == set; }),
-                   bindings.end());
+  forget_actions(inst, [set](const Action* a) { return a->set == set; });
   if (inst.session) {
     auto& att = inst.session->attached;
     att.erase(std::remove(att.begin(), att.end(), set), att.end());
@@ -1565,6 +1638,16 @@ XrResult XRAPI_CALL CreateAction(XrActionSet h, const XrActionCreateInfo* info, 
   return XR_SUCCESS;
 }
 
+XrResult XRAPI_CALL DestroyAction(XrAction h) {
+  std::lock_guard lock(g_mutex);
+  Action* a = action_of(h);
+  if (a == nullptr) return violation("xrDestroyAction", XR_ERROR_HANDLE_INVALID, "");
+  forget_actions(*a->set->instance, [a](const Action* x) { return x == a; });
+  auto& actions = a->set->actions;
+  actions.erase(std::find_if(actions.begin(), actions.end(), [a](const auto& p) { return p.get() == a; }));
+  return XR_SUCCESS;
+}
+
 XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance h, const XrInteractionProfileSuggestedBinding* s) {
   std::lock_guard lock(g_mutex);
   Instance* inst = instance_of(h);
@@ -1573,7 +1656,7 @@ XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance h, const XrInte
   if (s == nullptr || s->type != XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING || s->countSuggestedBindings == 0)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped or empty suggestion");
   const std::string profile = path_text(*inst, s->interactionProfile);
-  if (profile != kTouch && profile != kSimple)
+  if (!known_profile(profile))
     return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "unknown profile '" + profile + "'");
   std::vector<std::pair<Action*, std::string>> bindings;
   for (uint32_t i = 0; i < s->countSuggestedBindings; ++i) {
@@ -1583,7 +1666,8 @@ XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance h, const XrInte
     const std::string path = path_text(*inst, s->suggestedBindings[i].binding);
     if (!profile_has(profile, path))
       return violation(fn, XR_ERROR_PATH_UNSUPPORTED, profile + " has no input '" + path + "'");
-    const bool pose_input = path.size() > 5 && path.compare(path.size() - 5, 5, "/pose") == 0;
+    const bool pose_input = (path.size() > 5 && path.compare(path.size() - 5, 5, "/pose") == 0) ||
+                            profile_has(profile, path + "/pose");
     if ((a->type == XR_ACTION_TYPE_POSE_INPUT) != pose_input)
       return violation(fn, XR_ERROR_PATH_UNSUPPORTED, a->name + " bound to '" + path + "': pose type mismatch");
     bindings.emplace_back(a, path);
@@ -1607,9 +1691,12 @@ XrResult XRAPI_CALL AttachSessionActionSets(XrSession h, const XrSessionActionSe
   }
   for (ActionSet* set : s->attached) set->attached_to = s;
   // The controllers the headset has: Touch if the application suggested
-  // bindings for it, else the simple controller.
-  s->active_profile = s->instance->suggested.count(kTouch) != 0 ? kTouch : kSimple;
-  log_line("profile " + s->active_profile);
+  // bindings for it, else the simple controller if it did, else none that
+  // the application can use.
+  const auto& suggested = s->instance->suggested;
+  s->active_profile = suggested.count(kTouch) != 0 ? kTouch : suggested.count(kSimple) != 0 ? kSimple : "";
+  log_line("profile " + (s->active_profile.empty() ? std::string("none") : s->active_profile));
+  if (!s->active_profile.empty()) queue_profile_changed(*s);
   return XR_SUCCESS;
 }
 
@@ -1631,7 +1718,9 @@ XrResult XRAPI_CALL SyncActions(XrSession h, const XrActionsSyncInfo* info) {
   const bool focused = s->state == XR_SESSION_STATE_FOCUSED;
   const std::int64_t now = monotonic_ns();
   const double t = static_cast<double>(now - s->focus_t0_ns) * 1e-9;
-  const auto& bindings = s->instance->suggested[s->active_profile];
+  static const std::vector<std::pair<Action*, std::string>> unbound;
+  const auto found = s->instance->suggested.find(s->active_profile);
+  const auto& bindings = found == s->instance->suggested.end() ? unbound : found->second;
   for (ActionSet* set : s->attached) {
     for (auto& a : set->actions) {
       for (std::size_t k = 0; k < a->states.size(); ++k) {
@@ -1665,9 +1754,12 @@ XrResult XRAPI_CALL SyncActions(XrSession h, const XrActionsSyncInfo* info) {
   return focused ? XR_SUCCESS : XR_SESSION_NOT_FOCUSED;
 }
 
-// Finds the state slot of (action, subaction) or fails as the specification says.
-XrResult state_slot(Session* s, const XrActionStateGetInfo* info, XrActionType want, const char* fn,
-                    Action::State** out) {
+// The state of (action, subaction) after the last xrSyncActions, or the
+// specification's error. Without a subaction path, all of the action's
+// subactions together (OpenXR 1.0 §11.5, "Reading input action state"):
+// active if any is, the largest value, changed if any changed.
+XrResult action_state(Session* s, const XrActionStateGetInfo* info, XrActionType want, const char* fn,
+                      Action::State* out) {
   if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
   if (info == nullptr || info->type != XR_TYPE_ACTION_STATE_GET_INFO)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped get info");
@@ -1676,44 +1768,188 @@ XrResult state_slot(Session* s, const XrActionStateGetInfo* info, XrActionType w
   if (a->set->attached_to != s) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, a->set->name);
   if (a->type != want) return violation(fn, XR_ERROR_ACTION_TYPE_MISMATCH, a->name);
   if (info->subactionPath == XR_NULL_PATH) {
-    *out = &a->states.front();  // the first slot stands for "any"; curvlab always names the hand
+    Action::State any;
+    for (const Action::State& st : a->states) {
+      if (!st.active) continue;
+      any.value = any.active ? std::max(any.value, st.value) : st.value;
+      any.active = true;
+      any.changed = any.changed || st.changed;
+      any.last_change = std::max(any.last_change, st.last_change);
+    }
+    *out = any;
     return XR_SUCCESS;
   }
   const auto it = std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath);
   if (it == a->subactions.end())
     return violation(fn, XR_ERROR_PATH_UNSUPPORTED,
                      a->name + " has no subaction path " + path_text(*s->instance, info->subactionPath));
-  *out = &a->states[static_cast<std::size_t>(it - a->subactions.begin())];
+  *out = a->states[static_cast<std::size_t>(it - a->subactions.begin())];
   return XR_SUCCESS;
 }
 
 XrResult XRAPI_CALL GetActionStateBoolean(XrSession h, const XrActionStateGetInfo* info, XrActionStateBoolean* state) {
   std::lock_guard lock(g_mutex);
   constexpr const char* fn = "xrGetActionStateBoolean";
-  Action::State* st = nullptr;
-  if (const XrResult r = state_slot(session_of(h), info, XR_ACTION_TYPE_BOOLEAN_INPUT, fn, &st); XR_FAILED(r))
+  Action::State st;
+  if (const XrResult r = action_state(session_of(h), info, XR_ACTION_TYPE_BOOLEAN_INPUT, fn, &st); XR_FAILED(r))
     return r;
   if (state == nullptr || state->type != XR_TYPE_ACTION_STATE_BOOLEAN)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped state");
-  state->currentState = st->value > 0.5f ? XR_TRUE : XR_FALSE;
-  state->changedSinceLastSync = st->changed ? XR_TRUE : XR_FALSE;
-  state->lastChangeTime = st->last_change;
-  state->isActive = st->active ? XR_TRUE : XR_FALSE;
+  state->currentState = st.value > 0.5f ? XR_TRUE : XR_FALSE;
+  state->changedSinceLastSync = st.changed ? XR_TRUE : XR_FALSE;
+  state->lastChangeTime = st.last_change;
+  state->isActive = st.active ? XR_TRUE : XR_FALSE;
   return XR_SUCCESS;
 }
 
 XrResult XRAPI_CALL GetActionStateFloat(XrSession h, const XrActionStateGetInfo* info, XrActionStateFloat* state) {
   std::lock_guard lock(g_mutex);
   constexpr const char* fn = "xrGetActionStateFloat";
-  Action::State* st = nullptr;
-  if (const XrResult r = state_slot(session_of(h), info, XR_ACTION_TYPE_FLOAT_INPUT, fn, &st); XR_FAILED(r))
+  Action::State st;
+  if (const XrResult r = action_state(session_of(h), info, XR_ACTION_TYPE_FLOAT_INPUT, fn, &st); XR_FAILED(r))
     return r;
   if (state == nullptr || state->type != XR_TYPE_ACTION_STATE_FLOAT)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped state");
-  state->currentState = st->value;
-  state->changedSinceLastSync = st->changed ? XR_TRUE : XR_FALSE;
-  state->lastChangeTime = st->last_change;
-  state->isActive = st->active ? XR_TRUE : XR_FALSE;
+  state->currentState = st.value;
+  state->changedSinceLastSync = st.changed ? XR_TRUE : XR_FALSE;
+  state->lastChangeTime = st.last_change;
+  state->isActive = st.active ? XR_TRUE : XR_FALSE;
+  return XR_SUCCESS;
+}
+
+// The scripted controllers have no thumbstick or trackpad movement: a bound
+// two-axis action is active and at rest.
+XrResult XRAPI_CALL GetActionStateVector2f(XrSession h, const XrActionStateGetInfo* info,
+                                           XrActionStateVector2f* state) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetActionStateVector2f";
+  Action::State st;
+  if (const XrResult r = action_state(session_of(h), info, XR_ACTION_TYPE_VECTOR2F_INPUT, fn, &st); XR_FAILED(r))
+    return r;
+  if (state == nullptr || state->type != XR_TYPE_ACTION_STATE_VECTOR2F)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped state");
+  state->currentState = {0.0f, 0.0f};
+  state->changedSinceLastSync = XR_FALSE;
+  state->lastChangeTime = st.last_change;
+  state->isActive = st.active ? XR_TRUE : XR_FALSE;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetActionStatePose(XrSession h, const XrActionStateGetInfo* info, XrActionStatePose* state) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetActionStatePose";
+  Action::State st;
+  if (const XrResult r = action_state(session_of(h), info, XR_ACTION_TYPE_POSE_INPUT, fn, &st); XR_FAILED(r))
+    return r;
+  if (state == nullptr || state->type != XR_TYPE_ACTION_STATE_POSE)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped state");
+  state->isActive = st.active ? XR_TRUE : XR_FALSE;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL GetCurrentInteractionProfile(XrSession h, XrPath user, XrInteractionProfileState* state) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrGetCurrentInteractionProfile";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (state == nullptr || state->type != XR_TYPE_INTERACTION_PROFILE_STATE)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped state");
+  if (s->attached.empty()) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, "no action sets attached");
+  const std::string path = path_text(*s->instance, user);
+  if (path.empty()) return violation(fn, XR_ERROR_PATH_INVALID, std::to_string(user));
+  if (!top_level_user_path(path)) return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "'" + path + "'");
+  const bool hand = path == "/user/hand/left" || path == "/user/hand/right";
+  state->interactionProfile =
+      hand && !s->active_profile.empty() ? intern(*s->instance, s->active_profile) : XR_NULL_PATH;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EnumerateBoundSourcesForAction(XrSession h, const XrBoundSourcesForActionEnumerateInfo* info,
+                                                   uint32_t capacity, uint32_t* count, XrPath* sources) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrEnumerateBoundSourcesForAction";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_BOUND_SOURCES_FOR_ACTION_ENUMERATE_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped enumerate info");
+  const Action* a = action_of(info->action);
+  if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "action");
+  if (a->set->attached_to != s) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, a->set->name);
+  std::vector<XrPath> bound;
+  if (const auto it = s->instance->suggested.find(s->active_profile); it != s->instance->suggested.end())
+    for (const auto& [action, path] : it->second)
+      if (action == a) bound.push_back(intern(*s->instance, path));
+  return enumerate(fn, bound, capacity, count, sources);
+}
+
+XrResult XRAPI_CALL GetInputSourceLocalizedName(XrSession h, const XrInputSourceLocalizedNameGetInfo* info,
+                                                uint32_t capacity, uint32_t* count, char* buffer) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrGetInputSourceLocalizedName";
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_INPUT_SOURCE_LOCALIZED_NAME_GET_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped get info");
+  if (info->whichComponents == 0) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "whichComponents is 0");
+  if (s->attached.empty()) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, "no action sets attached");
+  const std::string source = path_text(*s->instance, info->sourcePath);
+  if (source.empty()) return violation(fn, XR_ERROR_PATH_INVALID, std::to_string(info->sourcePath));
+  if (!profile_has(s->active_profile, source))
+    return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "'" + source + "' is not a source of the current profile");
+  const XrInputSourceLocalizedNameFlags which = info->whichComponents;
+  const std::string name = localized_source_name(
+      s->active_profile, source, (which & XR_INPUT_SOURCE_LOCALIZED_NAME_USER_PATH_BIT) != 0,
+      (which & XR_INPUT_SOURCE_LOCALIZED_NAME_INTERACTION_PROFILE_BIT) != 0,
+      (which & XR_INPUT_SOURCE_LOCALIZED_NAME_COMPONENT_BIT) != 0);
+  return enumerate_string(fn, name, capacity, count, buffer);
+}
+
+// The vibration action of a haptic call, or the specification's error.
+XrResult haptic_action(Session* s, const XrHapticActionInfo* info, const char* fn, const Action** out) {
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_HAPTIC_ACTION_INFO)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped haptic action info");
+  const Action* a = action_of(info->action);
+  if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "action");
+  if (a->set->attached_to != s) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, a->set->name);
+  if (a->type != XR_ACTION_TYPE_VIBRATION_OUTPUT) return violation(fn, XR_ERROR_ACTION_TYPE_MISMATCH, a->name);
+  if (info->subactionPath != XR_NULL_PATH &&
+      std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath) == a->subactions.end())
+    return violation(fn, XR_ERROR_PATH_UNSUPPORTED,
+                     a->name + " has no subaction path " + path_text(*s->instance, info->subactionPath));
+  *out = a;
+  return XR_SUCCESS;
+}
+
+// Haptics are logged ("haptic" and "haptic_stop" lines); without input focus
+// they are ignored, as the specification allows.
+XrResult XRAPI_CALL ApplyHapticFeedback(XrSession h, const XrHapticActionInfo* info,
+                                        const XrHapticBaseHeader* feedback) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrApplyHapticFeedback";
+  const Action* a = nullptr;
+  if (const XrResult r = haptic_action(s, info, fn, &a); XR_FAILED(r)) return r;
+  if (feedback == nullptr || feedback->type != XR_TYPE_HAPTIC_VIBRATION)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "feedback must be XrHapticVibration");
+  const auto* v = reinterpret_cast<const XrHapticVibration*>(feedback);
+  if (!(v->amplitude >= 0.0f && v->amplitude <= 1.0f))
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE,
+                     "amplitude " + std::to_string(v->amplitude) + " outside [0, 1]");
+  if (s->state != XR_SESSION_STATE_FOCUSED) return XR_SESSION_NOT_FOCUSED;
+  log_line("haptic " + a->name + " " + path_text(*s->instance, info->subactionPath) + " duration_ns " +
+           std::to_string(v->duration) + " amplitude " + std::to_string(v->amplitude));
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL StopHapticFeedback(XrSession h, const XrHapticActionInfo* info) {
+  std::lock_guard lock(g_mutex);
+  Session* s = session_of(h);
+  constexpr const char* fn = "xrStopHapticFeedback";
+  const Action* a = nullptr;
+  if (const XrResult r = haptic_action(s, info, fn, &a); XR_FAILED(r)) return r;
+  if (s->state != XR_SESSION_STATE_FOCUSED) return XR_SESSION_NOT_FOCUSED;
+  log_line("haptic_stop " + a->name + " " + path_text(*s->instance, info->subactionPath));
   return XR_SUCCESS;
 }
 
@@ -1762,6 +1998,7 @@ XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVo
   static const std::map<std::string, PFN_xrVoidFunction> global = {
       {"xrGetInstanceProcAddr", fn_ptr(&GetInstanceProcAddr)},
       {"xrEnumerateInstanceExtensionProperties", fn_ptr(&EnumerateInstanceExtensionProperties)},
+      {"xrEnumerateApiLayerProperties", fn_ptr(&EnumerateApiLayerProperties)},
       {"xrCreateInstance", fn_ptr(&CreateInstance)},
   };
   static const std::map<std::string, PFN_xrVoidFunction> table = {
@@ -1773,6 +2010,19 @@ XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVo
       {"xrGetSystem", fn_ptr(&GetSystem)},
       {"xrGetSystemProperties", fn_ptr(&GetSystemProperties)},
       {"xrEnumerateViewConfigurationViews", fn_ptr(&EnumerateViewConfigurationViews)},
+      {"xrEnumerateViewConfigurations", fn_ptr(&EnumerateViewConfigurations)},
+      {"xrGetViewConfigurationProperties", fn_ptr(&GetViewConfigurationProperties)},
+      {"xrEnumerateEnvironmentBlendModes", fn_ptr(&EnumerateEnvironmentBlendModes)},
+      {"xrEnumerateReferenceSpaces", fn_ptr(&EnumerateReferenceSpaces)},
+      {"xrGetReferenceSpaceBoundsRect", fn_ptr(&GetReferenceSpaceBoundsRect)},
+      {"xrDestroyAction", fn_ptr(&DestroyAction)},
+      {"xrGetCurrentInteractionProfile", fn_ptr(&GetCurrentInteractionProfile)},
+      {"xrGetActionStateVector2f", fn_ptr(&GetActionStateVector2f)},
+      {"xrGetActionStatePose", fn_ptr(&GetActionStatePose)},
+      {"xrEnumerateBoundSourcesForAction", fn_ptr(&EnumerateBoundSourcesForAction)},
+      {"xrGetInputSourceLocalizedName", fn_ptr(&GetInputSourceLocalizedName)},
+      {"xrApplyHapticFeedback", fn_ptr(&ApplyHapticFeedback)},
+      {"xrStopHapticFeedback", fn_ptr(&StopHapticFeedback)},
       {"xrGetVulkanGraphicsRequirements2KHR", fn_ptr(&GetVulkanGraphicsRequirements2)},
       {"xrCreateVulkanInstanceKHR", fn_ptr(&CreateVulkanInstance)},
       {"xrGetVulkanGraphicsDevice2KHR", fn_ptr(&GetVulkanGraphicsDevice2)},
