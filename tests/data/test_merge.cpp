@@ -33,7 +33,7 @@ struct Cli {
   std::string out;
 };
 
-Cli curvlab(const std::string& args) {
+Cli run_curvlab(const std::string& args) {
   Cli r;
   FILE* pipe = popen((std::string(CURVLAB_BIN) + " " + args + " 2>&1").c_str(), "r");
   if (pipe == nullptr) return r;
@@ -74,12 +74,14 @@ std::string run_args(const std::string& participant, const fs::path& db, const s
   return "run " + protocol + " --participant " + participant + " --db " + db.string() + " --render none --quiet";
 }
 
-// Completed trials in `db`, or -1 while it cannot be read.
-std::int64_t completed_trials(const fs::path& db) {
+// Completed trials of `participant` in `db`, or -1 while it cannot be read.
+std::int64_t completed_trials(const fs::path& db, const std::string& participant) {
   if (!fs::exists(db)) return -1;
   try {
     auto c = Connection::open(db.string(), OpenFlags::read_only);
-    return c.query_int("SELECT COUNT(*) FROM trials WHERE status = 'completed'");
+    return c.query_int("SELECT COUNT(*) FROM trials t JOIN sessions s ON s.session_id = t.session_id JOIN "
+                       "participants p ON p.participant_id = s.participant_id WHERE t.status = 'completed' "
+                       "AND p.pseudonym = '" + participant + "'");
   } catch (const SqliteFailure&) {
     return -1;
   }
@@ -100,7 +102,7 @@ void run_until_first_trial_then_kill(const std::string& participant, const fs::p
     _exit(127);
   }
   int status = 0;
-  for (int i = 0; i < 3000 && completed_trials(db) < 1; ++i) {
+  for (int i = 0; i < 3000 && completed_trials(db, participant) < 1; ++i) {
     if (waitpid(pid, &status, WNOHANG) != 0) return;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
@@ -131,16 +133,16 @@ const Machines& machines() {
     out.a_before_resume = out.dir / "copies" / "lab_a_before_resume.sqlite";
     fs::create_directories(out.a_before_resume.parent_path());
     // Machine A: P01 completes; P02 is killed after a trial, copied, resumed.
-    EXPECT_EQ(curvlab(run_args("P01", out.a)).exit_code, 0);
+    EXPECT_EQ(run_curvlab(run_args("P01", out.a)).exit_code, 0);
     run_until_first_trial_then_kill("P02", out.a);
     copy_db(out.a, out.a_before_resume);
     const std::string p02 = scalar(out.a, "SELECT s.session_id FROM sessions s JOIN participants p "
                                           "ON p.participant_id = s.participant_id WHERE p.pseudonym = 'P02'");
-    const auto resumed = curvlab("resume --db " + out.a.string() + " --session " + p02 + " --render none --quiet");
+    const auto resumed = run_curvlab("resume --db " + out.a.string() + " --session " + p02 + " --render none --quiet");
     EXPECT_EQ(resumed.exit_code, 0) << resumed.out;
     // Machine B: P03, and another "first session" of P01.
-    EXPECT_EQ(curvlab(run_args("P03", out.b)).exit_code, 0);
-    EXPECT_EQ(curvlab(run_args("P01", out.b)).exit_code, 0);
+    EXPECT_EQ(run_curvlab(run_args("P03", out.b)).exit_code, 0);
+    EXPECT_EQ(run_curvlab(run_args("P01", out.b)).exit_code, 0);
     return out;
   }();
   return m;
@@ -158,10 +160,10 @@ TEST(MergeCli, TwoMachinesPoolIntoOneStudyKeepingEveryRowAndItsProvenance) {
   ASSERT_EQ(scalar(m.a, "SELECT status FROM sessions WHERE session_id = 2"), "completed");
   ASSERT_NE(scalar(m.a_before_resume, "SELECT status FROM sessions WHERE session_id = 2"), "completed")
       << "P02's session was not interrupted";
-  ASSERT_LT(completed_trials(m.a_before_resume), count(m.a, "trials"));
+  ASSERT_LT(completed_trials(m.a_before_resume, "P02"), completed_trials(m.a, "P02"));
   const fs::path study = fresh_dir("pool") / "study.sqlite";
   const std::string b_bytes = read_file(m.b);
-  const auto r = curvlab("merge --out " + study.string() + " " + m.a.string() + " " + m.b.string());
+  const auto r = run_curvlab("merge --out " + study.string() + " " + m.a.string() + " " + m.b.string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   std::cout << r.out;
   EXPECT_NE(r.out.find("total"), std::string::npos) << r.out;
@@ -208,22 +210,22 @@ TEST(MergeCli, TwoMachinesPoolIntoOneStudyKeepingEveryRowAndItsProvenance) {
 TEST(MergeCli, MergingAgainAddsNothingAndLeavesTheFileAsItWas) {
   const auto& m = machines();
   const fs::path study = fresh_dir("again") / "study.sqlite";
-  ASSERT_EQ(curvlab("merge --out " + study.string() + " " + m.a.string()).exit_code, 0);
+  ASSERT_EQ(run_curvlab("merge --out " + study.string() + " " + m.a.string()).exit_code, 0);
   // A second time, B added, and A given twice: only B's sessions are new.
-  const auto r = curvlab("merge --out " + study.string() + " " + m.a.string() + " " + m.b.string() + " " +
+  const auto r = run_curvlab("merge --out " + study.string() + " " + m.a.string() + " " + m.b.string() + " " +
                          m.a.string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_EQ(count(study, "sessions"), 4);
   EXPECT_EQ(count(study, "trials"), count(m.a, "trials") + count(m.b, "trials"));
   const std::string before = read_file(study);
-  const auto again = curvlab("merge --json --out " + study.string() + " " + m.dir.string());
+  const auto again = run_curvlab("merge --json --out " + study.string() + " " + m.dir.string());
   ASSERT_EQ(again.exit_code, 0) << again.out;
   EXPECT_NE(again.out.find("\"output_changed\": false"), std::string::npos) << again.out;
   EXPECT_NE(again.out.find("\"sessions_skipped\": 4"), std::string::npos) << again.out;
   EXPECT_EQ(read_file(study), before);
   // A merged file merged into a new study is the same study.
   const fs::path second = study.parent_path() / "second.sqlite";
-  ASSERT_EQ(curvlab("merge --out " + second.string() + " " + study.string()).exit_code, 0);
+  ASSERT_EQ(run_curvlab("merge --out " + second.string() + " " + study.string()).exit_code, 0);
   for (const char* who : {"P01", "P02", "P03"}) {
     const std::string uuid = uuid_of(m.a, who) == "NULL" ? uuid_of(m.b, who) : uuid_of(m.a, who);
     EXPECT_EQ(session_content_digest(second.string(), uuid).value(),
@@ -235,7 +237,7 @@ TEST(MergeCli, SameSessionWithDifferentContentIsRefusedAndTheStudyIsUnchanged) {
   const auto& m = machines();
   const fs::path dir = fresh_dir("conflict");
   const fs::path study = dir / "study.sqlite";
-  ASSERT_EQ(curvlab("merge --out " + study.string() + " " + m.a.string()).exit_code, 0);
+  ASSERT_EQ(run_curvlab("merge --out " + study.string() + " " + m.a.string()).exit_code, 0);
   const std::string before = read_file(study);
 
   // A copy of machine A's file whose P01 responses were edited.
@@ -247,7 +249,7 @@ TEST(MergeCli, SameSessionWithDifferentContentIsRefusedAndTheStudyIsUnchanged) {
     d.value().connection().exec("UPDATE trials SET response = 'concave' WHERE session_id = 1 AND trial_index = 3");
   }
   const std::string p01 = uuid_of(m.a, "P01");
-  const auto r = curvlab("merge --out " + study.string() + " " + m.b.string() + " " + edited.string());
+  const auto r = run_curvlab("merge --out " + study.string() + " " + m.b.string() + " " + edited.string());
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find(p01), std::string::npos) << r.out;
   EXPECT_EQ(read_file(study), before);
@@ -256,7 +258,7 @@ TEST(MergeCli, SameSessionWithDifferentContentIsRefusedAndTheStudyIsUnchanged) {
     EXPECT_EQ(entry.path().string().find(".merging-"), std::string::npos) << entry.path();
 
   // The copy of machine A's file taken before P02's session was resumed.
-  const auto early = curvlab("merge --out " + study.string() + " " + m.a_before_resume.string());
+  const auto early = run_curvlab("merge --out " + study.string() + " " + m.a_before_resume.string());
   EXPECT_EQ(early.exit_code, 2) << early.out;
   EXPECT_NE(early.out.find(uuid_of(m.a, "P02")), std::string::npos) << early.out;
   EXPECT_NE(early.out.find("merge only the later file"), std::string::npos) << early.out;
@@ -273,16 +275,16 @@ TEST(MergeCli, ProtocolVersionsUnderOneNameNeedTheFlag) {
   std::ofstream(protocol) << text;
   fs::copy_file(fs::path(kDemo).parent_path() / "schema.json", dir / "schema.json");
   const fs::path c = dir / "lab_c.sqlite";
-  const auto ran = curvlab(run_args("P04", c, protocol.string()));
+  const auto ran = run_curvlab(run_args("P04", c, protocol.string()));
   ASSERT_EQ(ran.exit_code, 0) << ran.out;
 
   const fs::path study = dir / "study.sqlite";
-  const auto refused = curvlab("merge --out " + study.string() + " " + m.a.string() + " " + c.string());
+  const auto refused = run_curvlab("merge --out " + study.string() + " " + m.a.string() + " " + c.string());
   EXPECT_EQ(refused.exit_code, 2) << refused.out;
   EXPECT_NE(refused.out.find("--allow-protocol-versions"), std::string::npos) << refused.out;
   EXPECT_FALSE(fs::exists(study));
 
-  const auto allowed = curvlab("merge --allow-protocol-versions --out " + study.string() + " " + m.a.string() +
+  const auto allowed = run_curvlab("merge --allow-protocol-versions --out " + study.string() + " " + m.a.string() +
                                " " + c.string());
   ASSERT_EQ(allowed.exit_code, 0) << allowed.out;
   EXPECT_EQ(count(study, "protocols"), 2);
@@ -295,10 +297,10 @@ TEST(MergeCli, ExportOfSeparateFilesEqualsExportOfTheMergedFile) {
   const auto& m = machines();
   const fs::path dir = fresh_dir("export");
   const fs::path study = dir / "study.sqlite";
-  ASSERT_EQ(curvlab("merge --out " + study.string() + " " + m.a.string() + " " + m.b.string()).exit_code, 0);
-  const auto sep = curvlab("export --db " + m.a.string() + " " + m.b.string() + " --out " + (dir / "separate").string());
+  ASSERT_EQ(run_curvlab("merge --out " + study.string() + " " + m.a.string() + " " + m.b.string()).exit_code, 0);
+  const auto sep = run_curvlab("export --db " + m.a.string() + " " + m.b.string() + " --out " + (dir / "separate").string());
   ASSERT_EQ(sep.exit_code, 0) << sep.out;
-  const auto merged = curvlab("export --db " + study.string() + " --out " + (dir / "merged").string());
+  const auto merged = run_curvlab("export --db " + study.string() + " --out " + (dir / "merged").string());
   ASSERT_EQ(merged.exit_code, 0) << merged.out;
   const std::string csv = read_file(dir / "separate" / "trials.csv");
   EXPECT_EQ(csv, read_file(dir / "merged" / "trials.csv"));
@@ -314,7 +316,7 @@ TEST(MergeCli, ExportOfSeparateFilesEqualsExportOfTheMergedFile) {
   }
   EXPECT_GT(compared, 10u);
   // A folder of files gives the same rows as listing them.
-  const auto folder = curvlab("export --format csv --db " + m.dir.string() + " --out " + (dir / "folder").string());
+  const auto folder = run_curvlab("export --format csv --db " + m.dir.string() + " --out " + (dir / "folder").string());
   ASSERT_EQ(folder.exit_code, 0) << folder.out;
   EXPECT_EQ(read_file(dir / "folder" / "trials.csv"), csv);
 }
@@ -327,12 +329,12 @@ TEST(MergeCli, OlderOrForeignInputsAreRefusedWithoutBeingTouched) {
     c.exec("CREATE TABLE t (x); INSERT INTO t VALUES (1); PRAGMA user_version = 3");
   }
   const std::string before = read_file(foreign);
-  const auto r = curvlab("merge --out " + (dir / "study.sqlite").string() + " " + foreign.string());
+  const auto r = run_curvlab("merge --out " + (dir / "study.sqlite").string() + " " + foreign.string());
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("not a curvlab data file"), std::string::npos) << r.out;
   EXPECT_EQ(read_file(foreign), before);
   EXPECT_FALSE(fs::exists(dir / "study.sqlite"));
-  const auto missing = curvlab("merge --out " + (dir / "study.sqlite").string() + " " + (dir / "nope.sqlite").string());
+  const auto missing = run_curvlab("merge --out " + (dir / "study.sqlite").string() + " " + (dir / "nope.sqlite").string());
   EXPECT_EQ(missing.exit_code, 2) << missing.out;
   EXPECT_NE(missing.out.find("nope.sqlite: no such database file"), std::string::npos) << missing.out;
 }

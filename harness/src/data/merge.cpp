@@ -156,7 +156,7 @@ std::int64_t schema_version_of(const std::string& path) {
 Expected<Done> check_current_file(const std::string& path, const std::string& role) {
   auto db = Database::open(path, OpenMode::read_only);
   if (db) return Done{};
-  const std::int64_t version = schema_version_of(path);
+  const std::int64_t version = db.error().kind == DataError::Kind::io ? schema_version_of(path) : -1;
   if (version >= 0 && version < current_schema_version)
     return DataError{DataError::Kind::bad_input,
                      path + ": " + role + " has schema version " + std::to_string(version) +
@@ -359,11 +359,13 @@ void compare_session(Connection& c, const SourceSession& src, std::int64_t study
   }
   ++report.inputs.back().sessions_conflicting;
   const std::string first = source_of(c, study_id, opts.out_path);
-  report.conflicts.push_back(
-      {src.uuid, first, input,
-       first + ": " + describe_session(c, "main", study_id) + "; " + input + ": " +
-           describe_session(c, "src", src.id) +
-           ". If one is a copy taken before the session was resumed, merge only the later file"});
+  const std::string ours = describe_session(c, "main", study_id);
+  const std::string theirs = describe_session(c, "src", src.id);
+  const std::string advice =
+      ours == theirs ? "The rows differ although status and counts agree: one copy was edited, or two "
+                       "recordings carry one UUID; merge only the right one"
+                     : "If one is a copy taken before the session was resumed, merge only the later file";
+  report.conflicts.push_back({src.uuid, first, input, first + ": " + ours + "; " + input + ": " + theirs + ". " + advice});
 }
 
 Expected<Done> merge_attached(Connection& c, const std::string& input, const MergeOptions& opts,
