@@ -337,14 +337,15 @@ void add_session(Connection& c, const SourceSession& src, const std::string& inp
     Statement s(c, with_trial_mapping(sql));
     s.bind(1, src.id).bind(2, id).run();
   }
+  const std::string source_file = fs::absolute(input).lexically_normal().string();
   add_merge_event(c, id, "merged_from",
-                  {{"source_file", fs::absolute(input).lexically_normal().string()},
+                  {{"source_file", source_file},
                    {"source_session_id", src.id},
                    {"source_session_number", src.number},
                    {"source_schema_migrations", history}});
   if (!holder.empty()) {
     add_merge_event(c, id, "session_renumbered",
-                    {{"from", src.number}, {"to", number}, {"source_file", input}, {"number_held_by", holder}});
+                    {{"from", src.number}, {"to", number}, {"source_file", source_file}, {"number_held_by", holder}});
     ++report.sessions_renumbered;
   }
   ++report.sessions_added;
