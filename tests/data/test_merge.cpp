@@ -321,7 +321,7 @@ TEST(MergeCli, ExportOfSeparateFilesEqualsExportOfTheMergedFile) {
   EXPECT_EQ(read_file(dir / "folder" / "trials.csv"), csv);
 }
 
-TEST(MergeCli, OlderOrForeignInputsAreRefusedWithoutBeingTouched) {
+TEST(MergeCli, OlderForeignOrMissingInputsAreRefusedWithoutBeingTouched) {
   const fs::path dir = fresh_dir("refuse");
   const fs::path foreign = dir / "other.sqlite";
   {
@@ -333,6 +333,22 @@ TEST(MergeCli, OlderOrForeignInputsAreRefusedWithoutBeingTouched) {
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("not a curvlab data file"), std::string::npos) << r.out;
   EXPECT_EQ(read_file(foreign), before);
+  EXPECT_FALSE(fs::exists(dir / "study.sqlite"));
+
+  // A version-3 file (before session UUIDs): refused with the upgrade
+  // command, and left as it was.
+  const fs::path v3 = dir / "v3.sqlite";
+  {
+    auto c = Connection::open(v3.string(), OpenFlags::read_write_create);
+    c.exec(read_file(fs::path(CURVLAB_SOURCE_DIR) / "data_schema" / "v3.sql"));
+    c.exec("PRAGMA application_id = " + std::to_string(curvlab_application_id));
+  }
+  const std::string v3_before = read_file(v3);
+  const auto old = run_curvlab("merge --out " + (dir / "study.sqlite").string() + " " + v3.string());
+  EXPECT_EQ(old.exit_code, 2) << old.out;
+  EXPECT_NE(old.out.find("schema version 3"), std::string::npos) << old.out;
+  EXPECT_NE(old.out.find("curvlab export --db " + v3.string()), std::string::npos) << old.out;
+  EXPECT_EQ(read_file(v3), v3_before);
   EXPECT_FALSE(fs::exists(dir / "study.sqlite"));
   const auto missing = run_curvlab("merge --out " + (dir / "study.sqlite").string() + " " + (dir / "nope.sqlite").string());
   EXPECT_EQ(missing.exit_code, 2) << missing.out;

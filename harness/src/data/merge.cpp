@@ -404,7 +404,11 @@ Expected<Done> merge_one(Database& work, const std::string& input, const MergeOp
   } catch (const SqliteFailure& f) {
     merged = to_data_error(f, input);
   }
-  c.exec("DETACH DATABASE src");
+  try {
+    c.exec("DETACH DATABASE src");
+  } catch (const SqliteFailure& f) {
+    if (merged) merged = to_data_error(f, input);
+  }
   return merged;
 }
 
@@ -507,7 +511,8 @@ Expected<std::vector<std::string>> database_files_in(const std::string& dir) {
   std::error_code ec;
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(dir, ec))
-    if (entry.is_regular_file() && entry.path().extension() == ".sqlite") files.push_back(entry.path().string());
+    if (std::error_code entry_ec; entry.is_regular_file(entry_ec) && entry.path().extension() == ".sqlite")
+      files.push_back(entry.path().string());
   if (ec) return DataError{DataError::Kind::io, dir + ": cannot list the folder: " + ec.message()};
   if (files.empty()) return DataError{DataError::Kind::not_found, dir + ": no .sqlite files in this folder"};
   std::sort(files.begin(), files.end());
