@@ -148,6 +148,28 @@ const Machines& machines() {
   return m;
 }
 
+// Every value of `column` in `table`, quoted and sorted.
+std::vector<std::string> column_values(const fs::path& db, const std::string& table, const std::string& column) {
+  auto d = Database::open(db.string(), OpenMode::read_only);
+  std::vector<std::string> values;
+  Statement s(d.value().connection(), "SELECT quote(" + column + ") FROM " + table);
+  while (s.step()) values.push_back(s.column_text(0));
+  std::sort(values.begin(), values.end());
+  return values;
+}
+
+// The columns of `table` other than ids, which a merge remaps.
+std::vector<std::string> data_columns(const fs::path& db, const std::string& table) {
+  auto d = Database::open(db.string(), OpenMode::read_only);
+  std::vector<std::string> columns;
+  Statement s(d.value().connection(), "SELECT name FROM pragma_table_info('" + table + "')");
+  while (s.step()) {
+    const std::string name = s.column_text(0);
+    if (name.size() < 3 || name.substr(name.size() - 3) != "_id") columns.push_back(name);
+  }
+  return columns;
+}
+
 std::string uuid_of(const fs::path& db, const std::string& pseudonym) {
   return scalar(db, "SELECT s.session_uuid FROM sessions s JOIN participants p ON p.participant_id = "
                     "s.participant_id WHERE p.pseudonym = '" + pseudonym + "'");
@@ -179,6 +201,17 @@ TEST(MergeCli, TwoMachinesPoolIntoOneStudyKeepingEveryRowAndItsProvenance) {
   EXPECT_EQ(scalar(study, "PRAGMA integrity_check"), "ok");
   EXPECT_EQ(scalar(study, "SELECT COUNT(*) FROM pragma_foreign_key_check"), "0");
 
+  // Every value of every column the schema has (so a column added later is
+  // covered too) arrived, ids aside.
+  for (const char* table : {"blocks", "trials", "staircase_steps", "tracking_samples", "frames"}) {
+    for (const std::string& column : data_columns(study, table)) {
+      auto expected = column_values(m.a, table, column);
+      const auto from_b = column_values(m.b, table, column);
+      expected.insert(expected.end(), from_b.begin(), from_b.end());
+      std::sort(expected.begin(), expected.end());
+      EXPECT_EQ(column_values(study, table, column), expected) << table << "." << column;
+    }
+  }
   // Each session's content is the same as in the file it came from, and
   // the file it came from is recorded.
   for (const auto& [file, who] : std::vector<std::pair<fs::path, std::string>>{
