@@ -157,8 +157,9 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
     while (s.step()) {
       std::vector<Cell> row;
       for (int c = 0; c < static_cast<int>(fixed); ++c) row.push_back(s.column_opt_text(c));
-      auto cond = nlohmann::ordered_json::parse(s.column_text(24), nullptr, false);
-      auto stim = nlohmann::ordered_json::parse(s.column_text(25), nullptr, false);
+      // conditions and stimulus follow the fixed columns in the SELECT.
+      auto cond = nlohmann::ordered_json::parse(s.column_text(static_cast<int>(fixed)), nullptr, false);
+      auto stim = nlohmann::ordered_json::parse(s.column_text(static_cast<int>(fixed) + 1), nullptr, false);
       for (auto [obj, names, pos] : {std::tie(cond, cond_names, cond_pos),
                                      std::tie(stim, stim_names, stim_pos)}) {
         if (!obj.is_object()) continue;
