@@ -51,6 +51,23 @@ fs::path fresh_dir(const std::string& name) {
   return dir;
 }
 
+// Removes this process's folders when the tests are done (machines() is
+// shared by the tests of one process, so not before).
+class RemoveFolders : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ec;
+    const std::string suffix = "_" + std::to_string(::getpid());
+    for (const auto& entry : fs::directory_iterator(fs::temp_directory_path(), ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name.rfind("curvlab_merge_", 0) == 0 && name.size() > suffix.size() &&
+          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+        fs::remove_all(entry.path(), ec);
+    }
+  }
+};
+[[maybe_unused]] auto* const remove_folders = ::testing::AddGlobalTestEnvironment(new RemoveFolders);
+
 std::string scalar(const fs::path& db, const std::string& sql) {
   auto d = Database::open(db.string(), OpenMode::read_only);
   if (!d) return d.error().message;
