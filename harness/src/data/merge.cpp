@@ -365,7 +365,9 @@ void compare_session(Connection& c, const SourceSession& src, std::int64_t study
   const std::string advice =
       ours == theirs ? "The rows differ although status and counts agree: one copy was edited, or two "
                        "recordings carry one UUID; merge only the right one"
-                     : "If one is a copy taken before the session was resumed, merge only the later file";
+                     : "If one is a copy taken before the session was resumed, merge only the later file "
+                       "(when the study already holds the earlier copy, build the study again from the "
+                       "current files)";
   report.conflicts.push_back({src.uuid, first, input, first + ": " + ours + "; " + input + ": " + theirs + ". " + advice});
 }
 
