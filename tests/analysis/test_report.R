@@ -35,7 +35,7 @@ check(p$status == 0, paste("figures are not blank:", paste(p$out, collapse = " |
 check(grepl("synthetic-constant", html) && grepl(strrep("1f", 32), html) && grepl("31001", html) &&
         grepl("synthetic data (analysis/R/simulate.R)", html, fixed = TRUE) && grepl("168 / 168", html),
       "provenance: protocol name, sha256, seed, renderer, trials completed/planned")
-check(grepl("y ~ x_m + space * view + (1 | participant)", html, fixed = TRUE), "mixed model formula shown")
+check(grepl("y ~ x_std + space * view + (1 | participant)", html, fixed = TRUE), "mixed model formula shown")
 check(grepl("Simulated observers", html), "observer ground truth section")
 fits <- utils::read.csv(file.path(out, "psychometric_fits.csv"))
 check(nrow(fits) == 12, "one psychometric fit per participant x space x view")
@@ -67,7 +67,7 @@ check(r$status == 0, paste("exit 0:", paste(utils::tail(r$out, 3), collapse = " 
 html3 <- paste(readLines(file.path(out3, "report.html"), warn = FALSE), collapse = "\n")
 rows <- regmatches(html3, gregexpr("<tr>.*?</tr>", html3))[[1]]
 header <- rows[grepl("tracking_flagged", rows)][1]
-cells <- function(row) regmatches(row, gregexpr("(?<=<t[hd]>)[^<]*", row, perl = TRUE))[[1]]
+cells <- function(row) gsub("<[^>]*>", "", regmatches(row, gregexpr("<t[hd][^>]*>[^<]*", row, perl = TRUE))[[1]])
 session1 <- rows[which(rows == header) + 1]
 got <- stats::setNames(cells(session1), cells(header))
 check(!is.na(header) && got[["completed"]] == "167 / 168" && got[["aborted"]] == "1" &&
