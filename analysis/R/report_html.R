@@ -20,17 +20,22 @@ format_cell <- function(v, digits = 4) {
 # A table in a horizontally scrolling box, so a wide one never widens the
 # page. `titles`: optional data frame of the same shape whose non-NA cells
 # become the cells' title attributes (the full value of a shortened one).
-html_table <- function(df, caption = NULL, digits = 4, titles = NULL, class = NULL) {
+# `wrap`: names of columns whose long values may break anywhere (hardware
+# names, commits, seeds); header names may break after an underscore.
+html_table <- function(df, caption = NULL, digits = 4, titles = NULL, class = NULL, wrap = character(0)) {
   if (is.null(df) || !nrow(df)) return("<p class=\"empty\">(nothing to show)</p>")
-  head <- paste0("<tr>", paste0("<th>", html_escape(names(df)), "</th>", collapse = ""), "</tr>")
+  head <- paste0("<tr>", paste0("<th>", gsub("_", "_<wbr>", html_escape(names(df)), fixed = TRUE), "</th>",
+                                collapse = ""), "</tr>")
   cells <- vapply(df, function(col) html_escape(format_cell(col, digits)), character(nrow(df)))
   if (is.null(dim(cells))) cells <- matrix(cells, nrow = nrow(df))
-  open <- matrix("<td>", nrow(df), ncol(df))
+  attrs <- matrix("", nrow(df), ncol(df))
+  attrs[, names(df) %in% wrap] <- " class=\"wrap\""
   if (!is.null(titles))
     for (j in seq_len(ncol(df))) {
       t <- titles[[j]]
-      open[!is.na(t), j] <- paste0("<td title=\"", html_escape(t[!is.na(t)]), "\">")
+      attrs[!is.na(t), j] <- paste0(attrs[!is.na(t), j], " title=\"", html_escape(t[!is.na(t)]), "\"")
     }
+  open <- matrix(paste0("<td", attrs, ">"), nrow(df))
   body <- paste0("<tr>", vapply(seq_len(nrow(df)), function(i) paste0(open[i, ], cells[i, ], "</td>", collapse = ""), ""),
                  "</tr>", collapse = "\n")
   paste0("<div class=\"scroll\"><table", if (!is.null(class)) paste0(" class=\"", class, "\""), ">",
@@ -49,7 +54,7 @@ html_figure <- function(file, caption) {
 }
 
 report_css <- paste(
-  "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;max-width:1100px;margin:2em auto;",
+  "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;max-width:1200px;margin:2em auto;",
   "padding:0 1em;color:#222;line-height:1.45}",
   "h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}",
   "table{border-collapse:collapse;margin:.8em 0;font-size:.85em}",
@@ -60,7 +65,8 @@ report_css <- paste(
   ".note{background:#fff8e1;border-left:4px solid #f9a825;padding:.4em .8em;margin:.5em 0}",
   ".empty{color:#888}code{background:#f4f4f4;padding:0 .2em}",
   ".scroll{max-width:100%;overflow-x:auto}",
-  "table.provenance td{max-width:14em;overflow-wrap:anywhere;text-align:left}",
+  "table.provenance{font-size:.8em}table.provenance td,table.provenance th{text-align:left;padding:.2em .35em}",
+  "table.provenance td.wrap{min-width:5em;max-width:9em;overflow-wrap:anywhere}",
   ".method{background:#eef5fb;border-left:4px solid #4a90c2;padding:.4em .8em;margin:.5em 0}")
 
 # Writes report.html (and the PNG/CSV files) into out_dir; returns its path.
@@ -187,7 +193,7 @@ provenance_html <- function(s, trials) {
   titles$session <- uuid
   titles$protocol_sha256 <- s$protocol_sha256
   titles$software <- paste(s$software_version, s$software_commit)
-  html_table(table, titles = titles, class = "provenance")
+  html_table(table, titles = titles, class = "provenance", wrap = c("software", "renderer", "seed", "started_utc"))
 }
 
 models_intro_html <- function(models) {

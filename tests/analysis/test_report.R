@@ -67,7 +67,7 @@ check(r$status == 0, paste("exit 0:", paste(utils::tail(r$out, 3), collapse = " 
 html3 <- paste(readLines(file.path(out3, "report.html"), warn = FALSE), collapse = "\n")
 rows <- regmatches(html3, gregexpr("<tr>.*?</tr>", html3))[[1]]
 header <- rows[grepl("tracking_flagged", rows)][1]
-cells <- function(row) gsub("<[^>]*>", "", regmatches(row, gregexpr("<t[hd][^>]*>[^<]*", row, perl = TRUE))[[1]])
+cells <- function(row) gsub("<[^>]*>", "", regmatches(row, gregexpr("<t([hd])[^>]*>.*?</t\\1>", row, perl = TRUE))[[1]])
 session1 <- rows[which(rows == header) + 1]
 got <- stats::setNames(cells(session1), cells(header))
 check(!is.na(header) && got[["completed"]] == "167 / 168" && got[["aborted"]] == "1" &&
