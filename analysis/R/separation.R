@@ -118,7 +118,7 @@ profile_inference <- function(X, y, beta_hat, L, se, level = 0.95, limit = 60) {
 
 # Bias-reduced logistic GLM (brglm2, mean bias reduction = Jeffreys penalty
 # for the logit link) with profile intervals and tests for every coefficient.
-fit_bias_reduced <- function(formula, data) {
+fit_bias_reduced <- function(formula, data, profiles = TRUE) {
   # glm's binomial initialisation warns about the adjusted (non-integer)
   # responses brglmFit works with; that is expected, not a problem.
   fit <- withCallingHandlers(
@@ -133,7 +133,8 @@ fit_bias_reduced <- function(formula, data) {
   y <- stats::model.response(stats::model.frame(fit))
   rows <- lapply(seq_along(beta), function(j) {
     L <- as.numeric(seq_along(beta) == j)
-    profile_inference(X, y, beta, L, sqrt(V[j, j]))
+    if (profiles) profile_inference(X, y, beta, L, sqrt(V[j, j]))
+    else c(estimate = beta[[j]], ci_low = NA_real_, ci_high = NA_real_, p = NA_real_)
   })
   table <- data.frame(term = names(beta), do.call(rbind, rows), row.names = NULL)
   table$se <- sqrt(diag(V))

@@ -47,6 +47,18 @@ check(r$status == 0 && length(r$out) == 1, "exit 0, --quiet prints one line")
 check(file.exists(file.path(out2, "staircases.png")) && png_ok(file.path(out2, "staircases.png"))$status == 0,
       "staircase track figure written and not blank")
 check(file.exists(file.path(out2, "staircase_thresholds.csv")), "staircase thresholds table written")
+sm <- utils::read.csv(file.path(out2, "models.csv"))
+check(any(grepl("mixed model", sm$model)) && all(is.finite(sm$ci_low) & is.finite(sm$ci_high)),
+      paste("staircase data: a mixed model with finite CIs, by", paste(unique(sm$method), collapse = " / ")))
+
+cat("models.csv: every estimate with a finite CI and a method\n")
+mc <- utils::read.csv(file.path(out, "models.csv"))
+check(identical(names(mc), c("model", "term", "estimate", "se", "ci_low", "ci_high", "p", "method", "note")),
+      "models.csv columns")
+check(nrow(mc) > 0 && all(is.finite(mc$ci_low) & is.finite(mc$ci_high) & mc$se < 50) && all(nzchar(mc$method)),
+      sprintf("%d rows, all CIs finite, largest SE %.2f", nrow(mc), max(mc$se)))
+check(any(grepl("view contrasts", mc$model)) && any(grepl("E3: native - tourist|E3: tourist - native", mc$term)),
+      "per-space view contrasts")
 
 cat("Aborted and tracking-flagged trials are counted in the provenance\n")
 marked <- scratch("report_marked.sqlite")
@@ -113,5 +125,19 @@ if (nzchar(curvlab) && file.exists(curvlab)) {
   check(png_ok(scratch("describe.png"))$status == 0, "describe.py figure is not blank")
   r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), empty_dir))
   check(r$status == 2, "describe.py: exit 2 without trials.csv")
+  cat("The demo session: separation flagged, every printed estimate finite\n")
+  demo_db <- scratch("demo.sqlite")
+  if (file.exists(demo_db)) file.remove(demo_db)
+  r <- run(curvlab, c("run", file.path(source_root, "protocols/demo.toml"), "--participant", "P01", "--db", demo_db))
+  check(r$status == 0, "curvlab run protocols/demo.toml")
+  demo_out <- scratch("report_demo")
+  r <- run(rscript, c(report_r, "--db", demo_db, "--out", demo_out, "--quiet"))
+  check(r$status == 0, "report on the demo database")
+  dm <- utils::read.csv(file.path(demo_out, "models.csv"))
+  demo_html <- paste(readLines(file.path(demo_out, "report.html"), warn = FALSE), collapse = "\n")
+  check(grepl("Separation detected", demo_html) && all(grepl("^separation:", dm$note)), "separation flagged")
+  check(nrow(dm) > 0 && all(is.finite(dm$estimate) & is.finite(dm$ci_low) & is.finite(dm$ci_high)) && max(dm$se) < 50,
+        sprintf("demo: %d estimates, all CIs finite, largest SE %.2f", nrow(dm), max(dm$se)))
+  check(!grepl("Wald", paste(dm$method, collapse = " ")), "demo: no Wald statistic of a separated fit")
 } else cat("(no curvlab binary given: export path not tested)\n")
 finish()
