@@ -92,7 +92,12 @@ main <- function() {
                          lapse_max = opts$lapse_max, discard_reversals = opts$discard_reversals)
   if (!opts$quiet) {
     cat(sprintf("figures: %s\n", paste(basename(result$figures), collapse = ", ")))
-    for (m in result$models) for (n in m$notes) cat(sprintf("note (%s, %s): %s\n", m$outcome, m$judged, n))
+    for (m in result$models) {
+      if (isTRUE(m$separation$separated))
+        cat(sprintf("separation (%s, %s): %s\n", m$outcome, m$judged, separation_words(m$separation)))
+      for (n in m$notes) cat(sprintf("note (%s, %s): %s\n", m$outcome, m$judged, n))
+    }
+    cat(sprintf("models: %s\n", result$models_csv))
   }
   cat(normalizePath(result$report), "\n", sep = "")
 }

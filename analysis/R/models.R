@@ -164,8 +164,9 @@ add_mixed_model <- function(result, d, make, rhs_fixed, rhs_null, factors, rando
   notes <- character(0)
   if (separated)
     result$methods <- c(result$methods, paste0(
-      "Separation detected (", separation_words(result$separation), "): the maximum-likelihood estimates of ",
-      "this model are infinite, so no Wald statistic of an ML fit is shown."))
+      "Because of the separation the maximum-likelihood estimates of this model are infinite: no Wald ",
+      "statistic of an ML fit is shown; the bias-reduced GLM with profile intervals is reported, and the tests ",
+      "are its penalised likelihood-ratio tests."))
   ml <- if (!separated) fit_mixed(make(rhs_fixed), d, bayes = FALSE) else NULL
   if (!random) {
     if (!separated && !is.null(ml$fit)) {

@@ -11,7 +11,11 @@ html_escape <- function(x) {
 
 format_cell <- function(v, digits = 4) {
   if (is.numeric(v)) {
-    out <- ifelse(is.na(v), "NA", formatC(signif(v, digits), format = "fg", digits = digits, flag = "#"))
+    # Fixed notation, except for magnitudes below 1e-4 (e.g. a difference
+    # of 1e-16 that is zero up to rounding), which get an exponent.
+    small <- !is.na(v) & v != 0 & abs(v) < 1e-4
+    out <- ifelse(is.na(v), "NA", ifelse(small, formatC(v, format = "g", digits = digits),
+                                         formatC(signif(v, digits), format = "fg", digits = digits, flag = "#")))
     out <- sub("\\.$", "", out)
     ifelse(!is.na(v) & v == round(v) & abs(v) < 1e9, format(round(v), scientific = FALSE, trim = TRUE), out)
   } else ifelse(is.na(v), "NA", as.character(v))

@@ -78,7 +78,7 @@ r <- run(rscript, c(report_r, "--db", marked, "--out", out3, "--quiet"))
 check(r$status == 0, paste("exit 0:", paste(utils::tail(r$out, 3), collapse = " | ")))
 html3 <- paste(readLines(file.path(out3, "report.html"), warn = FALSE), collapse = "\n")
 rows <- regmatches(html3, gregexpr("<tr>.*?</tr>", html3))[[1]]
-header <- rows[grepl("tracking_flagged", rows)][1]
+header <- rows[grepl("tracking_(<wbr>)?flagged", rows)][1]
 cells <- function(row) gsub("<[^>]*>", "", regmatches(row, gregexpr("<t([hd])[^>]*>.*?</t\\1>", row, perl = TRUE))[[1]])
 session1 <- rows[which(rows == header) + 1]
 got <- stats::setNames(cells(session1), cells(header))
