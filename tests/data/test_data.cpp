@@ -697,7 +697,7 @@ TEST(Export, FilesCarryWhatTheirStandardsRequire) {
   std::string header, row1;
   std::getline(csv_in, header);
   std::getline(csv_in, row1);
-  EXPECT_EQ(header.rfind("session_id,participant,session_number,protocol_sha256,block_index", 0), 0u);
+  EXPECT_EQ(header.rfind("session_id,session_uuid,participant,session_number,protocol_sha256,block_index", 0), 0u);
   EXPECT_NE(header.find(",cond_space,cond_mode,cond_eyes,stim_sagitta_m,stim_note"), std::string::npos);
   EXPECT_NE(row1.find(",450000000,convex,keyboard,"), std::string::npos) << row1;
   EXPECT_NE(row1.find(",E3,tourist,NA,0.0,NA"), std::string::npos) << row1;
@@ -762,6 +762,10 @@ TEST(Export, FilesCarryWhatTheirStandardsRequire) {
   EXPECT_TRUE(ds.contains("BIDSVersion"));
   EXPECT_TRUE(fs::exists(dir / "out" / "bids" / "participants.tsv"));
   EXPECT_TRUE(fs::exists(dir / "out" / "bids" / "sub-P01" / "ses-1" / "sub-P01_ses-1_scans.tsv"));
+  const auto sessions = read_file(dir / "out" / "bids" / "sub-P01" / "sub-P01_sessions.tsv");
+  EXPECT_TRUE(std::regex_search(sessions, std::regex("^session_id\tacq_time\tsession_uuid\nses-1\t[0-9T:.-]+\t"
+                                                     "[0-9a-f]{8}-[0-9a-f]{4}-7[0-9a-f]{3}-")))
+      << sessions;
 }
 
 TEST(Cli, ExportCommandAndItsErrors) {

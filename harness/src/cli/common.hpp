@@ -57,6 +57,10 @@ std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text, cons
 void add_inspect_commands(CLI::App& app);
 void add_devices_commands(CLI::App& app);
 void add_export_commands(CLI::App& app);
+void add_merge_commands(CLI::App& app);
+// Database arguments of merge and export: each folder is replaced by the
+// *.sqlite files directly in it (sorted by name), leaving out `exclude`.
+std::vector<std::string> expand_database_args(const std::vector<std::string>& args, const std::string& exclude);
 void add_track_commands(CLI::App& app);  // trajectory, track, inspect vergence/stick
 void add_render_commands(CLI::App& app);
 void add_protocol_commands(CLI::App& app);

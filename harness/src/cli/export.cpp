@@ -1,37 +1,69 @@
-// `curvlab export`: turns a session database into analysis formats (wide
+// `curvlab export`: turns session databases into analysis formats (wide
 // trial CSV, Psych-DS, BIDS motion). The formats live in curvlab_data.
+// Several files (or folders of them) are pooled first into a temporary study
+// database exactly as `curvlab merge` would pool them, so exporting the
+// separate files and exporting their merged file give the same rows.
 #include "common.hpp"
 
 #include "curvlab/harness/data/export.hpp"
+#include "curvlab/harness/data/merge.hpp"
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
 #include <memory>
+#include <unistd.h>
 
 namespace curvlab::cli {
 namespace {
 
+namespace fs = std::filesystem;
+
 struct ExportArgs {
-  std::string db_path;
+  std::vector<std::string> db_paths;
   std::string out_dir;
   std::string format = "all";
   std::int64_t session = 0;
   bool json = false;
 };
 
-void run_export(const ExportArgs& a, bool session_given) {
-  if (a.out_dir.empty()) throw UsageError("--out must name a folder");
-  auto db = data::Database::open(a.db_path, data::OpenMode::open_existing);
-  if (!db) raise(db.error());
-  data::ExportOptions options{a.out_dir, std::nullopt};
-  if (session_given) options.session_id = a.session;
-  Json doc;
-  doc["db"] = a.db_path;
-  doc["out"] = a.out_dir;
+// The pooled copy of several inputs; removed when the export is done.
+class PooledInputs {
+ public:
+  explicit PooledInputs(const std::vector<std::string>& inputs)
+      : path_((fs::temp_directory_path() / ("curvlab-export-" + std::to_string(::getpid()) + ".sqlite")).string()) {
+    remove();
+    auto merged = data::merge_databases({path_, inputs, true});
+    if (!merged) raise(merged.error());
+    if (merged.value().conflicts.empty()) return;
+    const auto& c = merged.value().conflicts.front();
+    throw UsageError("the inputs disagree about session " + c.session_uuid + ": " + c.detail +
+                     " (curvlab merge lists every conflict)");
+  }
+  ~PooledInputs() { remove(); }
+  PooledInputs(const PooledInputs&) = delete;
+  PooledInputs& operator=(const PooledInputs&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  void remove() const {
+    std::error_code ec;
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path_ + suffix, ec);
+  }
+  std::string path_;
+};
+
+std::string joined(const std::vector<std::string>& paths) {
+  std::string out;
+  for (const auto& p : paths) out += (out.empty() ? "" : ", ") + p;
+  return out;
+}
+
+void write_exports(data::Database& db, const ExportArgs& a, const data::ExportOptions& options, Json& doc) {
   Json files = Json::array();
   auto run = [&](const char* name, auto fn) {
     if (a.format != "all" && a.format != name) return;
-    auto result = fn(db.value(), options);
+    auto result = fn(db, options);
     if (!result) raise(result.error());
     doc[std::string(name) + "_rows"] = result.value().rows;
     for (const auto& f : result.value().files) files.push_back(f);
@@ -41,6 +73,25 @@ void run_export(const ExportArgs& a, bool session_given) {
   run("bids-motion", data::export_bids_motion);
   doc["files"] = files;
   if (!a.json) doc["files"] = std::to_string(files.size()) + " files";
+}
+
+void run_export(const ExportArgs& a, bool session_given) {
+  if (a.out_dir.empty()) throw UsageError("--out must name a folder");
+  const bool single = a.db_paths.size() == 1 && !fs::is_directory(a.db_paths.front());
+  const auto inputs = single ? a.db_paths : expand_database_args(a.db_paths, "");
+  if (!single && session_given)
+    throw UsageError("--session selects a session of one file; with several files export them all, or "
+                     "export one file");
+  std::unique_ptr<PooledInputs> pooled;
+  if (!single) pooled = std::make_unique<PooledInputs>(inputs);
+  auto db = data::Database::open(single ? inputs.front() : pooled->path(), data::OpenMode::open_existing);
+  if (!db) raise(db.error());
+  data::ExportOptions options{a.out_dir, std::nullopt, single ? "" : joined(inputs)};
+  if (session_given) options.session_id = a.session;
+  Json doc;
+  doc["db"] = single ? inputs.front() : joined(inputs);
+  doc["out"] = a.out_dir;
+  write_exports(db.value(), a, options, doc);
   print_result(doc, a.json);
 }
 
@@ -49,11 +100,13 @@ void run_export(const ExportArgs& a, bool session_given) {
 void add_export_commands(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
   auto* cmd = app.add_subcommand("export", "export session data: trial CSV, Psych-DS, BIDS motion");
-  cmd->add_option("--db", args->db_path, "curvlab database file")->required();
+  cmd->add_option("--db", args->db_paths,
+                  "curvlab database file; several files or folders of *.sqlite files are pooled as by merge")
+      ->required();
   cmd->add_option("--out", args->out_dir, "output folder (created if missing)")->required();
   cmd->add_option("--format", args->format, "csv, psychds, bids-motion or all")
       ->check(CLI::IsMember({"csv", "psychds", "bids-motion", "all"}));
-  auto* session = cmd->add_option("--session", args->session, "only this session id");
+  auto* session = cmd->add_option("--session", args->session, "only this session id (one file only)");
   cmd->add_flag("--json", args->json, "print the result as JSON");
   cmd->callback([args, session] { run_export(*args, session->count() > 0); });
 }

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 namespace curvlab::data {
 
@@ -73,6 +74,28 @@ std::string number(double v) {
   return buf;
 }
 
+// acq_time as BIDS writes it: ISO 8601 without the zone letter.
+std::string bids_time(std::string utc) {
+  if (!utc.empty() && utc.back() == 'Z') utc.pop_back();
+  return utc;
+}
+
+// sub-<label>/sub-<label>_sessions.tsv: each session's label, start and UUID
+// (its identity across files and machines), with the column described.
+std::optional<DataError> write_sessions_file(const std::string& root, const std::string& sub,
+                                             const std::string& rows, ExportSummary& summary) {
+  const std::string base = "sub-" + sub + "/sub-" + sub + "_sessions";
+  if (auto e = write_text(root + "/" + base + ".tsv", "session_id\tacq_time\tsession_uuid\n" + rows)) return e;
+  OJson doc;
+  doc["session_uuid"]["Description"] =
+      "The session's identity across files and machines (RFC 9562 UUID); session labels are numbered per "
+      "participant and may be renumbered when files are pooled";
+  if (auto e = write_text(root + "/" + base + ".json", doc.dump(2) + "\n")) return e;
+  summary.files.push_back("bids/" + base + ".tsv");
+  summary.files.push_back("bids/" + base + ".json");
+  return std::nullopt;
+}
+
 }  // namespace
 
 Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& options) {
@@ -93,6 +116,7 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
 
   std::string participants = "participant_id\tipd_m\tdominant_eye\n";
   std::vector<std::string> seen_subjects;
+  std::map<std::string, std::string> sessions_of;  // subject label → its _sessions.tsv rows
   try {
     for (const SessionInfo& s : sessions.value()) {
       const std::string sub = alnum_label(s.pseudonym);
@@ -221,8 +245,7 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
         sidecar["SubjectArtefactDescription"] = "n/a";
         if (auto e = write_text(root + "/" + base + "_motion.json", sidecar.dump(2) + "\n")) return *e;
 
-        std::string acq = s.started_utc;
-        if (!acq.empty() && acq.back() == 'Z') acq.pop_back();
+        const std::string acq = bids_time(s.started_utc);
         scans += base.substr(ses_dir.size() + 1);
         scans += "_motion.tsv\t";
         scans += acq;
@@ -231,6 +254,7 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
           summary.files.push_back("bids/" + base + suffix);
         summary.rows += n;
       }
+      sessions_of[sub] += "ses-" + ses + "\t" + bids_time(s.started_utc) + "\t" + s.session_uuid + "\n";
       const std::string scans_name = ses_dir + "/sub-" + sub + "_ses-" + ses + "_scans.tsv";
       if (auto e = write_text(root + "/" + scans_name, scans)) return *e;
       summary.files.push_back("bids/" + scans_name);
@@ -238,6 +262,8 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
   } catch (const SqliteFailure& f) {
     return to_data_error(f, db.path());
   }
+  for (const auto& [sub, rows] : sessions_of)
+    if (auto e = write_sessions_file(root, sub, rows, summary)) return *e;
   if (auto e = write_text(root + "/participants.tsv", participants)) return *e;
   summary.files.push_back("bids/participants.tsv");
   OJson pj;

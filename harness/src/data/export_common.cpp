@@ -58,10 +58,10 @@ Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptio
   try {
     Statement s(db.connection(),
                 "SELECT s.session_id, s.session_number, p.pseudonym, pr.name, pr.sha256, "
-                "s.software_version, s.started_utc, p.ipd_m, p.dominant_eye FROM sessions s "
+                "s.software_version, s.started_utc, p.ipd_m, p.dominant_eye, s.session_uuid FROM sessions s "
                 "JOIN participants p ON p.participant_id = s.participant_id "
                 "JOIN protocols pr ON pr.protocol_id = s.protocol_id "
-                "WHERE ?1 IS NULL OR s.session_id = ?1 ORDER BY s.session_id");
+                "WHERE ?1 IS NULL OR s.session_id = ?1 ORDER BY s.session_uuid, s.session_id");
     s.bind(1, options.session_id);
     std::vector<SessionInfo> out;
     while (s.step()) {
@@ -75,6 +75,7 @@ Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptio
       info.started_utc = s.column_text(6);
       info.ipd_m = s.column_opt_double(7);
       info.dominant_eye = s.column_text(8);
+      info.session_uuid = s.column_opt_text(9).value_or("");
       out.push_back(std::move(info));
     }
     if (out.empty() && options.session_id)
@@ -100,7 +101,8 @@ Cell json_cell(const nlohmann::ordered_json& v) {
 Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options) {
   TrialTable table;
   table.columns = {
-      {"session_id", "Database id of the session", ""},
+      {"session_id", "Database id of the session (local to the file; session_uuid identifies it across files)", ""},
+      {"session_uuid", "The session's identity across files and machines (RFC 9562 UUID)", ""},
       {"participant", "Participant pseudonym (no identifying data)", ""},
       {"session_number", "Session number of this participant, from 1", ""},
       {"protocol_sha256", "SHA-256 of the protocol text the session ran", ""},
@@ -133,7 +135,7 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
   const std::size_t fixed = table.columns.size();
   try {
     Statement s(db.connection(),
-                "SELECT t.session_id, p.pseudonym, se.session_number, pr.sha256, b.block_index, "
+                "SELECT t.session_id, se.session_uuid, p.pseudonym, se.session_number, pr.sha256, b.block_index, "
                 "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.end_reason, "
                 "t.attempt, t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
                 "t.completed_utc, st.staircase, st.step_index, st.intensity, st.is_reversal, "
@@ -147,7 +149,7 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
                 "JOIN participants p ON p.participant_id = se.participant_id "
                 "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
                 "JOIN blocks b ON b.block_id = t.block_id "
-                "WHERE ?1 IS NULL OR t.session_id = ?1 ORDER BY t.session_id, t.trial_index");
+                "WHERE ?1 IS NULL OR t.session_id = ?1 ORDER BY se.session_uuid, t.session_id, t.trial_index");
     s.bind(1, options.session_id);
     std::vector<std::string> cond_names, stim_names;
     std::map<std::string, std::size_t> cond_pos, stim_pos;
@@ -155,8 +157,8 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
     while (s.step()) {
       std::vector<Cell> row;
       for (int c = 0; c < static_cast<int>(fixed); ++c) row.push_back(s.column_opt_text(c));
-      auto cond = nlohmann::ordered_json::parse(s.column_text(23), nullptr, false);
-      auto stim = nlohmann::ordered_json::parse(s.column_text(24), nullptr, false);
+      auto cond = nlohmann::ordered_json::parse(s.column_text(24), nullptr, false);
+      auto stim = nlohmann::ordered_json::parse(s.column_text(25), nullptr, false);
       for (auto [obj, names, pos] : {std::tie(cond, cond_names, cond_pos),
                                      std::tie(stim, stim_names, stim_pos)}) {
         if (!obj.is_object()) continue;

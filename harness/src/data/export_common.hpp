@@ -27,6 +27,7 @@ struct SessionInfo {
   std::string started_utc;
   std::optional<double> ipd_m;
   std::string dominant_eye;
+  std::string session_uuid;
 };
 
 struct TrialTable {

@@ -39,7 +39,8 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
   doc["name"] = "curvlab trial data";
   doc["description"] =
       "One row per trial of perception experiments in curved spaces (S3, E3, H3), exported by "
-      "curvlab " + std::string(software_version()) + " from " + db.path() + ". Missing values are NA.";
+      "curvlab " + std::string(software_version()) + " from " +
+      (options.source.empty() ? db.path() : options.source) + ". Missing values are NA.";
   doc["keywords"] = nlohmann::ordered_json::array({"perception", "virtual reality", "curved space"});
   doc["dateCreated"] = sessions.value().empty() ? "" : sessions.value().front().started_utc;
   auto& vars = doc["variableMeasured"] = nlohmann::ordered_json::array();

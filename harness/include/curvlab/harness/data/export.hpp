@@ -15,6 +15,7 @@ namespace curvlab::data {
 struct ExportOptions {
   std::string out_dir;                    // created if missing
   std::optional<std::int64_t> session_id; // nullopt: every session
+  std::string source = {};                // the data's origin as descriptions name it; empty: the file
 };
 
 struct ExportSummary {
