@@ -1,8 +1,8 @@
 # A study over several files: report.R given two lab machines' databases,
-# the folder holding them, and one file with both machines' sessions (a
-# merge) writes identical tables; a session given twice counts once; the
+# the folder holding them, and the file `curvlab merge` makes of them writes
+# identical tables; a session given twice counts once; the
 # same session UUID with different trials is refused with exit 2.
-#   Rscript tests/analysis/test_pooling.R SOURCE_ROOT [CURVLAB_BINARY]
+#   Rscript tests/analysis/test_pooling.R SOURCE_ROOT CURVLAB_BINARY
 source(file.path(commandArgs(TRUE)[1], "tests/analysis/helpers.R"))
 rscript <- file.path(R.home("bin"), "Rscript")
 report_r <- file.path(source_root, "analysis", "report.R")
@@ -26,40 +26,16 @@ unlink(folder, recursive = TRUE); dir.create(folder)
 a <- lab("labs/machine_a", c("A01", "A02"), 41)
 b <- lab("labs/machine_b", c("B01", "B02"), 42)
 
-# The merged file: machine A's file with machine B's rows appended, ids
-# shifted and protocol / participant references re-pointed (what a merge
-# of two files produces).
-merge_files <- function(out, first, second) {
-  invisible(file.copy(first, out, overwrite = TRUE))
-  con <- DBI::dbConnect(RSQLite::SQLite(), out)
-  on.exit(DBI::dbDisconnect(con))
-  DBI::dbExecute(con, "ATTACH ? AS src", params = list(second))
-  top <- function(table, id) DBI::dbGetQuery(con, sprintf("SELECT coalesce(max(%s), 0) FROM main.%s", id, table))[[1]]
-  shift <- c(session_id = top("sessions", "session_id"), block_id = top("blocks", "block_id"),
-             trial_id = top("trials", "trial_id"), step_id = top("staircase_steps", "step_id"),
-             sample_id = top("tracking_samples", "sample_id"), event_id = top("events", "event_id"))
-  copy <- function(table, extra = character(0)) {
-    cols <- DBI::dbGetQuery(con, sprintf("PRAGMA src.table_info(%s)", table))$name
-    expr <- ifelse(cols %in% names(shift), paste0(cols, " + ", shift[cols]), cols)
-    expr[match(names(extra), cols)] <- extra
-    DBI::dbExecute(con, sprintf("INSERT INTO main.%s (%s) SELECT %s FROM src.%s s", table,
-                                paste(cols, collapse = ", "), paste(expr, collapse = ", "), table))
-  }
-  DBI::dbExecute(con, paste("INSERT INTO main.protocols (name, sha256, text, source_path) SELECT name, sha256,",
-                            "text, source_path FROM src.protocols WHERE sha256 NOT IN (SELECT sha256 FROM main.protocols)"))
-  DBI::dbExecute(con, paste("INSERT INTO main.participants (pseudonym, ipd_m, dominant_eye, created_utc)",
-                            "SELECT pseudonym, ipd_m, dominant_eye, created_utc FROM src.participants"))
-  copy("sessions", c(
-    protocol_id = paste("(SELECT m.protocol_id FROM main.protocols m JOIN src.protocols p ON p.sha256 = m.sha256",
-                        "WHERE p.protocol_id = s.protocol_id)"),
-    participant_id = paste("(SELECT m.participant_id FROM main.participants m JOIN src.participants p",
-                           "ON p.pseudonym = m.pseudonym WHERE p.participant_id = s.participant_id)")))
-  for (table in c("blocks", "trials", "staircase_steps", "tracking_samples", "events")) copy(table)
-  out
-}
-# Machine B first: the merged file numbers sessions and trials differently
-# from the two files read in name order.
-merged <- merge_files(scratch("study.sqlite"), b, a)
+# The merged file, by `curvlab merge`, machine B first: it numbers sessions
+# and trials differently from the two files read in name order. The two
+# machines' protocols share a name but not a hash (their seeds differ).
+curvlab <- if (length(commandArgs(TRUE)) >= 2) commandArgs(TRUE)[2] else ""
+if (!nzchar(curvlab) || !file.exists(curvlab)) { cat("FAIL: give the curvlab binary (for curvlab merge)\n"); quit(status = 1) }
+merged <- scratch("study.sqlite")
+if (file.exists(merged)) file.remove(merged)
+m <- suppressWarnings(system2(curvlab, c("merge", "--out", merged, "--allow-protocol-versions", b, a),
+                              stdout = TRUE, stderr = TRUE))
+check(is.null(attr(m, "status")) && file.exists(merged), paste("curvlab merge:", paste(utils::tail(m, 3), collapse = " | ")))
 
 tables <- c("proportions.csv", "psychometric_fits.csv", "models.csv")
 read_tables <- function(dir) lapply(stats::setNames(tables, tables), function(t) readLines(file.path(dir, t)))
