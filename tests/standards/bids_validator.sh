@@ -22,15 +22,15 @@ trap 'rm -rf "$work"' EXIT
 dataset="$work/export/bids"
 [ -f "$dataset/dataset_description.json" ] || { echo "FAIL: no $dataset/dataset_description.json"; exit 1; }
 
-# Summarises the validator's JSON: "ERRORS n WARNINGS m" and one line per issue.
+# Summarises the validator's JSON: "ERRORS n WARNINGS m" and one line per error or warning.
 summarise() {
   /usr/bin/python3 - "$1" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
-issues = d["issues"]
-print("ERRORS", len(issues["errors"]), "WARNINGS", len(issues["warnings"]))
+found = d["issues"]
+print("ERRORS", len(found["errors"]), "WARNINGS", len(found["warnings"]))
 for level in ("errors", "warnings"):
-    for i in issues[level]:
+    for i in found[level]:
         files = sorted({f["file"]["relativePath"] for f in i["files"] if f.get("file")})
         print(f"  {level[:-1]} {i['key']}: {i['reason']}" + (f" ({len(files)} file(s), e.g. {files[0]})" if files else ""))
 PY

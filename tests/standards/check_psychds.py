@@ -25,7 +25,7 @@ JSON_KEY_RECOMMENDED, MISSING_README_DOC.
 Inheritance: data/**/file_metadata.json and a data file's .json sidecar
 replace keys of dataset_description.json, nearest last.
 
-Usage: check_psychds.py DATASET_DIR   (prints one line per issue, then a
+Usage: check_psychds.py DATASET_DIR   (prints one line per error or warning, then a
 summary; exit 0 without errors, 1 with errors, 2 for a bad argument)
 """
 import csv
