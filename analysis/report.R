@@ -1,13 +1,15 @@
 #!/usr/bin/env Rscript
-# From a curvlab database (or an export directory) to an HTML report:
+# From curvlab databases (or an export directory) to an HTML report:
 #   Rscript analysis/report.R --db results/demo.sqlite --out results/demo/report
+#   Rscript analysis/report.R --db lab1.sqlite lab2.sqlite --out study/report
+#   Rscript analysis/report.R --db results/ --out study/report
 #   Rscript analysis/report.R --export results/demo/export --out results/demo/report
 # Prints the path of report.html. Exit codes: 0 done, 2 bad input (missing
 # file, not a curvlab database, bad option), 1 anything else.
 
 usage <- paste(
-  "usage: Rscript analysis/report.R (--db FILE | --export DIR) --out DIR [options]",
-  "  --db FILE                 a curvlab SQLite data file",
+  "usage: Rscript analysis/report.R (--db FILE... | --export DIR) --out DIR [options]",
+  "  --db FILE...              curvlab SQLite data files or folders of them (pooled by session UUID)",
   "  --export DIR              a directory written by `curvlab export` (trials.csv)",
   "  --out DIR                 where report.html, the PNG figures and CSV tables go",
   "  --positive VALUE          response counted as positive in fits and models (default convex)",
@@ -34,10 +36,19 @@ parse_args <- function(args) {
     if (!startsWith(a, "--") || !gsub("-", "_", key) %in% names(opts))
       fail_usage(paste0("unknown argument '", a, "'"))
     if (i == length(args)) fail_usage(paste0(a, " needs a value"))
+    if (a == "--db") {
+      # Every following argument up to the next option is a database.
+      n <- 0
+      while (i + n + 1 <= length(args) && !startsWith(args[i + n + 1], "--")) n <- n + 1
+      if (n == 0) fail_usage("--db needs a value")
+      opts$db <- c(opts$db, args[i + seq_len(n)])
+      i <- i + n + 1
+      next
+    }
     opts[[gsub("-", "_", key)]] <- args[i + 1]
     i <- i + 2
   }
-  if (is.null(opts$db) == is.null(opts$export)) fail_usage("give exactly one of --db FILE or --export DIR")
+  if (is.null(opts$db) == is.null(opts$export)) fail_usage("give exactly one of --db FILE... or --export DIR")
   if (is.null(opts$out)) fail_usage("--out DIR is required")
   if (!opts$lapse %in% c("free", "none")) fail_usage(paste0("--lapse must be free or none, not '", opts$lapse, "'"))
   opts$lapse_max <- suppressWarnings(as.numeric(opts$lapse_max))
@@ -60,29 +71,33 @@ main <- function() {
   analysis_root <<- function() root
   for (f in sort(list.files(file.path(root, "R"), pattern = "\\.R$", full.names = TRUE))) source(f)
   suppressPackageStartupMessages({
-    for (p in c("DBI", "RSQLite", "jsonlite", "ggplot2", "lme4"))
+    for (p in c("DBI", "RSQLite", "jsonlite", "ggplot2", "lme4", "brglm2", "blme", "emmeans", "lpSolve"))
       if (!requireNamespace(p, quietly = TRUE)) {
         cat("error: R package '", p, "' is not installed (Debian: apt-get install --no-install-recommends r-cran-",
             tolower(p), ")\n", sep = "", file = stderr())
         quit(status = 1)
       }
   })
-  input <- if (!is.null(opts$db)) opts$db else opts$export
-  data <- tryCatch(read_curvlab(input),
+  if (!is.null(opts$export) && file.exists(opts$export) && !dir.exists(opts$export))
+    fail_usage(paste0(opts$export, ": is a file; use --db FILE"))
+  data <- tryCatch(if (!is.null(opts$db)) read_curvlab_databases(opts$db) else read_curvlab(opts$export),
                    curvlab_input_error = function(e) {
                      cat("error: ", conditionMessage(e), "\n", sep = "", file = stderr())
                      quit(status = 2)
                    })
-  if (!is.null(opts$db) && data$kind != "database") fail_usage(paste0(opts$db, ": is a directory; use --export DIR"))
-  if (!is.null(opts$export) && data$kind != "export") fail_usage(paste0(opts$export, ": is a file; use --db FILE"))
   if (!opts$quiet)
-    cat(sprintf("read %s: %d trials (%d completed), %d session(s)\n", input, nrow(data$trials),
+    cat(sprintf("read %s: %d trials (%d completed), %d session(s)\n", data$source, nrow(data$trials),
                 sum(data$trials$status == "completed"), nrow(data$sessions)))
   result <- build_report(data, opts$out, positive = opts$positive, lapse = opts$lapse,
                          lapse_max = opts$lapse_max, discard_reversals = opts$discard_reversals)
   if (!opts$quiet) {
     cat(sprintf("figures: %s\n", paste(basename(result$figures), collapse = ", ")))
-    for (m in result$models) for (n in m$notes) cat(sprintf("note (%s, %s): %s\n", m$outcome, m$judged, n))
+    for (m in result$models) {
+      if (isTRUE(m$separation$separated))
+        cat(sprintf("separation (%s, %s): %s\n", m$outcome, m$judged, separation_words(m$separation)))
+      for (n in m$notes) cat(sprintf("note (%s, %s): %s\n", m$outcome, m$judged, n))
+    }
+    cat(sprintf("models: %s\n", result$models_csv))
   }
   cat(normalizePath(result$report), "\n", sep = "")
 }

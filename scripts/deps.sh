@@ -13,7 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-mpmath
   r-base-core r-cran-lme4 r-cran-ggplot2 r-cran-rsqlite r-cran-jsonlite python3-pandas python3-matplotlib
-  r-cran-brglm2 r-cran-blme r-cran-emmeans
+  r-cran-brglm2 r-cran-blme r-cran-emmeans r-cran-lpsolve
   openxr-layer-corevalidation libopenxr-utils
   xdotool universal-ctags
   chromium

@@ -106,18 +106,32 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
     return(res)
   }
   notes <- character(0)
-  if (max(x[y == 0]) < min(x[y == 1]) || max(x[y == 1]) < min(x[y == 0]))
-    notes <- c(notes, "complete separation: every response is predicted by the level, the slope is not identified (estimates and SEs are meaningless)")
+  # With one covariate, (quasi-)complete separation is a threshold on x that
+  # no answer contradicts; the ML slope is then infinite, so the fit is the
+  # Jeffreys-penalised probit GLM (brglm2), finite by construction (Kosmidis
+  # & Firth 2021), and no lapse is fitted.
+  separated <- max(x[y == 0]) <= min(x[y == 1]) || max(x[y == 1]) <= min(x[y == 0])
+  if (separated) {
+    notes <- c(notes, paste("separation: a threshold on the level predicts every response, so the ML slope is infinite;",
+                            "fitted by the Jeffreys-penalised probit GLM (brglm2), lapse fixed at 0"))
+    lapse <- "none"
+  }
   g <- withCallingHandlers(
-    stats::glm(y ~ x, family = stats::binomial(link = "probit")),
-    warning = function(w) { notes <<- c(notes, conditionMessage(w)); invokeRestart("muffleWarning") })
+    if (separated) stats::glm(y ~ x, family = stats::binomial(link = "probit"), method = brglm2::brglmFit,
+                              type = "MPL_Jeffreys")
+    else stats::glm(y ~ x, family = stats::binomial(link = "probit")),
+    warning = function(w) {
+      if (!grepl("non-integer #successes", conditionMessage(w))) notes <<- c(notes, conditionMessage(w))
+      invokeRestart("muffleWarning")
+    })
   a <- stats::coef(g)[1]; b <- stats::coef(g)[2]; V <- stats::vcov(g)
   mu <- unname(-a / b)
   grad <- c(-1 / b, a / b^2)  # d mu / d(a, b)
   res$pse_m <- mu; res$slope_per_m <- unname(b)
   res$pse_se_m <- sqrt(drop(t(grad) %*% V %*% grad))
   res$slope_se_per_m <- sqrt(V[2, 2]); res$lapse <- 0
-  res$loglik <- as.numeric(stats::logLik(g)); res$method <- "probit GLM"
+  res$loglik <- as.numeric(stats::logLik(g))
+  res$method <- if (separated) "Jeffreys-penalised probit GLM (separation)" else "probit GLM"
   if (lapse == "free") {
     nll <- function(p) {
       pr <- psychometric_p(x, p[1], p[2], p[3], k_options)

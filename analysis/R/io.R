@@ -129,7 +129,7 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
                 " (expected the curvlab schema version 4, data_schema/schema.sql)")
 
   raw_trials <- q(paste(
-    "SELECT t.trial_id, t.session_id, p.pseudonym AS participant, se.session_number,",
+    "SELECT t.trial_id, t.session_id, se.session_uuid, p.pseudonym AS participant, se.session_number,",
     "pr.sha256 AS protocol_sha256, b.block_index, b.name AS block_name, b.is_practice,",
     "t.trial_index, t.trial_in_block, t.status, t.attempt, t.onset_ns, t.response_ns,",
     "t.rt_ns, t.response, t.response_device, t.completed_utc, t.conditions, t.stimulus,",
@@ -150,7 +150,7 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
   trials <- normalise_trials(trials)
 
   sessions <- q(paste(
-    "SELECT s.session_id, p.pseudonym AS participant, s.session_number,",
+    "SELECT s.session_id, s.session_uuid, p.pseudonym AS participant, s.session_number,",
     "pr.name AS protocol_name, pr.sha256 AS protocol_sha256, s.software_version,",
     "s.software_commit, s.backend, s.renderer_device, s.renderer_driver,",
     "s.display_refresh_hz, printf('%llu', s.seed) AS seed, s.table_calibration, s.status,",
@@ -341,3 +341,108 @@ observer_truth <- function(data) {
 }
 
 num_or_na <- function(v) if (is.null(v)) NA_real_ else as.numeric(v)
+
+# ---------------------------------------------------------------------------
+# Several files: one study
+
+# Database files named by `paths`: files as given, folders expanded to the
+# SQLite files in them (*.sqlite, *.sqlite3, *.db), in name order.
+database_files <- function(paths) {
+  files <- unlist(lapply(paths, function(p) {
+    if (!file.exists(p))
+      input_error(p, ": no such file or directory (expected a curvlab SQLite database or a folder of them)")
+    if (!dir.exists(p)) return(p)
+    found <- sort(list.files(p, pattern = "\\.(sqlite3?|db)$", full.names = TRUE))
+    if (!length(found))
+      input_error(p, ": a folder without curvlab data files (expected *.sqlite, *.sqlite3 or *.db files, ",
+                  "or use --export DIR for a `curvlab export` folder)")
+    found
+  }))
+  unique(normalizePath(files))
+}
+
+# Reads several curvlab databases (or one) and pools them into one data set.
+# Sessions are identified by sessions.session_uuid, so a session found in two
+# files (a merged study file next to one of its sources) counts once; the
+# same UUID with different trials is refused. Session and trial ids are
+# renumbered in the order (start time, UUID), the same however the sessions
+# are split over files, so separate files and their merge give equal tables.
+read_curvlab_databases <- function(paths, max_tracking_per_device = 20000L) {
+  files <- database_files(paths)
+  parts <- lapply(files, read_database, max_tracking_per_device = max_tracking_per_device)
+  pooled <- pool_parts(parts)
+  pooled$source <- paste(files, collapse = ", ")
+  pooled$files <- files
+  pooled
+}
+
+session_fingerprint <- function(trials) {
+  t <- trials[order(trials$trial_index), c("trial_index", "status", "response", "rt_ns"), drop = FALSE]
+  paste(do.call(paste, c(unname(as.list(t)), sep = "|")), collapse = "\n")
+}
+
+pool_parts <- function(parts) {
+  sessions <- bind_rows_fill(lapply(seq_along(parts), function(i)
+    cbind(parts[[i]]$sessions, .part = rep(i, nrow(parts[[i]]$sessions)))))
+  sessions$session_uuid <- ifelse(is.na(sessions$session_uuid),
+                                  paste0("file", sessions$.part, "-session", sessions$session_id),
+                                  sessions$session_uuid)
+  part_trials <- function(i, id) { t <- parts[[i]]$trials; t[t$session_id == id, , drop = FALSE] }
+  keep <- !duplicated(sessions$session_uuid)
+  for (k in which(!keep)) {
+    first <- which(sessions$session_uuid == sessions$session_uuid[k])[1]
+    if (!identical(session_fingerprint(part_trials(sessions$.part[first], sessions$session_id[first])),
+                   session_fingerprint(part_trials(sessions$.part[k], sessions$session_id[k]))))
+      input_error(parts[[sessions$.part[k]]]$source, ": session ", sessions$session_uuid[k],
+                  " is also in ", parts[[sessions$.part[first]]]$source,
+                  " with different trials; give only one of the two files (or merge them with `curvlab merge`, ",
+                  "which reports the conflict)")
+  }
+  sessions <- sessions[keep, , drop = FALSE]
+  sessions <- sessions[order(sessions$started_utc, sessions$session_uuid), , drop = FALSE]
+  sessions$new_id <- seq_len(nrow(sessions))
+  remap <- function(table, i) {
+    if (is.null(table) || !nrow(table)) return(table)
+    m <- sessions[sessions$.part == i, ]
+    table <- table[table$session_id %in% m$session_id, , drop = FALSE]
+    table$session_id <- m$new_id[match(table$session_id, m$session_id)]
+    table
+  }
+  pick <- function(name) lapply(seq_along(parts), function(i) remap(parts[[i]][[name]], i))
+  trials <- bind_rows_fill(pick("trials"))
+  trial_key <- function(session_id, trial_id) paste(session_id, trial_id)
+  trials <- trials[order(trials$session_id, trials$trial_index), , drop = FALSE]
+  new_trial_id <- stats::setNames(seq_len(nrow(trials)), trial_key(trials$session_id, trials$trial_id))
+  renumber_trials <- function(table) {
+    if (is.null(table) || !nrow(table) || !"trial_id" %in% names(table)) return(table)
+    table$trial_id <- unname(new_trial_id[trial_key(table$session_id, table$trial_id)])
+    table
+  }
+  staircase <- renumber_trials(bind_rows_fill(pick("staircase")))
+  tracking <- renumber_trials(bind_rows_fill(pick("tracking")))
+  events <- renumber_trials(bind_rows_fill(pick("events")))
+  trials$trial_id <- seq_len(nrow(trials))
+  rownames(trials) <- NULL
+  sessions$session_id <- sessions$new_id
+  sessions$new_id <- NULL; sessions$.part <- NULL
+  rownames(sessions) <- NULL
+  order_by <- function(t, cols) if (is.null(t) || !nrow(t)) t else t[do.call(order, unname(as.list(t[cols]))), , drop = FALSE]
+  list(source = parts[[1]]$source, kind = "database", trials = trials, sessions = sessions,
+       staircase = order_by(staircase, c("session_id", "staircase", "step_index")),
+       tracking = order_by(tracking, c("session_id", "device", "t_ns")),
+       events = order_by(events, c("session_id", "t_ns")),
+       tracking_stride = max(vapply(parts, function(p) p$tracking_stride, 1)))
+}
+
+# rbind of data frames whose columns differ (cond_* and stim_* columns depend
+# on the protocol): missing columns are NA.
+bind_rows_fill <- function(frames) {
+  frames <- frames[!vapply(frames, is.null, TRUE)]
+  if (!length(frames)) return(data.frame())
+  cols <- unique(unlist(lapply(frames, names)))
+  filled <- lapply(frames, function(f) {
+    for (c in setdiff(cols, names(f))) f[[c]] <- rep(NA, nrow(f))
+    f[cols]
+  })
+  do.call(rbind, filled)
+}

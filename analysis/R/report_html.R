@@ -11,22 +11,44 @@ html_escape <- function(x) {
 
 format_cell <- function(v, digits = 4) {
   if (is.numeric(v)) {
-    out <- ifelse(is.na(v), "NA", formatC(signif(v, digits), format = "fg", digits = digits, flag = "#"))
+    # Fixed notation, except for magnitudes below 1e-4 (e.g. a difference
+    # of 1e-16 that is zero up to rounding), which get an exponent.
+    small <- !is.na(v) & v != 0 & abs(v) < 1e-4
+    out <- ifelse(is.na(v), "NA", ifelse(small, formatC(v, format = "g", digits = digits),
+                                         formatC(signif(v, digits), format = "fg", digits = digits, flag = "#")))
     out <- sub("\\.$", "", out)
     ifelse(!is.na(v) & v == round(v) & abs(v) < 1e9, format(round(v), scientific = FALSE, trim = TRUE), out)
   } else ifelse(is.na(v), "NA", as.character(v))
 }
 
-html_table <- function(df, caption = NULL, digits = 4) {
+# A table in a horizontally scrolling box, so a wide one never widens the
+# page. `titles`: optional data frame of the same shape whose non-NA cells
+# become the cells' title attributes (the full value of a shortened one).
+# `wrap`: names of columns whose long values may break anywhere (hardware
+# names, commits, seeds); header names may break after an underscore.
+html_table <- function(df, caption = NULL, digits = 4, titles = NULL, class = NULL, wrap = character(0)) {
   if (is.null(df) || !nrow(df)) return("<p class=\"empty\">(nothing to show)</p>")
-  head <- paste0("<tr>", paste0("<th>", html_escape(names(df)), "</th>", collapse = ""), "</tr>")
+  head <- paste0("<tr>", paste0("<th>", gsub("_", "_<wbr>", html_escape(names(df)), fixed = TRUE), "</th>",
+                                collapse = ""), "</tr>")
   cells <- vapply(df, function(col) html_escape(format_cell(col, digits)), character(nrow(df)))
   if (is.null(dim(cells))) cells <- matrix(cells, nrow = nrow(df))
-  body <- paste0("<tr>", apply(cells, 1, function(r) paste0("<td>", r, "</td>", collapse = "")), "</tr>",
-                 collapse = "\n")
-  paste0("<table>", if (!is.null(caption)) paste0("<caption>", html_escape(caption), "</caption>"),
-         "<thead>", head, "</thead><tbody>", body, "</tbody></table>")
+  attrs <- matrix("", nrow(df), ncol(df))
+  attrs[, names(df) %in% wrap] <- " class=\"wrap\""
+  if (!is.null(titles))
+    for (j in seq_len(ncol(df))) {
+      t <- titles[[j]]
+      attrs[!is.na(t), j] <- paste0(attrs[!is.na(t), j], " title=\"", html_escape(t[!is.na(t)]), "\"")
+    }
+  open <- matrix(paste0("<td", attrs, ">"), nrow(df))
+  body <- paste0("<tr>", vapply(seq_len(nrow(df)), function(i) paste0(open[i, ], cells[i, ], "</td>", collapse = ""), ""),
+                 "</tr>", collapse = "\n")
+  paste0("<div class=\"scroll\"><table", if (!is.null(class)) paste0(" class=\"", class, "\""), ">",
+         if (!is.null(caption)) paste0("<caption>", html_escape(caption), "</caption>"),
+         "<thead>", head, "</thead><tbody>", body, "</tbody></table></div>")
 }
+
+# First 12 hex digits of a hash (the full value goes in the cell's title).
+short_hash <- function(x) ifelse(is.na(x), NA_character_, substr(x, 1, 12))
 
 html_figure <- function(file, caption) {
   if (is.null(file) || !file.exists(file)) return("")
@@ -36,7 +58,7 @@ html_figure <- function(file, caption) {
 }
 
 report_css <- paste(
-  "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;max-width:1100px;margin:2em auto;",
+  "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;max-width:1200px;margin:2em auto;",
   "padding:0 1em;color:#222;line-height:1.45}",
   "h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}",
   "table{border-collapse:collapse;margin:.8em 0;font-size:.85em}",
@@ -45,7 +67,11 @@ report_css <- paste(
   "caption{caption-side:top;text-align:left;font-weight:600;padding:.3em 0}",
   "figure{margin:1em 0}img{max-width:100%;border:1px solid #eee}figcaption{font-size:.9em;color:#555}",
   ".note{background:#fff8e1;border-left:4px solid #f9a825;padding:.4em .8em;margin:.5em 0}",
-  ".empty{color:#888}code{background:#f4f4f4;padding:0 .2em}")
+  ".empty{color:#888}code{background:#f4f4f4;padding:0 .2em}",
+  ".scroll{max-width:100%;overflow-x:auto}",
+  "table.provenance{font-size:.8em}table.provenance td,table.provenance th{text-align:left;padding:.2em .35em}",
+  "table.provenance td.wrap{min-width:5em;max-width:9em;overflow-wrap:anywhere}",
+  ".method{background:#eef5fb;border-left:4px solid #4a90c2;padding:.4em .8em;margin:.5em 0}")
 
 # Writes report.html (and the PNG/CSV files) into out_dir; returns its path.
 build_report <- function(data, out_dir, positive = "convex", lapse = "free", lapse_max = 0.1,
@@ -89,29 +115,9 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
   if (nrow(thresholds)) utils::write.csv(thresholds, fig("staircase_thresholds.csv"), row.names = FALSE)
 
   s <- data$sessions
-  provenance <- data.frame(
-    session = s$session_id, participant = s$participant, protocol = s$protocol_name,
-    protocol_sha256 = s$protocol_sha256, software = paste(s$software_version, s$software_commit),
-    backend = s$backend, renderer = paste(s$renderer_device, s$renderer_driver, sep = " / "),
-    seed = s$seed, started_utc = s$started_utc, status = s$status,
-    completed = paste0(s$trials_completed, " / ", s$trials_planned),
-    no_answer = vapply(s$session_id, function(id)
-      sum(trials$session_id == id & trials$status == "completed" & no_answer(trials)), 0L),
-    # Given up after tracking loss or max_attempts (tracking.on_loss, docs/protocols.md).
-    aborted = vapply(s$session_id, function(id) sum(trials$session_id == id & trials$status == "aborted"), 0L),
-    # Completed with the head lost for longer than tracking.loss_ms (on_loss = "flag").
-    tracking_flagged = vapply(s$session_id, function(id)
-      sum(trials$session_id == id & trials$status == "completed" & !is.na(trials$tracking_lost_ms)), 0L))
-
-  model_html <- vapply(models, function(m) {
-    paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",
-           "<p><code>", html_escape(m$formula), "</code>, ", html_escape(m$family), "; ",
-           m$n, " trials, ", m$participants, " participant(s)",
-           if (!is.na(m$random_sd)) sprintf("; participant SD (probit units) %.3g", m$random_sd) else "", ".</p>",
-           paste0("<p class=\"note\">", html_escape(m$notes), "</p>", collapse = ""),
-           html_table(m$coefficients, "Fixed effects (probit units)"),
-           html_table(m$tests, "Likelihood-ratio tests against the model without these terms"))
-  }, "")
+  provenance <- provenance_html(s, trials)
+  model_html <- vapply(models, model_section_html, "")
+  utils::write.csv(models_table(models), fig("models.csv"), row.names = FALSE)
 
   truth_html <- if (!is.null(truth) && nrow(truth)) {
     cmp <- truth
@@ -136,7 +142,7 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
            nrow(trials), " planned, ", length(unique(analysed$participant)), " participant(s), ",
            nrow(s), " session(s).</p>"),
     if (data$kind == "export") "<p class=\"note\">Read from an export directory: trials.csv carries no protocol name, software, renderer or seed; run the report on the database for full provenance.</p>" else "",
-    "<h2>Sessions and provenance</h2>", html_table(provenance),
+    "<h2>Sessions and provenance</h2>", provenance,
     "<h2>Judgements</h2>",
     vapply(figures[grepl("proportions", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
     html_table(props_pooled, "Proportions pooled over participants (95% Wilson intervals)"),
@@ -150,7 +156,8 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
     if (nrow(thresholds)) c("<h2>Staircases</h2>",
                             vapply(figures[grepl("staircases", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
                             html_table(thresholds, sprintf("Reversal-mean thresholds (first %d reversals discarded; SE = SD/sqrt(n))", discard_reversals))) else "",
-    "<h2>Mixed models: space &times; view</h2>",
+    "<h2>Models: space &times; view</h2>",
+    models_intro_html(models),
     if (length(models)) model_html else "<p class=\"empty\">(no model: no completed trials)</p>",
     truth_html,
     "<h2>Tracking</h2>",
@@ -162,6 +169,72 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
                  report_css, "</style></head><body>\n", paste(body, collapse = "\n"), "\n</body></html>\n")
   out <- file.path(out_dir, "report.html")
   writeLines(html, out, useBytes = TRUE)
-  invisible(list(report = out, figures = vapply(figures, `[[`, "", 1), fits = fits, models = models,
+  invisible(list(report = out, models_csv = fig("models.csv"), figures = vapply(figures, `[[`, "", 1), fits = fits, models = models,
                  proportions = props, thresholds = thresholds))
+}
+
+# Provenance per session, sized for a laptop screen: hashes and commits
+# shortened to 12 hex digits (the full value in the cell's title, shown on
+# hover), long cells wrapped, and the whole table scrolling sideways in its
+# box if it is still too wide.
+provenance_html <- function(s, trials) {
+  count <- function(ok) vapply(s$session_id, function(id) sum(trials$session_id == id & ok), 0L)
+  uuid <- if (is.null(s$session_uuid)) rep(NA_character_, nrow(s)) else s$session_uuid
+  table <- data.frame(
+    session = ifelse(is.na(uuid), as.character(s$session_id), substr(uuid, 1, 8)),
+    participant = s$participant, protocol = s$protocol_name,
+    protocol_sha256 = short_hash(s$protocol_sha256),
+    software = paste(s$software_version, short_hash(s$software_commit)),
+    backend = s$backend, renderer = paste(s$renderer_device, s$renderer_driver, sep = " / "),
+    seed = s$seed, started_utc = s$started_utc, status = s$status,
+    completed = paste0(s$trials_completed, " / ", s$trials_planned),
+    no_answer = count(trials$status == "completed" & no_answer(trials)),
+    # Given up after tracking loss or max_attempts (tracking.on_loss, docs/protocols.md).
+    aborted = count(trials$status == "aborted"),
+    # Completed with the head lost for longer than tracking.loss_ms (on_loss = "flag").
+    tracking_flagged = count(trials$status == "completed" & !is.na(trials$tracking_lost_ms)))
+  titles <- as.data.frame(lapply(table, function(col) rep(NA_character_, nrow(table))))
+  titles$session <- uuid
+  titles$protocol_sha256 <- s$protocol_sha256
+  titles$software <- paste(s$software_version, s$software_commit)
+  html_table(table, titles = titles, class = "provenance", wrap = c("software", "renderer", "seed", "started_utc"))
+}
+
+models_intro_html <- function(models) {
+  separated <- vapply(models, function(m) isTRUE(m$separation$separated), TRUE)
+  flag <- if (any(separated))
+    paste0("<p class=\"note\"><strong>Separation</strong> in ", sum(separated), " of ", length(models),
+           " model(s): in some condition every answer is the same, so maximum-likelihood estimates are infinite ",
+           "and their Wald statistics meaningless. These models are reported with the finite methods below.</p>")
+  else ""
+  paste0(flag, "<p class=\"method\">Every model is checked for separation with a linear programme (Konis 2007). ",
+         "Each is fitted as a <strong>bias-reduced logistic GLM</strong> (brglm2, mean bias reduction, which for ",
+         "the logit link maximises the Jeffreys-penalised likelihood and always gives finite estimates; Firth 1993, ",
+         "Kosmidis &amp; Firth 2021) pooling participants, with <strong>profile penalised-likelihood</strong> 95% ",
+         "intervals and tests (Heinze &amp; Schemper 2002); the per-space view contrasts (emmeans) are log odds ",
+         "ratios from this fit. The <strong>mixed model</strong> (random intercept per participant) is fitted by ",
+         "maximum likelihood (glmer) when the data are not separated, and with weakly informative priors ",
+         "(blme::bglmer, N(0, 2.5&sup2;) on each effect, N(0, 10&sup2;) on the intercept, logit scale) when they ",
+         "are or when glmer fails. All estimates, intervals and the method of each row are in models.csv.</p>")
+}
+
+model_section_html <- function(m) {
+  sep <- if (isTRUE(m$separation$separated))
+    paste0("<p class=\"note\"><strong>Separation detected</strong>: ", html_escape(separation_words(m$separation)), ".</p>")
+  else "<p>No separation: the maximum-likelihood estimates exist.</p>"
+  contrasts <- m$contrasts
+  if (nrow(contrasts)) contrasts$odds_ratio <- exp(contrasts$estimate)
+  paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",
+         "<p><code>", html_escape(m$formula), "</code>, ", html_escape(m$family), "; ",
+         m$n, " trials, ", m$participants, " participant(s)",
+         if (!is.na(m$random_sd)) sprintf("; participant SD (logit units) %.3g", m$random_sd) else "", ".</p>",
+         sep,
+         paste0("<p class=\"method\">", html_escape(m$methods), "</p>", collapse = ""),
+         paste0("<p class=\"note\">", html_escape(m$notes), "</p>", collapse = ""),
+         html_table(contrasts, paste("Per-space view contrasts: log odds ratios (and odds ratios) with profile",
+                                     "penalised-likelihood 95% CIs, bias-reduced GLM")),
+         html_table(m$fixed, "Bias-reduced logistic GLM (participants pooled): coefficients, logit units, profile 95% CIs"),
+         if (isTRUE(m$mixed_is_fixed)) "<p>One participant: no mixed model; the bias-reduced GLM above is the model.</p>"
+         else html_table(m$coefficients, paste0("Mixed model: ", if (is.null(m$mixed_method)) "none" else m$mixed_method)),
+         html_table(m$tests, "Tests against the model without these terms"))
 }

@@ -28,6 +28,12 @@ create_curvlab_db <- function(path, schema_sql = default_schema_path()) {
   con
 }
 
+# A version-4 (random) RFC 9562 UUID that depends only on the seed and the
+# session, so a simulated study split over files pools the same way twice.
+synthetic_uuid <- function(seed, session) {
+  sprintf("%08x-0000-4000-8000-%012x", as.integer(seed %% 2^31), as.integer(session))
+}
+
 # observers: data frame with participant, bias_m, slope_per_m, lapse and
 #   optionally criterion_m (3 options) and model ("perception" by default).
 # effect_m: function(space, view) giving the perceived-minus-physical sagitta
@@ -66,7 +72,7 @@ simulate_curvlab_db <- function(path, observers,
       "'synthetic data (analysis/R/simulate.R)', 'none', NULL, ?, ?, 'completed', ?, ?, ?)"),
       params = list(i, i, seed * 1000L + i, calibration,
                     sprintf("2024-01-01T%02d:00:00.000Z", i %% 24), sprintf("2024-01-01T%02d:30:00.000Z", i %% 24),
-                    sprintf("00000000-0000-4000-8000-%012x", seed * 1000L + i)))
+                    synthetic_uuid(seed, i)))
     DBI::dbExecute(con, "INSERT INTO blocks VALUES (?, ?, 0, 'main', 0, '{}')", params = list(i, i))
     DBI::dbExecute(con, "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) VALUES (?, NULL, 0, 'observer', ?)",
                    params = list(i, as.character(jsonlite::toJSON(list(

@@ -35,7 +35,7 @@ check(p$status == 0, paste("figures are not blank:", paste(p$out, collapse = " |
 check(grepl("synthetic-constant", html) && grepl(strrep("1f", 32), html) && grepl("31001", html) &&
         grepl("synthetic data (analysis/R/simulate.R)", html, fixed = TRUE) && grepl("168 / 168", html),
       "provenance: protocol name, sha256, seed, renderer, trials completed/planned")
-check(grepl("y ~ x_m + space * view + (1 | participant)", html, fixed = TRUE), "mixed model formula shown")
+check(grepl("y ~ x_std + space * view + (1 | participant)", html, fixed = TRUE), "mixed model formula shown")
 check(grepl("Simulated observers", html), "observer ground truth section")
 fits <- utils::read.csv(file.path(out, "psychometric_fits.csv"))
 check(nrow(fits) == 12, "one psychometric fit per participant x space x view")
@@ -47,6 +47,18 @@ check(r$status == 0 && length(r$out) == 1, "exit 0, --quiet prints one line")
 check(file.exists(file.path(out2, "staircases.png")) && png_ok(file.path(out2, "staircases.png"))$status == 0,
       "staircase track figure written and not blank")
 check(file.exists(file.path(out2, "staircase_thresholds.csv")), "staircase thresholds table written")
+sm <- utils::read.csv(file.path(out2, "models.csv"))
+check(any(grepl("mixed model", sm$model)) && all(is.finite(sm$ci_low) & is.finite(sm$ci_high)),
+      paste("staircase data: a mixed model with finite CIs, by", paste(unique(sm$method), collapse = " / ")))
+
+cat("models.csv: every estimate with a finite CI and a method\n")
+mc <- utils::read.csv(file.path(out, "models.csv"))
+check(identical(names(mc), c("model", "term", "estimate", "se", "ci_low", "ci_high", "p", "method", "note")),
+      "models.csv columns")
+check(nrow(mc) > 0 && all(is.finite(mc$ci_low) & is.finite(mc$ci_high) & mc$se < 50) && all(nzchar(mc$method)),
+      sprintf("%d rows, all CIs finite, largest SE %.2f", nrow(mc), max(mc$se)))
+check(any(grepl("view contrasts", mc$model)) && any(grepl("E3: native - tourist|E3: tourist - native", mc$term)),
+      "per-space view contrasts")
 
 cat("Aborted and tracking-flagged trials are counted in the provenance\n")
 marked <- scratch("report_marked.sqlite")
@@ -66,8 +78,8 @@ r <- run(rscript, c(report_r, "--db", marked, "--out", out3, "--quiet"))
 check(r$status == 0, paste("exit 0:", paste(utils::tail(r$out, 3), collapse = " | ")))
 html3 <- paste(readLines(file.path(out3, "report.html"), warn = FALSE), collapse = "\n")
 rows <- regmatches(html3, gregexpr("<tr>.*?</tr>", html3))[[1]]
-header <- rows[grepl("tracking_flagged", rows)][1]
-cells <- function(row) regmatches(row, gregexpr("(?<=<t[hd]>)[^<]*", row, perl = TRUE))[[1]]
+header <- rows[grepl("tracking_(<wbr>)?flagged", rows)][1]
+cells <- function(row) gsub("<[^>]*>", "", regmatches(row, gregexpr("<t([hd])[^>]*>.*?</t\\1>", row, perl = TRUE))[[1]])
 session1 <- rows[which(rows == header) + 1]
 got <- stats::setNames(cells(session1), cells(header))
 check(!is.na(header) && got[["completed"]] == "167 / 168" && got[["aborted"]] == "1" &&
@@ -113,5 +125,19 @@ if (nzchar(curvlab) && file.exists(curvlab)) {
   check(png_ok(scratch("describe.png"))$status == 0, "describe.py figure is not blank")
   r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), empty_dir))
   check(r$status == 2, "describe.py: exit 2 without trials.csv")
+  cat("The demo session: separation flagged, every printed estimate finite\n")
+  demo_db <- scratch("demo.sqlite")
+  if (file.exists(demo_db)) file.remove(demo_db)
+  r <- run(curvlab, c("run", file.path(source_root, "protocols/demo.toml"), "--participant", "P01", "--db", demo_db))
+  check(r$status == 0, "curvlab run protocols/demo.toml")
+  demo_out <- scratch("report_demo")
+  r <- run(rscript, c(report_r, "--db", demo_db, "--out", demo_out, "--quiet"))
+  check(r$status == 0, "report on the demo database")
+  dm <- utils::read.csv(file.path(demo_out, "models.csv"))
+  demo_html <- paste(readLines(file.path(demo_out, "report.html"), warn = FALSE), collapse = "\n")
+  check(grepl("Separation detected", demo_html) && all(grepl("^separation:", dm$note)), "separation flagged")
+  check(nrow(dm) > 0 && all(is.finite(dm$estimate) & is.finite(dm$ci_low) & is.finite(dm$ci_high)) && max(dm$se) < 50,
+        sprintf("demo: %d estimates, all CIs finite, largest SE %.2f", nrow(dm), max(dm$se)))
+  check(!grepl("Wald", paste(dm$method, collapse = " ")), "demo: no Wald statistic of a separated fit")
 } else cat("(no curvlab binary given: export path not tested)\n")
 finish()
