@@ -84,7 +84,7 @@ TEST(OperatorScript, ActionsComeDueOnceWhenTheirTimeHasPassed) {
 TEST(OperatorScript, RepeatAndSkipAbortTheAttemptAndDecideItsFate) {
   pr::Timeline t;
   t.fixation_ms = 100;
-  for (const auto [signal, reason] : {std::pair{rn::BackendSignal::repeat, rn::AbortReason::repeat},
+  for (const auto& [signal, reason] : {std::pair{rn::BackendSignal::repeat, rn::AbortReason::repeat},
                                       std::pair{rn::BackendSignal::skip, rn::AbortReason::skip}}) {
     rn::Attempt a(t, {}, 0);
     EXPECT_FALSE(a.advance({0, 10, true, rn::BackendSignal::none}).abort);

@@ -136,22 +136,25 @@ TEST(XrOperator, ScriptedActionsAndTheWindowsScreenshots) {
   EXPECT_EQ(actions[2][0], "resume");
   EXPECT_EQ(actions[3][0], "skip");
 
-  // A screenshot per action and one at the end. The one at the pause (mid
-  // trial): the participant's image with the table's cloth in it, and the
-  // status panel's text.
+  // A screenshot per action and one at the end. Those taken while a
+  // stimulus was up (the note's, in the first trial's response window, and
+  // the skip's) show the participant's image with the table's cloth in it;
+  // every one shows the status panel's text.
+  ShotStats best;
   for (const char* name : {"action_1_note.png", "action_2_pause.png", "action_3_resume.png", "action_4_skip.png",
-                           "end.png"})
-    EXPECT_TRUE(fs::exists(shots / name)) << name;
-  curvlab::renderer::Rgba8Image img;
-  std::string error;
-  ASSERT_TRUE(curvlab::renderer::read_png((shots / "action_2_pause.png").string(), img, error)) << error;
-  ASSERT_EQ(img.width, 960);
-  ASSERT_EQ(img.height, 720);
-  const auto s = inspect(img);
-  EXPECT_GT(s.eye_pixels, 960 * 430 / 4) << "the eye area is blank";
-  EXPECT_GT(s.cloth_pixels, 2000) << "no table in the participant's image";
-  EXPECT_GT(s.text_pixels, 3000) << "no status text";
-  EXPECT_GT(s.panel_levels.size(), 20u) << "the panel is uniform";
+                           "end.png"}) {
+    curvlab::renderer::Rgba8Image img;
+    std::string error;
+    ASSERT_TRUE(curvlab::renderer::read_png((shots / name).string(), img, error)) << error;
+    ASSERT_EQ(img.width, 960) << name;
+    ASSERT_EQ(img.height, 720) << name;
+    const auto s = inspect(img);
+    EXPECT_GT(s.text_pixels, 3000) << name << ": no status text";
+    EXPECT_GT(s.panel_levels.size(), 20u) << name << ": the panel is uniform";
+    if (s.cloth_pixels > best.cloth_pixels) best = s;
+  }
+  EXPECT_GT(best.eye_pixels, 960 * 430 / 2) << "the eye area is blank";
+  EXPECT_GT(best.cloth_pixels, 5000) << "no table in the participant's image";
 }
 
 // The runtime misses refreshes and hides frames; curvlab counts them late,
@@ -166,7 +169,7 @@ TEST(XrOperator, LateFramesAreCountedPerFrameAndPerTrial) {
   std::string spec = "120,330,420";
   for (int k = 200; k < 280; ++k) {
     late.insert(k);
-    spec += "," + std::to_string(k) + "!";
+    spec.append(",").append(std::to_string(k)).append("!");
   }
   RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses}, {"CURVLAB_TEST_XR_LATE", spec}});
   const auto r = run_cli("run " + kProtocol + " --participant X01 --backend xr --operator-window off --db " + db +
@@ -174,17 +177,33 @@ TEST(XrOperator, LateFramesAreCountedPerFrameAndPerTrial) {
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_EQ(summary(r.out)["status"], "completed");
 
-  // Frame k of the runtime is frame_index k of the session (nothing aborted).
+  // Frame k of the runtime is frame_index k of the session (nothing aborted):
+  // every scripted frame is late. Lavapipe on a busy machine misses real
+  // refreshes too, and the first frames come before the session is visible
+  // (shouldRender false): those are late as well, with the refreshes they
+  // skipped counted, or with nothing drawn.
   std::set<std::int64_t> marked;
-  for (const auto& row : query(db, "SELECT frame_index FROM frames WHERE late = 1")) marked.insert(std::stoll(row[0]));
-  EXPECT_EQ(marked, late);
-  // A missed refresh shows as a display time two periods after the last.
-  const auto skip = query(db, "SELECT f.predicted_display_ns - p.predicted_display_ns, f.display_period_ns, "
-                              "f.dropped_frames FROM frames f JOIN frames p ON p.frame_index = f.frame_index - 1 "
-                              "WHERE f.frame_index = 330");
-  ASSERT_EQ(skip.size(), 1u);
-  EXPECT_NEAR(std::stod(skip[0][0]) / std::stod(skip[0][1]), 2.0, 0.01);
-  EXPECT_EQ(skip[0][2], "1");
+  for (const auto& row : query(db, "SELECT frame_index, dropped_frames, views FROM frames WHERE late = 1")) {
+    marked.insert(std::stoll(row[0]));
+    if (late.count(std::stoll(row[0])) == 0) {
+      EXPECT_TRUE(std::stoi(row[1]) >= 1 || row[2] == "0") << "frame " << row[0];
+    }
+  }
+  for (int k = 200; k < 280; ++k) {
+    const auto views = query(db, "SELECT views FROM frames WHERE frame_index = " + std::to_string(k));
+    ASSERT_EQ(views.size(), 1u);
+    EXPECT_EQ(views[0][0], "0") << "frame " << k << " was drawn although the runtime said not to";
+  }
+  for (const auto k : late) EXPECT_EQ(marked.count(k), 1u) << "frame " << k << " is not marked late";
+  // A missed refresh shows as a display time (skipped + 1) periods after the last.
+  for (const int k : {120, 330, 420}) {
+    const auto skip = query(db, "SELECT f.predicted_display_ns - p.predicted_display_ns, f.display_period_ns, "
+                                "f.dropped_frames FROM frames f JOIN frames p ON p.frame_index = f.frame_index - 1 "
+                                "WHERE f.frame_index = " + std::to_string(k));
+    ASSERT_EQ(skip.size(), 1u);
+    EXPECT_GE(std::stoi(skip[0][2]), 1) << "frame " << k;
+    EXPECT_NEAR(std::stod(skip[0][0]) / std::stod(skip[0][1]), std::stod(skip[0][2]) + 1.0, 0.01) << "frame " << k;
+  }
 
   // The export: frames_late adds up to the late frames inside trials, and
   // onset_late is 1 exactly where the onset frame was late.

@@ -89,7 +89,13 @@ class OperatorWindow final : public runner::OperatorConsole {
   }
 
   ~OperatorWindow() override {
-    if (!options_.screenshot_dir.empty()) screenshot("end");
+    if (!options_.screenshot_dir.empty()) {
+      // The last one waits (bounded) for the drawing thread: the session is over.
+      std::unique_lock lock(mutex_);
+      shots_.emplace_back("end");
+      wake_.notify_all();
+      wake_.wait_for(lock, std::chrono::seconds(5), [this] { return shots_.empty(); });
+    }
     {
       const std::lock_guard lock(mutex_);
       stop_ = true;
@@ -120,21 +126,18 @@ class OperatorWindow final : public runner::OperatorConsole {
     keyed_.clear();
   }
 
+  // The drawing thread saves its next frame; the frame thread does not wait.
   void acted(const OperatorAction& action) override {
     if (options_.screenshot_dir.empty()) return;
-    screenshot("action_" + std::to_string(++actions_) + "_" + std::string(runner::to_string(action.kind)));
+    const std::lock_guard lock(mutex_);
+    shots_.push_back(std::string("action_")
+                         .append(std::to_string(++actions_))
+                         .append("_")
+                         .append(runner::to_string(action.kind)));
+    wake_.notify_all();
   }
 
  private:
-  // Asks the drawing thread for a screenshot of its next frame and waits
-  // for it (bounded): the file is there when the action's effect begins.
-  void screenshot(const std::string& stem) {
-    std::unique_lock lock(mutex_);
-    shot_stem_ = stem;
-    wake_.notify_all();
-    wake_.wait_for(lock, std::chrono::seconds(2), [this] { return shot_stem_.empty(); });
-  }
-
   static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods) {
     (void)scancode;
     (void)mods;
@@ -192,15 +195,15 @@ class OperatorWindow final : public runner::OperatorConsole {
     auto disk_checked = std::chrono::steady_clock::now() - std::chrono::hours(1);
     std::optional<double> free_gb;
     for (;;) {
-      std::string stem;
+      std::vector<std::string> stems;
       runner::OperatorStatus status;
       std::string note;
       bool typing = false;
       {
         std::unique_lock lock(mutex_);
-        wake_.wait_for(lock, kTick, [this] { return stop_ || !shot_stem_.empty(); });
-        if (stop_ && shot_stem_.empty()) break;
-        stem = shot_stem_;
+        wake_.wait_for(lock, kTick, [this] { return stop_ || !shots_.empty(); });
+        if (stop_ && shots_.empty()) break;
+        stems = shots_;
         status = status_;
         typing = note_.has_value();
         if (typing) note = *note_;
@@ -213,10 +216,10 @@ class OperatorWindow final : public runner::OperatorConsole {
         disk_checked = std::chrono::steady_clock::now();
       }
       compose(status, free_gb, typing ? std::optional<std::string>(note) : std::nullopt);
-      present(stem);
-      if (!stem.empty()) {
+      present(stems);
+      if (!stems.empty()) {
         const std::lock_guard lock(mutex_);
-        shot_stem_.clear();
+        shots_.erase(shots_.begin(), shots_.begin() + static_cast<std::ptrdiff_t>(stems.size()));
         wake_.notify_all();
       }
     }
@@ -248,7 +251,7 @@ class OperatorWindow final : public runner::OperatorConsole {
     if (auto* b = std::get_if<renderer::CoverageBitmap>(&bitmap)) blit_text(*b, canvas_, 10, kPanelTop);
   }
 
-  void present(const std::string& stem) {
+  void present(const std::vector<std::string>& stems) {
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window_, &fw, &fh);
     glViewport(0, 0, fw, fh);
@@ -257,7 +260,7 @@ class OperatorWindow final : public runner::OperatorConsole {
     glPixelZoom(1.0f, -1.0f);  // canvas rows run top to bottom
     glRasterPos2f(-1.0f, 1.0f);
     glDrawPixels(kWidth, kHeight, GL_RGBA, GL_UNSIGNED_BYTE, canvas_.pixels.data());
-    if (!stem.empty()) save(stem, fw, fh);
+    for (const auto& stem : stems) save(stem, fw, fh);
     glfwSwapBuffers(window_);
   }
 
@@ -292,7 +295,7 @@ class OperatorWindow final : public runner::OperatorConsole {
   runner::OperatorStatus status_;
   std::optional<std::string> note_;  // being typed
   bool skip_char_ = false;
-  std::string shot_stem_;  // a screenshot wanted ("" none)
+  std::vector<std::string> shots_;  // screenshots wanted, by file stem
   bool stop_ = false;
   std::atomic<bool> want_status_{true};
 
