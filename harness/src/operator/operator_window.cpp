@@ -246,9 +246,16 @@ class OperatorWindow final : public runner::OperatorConsole {
     if (options_.mirror == nullptr) text = "(no copy of the participant's view: see its own window)\n";
     for (const auto& l : lines) text.append(l).append("\n");
     if (!text.empty()) text.pop_back();
-    auto bitmap = renderer::render_text(text, kWidth - 20, kHeight - kPanelTop - 10, 30.0,
-                                        options_.font_path.empty() ? CURVLAB_DEFAULT_FONT : options_.font_path);
-    if (auto* b = std::get_if<renderer::CoverageBitmap>(&bitmap)) blit_text(*b, canvas_, 10, kPanelTop);
+    // Rasterised again only when the text changed.
+    if (text != panel_text_) {
+      auto bitmap = renderer::render_text(text, kWidth - 20, kHeight - kPanelTop - 10, 30.0,
+                                          options_.font_path.empty() ? CURVLAB_DEFAULT_FONT : options_.font_path);
+      panel_ = std::get_if<renderer::CoverageBitmap>(&bitmap) != nullptr
+                   ? std::get<renderer::CoverageBitmap>(std::move(bitmap))
+                   : renderer::CoverageBitmap{};
+      panel_text_ = text;
+    }
+    blit_text(panel_, canvas_, 10, kPanelTop);
   }
 
   void present(const std::vector<std::string>& stems) {
@@ -303,6 +310,8 @@ class OperatorWindow final : public runner::OperatorConsole {
   runner::MirrorImage eyes_;
   bool have_eyes_ = false;
   renderer::Rgba8Image canvas_;
+  std::string panel_text_;
+  renderer::CoverageBitmap panel_;
   std::thread thread_;
 };
 

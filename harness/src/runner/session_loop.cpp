@@ -111,6 +111,7 @@ class SessionLoop::Impl {
   // ---- the session: pages, blocks, breaks, trials ------------------------
 
   Outcome run_trials(std::size_t first, bool start_pages) {
+    first_reported_ = static_cast<std::int64_t>(first);
     // Pages are shown in the scene of the trial that follows them (the
     // first here, the previous one later): each trial prepares its own.
     prepare(design_.trials[std::min(first, design_.trials.size() - 1)].settings);
@@ -350,9 +351,10 @@ class SessionLoop::Impl {
     phase_left_ns_ = -1;
     status_.paused = phase == Phase::paused;
     status_.elapsed_ns = f.timing.now_ns - session_start_ns_;
-    if (trials_done_ > 0)
-      status_.remaining_ns = (f.timing.now_ns - first_trial_ns_) / trials_done_ *
-                             (status_.trials - static_cast<std::int64_t>(trials_reported_));
+    // The time per trial so far, for the trials still to run.
+    if (trials_reported_ > 0)
+      status_.remaining_ns = (f.timing.now_ns - session_start_ns_) / trials_reported_ *
+                             (status_.trials - trials_reported_ - first_reported_);
     for (std::size_t d = 0; d < 3; ++d) {
       const bool tracked = lab_.pose[d].valid;
       if (!tracked && lost_since_[d] < 0) lost_since_[d] = f.timing.now_ns;
@@ -379,8 +381,6 @@ class SessionLoop::Impl {
 
   // One line of --progress json per trial, however it ended.
   void report_trial(std::size_t i, const std::string& status, const std::string& reason) {
-    if (trials_done_ == 0) first_trial_ns_ = session_start_ns_;
-    ++trials_done_;
     ++trials_reported_;
     const PlannedTrial& t = design_.trials[i];
     if (!progress_.json()) return;
@@ -866,9 +866,8 @@ class SessionLoop::Impl {
   std::array<std::int64_t, 3> lost_since_{-1, -1, -1};
   std::int64_t late_trial_ = 0;
   std::int64_t late_session_ = 0;
-  std::int64_t trials_done_ = 0;
-  std::size_t trials_reported_ = 0;
-  std::int64_t first_trial_ns_ = 0;
+  std::int64_t trials_reported_ = 0;  // ended in this run
+  std::int64_t first_reported_ = 0;   // ended before it (a resumed run)
 };
 
 SessionLoop::SessionLoop(SessionSetup setup) : impl_(std::make_unique<Impl>(std::move(setup))) {}
