@@ -99,11 +99,14 @@ TEST(XrOperator, ScriptedActionsAndTheWindowsScreenshots) {
                      << "1.35 pause\n"
                      << "1.75 resume\n"
                      << "4.4 skip   # misunderstood\n";
-  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses}});
+  // With the Vulkan validation layer on (it prints its errors to stdout):
+  // the copies for the window share the device, queue and images.
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses}, {"VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation"}});
   const auto r = run_cli("run " + kProtocol + " --participant X01 --backend xr --db " + db +
                          " --operator-script " + ops.string() + " --operator-screenshot " + shots.string() +
                          " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(r.out.find("Validation"), std::string::npos) << r.out;
   const auto doc = summary(r.out);
   EXPECT_EQ(doc["status"], "completed");
   EXPECT_EQ(doc["trials_skipped"], 1);
