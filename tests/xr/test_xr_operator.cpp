@@ -96,8 +96,8 @@ TEST(XrOperator, ScriptedActionsAndTheWindowsScreenshots) {
   // come from 1.0 s. The pause falls in a trial, the skip in a later one.
   std::ofstream(ops) << "# operator script\n"
                      << "0.9 note " << note << "\n"
-                     << "1.35 pause\n"
-                     << "1.75 resume\n"
+                     << "1.45 pause\n"
+                     << "1.85 resume\n"
                      << "4.4 skip   # misunderstood\n";
   // With the Vulkan validation layer on (it prints its errors to stdout):
   // the copies for the window share the device, queue and images.
