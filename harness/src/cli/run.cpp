@@ -16,6 +16,7 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
+#include "operator_window.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -83,6 +84,11 @@ struct BackendArgs {
   bool quiet = false;
   bool json = false;
   std::string export_dir;
+  std::string progress = "bar";
+  std::string operator_window = "auto";
+  std::string operator_script;
+  std::string operator_screenshot;
+  std::string operator_eyes = "both";
 };
 
 void add_backend_options(CLI::App* cmd, BackendArgs& b) {
@@ -101,6 +107,69 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--export", b.export_dir, "afterwards, export CSV, Psych-DS and BIDS motion here");
   cmd->add_flag("--quiet", b.quiet, "no progress bar");
   cmd->add_flag("--json", b.json, "print the summary as JSON");
+  cmd->add_option("--progress", b.progress, "bar (default: on a terminal's stderr) or json (a line per trial on stdout)");
+  cmd->add_option("--operator-window", b.operator_window,
+                  "the experimenter's window: auto (default: with --backend xr when a display exists), on or off");
+  cmd->add_option("--operator-script", b.operator_script,
+                  "operator actions from a file: SECONDS ACTION [TEXT] a line (docs/xr.md)");
+  cmd->add_option("--operator-screenshot", b.operator_screenshot,
+                  "save the operator window as PNG here at each action and at the end");
+  cmd->add_option("--operator-eyes", b.operator_eyes, "the operator window shows both (default), left or right");
+}
+
+// Parsed before anything runs: a bad line stops the command (exit 2).
+std::vector<rn::OperatorAction> read_operator_script(const BackendArgs& a) {
+  if (a.operator_script.empty()) return {};
+  auto script = rn::read_operator_script(a.operator_script);
+  if (!script) raise(script.error());
+  return std::move(script).value();
+}
+
+bool display_present() {
+  const char* x = std::getenv("DISPLAY");
+  const char* wl = std::getenv("WAYLAND_DISPLAY");
+  return (x != nullptr && *x != '\0') || (wl != nullptr && *wl != '\0');
+}
+
+// Whether the run opens the operator window; a bad value is a usage error.
+bool wants_operator_window(const BackendArgs& a) {
+  if (a.operator_window == "off") return false;
+  if (a.operator_window == "on") return true;
+  if (a.operator_window != "auto")
+    throw UsageError("--operator-window must be auto, on or off, got '" + a.operator_window + "'");
+  // The desktop pilot's own window is the participant's view: its panel opens on request.
+  return a.backend == "xr" && display_present();
+}
+
+// The operator's console: the window (--operator-window), or the script
+// alone, or none. Made after the backend, so destroyed before it.
+std::unique_ptr<rn::OperatorConsole> open_console(const BackendArgs& a, std::vector<rn::OperatorAction> script,
+                                                  rn::Backend& backend, const std::string& db) {
+  if (wants_operator_window(a)) {
+    harness::operator_console::OperatorWindowOptions o;
+    o.script = std::move(script);
+    o.mirror = backend.mirror();
+    if (a.operator_eyes == "left") o.eyes = harness::operator_console::EyeView::left;
+    else if (a.operator_eyes == "right") o.eyes = harness::operator_console::EyeView::right;
+    o.screenshot_dir = a.operator_screenshot;
+    o.db_dir = std::filesystem::path(db).parent_path().string();
+    o.terminate_glfw = a.backend != "desktop";
+    auto made = harness::operator_console::open_operator_window(std::move(o));
+    if (!made) raise(made.error());
+    return std::move(made).value();
+  }
+  if (!a.operator_screenshot.empty())
+    throw UsageError("--operator-screenshot needs the operator window (--operator-window on, and a display)");
+  if (script.empty()) return nullptr;
+  return std::make_unique<rn::ScriptConsole>(std::move(script));
+}
+
+void check_operator_args(const BackendArgs& a) {
+  if (a.progress != "bar" && a.progress != "json")
+    throw UsageError("--progress must be bar or json, got '" + a.progress + "'");
+  if (a.operator_eyes != "both" && a.operator_eyes != "left" && a.operator_eyes != "right")
+    throw UsageError("--operator-eyes must be both, left or right, got '" + a.operator_eyes + "'");
+  (void)wants_operator_window(a);
 }
 
 // The backend, created before anything is written: a backend that cannot
@@ -159,6 +228,7 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
   if (a.backend == "xr") {
     xr::XrBackendOptions o;
     o.clock = out.clock;
+    o.mirror = wants_operator_window(a);
     auto made = xr::make_xr_backend(o);
     if (!made) raise(made.error());
     out.backend = std::move(made).value();
@@ -173,7 +243,8 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
   if (!drawing) throw UsageError("--render must be all, onset or none, got '" + a.render + "'");
   o.drawing = *drawing;
   o.images_dir = a.images;
-  o.progress = !a.quiet && !a.json;
+  o.progress = !a.quiet && !a.json && a.progress == "bar";
+  o.progress_json = a.progress == "json";
   o.lossless_logging = a.backend == "headless" && a.pace == "fast";
   if (!a.images.empty()) {
     std::error_code ec;
@@ -284,12 +355,18 @@ void run_command(const RunArgs& a) {
                              : a.db;
   check_db_argument(db);
   const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
+  check_operator_args(a.backend);
+  auto script = read_operator_script(a.backend);
   auto backend = open_backend(a.backend, p, table, 0);
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(parent, ec);
   }
-  report(rn::run_session(p, text, db, o, *backend.backend, *backend.clock), a.backend);
+  auto console = open_console(a.backend, std::move(script), *backend.backend, db);
+  o.console = console.get();
+  auto result = rn::run_session(p, text, db, o, *backend.backend, *backend.clock);
+  console.reset();  // its last screenshot shows the session's end
+  report(result, a.backend);
 }
 
 struct ResumeArgs {
@@ -314,9 +391,14 @@ void resume_command(const ResumeArgs& a) {
     o.observer = observer_params(a.observer, stored.observer ? stored.observer->seed : 1);
   const auto table = stored.calibration.value_or(rn::nominal_calibration(loaded.protocol->session_settings()));
   // A resumed session's clock continues after the last logged time.
+  check_operator_args(a.backend);
+  auto script = read_operator_script(a.backend);
   auto backend = open_backend(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
-  report(rn::resume_session(a.db, a.session, stored, *loaded.protocol, o, *backend.backend, *backend.clock),
-         a.backend);
+  auto console = open_console(a.backend, std::move(script), *backend.backend, a.db);
+  o.console = console.get();
+  auto result = rn::resume_session(a.db, a.session, stored, *loaded.protocol, o, *backend.backend, *backend.clock);
+  console.reset();
+  report(result, a.backend);
 }
 
 struct PredictArgs {

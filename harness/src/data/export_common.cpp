@@ -131,6 +131,14 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
        "Trials completed with tracking lost (tracking.on_loss = \"flag\"): how long the head was "
        "untracked, in spells longer than tracking.loss_ms",
        "ms"},
+      {"frames_late",
+       "Frames of the trial (all attempts) the runtime reported late: the display time skipped a refresh "
+       "or the frame was not to be rendered (frames.late)",
+       ""},
+      {"onset_late",
+       "1 when the stimulus onset frame was late (not shown at its predicted display time), 0 when on "
+       "time; empty without an onset",
+       ""},
   };
   const std::size_t fixed = table.columns.size();
   try {
@@ -139,12 +147,18 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
                 "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.end_reason, "
                 "t.attempt, t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
                 "t.completed_utc, st.staircase, st.step_index, st.intensity, st.is_reversal, "
-                "tf.lost_ms, t.conditions, t.stimulus FROM trials t "
+                "tf.lost_ms, COALESCE(fl.late, 0), "
+                "CASE WHEN t.onset_ns IS NULL THEN NULL WHEN ol.d IS NULL THEN 0 ELSE 1 END, "
+                "t.conditions, t.stimulus FROM trials t "
                 "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
                 // One pass over the events, not one per trial.
                 "LEFT JOIN (SELECT trial_id, SUM(json_extract(detail, '$.lost_ms')) AS lost_ms "
                 "FROM events WHERE kind = 'tracking_flagged' GROUP BY trial_id) tf "
                 "ON tf.trial_id = t.trial_id "
+                "LEFT JOIN (SELECT trial_id, SUM(late) AS late FROM frames WHERE trial_id IS NOT NULL "
+                "GROUP BY trial_id) fl ON fl.trial_id = t.trial_id "
+                "LEFT JOIN (SELECT DISTINCT trial_id, predicted_display_ns AS d FROM frames WHERE late = 1) ol "
+                "ON ol.trial_id = t.trial_id AND ol.d = t.onset_ns "
                 "JOIN sessions se ON se.session_id = t.session_id "
                 "JOIN participants p ON p.participant_id = se.participant_id "
                 "JOIN protocols pr ON pr.protocol_id = se.protocol_id "

@@ -1,5 +1,8 @@
-// The terminal progress bar of a session: one line on stderr, redrawn in
-// place, only when stderr is a terminal. Owned by the session thread.
+// How a session reports its progress: by default a bar on stderr, one line
+// redrawn in place, only when stderr is a terminal; with --progress json, one
+// compact JSON object per trial on stdout, a line each, flushed at once, for
+// lab scripts that watch a session (docs/xr.md, "The operator window", lists the members).
+// Owned by the session thread.
 #pragma once
 
 #include <chrono>
@@ -12,12 +15,14 @@ namespace curvlab::harness::runner {
 
 class Progress {
  public:
-  explicit Progress(bool on) : on_(on && isatty(STDERR_FILENO) != 0) {}
+  Progress(bool bar, bool json) : on_(bar && !json && isatty(STDERR_FILENO) != 0), json_(json) {}
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
   ~Progress() {
     if (drawn_) std::fputc('\n', stderr);
   }
+
+  [[nodiscard]] bool json() const { return json_; }
 
   void update(std::int64_t done, std::int64_t total, const std::string& block) {
     if (!on_ || total <= 0) return;
@@ -31,8 +36,17 @@ class Progress {
     drawn_ = true;
   }
 
+  // One trial's JSON object (already serialised, without newlines).
+  void line(const std::string& json_object) const {
+    if (!json_) return;
+    std::fputs(json_object.c_str(), stdout);
+    std::fputc('\n', stdout);
+    std::fflush(stdout);
+  }
+
  private:
   bool on_;
+  bool json_;
   bool drawn_ = false;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };

@@ -11,6 +11,7 @@
 #include "curvlab/harness/runner/view_record.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <deque>
@@ -41,6 +42,21 @@ std::string trial_line(const PlannedTrial& t) {
   return line;
 }
 
+constexpr std::int64_t ms_to_ns(std::int64_t v) { return v * 1'000'000; }
+
+// How long the attempt's current phase lasts after `now_ns`.
+std::int64_t phase_left(const Attempt& a, Phase phase, const protocol::Timeline& tl, std::int64_t now_ns) {
+  const auto onset = a.onset_frame_ns();
+  switch (phase) {
+    case Phase::fixation: return std::max<std::int64_t>(0, a.start_ns() + ms_to_ns(tl.fixation_ms) - now_ns);
+    case Phase::stimulus:
+      return onset ? std::max<std::int64_t>(0, *onset + ms_to_ns(tl.stimulus_ms) - now_ns) : -1;
+    case Phase::response:
+      return onset ? std::max<std::int64_t>(0, *onset + ms_to_ns(tl.stimulus_ms + tl.response_ms) - now_ns) : -1;
+    default: return -1;
+  }
+}
+
 }  // namespace
 
 class SessionLoop::Impl {
@@ -58,11 +74,16 @@ class SessionLoop::Impl {
         frame_index_(s.frame_offset),
         first_trial_attempts_(s.first_trial_attempts),
         first_trial_aborts_(s.first_trial_aborts),
-        progress_(options_.progress) {
+        progress_(options_.progress, options_.progress_json),
+        console_(options_.console) {
     dominant_ = options_.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
     eye_size_ = eye_image_size(backend_.info(), static_cast<std::uint32_t>(p_.resolution_width),
                                static_cast<std::uint32_t>(p_.resolution_height));
     restore_staircases(s.staircase_history);
+    status_.participant = options_.participant;
+    status_.session_id = session_id_;
+    status_.protocol = p_.meta.name;
+    status_.trials = static_cast<std::int64_t>(design_.trials.size());
   }
 
   RunResult run(std::size_t first, bool start_pages) {
@@ -90,6 +111,7 @@ class SessionLoop::Impl {
   // ---- the session: pages, blocks, breaks, trials ------------------------
 
   Outcome run_trials(std::size_t first, bool start_pages) {
+    first_reported_ = static_cast<std::int64_t>(first);
     // Pages are shown in the scene of the trial that follows them (the
     // first here, the previous one later): each trial prepares its own.
     prepare(design_.trials[std::min(first, design_.trials.size() - 1)].settings);
@@ -101,6 +123,7 @@ class SessionLoop::Impl {
       if (staircase_finished(t)) {
         writer_.journal(data::EndUnanswered{trial_ids_[i], false, "staircase_finished"});
         ++summary_.trials_skipped;
+        report_trial(i, "skipped", "staircase_finished");
         continue;
       }
       if (run_trial(i) == Outcome::quit) return Outcome::quit;
@@ -133,6 +156,7 @@ class SessionLoop::Impl {
 
   void end_session(data::SessionStatus status) {
     event(std::nullopt, "session_end", Json{{"status", data::to_string(status)}});
+    show_ended();
     // The writer applies an entry after the samples pushed before it: once
     // the closing status is durable, so is everything the session logged.
     const auto ticket = writer_.journal(data::StatusChange{session_id_, status, true});
@@ -142,6 +166,7 @@ class SessionLoop::Impl {
 
   // Leaves the session resumable: completed trials are on disk already.
   RunResult interrupted(const Error& error) {
+    show_ended();
     const auto ticket = writer_.journal(data::StatusChange{session_id_, data::SessionStatus::interrupted, false});
     if (!writer_.wait_durable(ticket, std::chrono::seconds(5)))
       (void)store_.set_session_status(session_id_, data::SessionStatus::interrupted);
@@ -242,6 +267,7 @@ class SessionLoop::Impl {
     f.head_tracked = tracker_ && tracker_->output().tracked[0];
     f.inputs.clear();
     f.signal = backend_.poll_input(f.inputs);
+    take_operator_actions(f);
     while (!scheduled_.empty() && scheduled_.front().t_ns <= f.timing.now_ns) {
       f.inputs.push_back({scheduled_.front().t_ns, scheduled_.front().name, "observer", true});
       scheduled_.pop_front();
@@ -268,7 +294,112 @@ class SessionLoop::Impl {
     cpu_ns_.push_back(own.count() + static_cast<std::int64_t>(stats.cpu_ms * 1e6));
     ++summary_.frames;
     ++frame_index_;
+    if (f.timing.late) {
+      ++late_trial_;
+      ++late_session_;
+    }
+    if (console_) show_status(f, stats, overlay.phase, own.count());
     return stats;
+  }
+
+  // ---- the operator's console ---------------------------------------------
+
+  // Actions due now: each logged with its time stamp, notes stored verbatim;
+  // the others become this frame's signal (or a later frame's, when the
+  // backend already gave one), handled as a backend's signal would be.
+  void take_operator_actions(Frame& f) {
+    if (console_ == nullptr) return;
+    actions_.clear();
+    console_->take(f.timing.now_ns - session_start_ns_, actions_);
+    for (const auto& a : actions_) carry_out(a);
+    if (f.signal == BackendSignal::none && !operator_signals_.empty()) {
+      f.signal = operator_signals_.front();
+      operator_signals_.pop_front();
+    }
+  }
+
+  void carry_out(const OperatorAction& a) {
+    const std::optional<std::int64_t> trial_id =
+        current_trial_ ? std::optional<std::int64_t>(trial_ids_[*current_trial_]) : std::nullopt;
+    Json detail{{"action", to_string(a.kind)}, {"source", a.source}, {"t_ns", clock_.now_ns()}};
+    if (a.kind == OperatorActionKind::note) {
+      detail["text"] = a.text;
+      event(trial_id, "operator_note", detail);
+    } else {
+      event(trial_id, "operator_action", detail);
+    }
+    if (const auto signal = operator_signal(a.kind)) operator_signals_.push_back(*signal);
+    console_->acted(a);
+  }
+
+  static std::optional<BackendSignal> operator_signal(OperatorActionKind kind) {
+    switch (kind) {
+      case OperatorActionKind::pause: return BackendSignal::pause;
+      case OperatorActionKind::resume: return BackendSignal::resume;
+      case OperatorActionKind::recenter: return BackendSignal::recenter;
+      case OperatorActionKind::repeat: return BackendSignal::repeat;
+      case OperatorActionKind::skip: return BackendSignal::skip;
+      case OperatorActionKind::end: return BackendSignal::quit;
+      case OperatorActionKind::note: return std::nullopt;
+    }
+    return std::nullopt;
+  }
+
+  void show_status(const Frame& f, const renderer::FrameStats& stats, Phase phase, std::int64_t own_ns) {
+    status_.phase = phase;
+    status_.phase_left_ns = phase_left_ns_;
+    phase_left_ns_ = -1;
+    status_.paused = phase == Phase::paused;
+    status_.elapsed_ns = f.timing.now_ns - session_start_ns_;
+    // The time per trial so far, for the trials still to run.
+    if (trials_reported_ > 0)
+      status_.remaining_ns = (f.timing.now_ns - session_start_ns_) / trials_reported_ *
+                             (status_.trials - trials_reported_ - first_reported_);
+    for (std::size_t d = 0; d < 3; ++d) {
+      const bool tracked = lab_.pose[d].valid;
+      if (!tracked && lost_since_[d] < 0) lost_since_[d] = f.timing.now_ns;
+      if (tracked) lost_since_[d] = -1;
+      status_.tracked[d] = tracked;
+      status_.lost_ns[d] = tracked ? -1 : f.timing.now_ns - lost_since_[d];
+    }
+    status_.late_trial = late_trial_;
+    status_.late_session = late_session_;
+    status_.cpu_ms = stats.cpu_ms + static_cast<double>(own_ns) * 1e-6;
+    status_.gpu_ms = stats.gpu_ms > 0.0 ? stats.gpu_ms : -1.0;
+    const auto ws = writer_.stats();
+    status_.logger_drops = ws.dropped_tracking + ws.dropped_frames;
+    console_->show(status_);
+  }
+
+  void show_ended() {
+    if (console_ == nullptr) return;
+    status_.ended = true;
+    status_.phase = Phase::done;
+    status_.phase_left_ns = -1;
+    console_->show(status_);
+  }
+
+  // One line of --progress json per trial, however it ended.
+  void report_trial(std::size_t i, const std::string& status, const std::string& reason) {
+    ++trials_reported_;
+    const PlannedTrial& t = design_.trials[i];
+    if (!progress_.json()) return;
+    Json line{{"trial", i + 1},
+              {"of", design_.trials.size()},
+              {"trial_id", trial_ids_[i]},
+              {"block", t.block},
+              {"status", status}};
+    Json levels = Json::object();
+    for (const auto& [f, l] : t.levels) levels[f] = l;
+    line["conditions"] = levels;
+    if (!reason.empty()) line["end_reason"] = reason;
+    if (status == "completed") {
+      line["response"] = status_.last_response;
+      line["rt_ms"] = status_.last_rt_ms >= 0.0 ? Json(status_.last_rt_ms) : Json(nullptr);
+    }
+    line["frames_late"] = late_trial_;
+    line["elapsed_s"] = static_cast<double>(clock_.now_ns() - session_start_ns_) * 1e-9;
+    progress_.line(line.dump());
   }
 
   // Hands a record to the logger. Fast runs wait for the writer rather than
@@ -329,6 +460,9 @@ class SessionLoop::Impl {
     fr.frame_index = frame_index_;
     fr.t_ns = f.timing.now_ns;
     fr.predicted_display_ns = f.timing.predicted_display_ns;
+    fr.display_period_ns = f.timing.period_ns > 0 ? f.timing.period_ns : -1;
+    fr.late = f.timing.late;
+    fr.dropped_frames = f.timing.skipped_periods;
     fr.cpu_time_ns = static_cast<std::int64_t>(stats.cpu_ms * 1e6);
     fr.gpu_time_ns = stats.gpu_ms > 0.0 ? static_cast<std::int64_t>(stats.gpu_ms * 1e6) : -1;
     fr.views = stats.views;
@@ -450,6 +584,11 @@ class SessionLoop::Impl {
       resumed_trial_started_ = true;
     }
     current_trial_ = i;
+    late_trial_ = 0;
+    status_.block = t.planned->block;
+    status_.trial = static_cast<std::int64_t>(i + 1);
+    status_.condition.clear();
+    for (const auto& [f, l] : t.planned->levels) status_.condition += f + "=" + l + "  ";
     return t;
   }
 
@@ -461,13 +600,20 @@ class SessionLoop::Impl {
         complete(t, a);
         const Outcome o = inter_trial_interval(t);
         current_trial_.reset();
+        if (o == Outcome::done) report_trial(t.index, "completed", "");
         return o;
       }
       if (a.backend_ended) return Outcome::quit;
       event(t.id, "trial_aborted", Json{{"reason", to_string(*a.abort)}, {"attempt", a.number}});
       if (*a.abort == AbortReason::quit) return Outcome::quit;
       ++t.aborts;
-      if (wait_until_ready(*a.abort, t.id) == Outcome::quit) return Outcome::quit;
+      if (*a.abort == AbortReason::skip) {
+        skip(t);
+        return Outcome::done;
+      }
+      // The operator's repeat starts again at once; the others wait for the
+      // resume or for the head.
+      if (*a.abort != AbortReason::repeat && wait_until_ready(*a.abort, t.id) == Outcome::quit) return Outcome::quit;
       if (after_abort(*a.abort, a.number, t.settings.tracking_loss) == AfterAbort::give_up) {
         give_up(t, *a.abort, a.number);
         return Outcome::done;
@@ -481,6 +627,17 @@ class SessionLoop::Impl {
     event(t.id, "trial_abandoned", Json{{"reason", to_string(reason)}, {"attempts", attempts}});
     ++summary_.trials_aborted;
     current_trial_.reset();
+    report_trial(t.index, "aborted", std::string(to_string(reason)));
+  }
+
+  // The operator's skip: stored `skipped` (end_reason "operator"), so a
+  // resumed session never runs it again.
+  void skip(const TrialRun& t) {
+    writer_.journal(data::EndUnanswered{t.id, false, "operator"});
+    event(t.id, "trial_skipped", Json{{"reason", "operator"}, {"attempts", t.attempts}});
+    ++summary_.trials_skipped;
+    current_trial_.reset();
+    report_trial(t.index, "skipped", "operator");
   }
 
   // A new attempt: the stimulus from its start values, the observer's
@@ -488,6 +645,7 @@ class SessionLoop::Impl {
   AttemptRun begin_attempt(TrialRun& t) {
     AttemptRun a;
     a.number = ++t.attempts;
+    status_.attempt = a.number;
     if (a.number > 1) ++summary_.attempts_repeated;
     const auto& j = *t.judgement;
     if (j.type == JudgementType::adjustment && j.adjustment) {
@@ -525,6 +683,7 @@ class SessionLoop::Impl {
       take_inputs(t, a, state, f);
       scene_->show(step.phase, t.settings.timeline.stimulus_during_response);
       const Overlay overlay{step.phase, t.line, step.phase == Phase::response || step.phase == Phase::stimulus};
+      phase_left_ns_ = phase_left(state, step.phase, t.settings.timeline, f.timing.now_ns);
       const auto stats = end(f, overlay, step.onset, t.id);
       if (step.onset) log_onset(t, a, stats, f.timing.predicted_display_ns);
       if (state.over(f.timing.now_ns)) break;
@@ -637,6 +796,8 @@ class SessionLoop::Impl {
       r.staircase_step = data::StaircaseStep{staircase_key(p_, *t.planned), step, *t.staircase_value, positive,
                                              stair.reversals() > reversals, stair.value()};
     }
+    status_.last_response = r.response;
+    status_.last_rt_ms = a.answer ? static_cast<double>(r.response_ns - r.onset_ns) * 1e-6 : -1.0;
     completed_ticket_ = writer_.journal(std::move(r));
   }
 
@@ -654,6 +815,7 @@ class SessionLoop::Impl {
         iti_end = clock_.now_ns() + t.settings.timeline.iti_ms * 1'000'000;
         continue;
       }
+      phase_left_ns_ = std::max<std::int64_t>(0, iti_end - g.timing.now_ns);
       end(g, Overlay{Phase::iti, t.line, false}, false, std::nullopt);
       if (g.signal == BackendSignal::quit) return Outcome::quit;
       if (g.timing.now_ns >= iti_end) break;
@@ -696,6 +858,16 @@ class SessionLoop::Impl {
   std::int64_t session_start_ns_ = 0;
   std::vector<std::int64_t> cpu_ns_;
   SessionSummary summary_;
+  OperatorConsole* console_ = nullptr;
+  std::vector<OperatorAction> actions_;          // this frame's, reused
+  std::deque<BackendSignal> operator_signals_;  // not yet handed to the loop
+  OperatorStatus status_;
+  std::int64_t phase_left_ns_ = -1;  // for the next status; set before end()
+  std::array<std::int64_t, 3> lost_since_{-1, -1, -1};
+  std::int64_t late_trial_ = 0;
+  std::int64_t late_session_ = 0;
+  std::int64_t trials_reported_ = 0;  // ended in this run
+  std::int64_t first_reported_ = 0;   // ended before it (a resumed run)
 };
 
 SessionLoop::SessionLoop(SessionSetup setup) : impl_(std::make_unique<Impl>(std::move(setup))) {}

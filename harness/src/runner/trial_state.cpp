@@ -45,6 +45,8 @@ AttemptStep Attempt::advance(const FrameFacts& frame) {
     case BackendSignal::quit: step.abort = AbortReason::quit; return step;
     case BackendSignal::pause: step.abort = AbortReason::pause; break;
     case BackendSignal::recenter: step.abort = AbortReason::recenter; break;
+    case BackendSignal::repeat: step.abort = AbortReason::repeat; break;
+    case BackendSignal::skip: step.abort = AbortReason::skip; break;
     default: break;
   }
   // The loss is tracked even when the frame is aborted for another reason,
@@ -72,6 +74,9 @@ bool Attempt::over(std::int64_t now_ns) const {
 AfterAbort after_abort(AbortReason reason, std::int64_t attempt, const protocol::TrackingLoss& policy) {
   // A quit attempt is run again when the session is resumed.
   if (reason == AbortReason::quit) return AfterAbort::repeat;
+  // The operator decides for these two, whatever the protocol's cap.
+  if (reason == AbortReason::skip) return AfterAbort::give_up;
+  if (reason == AbortReason::repeat) return AfterAbort::repeat;
   if (reason == AbortReason::tracking_lost && policy.on_loss == protocol::OnTrackingLoss::abort)
     return AfterAbort::give_up;
   if (policy.max_attempts > 0 && attempt >= policy.max_attempts) return AfterAbort::give_up;

@@ -11,6 +11,7 @@
 #include "curvlab/harness/xr/session_state.hpp"
 #include "curvlab/harness/xr/stereo.hpp"
 #include "curvlab/renderer/context.hpp"
+#include "curvlab/renderer/gpu.hpp"
 #include "curvlab/renderer/renderer.hpp"
 #include "curvlab/renderer/swapchain.hpp"
 
@@ -22,7 +23,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
+#include <cstring>
 #include <deque>
 #include <iostream>
 #include <limits>
@@ -122,6 +125,92 @@ bool located(XrSpaceLocationFlags flags) {
 
 std::string vk_result(VkResult r) { return vk::to_string(static_cast<vk::Result>(r)); }
 
+// The operator window's copies of the submitted swapchain images (FrameMirror
+// in runner/backend.hpp). The frame thread records, in a command buffer of
+// its own submitted right after the frame's (same queue, so after it), a
+// copy of both eyes into a host-visible buffer; the operator's thread waits
+// on the fence and reads the buffer. One copy in flight; `state_` hands the
+// buffer and fence between the two threads (acquire/release): idle → requested
+// (operator) → copying (frame thread) → idle (operator, after reading).
+class XrMirror final : public harness::runner::FrameMirror {
+ public:
+  XrMirror(const renderer::Context& ctx, vk::Extent2D eye, bool bgra)
+      : ctx_(ctx),
+        eye_(eye),
+        bgra_(bgra),
+        pool_(ctx.device(), {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer,
+                             .queueFamilyIndex = ctx.queue_family()}),
+        fence_(ctx.device(), vk::FenceCreateInfo{}),
+        staging_(renderer::Buffer::create(ctx, vk::DeviceSize{2} * eye.width * eye.height * 4,
+                                          vk::BufferUsageFlagBits::eTransferDst)) {
+    vk::raii::CommandBuffers cbs(ctx.device(), {.commandPool = *pool_,
+                                                .level = vk::CommandBufferLevel::ePrimary,
+                                                .commandBufferCount = 1});
+    cb_ = std::move(cbs.front());
+  }
+  ~XrMirror() override {
+    if (state_.load(std::memory_order_acquire) == kCopying)
+      (void)ctx_.device().waitForFences(*fence_, VK_TRUE, 1'000'000'000);
+  }
+
+  void request() override {
+    int idle = kIdle;
+    state_.compare_exchange_strong(idle, kRequested, std::memory_order_acq_rel);
+  }
+
+  bool take(harness::runner::MirrorImage& out) override {
+    if (state_.load(std::memory_order_acquire) != kCopying) return false;
+    if (ctx_.device().waitForFences(*fence_, VK_TRUE, 0) != vk::Result::eSuccess) return false;
+    out.width = eye_.width * 2;
+    out.height = eye_.height;
+    out.rgba.resize(std::size_t{out.width} * out.height * 4);
+    const auto* src = static_cast<const std::uint8_t*>(staging_.mapped);
+    const std::size_t row = std::size_t{eye_.width} * 4;
+    for (std::uint32_t y = 0; y < eye_.height; ++y)
+      for (std::size_t e = 0; e < 2; ++e)
+        std::memcpy(out.rgba.data() + (std::size_t{y} * out.width * 4) + e * row,
+                    src + e * row * eye_.height + y * row, row);
+    if (bgra_)
+      for (std::size_t i = 0; i < out.rgba.size(); i += 4) std::swap(out.rgba[i], out.rgba[i + 2]);
+    state_.store(kIdle, std::memory_order_release);
+    return true;
+  }
+
+  // Frame thread, with both eyes' swapchain images still acquired and the
+  // frame's own commands submitted: copies them when a copy was requested.
+  void copy(const std::array<vk::Image, 2>& images) {
+    if (state_.load(std::memory_order_acquire) != kRequested) return;
+    ctx_.device().resetFences(*fence_);
+    cb_.reset();
+    cb_.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+    for (std::size_t e = 0; e < 2; ++e) {
+      constexpr auto color = vk::ImageAspectFlagBits::eColor;
+      renderer::transition(cb_, images[e], color, vk::ImageLayout::eColorAttachmentOptimal,
+                           vk::ImageLayout::eTransferSrcOptimal);
+      const vk::BufferImageCopy region{.bufferOffset = vk::DeviceSize{e} * eye_.width * eye_.height * 4,
+                                       .imageSubresource = {color, 0, 0, 1},
+                                       .imageExtent = {eye_.width, eye_.height, 1}};
+      cb_.copyImageToBuffer(images[e], vk::ImageLayout::eTransferSrcOptimal, *staging_.buffer, region);
+      renderer::transition(cb_, images[e], color, vk::ImageLayout::eTransferSrcOptimal,
+                           vk::ImageLayout::eColorAttachmentOptimal);
+    }
+    cb_.end();
+    ctx_.submit(*cb_, *fence_);
+    state_.store(kCopying, std::memory_order_release);
+  }
+
+ private:
+  static constexpr int kIdle = 0, kRequested = 1, kCopying = 2;
+  const renderer::Context& ctx_;
+  vk::Extent2D eye_;
+  bool bgra_;
+  vk::raii::CommandPool pool_;
+  vk::raii::CommandBuffer cb_{nullptr};
+  vk::raii::Fence fence_;
+  renderer::Buffer staging_;
+  std::atomic<int> state_{kIdle};
+};
+
 }  // namespace
 
 // Owns, in order of destruction: the eye target and renderer, the swapchains,
@@ -143,6 +232,7 @@ class XrBackend final : public Backend {
   renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
                               const Overlay& overlay, bool draw) override;
   std::vector<std::string> save_frame(const std::string& stem) override;
+  harness::runner::FrameMirror* mirror() override { return mirror_.get(); }
 
  private:
   struct EyeSwapchain {
@@ -170,6 +260,7 @@ class XrBackend final : public Backend {
   // Logs a failed action-state query once per call name (it repeats every
   // frame otherwise) and goes on: one unreadable button must not end a session.
   void report_once(XrResult r, const char* call);
+  void mark_late(FrameTiming& timing);
 
   XrBackendOptions options_;
   Instance instance_;
@@ -185,6 +276,7 @@ class XrBackend final : public Backend {
   std::int64_t swapchain_format_ = 0;
   std::unique_ptr<renderer::Renderer> renderer_;
   std::unique_ptr<renderer::ExternalImagesTarget> target_;
+  std::unique_ptr<XrMirror> mirror_;
 
   SessionStateMachine state_;
   PFN_xrConvertTimeToTimespecTimeKHR to_timespec_ = nullptr;
@@ -205,6 +297,7 @@ class XrBackend final : public Backend {
   LabPose head_;
   geometry::LabFrame lab_;
   std::array<bool, 2> trigger_down_{false, false};
+  XrTime last_display_ = 0;  // the previous frame's predicted display time
 };
 
 Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& options) {
@@ -391,7 +484,9 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
     sc.width = config[i].recommendedImageRectWidth;
     sc.height = config[i].recommendedImageRectHeight;
     auto info = tagged<XrSwapchainCreateInfo>(XR_TYPE_SWAPCHAIN_CREATE_INFO);
-    info.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT;
+    // TRANSFER_SRC: the operator window's copies (XrMirror).
+    info.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT |
+                      XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT;
     info.format = *format;
     info.sampleCount = 1;
     info.width = sc.width;
@@ -419,6 +514,11 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
                                        ": " + renderer::vk_result_name(e.code().value())};
   }
   b->target_ = std::make_unique<renderer::ExternalImagesTarget>(c);
+  if (options.mirror) {
+    const bool bgra = static_cast<vk::Format>(*format) == vk::Format::eB8G8R8A8Srgb ||
+                      static_cast<vk::Format>(*format) == vk::Format::eB8G8R8A8Unorm;
+    b->mirror_ = std::make_unique<XrMirror>(c, vk::Extent2D{b->swapchains_[0].width, b->swapchains_[0].height}, bgra);
+  }
   return std::unique_ptr<Backend>(std::move(b));
 }
 
@@ -654,7 +754,21 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   timing.now_ns = now;
   timing.predicted_display_ns = to_session_ns(t);
   timing.period_ns = frame_state_.predictedDisplayPeriod;
+  mark_late(timing);
   return timing;
+}
+
+// A frame is late when its display time skipped refreshes after the
+// previous frame's (the loop missed them: the previous image stayed up
+// longer) or the runtime said not to render it (it is not shown).
+void XrBackend::mark_late(FrameTiming& timing) {
+  const XrTime t = frame_state_.predictedDisplayTime;
+  const XrDuration period = frame_state_.predictedDisplayPeriod;
+  if (last_display_ != 0 && period > 0 && t > last_display_)
+    timing.skipped_periods = static_cast<std::int32_t>(
+        std::max<std::int64_t>(0, std::llround(static_cast<double>(t - last_display_) / static_cast<double>(period)) - 1));
+  last_display_ = t;
+  timing.late = timing.skipped_periods > 0 || frame_state_.shouldRender != XR_TRUE;
 }
 
 geometry::LabFrame XrBackend::poses(const FrameTiming& frame) {
@@ -747,6 +861,7 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
     return stats;
   }
   std::array<bool, 2> acquired{false, false};
+  std::array<vk::Image, 2> submitted{};
   auto release_all = [&] {
     for (std::size_t i = 0; i < 2; ++i) {
       if (!acquired[i]) continue;
@@ -769,6 +884,7 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
       release_all();
       fail(r, "xrWaitSwapchainImage");
     }
+    submitted[i] = sc.images[index].image;
     target_->set_image(i == 0 ? renderer::Eye::left : renderer::Eye::right,
                        {sc.images[index].image, static_cast<vk::Format>(swapchain_format_),
                         vk::Extent2D{sc.width, sc.height},
@@ -780,9 +896,14 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
   try {
     // render() submits before returning, as xrReleaseSwapchainImage requires.
     stats = renderer_->render(scene, f, *target_);
+    // The operator window's copy, while the images are still acquired.
+    if (mirror_) mirror_->copy(submitted);
   } catch (const renderer::VulkanFailure& e) {
     release_all();
     fail(e);
+  } catch (const vk::SystemError& e) {
+    release_all();
+    fail(renderer::VulkanFailure(renderer::vk_call_name(e.what()), e.code().value()));
   }
   release_all();
   if (const XrResult r = end_frame(true); XR_FAILED(r)) fail(r, "xrEndFrame");

@@ -40,6 +40,10 @@
 //                            succeeded; "state", "profile", "input", "haptic",
 //                            "capture", "violation", "warning" lines
 //   CURVLAB_TEST_XR_SIZE     recommended eye size WxH (default 320x320)
+//   CURVLAB_TEST_XR_LATE     late frames, comma-separated, numbered from 0 in
+//                            xrWaitFrame order: FRAME wakes the application a
+//                            period late, so its predicted display time skips
+//                            one refresh; FRAME! returns shouldRender false
 //
 // XrTime is CLOCK_MONOTONIC minus an epoch taken when the library loads (so
 // the two differ, and xrConvertTimeToTimespecTimeKHR has work to do). Frames
@@ -1398,6 +1402,9 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
     const std::int64_t next = s->last_wake_ns + period;
     wake = wake <= next ? next : s->last_wake_ns + ((wake - s->last_wake_ns + period - 1) / period) * period;
   }
+  const Script& script = s->instance->script;
+  if (script.late_skip.count(s->frames_waited) != 0) wake += period;  // a missed refresh
+  const bool hidden = script.late_hidden.count(s->frames_waited) != 0;
   s->last_wake_ns = wake;
   ++s->frames_waited;
   const std::int64_t display = wake + period;
@@ -1411,7 +1418,8 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
   tick(*s);
   state->predictedDisplayTime = to_xr(display);
   state->predictedDisplayPeriod = period;
-  state->shouldRender = s->state == XR_SESSION_STATE_VISIBLE || s->state == XR_SESSION_STATE_FOCUSED ? XR_TRUE : XR_FALSE;
+  state->shouldRender =
+      !hidden && (s->state == XR_SESSION_STATE_VISIBLE || s->state == XR_SESSION_STATE_FOCUSED) ? XR_TRUE : XR_FALSE;
   s->waited = true;
   s->waited_display = state->predictedDisplayTime;
   const Pose head = head_pose(xr_seconds(state->predictedDisplayTime));

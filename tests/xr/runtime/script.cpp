@@ -158,6 +158,19 @@ std::optional<Script> read_script(std::string& error) {
     }
     s.capture_every = static_cast<int>(*n);
   }
+  if (const char* v = env("CURVLAB_TEST_XR_LATE")) {
+    for (const auto& item : split(v, ',')) {
+      const bool hidden = !item.empty() && item.back() == '!';
+      const auto n = number(hidden ? item.substr(0, item.size() - 1) : item);
+      if (!n || *n < 0.0 || *n != std::floor(*n)) {
+        error = "CURVLAB_TEST_XR_LATE: '" + item +
+                "': expected FRAME (its display time skips a period) or FRAME! (shouldRender false), "
+                "FRAME a whole number ≥ 0";
+        return std::nullopt;
+      }
+      (hidden ? s.late_hidden : s.late_skip).insert(static_cast<std::int64_t>(*n));
+    }
+  }
   if (const char* v = env("CURVLAB_TEST_XR_LOG")) s.log_path = v;
   if (const char* v = env("CURVLAB_TEST_XR_SIZE")) {
     const std::string text = v;

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,11 @@ struct Script {
   double refresh_hz = 90.0;
   std::uint32_t eye_width_px = 320;
   std::uint32_t eye_height_px = 320;
+  // CURVLAB_TEST_XR_LATE: frames (numbered from 0 in xrWaitFrame order) whose
+  // predicted display time skips one period (the runtime wakes the
+  // application a refresh later), and frames with shouldRender false.
+  std::set<std::int64_t> late_skip;
+  std::set<std::int64_t> late_hidden;
 };
 
 // Reads the CURVLAB_TEST_XR_* variables; a malformed one is an error naming

@@ -70,6 +70,12 @@ struct FrameTiming {
   std::int64_t now_ns = 0;             // session clock when the frame began
   std::int64_t predicted_display_ns = 0;  // when this frame's image will be shown
   std::int64_t period_ns = 11'111'111;
+  // The runtime's verdict on this frame (OpenXR): its display time skipped
+  // `skipped_periods` refreshes after the previous frame's (the loop missed
+  // them), or it is not shown at all (shouldRender false). Late frames are
+  // counted per trial (docs/xr.md, "Frame timing").
+  std::int32_t skipped_periods = 0;
+  bool late = false;
 };
 
 // One discrete input: a key (GLFW-style lower-case names: "1", "left",
@@ -91,6 +97,32 @@ struct Overlay {
   Phase phase = Phase::iti;
   std::string text;   // trial information line (block, trial, condition)
   bool waiting_for_input = false;  // instructions, response window, break
+};
+
+// Both eyes of a frame as submitted to the display, side by side (left
+// first), RGBA8, rows top to bottom.
+struct MirrorImage {
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  std::vector<std::uint8_t> rgba;
+};
+
+// Copies of the images a backend submitted, for the operator window. The
+// frame thread only records a GPU copy into a staging buffer in the frame it
+// submits, at most once per request; the operator's thread waits for that
+// copy and reads it, so the participant's frame loop never waits for it.
+// request() and take() are called from one other thread; the backend owns
+// the mirror, which must not be used after the backend is destroyed.
+class FrameMirror {
+ public:
+  virtual ~FrameMirror() = default;
+  FrameMirror() = default;
+  FrameMirror(const FrameMirror&) = delete;
+  FrameMirror& operator=(const FrameMirror&) = delete;
+  // Asks for a copy of the next frame submitted (no-op while one is pending).
+  virtual void request() = 0;
+  // The requested copy, once the GPU has made it; false: not ready yet.
+  virtual bool take(MirrorImage& out) = 0;
 };
 
 class Backend {
@@ -127,6 +159,10 @@ class Backend {
     (void)stem;
     return {};
   }
+  // Copies of the submitted images for the operator window; nullptr when
+  // the backend offers none (headless, desktop: the participant's window is
+  // on the same desk).
+  virtual FrameMirror* mirror() { return nullptr; }
 };
 
 }  // namespace curvlab::harness::runner

@@ -23,16 +23,20 @@ enum class Phase {
   tracking_lost, // held until the head is tracked again
 };
 
-// Something the backend wants the runner to know in a frame: the participant
-// paused (focus lost, headset off) or resumed, the view was recentred, or the
-// session is to end (window closed, runtime exiting).
-enum class BackendSignal { none, pause, resume, quit, recenter };
+// Something the backend (or the operator, operator.hpp) wants the runner to
+// know in a frame: the participant paused (focus lost, headset off) or
+// resumed, the view was recentred, the session is to end (window closed,
+// runtime exiting, the operator's end), or the operator repeats or skips the
+// current trial.
+enum class BackendSignal { none, pause, resume, quit, recenter, repeat, skip };
 
 enum class AbortReason {
   pause,          // the participant or operator paused (focus lost, pause key)
   recenter,       // the view was recentred mid-trial
   tracking_lost,  // the head was lost for longer than [tracking] loss_ms
   quit,           // the backend ended the session (window closed, runtime exiting)
+  repeat,         // the operator repeats the trial (always run again)
+  skip,           // the operator skips the trial (stored skipped, never run again)
 };
 
 namespace phase_names {
@@ -47,11 +51,13 @@ inline constexpr std::array<std::pair<Phase, std::string_view>, 9> phases{{
     {Phase::paused, "paused"},
     {Phase::tracking_lost, "tracking_lost"},
 }};
-inline constexpr std::array<std::pair<AbortReason, std::string_view>, 4> reasons{{
+inline constexpr std::array<std::pair<AbortReason, std::string_view>, 6> reasons{{
     {AbortReason::pause, "pause"},
     {AbortReason::recenter, "recenter"},
     {AbortReason::tracking_lost, "tracking_lost"},
     {AbortReason::quit, "quit"},
+    {AbortReason::repeat, "operator_repeat"},
+    {AbortReason::skip, "operator_skip"},
 }};
 }  // namespace phase_names
 

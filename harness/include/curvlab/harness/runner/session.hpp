@@ -29,6 +29,7 @@
 #include "curvlab/harness/result.hpp"
 #include "curvlab/harness/runner/backend.hpp"
 #include "curvlab/harness/runner/observer.hpp"
+#include "curvlab/harness/runner/operator.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -52,6 +53,10 @@ struct RunOptions {
   FrameDrawing drawing = FrameDrawing::all;
   std::string images_dir;  // stimulus images of every onset ("" none)
   bool progress = false;   // a progress bar on stderr
+  bool progress_json = false;  // one JSON object per trial on stdout (docs/xr.md, "The operator window")
+  // The experimenter's console (operator.hpp): status shown, actions taken.
+  // Not owned; outlives the run. nullptr: none.
+  OperatorConsole* console = nullptr;
   std::optional<geometry::PhysicalTableFit> calibration;
   std::string font_path;   // text panels; empty: the renderer's default
   // Fast runs may wait for the logger instead of dropping samples.

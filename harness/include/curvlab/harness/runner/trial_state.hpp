@@ -71,6 +71,7 @@ class Attempt {
   [[nodiscard]] bool over(std::int64_t now_ns) const;
   [[nodiscard]] std::optional<std::int64_t> onset_display_ns() const { return onset_display_ns_; }
   [[nodiscard]] std::optional<std::int64_t> onset_frame_ns() const { return onset_frame_ns_; }
+  [[nodiscard]] std::int64_t start_ns() const { return start_ns_; }
   void finish(std::int64_t now_ns) { loss_.finish(now_ns); }
   [[nodiscard]] const TrackingLossMonitor& loss() const { return loss_; }
 

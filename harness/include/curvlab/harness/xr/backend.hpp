@@ -15,6 +15,9 @@ namespace curvlab::xr {
 struct XrBackendOptions {
   std::string application_name = "curvlab";
   const devices::Clock* clock = nullptr;  // the session's; required
+  // Offer copies of the submitted images for the operator window
+  // (Backend::mirror()); the swapchains can be copied from either way.
+  bool mirror = false;
 };
 
 // No runtime or no headset: an Error of kind `device` naming the OpenXR
