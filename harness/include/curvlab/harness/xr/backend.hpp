@@ -15,6 +15,7 @@ namespace curvlab::xr {
 struct XrBackendOptions {
   std::string application_name = "curvlab";
   const devices::Clock* clock = nullptr;  // the session's; required
+  std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
 };
 
 // No runtime or no headset: an Error of kind `device` naming the OpenXR
