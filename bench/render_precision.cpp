@@ -217,7 +217,10 @@ Residuals sweep(const Context& ctx, std::uint32_t msaa) {
     const Isometry head = straight.head * geometry::rotation(Vec3(0, 1, 0), yaw);
     r.render(straight.scene, frame_of(straight, head), target);
     const Features m = measure(target, straight, head, 0.0), a = analytic(straight, head, 0.0);
-    if (!m0) m0 = m, a0 = a;
+    if (!m0) {
+      m0 = m;
+      a0 = a;
+    }
     for (int e = 0; e < 2; ++e) {
       res.add(m.left_end[e] - m0->left_end[e], a.left_end[e] - a0->left_end[e]);
       res.add(m.right_end[e] - m0->right_end[e], a.right_end[e] - a0->right_end[e]);
@@ -229,7 +232,10 @@ Residuals sweep(const Context& ctx, std::uint32_t msaa) {
     const StimulusScene s = stick_scene(sagitta);
     r.render(s.scene, frame_of(s, s.head), target);
     const Features m = measure(target, s, s.head, sagitta), a = analytic(s, s.head, sagitta);
-    if (!m0) m0 = m, a0 = a;
+    if (!m0) {
+      m0 = m;
+      a0 = a;
+    }
     for (int e = 0; e < 2; ++e) {
       res.add(m.transition[e] - m0->transition[e], a.transition[e] - a0->transition[e]);
       res.add(m.middle_y[e] - m0->middle_y[e], a.middle_y[e] - a0->middle_y[e]);

@@ -14,7 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
+#include <sstream>
 #include <unistd.h>
 #include <numbers>
 
@@ -298,7 +298,9 @@ TEST(ImageIo, PngsCarryAnSrgbChunkAndRoundTrip) {
   for (int i = 0; i < 24; ++i) img.pixels.push_back(static_cast<std::uint8_t>(i * 10));
   ASSERT_EQ(write_png(path.string(), img), "");
   std::ifstream in(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::stringstream contents;
+  contents << in.rdbuf();
+  const std::string bytes = contents.str();
   EXPECT_NE(bytes.find("sRGB"), std::string::npos);
   EXPECT_NE(bytes.find("gAMA"), std::string::npos);
   Rgba8Image back;

@@ -317,9 +317,9 @@ glm::dvec3 linear_at(const Rgba8Image& img, int x, int y) {
 // Mean absolute difference (linear light, 0–1) of `img` from `reference`
 // downsampled by box-filtering factor² pixels in linear light — what an
 // ideal anti-aliased image of the same scene holds.
-double difference_from_supersampled(const Rgba8Image& img, const Rgba8Image& reference, int factor) {
+double difference_from_supersampled(const Rgba8Image& img, const Rgba8Image& reference, int factor, int first_row) {
   double sum = 0.0;
-  for (int y = 0; y < img.height; ++y)
+  for (int y = first_row; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) {
       glm::dvec3 box(0.0);
       for (int j = 0; j < factor; ++j)
@@ -327,7 +327,7 @@ double difference_from_supersampled(const Rgba8Image& img, const Rgba8Image& ref
       const glm::dvec3 d = glm::abs(linear_at(img, x, y) - box / double(factor * factor));
       sum += (d.x + d.y + d.z) / 3.0;
     }
-  return sum / (img.width * img.height);
+  return sum / (img.width * (img.height - first_row));
 }
 
 Rgba8Image render_left(const Context& ctx, const StimulusScene& s, std::uint32_t px, std::uint32_t msaa) {
@@ -350,13 +350,14 @@ TEST_F(VulkanTest, MultisamplingIsClampedToTheDevice) {
 }
 
 TEST_F(VulkanTest, MultisampledEdgesApproachASupersampledImage) {
-  // The stick (and its prompt panel) at 128², against the same scene drawn at
-  // 512² with one sample and box-filtered down: 4× MSAA must remove most of
-  // the aliasing that one sample per pixel leaves.
+  // The stick at 128² (the image's lower half: its prompt panel above is
+  // text, sampled from its atlas), against the same scene drawn at 512² with
+  // one sample and box-filtered down: 4× MSAA must remove most of the
+  // aliasing that one sample per pixel leaves.
   const StimulusScene s = make(SpaceKind::E3, SceneKind::stick);
   const Rgba8Image reference = render_left(ctx(), s, 512, 1);
-  const double aliased = difference_from_supersampled(render_left(ctx(), s, 128, 1), reference, 4);
-  const double smoothed = difference_from_supersampled(render_left(ctx(), s, 128, 4), reference, 4);
+  const double aliased = difference_from_supersampled(render_left(ctx(), s, 128, 1), reference, 4, 64);
+  const double smoothed = difference_from_supersampled(render_left(ctx(), s, 128, 4), reference, 4, 64);
   EXPECT_GT(aliased, 0.0);
   EXPECT_LT(smoothed, 0.6 * aliased) << "msaa 1: " << aliased << ", msaa 4: " << smoothed;
 }

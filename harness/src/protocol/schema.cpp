@@ -93,14 +93,15 @@ Json value_schema(const SettingInfo& info) {
   switch (info.kind) {
     case SettingKind::boolean: return {{"type", "boolean"}};
     case SettingKind::integer: {
+      Json j = {{"type", "integer"},
+                {"minimum", static_cast<std::int64_t>(info.min)},
+                {"maximum", static_cast<std::int64_t>(info.max)}};
       if (!info.choices.empty()) {
         Json values = Json::array();
         for (auto c : info.choices) values.push_back(std::stoll(std::string(c)));
-        return {{"type", "integer"}, {"enum", values}};
+        j["enum"] = values;
       }
-      return {{"type", "integer"},
-              {"minimum", static_cast<std::int64_t>(info.min)},
-              {"maximum", static_cast<std::int64_t>(info.max)}};
+      return j;
     }
     case SettingKind::number: return {{"type", "number"}, {"minimum", info.min}, {"maximum", info.max}};
     case SettingKind::number_or_from_table:
