@@ -66,12 +66,11 @@ glm::dvec2 project(const Space& space, const Isometry& head, int eye, const geom
 
 // Linear relative luminance of each pixel (the images are sRGB-encoded).
 std::vector<double> luminance(const Rgba8Image& img) {
+  std::array<float, 256> decode{};
+  for (std::size_t v = 0; v < decode.size(); ++v) decode[v] = srgb_to_linear(float(v) / 255.0f);
   std::vector<double> y(static_cast<std::size_t>(img.width) * img.height);
-  for (std::size_t i = 0; i < y.size(); ++i) {
-    const glm::vec3 c{srgb_to_linear(img.pixels[4 * i] / 255.0f), srgb_to_linear(img.pixels[4 * i + 1] / 255.0f),
-                      srgb_to_linear(img.pixels[4 * i + 2] / 255.0f)};
-    y[i] = relative_luminance(c);
-  }
+  for (std::size_t i = 0; i < y.size(); ++i)
+    y[i] = relative_luminance({decode[img.pixels[4 * i]], decode[img.pixels[4 * i + 1]], decode[img.pixels[4 * i + 2]]});
   return y;
 }
 
@@ -205,11 +204,20 @@ Features analytic(const StimulusScene& s, const Isometry& head, double sagitta_m
   return f;
 }
 
+// The residuals of each kind of feature, and of all together.
+struct SweepResiduals {
+  Residuals ends, transition, middle, all;
+  void add(Residuals& kind, double measured_motion, double analytic_motion) {
+    kind.add(measured_motion, analytic_motion);
+    all.add(measured_motion, analytic_motion);
+  }
+};
+
 // Residuals of the motions over the yaw and the bend sweeps.
-Residuals sweep(const Context& ctx, std::uint32_t msaa) {
+SweepResiduals sweep(const Context& ctx, std::uint32_t msaa) {
   Renderer r(ctx, RendererOptions{.msaa = msaa});
   OffscreenTarget target(ctx, kPx, kPx);
-  Residuals res;
+  SweepResiduals res;
   const StimulusScene straight = stick_scene(0.0);
   std::optional<Features> m0, a0;
   for (int i = 0; i < kSteps; ++i) {
@@ -222,8 +230,8 @@ Residuals sweep(const Context& ctx, std::uint32_t msaa) {
       a0 = a;
     }
     for (int e = 0; e < 2; ++e) {
-      res.add(m.left_end[e] - m0->left_end[e], a.left_end[e] - a0->left_end[e]);
-      res.add(m.right_end[e] - m0->right_end[e], a.right_end[e] - a0->right_end[e]);
+      res.add(res.ends, m.left_end[e] - m0->left_end[e], a.left_end[e] - a0->left_end[e]);
+      res.add(res.ends, m.right_end[e] - m0->right_end[e], a.right_end[e] - a0->right_end[e]);
     }
   }
   m0.reset();
@@ -237,8 +245,8 @@ Residuals sweep(const Context& ctx, std::uint32_t msaa) {
       a0 = a;
     }
     for (int e = 0; e < 2; ++e) {
-      res.add(m.transition[e] - m0->transition[e], a.transition[e] - a0->transition[e]);
-      res.add(m.middle_y[e] - m0->middle_y[e], a.middle_y[e] - a0->middle_y[e]);
+      res.add(res.transition, m.transition[e] - m0->transition[e], a.transition[e] - a0->transition[e]);
+      res.add(res.middle, m.middle_y[e] - m0->middle_y[e], a.middle_y[e] - a0->middle_y[e]);
     }
   }
   return res;
@@ -282,14 +290,18 @@ void print_precision_table(const Context& ctx, int frames) {
   std::printf("   bend in %d steps of %.1f mm (colour transition, middle's height, both eyes); residual of\n",
               kSteps - 1, kBendStepM * 1e3);
   std::printf("   each feature's motion against the analytic projection; frame time: billiards, E3 native\n\n");
-  std::printf("| msaa | samples used | residual RMS px | max px | RMS arcsec | max arcsec | frame ms | ratio to msaa 1 |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
+  std::printf("| msaa | samples used | residual RMS px | max px | RMS arcsec | max arcsec | ends RMS/max px | "
+              "transition RMS/max px | middle RMS/max px | frame ms | ratio to msaa 1 |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   const std::vector<std::uint32_t> counts{1, 2, 4, 8};
   const std::vector<double> ms = frame_times(ctx, counts, frames);
   for (std::size_t k = 0; k < counts.size(); ++k) {
-    const Residuals r = sweep(ctx, counts[k]);
-    std::printf("| %u | %u | %.4f | %.4f | %.2f | %.2f | %.1f | %.2f |\n", counts[k], supported_msaa(ctx, counts[k]),
-                r.rms(), r.max_abs(), r.rms() * arcsec_per_px, r.max_abs() * arcsec_per_px, ms[k], ms[k] / ms[0]);
+    const SweepResiduals s = sweep(ctx, counts[k]);
+    const Residuals& r = s.all;
+    std::printf("| %u | %u | %.4f | %.4f | %.2f | %.2f | %.3f/%.3f | %.3f/%.3f | %.3f/%.3f | %.1f | %.2f |\n",
+                counts[k], supported_msaa(ctx, counts[k]), r.rms(), r.max_abs(), r.rms() * arcsec_per_px,
+                r.max_abs() * arcsec_per_px, s.ends.rms(), s.ends.max_abs(), s.transition.rms(),
+                s.transition.max_abs(), s.middle.rms(), s.middle.max_abs(), ms[k], ms[k] / ms[0]);
   }
 }
 

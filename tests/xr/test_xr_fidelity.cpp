@@ -128,11 +128,16 @@ TEST(XrFidelity, HeadsetOnsetFrameMatchesTheOffscreenPng) {
   setenv("CURVLAB_TEST_XR_PRESS", kPresses.c_str(), 1);
   setenv("CURVLAB_TEST_XR_CAPTURE_DIR", captures.c_str(), 1);
   setenv("CURVLAB_TEST_XR_LOG", log.c_str(), 1);
+  // The validation layer watches the multisampled passes, their resolves and
+  // the copies into the sRGB swapchain images (it prints to stdout).
+  setenv("VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation", 1);
   const auto r = run_cli("run " + std::string(CURVLAB_SOURCE_DIR) + "/tests/xr/demo_buttons.toml --participant F01 "
                          "--backend xr --db " + db.string() + " --json");
-  for (const char* v : {"XR_RUNTIME_JSON", "CURVLAB_TEST_XR_PRESS", "CURVLAB_TEST_XR_CAPTURE_DIR", "CURVLAB_TEST_XR_LOG"})
+  for (const char* v : {"XR_RUNTIME_JSON", "CURVLAB_TEST_XR_PRESS", "CURVLAB_TEST_XR_CAPTURE_DIR", "CURVLAB_TEST_XR_LOG",
+                        "VK_INSTANCE_LAYERS"})
     unsetenv(v);
   ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(r.out.find("Validation"), std::string::npos) << r.out;
 
   // The runtime's capture at a trial's onset (its predicted display time)
   // is the headset's image; `curvlab replay` draws the same frame offscreen.
