@@ -8,7 +8,8 @@
 //     with the same pixel coverage into the same two 1024² images.
 //  4. Edge-position precision from the pixels per MSAA sample count
 //     (render_precision.cpp).
-// Usage: bench_render_accuracy [frames-per-measurement]
+// Usage: bench_render_accuracy [frames-per-measurement] [precision]
+// ("precision": section 4 only)
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/renderer.hpp"
 #include "curvlab/renderer/shader.hpp"
@@ -220,6 +221,10 @@ int main(int argc, char** argv) {
   }
   const Context& ctx = std::get<Context>(created);
   std::printf("device: %s (%s); median of %d frames\n\n", ctx.device_name().c_str(), ctx.driver_info().c_str(), frames);
+  if (argc > 2 && std::string(argv[2]) == "precision") {
+    bench::print_precision_table(ctx, frames);
+    return 0;
+  }
 
   // ---- 1. native subdivision: error vs level ------------------------------
   std::printf("1. Native view, table edges (geodesics) drawn as straight pieces vs the analytic curve\n");

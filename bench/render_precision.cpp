@@ -82,20 +82,21 @@ struct Luma {
   }
 };
 
-// Rows through the stick at column x, with their weight (contrast there).
-std::vector<std::pair<int, double>> stick_rows(const Luma& l, int x, double y_px) {
+// Rows through the stick at column x whose contrast there is at least
+// `fraction` of the brightest row's, with that contrast as their weight.
+std::vector<std::pair<int, double>> stick_rows(const Luma& l, int x, double y_px, double fraction) {
   std::vector<std::pair<int, double>> rows;
   double peak = 0.0;
   for (int r = int(y_px) - 20; r <= int(y_px) + 20; ++r) peak = std::max(peak, l.at(x, r));
   for (int r = int(y_px) - 20; r <= int(y_px) + 20; ++r)
-    if (l.at(x, r) > 0.3 * peak) rows.emplace_back(r, l.at(x, r));
+    if (l.at(x, r) > fraction * peak) rows.emplace_back(r, l.at(x, r));
   return rows;
 }
 
 // The end of the stick beyond column `ref` (inside it) in direction dir (±1).
 double end_position(const Luma& l, int ref, int dir, double y_px) {
   double sum = 0.0, weight = 0.0;
-  for (const auto& [r, w] : stick_rows(l, ref, y_px)) {
+  for (const auto& [r, w] : stick_rows(l, ref, y_px, 0.3)) {
     double covered = 0.0;
     for (int k = 1; k <= 40; ++k) covered += l.at(ref + dir * k, r) / w;
     // The reference pixel counts whole: the edge lies `covered` beyond it.
@@ -109,7 +110,9 @@ double end_position(const Luma& l, int ref, int dir, double y_px) {
 // The butt-to-shaft transition between a butt column and a shaft column.
 double transition_position(const Luma& l, int butt, int shaft, double y_px) {
   double sum = 0.0, weight = 0.0;
-  for (const auto& [r, w] : stick_rows(l, shaft, y_px)) {
+  // Rows inside the silhouette only: a bend tilts the silhouette, which
+  // would change a partly covered row's coverage along it.
+  for (const auto& [r, w] : stick_rows(l, shaft, y_px, 0.8)) {
     const double lo = l.at(butt, r), hi = l.at(shaft, r);
     double butt_part = 0.0;
     for (int x = butt + 1; x < shaft; ++x) butt_part += (hi - l.at(x, r)) / (hi - lo);
@@ -173,6 +176,9 @@ struct Features {
   std::array<double, 2> left_end{}, right_end{}, transition{}, middle_y{};
 };
 
+// Measures the features in the target's images. The estimators' windows are
+// placed from the sweep's first pose (head, sagitta_m) and stay put while the
+// stimulus moves under them, so a window never jumps by a pixel.
 Features measure(const OffscreenTarget& target, const StimulusScene& s, const Isometry& head, double sagitta_m) {
   Features f;
   const double bg = relative_luminance(glm::vec3(palette::background));
@@ -224,7 +230,7 @@ SweepResiduals sweep(const Context& ctx, std::uint32_t msaa) {
     const double yaw = i * kYawStepDeg * std::numbers::pi / 180.0;
     const Isometry head = straight.head * geometry::rotation(Vec3(0, 1, 0), yaw);
     r.render(straight.scene, frame_of(straight, head), target);
-    const Features m = measure(target, straight, head, 0.0), a = analytic(straight, head, 0.0);
+    const Features m = measure(target, straight, straight.head, 0.0), a = analytic(straight, head, 0.0);
     if (!m0) {
       m0 = m;
       a0 = a;
@@ -239,7 +245,7 @@ SweepResiduals sweep(const Context& ctx, std::uint32_t msaa) {
     const double sagitta = i * kBendStepM;
     const StimulusScene s = stick_scene(sagitta);
     r.render(s.scene, frame_of(s, s.head), target);
-    const Features m = measure(target, s, s.head, sagitta), a = analytic(s, s.head, sagitta);
+    const Features m = measure(target, s, s.head, 0.0), a = analytic(s, s.head, sagitta);
     if (!m0) {
       m0 = m;
       a0 = a;
