@@ -437,6 +437,15 @@ vk::RenderingAttachmentInfo color_attachment(std::uint32_t msaa, const EyeAttach
   return info;
 }
 
+// Every target hands the renderer sRGB RGBA8 images (its pipelines' format);
+// another format is a broken contract.
+void check_eye_format(const EyeImage& img) {
+  if (img.format == kColorFormat) return;
+  std::cerr << "curvlab renderer: an eye image is " << vk::to_string(img.format) << ", not "
+            << vk::to_string(kColorFormat) << '\n';
+  std::abort();
+}
+
 // Everything a frame's pixels depend on besides the scene content.
 std::vector<double> frame_signature(const Scene& scene, const FrameDescription& f,
                                     const RenderTarget& target) {
@@ -537,12 +546,7 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
       draw_textures.push_back(scene.objects()[d.object].text ? &r.texture(scene, d.object, slot.garbage)
                                                              : nullptr);
     }
-    if (img.format != kColorFormat) {
-      // A broken contract: every target draws into sRGB RGBA8 images.
-      std::cerr << "curvlab renderer: an eye image is " << vk::to_string(img.format) << ", not "
-                << vk::to_string(kColorFormat) << '\n';
-      std::abort();
-    }
+    check_eye_format(img);
     const EyeAttachments& att = r.eye_attachments(e, img.extent, slot.garbage);
     const Image& depth = att.depth;
     transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
