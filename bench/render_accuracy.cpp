@@ -4,12 +4,17 @@
 //     subdivision level, with frame time.
 //  2. Ratios measured in the same run: native/tourist and one-eye/two-eye
 //     frame time (billiards, 1024² per eye).
-//  3. The billiards frame beside a plain Vulkan loop drawing the same
-//     triangle count into the same two 1024² images.
-// Usage: bench_render_accuracy [frames-per-measurement]
+//  3. The billiards frame beside a plain Vulkan loop drawing the same meshes
+//     with the same pixel coverage into the same two 1024² images.
+//  4. Edge-position precision from the pixels per MSAA sample count
+//     (render_precision.cpp).
+// Usage: bench_render_accuracy [frames-per-measurement] [precision]
+// ("precision": section 4 only)
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/renderer.hpp"
 #include "curvlab/renderer/shader.hpp"
+
+#include "render_precision.hpp"
 
 #include "curvlab/geometry/maps.hpp"
 
@@ -17,7 +22,9 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,34 +89,54 @@ Timing time_frames(Renderer& r, const StimulusScene& s, FrameDescription f, Rend
   return t;
 }
 
-// The plain loop: N triangles in clip space (a jittered grid over the whole
-// image, depth-tested), two 1024² passes and read-backs, same as the scene.
-double plain_loop_ms(const Context& ctx, std::uint64_t triangles, std::uint32_t px, int frames) {
-  const auto& dev = ctx.device();
+// The plain loop draws exactly what curvlab drew in `plan`: the same meshes
+// at the same subdivision levels, each vertex at the clip position curvlab's
+// vertex shader gives it (clip_position, its C++ twin), so every pixel is
+// covered as in curvlab's frame; with the same sample count, depth test, sRGB
+// targets and read-back. What it leaves out — planning, per-draw state, the
+// curved-space vertex work, shading — is curvlab's overhead.
+struct PlainGeometry {
   struct V {
     float x, y, z, w, r, g, b, a;
   };
-  std::vector<V> verts;
-  const auto cells = static_cast<int>(std::ceil(std::sqrt(double(triangles) / 2.0)));
-  std::uint64_t made = 0;
-  for (int j = 0; j < cells && made < triangles; ++j)
-    for (int i = 0; i < cells && made < triangles; ++i) {
-      const float x0 = -1.0f + 2.0f * float(i) / float(cells), x1 = -1.0f + 2.0f * float(i + 1) / float(cells);
-      const float y0 = -1.0f + 2.0f * float(j) / float(cells), y1 = -1.0f + 2.0f * float(j + 1) / float(cells);
-      const float z = 0.2f + 0.6f * float((i * 7 + j * 3) % 11) / 11.0f;
-      const float c = float((i + j) % 2);
-      verts.push_back({x0, y0, z, 1, c, 0.5f, 0.3f, 1});
-      verts.push_back({x1, y0, z, 1, c, 0.5f, 0.3f, 1});
-      verts.push_back({x0, y1, z, 1, c, 0.5f, 0.3f, 1});
-      ++made;
-      if (made >= triangles) break;
-      verts.push_back({x1, y0, z, 1, c, 0.4f, 0.6f, 1});
-      verts.push_back({x1, y1, z, 1, c, 0.4f, 0.6f, 1});
-      verts.push_back({x0, y1, z, 1, c, 0.4f, 0.6f, 1});
-      ++made;
+  std::array<std::vector<V>, 2> verts;  // per eye, the meshes' vertices
+  std::array<std::vector<std::uint32_t>, 2> indices;  // per eye, triangle list
+};
+
+PlainGeometry plain_geometry(const StimulusScene& s, const RenderPlan& plan) {
+  PlainGeometry g;
+  for (int e = 0; e < 2; ++e) {
+    const ViewPlan& vp = plan.views[e];
+    for (const PlannedDraw& d : vp.draws) {
+      const MeshData mesh = s.scene.objects()[d.object].build(d.level);
+      if (mesh.topology != Topology::triangles) continue;
+      const auto first = static_cast<std::uint32_t>(g.verts[e].size());
+      for (const Vertex& v : mesh.vertices) {
+        const glm::dvec4 clip = clip_position(vp.constants, d.hemisphere, d.model_view * glm::dvec4(v.position));
+        g.verts[e].push_back({float(clip.x), float(clip.y), float(clip.z), float(clip.w), v.color.x, v.color.y,
+                              v.color.z, 1.0f});
+      }
+      for (const std::uint32_t i : mesh.indices) g.indices[e].push_back(first + i);
     }
-  Buffer vb = Buffer::create(ctx, verts.size() * sizeof(V), vk::BufferUsageFlagBits::eVertexBuffer);
-  vb.write(verts.data(), verts.size() * sizeof(V));
+  }
+  return g;
+}
+
+// `before_each` runs before every plain frame (curvlab's frame, so that load
+// from other processes affects both alike).
+double plain_loop_ms(const Context& ctx, const PlainGeometry& g, std::uint32_t px, std::uint32_t msaa, int frames,
+                     const std::function<void(int)>& before_each) {
+  using V = PlainGeometry::V;
+  const auto& dev = ctx.device();
+  std::array<Buffer, 2> vbs, ibs;
+  for (int e = 0; e < 2; ++e) {
+    vbs[e] = Buffer::create(ctx, std::max<std::size_t>(16, g.verts[e].size() * sizeof(V)),
+                            vk::BufferUsageFlagBits::eVertexBuffer);
+    vbs[e].write(g.verts[e].data(), g.verts[e].size() * sizeof(V));
+    ibs[e] = Buffer::create(ctx, std::max<std::size_t>(16, g.indices[e].size() * 4),
+                            vk::BufferUsageFlagBits::eIndexBuffer);
+    ibs[e].write(g.indices[e].data(), g.indices[e].size() * 4);
+  }
   auto vs = std::get<std::vector<std::uint32_t>>(compile_shader("plain.vert", ShaderStage::vertex));
   auto fs = std::get<std::vector<std::uint32_t>>(compile_shader("plain.frag", ShaderStage::fragment));
   vk::raii::ShaderModule vm(dev, {.codeSize = vs.size() * 4, .pCode = vs.data()});
@@ -128,12 +155,13 @@ double plain_loop_ms(const Context& ctx, std::uint64_t triangles, std::uint32_t 
   const vk::Rect2D scissor{{0, 0}, {px, px}};
   const vk::PipelineViewportStateCreateInfo vp{.viewportCount = 1, .pViewports = &viewport, .scissorCount = 1, .pScissors = &scissor};
   const vk::PipelineRasterizationStateCreateInfo rs{.cullMode = vk::CullModeFlagBits::eNone, .lineWidth = 1.0f};
-  const vk::PipelineMultisampleStateCreateInfo ms{.rasterizationSamples = vk::SampleCountFlagBits::e1};
+  const auto samples = static_cast<vk::SampleCountFlagBits>(msaa);
+  const vk::PipelineMultisampleStateCreateInfo ms{.rasterizationSamples = samples};
   const vk::PipelineDepthStencilStateCreateInfo ds{.depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE, .depthCompareOp = vk::CompareOp::eLess};
   const vk::PipelineColorBlendAttachmentState ba{.colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG |
                                                                    vk::ColorComponentFlagBits::eB | vk::ColorComponentFlagBits::eA};
   const vk::PipelineColorBlendStateCreateInfo bs{.attachmentCount = 1, .pAttachments = &ba};
-  const vk::Format cf = vk::Format::eR8G8B8A8Unorm;
+  const vk::Format cf = vk::Format::eR8G8B8A8Srgb;
   const vk::PipelineRenderingCreateInfo ri{.colorAttachmentCount = 1, .pColorAttachmentFormats = &cf,
                                            .depthAttachmentFormat = vk::Format::eD32Sfloat};
   vk::raii::Pipeline pipeline(dev, nullptr,
@@ -143,27 +171,44 @@ double plain_loop_ms(const Context& ctx, std::uint64_t triangles, std::uint32_t 
                                                              .pMultisampleState = &ms, .pDepthStencilState = &ds,
                                                              .pColorBlendState = &bs, .layout = *layout});
   OffscreenTarget target(ctx, px, px);
-  std::array<Image, 2> depth{
-      Image::create(ctx, {px, px}, vk::Format::eD32Sfloat, vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth),
-      Image::create(ctx, {px, px}, vk::Format::eD32Sfloat, vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth)};
+  std::array<Image, 2> depth, color;
+  for (int e = 0; e < 2; ++e) {
+    depth[e] = Image::create(ctx, {px, px}, vk::Format::eD32Sfloat, vk::ImageUsageFlagBits::eDepthStencilAttachment,
+                             vk::ImageAspectFlagBits::eDepth, samples);
+    if (msaa > 1)
+      color[e] = Image::create(ctx, {px, px}, cf,
+                               vk::ImageUsageFlagBits::eColorAttachment | vk::ImageUsageFlagBits::eTransientAttachment,
+                               vk::ImageAspectFlagBits::eColor, samples);
+  }
   std::vector<double> times;
   for (int f = 0; f < frames + 1; ++f) {
+    before_each(f);
     const auto t0 = std::chrono::steady_clock::now();
     ctx.submit_and_wait([&](const vk::raii::CommandBuffer& cb) {
       for (int e = 0; e < 2; ++e) {
         const EyeImage img = target.eye_image(static_cast<Eye>(e));
         transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined, vk::ImageLayout::eColorAttachmentOptimal);
         transition(cb, *depth[e].image, vk::ImageAspectFlagBits::eDepth, vk::ImageLayout::eUndefined, vk::ImageLayout::eDepthAttachmentOptimal);
-        const vk::RenderingAttachmentInfo ca{.imageView = img.view, .imageLayout = vk::ImageLayout::eColorAttachmentOptimal,
-                                             .loadOp = vk::AttachmentLoadOp::eClear, .storeOp = vk::AttachmentStoreOp::eStore,
-                                             .clearValue = vk::ClearColorValue{std::array<float, 4>{0, 0, 0, 1}}};
+        vk::RenderingAttachmentInfo ca{.imageView = img.view, .imageLayout = vk::ImageLayout::eColorAttachmentOptimal,
+                                       .loadOp = vk::AttachmentLoadOp::eClear, .storeOp = vk::AttachmentStoreOp::eStore,
+                                       .clearValue = vk::ClearColorValue{std::array<float, 4>{0, 0, 0, 1}}};
+        if (msaa > 1) {
+          transition(cb, *color[e].image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+                     vk::ImageLayout::eColorAttachmentOptimal);
+          ca.imageView = *color[e].view;
+          ca.storeOp = vk::AttachmentStoreOp::eDontCare;
+          ca.resolveMode = vk::ResolveModeFlagBits::eAverage;
+          ca.resolveImageView = img.view;
+          ca.resolveImageLayout = vk::ImageLayout::eColorAttachmentOptimal;
+        }
         const vk::RenderingAttachmentInfo da{.imageView = *depth[e].view, .imageLayout = vk::ImageLayout::eDepthAttachmentOptimal,
                                              .loadOp = vk::AttachmentLoadOp::eClear, .storeOp = vk::AttachmentStoreOp::eDontCare,
                                              .clearValue = vk::ClearValue{.depthStencil = {.depth = 1.0f, .stencil = 0}}};
         cb.beginRendering({.renderArea = scissor, .layerCount = 1, .colorAttachmentCount = 1, .pColorAttachments = &ca, .pDepthAttachment = &da});
         cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipeline);
-        cb.bindVertexBuffers(0, *vb.buffer, vk::DeviceSize{0});
-        cb.draw(static_cast<std::uint32_t>(verts.size()), 1, 0, 0);
+        cb.bindVertexBuffers(0, *vbs[e].buffer, vk::DeviceSize{0});
+        cb.bindIndexBuffer(*ibs[e].buffer, 0, vk::IndexType::eUint32);
+        cb.drawIndexed(static_cast<std::uint32_t>(g.indices[e].size()), 1, 0, 0, 0);
         cb.endRendering();
         transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eColorAttachmentOptimal, img.final_layout);
         target.record_after(cb, static_cast<Eye>(e));
@@ -187,15 +232,22 @@ int main(int argc, char** argv) {
   }
   const Context& ctx = std::get<Context>(created);
   std::printf("device: %s (%s); median of %d frames\n\n", ctx.device_name().c_str(), ctx.driver_info().c_str(), frames);
+  if (argc > 2 && std::string(argv[2]) == "precision") {
+    bench::print_precision_table(ctx, frames);
+    return 0;
+  }
 
   // ---- 1. native subdivision: error vs level ------------------------------
   std::printf("1. Native view, table edges (geodesics) drawn as straight pieces vs the analytic curve\n");
-  std::printf("   %u x %u per eye, 90 deg FOV = 20 px/deg; error over both eyes and all edges\n\n", kHeadsetPx, kHeadsetPx);
+  std::printf("   %u x %u per eye, 90 deg FOV = 20 px/deg, one sample per pixel; error over both eyes and all edges\n\n",
+              kHeadsetPx, kHeadsetPx);
   std::printf("| space | level | pieces/edge | max err px | mean err px | triangles | frame ms | GPU ms |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (SpaceKind kind : {SpaceKind::S3, SpaceKind::H3}) {
     const StimulusScene s = make(kind, SceneKind::billiards);
-    Renderer renderer(ctx);
+    // One sample per pixel: the error is geometric, and 1800² with 4× MSAA
+    // would double the benchmark's run time on a CPU device.
+    Renderer renderer(ctx, RendererOptions{.msaa = 1});
     OffscreenTarget target(ctx, kHeadsetPx, kHeadsetPx);
     const auto& table = s.scene.objects()[0];
     auto errors_at = [&](int level) {
@@ -238,7 +290,8 @@ int main(int argc, char** argv) {
   std::printf("| space | tourist ms (cpu/gpu) | native ms (cpu/gpu) | native/tourist | one-eye ms | one-eye/two-eye | native triangles | level |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   std::uint64_t billiards_triangles = 0;
-  double billiards_ms = 0.0;
+  std::optional<PlainGeometry> billiards_geometry;
+  std::uint32_t billiards_msaa = 1;
   for (SpaceKind kind : {SpaceKind::S3, SpaceKind::E3, SpaceKind::H3}) {
     const StimulusScene s = make(kind, SceneKind::billiards);
     // Three renderers and targets, frames interleaved, so load from other
@@ -281,17 +334,35 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(tourist.last.triangles), tourist.last.draws);
     if (kind == SpaceKind::E3) {
       billiards_triangles = native.last.triangles;
-      billiards_ms = native.frame_ms;
+      billiards_geometry = plain_geometry(s, r_native.last_plan());
+      billiards_msaa = r_native.msaa();
     }
   }
 
   // ---- 3. beside a plain loop -----------------------------------------------
-  const double plain = plain_loop_ms(ctx, billiards_triangles, 1024, frames);
-  std::printf("\n3. Billiards (E3, native, both eyes, 1024 x 1024 per eye) beside a plain Vulkan loop\n\n");
+  // curvlab's frames interleaved with the plain loop's.
+  const StimulusScene e3 = make(SpaceKind::E3, SceneKind::billiards);
+  Renderer r_e3(ctx);
+  OffscreenTarget t_e3(ctx, 1024, 1024);
+  std::vector<double> curvlab_ms;
+  const double plain = plain_loop_ms(ctx, *billiards_geometry, 1024, billiards_msaa, frames, [&](int i) {
+    FrameDescription fd = frame_for(e3, ViewSettings::preset(ViewPreset::native), 1024);
+    fd.head = e3.head * geometry::rotation(geometry::Vec3(0, 1, 0), 1e-6 * i);
+    const FrameStats st = r_e3.render(e3.scene, fd, t_e3);
+    if (i > 0) curvlab_ms.push_back(st.frame_ms);
+  });
+  const double billiards_ms = median(curvlab_ms);
+  const std::size_t plain_triangles =
+      (billiards_geometry->indices[0].size() + billiards_geometry->indices[1].size()) / 3;
+  std::printf("\n3. Billiards (E3, native, both eyes, 1024 x 1024 per eye, msaa %u) beside a plain Vulkan loop\n",
+              billiards_msaa);
+  std::printf("   drawing the same meshes at the same clip positions (same pixel coverage) through a minimal\n");
+  std::printf("   pipeline, same sample count, sRGB targets and read-back\n\n");
   std::printf("| what | triangles | frame ms |\n|---|---|---|\n");
   std::printf("| curvlab billiards frame | %llu | %.1f |\n", static_cast<unsigned long long>(billiards_triangles), billiards_ms);
-  std::printf("| plain loop, same triangles, 2 passes + read-back | %llu | %.1f |\n",
-              static_cast<unsigned long long>(billiards_triangles), plain);
+  std::printf("| plain loop, same meshes and coverage, 2 passes + read-back | %zu | %.1f |\n", plain_triangles, plain);
   std::printf("| ratio curvlab/plain | | %.3f |\n", billiards_ms / plain);
+
+  bench::print_precision_table(ctx, frames);
   return 0;
 }

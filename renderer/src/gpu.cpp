@@ -26,16 +26,18 @@ void Buffer::write(const void* data, std::size_t bytes, std::size_t offset) cons
 }
 
 Image Image::create(const Context& ctx, vk::Extent2D extent, vk::Format format,
-                    vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect) {
+                    vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect,
+                    vk::SampleCountFlagBits samples) {
   Image img;
   img.format = format;
+  img.samples = samples;
   img.extent = extent;
   img.image = vk::raii::Image(ctx.device(), {.imageType = vk::ImageType::e2D,
                                              .format = format,
                                              .extent = {extent.width, extent.height, 1},
                                              .mipLevels = 1,
                                              .arrayLayers = 1,
-                                             .samples = vk::SampleCountFlagBits::e1,
+                                             .samples = samples,
                                              .tiling = vk::ImageTiling::eOptimal,
                                              .usage = usage,
                                              .sharingMode = vk::SharingMode::eExclusive,

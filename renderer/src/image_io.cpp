@@ -1,16 +1,51 @@
 #include "curvlab/renderer/image_io.hpp"
 
+#include <png.h>
 #include <stb_image.h>
-#include <stb_image_write.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
+#include <memory>
 
 namespace curvlab::renderer {
+namespace {
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+
+// libpng reports errors by longjmp to the setjmp in encode(); no C++ object
+// with a destructor may live between the two.
+bool encode(std::FILE* file, const Rgba8Image& image) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  if (png == nullptr) return false;
+  png_infop info = png_create_info_struct(png);
+  if (info == nullptr || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    return false;
+  }
+  png_init_io(png, file);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height),
+               8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  // The pixels are sRGB-encoded (the renderer's targets are sRGB): say so
+  // with an sRGB chunk and the gAMA/cHRM values the PNG specification
+  // (11.3.3.5) pairs with it, for readers that know only those.
+  png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+  png_write_info(png, info);
+  for (int y = 0; y < image.height; ++y)
+    png_write_row(png, image.pixels.data() + static_cast<std::size_t>(y) * image.width * 4);
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return true;
+}
+
+}  // namespace
 
 std::string write_png(const std::string& path, const Rgba8Image& image) {
-  if (stbi_write_png(path.c_str(), image.width, image.height, 4, image.pixels.data(),
-                     image.width * 4) == 0)
+  const std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "wb"));
+  if (!file || !encode(file.get(), image) || std::fflush(file.get()) != 0)
     return "cannot write PNG " + path;
   return {};
 }

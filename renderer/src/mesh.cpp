@@ -1,5 +1,7 @@
 #include "curvlab/renderer/mesh.hpp"
 
+#include "curvlab/renderer/colour.hpp"
+
 #include "curvlab/geometry/maps.hpp"
 
 #include <glm/geometric.hpp>
@@ -65,10 +67,10 @@ void fermi_patch(MeshData& m, const Space& space, const geometry::TableShape& ta
   grid_indices(m, first, ns + 1, nyz + 1);
 }
 
-const glm::vec4 kCloth{0.10f, 0.42f, 0.20f, 1.0f};
-const glm::vec4 kCushion{0.08f, 0.34f, 0.16f, 1.0f};
-const glm::vec4 kRail{0.45f, 0.26f, 0.12f, 1.0f};
-const glm::vec4 kSkirt{0.30f, 0.17f, 0.08f, 1.0f};
+const glm::vec4& kCloth = palette::cloth;
+const glm::vec4& kCushion = palette::cushion;
+const glm::vec4& kRail = palette::rail;
+const glm::vec4& kSkirt = palette::skirt;
 
 }  // namespace
 
@@ -198,9 +200,9 @@ MeshData build_stick(const Space& space, const geometry::BentStick& stick, int l
     const double u = -half + stick.length_m * i / along;
     const double f = static_cast<double>(i) / along;
     // Butt (u = −L/2) dark, shaft light, the last 2 cm white (tip).
-    const glm::vec4 color = f < 0.35   ? glm::vec4(0.22f, 0.10f, 0.05f, 1.0f)
-                            : u > half - 0.02 ? glm::vec4(0.9f, 0.9f, 0.88f, 1.0f)
-                                              : glm::vec4(0.85f, 0.66f, 0.40f, 1.0f);
+    const glm::vec4 color = f < 0.35          ? palette::stick_butt
+                            : u > half - 0.02 ? palette::stick_tip
+                                              : palette::stick_shaft;
     const Point c = stick.centre_point(space, frame, u);
     for (int k = 0; k <= kAround; ++k) {
       const double phi = 2.0 * kPi * k / kAround;

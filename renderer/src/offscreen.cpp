@@ -13,7 +13,7 @@ OffscreenTarget::OffscreenTarget(const Context& ctx, std::uint32_t width_px,
     : identity_(next_identity++) {
   const vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width_px) * height_px * 4;
   for (int e = 0; e < 2; ++e) {
-    images_[e] = Image::create(ctx, {width_px, height_px}, vk::Format::eR8G8B8A8Unorm,
+    images_[e] = Image::create(ctx, {width_px, height_px}, vk::Format::eR8G8B8A8Srgb,
                                vk::ImageUsageFlagBits::eColorAttachment |
                                    vk::ImageUsageFlagBits::eTransferSrc |
                                    vk::ImageUsageFlagBits::eTransferDst,

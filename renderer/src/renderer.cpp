@@ -13,6 +13,9 @@ namespace curvlab::renderer {
 namespace {
 
 constexpr vk::Format kDepthFormat = vk::Format::eD32Sfloat;
+// The eye images every target hands the renderer: shaded in linear light,
+// stored sRGB-encoded by the hardware (colour.hpp).
+constexpr vk::Format kColorFormat = vk::Format::eR8G8B8A8Srgb;
 constexpr vk::DeviceSize kViewStride = 256;  // ≥ minUniformBufferOffsetAlignment everywhere
 
 // std140 layout of the View block in scene.vert.
@@ -34,6 +37,8 @@ struct SpecData {
   std::int32_t curvature;
   std::int32_t back;
   std::int32_t shading;
+  glm::vec3 ink;    // text panels' glyphs, linear RGB
+  glm::vec3 paper;  // text panels' ground, linear RGB
 };
 
 struct GpuMesh {
@@ -86,6 +91,17 @@ std::vector<std::uint32_t> compile_or_abort(std::string_view name, ShaderStage s
 
 glm::mat4 to_float(const glm::dmat4& m) { return glm::mat4(m); }
 
+vk::SampleCountFlagBits sample_bits(std::uint32_t samples) {
+  return static_cast<vk::SampleCountFlagBits>(samples);
+}
+
+// What one eye is drawn into: the target's image itself (one sample), or a
+// multisampled colour image resolved into it at the end of the pass.
+struct EyeAttachments {
+  Image color;  // multisampled; empty when drawing with one sample
+  Image depth;
+};
+
 }  // namespace
 
 struct Renderer::Impl {
@@ -98,10 +114,11 @@ struct Renderer::Impl {
   vk::raii::Sampler sampler{nullptr};
   vk::raii::ShaderModule vert{nullptr};
   vk::raii::ShaderModule frag{nullptr};
+  std::uint32_t msaa = 1;
   std::map<std::tuple<int, int, int, int, int>, vk::raii::Pipeline> pipelines;
   std::map<std::pair<std::size_t, int>, GpuMesh> meshes;
   std::map<std::size_t, Texture> textures;
-  std::array<Image, 2> depth;
+  std::array<EyeAttachments, 2> attachments;
   std::vector<FrameSlot> slots;
   std::size_t next_slot = 0;
   bool timestamps = false;
@@ -114,7 +131,7 @@ struct Renderer::Impl {
   // Bound to set 1 for draws without text, so every pipeline's sets are bound.
   Texture blank;
 
-  Impl(const Context& c, RendererOptions o) : ctx(c), options(o) {
+  Impl(const Context& c, RendererOptions o) : ctx(c), options(o), msaa(supported_msaa(c, o.msaa)) {
     const auto& dev = ctx.device();
     const vk::DescriptorSetLayoutBinding view_binding{
         .binding = 0,
@@ -212,12 +229,19 @@ struct Renderer::Impl {
                                      static_cast<int>(shading), static_cast<int>(topology));
     if (auto it = pipelines.find(key); it != pipelines.end()) return it->second;
     const SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
-                        static_cast<std::int32_t>(shading)};
+                        static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
+                        glm::vec3(palette::text_paper)};
     const vk::SpecializationMapEntry entries[] = {{0, offsetof(SpecData, native_view), 4},
                                                   {1, offsetof(SpecData, curvature), 4},
                                                   {2, offsetof(SpecData, back), 4},
-                                                  {3, offsetof(SpecData, shading), 4}};
-    const vk::SpecializationInfo spec_info{.mapEntryCount = 4,
+                                                  {3, offsetof(SpecData, shading), 4},
+                                                  {4, offsetof(SpecData, ink), 4},
+                                                  {5, offsetof(SpecData, ink) + 4, 4},
+                                                  {6, offsetof(SpecData, ink) + 8, 4},
+                                                  {7, offsetof(SpecData, paper), 4},
+                                                  {8, offsetof(SpecData, paper) + 4, 4},
+                                                  {9, offsetof(SpecData, paper) + 8, 4}};
+    const vk::SpecializationInfo spec_info{.mapEntryCount = 10,
                                            .pMapEntries = entries,
                                            .dataSize = sizeof(SpecData),
                                            .pData = &spec};
@@ -245,8 +269,10 @@ struct Renderer::Impl {
         .cullMode = vk::CullModeFlagBits::eNone,
         .frontFace = vk::FrontFace::eCounterClockwise,
         .lineWidth = 1.0f};
+    // Multisampling anti-aliases edges only: the fragment shader runs once
+    // per pixel, so text sampled from its atlas stays as sharp as without.
     const vk::PipelineMultisampleStateCreateInfo multisample{
-        .rasterizationSamples = vk::SampleCountFlagBits::e1};
+        .rasterizationSamples = sample_bits(msaa)};
     const vk::PipelineDepthStencilStateCreateInfo depth_state{
         .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE,
         .depthCompareOp = vk::CompareOp::eLess};
@@ -257,7 +283,7 @@ struct Renderer::Impl {
     const vk::PipelineColorBlendStateCreateInfo blend_state{.attachmentCount = 1, .pAttachments = &blend};
     const vk::DynamicState dyn[] = {vk::DynamicState::eViewport, vk::DynamicState::eScissor};
     const vk::PipelineDynamicStateCreateInfo dynamic{.dynamicStateCount = 2, .pDynamicStates = dyn};
-    const vk::Format color_format = vk::Format::eR8G8B8A8Unorm;
+    const vk::Format color_format = kColorFormat;
     const vk::PipelineRenderingCreateInfo rendering{.colorAttachmentCount = 1,
                                                     .pColorAttachmentFormats = &color_format,
                                                     .depthAttachmentFormat = kDepthFormat};
@@ -347,13 +373,19 @@ struct Renderer::Impl {
     return textures.emplace(object, std::move(t)).first->second;
   }
 
-  const Image& depth_image(int eye, vk::Extent2D extent, Garbage& garbage) {
-    Image& d = depth[eye];
-    if (*d.image && d.extent == extent) return d;
-    if (*d.image) garbage.images.push_back(std::move(d));
-    d = Image::create(ctx, extent, kDepthFormat, vk::ImageUsageFlagBits::eDepthStencilAttachment,
-                      vk::ImageAspectFlagBits::eDepth);
-    return d;
+  const EyeAttachments& eye_attachments(int eye, vk::Extent2D extent, Garbage& garbage) {
+    EyeAttachments& a = attachments[eye];
+    if (*a.depth.image && a.depth.extent == extent) return a;
+    if (*a.depth.image) garbage.images.push_back(std::move(a.depth));
+    if (*a.color.image) garbage.images.push_back(std::move(a.color));
+    a.depth = Image::create(ctx, extent, kDepthFormat, vk::ImageUsageFlagBits::eDepthStencilAttachment,
+                            vk::ImageAspectFlagBits::eDepth, sample_bits(msaa));
+    if (msaa > 1)
+      a.color = Image::create(ctx, extent, kColorFormat,
+                              vk::ImageUsageFlagBits::eColorAttachment |
+                                  vk::ImageUsageFlagBits::eTransientAttachment,
+                              vk::ImageAspectFlagBits::eColor, sample_bits(msaa));
+    return a;
   }
 };
 
@@ -363,6 +395,16 @@ Renderer::~Renderer() = default;
 Renderer::Renderer(Renderer&&) noexcept = default;
 
 const RenderPlan& Renderer::last_plan() const { return impl_->last_plan; }
+std::uint32_t Renderer::msaa() const { return impl_->msaa; }
+
+std::uint32_t supported_msaa(const Context& ctx, std::uint32_t requested) {
+  const auto& limits = ctx.physical().getProperties().limits;
+  const vk::SampleCountFlags both =
+      limits.framebufferColorSampleCounts & limits.framebufferDepthSampleCounts;
+  for (std::uint32_t n = 8; n > 1; n /= 2)
+    if (n <= requested && (both & sample_bits(n))) return n;
+  return 1;
+}
 void Renderer::wait_idle() {
   try {
     impl_->wait_all();
@@ -375,6 +417,34 @@ void Renderer::wait_idle_noexcept() noexcept {
 }
 
 namespace {
+
+// The eye's colour attachment: the target's image, or the multisampled image
+// averaged into it when the pass ends (the resolve; for sRGB images the
+// average is taken of linear values).
+vk::RenderingAttachmentInfo color_attachment(std::uint32_t msaa, const EyeAttachments& att,
+                                             const EyeImage& img, const std::array<float, 4>& bg) {
+  vk::RenderingAttachmentInfo info{.imageView = img.view,
+                                   .imageLayout = vk::ImageLayout::eColorAttachmentOptimal,
+                                   .loadOp = vk::AttachmentLoadOp::eClear,
+                                   .storeOp = vk::AttachmentStoreOp::eStore,
+                                   .clearValue = vk::ClearColorValue{bg}};
+  if (msaa == 1) return info;
+  info.imageView = *att.color.view;
+  info.storeOp = vk::AttachmentStoreOp::eDontCare;
+  info.resolveMode = vk::ResolveModeFlagBits::eAverage;
+  info.resolveImageView = img.view;
+  info.resolveImageLayout = vk::ImageLayout::eColorAttachmentOptimal;
+  return info;
+}
+
+// Every target hands the renderer sRGB RGBA8 images (its pipelines' format);
+// another format is a broken contract.
+void check_eye_format(const EyeImage& img) {
+  if (img.format == kColorFormat) return;
+  std::cerr << "curvlab renderer: an eye image is " << vk::to_string(img.format) << ", not "
+            << vk::to_string(kColorFormat) << '\n';
+  std::abort();
+}
 
 // Everything a frame's pixels depend on besides the scene content.
 std::vector<double> frame_signature(const Scene& scene, const FrameDescription& f,
@@ -476,16 +546,17 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
       draw_textures.push_back(scene.objects()[d.object].text ? &r.texture(scene, d.object, slot.garbage)
                                                              : nullptr);
     }
-    const Image& depth = r.depth_image(e, img.extent, slot.garbage);
+    check_eye_format(img);
+    const EyeAttachments& att = r.eye_attachments(e, img.extent, slot.garbage);
+    const Image& depth = att.depth;
     transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
                vk::ImageLayout::eColorAttachmentOptimal);
+    if (r.msaa > 1)
+      transition(cb, *att.color.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+                 vk::ImageLayout::eColorAttachmentOptimal);
     transition(cb, *depth.image, vk::ImageAspectFlagBits::eDepth, vk::ImageLayout::eUndefined,
                vk::ImageLayout::eDepthAttachmentOptimal);
-    const vk::RenderingAttachmentInfo color_att{.imageView = img.view,
-                                                .imageLayout = vk::ImageLayout::eColorAttachmentOptimal,
-                                                .loadOp = vk::AttachmentLoadOp::eClear,
-                                                .storeOp = vk::AttachmentStoreOp::eStore,
-                                                .clearValue = vk::ClearColorValue{bg}};
+    const vk::RenderingAttachmentInfo color_att = color_attachment(r.msaa, att, img, bg);
     const vk::ClearValue depth_clear{.depthStencil = {.depth = 1.0f, .stencil = 0}};
     const vk::RenderingAttachmentInfo depth_att{.imageView = *depth.view,
                                                 .imageLayout = vk::ImageLayout::eDepthAttachmentOptimal,

@@ -2,6 +2,7 @@
 
 #include "curvlab/geometry/maps.hpp"
 #include "curvlab/renderer/tiling.hpp"
+#include "curvlab/renderer/colour.hpp"
 
 #include <atomic>
 #include <cmath>
@@ -182,10 +183,10 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
         return geometry::translation_m(space, Vec3(x, 0.0, z)) *
                geometry::translation_m(space, Vec3(0.0, r, 0.0));
       };
-      const glm::vec4 colors[] = {{0.95f, 0.80f, 0.10f, 1}, {0.10f, 0.25f, 0.80f, 1},
-                                  {0.85f, 0.10f, 0.10f, 1}, {0.45f, 0.10f, 0.55f, 1},
-                                  {0.95f, 0.45f, 0.05f, 1}, {0.05f, 0.50f, 0.20f, 1},
-                                  {0.55f, 0.10f, 0.10f, 1}, {0.05f, 0.05f, 0.05f, 1}};
+      const glm::vec4 colors[] = {display(0.95f, 0.80f, 0.10f), display(0.10f, 0.25f, 0.80f),
+                                  display(0.85f, 0.10f, 0.10f), display(0.45f, 0.10f, 0.55f),
+                                  display(0.95f, 0.45f, 0.05f), display(0.05f, 0.50f, 0.20f),
+                                  display(0.55f, 0.10f, 0.10f), display(0.05f, 0.05f, 0.05f)};
       int n = 0;
       for (int row = 0; row < 5; ++row)
         for (int i = 0; i <= row; ++i, ++n) {
@@ -195,7 +196,7 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
           o.name = "ball " + std::to_string(n + 1);
           s.scene.add(std::move(o));
         }
-      SceneObject cue = ball_object(space, r, glm::vec4(0.95f, 0.95f, 0.92f, 1), place(0.0, cue_z));
+      SceneObject cue = ball_object(space, r, display(0.95f, 0.95f, 0.92f), place(0.0, cue_z));
       cue.name = "cue ball";
       s.scene.add(std::move(cue));
       // Stick along −z (model +x rotated by +90° about y), tip just behind the

@@ -1,5 +1,6 @@
 #include "curvlab/renderer/swapchain.hpp"
 
+#include "curvlab/renderer/colour.hpp"
 #include "curvlab/renderer/text.hpp"
 
 #include <algorithm>
@@ -14,8 +15,10 @@ namespace {
 // Far from the offscreen targets' numbering, so identities never collide.
 std::atomic<std::uint64_t> next_identity{std::uint64_t{1} << 40};
 
-constexpr vk::Format kEyeFormat = vk::Format::eR8G8B8A8Unorm;
-constexpr std::array<float, 4> kLetterbox{0.08f, 0.08f, 0.09f, 1.0f};
+// The renderer's eye format; the window image is composed in it too, so
+// letterbox scaling filters linear values and the banner's bytes are display
+// values, as the PNGs hold them.
+constexpr vk::Format kEyeFormat = vk::Format::eR8G8B8A8Srgb;
 constexpr std::array<std::uint8_t, 3> kBannerInk{235, 235, 235};
 constexpr std::array<std::uint8_t, 3> kBannerPaper{24, 24, 28};
 
@@ -60,14 +63,22 @@ vk::ImageBlit whole(vk::Extent2D src, vk::Extent2D dst) {
   return blit_onto(src, 0, 0, static_cast<std::int32_t>(dst.width), static_cast<std::int32_t>(dst.height));
 }
 
-bool is_rgba8(vk::Format f) {
-  return f == vk::Format::eR8G8B8A8Unorm || f == vk::Format::eR8G8B8A8Srgb;
+// The colour the window shows around letterboxed eyes (linear).
+vk::ClearColorValue letterbox_colour() {
+  const glm::vec4 c = display(0.08f, 0.08f, 0.09f);
+  return vk::ClearColorValue{std::array<float, 4>{c.x, c.y, c.z, 1.0f}};
 }
 
-// UNORM first: the renderer writes display values, as its PNGs hold them; an
-// sRGB swapchain would re-encode them in the blit and brighten the image.
+bool is_srgb(vk::Format f) {
+  return f == vk::Format::eB8G8R8A8Srgb || f == vk::Format::eR8G8B8A8Srgb;
+}
+
+// sRGB first: the composed window holds sRGB-encoded values, which a blit
+// into an sRGB image keeps byte for byte. A UNORM image in the sRGB colour
+// space would receive the decoded (linear) values and look too dark.
 vk::SurfaceFormatKHR choose_format(const std::vector<vk::SurfaceFormatKHR>& formats) {
-  for (const vk::Format want : {vk::Format::eB8G8R8A8Unorm, vk::Format::eR8G8B8A8Unorm})
+  for (const vk::Format want : {vk::Format::eB8G8R8A8Srgb, vk::Format::eR8G8B8A8Srgb,
+                                vk::Format::eB8G8R8A8Unorm, vk::Format::eR8G8B8A8Unorm})
     for (const auto& f : formats)
       if (f.format == want && f.colorSpace == vk::ColorSpaceKHR::eSrgbNonlinear) return f;
   return formats.front();
@@ -177,6 +188,9 @@ std::optional<RenderError> SwapchainTarget::recreate(vk::Extent2D framebuffer_px
         vk::FormatFeatureFlagBits::eBlitDst))
     return RenderError{"the window's swapchain format " + vk::to_string(chosen.format) +
                        " cannot be a blit destination"};
+  if (!is_srgb(chosen.format) && format_ != chosen.format)
+    std::fprintf(stderr, "curvlab: warning: the window offers no sRGB swapchain format; it shows %s, "
+                         "darker than the stimulus PNGs\n", vk::to_string(chosen.format).c_str());
   format_ = chosen.format;
   mode_ = choose_mode(pd.getSurfacePresentModesKHR(surface), options_.vsync);
   std::uint32_t count = caps.minImageCount + 1;
@@ -311,8 +325,8 @@ void SwapchainTarget::frame_finished() {
     writes_before_transfer(cb);
     transition(cb, *window_.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
                vk::ImageLayout::eTransferDstOptimal);
-    cb.clearColorImage(*window_.image, vk::ImageLayout::eTransferDstOptimal,
-                       vk::ClearColorValue{kLetterbox}, kColorRange);
+    cb.clearColorImage(*window_.image, vk::ImageLayout::eTransferDstOptimal, letterbox_colour(),
+                       kColorRange);
     const std::uint32_t area_h = extent_.height - banner_h;
     if (area_h > 0) {
       auto blit_eye = [&](Eye eye, std::int32_t x0, std::uint32_t w) {
@@ -450,7 +464,7 @@ void ExternalImagesTarget::record_after(const vk::raii::CommandBuffer& cb, Eye e
   writes_before_transfer(cb);
   transition(cb, dst.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
              vk::ImageLayout::eTransferDstOptimal);
-  if (is_rgba8(dst.format)) {
+  if (dst.format == kEyeFormat) {
     const vk::ImageCopy region{.srcSubresource = kColorLayer,
                                .dstSubresource = kColorLayer,
                                .extent = {src.extent.width, src.extent.height, 1}};

@@ -1,6 +1,7 @@
 #include "curvlab/renderer/tiling.hpp"
 
 #include "curvlab/geometry/maps.hpp"
+#include "curvlab/renderer/colour.hpp"
 
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
@@ -247,7 +248,7 @@ MeshData build_tiling_mesh(const Space& space, const Tiling& tiling, int level) 
                        (space.kind == SpaceKind::E3 ? 3.0 / space.radius_m : far_rad);
       const float f = static_cast<float>(std::clamp(1.0 - 0.75 * d, 0.2, 1.0));
       m.vertices.push_back({glm::vec4(p), glm::vec4(0.0f, 1.0f, 0.0f, 0.0f),
-                            glm::vec4(0.55f * f, 0.75f * f, 1.0f * f, 1.0f)});
+                            display(0.55f * f, 0.75f * f, 1.0f * f)});
     }
     for (int i = 0; i < pieces; ++i)
       m.indices.insert(m.indices.end(), {first + static_cast<std::uint32_t>(i),

@@ -194,6 +194,23 @@ options = [{ value = "a", keys = ["1"] }, { value = "b", keys = ["2"] }]
   EXPECT_EQ(fields, (std::set<std::string>{"viewing.eyse", "viewing.ipd_m", "timeline.iti_ms"}));
 }
 
+TEST(Diagnostics, MsaaTakesOnlyTheSampleCountsAndDefaultsToFour) {
+  const std::string head = "[protocol]\nname = \"x\"\nversion = \"1\"\n[randomization]\nseed = 1\n";
+  const std::string tail = "[judgement]\ntype = \"choice\"\n"
+                           "options = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n";
+  const auto bad = load_protocol_text(head + "[viewing]\nmsaa = 3\n" + tail, "inline.toml");
+  ASSERT_EQ(bad.diagnostics.size(), 1u);
+  EXPECT_EQ(bad.diagnostics[0].field, "viewing.msaa");
+  EXPECT_NE(bad.diagnostics[0].message.find("expected one of 1, 2, 4, 8, found 3"), std::string::npos)
+      << bad.diagnostics[0].message;
+  const auto eight = load_protocol_text(head + "[viewing]\nmsaa = 8\n" + tail, "inline.toml");
+  ASSERT_TRUE(eight.ok());
+  EXPECT_EQ(eight.protocol->session_settings().viewing.msaa, 8);
+  const auto unset = load_protocol_text(head + tail, "inline.toml");
+  ASSERT_TRUE(unset.ok());
+  EXPECT_EQ(unset.protocol->session_settings().viewing.msaa, 4);
+}
+
 TEST(Diagnostics, GarbageNeverCrashes) {
   for (const std::string& text : {std::string(), std::string("\0\0\0", 3), std::string("[[[[["),
                                  std::string("a = [") + std::string(5000, '['), std::string("x = 1e999"),

@@ -4,12 +4,18 @@
 #include "stimulus_fixtures.hpp"
 
 #include "curvlab/geometry/maps.hpp"
+#include "curvlab/renderer/colour.hpp"
+#include "curvlab/renderer/image_io.hpp"
 #include "curvlab/renderer/plan.hpp"
 #include "curvlab/renderer/tiling.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
 #include <numbers>
 
 using namespace curvlab;
@@ -261,4 +267,46 @@ TEST(Text, RendersInkIntoThePanel) {
   auto missing = render_text("x", 16, 16, 10.0, "/nonexistent/font.ttf");
   ASSERT_TRUE(std::holds_alternative<TextError>(missing));
   EXPECT_NE(std::get<TextError>(missing).message.find("/nonexistent/font.ttf"), std::string::npos);
+}
+
+// ---- colour --------------------------------------------------------------
+
+TEST(Colour, SrgbTransferRoundTripsAndMatchesTheStandard) {
+  // IEC 61966-2-1: 0.5 encodes 0.2140 linear; the curve's two pieces meet.
+  EXPECT_NEAR(srgb_to_linear(0.5f), 0.21404, 1e-4);
+  EXPECT_NEAR(srgb_to_linear(0.04045f), 0.04045f / 12.92f, 1e-6);
+  for (int i = 0; i <= 255; ++i) {
+    const float v = float(i) / 255.0f;
+    EXPECT_NEAR(linear_to_srgb(srgb_to_linear(v)), v, 1e-5) << i;
+  }
+}
+
+TEST(Colour, PhotometryTableInTheDocsMatchesThePalette) {
+  // docs/renderer.md, "Photometry": relative luminance Y of each colour.
+  const std::vector<std::pair<glm::vec4, double>> documented = {
+      {palette::background, 0.0014}, {palette::cloth, 0.1099},      {palette::cushion, 0.0708},
+      {palette::rail, 0.0766},       {palette::skirt, 0.0336},      {palette::stick_butt, 0.0159},
+      {palette::stick_shaft, 0.4379}, {palette::stick_tip, 0.7846}, {palette::text_ink, 0.9054},
+      {palette::text_paper, 0.0060}};
+  for (const auto& [colour, y] : documented) EXPECT_NEAR(relative_luminance(glm::vec3(colour)), y, 1e-4);
+}
+
+TEST(ImageIo, PngsCarryAnSrgbChunkAndRoundTrip) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("curvlab_png_" + std::to_string(::getpid()) + ".png");
+  Rgba8Image img{3, 2, {}};
+  for (int i = 0; i < 24; ++i) img.pixels.push_back(static_cast<std::uint8_t>(i * 10));
+  ASSERT_EQ(write_png(path.string(), img), "");
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream contents;
+  contents << in.rdbuf();
+  const std::string bytes = contents.str();
+  EXPECT_NE(bytes.find("sRGB"), std::string::npos);
+  EXPECT_NE(bytes.find("gAMA"), std::string::npos);
+  Rgba8Image back;
+  std::string error;
+  ASSERT_TRUE(read_png(path.string(), back, error)) << error;
+  EXPECT_EQ(back.pixels, img.pixels);
+  std::filesystem::remove(path);
+  EXPECT_NE(write_png("/nonexistent-dir/x.png", img), "");
 }

@@ -222,3 +222,27 @@ TEST(Predict, PrintsProportionsAndPower) {
   const auto bad = run_cli("predict " + kProtocols + "proposed_study.toml --effect view:native,nowhere");
   EXPECT_EQ(bad.exit_code, 2);
 }
+
+// --msaa overrides the protocol's [viewing] msaa, is clamped to the device
+// with a warning, and the count drawn with is the session's provenance.
+TEST(RunHeadless, MsaaIsClampedWarnedAndStoredWithTheSession) {
+  const auto dir = fresh_dir("msaa");
+  const auto db = (dir / "demo.sqlite").string();
+  const auto images = (dir / "images").string();
+  auto r = run_cli("run " + kProtocols + "demo.toml --participant P01 --db " + db + " --images " + images +
+                   " --render onset --quiet --software --msaa 8");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("warning: msaa 8 is more than the Vulkan device supports; drawing with 4"),
+            std::string::npos)
+      << r.out;
+  const auto start = query(db, "SELECT detail FROM events WHERE kind = 'session_start'");
+  ASSERT_EQ(start.size(), 1u);
+  EXPECT_EQ(nlohmann::json::parse(start[0][0]).at("msaa"), 4);
+  std::ifstream png(images + "/trial_0000_left.png", std::ios::binary);
+  std::string head(64, '\0');
+  png.read(head.data(), 64);
+  EXPECT_NE(head.find("sRGB"), std::string::npos) << "the saved stimulus carries an sRGB chunk";
+  r = run_cli("run " + kProtocols + "demo.toml --participant P02 --db " + db + " --render none --msaa 3");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("--msaa must be 1, 2, 4 or 8, got 3"), std::string::npos) << r.out;
+}

@@ -91,12 +91,14 @@ TEST(StereoRig, GeometryPoseKeepsValidity) {
   EXPECT_TRUE(to_geometry(p, true).valid);
 }
 
-TEST(SwapchainFormat, PrefersBytesTheRendererWrites) {
+TEST(SwapchainFormat, PrefersSrgbThenTheBytesTheRendererWrites) {
   EXPECT_EQ(choose_swapchain_format({VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_SRGB,
                                      VK_FORMAT_R8G8B8A8_UNORM}),
-            VK_FORMAT_R8G8B8A8_UNORM);
-  EXPECT_EQ(choose_swapchain_format({VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_SRGB}),
             VK_FORMAT_R8G8B8A8_SRGB);
+  EXPECT_EQ(choose_swapchain_format({VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_SRGB}),
+            VK_FORMAT_B8G8R8A8_SRGB);
+  EXPECT_EQ(choose_swapchain_format({VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM}),
+            VK_FORMAT_R8G8B8A8_UNORM);
   EXPECT_EQ(choose_swapchain_format({VK_FORMAT_R16G16B16A16_SFLOAT, VK_FORMAT_B8G8R8A8_UNORM}),
             VK_FORMAT_B8G8R8A8_UNORM);
   EXPECT_EQ(choose_swapchain_format({VK_FORMAT_B8G8R8A8_SRGB}), VK_FORMAT_B8G8R8A8_SRGB);

@@ -85,6 +85,18 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
   return out;
 }
 
+std::uint32_t check_msaa(int samples) {
+  if (samples != 1 && samples != 2 && samples != 4 && samples != 8)
+    throw UsageError("--msaa must be 1, 2, 4 or 8, got " + std::to_string(samples));
+  return static_cast<std::uint32_t>(samples);
+}
+
+void warn_if_msaa_clamped(std::uint32_t requested, std::uint32_t effective) {
+  if (effective != 0 && effective < requested)
+    std::cerr << "curvlab: warning: msaa " << requested << " is more than the Vulkan device supports; "
+              << "drawing with " << effective << " samples per pixel\n";
+}
+
 std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text, const std::string& option) {
   const auto x = text.find('x');
   try {

@@ -50,6 +50,12 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 
 // Adds the required option `--space S3|E3|H3` (case-insensitive) to cmd.
 void add_space_option(CLI::App* cmd, geometry::SpaceKind* kind);
+// --msaa N: samples per pixel, 1, 2, 4 or 8; a UsageError naming --msaa
+// otherwise.
+std::uint32_t check_msaa(int samples);
+// A warning on stderr when the device draws with fewer samples than asked.
+void warn_if_msaa_clamped(std::uint32_t requested, std::uint32_t effective);
+
 // "WIDTHxHEIGHT" in pixels, each 16…8192; a UsageError naming `option` otherwise.
 std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text, const std::string& option);
 

@@ -32,6 +32,7 @@ struct RenderArgs {
   std::string eyes;
   double ipd_m = 0.063;
   double bend_m = 0.0;
+  int msaa = 4;
   bool software = false;
   std::string out;
   bool json = false;
@@ -57,6 +58,7 @@ void run_render(const RenderArgs& a) {
   if (!(std::abs(a.yaw_deg) <= 360.0)) throw UsageError("--yaw-deg must lie in [-360, 360]");
   if (!(a.ipd_m >= 0.0 && a.ipd_m < 0.1)) throw UsageError("--ipd-m must lie in [0, 0.1) m");
   const auto [w, h] = parse_size(a.size, "--size");
+  const std::uint32_t msaa = check_msaa(a.msaa);
   if (a.out.empty()) throw UsageError("--out DIR is required");
 
   ViewSettings settings = ViewSettings::preset(*preset);
@@ -86,7 +88,8 @@ void run_render(const RenderArgs& a) {
                                   .validation = false});
   if (auto* e = std::get_if<RenderError>(&created)) throw RuntimeFailure(e->message);
   const Context& ctx = std::get<Context>(created);
-  Renderer renderer(ctx);
+  Renderer renderer(ctx, RendererOptions{.msaa = msaa});
+  warn_if_msaa_clamped(msaa, renderer.msaa());
   OffscreenTarget target(ctx, w, h);
 
   FrameDescription frame;
@@ -113,6 +116,7 @@ void run_render(const RenderArgs& a) {
   plan["width_px"] = w;
   plan["height_px"] = h;
   plan["device"] = ctx.device_name();
+  plan["msaa"] = renderer.msaa();
   plan["views"] = stats.views;
   plan["passes"] = stats.passes;
   plan["draws"] = stats.draws;
@@ -151,6 +155,7 @@ void add_render_commands(CLI::App& app) {
   cmd->add_option("--yaw-deg", args->yaw_deg, "turn the head left (+) from facing the stimulus");
   cmd->add_option("--ipd-m", args->ipd_m, "interpupillary distance (default 0.063)");
   cmd->add_option("--bend-m", args->bend_m, "cue-stick sagitta in metres (+ toward the viewer)");
+  cmd->add_option("--msaa", args->msaa, "samples per pixel: 1, 2, 4 (default) or 8");
   cmd->add_flag("--software", args->software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   cmd->add_option("--out", args->out, "output directory")->required();
   cmd->add_flag("--json", args->json, "print the plan as JSON");

@@ -76,6 +76,7 @@ struct BackendArgs {
   std::string render = "all";
   std::string images;
   std::string trajectory;
+  std::optional<int> msaa;  // overrides the protocol's [viewing] msaa
   bool software = false;
   std::string window_size = "960x960";
   std::string preview = "side-by-side";
@@ -99,6 +100,8 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--images", b.images, "save each trial's stimulus onset as PNGs in this folder");
   cmd->add_option("--trajectory", b.trajectory,
                   "headless: lab poses from a trajectory CSV (curvlab trajectory …), looped");
+  cmd->add_option_function<int>("--msaa", [&b](int n) { b.msaa = n; },
+                                "samples per pixel, 1, 2, 4 or 8 (default: the protocol's [viewing] msaa)");
   cmd->add_flag("--software", b.software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   cmd->add_option("--window-size", b.window_size, "desktop: per-eye size WxH (default 960x960)");
   cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
@@ -180,8 +183,9 @@ struct Backends {
   const devices::Clock* clock = nullptr;
 };
 
-Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
-                      const geometry::PhysicalTableFit& table, std::int64_t start_ns) {
+Backends open_backend_of_kind(const BackendArgs& a, const pr::Protocol& p,
+                              const geometry::PhysicalTableFit& table, std::int64_t start_ns,
+                              std::uint32_t msaa) {
   Backends out;
   if (a.backend == "headless") {
     rn::HeadlessOptions o;
@@ -192,6 +196,7 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
     o.width_px = static_cast<std::uint32_t>(p.resolution_width);
     o.height_px = static_cast<std::uint32_t>(p.resolution_height);
     o.software = a.software;
+    o.msaa = msaa;
     o.table = table;
     o.start_ns = start_ns;
     if (!a.trajectory.empty()) {
@@ -219,6 +224,7 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
     o.screenshot_dir = a.screenshot;
     o.key_script = a.key_script;
     o.software = a.software;
+    o.msaa = msaa;
     o.clock = out.clock;
     auto made = rn::make_desktop_backend(o);
     if (!made) raise(made.error());
@@ -229,12 +235,24 @@ Backends open_backend(const BackendArgs& a, const pr::Protocol& p,
     xr::XrBackendOptions o;
     o.clock = out.clock;
     o.mirror = wants_operator_window(a);
+    o.msaa = msaa;
     auto made = xr::make_xr_backend(o);
     if (!made) raise(made.error());
     out.backend = std::move(made).value();
     return out;
   }
   throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
+}
+
+// The samples per pixel: --msaa, else the protocol's [viewing] msaa; the
+// backend's renderer clamps it to the device, with a warning.
+Backends open_backend(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
+                      std::int64_t start_ns) {
+  const std::uint32_t msaa = a.msaa ? check_msaa(*a.msaa)
+                                    : static_cast<std::uint32_t>(p.session_settings().viewing.msaa);
+  Backends out = open_backend_of_kind(a, p, table, start_ns, msaa);
+  warn_if_msaa_clamped(msaa, out.backend->info().msaa);
+  return out;
 }
 
 rn::RunOptions drawing_options(const BackendArgs& a) {

@@ -115,9 +115,10 @@ Expected<SessionProvenance> read_session_provenance(Database& db, std::int64_t s
     while (ev.step()) {
       const Json d = Json::parse(ev.column_text(1), nullptr, false);
       if (d.is_discarded() || !d.is_object()) continue;
-      if (ev.column_text(0) == "session_start")
+      if (ev.column_text(0) == "session_start") {
         out.participant_number = d.value("participant_number", std::uint64_t{1});
-      else
+        if (d.contains("msaa") && d["msaa"].is_number_unsigned()) out.msaa = d["msaa"].get<std::uint32_t>();
+      } else
         out.observer = observer_from(d);
     }
     return out;

@@ -238,7 +238,8 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
     return Error{Error::Kind::device, "cannot render to the desktop window: " + e->message};
   b->target_ = std::get<std::unique_ptr<renderer::SwapchainTarget>>(std::move(target));
   try {
-    b->renderer_ = std::make_unique<renderer::Renderer>(*b->context_);
+    b->renderer_ = std::make_unique<renderer::Renderer>(*b->context_,
+                                                        renderer::RendererOptions{.msaa = options.msaa});
   } catch (const renderer::VulkanFailure& f) {
     return Error{Error::Kind::api, std::string("cannot render to the desktop window: ") + f.what()};
   } catch (const vk::SystemError& e) {
@@ -252,7 +253,7 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
 
 BackendInfo DesktopBackend::info() const {
   return {"desktop", context_->device_name(), context_->driver_info(), refresh_hz_, options_.eye_width_px,
-          options_.eye_height_px};
+          options_.eye_height_px, renderer_ ? renderer_->msaa() : 0};
 }
 
 std::size_t DesktopBackend::scripted_keys_pressed() const {

@@ -74,6 +74,7 @@ Json default_of(const SettingInfo& info) {
   if (p == "viewing.projection") return std::string(to_string(s.viewing.projection));
   if (p == "viewing.eyes") return std::string(to_string(s.viewing.eyes));
   if (p == "viewing.back_hemisphere") return s.viewing.back_hemisphere;
+  if (p == "viewing.msaa") return s.viewing.msaa;
   if (p == "timeline.fixation_ms") return s.timeline.fixation_ms;
   if (p == "timeline.stimulus_ms") return s.timeline.stimulus_ms;
   if (p == "timeline.response_ms") return s.timeline.response_ms;
@@ -91,10 +92,17 @@ Json default_of(const SettingInfo& info) {
 Json value_schema(const SettingInfo& info) {
   switch (info.kind) {
     case SettingKind::boolean: return {{"type", "boolean"}};
-    case SettingKind::integer:
-      return {{"type", "integer"},
-              {"minimum", static_cast<std::int64_t>(info.min)},
-              {"maximum", static_cast<std::int64_t>(info.max)}};
+    case SettingKind::integer: {
+      Json j = {{"type", "integer"},
+                {"minimum", static_cast<std::int64_t>(info.min)},
+                {"maximum", static_cast<std::int64_t>(info.max)}};
+      if (!info.choices.empty()) {
+        Json values = Json::array();
+        for (auto c : info.choices) values.push_back(std::stoll(std::string(c)));
+        j["enum"] = values;
+      }
+      return j;
+    }
     case SettingKind::number: return {{"type", "number"}, {"minimum", info.min}, {"maximum", info.max}};
     case SettingKind::number_or_from_table:
       return {{"anyOf", Json::array({Json{{"type", "number"}, {"minimum", info.min}, {"maximum", info.max}},

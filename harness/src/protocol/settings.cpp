@@ -1,5 +1,6 @@
 #include "curvlab/harness/protocol/settings.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -68,6 +69,8 @@ std::vector<SettingInfo> make_registry() {
       {"viewing.back_hemisphere", K::boolean, 0, 0, {}, "S3: draw the antipodal images"},
       {"viewing.ipd_m", K::number, 0.045, 0.085, {},
        "default interpupillary distance (used when the runtime gives none)"},
+      {"viewing.msaa", K::integer, 1, 8, {"1", "2", "4", "8"},
+       "samples per pixel for anti-aliased edges (1: none); clamped to what the device supports"},
       {"timeline.fixation_ms", K::integer, 0, 60000, {}, "fixation mark before the stimulus"},
       {"timeline.stimulus_ms", K::integer, 1, 600000, {}, "stimulus duration"},
       {"timeline.response_ms", K::integer, 1, 600000, {}, "response window"},
@@ -111,6 +114,16 @@ std::string choices_text(const SettingInfo& info) {
     out += '"';
     out += info.choices[i];
     out += '"';
+  }
+  return out;
+}
+
+// The allowed integers, as a protocol writes them (no quotes).
+std::string values_text(const SettingInfo& info) {
+  std::string out;
+  for (std::size_t i = 0; i < info.choices.size(); ++i) {
+    if (i) out += ", ";
+    out += info.choices[i];
   }
   return out;
 }
@@ -176,6 +189,9 @@ Result<Done> check_setting(const SettingInfo& info, const SettingValue& value) {
       if (!i) return setting_problem("expected an integer in " + range_text(info));
       if (static_cast<double>(*i) < info.min || static_cast<double>(*i) > info.max)
         return setting_problem("expected an integer in " + range_text(info) + ", found " + std::to_string(*i));
+      if (!info.choices.empty() &&
+          std::find(info.choices.begin(), info.choices.end(), std::to_string(*i)) == info.choices.end())
+        return setting_problem("expected one of " + values_text(info) + ", found " + std::to_string(*i));
       return Done{};
     }
     case K::number_or_from_table:
@@ -244,6 +260,8 @@ void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& val
     s.viewing.back_hemisphere = flag;
   } else if (p == "viewing.ipd_m") {
     s.viewing.ipd_m = num;
+  } else if (p == "viewing.msaa") {
+    s.viewing.msaa = integer;
   } else if (p == "timeline.fixation_ms") {
     s.timeline.fixation_ms = integer;
   } else if (p == "timeline.stimulus_ms") {

@@ -76,7 +76,7 @@ Result<std::unique_ptr<HeadlessBackend>> HeadlessBackend::create(const HeadlessO
       return Error{Error::Kind::device, "headless: cannot start Vulkan: " + e->message};
     impl->ctx.emplace(std::move(std::get<renderer::Context>(created)));
     try {
-      impl->renderer.emplace(*impl->ctx);
+      impl->renderer.emplace(*impl->ctx, renderer::RendererOptions{.msaa = options.msaa});
       impl->target.emplace(*impl->ctx, options.width_px, options.height_px);
     } catch (const renderer::VulkanFailure& f) {
       return Error{Error::Kind::api, std::string("headless: cannot start the renderer: ") + f.what()};
@@ -108,6 +108,7 @@ BackendInfo HeadlessBackend::info() const {
   if (impl_->ctx) {
     i.renderer_device = impl_->ctx->device_name();
     i.renderer_driver = impl_->ctx->driver_info();
+    if (impl_->renderer) i.msaa = impl_->renderer->msaa();
   } else {
     i.renderer_device = "none";
     i.renderer_driver = "none";

@@ -42,6 +42,7 @@ struct StoredFrame {
   data::OnsetRecord onset;
   geometry::Isometry head;
   data::DominantEye dominant_eye = data::DominantEye::unknown;
+  std::uint32_t msaa = 1;  // the samples per pixel the session drew with
   std::optional<data::ViewGeometry> views;  // nullopt: not recorded (schema version 2)
   bool adjusted = false;                   // an adjustment after onset changed the stimulus
   std::optional<double> adjustment_value;  // an adjustment trial's value shown at the frame
@@ -119,6 +120,10 @@ Result<StoredFrame> read_stored_frame(const ReplayRequest& rq) {
   if (!prov) return prov.error();
   StoredFrame out;
   out.dominant_eye = prov->dominant_eye;
+  // Drawn as the session drew it: sessions from before multisampling (no
+  // msaa recorded) with one sample, a session that drew nothing as its
+  // protocol asks.
+  out.msaa = prov->msaa.value_or(1);
   if (auto r = read_trial_settings(*prov, rq, out); !r) return r.error();
   auto trial_id = data::read_trial_id(db, rq.session_id, rq.trial_index);
   if (!trial_id) return trial_id.error();
@@ -211,7 +216,8 @@ Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
        .validation = false});
   if (auto* e = std::get_if<renderer::RenderError>(&created)) return Error{Kind::device, e->message};
   const auto& ctx = std::get<renderer::Context>(created);
-  renderer::Renderer r(ctx);
+  const auto msaa = f.msaa > 0 ? f.msaa : static_cast<std::uint32_t>(f.settings.viewing.msaa);
+  renderer::Renderer r(ctx, renderer::RendererOptions{.msaa = msaa});
   renderer::FrameDescription desc;
   desc.space = world.space;
   desc.settings =

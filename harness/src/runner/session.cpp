@@ -70,6 +70,7 @@ Result<data::StartedSession> create(
              {"seed", design.seed},
              {"protocol_seed", design.protocol_seed},
              {"backend", info.name},
+             {"msaa", info.msaa},
              {"trials", design.trials.size()}};
   if (design.counterbalance_row) start["counterbalance_row"] = *design.counterbalance_row;
   std::vector<data::EventRecord> events{{0, std::nullopt, clock.now_ns(), "session_start", start.dump()}};

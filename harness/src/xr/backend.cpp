@@ -506,7 +506,7 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
       return error(r, "xrEnumerateSwapchainImages");
   }
   try {
-    b->renderer_ = std::make_unique<renderer::Renderer>(c);
+    b->renderer_ = std::make_unique<renderer::Renderer>(c, renderer::RendererOptions{.msaa = options.msaa});
   } catch (const renderer::VulkanFailure& f) {
     return Error{Error::Kind::api, std::string("cannot render for the headset: ") + f.what()};
   } catch (const vk::SystemError& e) {
@@ -564,7 +564,7 @@ BackendInfo XrBackend::info() const {
   // reported rate (XR_FB_display_refresh_rate) or 90 Hz, the common rate.
   const double period = static_cast<double>(frame_state_.predictedDisplayPeriod);
   return {"xr", context_->device_name(), context_->driver_info(), period > 0.0 ? 1e9 / period : refresh_hz_,
-          swapchains_[0].width, swapchains_[0].height};
+          swapchains_[0].width, swapchains_[0].height, renderer_ ? renderer_->msaa() : 0};
 }
 
 void XrBackend::fail(XrResult r, const char* call) {

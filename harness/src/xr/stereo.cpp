@@ -38,7 +38,7 @@ geometry::LabPose to_geometry(const LabPose& pose, bool valid) {
 }
 
 std::optional<std::int64_t> choose_swapchain_format(const std::vector<std::int64_t>& offered) {
-  for (const std::int64_t want : {kR8G8B8A8Unorm, kR8G8B8A8Srgb, kB8G8R8A8Unorm, kB8G8R8A8Srgb})
+  for (const std::int64_t want : {kR8G8B8A8Srgb, kB8G8R8A8Srgb, kR8G8B8A8Unorm, kB8G8R8A8Unorm})
     if (std::find(offered.begin(), offered.end(), want) != offered.end()) return want;
   return std::nullopt;
 }

@@ -67,6 +67,7 @@
 #include <stb_image_write.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -493,11 +494,22 @@ bool capture(Session& s, const Swapchain& sc, std::uint32_t index, const XrRect2
     if (ok) {
       const auto* px = static_cast<const std::uint8_t*>(mapped);
       const bool bgra = sc.format == VK_FORMAT_B8G8R8A8_UNORM || sc.format == VK_FORMAT_B8G8R8A8_SRGB;
+      // An sRGB image stores the encoded bytes a display shows: written as
+      // they are. A UNORM image holds linear values (a runtime treats them as
+      // linear, XR_KHR_vulkan_enable2), which the compositor encodes for the
+      // display: so does the capture (IEC 61966-2-1).
+      const bool linear = sc.format == VK_FORMAT_R8G8B8A8_UNORM || sc.format == VK_FORMAT_B8G8R8A8_UNORM;
+      std::array<std::uint8_t, 256> encode{};
+      for (int v = 0; v < 256; ++v) {
+        const double l = v / 255.0;
+        const double e = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+        encode[static_cast<std::size_t>(v)] = static_cast<std::uint8_t>(std::lround((linear ? e : l) * 255.0));
+      }
       std::vector<std::uint8_t> rgb(static_cast<std::size_t>(w) * h * 3);
       for (std::size_t i = 0; i < static_cast<std::size_t>(w) * h; ++i) {
-        rgb[3 * i + 0] = px[4 * i + (bgra ? 2 : 0)];
-        rgb[3 * i + 1] = px[4 * i + 1];
-        rgb[3 * i + 2] = px[4 * i + (bgra ? 0 : 2)];
+        rgb[3 * i + 0] = encode[px[4 * i + (bgra ? 2 : 0)]];
+        rgb[3 * i + 1] = encode[px[4 * i + 1]];
+        rgb[3 * i + 2] = encode[px[4 * i + (bgra ? 0 : 2)]];
       }
       vk.vkUnmapMemory(vk.device, memory);
       ok = stbi_write_png(path.c_str(), static_cast<int>(w), static_cast<int>(h), 3, rgb.data(),

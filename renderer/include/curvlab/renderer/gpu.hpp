@@ -21,16 +21,19 @@ struct Buffer {
   void write(const void* data, std::size_t bytes, std::size_t offset = 0) const;
 };
 
-// A 2D image with one mip level, its memory and a view.
+// A 2D image with one mip level, its memory and a view; `samples` > 1 for
+// a multisampled attachment.
 struct Image {
   vk::raii::Image image{nullptr};
   vk::raii::DeviceMemory memory{nullptr};
   vk::raii::ImageView view{nullptr};
   vk::Format format = vk::Format::eUndefined;
   vk::Extent2D extent{};
+  vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1;
 
   static Image create(const Context& ctx, vk::Extent2D extent, vk::Format format,
-                      vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect);
+                      vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect,
+                      vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1);
 };
 
 // Records a whole-image layout transition with conservative stage masks.

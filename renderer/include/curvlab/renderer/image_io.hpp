@@ -1,4 +1,5 @@
-// RGBA8 images on the CPU and PNG files (stb_image_write / stb_image).
+// RGBA8 images on the CPU and PNG files (libpng with an sRGB chunk /
+// stb_image).
 #pragma once
 
 #include <cstdint>
@@ -13,7 +14,8 @@ struct Rgba8Image {
   std::vector<std::uint8_t> pixels;  // row major, 4 bytes per pixel
 };
 
-// Returns an empty string on success, else a message naming the file.
+// Writes sRGB-encoded pixels as a PNG with an sRGB chunk. Returns an empty
+// string on success, else a message naming the file.
 std::string write_png(const std::string& path, const Rgba8Image& image);
 // Reads a PNG as RGBA8; false with a message on failure.
 bool read_png(const std::string& path, Rgba8Image& image, std::string& error);

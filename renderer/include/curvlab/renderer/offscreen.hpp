@@ -1,4 +1,5 @@
-// Offscreen target: two RGBA8 images and their read-back buffers.
+// Offscreen target: two sRGB RGBA8 images and their read-back buffers; the
+// bytes read back are sRGB-encoded, as PNG viewers expect.
 #pragma once
 
 #include "curvlab/renderer/gpu.hpp"

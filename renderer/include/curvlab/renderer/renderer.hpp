@@ -5,6 +5,7 @@
 // only after that slot's fence has signalled.
 #pragma once
 
+#include "curvlab/renderer/colour.hpp"
 #include "curvlab/renderer/context.hpp"
 #include "curvlab/renderer/frame_stats.hpp"
 #include "curvlab/renderer/gpu.hpp"
@@ -18,9 +19,16 @@
 namespace curvlab::renderer {
 
 struct RendererOptions {
-  glm::vec4 background{0.015f, 0.017f, 0.03f, 1.0f};  // the void
+  glm::vec4 background = palette::background;  // linear RGBA
   std::size_t frames_in_flight = 2;
+  // Samples per pixel (1, 2, 4 or 8); the renderer uses the largest count
+  // the device supports that is not above this (Renderer::msaa()).
+  std::uint32_t msaa = 4;
 };
+
+// The sample count a device can draw with: the largest of 1, 2, 4, 8 not
+// above `requested` that both its colour and depth framebuffers support.
+std::uint32_t supported_msaa(const Context& ctx, std::uint32_t requested);
 
 // Owns pipelines, meshes, textures, depth images and frame slots. Holds a
 // reference to the Context, which must outlive it. Not thread-safe.
@@ -39,6 +47,9 @@ class Renderer {
   // throws VulkanFailure; the renderer can then only be destroyed.
   FrameStats render(const Scene& scene, const FrameDescription& frame, RenderTarget& target);
 
+  // The samples per pixel every frame is drawn with (1: no multisampling);
+  // each eye is drawn multisampled and resolved into the target's image.
+  [[nodiscard]] std::uint32_t msaa() const;
   // The plan of the last frame drawn.
   [[nodiscard]] const RenderPlan& last_plan() const;
   // Waits until the GPU has finished every submitted frame; a failure (a

@@ -1,9 +1,9 @@
 // Targets that put frames in front of a person: a window's swapchain
 // (SwapchainTarget, for the desktop pilot backend) and images owned by
 // someone else, handed in per frame (ExternalImagesTarget, for OpenXR
-// swapchain images). Both let the renderer draw into RGBA8 images of their
-// own — the format its pipelines are built for — and copy the result into the
-// presented images, so the presented format is negotiated freely.
+// swapchain images). Both let the renderer draw into sRGB RGBA8 images of
+// their own — the format its pipelines are built for — and copy the result
+// into the presented images, so the presented format is negotiated freely.
 //
 // The renderer knows nothing of windows: the surface comes from the Context
 // (ContextEmbedding::create_surface), made by whoever owns the window.
@@ -128,17 +128,18 @@ class SwapchainTarget final : public RenderTarget {
 // frame.
 struct ExternalImage {
   vk::Image image;
-  vk::Format format = vk::Format::eR8G8B8A8Unorm;
+  vk::Format format = vk::Format::eR8G8B8A8Srgb;
   vk::Extent2D extent;
   // The layout the owner expects when the frame's commands are done (OpenXR:
   // COLOR_ATTACHMENT_OPTIMAL).
   vk::ImageLayout final_layout = vk::ImageLayout::eColorAttachmentOptimal;
 };
 
-// Renders each eye into an RGBA8 image of its own and, in the frame's command
-// buffer, copies it into the external image set for the frame: a raw copy for
-// the R8G8B8A8 formats (UNORM or SRGB: the bytes the renderer wrote are the
-// bytes shown, as in the PNGs), a blit for other formats. Both images must be
+// Renders each eye into an sRGB RGBA8 image of its own and, in the frame's
+// command buffer, copies it into the external image set for the frame: a raw
+// copy for R8G8B8A8_SRGB (the bytes shown are the bytes of the PNGs), a blit
+// for other formats, which converts through linear values — so a UNORM
+// swapchain, which OpenXR runtimes take as linear, receives linear values. Both images must be
 // set before each Renderer::render(); frame_finished() forgets them.
 // Holds a reference to the Context; owns its eye images. Not thread-safe.
 class ExternalImagesTarget final : public RenderTarget {

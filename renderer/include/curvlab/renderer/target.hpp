@@ -17,7 +17,7 @@ struct EyeImage {
   vk::Image image;
   vk::ImageView view;
   vk::Extent2D extent;
-  vk::Format format = vk::Format::eR8G8B8A8Unorm;
+  vk::Format format = vk::Format::eR8G8B8A8Srgb;
   // The layout the renderer leaves the image in (e.g. TransferSrcOptimal for
   // a read-back, ColorAttachmentOptimal for an OpenXR swapchain image).
   vk::ImageLayout final_layout = vk::ImageLayout::eTransferSrcOptimal;

@@ -53,6 +53,9 @@ struct SessionProvenance {
   // cannot be resumed: the design cannot be expanded again).
   std::optional<std::uint64_t> participant_number;
   std::optional<StoredObserver> observer;  // from the observer event, if any
+  // Samples per pixel the session drew with (session_start); nullopt: not
+  // recorded (sessions from before multisampling drew with 1), 0: nothing drawn.
+  std::optional<std::uint32_t> msaa;
   // The latest time stamp logged for the session (frames and events), 0 if
   // none: a resumed session's clock must not run backwards past it.
   std::int64_t last_t_ns = 0;

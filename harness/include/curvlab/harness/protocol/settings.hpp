@@ -57,6 +57,9 @@ struct Viewing {
   Eyes eyes = Eyes::both;
   bool back_hemisphere = true;  // S3 only: draw the antipodal images
   double ipd_m = 0.063;
+  // Samples per pixel for anti-aliasing (1, 2, 4 or 8); the renderer clamps
+  // it to what the device supports.
+  std::int64_t msaa = 4;
 };
 
 // Per-trial timeline in milliseconds: fixation → stimulus → response window
@@ -113,7 +116,9 @@ struct SettingInfo {
   SettingKind kind;
   double min = 0.0;  // inclusive range for integer and number kinds
   double max = 0.0;
-  std::vector<std::string_view> choices;  // enumeration kind
+  // enumeration kind; for the integer kind, the only values allowed (none:
+  // any in the range)
+  std::vector<std::string_view> choices;
   std::string_view meaning;  // one line, with the unit
 };
 

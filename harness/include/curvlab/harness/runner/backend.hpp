@@ -63,6 +63,9 @@ struct BackendInfo {
   // OpenXR swapchain, the offscreen target); 0: the protocol's resolution.
   std::uint32_t eye_width_px = 0;
   std::uint32_t eye_height_px = 0;
+  // Samples per pixel the renderer draws with (after clamping to the
+  // device); 0: nothing is drawn (no GPU).
+  std::uint32_t msaa = 0;
 };
 
 struct FrameTiming {

@@ -30,6 +30,7 @@ struct DesktopOptions {
   std::string key_script;
   bool software = false;  // lavapipe even with a GPU
   bool vsync = true;
+  std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
   bool validation = false;  // Khronos validation layer on (tests); messages go to stderr
   const devices::Clock* clock = nullptr;  // the session's; required
 };

@@ -35,6 +35,7 @@ struct HeadlessOptions {
   std::uint32_t width_px = 1024;  // per eye
   std::uint32_t height_px = 1024;
   bool software = false;  // lavapipe even with a GPU
+  std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
   // Lab poses; looped when the session outlasts it. Empty: the participant
   // stands in front of edge 0 of `table` and sways a little.
   geometry::Trajectory trajectory;

@@ -18,6 +18,7 @@ struct XrBackendOptions {
   // Offer copies of the submitted images for the operator window
   // (Backend::mirror()); the swapchains can be copied from either way.
   bool mirror = false;
+  std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
 };
 
 // No runtime or no headset: an Error of kind `device` naming the OpenXR

@@ -26,9 +26,11 @@ renderer::StereoRig rig_from_views(const LabPose& head, const std::array<LabPose
 geometry::LabPose to_geometry(const LabPose& pose, bool valid);
 
 // VkFormat values (as OpenXR's xrEnumerateSwapchainFormats returns them) in
-// curvlab's order of preference: the 8-bit RGBA formats the renderer's eye
-// images can be copied into byte for byte, then BGRA (blitted). nullopt: the
-// runtime offers none of them.
+// curvlab's order of preference: sRGB first, as the OpenXR specification
+// advises for colour (XR_KHR_vulkan_enable2: the runtime takes UNORM values
+// as linear) — R8G8B8A8_SRGB, which the renderer's eye images are copied into
+// byte for byte, then B8G8R8A8_SRGB (blitted); then the UNORM formats
+// (blitted, receiving linear values). nullopt: the runtime offers none.
 std::optional<std::int64_t> choose_swapchain_format(const std::vector<std::int64_t>& offered);
 
 // XrTime (runtime nanoseconds) → the session clock. With

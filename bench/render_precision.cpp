@@ -1,0 +1,314 @@
+// Edge-position precision of bench_render_accuracy (section 4): how exactly
+// the rendered pixels carry sub-pixel motions of the stimulus, per MSAA
+// sample count. The stick scene (E3, tourist, 1 m stick 0.75 m ahead) is
+// moved by steps far below a pixel — the head yawed in 0.01° steps, the stick
+// bent in 0.1 mm steps — and features are estimated from the images alone by
+// coverage-weighted sums in linear light:
+//  * each end of the stick (yaw steps): along each row through the stick,
+//    a reference column inside the stick gives the row's full coverage, and
+//    the end lies at the reference column plus the summed coverage beyond it;
+//  * the butt-to-shaft colour transition (bend steps): the same sum of the
+//    fraction of butt colour between a butt and a shaft reference column;
+//  * the stick's vertical centre at its middle (bend steps): the centroid of
+//    the columns' coverage.
+// Each feature's motion from the first step is compared with the motion of
+// the analytic projection of the same point (E3 pinhole from the isometries
+// in geometry/, not the renderer's view math); the residual is what the
+// pixels get wrong. A constant bias of an estimator (the cap's shading, the
+// silhouette of a cylinder) cancels in the motion.
+#include "render_precision.hpp"
+
+#include "curvlab/geometry/isometry.hpp"
+#include "curvlab/geometry/tube.hpp"
+#include "curvlab/renderer/colour.hpp"
+#include "curvlab/renderer/offscreen.hpp"
+#include "curvlab/renderer/renderer.hpp"
+
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <optional>
+#include <vector>
+
+namespace bench {
+namespace {
+
+using namespace curvlab;
+using namespace curvlab::renderer;
+using geometry::Vec3;
+
+constexpr std::uint32_t kPx = 1024;  // per eye
+constexpr double kFovRad = std::numbers::pi / 2.0;
+constexpr double kIpdM = 0.063;
+constexpr double kYawStepDeg = 0.01;
+constexpr double kBendStepM = 0.0001;
+constexpr int kSteps = 21;  // 0 … 20 steps: 0.2° of yaw, 2 mm of bend
+// Where the stick scene puts the stick (renderer/src/scene.cpp, stick).
+const Vec3 kStickAt{0.0, -0.25, -0.75};
+// The butt colour ends after 4 of the stick's 12 segments and the shaft
+// colour starts at 5 (mesh.cpp): the ramp's middle is at 0.375 of the length.
+constexpr double kTransitionFraction = 0.375;
+
+// The pixel position of a world point seen by one eye: E3 pinhole through the
+// head and eye isometries (x right, y down, pixel centres at .5).
+glm::dvec2 project(const Space& space, const Isometry& head, int eye, const geometry::Point& world) {
+  const double side = eye == 0 ? -kIpdM / 2.0 : kIpdM / 2.0;
+  const Isometry eye_pose = head * geometry::translation_m(space, Vec3(side, 0.0, 0.0));
+  const glm::dvec4 q = glm::inverse(eye_pose.m) * world;
+  const double focal_px = (kPx / 2.0) / std::tan(kFovRad / 2.0);
+  return {kPx / 2.0 + focal_px * q.x / -q.z, kPx / 2.0 - focal_px * q.y / -q.z};
+}
+
+// Linear relative luminance of each pixel (the images are sRGB-encoded).
+std::vector<double> luminance(const Rgba8Image& img) {
+  std::array<float, 256> decode{};
+  for (std::size_t v = 0; v < decode.size(); ++v) decode[v] = srgb_to_linear(float(v) / 255.0f);
+  std::vector<double> y(static_cast<std::size_t>(img.width) * img.height);
+  for (std::size_t i = 0; i < y.size(); ++i)
+    y[i] = relative_luminance({decode[img.pixels[4 * i]], decode[img.pixels[4 * i + 1]], decode[img.pixels[4 * i + 2]]});
+  return y;
+}
+
+struct Luma {
+  const std::vector<double>& y;
+  double background;
+  double at(int x, int row) const {
+    return y[static_cast<std::size_t>(row) * kPx + static_cast<std::size_t>(x)] - background;
+  }
+};
+
+// Rows through the stick at column x whose contrast there is at least
+// `fraction` of the brightest row's, with that contrast as their weight.
+std::vector<std::pair<int, double>> stick_rows(const Luma& l, int x, double y_px, double fraction) {
+  std::vector<std::pair<int, double>> rows;
+  double peak = 0.0;
+  for (int r = int(y_px) - 20; r <= int(y_px) + 20; ++r) peak = std::max(peak, l.at(x, r));
+  for (int r = int(y_px) - 20; r <= int(y_px) + 20; ++r)
+    if (l.at(x, r) > fraction * peak) rows.emplace_back(r, l.at(x, r));
+  return rows;
+}
+
+// The end of the stick beyond column `ref` (inside it) in direction dir (±1).
+double end_position(const Luma& l, int ref, int dir, double y_px) {
+  double sum = 0.0, weight = 0.0;
+  for (const auto& [r, w] : stick_rows(l, ref, y_px, 0.3)) {
+    double covered = 0.0;
+    for (int k = 1; k <= 40; ++k) covered += l.at(ref + dir * k, r) / w;
+    // The reference pixel counts whole: the edge lies `covered` beyond it.
+    const double end = dir > 0 ? ref + 1.0 + covered : ref - covered;
+    sum += w * end;
+    weight += w;
+  }
+  return sum / weight;
+}
+
+// The butt-to-shaft transition between a butt column and a shaft column.
+double transition_position(const Luma& l, int butt, int shaft, double y_px) {
+  double sum = 0.0, weight = 0.0;
+  // Rows inside the silhouette only: a bend tilts the silhouette, which
+  // would change a partly covered row's coverage along it.
+  for (const auto& [r, w] : stick_rows(l, shaft, y_px, 0.8)) {
+    const double lo = l.at(butt, r), hi = l.at(shaft, r);
+    double butt_part = 0.0;
+    for (int x = butt + 1; x < shaft; ++x) butt_part += (hi - l.at(x, r)) / (hi - lo);
+    sum += w * (butt + 1.0 + butt_part);
+    weight += w;
+  }
+  return sum / weight;
+}
+
+// The stick's vertical coverage centroid over the columns x0 … x1.
+double vertical_centre(const Luma& l, int x0, int x1, double y_px) {
+  double sum = 0.0, weight = 0.0;
+  for (int x = x0; x <= x1; ++x)
+    for (int r = int(y_px) - 20; r <= int(y_px) + 20; ++r) {
+      const double w = std::max(0.0, l.at(x, r));
+      sum += w * (r + 0.5);
+      weight += w;
+    }
+  return sum / weight;
+}
+
+struct Residuals {
+  std::vector<double> px;
+  void add(double measured_motion, double analytic_motion) { px.push_back(measured_motion - analytic_motion); }
+  [[nodiscard]] double rms() const {
+    double s = 0.0;
+    for (double v : px) s += v * v;
+    return px.empty() ? 0.0 : std::sqrt(s / double(px.size()));
+  }
+  [[nodiscard]] double max_abs() const {
+    double m = 0.0;
+    for (double v : px) m = std::max(m, std::abs(v));
+    return m;
+  }
+};
+
+StimulusScene stick_scene(double sagitta_m) {
+  StimulusOptions o;
+  o.stick_sagitta_m = sagitta_m;
+  return std::get<StimulusScene>(make_stimulus_scene(geometry::SpaceKind::E3, SceneKind::stick, o));
+}
+
+FrameDescription frame_of(const StimulusScene& s, const Isometry& head) {
+  FrameDescription f;
+  f.space = s.space;
+  f.settings = ViewSettings::preset(ViewPreset::tourist);
+  f.head = head;
+  f.rig = StereoRig::from_ipd(kIpdM, Fov::symmetric(kFovRad, 1.0));
+  f.width_px = kPx;
+  f.height_px = kPx;
+  return f;
+}
+
+geometry::Point stick_point(const Space& space, double sagitta_m, double u_m) {
+  const geometry::BentStick stick{1.0, sagitta_m, 0.0125};
+  return geometry::translation_m(space, kStickAt).m * stick.centre_point(space, Isometry::identity(), u_m);
+}
+
+// The features of one frame, measured and analytic, per eye.
+struct Features {
+  std::array<double, 2> left_end{}, right_end{}, transition{}, middle_y{};
+};
+
+// Measures the features in the target's images. The estimators' windows are
+// placed from the sweep's first pose (head, sagitta_m) and stay put while the
+// stimulus moves under them, so a window never jumps by a pixel.
+Features measure(const OffscreenTarget& target, const StimulusScene& s, const Isometry& head, double sagitta_m) {
+  Features f;
+  const double bg = relative_luminance(glm::vec3(palette::background));
+  for (int e = 0; e < 2; ++e) {
+    const auto y = luminance(target.image(static_cast<Eye>(e)));
+    const Luma l{y, bg};
+    const glm::dvec2 left = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5));
+    const glm::dvec2 right = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.5));
+    const glm::dvec2 mid = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.0));
+    f.left_end[e] = end_position(l, int(left.x) + 12, -1, left.y);
+    f.right_end[e] = end_position(l, int(right.x) - 5, +1, right.y);
+    const double u_butt = -0.5 + 0.29, u_shaft = -0.5 + 0.46;
+    const glm::dvec2 butt = project(s.space, head, e, stick_point(s.space, sagitta_m, u_butt));
+    const glm::dvec2 shaft = project(s.space, head, e, stick_point(s.space, sagitta_m, u_shaft));
+    f.transition[e] = transition_position(l, int(butt.x), int(shaft.x), 0.5 * (butt.y + shaft.y));
+    f.middle_y[e] = vertical_centre(l, int(mid.x) - 3, int(mid.x) + 3, mid.y);
+  }
+  return f;
+}
+
+Features analytic(const StimulusScene& s, const Isometry& head, double sagitta_m) {
+  Features f;
+  for (int e = 0; e < 2; ++e) {
+    f.left_end[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5)).x;
+    f.right_end[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.5)).x;
+    f.transition[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5 + kTransitionFraction)).x;
+    f.middle_y[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.0)).y;
+  }
+  return f;
+}
+
+// The residuals of each kind of feature, and of all together.
+struct SweepResiduals {
+  Residuals ends, transition, middle, all;
+  void add(Residuals& kind, double measured_motion, double analytic_motion) {
+    kind.add(measured_motion, analytic_motion);
+    all.add(measured_motion, analytic_motion);
+  }
+};
+
+// Residuals of the motions over the yaw and the bend sweeps.
+SweepResiduals sweep(const Context& ctx, std::uint32_t msaa) {
+  Renderer r(ctx, RendererOptions{.msaa = msaa});
+  OffscreenTarget target(ctx, kPx, kPx);
+  SweepResiduals res;
+  const StimulusScene straight = stick_scene(0.0);
+  std::optional<Features> m0, a0;
+  for (int i = 0; i < kSteps; ++i) {
+    const double yaw = i * kYawStepDeg * std::numbers::pi / 180.0;
+    const Isometry head = straight.head * geometry::rotation(Vec3(0, 1, 0), yaw);
+    r.render(straight.scene, frame_of(straight, head), target);
+    const Features m = measure(target, straight, straight.head, 0.0), a = analytic(straight, head, 0.0);
+    if (!m0) {
+      m0 = m;
+      a0 = a;
+    }
+    for (int e = 0; e < 2; ++e) {
+      res.add(res.ends, m.left_end[e] - m0->left_end[e], a.left_end[e] - a0->left_end[e]);
+      res.add(res.ends, m.right_end[e] - m0->right_end[e], a.right_end[e] - a0->right_end[e]);
+    }
+  }
+  m0.reset();
+  for (int i = 0; i < kSteps; ++i) {
+    const double sagitta = i * kBendStepM;
+    const StimulusScene s = stick_scene(sagitta);
+    r.render(s.scene, frame_of(s, s.head), target);
+    const Features m = measure(target, s, s.head, 0.0), a = analytic(s, s.head, sagitta);
+    if (!m0) {
+      m0 = m;
+      a0 = a;
+    }
+    for (int e = 0; e < 2; ++e) {
+      res.add(res.transition, m.transition[e] - m0->transition[e], a.transition[e] - a0->transition[e]);
+      res.add(res.middle, m.middle_y[e] - m0->middle_y[e], a.middle_y[e] - a0->middle_y[e]);
+    }
+  }
+  return res;
+}
+
+// Median frame time of the billiards scene (E3, native, both eyes, 1024²)
+// per sample count, frames interleaved so machine load affects all alike.
+std::vector<double> frame_times(const Context& ctx, const std::vector<std::uint32_t>& counts, int frames) {
+  const StimulusScene s = std::get<StimulusScene>(make_stimulus_scene(geometry::SpaceKind::E3, SceneKind::billiards, {}));
+  std::vector<std::unique_ptr<Renderer>> renderers;
+  std::vector<std::unique_ptr<OffscreenTarget>> targets;
+  for (const auto n : counts) {
+    renderers.push_back(std::make_unique<Renderer>(ctx, RendererOptions{.msaa = n}));
+    targets.push_back(std::make_unique<OffscreenTarget>(ctx, kPx, kPx));
+  }
+  std::vector<std::vector<double>> ms(counts.size());
+  for (int i = 0; i < frames + 1; ++i)
+    for (std::size_t k = 0; k < counts.size(); ++k) {
+      FrameDescription f = frame_of(s, s.head * geometry::rotation(Vec3(0, 1, 0), 1e-6 * i));
+      f.settings = ViewSettings::preset(ViewPreset::native);
+      const FrameStats st = renderers[k]->render(s.scene, f, *targets[k]);
+      if (i > 0) ms[k].push_back(st.frame_ms);
+    }
+  std::vector<double> out;
+  for (auto& v : ms) {
+    std::sort(v.begin(), v.end());
+    out.push_back(v[v.size() / 2]);
+  }
+  return out;
+}
+
+}  // namespace
+
+void print_precision_table(const Context& ctx, int frames) {
+  // Pixels per degree at the image centre (1024 px over 90°).
+  const double px_per_deg = (kPx / 2.0) / std::tan(kFovRad / 2.0) * std::numbers::pi / 180.0;
+  const double arcsec_per_px = 3600.0 / px_per_deg;
+  std::printf("\n4. Edge-position precision from pixels: stick (E3, tourist, 1024 x 1024 per eye, 90 deg,\n");
+  std::printf("   %.2f px/deg at the centre); head yaw in %d steps of %.2f deg (both ends, both eyes) and\n",
+              px_per_deg, kSteps - 1, kYawStepDeg);
+  std::printf("   bend in %d steps of %.1f mm (colour transition, middle's height, both eyes); residual of\n",
+              kSteps - 1, kBendStepM * 1e3);
+  std::printf("   each feature's motion against the analytic projection; frame time: billiards, E3 native\n\n");
+  std::printf("| msaa | samples used | residual RMS px | max px | RMS arcsec | max arcsec | ends RMS/max px | "
+              "transition RMS/max px | middle RMS/max px | frame ms | ratio to msaa 1 |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  const std::vector<std::uint32_t> counts{1, 2, 4, 8};
+  const std::vector<double> ms = frame_times(ctx, counts, frames);
+  for (std::size_t k = 0; k < counts.size(); ++k) {
+    const SweepResiduals s = sweep(ctx, counts[k]);
+    const Residuals& r = s.all;
+    std::printf("| %u | %u | %.4f | %.4f | %.2f | %.2f | %.3f/%.3f | %.3f/%.3f | %.3f/%.3f | %.1f | %.2f |\n",
+                counts[k], supported_msaa(ctx, counts[k]), r.rms(), r.max_abs(), r.rms() * arcsec_per_px,
+                r.max_abs() * arcsec_per_px, s.ends.rms(), s.ends.max_abs(), s.transition.rms(),
+                s.transition.max_abs(), s.middle.rms(), s.middle.max_abs(), ms[k], ms[k] / ms[0]);
+  }
+}
+
+}  // namespace bench
