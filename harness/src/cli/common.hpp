@@ -59,6 +59,7 @@ void add_devices_commands(CLI::App& app);
 void add_export_commands(CLI::App& app);
 void add_track_commands(CLI::App& app);  // trajectory, track, inspect vergence/stick
 void add_render_commands(CLI::App& app);
+void add_measure_commands(CLI::App& app);  // measure stick
 void add_protocol_commands(CLI::App& app);
 void add_authoring_commands(CLI::App& app);  // schema, new, preview
 void add_run_commands(CLI::App& app);

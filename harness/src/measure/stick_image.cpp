@@ -1,0 +1,285 @@
+// Finding the stick and its rings in one eye's image (stick.hpp). The stick
+// is the widest connected region that differs from the background (the
+// colour most common on the image border); each ring is located by the
+// brightness it adds to the wood, row by row across the stick, as the
+// centroid of that excess: a coverage-weighted centroid of a smooth profile,
+// so its precision does not depend on where pixel centres fall.
+#include "curvlab/harness/measure/stick.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+
+namespace curvlab::harness::measure {
+namespace {
+
+using renderer::Rgba8Image;
+
+Error bad(std::string m) { return Error{Error::Kind::bad_input, std::move(m)}; }
+
+std::uint32_t pixel(const Rgba8Image& img, int x, int y) {
+  const auto* p = &img.pixels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
+                               static_cast<std::size_t>(x)) * 4];
+  return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16;
+}
+
+double brightness(const Rgba8Image& img, int x, int y) {
+  const auto* p = &img.pixels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
+                               static_cast<std::size_t>(x)) * 4];
+  return double(p[0]) + double(p[1]) + double(p[2]);
+}
+
+std::uint32_t border_colour(const Rgba8Image& img) {
+  std::map<std::uint32_t, int> count;
+  for (int x = 0; x < img.width; ++x) {
+    ++count[pixel(img, x, 0)];
+    ++count[pixel(img, x, img.height - 1)];
+  }
+  for (int y = 0; y < img.height; ++y) {
+    ++count[pixel(img, 0, y)];
+    ++count[pixel(img, img.width - 1, y)];
+  }
+  return std::max_element(count.begin(), count.end(),
+                          [](const auto& a, const auto& b) { return a.second < b.second; })->first;
+}
+
+bool differs(std::uint32_t a, std::uint32_t b) {
+  for (int c = 0; c < 3; ++c) {
+    const int da = int((a >> (8 * c)) & 0xffu) - int((b >> (8 * c)) & 0xffu);
+    if (std::abs(da) > 6) return true;
+  }
+  return false;
+}
+
+// The stick's pixels: per column, the first and last row of the widest
+// 4-connected region that differs from the background.
+struct StickMask {
+  int x0 = 0, x1 = -1;                // columns covered, inclusive
+  std::vector<int> top, bottom;       // per column from x0; −1 where empty
+  std::vector<std::uint8_t> inside;   // the region, row major
+  int width = 0;
+  [[nodiscard]] bool at(int x, int y) const {
+    return inside[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] != 0;
+  }
+};
+
+constexpr std::array<std::pair<int, int>, 4> kSteps{{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
+
+std::optional<StickMask> stick_mask(const Rgba8Image& img) {
+  const std::uint32_t bg = border_colour(img);
+  const auto w = static_cast<std::size_t>(img.width);
+  std::vector<int> label(w * static_cast<std::size_t>(img.height), 0);
+  int best = 0, best_extent = 0, next = 0;
+  std::vector<std::pair<int, int>> stack;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      if (label[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)] || !differs(pixel(img, x, y), bg))
+        continue;
+      ++next;
+      int lo = x, hi = x;
+      stack.assign(1, {x, y});
+      label[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)] = next;
+      while (!stack.empty()) {
+        const auto [cx, cy] = stack.back();
+        stack.pop_back();
+        lo = std::min(lo, cx);
+        hi = std::max(hi, cx);
+        for (const auto& [dx, dy] : kSteps) {
+          const int nx = cx + dx, ny = cy + dy;
+          if (nx < 0 || ny < 0 || nx >= img.width || ny >= img.height) continue;
+          auto& l = label[static_cast<std::size_t>(ny) * w + static_cast<std::size_t>(nx)];
+          if (l || !differs(pixel(img, nx, ny), bg)) continue;
+          l = next;
+          stack.push_back({nx, ny});
+        }
+      }
+      if (hi - lo > best_extent) {
+        best_extent = hi - lo;
+        best = next;
+      }
+    }
+  if (best == 0 || best_extent < 20) return std::nullopt;
+  StickMask m;
+  m.width = img.width;
+  m.inside.assign(label.size(), 0);
+  m.x0 = img.width;
+  for (std::size_t i = 0; i < label.size(); ++i)
+    if (label[i] == best) {
+      m.inside[i] = 1;
+      const int x = static_cast<int>(i % w);
+      m.x0 = std::min(m.x0, x);
+      m.x1 = std::max(m.x1, x);
+    }
+  const auto n = static_cast<std::size_t>(m.x1 - m.x0 + 1);
+  m.top.assign(n, -1);
+  m.bottom.assign(n, -1);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = m.x0; x <= m.x1; ++x)
+      if (m.at(x, y)) {
+        auto& t = m.top[static_cast<std::size_t>(x - m.x0)];
+        if (t < 0) t = y;
+        m.bottom[static_cast<std::size_t>(x - m.x0)] = y;
+      }
+  return m;
+}
+
+// Least-squares polynomial (degree 3) of the stick's midline row against the
+// column: the silhouette is quantized per column, the fit over hundreds of
+// columns is not.
+struct Midline {
+  double centre = 0.0, scale = 1.0;
+  std::array<double, 4> c{};
+  [[nodiscard]] double at(double x) const {
+    const double t = (x - centre) / scale;
+    return c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+  }
+};
+
+Midline fit_midline(const StickMask& m) {
+  Midline f;
+  f.centre = 0.5 * (m.x0 + m.x1 + 1);
+  f.scale = std::max(1.0, 0.5 * (m.x1 - m.x0 + 1));
+  std::array<std::array<double, 5>, 4> a{};  // normal equations, augmented
+  for (int x = m.x0; x <= m.x1; ++x) {
+    const auto i = static_cast<std::size_t>(x - m.x0);
+    if (m.top[i] < 0 || m.bottom[i] - m.top[i] < 2) continue;
+    const double t = (x + 0.5 - f.centre) / f.scale;
+    const double mid = 0.5 * (m.top[i] + m.bottom[i] + 1);
+    const std::array<double, 4> p{1.0, t, t * t, t * t * t};
+    for (std::size_t r = 0; r < 4; ++r) {
+      for (std::size_t c = 0; c < 4; ++c) a[r][c] += p[r] * p[c];
+      a[r][4] += p[r] * mid;
+    }
+  }
+  for (std::size_t k = 0; k < 4; ++k) {  // Gauss–Jordan; the matrix is positive definite
+    if (std::abs(a[k][k]) < 1e-12) return f;
+    for (std::size_t r = 0; r < 4; ++r) {
+      if (r == k) continue;
+      const double q = a[r][k] / a[k][k];
+      for (std::size_t c = k; c < 5; ++c) a[r][c] -= q * a[k][c];
+    }
+  }
+  for (std::size_t k = 0; k < 4; ++k) f.c[k] = a[k][4] / a[k][k];
+  return f;
+}
+
+// Mean brightness of the stick's inner rows in each column (the silhouette
+// rows, partly covered, left out).
+std::vector<double> column_profile(const Rgba8Image& img, const StickMask& m) {
+  std::vector<double> p(m.top.size(), 0.0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    double sum = 0.0;
+    int n = 0;
+    const int x = m.x0 + static_cast<int>(i);
+    for (int y = m.top[i] + 1; m.top[i] >= 0 && y < m.bottom[i]; ++y)
+      if (m.at(x, y)) {
+        sum += brightness(img, x, y);
+        ++n;
+      }
+    p[i] = n > 0 ? sum / n : 0.0;
+  }
+  return p;
+}
+
+// The column of a ring near `expected`: the largest excess of the profile
+// over the mean two half-widths to either side (zero on a linear ramp, so
+// the butt-to-shaft transition does not pull it).
+std::optional<int> ring_column(const std::vector<double>& p, double expected, double half_px) {
+  const int reach = static_cast<int>(std::ceil(2.0 * half_px));
+  const int lo = std::max(reach, static_cast<int>(expected - 2.5 * half_px));
+  const int hi = std::min(static_cast<int>(p.size()) - 1 - reach, static_cast<int>(expected + 2.5 * half_px));
+  std::optional<int> best;
+  double best_excess = 0.0;
+  for (int i = lo; i <= hi; ++i) {
+    const auto at = [&](int k) { return p[static_cast<std::size_t>(k)]; };
+    const double excess = at(i) - 0.5 * (at(i - reach) + at(i + reach));
+    if (excess > best_excess) {
+      best_excess = excess;
+      best = i;
+    }
+  }
+  if (best_excess < 12.0) return std::nullopt;  // under ~4 levels per channel: no ring
+  return best;
+}
+
+// The ring's column position: in every row that crosses the whole window
+// inside the stick, the centroid of the brightness above the line through
+// the window's two ends; then the mean over rows.
+std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& m, const Midline& mid,
+                                        double centre_x, double half_px) {
+  const int a = static_cast<int>(std::floor(centre_x - 1.7 * half_px));
+  const int b = static_cast<int>(std::ceil(centre_x + 1.7 * half_px));
+  const int foot = std::max(1, static_cast<int>(0.3 * half_px));
+  if (a < m.x0 || b > m.x1) return std::nullopt;
+  int y0 = 0, y1 = img.height;
+  for (int x = a; x <= b; ++x) {
+    const auto i = static_cast<std::size_t>(x - m.x0);
+    if (m.top[i] < 0) return std::nullopt;
+    y0 = std::max(y0, m.top[i] + 1);
+    y1 = std::min(y1, m.bottom[i]);
+  }
+  double sum = 0.0;
+  int rows = 0;
+  for (int y = y0; y < y1; ++y) {
+    double left = 0.0, right = 0.0;
+    for (int k = 0; k < foot; ++k) {
+      left += brightness(img, a + k, y);
+      right += brightness(img, b - k, y);
+    }
+    left /= foot;
+    right /= foot;
+    const double xl = a + 0.5 * foot, xr = b + 1.0 - 0.5 * foot;
+    double w_sum = 0.0, wx_sum = 0.0;
+    for (int x = a; x <= b; ++x) {
+      const double xc = x + 0.5;
+      const double base = left + (right - left) * (xc - xl) / (xr - xl);
+      const double w = std::max(0.0, brightness(img, x, y) - base);
+      w_sum += w;
+      wx_sum += w * xc;
+    }
+    if (w_sum <= 0.0) continue;
+    sum += wx_sum / w_sum;
+    ++rows;
+  }
+  if (rows < 2) return std::nullopt;
+  const double x = sum / rows;
+  return RingSighting{{x, mid.at(x)}, rows};
+}
+
+}  // namespace
+
+Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_length_m) {
+  if (image.width < 8 || image.height < 8) return bad("the image is too small to hold a stick");
+  const auto mask = stick_mask(image);
+  if (!mask) return bad("no stick in the image (no region apart from the background is 20 px wide)");
+  // A fronto-parallel segment projects with one scale in a pinhole image, so
+  // the stick's extent in pixels gives the rings' expected columns and widths.
+  const double length_px = mask->x1 - mask->x0 + 1;
+  const double half_px = length_px * renderer::kStickRingHalfWidthM / stick_length_m;
+  if (half_px < 1.5)
+    return bad("the rings are " + std::to_string(2.0 * half_px) +
+               " px wide; at least 3 px are needed (a larger image or a narrower field of view)");
+  const auto profile = column_profile(image, *mask);
+  const Midline mid = fit_midline(*mask);
+  std::vector<RingSighting> out;
+  for (const double f : renderer::kStickRingFractions) {
+    const auto column = ring_column(profile, (f + 0.5) * length_px, half_px);
+    if (!column)
+      return bad("no ring near " + std::to_string(f) + " of the length from the middle (is the stick marked?)");
+    const auto ring = refine_ring(image, *mask, mid, mask->x0 + *column + 0.5, half_px);
+    if (!ring) return bad("the ring at " + std::to_string(f) + " of the length is cut by the stick's outline");
+    out.push_back(*ring);
+  }
+  return out;
+}
+
+bool shows_stick(const renderer::Rgba8Image& image) {
+  return image.width >= 8 && image.height >= 8 && stick_mask(image).has_value();
+}
+
+}  // namespace curvlab::harness::measure

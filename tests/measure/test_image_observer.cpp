@@ -1,0 +1,112 @@
+// `curvlab run --observer image`: the simulated participant that judges each
+// trial from its rendered onset pair answers as the perception-model
+// observer does — same seeds, so the same noise and lapses; only the judged
+// value differs, by the image estimate's error — and refuses a plain stick.
+#include "run_cli.hpp"
+#include "session_db.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <map>
+
+using curvlab::testing::fresh_dir;
+using curvlab::testing::query;
+using curvlab::testing::run_cli;
+
+namespace {
+
+const char* kMarkedProtocol = R"(
+[protocol]
+name = "marked-stick"
+version = "1.0.0"
+
+[randomization]
+seed = 7
+
+[backend]
+resolution = [640, 640]
+
+[space]
+radius_m = "from_table"
+
+[table]
+edge_m = 1.0
+
+[timeline]
+fixation_ms = 100
+stimulus_ms = 300
+response_ms = 2500
+iti_ms = 100
+
+[stimulus]
+stick_length_m = 1.0
+stick_distance_m = 1.0
+stick_height_m = -0.2
+stick_marks = "rings"
+show_table = false
+
+[factors.space]
+sets = "space.kind"
+levels = ["E3", "H3", "S3"]
+
+[factors.view]
+sets = "viewing.preset"
+levels = ["tourist", "native", "monocular"]
+
+[factors.bend]
+sets = "stimulus.stick_sagitta_m"
+levels = [-0.01, 0.0, 0.01]
+
+[judgement]
+type = "choice"
+prompt = "Convex, straight or concave?"
+options = [
+  { value = "convex", keys = ["1"] },
+  { value = "straight", keys = ["2"] },
+  { value = "concave", keys = ["3"] },
+]
+)";
+
+std::map<std::string, std::string> responses(const std::string& db) {
+  std::map<std::string, std::string> out;  // trial index → response
+  for (const auto& row : query(db, "SELECT trial_index, response FROM trials WHERE status = 'completed'"))
+    out[row[0]] = row[1];
+  return out;
+}
+
+}  // namespace
+
+TEST(ImageObserver, AnswersAsThePerceptionModelDoesFromThePixels) {
+  const auto dir = fresh_dir("image_observer");
+  const auto protocol = (dir / "marked.toml").string();
+  std::ofstream(protocol) << kMarkedProtocol;
+  const auto model_db = (dir / "model.sqlite").string();
+  const auto image_db = (dir / "image.sqlite").string();
+  auto r = run_cli("run " + protocol + " --participant P01 --db " + model_db + " --render none --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run_cli("run " + protocol + " --participant P01 --db " + image_db + " --render none --quiet --observer image");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto model = responses(model_db);
+  const auto image = responses(image_db);
+  ASSERT_EQ(model.size(), 27u);
+  ASSERT_EQ(image.size(), model.size());
+  int same = 0;
+  for (const auto& [trial, response] : model) same += image.at(trial) == response;
+  // The judged values differ by a millimetre or so against a noise SD of
+  // 3.3 mm: a trial's answer can flip only near a cut.
+  EXPECT_GE(same, 24) << same << " of 27 answers agree";
+  // What the image observer judged is logged with each onset.
+  const auto seen = query(image_db, "SELECT json_extract(detail, '$.perceived_sagitta_m') FROM events "
+                                    "WHERE kind = 'onset'");
+  ASSERT_EQ(seen.size(), 27u);
+}
+
+TEST(ImageObserver, RefusesAPlainStick) {
+  const auto dir = fresh_dir("image_observer_plain");
+  const auto r = run_cli("run " + std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml --participant P01 --db " +
+                         (dir / "plain.sqlite").string() + " --render none --quiet --observer image");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("stick_marks = \"rings\""), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "plain.sqlite")) << "nothing is written for a refused run";
+}
