@@ -93,10 +93,10 @@ renderer::Rgba8Image read_image(const fs::path& path) {
 }
 
 void print_text(const harness::measure::StickEstimate& e) {
-  std::printf("estimated_sagitta_m: %.6f\nmodel_sagitta_m: %.6f\ndifference_m: %.6f\nbinocular: %s\n"
-              "fit_rms_m: %.6f\n",
+  std::printf("estimated_sagitta_m: %.6f\nmodel_sagitta_m: %.6f\ndifference_m: %.6f\n"
+              "estimated_bend_m: %.6f\nmodel_bend_m: %.6f\nbinocular: %s\nfit_rms_m: %.6f\n",
               e.estimated_sagitta_m, e.model_sagitta_m, e.estimated_sagitta_m - e.model_sagitta_m,
-              e.binocular ? "true" : "false", e.fit_rms_m);
+              e.estimated_bend_m, e.model_bend_m, e.binocular ? "true" : "false", e.fit_rms_m);
   if (e.features.empty()) return;
   std::printf("%-11s %8s %19s %19s %28s %9s %9s\n", "feature", "u_m", "left_px", "right_px", "position_m",
               "res_l_px", "res_r_px");

@@ -6,9 +6,9 @@
 #include <glm/matrix.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 
 namespace curvlab::harness::measure {
 namespace {
@@ -29,6 +29,16 @@ double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_
   const double len = glm::length(toward);
   toward = len > 0.0 ? toward / len : Vec3(0.0, 0.0, 1.0);
   return glm::dot(middle - mid, toward);
+}
+
+// The whole distance of the middle from the chord, with the sign of the bow.
+double bend_in_plane(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
+  Vec3 chord = end_b - end_a;
+  const double cl = glm::length(chord);
+  chord = cl > 0.0 ? chord / cl : Vec3(1.0, 0.0, 0.0);
+  Vec3 off = middle - 0.5 * (end_a + end_b);
+  off -= glm::dot(off, chord) * chord;
+  return std::copysign(glm::length(off), bow_toward_viewer(end_a, middle, end_b));
 }
 
 // The least-squares intersection of two lines: the midpoint of their common
@@ -86,13 +96,14 @@ glm::dmat4 matrix_from(const nlohmann::json& j) {
 // The triangulated point lies on the part of the ring that faces the eyes.
 // Averaged over the image rows that cross the stick (uniform in the
 // projected height r·sin α of the visible half circle), its offset toward
-// the eyes is r·⟨cos α⟩ = π r / 4; move it back onto the centre line, away
-// from the viewer, perpendicular to the stick's chord.
-Vec3 onto_centre_line(const Vec3& p, const Vec3& cyclops, const Vec3& chord, double radius_m) {
+// the eyes is r·⟨cos α⟩ (π r / 4 over the whole half circle; more when the
+// rows along the outline are left out); move it back onto the centre line,
+// away from the viewer, perpendicular to the stick's chord.
+Vec3 onto_centre_line(const Vec3& p, const Vec3& cyclops, const Vec3& chord, double offset_m) {
   Vec3 away = p - cyclops;
   away -= glm::dot(away, chord) * chord;
   const double len = glm::length(away);
-  return len > 0.0 ? p + (std::numbers::pi / 4.0) * radius_m * away / len : p;
+  return len > 0.0 ? p + offset_m * away / len : p;
 }
 
 }  // namespace
@@ -115,15 +126,31 @@ glm::dvec2 project_px(const renderer::EyeOffset& eye, std::uint32_t width_px, st
   return {(tx - l) / (r - l) * width_px, (u - ty) / (u - d) * height_px};
 }
 
-double model_sagitta_m(const StickScene& scene) {
-  if (scene.mode == geometry::ViewMode::monocular) return 0.0;
+namespace {
+
+// The perceived ends and middle of the stick's centre line.
+std::array<Vec3, 3> model_points(const StickScene& scene) {
   const geometry::EyeOffsets eyes{scene.rig.eyes[0].position_m, scene.rig.eyes[1].position_m};
   const auto seen = [&](double u) {
     const auto q = scene.stick.centre_point(scene.space, scene.stick_pose, u);
     return geometry::perceive_point(scene.space, scene.head, eyes, scene.mode, q).position_m;
   };
   const double half = scene.stick.length_m / 2.0;
-  return bow_toward_viewer(seen(-half), seen(0.0), seen(half));
+  return {seen(-half), seen(0.0), seen(half)};
+}
+
+}  // namespace
+
+double model_sagitta_m(const StickScene& scene) {
+  if (scene.mode == geometry::ViewMode::monocular) return 0.0;
+  const auto p = model_points(scene);
+  return bow_toward_viewer(p[0], p[1], p[2]);
+}
+
+double model_bend_m(const StickScene& scene) {
+  if (scene.mode == geometry::ViewMode::monocular) return 0.0;
+  const auto p = model_points(scene);
+  return bend_in_plane(p[0], p[1], p[2]);
 }
 
 namespace {
@@ -139,6 +166,7 @@ StickFeature triangulate(const StickScene& scene, double fraction, const RingSig
   f.left_px = left.px;
   f.right_px = right.px;
   f.rows = std::min(left.rows, right.rows);
+  f.depth_radii = 0.5 * (left.depth_radii + right.depth_radii);
   f.position_m = intersect(sight_line(rig.eyes[0], scene.width_px, scene.height_px, left.px),
                            sight_line(rig.eyes[1], scene.width_px, scene.height_px, right.px));
   f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - left.px);
@@ -155,7 +183,7 @@ void fit_stick(const StickScene& scene, StickEstimate& e) {
   std::vector<double> u;
   std::vector<Vec3> p;
   for (auto& f : e.features) {
-    f.position_m = onto_centre_line(f.position_m, cyclops, chord, scene.stick.radius_m);
+    f.position_m = onto_centre_line(f.position_m, cyclops, chord, f.depth_radii * scene.stick.radius_m);
     u.push_back(f.u_m);
     p.push_back(f.position_m);
   }
@@ -165,6 +193,7 @@ void fit_stick(const StickScene& scene, StickEstimate& e) {
   e.fit_rms_m = std::sqrt(sq / static_cast<double>(u.size()));
   const double half = scene.stick.length_m / 2.0;
   e.estimated_sagitta_m = bow_toward_viewer(q.at(-half), q.at(0.0), q.at(half));
+  e.estimated_bend_m = bend_in_plane(q.at(-half), q.at(0.0), q.at(half));
 }
 
 }  // namespace
@@ -178,6 +207,7 @@ Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const rend
                std::to_string(scene.width_px) + "x" + std::to_string(scene.height_px));
   StickEstimate e;
   e.model_sagitta_m = model_sagitta_m(scene);
+  e.model_bend_m = model_bend_m(scene);
   const bool sees_left = shows_stick(left), sees_right = shows_stick(right);
   if (!sees_left && !sees_right) return bad("neither image shows a stick");
   if (!sees_left || !sees_right) {
@@ -187,9 +217,9 @@ Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const rend
   if (scene.marks != renderer::StickMarks::rings)
     return bad("a plain stick has no features along its length to match between the eyes; "
                "mark it with rings (render --stick-marks rings, protocol stimulus.stick_marks = \"rings\")");
-  auto l = find_rings(left, scene.stick.length_m);
+  auto l = find_rings(left, scene.stick.radius_m);
   if (!l) return Error{l.error().kind, "left image: " + l.error().message};
-  auto r = find_rings(right, scene.stick.length_m);
+  auto r = find_rings(right, scene.stick.radius_m);
   if (!r) return Error{r.error().kind, "right image: " + r.error().message};
   for (std::size_t i = 0; i < renderer::kStickRingFractions.size(); ++i)
     e.features.push_back(triangulate(scene, renderer::kStickRingFractions[i], l.value()[i], r.value()[i]));
@@ -276,6 +306,8 @@ nlohmann::ordered_json estimate_json(const StickEstimate& e) {
   j["estimated_sagitta_m"] = e.estimated_sagitta_m;
   j["model_sagitta_m"] = e.model_sagitta_m;
   j["difference_m"] = e.estimated_sagitta_m - e.model_sagitta_m;
+  j["estimated_bend_m"] = e.estimated_bend_m;
+  j["model_bend_m"] = e.model_bend_m;
   j["binocular"] = e.binocular;
   j["fit_rms_m"] = e.fit_rms_m;
   auto features = nlohmann::ordered_json::array();
@@ -287,7 +319,8 @@ nlohmann::ordered_json estimate_json(const StickEstimate& e) {
                         {"position_m", {f.position_m.x, f.position_m.y, f.position_m.z}},
                         {"residual_left_px", f.residual_left_px},
                         {"residual_right_px", f.residual_right_px},
-                        {"rows", f.rows}});
+                        {"rows", f.rows},
+                        {"depth_radii", f.depth_radii}});
   j["features"] = features;
   return j;
 }

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -186,25 +187,44 @@ std::vector<double> column_profile(const Rgba8Image& img, const StickMask& m) {
   return p;
 }
 
-// The column of a ring near `expected`: the largest excess of the profile
-// over the mean two half-widths to either side (zero on a linear ramp, so
-// the butt-to-shaft transition does not pull it).
-std::optional<int> ring_column(const std::vector<double>& p, double expected, double half_px) {
-  const int reach = static_cast<int>(std::ceil(2.0 * half_px));
-  const int lo = std::max(reach, static_cast<int>(expected - 2.5 * half_px));
-  const int hi = std::min(static_cast<int>(p.size()) - 1 - reach, static_cast<int>(expected + 2.5 * half_px));
-  std::optional<int> best;
-  double best_excess = 0.0;
-  for (int i = lo; i <= hi; ++i) {
+// The rings' half-width in pixels at each column: the stick's half
+// thickness there, scaled by the ring's half-width over the stick's radius
+// (both lie across the line of sight at the same depth).
+std::vector<double> ring_half_widths(const StickMask& m, double rings_per_radius) {
+  std::vector<double> h(m.top.size(), 0.0);
+  for (std::size_t i = 0; i < h.size(); ++i)
+    if (m.top[i] >= 0) h[i] = 0.5 * (m.bottom[i] - m.top[i] + 1) * rings_per_radius;
+  return h;
+}
+
+// The rings' columns, left to right: the `count` strongest local maxima of
+// the profile's excess over the mean two half-widths to either side (zero on
+// a linear ramp, so the butt-to-shaft transition does not count as a ring),
+// more than four half-widths from the stick's ends in the image (the white
+// tip and the end caps are not rings; no ring lies that close to an end).
+std::vector<int> ring_columns(const std::vector<double>& p, const std::vector<double>& half_px, std::size_t count) {
+  const int n = static_cast<int>(p.size());
+  std::vector<double> excess(p.size(), 0.0);
+  for (int i = 0; i < n; ++i) {
+    const int reach = static_cast<int>(std::ceil(2.0 * half_px[static_cast<std::size_t>(i)]));
+    if (reach < 1 || i - 2 * reach < 0 || i + 2 * reach >= n) continue;
     const auto at = [&](int k) { return p[static_cast<std::size_t>(k)]; };
-    const double excess = at(i) - 0.5 * (at(i - reach) + at(i + reach));
-    if (excess > best_excess) {
-      best_excess = excess;
-      best = i;
-    }
+    excess[static_cast<std::size_t>(i)] = at(i) - 0.5 * (at(i - reach) + at(i + reach));
   }
-  if (best_excess < 12.0) return std::nullopt;  // under ~4 levels per channel: no ring
-  return best;
+  std::vector<std::pair<double, int>> peaks;
+  for (int i = 0; i < n; ++i) {
+    const double e = excess[static_cast<std::size_t>(i)];
+    const int reach = static_cast<int>(std::ceil(2.0 * half_px[static_cast<std::size_t>(i)]));
+    bool top = e >= 12.0;  // under ~4 levels per channel: no ring
+    for (int k = std::max(0, i - reach); top && k <= std::min(n - 1, i + reach); ++k)
+      top = excess[static_cast<std::size_t>(k)] < e || (excess[static_cast<std::size_t>(k)] == e && k >= i);
+    if (top) peaks.push_back({e, i});
+  }
+  std::sort(peaks.begin(), peaks.end(), std::greater<>());
+  std::vector<int> out;
+  for (std::size_t k = 0; k < std::min(count, peaks.size()); ++k) out.push_back(peaks[k].second);
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 // The ring's column position: in every row that crosses the whole window
@@ -223,7 +243,12 @@ std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& 
     y0 = std::max(y0, m.top[i] + 1);
     y1 = std::min(y1, m.bottom[i]);
   }
-  double sum = 0.0;
+  double half_height = 0.0;
+  for (int x = a; x <= b; ++x)
+    half_height += 0.5 * (m.bottom[static_cast<std::size_t>(x - m.x0)] - m.top[static_cast<std::size_t>(x - m.x0)] + 1);
+  half_height /= (b - a + 1);
+  const double centre_y = mid.at(centre_x);
+  double sum = 0.0, depth = 0.0;
   int rows = 0;
   for (int y = y0; y < y1; ++y) {
     double left = 0.0, right = 0.0;
@@ -244,35 +269,37 @@ std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& 
     }
     if (w_sum <= 0.0) continue;
     sum += wx_sum / w_sum;
+    const double sine = std::clamp((y + 0.5 - centre_y) / half_height, -1.0, 1.0);
+    depth += std::sqrt(1.0 - sine * sine);
     ++rows;
   }
   if (rows < 2) return std::nullopt;
   const double x = sum / rows;
-  return RingSighting{{x, mid.at(x)}, rows};
+  return RingSighting{{x, mid.at(x)}, rows, depth / rows};
 }
 
 }  // namespace
 
-Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_length_m) {
+Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m) {
   if (image.width < 8 || image.height < 8) return bad("the image is too small to hold a stick");
   const auto mask = stick_mask(image);
   if (!mask) return bad("no stick in the image (no region apart from the background is 20 px wide)");
-  // A fronto-parallel segment projects with one scale in a pinhole image, so
-  // the stick's extent in pixels gives the rings' expected columns and widths.
-  const double length_px = mask->x1 - mask->x0 + 1;
-  const double half_px = length_px * renderer::kStickRingHalfWidthM / stick_length_m;
-  if (half_px < 1.5)
-    return bad("the rings are " + std::to_string(2.0 * half_px) +
-               " px wide; at least 3 px are needed (a larger image or a narrower field of view)");
+  const auto half_px = ring_half_widths(*mask, renderer::kStickRingHalfWidthM / stick_radius_m);
   const auto profile = column_profile(image, *mask);
   const Midline mid = fit_midline(*mask);
+  const std::size_t count = renderer::kStickRingFractions.size();
+  const auto columns = ring_columns(profile, half_px, count);
+  if (columns.size() < count)
+    return bad("found " + std::to_string(columns.size()) + " of the stick's " + std::to_string(count) +
+               " rings (is the stick marked, and are all its rings in view?)");
   std::vector<RingSighting> out;
-  for (const double f : renderer::kStickRingFractions) {
-    const auto column = ring_column(profile, (f + 0.5) * length_px, half_px);
-    if (!column)
-      return bad("no ring near " + std::to_string(f) + " of the length from the middle (is the stick marked?)");
-    const auto ring = refine_ring(image, *mask, mid, mask->x0 + *column + 0.5, half_px);
-    if (!ring) return bad("the ring at " + std::to_string(f) + " of the length is cut by the stick's outline");
+  for (std::size_t k = 0; k < count; ++k) {
+    const auto c = static_cast<std::size_t>(columns[k]);
+    if (half_px[c] < 1.5)
+      return bad("a ring is " + std::to_string(2.0 * half_px[c]) +
+                 " px wide; at least 3 px are needed (a larger image or a narrower field of view)");
+    const auto ring = refine_ring(image, *mask, mid, mask->x0 + columns[k] + 0.5, half_px[c]);
+    if (!ring) return bad("ring " + std::to_string(k + 1) + " is cut by the stick's outline or the image border");
     out.push_back(*ring);
   }
   return out;

@@ -61,11 +61,19 @@ struct StickFeature {
   double residual_left_px = 0.0;   // reprojection residuals of the triangulated point
   double residual_right_px = 0.0;
   int rows = 0;  // image rows averaged per eye (the smaller of the two)
+  double depth_radii = 0.0;  // in front of the centre line (mean of the two eyes)
 };
 
 struct StickEstimate {
+  // The middle's distance from the chord of the ends along the normal that
+  // points from the chord toward the nose (the perception model's measure).
   double estimated_sagitta_m = 0.0;
   double model_sagitta_m = 0.0;
+  // The middle's whole distance from the chord, signed as the sagitta: the
+  // bend in the stick's own plane (the shown bend, for a Euclidean view of a
+  // stick below or above the eyes, whose bend plane the sagitta sees tilted).
+  double estimated_bend_m = 0.0;
+  double model_bend_m = 0.0;
   bool binocular = true;  // false: one eye showed no stick (no disparity, estimate 0)
   double fit_rms_m = 0.0; // triangulated points against the quadratic
   std::vector<StickFeature> features;
@@ -77,8 +85,12 @@ struct StickEstimate {
 struct RingSighting {
   glm::dvec2 px{0.0};
   int rows = 0;  // image rows averaged
+  // The rows cross the stick's visible half at sin α = (row − axis) / radius
+  // (α from the line of sight); the mean of cos α over them is how far in
+  // front of the centre line, in radii, the located point lies.
+  double depth_radii = 0.785;
 };
-Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_length_m);
+Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m);
 // Whether the image shows a stick at all (one eye of a monocular view does not).
 bool shows_stick(const renderer::Rgba8Image& image);
 
@@ -89,8 +101,10 @@ geometry::SightLine sight_line(const renderer::EyeOffset& eye, std::uint32_t wid
 glm::dvec2 project_px(const renderer::EyeOffset& eye, std::uint32_t width_px, std::uint32_t height_px,
                       const geometry::Vec3& p_m);
 
-// The perception model's sagitta for the scene (0 for monocular viewing).
+// The perception model's sagitta and bend for the scene (0 for monocular
+// viewing).
 double model_sagitta_m(const StickScene& scene);
+double model_bend_m(const StickScene& scene);
 
 // The estimate from the two images. A plain stick has no features along its
 // length to match between the eyes: that is an error naming the fix (rings).
