@@ -39,7 +39,8 @@ def proportions(path):
     rows = sqlite3.connect(path).execute(
         "SELECT json_extract(conditions, '$.judged'), json_extract(conditions, '$.space'), "
         "json_extract(conditions, '$.view'), "
-        "coalesce(json_extract(conditions, '$.stick_bend'), json_extract(conditions, '$.table_bend')), "
+        "CASE json_extract(conditions, '$.judged') WHEN 'stick' THEN json_extract(conditions, '$.stick_bend') "
+        "ELSE json_extract(conditions, '$.table_bend') END, "
         "response FROM trials t JOIN blocks b ON b.block_id = t.block_id "
         "WHERE b.is_practice = 0 AND t.status = 'completed'").fetchall()
     counts = defaultdict(lambda: defaultdict(int))

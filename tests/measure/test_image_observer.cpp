@@ -2,6 +2,10 @@
 // trial from its rendered onset pair answers as the perception-model
 // observer does — same seeds, so the same noise and lapses; only the judged
 // value differs, by the image estimate's error — and refuses a plain stick.
+// E3 and H3 with the proposed study's stick: in its S3 (ρ = 0.64 m) the
+// stick lies at the equator, where the tourist view's lines of sight turn
+// parallel and no triangulation, the model's or the image's, is defined
+// (S3 native is covered by test_measure_stick.cpp).
 #include "run_cli.hpp"
 #include "session_db.hpp"
 
@@ -25,7 +29,7 @@ version = "1.0.0"
 seed = 7
 
 [backend]
-resolution = [640, 640]
+resolution = [1024, 1024]
 
 [space]
 radius_m = "from_table"
@@ -48,7 +52,7 @@ show_table = false
 
 [factors.space]
 sets = "space.kind"
-levels = ["E3", "H3", "S3"]
+levels = ["E3", "H3"]
 
 [factors.view]
 sets = "viewing.preset"
@@ -67,6 +71,15 @@ options = [
   { value = "concave", keys = ["3"] },
 ]
 )";
+
+// The judged value logged at each onset, by trial index.
+std::map<std::string, double> judged_values(const std::string& db) {
+  std::map<std::string, double> out;
+  for (const auto& row : query(db, "SELECT t.trial_index, json_extract(e.detail, '$.perceived_sagitta_m') "
+                                   "FROM events e JOIN trials t ON t.trial_id = e.trial_id WHERE e.kind = 'onset'"))
+    out[row[0]] = std::stod(row[1]);
+  return out;
+}
 
 std::map<std::string, std::string> responses(const std::string& db) {
   std::map<std::string, std::string> out;  // trial index → response
@@ -89,17 +102,20 @@ TEST(ImageObserver, AnswersAsThePerceptionModelDoesFromThePixels) {
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto model = responses(model_db);
   const auto image = responses(image_db);
-  ASSERT_EQ(model.size(), 27u);
+  ASSERT_EQ(model.size(), 18u);
   ASSERT_EQ(image.size(), model.size());
   int same = 0;
   for (const auto& [trial, response] : model) same += image.at(trial) == response;
   // The judged values differ by a millimetre or so against a noise SD of
   // 3.3 mm: a trial's answer can flip only near a cut.
-  EXPECT_GE(same, 24) << same << " of 27 answers agree";
-  // What the image observer judged is logged with each onset.
-  const auto seen = query(image_db, "SELECT json_extract(detail, '$.perceived_sagitta_m') FROM events "
-                                    "WHERE kind = 'onset'");
-  ASSERT_EQ(seen.size(), 27u);
+  EXPECT_GE(same, 16) << same << " of 18 answers agree";
+  // What each judged, logged with each onset: the pixels give the model's
+  // value within 3 mm in every space and view (0 with one eye).
+  const auto from_model = judged_values(model_db);
+  const auto from_image = judged_values(image_db);
+  ASSERT_EQ(from_image.size(), 18u);
+  for (const auto& [trial, value] : from_model)
+    EXPECT_NEAR(from_image.at(trial), value, 0.003) << "trial " << trial;
 }
 
 TEST(ImageObserver, RefusesAPlainStick) {
