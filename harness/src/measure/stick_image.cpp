@@ -71,20 +71,28 @@ struct StickMask {
 
 constexpr std::array<std::pair<int, int>, 4> kSteps{{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
 
-std::optional<StickMask> stick_mask(const Rgba8Image& img) {
+// 4-connected regions of pixels that differ from the background: a label
+// per pixel (0 background) and the label of the widest region (0 if none).
+struct Regions {
+  std::vector<int> label;
+  int widest = 0;
+  int widest_extent = 0;
+};
+
+Regions label_regions(const Rgba8Image& img) {
   const std::uint32_t bg = border_colour(img);
   const auto w = static_cast<std::size_t>(img.width);
-  std::vector<int> label(w * static_cast<std::size_t>(img.height), 0);
-  int best = 0, best_extent = 0, next = 0;
+  const auto index = [w](int x, int y) { return static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x); };
+  Regions r;
+  r.label.assign(w * static_cast<std::size_t>(img.height), 0);
+  int next = 0;
   std::vector<std::pair<int, int>> stack;
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) {
-      if (label[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)] || !differs(pixel(img, x, y), bg))
-        continue;
-      ++next;
+      if (r.label[index(x, y)] || !differs(pixel(img, x, y), bg)) continue;
+      r.label[index(x, y)] = ++next;
       int lo = x, hi = x;
       stack.assign(1, {x, y});
-      label[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)] = next;
       while (!stack.empty()) {
         const auto [cx, cy] = stack.back();
         stack.pop_back();
@@ -93,26 +101,30 @@ std::optional<StickMask> stick_mask(const Rgba8Image& img) {
         for (const auto& [dx, dy] : kSteps) {
           const int nx = cx + dx, ny = cy + dy;
           if (nx < 0 || ny < 0 || nx >= img.width || ny >= img.height) continue;
-          auto& l = label[static_cast<std::size_t>(ny) * w + static_cast<std::size_t>(nx)];
-          if (l || !differs(pixel(img, nx, ny), bg)) continue;
-          l = next;
+          if (r.label[index(nx, ny)] || !differs(pixel(img, nx, ny), bg)) continue;
+          r.label[index(nx, ny)] = next;
           stack.push_back({nx, ny});
         }
       }
-      if (hi - lo > best_extent) {
-        best_extent = hi - lo;
-        best = next;
+      if (hi - lo > r.widest_extent) {
+        r.widest_extent = hi - lo;
+        r.widest = next;
       }
     }
-  if (best == 0 || best_extent < 20) return std::nullopt;
+  return r;
+}
+
+std::optional<StickMask> stick_mask(const Rgba8Image& img) {
+  const Regions regions = label_regions(img);
+  if (regions.widest == 0 || regions.widest_extent < 20) return std::nullopt;
   StickMask m;
   m.width = img.width;
-  m.inside.assign(label.size(), 0);
+  m.inside.assign(regions.label.size(), 0);
   m.x0 = img.width;
-  for (std::size_t i = 0; i < label.size(); ++i)
-    if (label[i] == best) {
+  for (std::size_t i = 0; i < regions.label.size(); ++i)
+    if (regions.label[i] == regions.widest) {
       m.inside[i] = 1;
-      const int x = static_cast<int>(i % w);
+      const int x = static_cast<int>(i % static_cast<std::size_t>(img.width));
       m.x0 = std::min(m.x0, x);
       m.x1 = std::max(m.x1, x);
     }
