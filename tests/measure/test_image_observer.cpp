@@ -10,6 +10,7 @@
 #include "session_db.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <fstream>
 #include <map>
@@ -98,7 +99,9 @@ TEST(ImageObserver, AnswersAsThePerceptionModelDoesFromThePixels) {
   const auto image_db = (dir / "image.sqlite").string();
   auto r = run_cli("run " + protocol + " --participant P01 --db " + model_db + " --render none --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  r = run_cli("run " + protocol + " --participant P01 --db " + image_db + " --render none --quiet --observer image");
+  const auto images = (dir / "images").string();
+  r = run_cli("run " + protocol + " --participant P01 --db " + image_db +
+              " --render onset --images " + images + " --quiet --observer image");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto model = responses(model_db);
   const auto image = responses(image_db);
@@ -116,6 +119,16 @@ TEST(ImageObserver, AnswersAsThePerceptionModelDoesFromThePixels) {
   ASSERT_EQ(from_image.size(), 18u);
   for (const auto& [trial, value] : from_model)
     EXPECT_NEAR(from_image.at(trial), value, 0.003) << "trial " << trial;
+  // The participant's own onset pair, saved by --images with the record of
+  // the eyes, reads as the observer's: `curvlab measure stick --trial N`.
+  r = run_cli("measure stick --from " + images);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("--trial N"), std::string::npos) << r.out;
+  r = run_cli("measure stick --from " + images + " --trial 1 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["estimated_sagitta_m"].get<double>(), from_image.at("1"), 0.001) << r.out;
+  EXPECT_NEAR(j["model_sagitta_m"].get<double>(), from_model.at("1"), 1e-9) << r.out;
 }
 
 TEST(ImageObserver, RefusesAPlainStick) {
