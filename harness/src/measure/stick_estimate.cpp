@@ -155,6 +155,17 @@ double model_bend_m(const StickScene& scene) {
 
 namespace {
 
+// The radius a round stick must have to look as thick as it does at the
+// distance it is seen at (no knowledge of the true radius: in a curved
+// space's tourist view the seen depth scale differs from the true one).
+double radius_seen(const renderer::EyeOffset& eye, const StickScene& scene, const RingSighting& ring,
+                   const Vec3& p) {
+  const auto a = sight_line(eye, scene.width_px, scene.height_px, ring.px);
+  const auto b = sight_line(eye, scene.width_px, scene.height_px, ring.px + glm::dvec2(0.0, ring.half_thickness_px));
+  const double angle = std::acos(std::clamp(glm::dot(a.direction, b.direction), -1.0, 1.0));
+  return glm::length(p - eye.position_m) * std::tan(angle);
+}
+
 StickFeature triangulate(const StickScene& scene, double fraction, const RingSighting& left,
                          const RingSighting& right) {
   const auto& rig = scene.rig;
@@ -172,6 +183,8 @@ StickFeature triangulate(const StickScene& scene, double fraction, const RingSig
   f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - left.px);
   f.residual_right_px =
       glm::length(project_px(rig.eyes[1], scene.width_px, scene.height_px, f.position_m) - right.px);
+  f.radius_seen_m = 0.5 * (radius_seen(rig.eyes[0], scene, left, f.position_m) +
+                           radius_seen(rig.eyes[1], scene, right, f.position_m));
   return f;
 }
 
@@ -183,7 +196,7 @@ void fit_stick(const StickScene& scene, StickEstimate& e) {
   std::vector<double> u;
   std::vector<Vec3> p;
   for (auto& f : e.features) {
-    f.position_m = onto_centre_line(f.position_m, cyclops, chord, f.depth_radii * scene.stick.radius_m);
+    f.position_m = onto_centre_line(f.position_m, cyclops, chord, f.depth_radii * f.radius_seen_m);
     u.push_back(f.u_m);
     p.push_back(f.position_m);
   }
@@ -320,7 +333,8 @@ nlohmann::ordered_json estimate_json(const StickEstimate& e) {
                         {"residual_left_px", f.residual_left_px},
                         {"residual_right_px", f.residual_right_px},
                         {"rows", f.rows},
-                        {"depth_radii", f.depth_radii}});
+                        {"depth_radii", f.depth_radii},
+                        {"radius_seen_m", f.radius_seen_m}});
   j["features"] = features;
   return j;
 }

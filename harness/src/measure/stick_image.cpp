@@ -141,10 +141,11 @@ std::optional<StickMask> stick_mask(const Rgba8Image& img) {
   return m;
 }
 
-// Least-squares polynomial (degree 3) of the stick's midline row against the
-// column: the silhouette is quantized per column, the fit over hundreds of
-// columns is not.
-struct Midline {
+// Least-squares polynomials (degree 3) of the stick's midline row and half
+// thickness against the column: the outline is quantized per column, the
+// fit over hundreds of columns is not.
+enum class Outline { midline, half_thickness };
+struct Cubic {
   double centre = 0.0, scale = 1.0;
   std::array<double, 4> c{};
   [[nodiscard]] double at(double x) const {
@@ -153,8 +154,8 @@ struct Midline {
   }
 };
 
-Midline fit_midline(const StickMask& m) {
-  Midline f;
+Cubic fit_outline(const StickMask& m, Outline what) {
+  Cubic f;
   f.centre = 0.5 * (m.x0 + m.x1 + 1);
   f.scale = std::max(1.0, 0.5 * (m.x1 - m.x0 + 1));
   std::array<std::array<double, 5>, 4> a{};  // normal equations, augmented
@@ -162,11 +163,12 @@ Midline fit_midline(const StickMask& m) {
     const auto i = static_cast<std::size_t>(x - m.x0);
     if (m.top[i] < 0 || m.bottom[i] - m.top[i] < 2) continue;
     const double t = (x + 0.5 - f.centre) / f.scale;
-    const double mid = 0.5 * (m.top[i] + m.bottom[i] + 1);
+    const double v = what == Outline::midline ? 0.5 * (m.top[i] + m.bottom[i] + 1)
+                                              : 0.5 * (m.bottom[i] - m.top[i] + 1);
     const std::array<double, 4> p{1.0, t, t * t, t * t * t};
     for (std::size_t r = 0; r < 4; ++r) {
       for (std::size_t c = 0; c < 4; ++c) a[r][c] += p[r] * p[c];
-      a[r][4] += p[r] * mid;
+      a[r][4] += p[r] * v;
     }
   }
   for (std::size_t k = 0; k < 4; ++k) {  // Gauss–Jordan; the matrix is positive definite
@@ -242,8 +244,8 @@ std::vector<int> ring_columns(const std::vector<double>& p, const std::vector<do
 // The ring's column position: in every row that crosses the whole window
 // inside the stick, the centroid of the brightness above the line through
 // the window's two ends; then the mean over rows.
-std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& m, const Midline& mid,
-                                        double centre_x, double half_px) {
+std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& m, const Cubic& mid,
+                                        const Cubic& thickness, double centre_x, double half_px) {
   const int a = static_cast<int>(std::floor(centre_x - 1.7 * half_px));
   const int b = static_cast<int>(std::ceil(centre_x + 1.7 * half_px));
   const int foot = std::max(1, static_cast<int>(0.3 * half_px));
@@ -255,10 +257,7 @@ std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& 
     y0 = std::max(y0, m.top[i] + 1);
     y1 = std::min(y1, m.bottom[i]);
   }
-  double half_height = 0.0;
-  for (int x = a; x <= b; ++x)
-    half_height += 0.5 * (m.bottom[static_cast<std::size_t>(x - m.x0)] - m.top[static_cast<std::size_t>(x - m.x0)] + 1);
-  half_height /= (b - a + 1);
+  const double half_height = thickness.at(centre_x);
   const double centre_y = mid.at(centre_x);
   double sum = 0.0, depth = 0.0;
   int rows = 0;
@@ -287,7 +286,7 @@ std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& 
   }
   if (rows < 2) return std::nullopt;
   const double x = sum / rows;
-  return RingSighting{{x, mid.at(x)}, rows, depth / rows};
+  return RingSighting{{x, mid.at(x)}, rows, depth / rows, half_height};
 }
 
 }  // namespace
@@ -298,7 +297,8 @@ Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, 
   if (!mask) return bad("no stick in the image (no region apart from the background is 20 px wide)");
   const auto half_px = ring_half_widths(*mask, renderer::kStickRingHalfWidthM / stick_radius_m);
   const auto profile = column_profile(image, *mask);
-  const Midline mid = fit_midline(*mask);
+  const Cubic mid = fit_outline(*mask, Outline::midline);
+  const Cubic thickness = fit_outline(*mask, Outline::half_thickness);
   const std::size_t count = renderer::kStickRingFractions.size();
   const auto columns = ring_columns(profile, half_px, count);
   if (columns.size() < count)
@@ -310,7 +310,7 @@ Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, 
     if (half_px[c] < 1.5)
       return bad("a ring is " + std::to_string(2.0 * half_px[c]) +
                  " px wide; at least 3 px are needed (a larger image or a narrower field of view)");
-    const auto ring = refine_ring(image, *mask, mid, mask->x0 + columns[k] + 0.5, half_px[c]);
+    const auto ring = refine_ring(image, *mask, mid, thickness, mask->x0 + columns[k] + 0.5, half_px[c]);
     if (!ring) return bad("ring " + std::to_string(k + 1) + " is cut by the stick's outline or the image border");
     out.push_back(*ring);
   }

@@ -62,6 +62,9 @@ struct StickFeature {
   double residual_right_px = 0.0;
   int rows = 0;  // image rows averaged per eye (the smaller of the two)
   double depth_radii = 0.0;  // in front of the centre line (mean of the two eyes)
+  // The stick's radius as seen: its angular half-thickness in the images at
+  // the triangulated distance (mean of the two eyes).
+  double radius_seen_m = 0.0;
 };
 
 struct StickEstimate {
@@ -89,6 +92,7 @@ struct RingSighting {
   // (α from the line of sight); the mean of cos α over them is how far in
   // front of the centre line, in radii, the located point lies.
   double depth_radii = 0.785;
+  double half_thickness_px = 0.0;  // the stick's, across the ring's window
 };
 Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m);
 // Whether the image shows a stick at all (one eye of a monocular view does not).
