@@ -1,6 +1,7 @@
 // `curvlab render …`: one stereo frame of a stimulus scene, offscreen, written
 // as DIR/left.png, DIR/right.png and DIR/plan.json (what the render plan
-// drew and skipped, and how long it took).
+// drew and skipped, and how long it took; for the stick scene also the eye
+// geometry and stick that `curvlab measure stick` reads).
 #include "common.hpp"
 
 #include "curvlab/harness/measure/stick.hpp"
