@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -189,20 +190,62 @@ MeshInfo table_info(const Space& space, const geometry::TableShape& table,
   return info;
 }
 
-MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level) {
+std::optional<StickMarks> parse_stick_marks(std::string_view text) {
+  if (text == "none") return StickMarks::none;
+  if (text == "rings") return StickMarks::rings;
+  return std::nullopt;
+}
+
+std::string_view to_string(StickMarks marks) { return marks == StickMarks::rings ? "rings" : "none"; }
+
+namespace {
+
+// Butt (u = −L/2) dark, shaft light, the last 2 cm white (tip).
+glm::vec4 stick_wood(double u, double f, double half) {
+  return f < 0.35           ? palette::stick_butt
+         : u > half - 0.02 ? palette::stick_tip
+                            : palette::stick_shaft;
+}
+
+// The axial positions of the stick's vertex rings: `along` equal pieces, and
+// with rings each band's two feet and peak, so that the tent profile is exact.
+std::vector<double> stick_rows(const geometry::BentStick& stick, int along, StickMarks marks) {
+  const double half = stick.length_m / 2.0;
+  std::vector<double> u;
+  for (int i = 0; i <= along; ++i) u.push_back(-half + stick.length_m * i / along);
+  if (marks == StickMarks::rings)
+    for (double f : kStickRingFractions)
+      for (double d : {-kStickRingHalfWidthM, 0.0, kStickRingHalfWidthM})
+        u.push_back(f * stick.length_m + d);
+  std::sort(u.begin(), u.end());
+  u.erase(std::unique(u.begin(), u.end()), u.end());
+  return u;
+}
+
+// How much a ring brightens the wood at u: 1 at a band's centre, falling
+// linearly to 0 at its half-width.
+double ring_weight(const geometry::BentStick& stick, double u) {
+  double w = 0.0;
+  for (double f : kStickRingFractions)
+    w = std::max(w, 1.0 - std::abs(u - f * stick.length_m) / kStickRingHalfWidthM);
+  return w;
+}
+
+}  // namespace
+
+MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level, StickMarks marks) {
   MeshData m;
   const Isometry frame = Isometry::identity();
   const int along = pieces(12, level);
   constexpr int kAround = 16;
   const double half = stick.length_m / 2.0;
   const auto first = static_cast<std::uint32_t>(m.vertices.size());
-  for (int i = 0; i <= along; ++i) {
-    const double u = -half + stick.length_m * i / along;
-    const double f = static_cast<double>(i) / along;
-    // Butt (u = −L/2) dark, shaft light, the last 2 cm white (tip).
-    const glm::vec4 color = f < 0.35          ? palette::stick_butt
-                            : u > half - 0.02 ? palette::stick_tip
-                                              : palette::stick_shaft;
+  const std::vector<double> rows = stick_rows(stick, along, marks);
+  for (const double u : rows) {
+    const double f = (u + half) / stick.length_m;
+    glm::vec4 color = stick_wood(u, f, half);
+    if (marks == StickMarks::rings)
+      color = glm::mix(color, palette::stick_ring, static_cast<float>(ring_weight(stick, u)));
     const Point c = stick.centre_point(space, frame, u);
     for (int k = 0; k <= kAround; ++k) {
       const double phi = 2.0 * kPi * k / kAround;
@@ -212,7 +255,8 @@ MeshData build_stick(const Space& space, const geometry::BentStick& stick, int l
       push(m, space, p, out, color);
     }
   }
-  grid_indices(m, first, along + 1, kAround + 1);
+  const int row_count = static_cast<int>(rows.size());
+  grid_indices(m, first, row_count, kAround + 1);
   // End caps as fans.
   for (int end = 0; end < 2; ++end) {
     const double u = end == 0 ? -half : half;

@@ -59,10 +59,11 @@ std::string_view to_string(SceneKind kind) {
   return "?";
 }
 
-SceneObject stick_object(const Space& space, const geometry::BentStick& stick, const Isometry& pose) {
+SceneObject stick_object(const Space& space, const geometry::BentStick& stick, const Isometry& pose,
+                         StickMarks marks) {
   SceneObject o;
   o.name = "cue stick";
-  o.build = [space, stick](int level) { return build_stick(space, stick, level); };
+  o.build = [space, stick, marks](int level) { return build_stick(space, stick, level, marks); };
   o.info = stick_info(space, stick);
   o.pose = pose;
   return o;
@@ -162,7 +163,8 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
       // The stick alone, across the line of sight below eye level, bowed
       // toward the participant by a positive sagitta (model +z faces them).
       s.head = geometry::rotation(Vec3(0.0, 1.0, 0.0), options.yaw_rad);
-      s.scene.add(stick_object(space, stick, geometry::translation_m(space, Vec3(0.0, -0.25, -0.75))));
+      s.scene.add(stick_object(space, stick, geometry::translation_m(space, Vec3(0.0, -0.25, -0.75)),
+                               options.stick_marks));
       if (auto err = add_panel(s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
                                geometry::translation_m(space, Vec3(0.0, 0.22, -1.1))))
         return *err;

@@ -69,6 +69,7 @@ void add_merge_commands(CLI::App& app);
 std::vector<std::string> expand_database_args(const std::vector<std::string>& args, const std::string& exclude);
 void add_track_commands(CLI::App& app);  // trajectory, track, inspect vergence/stick
 void add_render_commands(CLI::App& app);
+void add_measure_commands(CLI::App& app);  // measure stick
 void add_protocol_commands(CLI::App& app);
 void add_authoring_commands(CLI::App& app);  // schema, new, preview
 void add_run_commands(CLI::App& app);

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   curvlab::cli::add_merge_commands(app);
   curvlab::cli::add_track_commands(app);
   curvlab::cli::add_render_commands(app);
+  curvlab::cli::add_measure_commands(app);
   curvlab::cli::add_protocol_commands(app);
   curvlab::cli::add_authoring_commands(app);
   curvlab::cli::add_run_commands(app);

@@ -36,6 +36,7 @@ Json settings_json(const pr::Settings& s, const pr::Derived& d) {
   j["stick_length_m"] = s.stimulus.stick_length_m;
   j["stick_sagitta_m"] = s.stimulus.stick_sagitta_m;
   j["stick_anchor"] = std::string(pr::to_string(s.stimulus.stick_anchor));
+  j["stick_marks"] = std::string(pr::to_string(s.stimulus.stick_marks));
   j["stick_distance_m"] = s.stimulus.stick_distance_m;
   j["table_sagitta_m"] = s.stimulus.table_sagitta_m;
   j["table_edge_m"] = s.table.edge_m;

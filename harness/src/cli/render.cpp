@@ -1,8 +1,10 @@
 // `curvlab render …`: one stereo frame of a stimulus scene, offscreen, written
 // as DIR/left.png, DIR/right.png and DIR/plan.json (what the render plan
-// drew and skipped, and how long it took).
+// drew and skipped, and how long it took; for the stick scene also the eye
+// geometry and stick that `curvlab measure stick` reads).
 #include "common.hpp"
 
+#include "curvlab/harness/measure/stick.hpp"
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/renderer.hpp"
 
@@ -33,10 +35,30 @@ struct RenderArgs {
   double ipd_m = 0.063;
   double bend_m = 0.0;
   int msaa = 4;
+  std::string stick_marks = "none";
   bool software = false;
   std::string out;
   bool json = false;
 };
+
+// What `curvlab measure stick` needs besides the images: the eyes and the
+// stick (the stick scene's pose, as make_stimulus_scene places it).
+Json stick_record(const StimulusScene& stimulus, const FrameDescription& frame, const StimulusOptions& options) {
+  harness::measure::StickScene s;
+  s.space = stimulus.space;
+  const bool both = frame.settings.eyes == EyeSelection::both;
+  s.mode = !both ? geometry::ViewMode::monocular
+           : frame.settings.projection == Projection::tourist ? geometry::ViewMode::tourist
+                                                               : geometry::ViewMode::native;
+  s.head = stimulus.head;
+  s.rig = frame.rig;
+  s.width_px = frame.width_px;
+  s.height_px = frame.height_px;
+  s.stick = {options.stick_length_m, options.stick_sagitta_m, options.stick_radius_m};
+  s.stick_pose = stimulus.scene.objects().front().pose;
+  s.marks = options.stick_marks;
+  return harness::measure::scene_json(s);
+}
 
 void run_render(const RenderArgs& a) {
   const auto kind = geometry::parse_space_kind(a.space);
@@ -75,6 +97,9 @@ void run_render(const RenderArgs& a) {
   options.radius_m = a.radius_m;
   options.eye_height_m = a.eye_height_m;
   options.stick_sagitta_m = a.bend_m;
+  const auto marks = parse_stick_marks(a.stick_marks);
+  if (!marks) throw UsageError("--stick-marks must be none or rings, got '" + a.stick_marks + "'");
+  options.stick_marks = *marks;
   options.yaw_rad = a.yaw_deg * std::numbers::pi / 180.0;
   auto made = make_stimulus_scene(*kind, *scene_kind, options);
   if (auto* e = std::get_if<std::string>(&made)) throw UsageError(*e);
@@ -129,6 +154,7 @@ void run_render(const RenderArgs& a) {
   plan["cpu_ms"] = stats.cpu_ms;
   plan["gpu_ms"] = stats.gpu_ms;
   plan["frame_ms"] = stats.frame_ms;
+  if (*scene_kind == SceneKind::stick) plan["measure"] = stick_record(stimulus, frame, options);
   const std::string plan_path = (std::filesystem::path(a.out) / "plan.json").string();
   std::ofstream out(plan_path);
   out << plan.dump(2) << '\n';
@@ -156,6 +182,7 @@ void add_render_commands(CLI::App& app) {
   cmd->add_option("--ipd-m", args->ipd_m, "interpupillary distance (default 0.063)");
   cmd->add_option("--bend-m", args->bend_m, "cue-stick sagitta in metres (+ toward the viewer)");
   cmd->add_option("--msaa", args->msaa, "samples per pixel: 1, 2, 4 (default) or 8");
+  cmd->add_option("--stick-marks", args->stick_marks, "cue-stick marks: none or rings (for curvlab measure)");
   cmd->add_flag("--software", args->software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   cmd->add_option("--out", args->out, "output directory")->required();
   cmd->add_flag("--json", args->json, "print the plan as JSON");

@@ -10,6 +10,7 @@
 #include "curvlab/harness/protocol/random.hpp"
 #include "curvlab/harness/runner/desktop.hpp"
 #include "curvlab/harness/runner/headless.hpp"
+#include "curvlab/harness/runner/image_observer.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 #include "curvlab/harness/runner/replay.hpp"
 #include "curvlab/harness/runner/session.hpp"
@@ -44,7 +45,8 @@ struct ObserverArgs {
 
 void add_observer_options(CLI::App* cmd, ObserverArgs& o) {
   cmd->add_option("--observer", o.model,
-                  "who answers in headless runs: perception (default), physical (null model), random, or none");
+                  "who answers in headless runs: perception (default), physical (null model), random, image "
+                  "(reads the stick from the rendered onset pair), or none");
   cmd->add_option("--observer-bias-m", o.bias_m, "simulated observer: bias added to the perceived sagitta (m)");
   cmd->add_option("--observer-slope-per-m", o.slope_per_m, "simulated observer: 1 / noise SD (default 300 /m)");
   cmd->add_option("--observer-lapse", o.lapse, "simulated observer: lapse rate (default 0.02)");
@@ -58,7 +60,7 @@ std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::ui
   if (a.model == "none") return std::nullopt;
   const auto model = rn::parse_observer_model(a.model);
   if (!model)
-    throw UsageError("--observer must be perception, physical, random or none, got '" + a.model + "'");
+    throw UsageError("--observer must be perception, physical, random, image or none, got '" + a.model + "'");
   rn::ObserverParams p;
   p.model = *model;
   p.bias_m = a.bias_m;
@@ -367,6 +369,8 @@ void run_command(const RunArgs& a) {
   if (a.backend.backend == "headless") {
     const std::uint64_t seed = pr::participant_seed(p.seed, o.participant_number, p.seed_per_participant);
     o.observer = observer_params(a.observer, pr::mix_seed(seed ^ 0x5eedULL));
+    if (o.observer && o.observer->model == rn::ObserverModel::image)
+      if (auto ok = rn::check_image_observer(p); !ok) throw UsageError(ok.error().message);
   }
   const std::string db = a.db.empty()
                              ? (std::filesystem::path("results") / (p.meta.name + ".sqlite")).string()

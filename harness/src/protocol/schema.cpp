@@ -81,6 +81,7 @@ Json default_of(const SettingInfo& info) {
   if (p == "timeline.iti_ms") return s.timeline.iti_ms;
   if (p == "timeline.stimulus_during_response") return s.timeline.stimulus_during_response;
   if (p == "stimulus.stick_anchor") return std::string(to_string(s.stimulus.stick_anchor));
+  if (p == "stimulus.stick_marks") return std::string(to_string(s.stimulus.stick_marks));
   if (p == "stimulus.show_stick") return s.stimulus.show_stick;
   if (p == "stimulus.show_table") return s.stimulus.show_table;
   if (p == "stimulus.balls") return s.stimulus.balls;

@@ -27,6 +27,7 @@ std::string_view to_string(Eyes e) {
   return "?";
 }
 std::string_view to_string(StickAnchor a) { return a == StickAnchor::head ? "head" : "table"; }
+std::string_view to_string(StickMarks m) { return m == StickMarks::rings ? "rings" : "none"; }
 std::string_view to_string(OnTrackingLoss o) {
   switch (o) {
     case OnTrackingLoss::repeat: return "repeat";
@@ -90,6 +91,8 @@ std::vector<SettingInfo> make_registry() {
        "height relative to the eyes (head) or to the table top (table)"},
       {"stimulus.stick_yaw_deg", K::number, -180.0, 180.0, {},
        "rotation about the vertical; 0 lies across the line of sight"},
+      {"stimulus.stick_marks", K::enumeration, 0, 0, {"none", "rings"},
+       "marks along the stick: none, or light rings at 0.1, 0.3, 0.5, 0.7 and 0.9 of its length"},
       {"stimulus.show_stick", K::boolean, 0, 0, {}, "draw the cue stick"},
       {"stimulus.show_table", K::boolean, 0, 0, {}, "draw the billiards table"},
       {"stimulus.table_sagitta_m", K::number, -1.0, 1.0, {},
@@ -274,6 +277,8 @@ void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& val
     s.timeline.stimulus_during_response = flag;
   } else if (p == "stimulus.stick_anchor") {
     s.stimulus.stick_anchor = text == "table" ? StickAnchor::table : StickAnchor::head;
+  } else if (p == "stimulus.stick_marks") {
+    s.stimulus.stick_marks = text == "rings" ? StickMarks::rings : StickMarks::none;
   } else if (p == "stimulus.show_stick") {
     s.stimulus.show_stick = flag;
   } else if (p == "stimulus.show_table") {

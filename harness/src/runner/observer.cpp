@@ -13,6 +13,7 @@ std::string_view to_string(ObserverModel m) {
     case ObserverModel::perception: return "perception";
     case ObserverModel::physical: return "physical";
     case ObserverModel::random: return "random";
+    case ObserverModel::image: return "image";
   }
   return "?";
 }
@@ -21,6 +22,7 @@ std::optional<ObserverModel> parse_observer_model(std::string_view text) {
   if (text == "perception") return ObserverModel::perception;
   if (text == "physical") return ObserverModel::physical;
   if (text == "random") return ObserverModel::random;
+  if (text == "image") return ObserverModel::image;
   return std::nullopt;
 }
 

@@ -60,12 +60,12 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
 ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, const protocol::Judgement& j,
                            const protocol::Settings& s, const Placement& placement,
                            const geometry::Isometry& head, std::int64_t onset_ns,
-                           const std::optional<protocol::Adjustment>& adjustment) {
+                           const std::optional<protocol::Adjustment>& adjustment, std::optional<double> seen_m) {
   const std::int64_t rt = observer.response_time_ns();
   if (j.type == JudgementType::adjustment)
     return adjust(observer, world, *j.adjustment, s, head, onset_ns + rt, adjustment->value());
   ObserverAnswer out;
-  out.perceived_m = judged_quantity(observer, world, s, placement, head);
+  out.perceived_m = seen_m ? *seen_m : judged_quantity(observer, world, s, placement, head);
   const auto& option = j.options.at(observer.choose(out.perceived_m, j.options.size()));
   const std::string key = first_of(option.keys, option.buttons);
   out.keys.push_back({onset_ns + rt, key.empty() ? option.value : key});

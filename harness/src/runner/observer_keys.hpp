@@ -33,10 +33,13 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
                            std::int64_t attempt);
 
 // What `observer` presses for a trial whose stimulus came up at `onset_ns`
-// (session clock of the onset frame) with the head at `head`.
+// (session clock of the onset frame) with the head at `head`. `seen_m`: the
+// judged quantity as read from the onset images (the image observer's
+// choices); otherwise the perception model's.
 ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, const protocol::Judgement& j,
                            const protocol::Settings& s, const Placement& placement,
                            const geometry::Isometry& head, std::int64_t onset_ns,
-                           const std::optional<protocol::Adjustment>& adjustment);
+                           const std::optional<protocol::Adjustment>& adjustment,
+                           std::optional<double> seen_m = std::nullopt);
 
 }  // namespace curvlab::harness::runner

@@ -6,6 +6,7 @@
 
 #include "curvlab/harness/protocol/adjustment.hpp"
 #include "curvlab/harness/protocol/staircase.hpp"
+#include "curvlab/harness/runner/image_observer.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/runner/view_record.hpp"
@@ -557,6 +558,7 @@ class SessionLoop::Impl {
     std::optional<protocol::Adjustment> adjustment;
     Isometry head_at_onset;
     Placement placement;
+    OnsetView onset_view;  // the eyes at onset (the image observer, the images' record)
     std::optional<std::pair<std::string, InputEvent>> answer;
     std::optional<AbortReason> abort;
     bool backend_ended = false;  // begin_frame gave no frame: no abort event
@@ -705,11 +707,20 @@ class SessionLoop::Impl {
     a.head_at_onset = head();
     a.placement = place_stimulus(*world_, t.settings, a.head_at_onset);
     scene_->place(a.placement, a.head_at_onset);
+    a.onset_view = {view_settings(t.settings, dominant_), a.head_at_onset, backend_.rig(f.timing, ipd()),
+                    static_cast<std::uint32_t>(p_.resolution_width), static_cast<std::uint32_t>(p_.resolution_height)};
     if (!observer_) return;
     auto answer = plan_answer(*observer_, *world_, *t.judgement, t.settings, a.placement, a.head_at_onset,
-                              f.timing.now_ns, a.adjustment);
+                              f.timing.now_ns, a.adjustment, read_onset(t, a));
     scheduled_.assign(answer.keys.begin(), answer.keys.end());
     last_perceived_ = answer.perceived_m;
+  }
+
+  // The image observer's reading of the onset pair (nullopt for the others).
+  std::optional<double> read_onset(const TrialRun& t, const AttemptRun& a) {
+    if (observer_->params().model != ObserverModel::image) return std::nullopt;
+    if (!onset_reader_) onset_reader_ = check(OnsetReader::create());
+    return check(onset_reader_->read(*world_, t.settings, a.placement, a.onset_view));
   }
 
   // Responses count from the onset's display to the end of the window; a
@@ -760,7 +771,9 @@ class SessionLoop::Impl {
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
       char stem[32];
       std::snprintf(stem, sizeof stem, "trial_%04zu", t.index);
-      const auto files = backend_.save_frame((std::filesystem::path(options_.images_dir) / stem).string());
+      const auto path = std::filesystem::path(options_.images_dir) / stem;
+      const auto files = backend_.save_frame(path.string());
+      if (!files.empty()) check(write_onset_record(path.string() + ".json", *world_, t.settings, a.placement, a.onset_view));
       detail["images"] = files;
       summary_.images.insert(summary_.images.end(), files.begin(), files.end());
     }
@@ -841,6 +854,7 @@ class SessionLoop::Impl {
   bool resumed_trial_started_ = false;
   Progress progress_;
   std::optional<SimulatedObserver> observer_;
+  std::unique_ptr<OnsetReader> onset_reader_;  // --observer image only
   renderer::Eye dominant_ = renderer::Eye::right;
   std::pair<std::uint32_t, std::uint32_t> eye_size_;  // each eye's image as the backend draws it
   std::map<std::pair<std::size_t, std::size_t>, protocol::InterleavedStaircases> staircases_;

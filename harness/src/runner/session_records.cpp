@@ -76,6 +76,7 @@ std::string stimulus_json(const PlannedTrial& t) {
   j["stick_distance_m"] = s.stimulus.stick_distance_m;
   j["stick_height_m"] = s.stimulus.stick_height_m;
   j["stick_anchor"] = std::string(protocol::to_string(s.stimulus.stick_anchor));
+  j["stick_marks"] = std::string(protocol::to_string(s.stimulus.stick_marks));
   j["show_stick"] = s.stimulus.show_stick;
   j["show_table"] = s.stimulus.show_table;
   j["radius_m"] = t.derived.radius_m;

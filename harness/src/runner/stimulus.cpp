@@ -207,6 +207,11 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
   return glm::dot(centre - centroid, normal);
 }
 
+renderer::StickMarks stick_marks(const Settings& s) {
+  return s.stimulus.stick_marks == protocol::StickMarks::rings ? renderer::StickMarks::rings
+                                                               : renderer::StickMarks::none;
+}
+
 double physical_sagitta_m(const Settings& s) {
   return judged(s) == Judged::stick ? s.stimulus.stick_sagitta_m : s.stimulus.table_sagitta_m;
 }
@@ -242,7 +247,7 @@ Result<TrialScene> TrialScene::build(const World& world, const Settings& s, cons
   }
   if (st.show_stick) {
     const geometry::BentStick stick{st.stick_length_m, st.stick_sagitta_m, st.stick_radius_m};
-    t.stick_ = t.scene_.add(hidden(renderer::stick_object(space, stick, Isometry::identity())));
+    t.stick_ = t.scene_.add(hidden(renderer::stick_object(space, stick, Isometry::identity(), stick_marks(s))));
     t.has_stick_ = true;
     t.stick_sagitta_m_ = st.stick_sagitta_m;
     t.stick_length_m_ = st.stick_length_m;
@@ -272,7 +277,7 @@ void TrialScene::set_stimulus(const Settings& s, const Placement& placement) {
   const auto& st = s.stimulus;
   if (has_stick_) {
     if (st.stick_sagitta_m != stick_sagitta_m_ || st.stick_length_m != stick_length_m_) {
-      auto o = renderer::stick_object(space, placement.stick, placement.stick_pose);
+      auto o = renderer::stick_object(space, placement.stick, placement.stick_pose, stick_marks(s));
       scene_.replace_mesh(stick_, std::move(o.build), std::move(o.info));
       stick_sagitta_m_ = st.stick_sagitta_m;
       stick_length_m_ = st.stick_length_m;

@@ -44,6 +44,9 @@ inline const glm::vec4 skirt = display(0.30f, 0.17f, 0.08f);
 inline const glm::vec4 stick_butt = display(0.22f, 0.10f, 0.05f);
 inline const glm::vec4 stick_shaft = display(0.85f, 0.66f, 0.40f);
 inline const glm::vec4 stick_tip = display(0.9f, 0.9f, 0.88f);
+// The marked stick's rings (stimulus.stick_marks = "rings"), blended into the
+// wood in linear light along each ring's tent profile.
+inline const glm::vec4 stick_ring = display(0.95f, 0.95f, 0.92f);
 inline const glm::vec4 text_ink = display(0.96f, 0.96f, 0.92f);
 inline const glm::vec4 text_paper = display(0.06f, 0.07f, 0.10f);
 }  // namespace palette

@@ -11,8 +11,11 @@
 
 #include <glm/vec4.hpp>
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace curvlab::renderer {
@@ -74,10 +77,22 @@ MeshData build_table(const Space& space, const geometry::TableShape& table, int 
 MeshInfo table_info(const Space& space, const geometry::TableShape& table,
                     const TableStyle& style = {});
 
+// Marks along the cue stick. `rings`: light bands centred at the fractions
+// kStickRingFractions of the length (−½ the butt end, +½ the tip), each
+// brightening the wood along a tent profile of half-width kStickRingHalfWidthM
+// so that the band's image position can be read to a fraction of a pixel
+// with or without anti-aliasing (a sharp-edged band quantizes to whole pixels).
+enum class StickMarks { none, rings };
+std::optional<StickMarks> parse_stick_marks(std::string_view text);
+std::string_view to_string(StickMarks marks);
+inline constexpr std::array<double, 5> kStickRingFractions{-0.4, -0.2, 0.0, 0.2, 0.4};
+inline constexpr double kStickRingHalfWidthM = 0.012;
+
 // The cue stick of geometry/tube.hpp with its chord along the model x axis,
 // centred at the model origin, bowed toward +z by the sagitta. Tip white,
-// shaft light wood, butt dark.
-MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level);
+// shaft light wood, butt dark; optional rings.
+MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level,
+                     StickMarks marks = StickMarks::none);
 MeshInfo stick_info(const Space& space, const geometry::BentStick& stick);
 
 // A ball of the given radius centred at the model origin.

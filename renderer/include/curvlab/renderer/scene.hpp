@@ -50,7 +50,8 @@ class Scene {
 
 // The stimulus's objects (model frames as in mesh.hpp), shared by the
 // stimulus scenes below and the session runner's trial scenes.
-SceneObject stick_object(const Space& space, const geometry::BentStick& stick, const Isometry& pose);
+SceneObject stick_object(const Space& space, const geometry::BentStick& stick, const Isometry& pose,
+                         StickMarks marks = StickMarks::none);
 SceneObject table_object(const Space& space, const geometry::TableShape& table,
                          const TableStyle& style = {});
 SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour,
@@ -74,6 +75,7 @@ struct StimulusOptions {
   double stick_length_m = 1.0;
   double stick_radius_m = 0.0125;
   double stick_sagitta_m = 0.0;  // bend: + toward the viewer
+  StickMarks stick_marks = StickMarks::none;
   double ball_radius_m = 0.0285; // 57 mm balls
   std::string prompt = "Is the cue stick bent toward you,\nstraight, or bent away?";
   std::string font_path = CURVLAB_DEFAULT_FONT;

@@ -22,6 +22,8 @@ enum class Tracking { naive, head_anchored, table_anchored };
 enum class Projection { tourist, native };
 enum class Eyes { both, left, right, dominant };
 enum class StickAnchor { head, table };
+// Marks along the stick: none, or rings at known positions (docs/protocols.md).
+enum class StickMarks { none, rings };
 // What a trial does when the head has been untracked for `loss_ms`.
 enum class OnTrackingLoss { repeat, flag, abort };
 
@@ -29,6 +31,7 @@ std::string_view to_string(Tracking t);
 std::string_view to_string(Projection p);
 std::string_view to_string(Eyes e);
 std::string_view to_string(StickAnchor a);
+std::string_view to_string(StickMarks m);
 std::string_view to_string(OnTrackingLoss o);
 
 struct SpaceSettings {
@@ -84,6 +87,7 @@ struct Stimulus {
   double stick_distance_m = 1.0;  // from the eyes (head) or the table centre (table)
   double stick_height_m = 0.0;    // relative to eye height (head) or table top (table)
   double stick_yaw_deg = 0.0;     // rotation about the vertical, 0 = across the view
+  StickMarks stick_marks = StickMarks::none;
   bool show_stick = true;
   bool show_table = true;
   double table_sagitta_m = 0.0;   // signed convexity of the table top, + bulges up

@@ -33,6 +33,8 @@ enum class ObserverModel {
   perception,  // the perception model: what a Euclidean-born observer would see
   physical,    // the physical stimulus only (as if every space were E3): a null model
   random,      // uniformly random answers
+  image,       // the stick's sagitta read from the rendered onset pair (image_observer.hpp);
+               // judgements of the table and adjustments answer as `perception`
 };
 std::string_view to_string(ObserverModel m);
 std::optional<ObserverModel> parse_observer_model(std::string_view text);

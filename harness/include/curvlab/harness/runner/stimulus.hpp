@@ -74,6 +74,8 @@ double perceived_sagitta_m(const World& world, const protocol::Settings& s,
                            const Placement& placement, const geometry::Isometry& head);
 // The same for the physical stimulus alone (the null observer).
 double physical_sagitta_m(const protocol::Settings& s);
+// The renderer's marks for the protocol's stimulus.stick_marks.
+renderer::StickMarks stick_marks(const protocol::Settings& s);
 
 // The scene of one trial: table, stick, balls, a prompt panel and a
 // fixation mark, with visibility switched per phase.

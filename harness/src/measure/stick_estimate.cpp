@@ -1,0 +1,342 @@
+// Triangulating the rings and fitting the stick (stick.hpp), the perception
+// model's value for the same scene, and the JSON records.
+#include "curvlab/harness/measure/stick.hpp"
+
+#include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+
+namespace curvlab::harness::measure {
+namespace {
+
+using geometry::Vec3;
+
+Error bad(std::string m) { return Error{Error::Kind::bad_input, std::move(m)}; }
+
+// Signed distance of the middle point from the chord of the two ends,
+// positive toward the nose (the origin of the nose frame) — the perception
+// model's sagitta (geometry/perception.cpp, runner/stimulus.cpp).
+double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
+  Vec3 chord = end_b - end_a;
+  const double cl = glm::length(chord);
+  chord = cl > 0.0 ? chord / cl : Vec3(1.0, 0.0, 0.0);
+  const Vec3 mid = 0.5 * (end_a + end_b);
+  Vec3 toward = -mid - glm::dot(-mid, chord) * chord;
+  const double len = glm::length(toward);
+  toward = len > 0.0 ? toward / len : Vec3(0.0, 0.0, 1.0);
+  return glm::dot(middle - mid, toward);
+}
+
+// The whole distance of the middle from the chord, with the sign of the bow.
+double bend_in_plane(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
+  Vec3 chord = end_b - end_a;
+  const double cl = glm::length(chord);
+  chord = cl > 0.0 ? chord / cl : Vec3(1.0, 0.0, 0.0);
+  Vec3 off = middle - 0.5 * (end_a + end_b);
+  off -= glm::dot(off, chord) * chord;
+  return std::copysign(glm::length(off), bow_toward_viewer(end_a, middle, end_b));
+}
+
+// The least-squares intersection of two lines: the midpoint of their common
+// perpendicular.
+Vec3 intersect(const geometry::SightLine& l1, const geometry::SightLine& l2) {
+  const Vec3 w0 = l1.origin_m - l2.origin_m;
+  const double b = glm::dot(l1.direction, l2.direction);
+  const double d = glm::dot(l1.direction, w0);
+  const double e = glm::dot(l2.direction, w0);
+  const double den = std::max(1.0 - b * b, 1e-18);
+  const double s = (b * e - d) / den;
+  const double u = (e - b * d) / den;
+  return 0.5 * (l1.origin_m + s * l1.direction + l2.origin_m + u * l2.direction);
+}
+
+// P(u) = A + B u + C u², least squares per coordinate.
+struct Quadratic {
+  Vec3 a{0.0}, b{0.0}, c{0.0};
+  [[nodiscard]] Vec3 at(double u) const { return a + u * (b + u * c); }
+};
+
+Quadratic fit_quadratic(const std::vector<double>& u, const std::vector<Vec3>& p) {
+  glm::dmat3 n(0.0);
+  glm::dmat3 rhs(0.0);  // columns: x, y, z right-hand sides
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    const glm::dvec3 basis(1.0, u[i], u[i] * u[i]);
+    n += glm::outerProduct(basis, basis);
+    for (int k = 0; k < 3; ++k) rhs[k] += basis * p[i][k];
+  }
+  const glm::dmat3 inv = glm::inverse(n);
+  Quadratic q;
+  for (int k = 0; k < 3; ++k) {
+    const glm::dvec3 c = inv * rhs[k];
+    q.a[k] = c[0];
+    q.b[k] = c[1];
+    q.c[k] = c[2];
+  }
+  return q;
+}
+
+nlohmann::ordered_json matrix_json(const glm::dmat4& m) {
+  auto out = nlohmann::ordered_json::array();
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) out.push_back(m[c][r]);
+  return out;
+}
+
+glm::dmat4 matrix_from(const nlohmann::json& j) {
+  glm::dmat4 m(1.0);
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) m[c][r] = j.at(static_cast<std::size_t>(c * 4 + r)).get<double>();
+  return m;
+}
+
+// The triangulated point lies on the part of the ring that faces the eyes.
+// Averaged over the image rows that cross the stick (uniform in the
+// projected height r·sin α of the visible half circle), its offset toward
+// the eyes is r·⟨cos α⟩ (π r / 4 over the whole half circle; more when the
+// rows along the outline are left out); move it back onto the centre line,
+// away from the viewer, perpendicular to the stick's chord.
+Vec3 onto_centre_line(const Vec3& p, const Vec3& cyclops, const Vec3& chord, double offset_m) {
+  Vec3 away = p - cyclops;
+  away -= glm::dot(away, chord) * chord;
+  const double len = glm::length(away);
+  return len > 0.0 ? p + offset_m * away / len : p;
+}
+
+}  // namespace
+
+geometry::SightLine sight_line(const renderer::EyeOffset& eye, std::uint32_t width_px,
+                               std::uint32_t height_px, const glm::dvec2& px) {
+  const double l = std::tan(eye.fov.angle_left_rad), r = std::tan(eye.fov.angle_right_rad);
+  const double u = std::tan(eye.fov.angle_up_rad), d = std::tan(eye.fov.angle_down_rad);
+  const double tx = l + px.x / width_px * (r - l);
+  const double ty = u - px.y / height_px * (u - d);
+  return {eye.position_m, glm::normalize(eye.rotation * Vec3(tx, ty, -1.0))};
+}
+
+glm::dvec2 project_px(const renderer::EyeOffset& eye, std::uint32_t width_px, std::uint32_t height_px,
+                      const Vec3& p_m) {
+  const Vec3 q = glm::transpose(eye.rotation) * (p_m - eye.position_m);
+  const double tx = q.x / -q.z, ty = q.y / -q.z;
+  const double l = std::tan(eye.fov.angle_left_rad), r = std::tan(eye.fov.angle_right_rad);
+  const double u = std::tan(eye.fov.angle_up_rad), d = std::tan(eye.fov.angle_down_rad);
+  return {(tx - l) / (r - l) * width_px, (u - ty) / (u - d) * height_px};
+}
+
+namespace {
+
+// The perceived ends and middle of the stick's centre line.
+std::array<Vec3, 3> model_points(const StickScene& scene) {
+  const geometry::EyeOffsets eyes{scene.rig.eyes[0].position_m, scene.rig.eyes[1].position_m};
+  const auto seen = [&](double u) {
+    const auto q = scene.stick.centre_point(scene.space, scene.stick_pose, u);
+    return geometry::perceive_point(scene.space, scene.head, eyes, scene.mode, q).position_m;
+  };
+  const double half = scene.stick.length_m / 2.0;
+  return {seen(-half), seen(0.0), seen(half)};
+}
+
+}  // namespace
+
+double model_sagitta_m(const StickScene& scene) {
+  if (scene.mode == geometry::ViewMode::monocular) return 0.0;
+  const auto p = model_points(scene);
+  return bow_toward_viewer(p[0], p[1], p[2]);
+}
+
+double model_bend_m(const StickScene& scene) {
+  if (scene.mode == geometry::ViewMode::monocular) return 0.0;
+  const auto p = model_points(scene);
+  return bend_in_plane(p[0], p[1], p[2]);
+}
+
+namespace {
+
+// The radius a round stick must have to look as thick as it does at the
+// distance it is seen at (no knowledge of the true radius: in a curved
+// space's tourist view the seen depth scale differs from the true one).
+double radius_seen(const renderer::EyeOffset& eye, const StickScene& scene, const RingSighting& ring,
+                   const Vec3& p) {
+  const auto a = sight_line(eye, scene.width_px, scene.height_px, ring.px);
+  const auto b = sight_line(eye, scene.width_px, scene.height_px, ring.px + glm::dvec2(0.0, ring.half_thickness_px));
+  const double angle = std::acos(std::clamp(glm::dot(a.direction, b.direction), -1.0, 1.0));
+  return glm::length(p - eye.position_m) * std::tan(angle);
+}
+
+StickFeature triangulate(const StickScene& scene, double fraction, const RingSighting& left,
+                         const RingSighting& right) {
+  const auto& rig = scene.rig;
+  StickFeature f;
+  char name[32];
+  std::snprintf(name, sizeof name, "ring %+.2f", fraction);
+  f.name = name;
+  f.u_m = fraction * scene.stick.length_m;
+  f.left_px = left.px;
+  f.right_px = right.px;
+  f.rows = std::min(left.rows, right.rows);
+  f.depth_radii = 0.5 * (left.depth_radii + right.depth_radii);
+  f.position_m = intersect(sight_line(rig.eyes[0], scene.width_px, scene.height_px, left.px),
+                           sight_line(rig.eyes[1], scene.width_px, scene.height_px, right.px));
+  f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - left.px);
+  f.residual_right_px =
+      glm::length(project_px(rig.eyes[1], scene.width_px, scene.height_px, f.position_m) - right.px);
+  f.radius_seen_m = 0.5 * (radius_seen(rig.eyes[0], scene, left, f.position_m) +
+                           radius_seen(rig.eyes[1], scene, right, f.position_m));
+  return f;
+}
+
+// The quadratic through the rings' centre-line points gives the perceived
+// ends and middle; their bow is the estimate.
+void fit_stick(const StickScene& scene, StickEstimate& e) {
+  const Vec3 cyclops = 0.5 * (scene.rig.eyes[0].position_m + scene.rig.eyes[1].position_m);
+  const Vec3 chord = glm::normalize(e.features.back().position_m - e.features.front().position_m);
+  std::vector<double> u;
+  std::vector<Vec3> p;
+  for (auto& f : e.features) {
+    f.position_m = onto_centre_line(f.position_m, cyclops, chord, f.depth_radii * f.radius_seen_m);
+    u.push_back(f.u_m);
+    p.push_back(f.position_m);
+  }
+  const Quadratic q = fit_quadratic(u, p);
+  double sq = 0.0;
+  for (std::size_t i = 0; i < u.size(); ++i) sq += glm::dot(q.at(u[i]) - p[i], q.at(u[i]) - p[i]);
+  e.fit_rms_m = std::sqrt(sq / static_cast<double>(u.size()));
+  const double half = scene.stick.length_m / 2.0;
+  e.estimated_sagitta_m = bow_toward_viewer(q.at(-half), q.at(0.0), q.at(half));
+  e.estimated_bend_m = bend_in_plane(q.at(-half), q.at(0.0), q.at(half));
+}
+
+}  // namespace
+
+Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const renderer::Rgba8Image& right,
+                                    const StickScene& scene) {
+  if (left.width != static_cast<int>(scene.width_px) || left.height != static_cast<int>(scene.height_px) ||
+      right.width != left.width || right.height != left.height)
+    return bad("the images are " + std::to_string(left.width) + "x" + std::to_string(left.height) + " and " +
+               std::to_string(right.width) + "x" + std::to_string(right.height) + "; the recorded eye geometry is " +
+               std::to_string(scene.width_px) + "x" + std::to_string(scene.height_px));
+  StickEstimate e;
+  e.model_sagitta_m = model_sagitta_m(scene);
+  e.model_bend_m = model_bend_m(scene);
+  const bool sees_left = shows_stick(left), sees_right = shows_stick(right);
+  if (!sees_left && !sees_right) return bad("neither image shows a stick");
+  if (!sees_left || !sees_right) {
+    e.binocular = false;  // one eye: no disparity, nothing to triangulate
+    return e;
+  }
+  if (scene.marks != renderer::StickMarks::rings)
+    return bad("a plain stick has no features along its length to match between the eyes; "
+               "mark it with rings (render --stick-marks rings, protocol stimulus.stick_marks = \"rings\")");
+  auto l = find_rings(left, scene.stick.radius_m);
+  if (!l) return Error{l.error().kind, "left image: " + l.error().message};
+  auto r = find_rings(right, scene.stick.radius_m);
+  if (!r) return Error{r.error().kind, "right image: " + r.error().message};
+  for (std::size_t i = 0; i < renderer::kStickRingFractions.size(); ++i)
+    e.features.push_back(triangulate(scene, renderer::kStickRingFractions[i], l.value()[i], r.value()[i]));
+  fit_stick(scene, e);
+  return e;
+}
+
+nlohmann::ordered_json scene_json(const StickScene& s) {
+  nlohmann::ordered_json j;
+  j["space"] = std::string(geometry::to_string(s.space.kind));
+  j["radius_m"] = s.space.radius_m;
+  j["view_mode"] = std::string(geometry::to_string(s.mode));
+  j["head"] = matrix_json(s.head.m);
+  j["width_px"] = s.width_px;
+  j["height_px"] = s.height_px;
+  auto eyes = nlohmann::ordered_json::array();
+  for (const auto& e : s.rig.eyes) {
+    nlohmann::ordered_json eye;
+    eye["position_m"] = {e.position_m.x, e.position_m.y, e.position_m.z};
+    auto rot = nlohmann::ordered_json::array();
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) rot.push_back(e.rotation[c][r]);
+    eye["rotation"] = rot;
+    eye["fov_rad"] = {e.fov.angle_left_rad, e.fov.angle_right_rad, e.fov.angle_up_rad, e.fov.angle_down_rad};
+    eyes.push_back(eye);
+  }
+  j["eyes"] = eyes;
+  j["stick"] = {{"length_m", s.stick.length_m},
+                {"radius_m", s.stick.radius_m},
+                {"sagitta_m", s.stick.sagitta_m},
+                {"marks", std::string(renderer::to_string(s.marks))},
+                {"pose", matrix_json(s.stick_pose.m)}};
+  return j;
+}
+
+namespace {
+
+renderer::EyeOffset eye_from(const nlohmann::json& j) {
+  renderer::EyeOffset e;
+  const auto& p = j.at("position_m");
+  e.position_m = {p.at(0).get<double>(), p.at(1).get<double>(), p.at(2).get<double>()};
+  const auto& rot = j.at("rotation");
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) e.rotation[c][r] = rot.at(static_cast<std::size_t>(c * 3 + r)).get<double>();
+  const auto& f = j.at("fov_rad");
+  e.fov = {f.at(0).get<double>(), f.at(1).get<double>(), f.at(2).get<double>(), f.at(3).get<double>()};
+  return e;
+}
+
+}  // namespace
+
+Result<StickScene> parse_scene_json(const nlohmann::json& j) {
+  StickScene s;
+  try {
+    const auto kind = geometry::parse_space_kind(j.at("space").get<std::string>());
+    if (!kind) return bad("measure.space: expected S3, E3 or H3");
+    s.space = geometry::Space{*kind, j.at("radius_m").get<double>()};
+    const auto mode = geometry::parse_view_mode(j.at("view_mode").get<std::string>());
+    if (!mode) return bad("measure.view_mode: expected tourist, native or monocular");
+    s.mode = *mode;
+    s.head = geometry::Isometry{matrix_from(j.at("head"))};
+    s.width_px = j.at("width_px").get<std::uint32_t>();
+    s.height_px = j.at("height_px").get<std::uint32_t>();
+    for (std::size_t i = 0; i < 2; ++i) s.rig.eyes[i] = eye_from(j.at("eyes").at(i));
+    const auto& st = j.at("stick");
+    s.stick = geometry::BentStick{st.at("length_m").get<double>(), st.at("sagitta_m").get<double>(),
+                                  st.at("radius_m").get<double>()};
+    const auto marks = renderer::parse_stick_marks(st.at("marks").get<std::string>());
+    if (!marks) return bad("measure.stick.marks: expected none or rings");
+    s.marks = *marks;
+    s.stick_pose = geometry::Isometry{matrix_from(st.at("pose"))};
+  } catch (const nlohmann::json::exception& e) {
+    return bad(std::string("measure: ") + e.what() +
+               " (expected space, radius_m, view_mode, head, width_px, height_px, eyes[2] with position_m, "
+               "rotation, fov_rad, and stick with length_m, radius_m, sagitta_m, marks, pose)");
+  }
+  if (!(s.space.radius_m > 0.0) || s.width_px < 8 || s.height_px < 8 || !(s.stick.length_m > 0.0))
+    return bad("measure: radius_m and stick.length_m must be positive and the images at least 8x8 px");
+  return s;
+}
+
+nlohmann::ordered_json estimate_json(const StickEstimate& e) {
+  nlohmann::ordered_json j;
+  j["estimated_sagitta_m"] = e.estimated_sagitta_m;
+  j["model_sagitta_m"] = e.model_sagitta_m;
+  j["difference_m"] = e.estimated_sagitta_m - e.model_sagitta_m;
+  j["estimated_bend_m"] = e.estimated_bend_m;
+  j["model_bend_m"] = e.model_bend_m;
+  j["binocular"] = e.binocular;
+  j["fit_rms_m"] = e.fit_rms_m;
+  auto features = nlohmann::ordered_json::array();
+  for (const auto& f : e.features)
+    features.push_back({{"name", f.name},
+                        {"u_m", f.u_m},
+                        {"left_px", {f.left_px.x, f.left_px.y}},
+                        {"right_px", {f.right_px.x, f.right_px.y}},
+                        {"position_m", {f.position_m.x, f.position_m.y, f.position_m.z}},
+                        {"residual_left_px", f.residual_left_px},
+                        {"residual_right_px", f.residual_right_px},
+                        {"rows", f.rows},
+                        {"depth_radii", f.depth_radii},
+                        {"radius_seen_m", f.radius_seen_m}});
+  j["features"] = features;
+  return j;
+}
+
+}  // namespace curvlab::harness::measure

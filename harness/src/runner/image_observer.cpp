@@ -1,0 +1,66 @@
+#include "curvlab/harness/runner/image_observer.hpp"
+
+#include "curvlab/harness/measure/stick.hpp"
+#include "curvlab/harness/protocol/design.hpp"
+
+#include <fstream>
+
+namespace curvlab::harness::runner {
+
+OnsetReader::OnsetReader(renderer::Context ctx) : ctx_(std::move(ctx)), renderer_(ctx_) {}
+
+Result<std::unique_ptr<OnsetReader>> OnsetReader::create() {
+  auto created = renderer::Context::create({.device = renderer::DeviceChoice::automatic, .validation = false});
+  if (auto* e = std::get_if<renderer::RenderError>(&created))
+    return Error{Error::Kind::device, "the image observer needs a Vulkan device: " + e->message};
+  return std::unique_ptr<OnsetReader>(new OnsetReader(std::move(std::get<renderer::Context>(created))));
+}
+
+namespace {
+
+measure::StickScene stick_scene(const World& world, const protocol::Settings& s, const Placement& placement,
+                                const OnsetView& view) {
+  return {world.space,    view_mode(s),    view.head,         view.rig, view.width_px,
+          view.height_px, placement.stick, placement.stick_pose, stick_marks(s)};
+}
+
+}  // namespace
+
+Result<Done> write_onset_record(const std::string& path, const World& world, const protocol::Settings& s,
+                                const Placement& placement, const OnsetView& view) {
+  if (!s.stimulus.show_stick) return Done{};
+  std::ofstream out(path);
+  out << measure::scene_json(stick_scene(world, s, placement, view)).dump(2) << '\n';
+  if (!out) return Error{Error::Kind::io, "cannot write " + path};
+  return Done{};
+}
+
+Result<std::optional<double>> OnsetReader::read(const World& world, const protocol::Settings& s,
+                                                const Placement& placement, const OnsetView& view) {
+  if (judged(s) != Judged::stick) return std::optional<double>{};
+  if (!target_ || target_->image(renderer::Eye::left).width != static_cast<int>(view.width_px) ||
+      target_->image(renderer::Eye::left).height != static_cast<int>(view.height_px))
+    target_.emplace(ctx_, view.width_px, view.height_px);
+  renderer::Scene scene;
+  scene.add(renderer::stick_object(world.space, placement.stick, placement.stick_pose, stick_marks(s)));
+  renderer::FrameDescription frame{world.space, view.settings, view.head, view.rig, view.width_px, view.height_px};
+  renderer_.render(scene, frame, *target_);
+  auto estimate = measure::measure_stick(target_->image(renderer::Eye::left),
+                                         target_->image(renderer::Eye::right),
+                                         stick_scene(world, s, placement, view));
+  if (!estimate) return Error{estimate.error().kind, "image observer: " + estimate.error().message};
+  return std::optional<double>(estimate->estimated_sagitta_m);
+}
+
+Result<Done> check_image_observer(const protocol::Protocol& p) {
+  const protocol::Design design = protocol::expand_design(p, 1);
+  for (const auto& t : design.trials)
+    if (judged(t.settings) == Judged::stick && view_mode(t.settings) != geometry::ViewMode::monocular &&
+        t.settings.stimulus.stick_marks != protocol::StickMarks::rings)
+      return Error{Error::Kind::usage,
+                   "--observer image reads the stick's rings from the images, but block '" + t.block +
+                       "' shows a plain stick: set stimulus.stick_marks = \"rings\" (docs/protocols.md)"};
+  return Done{};
+}
+
+}  // namespace curvlab::harness::runner
