@@ -146,16 +146,18 @@ StickPerception perceive_stick(const Space& space, const BentStick& stick, doubl
         perceive_point(space, nose, eyes, mode, q).position_m;
   }
   if (mode == ViewMode::monocular) return out;
-  const Vec3& e1 = out.perceived_m[0];
-  const Vec3& e2 = out.perceived_m[4];
-  const Vec3 mid = 0.5 * (e1 + e2);
-  const Vec3 chord = unit_or_forward(e2 - e1);
+  out.perceived_sagitta_m = bow_toward_viewer(out.perceived_m[0], out.perceived_m[2], out.perceived_m[4]);
+  return out;
+}
+
+double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
+  const Vec3 mid = 0.5 * (end_a + end_b);
+  const Vec3 chord = unit_or_forward(end_b - end_a);
   // The unit normal to the chord pointing from the chord toward the nose.
   Vec3 toward = -mid - glm::dot(-mid, chord) * chord;
   const double len = glm::length(toward);
   toward = len > 0.0 ? toward / len : Vec3(0.0, 0.0, 1.0);
-  out.perceived_sagitta_m = glm::dot(out.perceived_m[2] - mid, toward);
-  return out;
+  return glm::dot(middle - mid, toward);
 }
 
 }  // namespace curvlab::geometry

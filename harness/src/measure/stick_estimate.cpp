@@ -17,19 +17,8 @@ using geometry::Vec3;
 
 Error bad(std::string m) { return Error{Error::Kind::bad_input, std::move(m)}; }
 
-// Signed distance of the middle point from the chord of the two ends,
-// positive toward the nose (the origin of the nose frame) — the perception
-// model's sagitta (geometry/perception.cpp, runner/stimulus.cpp).
-double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
-  Vec3 chord = end_b - end_a;
-  const double cl = glm::length(chord);
-  chord = cl > 0.0 ? chord / cl : Vec3(1.0, 0.0, 0.0);
-  const Vec3 mid = 0.5 * (end_a + end_b);
-  Vec3 toward = -mid - glm::dot(-mid, chord) * chord;
-  const double len = glm::length(toward);
-  toward = len > 0.0 ? toward / len : Vec3(0.0, 0.0, 1.0);
-  return glm::dot(middle - mid, toward);
-}
+// The perception model's sagitta of three points (geometry/perception.hpp).
+using geometry::bow_toward_viewer;
 
 // The whole distance of the middle from the chord, with the sign of the bow.
 double bend_in_plane(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {

@@ -5,6 +5,7 @@
 // centroid of that excess: a coverage-weighted centroid of a smooth profile,
 // so its precision does not depend on where pixel centres fall.
 #include "curvlab/harness/measure/stick.hpp"
+#include "curvlab/renderer/colour.hpp"
 
 #include <algorithm>
 #include <array>
@@ -139,6 +140,32 @@ std::optional<StickMask> stick_mask(const Rgba8Image& img) {
         m.bottom[static_cast<std::size_t>(x - m.x0)] = y;
       }
   return m;
+}
+
+// Light above the background, in linear light (the images are sRGB).
+double excess_over(const Rgba8Image& img, int x, int y, std::uint32_t bg) {
+  const std::uint32_t p = pixel(img, x, y);
+  double sum = 0.0;
+  for (int c = 0; c < 3; ++c)
+    sum += double(renderer::srgb_to_linear(float((p >> (8 * c)) & 0xffu) / 255.0f)) -
+           double(renderer::srgb_to_linear(float((bg >> (8 * c)) & 0xffu) / 255.0f));
+  return sum;
+}
+
+// An anti-aliased outline has partly covered pixels on both sides: a column's
+// first and last rows count only when at least half covered (their light
+// above the background at least half their inner neighbour's), the rule a
+// single-sample rasterizer applies at the pixel centre, so that the outline's
+// thickness and midline do not depend on the sample count.
+void drop_partial_outline(const Rgba8Image& img, StickMask& m, std::uint32_t bg) {
+  for (int x = m.x0; x <= m.x1; ++x) {
+    const auto i = static_cast<std::size_t>(x - m.x0);
+    int& top = m.top[i];
+    int& bottom = m.bottom[i];
+    if (top < 0 || bottom - top < 4) continue;
+    if (excess_over(img, x, top, bg) < 0.5 * excess_over(img, x, top + 1, bg)) ++top;
+    if (excess_over(img, x, bottom, bg) < 0.5 * excess_over(img, x, bottom - 1, bg)) --bottom;
+  }
 }
 
 // Least-squares polynomials (degree 3) of the stick's midline row and half
@@ -293,8 +320,9 @@ std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& 
 
 Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m) {
   if (image.width < 8 || image.height < 8) return bad("the image is too small to hold a stick");
-  const auto mask = stick_mask(image);
+  auto mask = stick_mask(image);
   if (!mask) return bad("no stick in the image (no region apart from the background is 20 px wide)");
+  drop_partial_outline(image, *mask, border_colour(image));
   const auto half_px = ring_half_widths(*mask, renderer::kStickRingHalfWidthM / stick_radius_m);
   const auto profile = column_profile(image, *mask);
   const Cubic mid = fit_outline(*mask, Outline::midline);

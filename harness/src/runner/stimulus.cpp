@@ -150,23 +150,6 @@ std::string view_name(const Settings& s) {
   return both ? "native" : "monocular";
 }
 
-namespace {
-
-// Signed distance of the middle point from the chord of the two ends,
-// positive toward the nose (the origin of the nose frame).
-double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
-  Vec3 chord = end_b - end_a;
-  const double cl = glm::length(chord);
-  chord = cl > 0.0 ? chord / cl : Vec3(1.0, 0.0, 0.0);
-  const Vec3 mid = 0.5 * (end_a + end_b);
-  Vec3 toward = -mid - glm::dot(-mid, chord) * chord;
-  const double len = glm::length(toward);
-  toward = len > 0.0 ? toward / len : Vec3(0.0, 0.0, 1.0);
-  return glm::dot(middle - mid, toward);
-}
-
-}  // namespace
-
 double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
                            const Isometry& head) {
   const auto mode = view_mode(s);
@@ -181,7 +164,7 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
     const Vec3 a = seen(placement.stick.centre_point(space, placement.stick_pose, -half));
     const Vec3 m = seen(placement.stick.centre_point(space, placement.stick_pose, 0.0));
     const Vec3 b = seen(placement.stick.centre_point(space, placement.stick_pose, half));
-    return bow_toward_viewer(a, m, b);
+    return geometry::bow_toward_viewer(a, m, b);
   }
   // The table top: its (possibly raised) centre against the plane of the
   // perceived edge midpoints (Newell's normal), oriented by the perceived up.

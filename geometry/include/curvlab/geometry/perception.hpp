@@ -87,6 +87,11 @@ struct StickPerception {
   // the image of a stick bowed in depth is the same straight segment).
   double perceived_sagitta_m = 0.0;
 };
+// Signed distance of `middle` from the chord of end_a and end_b (all in the
+// nose frame), positive toward the nose: the sagitta a viewer reads from
+// three perceived points of a stick.
+double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b);
+
 StickPerception perceive_stick(const Space& space, const BentStick& stick, double distance_m,
                                const EyeOffsets& eyes, ViewMode mode);
 
