@@ -90,25 +90,35 @@ PerceivedPoint perceive_point(const Space& space, const Isometry& nose, const Ey
   const auto lines = sight_lines(space, nose, eyes, mode, q);
   const EyeAxes axes = eye_axes(eyes);
   p.vergence_rad = yaw_toward(axes, lines[0].direction) - yaw_toward(axes, lines[1].direction);
-  // Closest points of the two (infinite) lines o1 + s d1 and o2 + u d2.
-  const Vec3& d1 = lines[0].direction;
-  const Vec3& d2 = lines[1].direction;
-  const Vec3 w0 = lines[0].origin_m - lines[1].origin_m;
-  const double b = glm::dot(d1, d2);
-  const double d = glm::dot(d1, w0);
-  const double e = glm::dot(d2, w0);
-  const double den = 1.0 - b * b;
-  if (den <= 1e-24) {
+  const LineMeeting m = closest_approach(lines[0], lines[1]);
+  if (m.parallel) {
     p.parallel = true;
-    p.position_m = 0.5 * (lines[0].origin_m + lines[1].origin_m) +
-                   1e9 * unit_or_forward(d1 + d2);
+    p.position_m = m.point + 1e9 * unit_or_forward(lines[0].direction + lines[1].direction);
     return p;
   }
-  const double s = (b * e - d) / den;
-  const double u = (e - b * d) / den;
-  p.diverging = s < 0.0 && u < 0.0;
-  p.position_m = 0.5 * (lines[0].origin_m + s * d1 + lines[1].origin_m + u * d2);
+  p.diverging = m.s < 0.0 && m.u < 0.0;
+  p.position_m = m.point;
   return p;
+}
+
+LineMeeting closest_approach(const SightLine& a, const SightLine& b) {
+  const Vec3& d1 = a.direction;
+  const Vec3& d2 = b.direction;
+  const Vec3 w0 = a.origin_m - b.origin_m;
+  const double cos = glm::dot(d1, d2);
+  const double d = glm::dot(d1, w0);
+  const double e = glm::dot(d2, w0);
+  const double den = 1.0 - cos * cos;
+  LineMeeting m;
+  if (den <= 1e-24) {
+    m.parallel = true;
+    m.point = 0.5 * (a.origin_m + b.origin_m);
+    return m;
+  }
+  m.s = (cos * e - d) / den;
+  m.u = (e - cos * d) / den;
+  m.point = 0.5 * (a.origin_m + m.s * d1 + b.origin_m + m.u * d2);
+  return m;
 }
 
 double distance_from_vergence_m(double vergence_rad, double ipd_m) {

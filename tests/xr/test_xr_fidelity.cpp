@@ -7,6 +7,7 @@
 // sRGB image treated as linear, a UNORM swapchain given sRGB bytes), in
 // anti-aliasing or in geometry shows up as a large difference.
 #include "../cli/run_cli.hpp"
+#include "runtime_env.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
 
@@ -113,9 +114,6 @@ curvlab::renderer::Rgba8Image read(const std::string& path) {
   return img;
 }
 
-// One trial answered per 0.6 s from 1 s on (tests/xr/test_xr_session.cpp).
-const std::string kPresses = "right:a@1.0/1.8,left:x@1.6/1.8,right:trigger@2.2/1.8";
-
 }  // namespace
 
 TEST(XrFidelity, HeadsetOnsetFrameMatchesTheOffscreenPng) {
@@ -124,18 +122,16 @@ TEST(XrFidelity, HeadsetOnsetFrameMatchesTheOffscreenPng) {
   fs::create_directories(captures);
   const auto db = dir / "xr.db";
   const auto log = dir / "runtime.log";
-  setenv("XR_RUNTIME_JSON", CURVLAB_TEST_XR_RUNTIME_JSON, 1);
-  setenv("CURVLAB_TEST_XR_PRESS", kPresses.c_str(), 1);
-  setenv("CURVLAB_TEST_XR_CAPTURE_DIR", captures.c_str(), 1);
-  setenv("CURVLAB_TEST_XR_LOG", log.c_str(), 1);
-  // The validation layer watches the multisampled passes, their resolves and
-  // the copies into the sRGB swapchain images (it prints to stdout).
-  setenv("VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation", 1);
-  const auto r = run_cli("run " + std::string(CURVLAB_SOURCE_DIR) + "/tests/xr/demo_buttons.toml --participant F01 "
-                         "--backend xr --db " + db.string() + " --json");
-  for (const char* v : {"XR_RUNTIME_JSON", "CURVLAB_TEST_XR_PRESS", "CURVLAB_TEST_XR_CAPTURE_DIR", "CURVLAB_TEST_XR_LOG",
-                        "VK_INSTANCE_LAYERS"})
-    unsetenv(v);
+  const auto r = [&] {
+    // The validation layer watches the multisampled passes, their resolves
+    // and the copies into the sRGB swapchain images (it prints to stdout).
+    const curvlab::testing::RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", curvlab::testing::kScriptedPresses},
+                                            {"CURVLAB_TEST_XR_CAPTURE_DIR", captures.string()},
+                                            {"CURVLAB_TEST_XR_LOG", log.string()},
+                                            {"VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation"}});
+    return run_cli("run " + std::string(CURVLAB_SOURCE_DIR) + "/tests/xr/demo_buttons.toml --participant F01 "
+                   "--backend xr --db " + db.string() + " --json");
+  }();
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_EQ(r.out.find("Validation"), std::string::npos) << r.out;
 

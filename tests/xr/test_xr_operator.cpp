@@ -7,6 +7,7 @@
 #include "../cli/run_cli.hpp"
 #include "../desktop/xvfb.hpp"
 #include "../runner/session_db.hpp"
+#include "runtime_env.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
 
@@ -25,33 +26,11 @@ namespace {
 using curvlab::testing::fresh_dir;
 using curvlab::testing::query;
 using curvlab::testing::run_cli;
+using curvlab::testing::RuntimeEnv;
+const std::string& kPresses = curvlab::testing::kScriptedPresses;
 namespace fs = std::filesystem;
 
 const std::string kProtocol = std::string(CURVLAB_SOURCE_DIR) + "/tests/xr/demo_buttons.toml";
-// Presses every 0.6 s from 1 s after focus, cycling through the three
-// answers (test_xr_session.cpp): each answer ends a trial.
-const std::string kPresses = "right:a@1.0/1.8,left:x@1.6/1.8,right:trigger@2.2/1.8";
-
-// The runtime's environment for one run; restores a clean one after.
-class RuntimeEnv {
- public:
-  explicit RuntimeEnv(const std::map<std::string, std::string>& vars) {
-    setenv("XR_RUNTIME_JSON", CURVLAB_TEST_XR_RUNTIME_JSON, 1);
-    for (const char* v : kAll) unsetenv(v);
-    for (const auto& [k, v] : vars) setenv(k.c_str(), v.c_str(), 1);
-  }
-  ~RuntimeEnv() {
-    unsetenv("XR_RUNTIME_JSON");
-    for (const char* v : kAll) unsetenv(v);
-  }
-  RuntimeEnv(const RuntimeEnv&) = delete;
-  RuntimeEnv& operator=(const RuntimeEnv&) = delete;
-
- private:
-  static constexpr const char* kAll[] = {"CURVLAB_TEST_XR_PRESS", "CURVLAB_TEST_XR_UNFOCUS", "CURVLAB_TEST_XR_EXIT",
-                                         "CURVLAB_TEST_XR_LATE", "CURVLAB_TEST_XR_LOG", "VK_INSTANCE_LAYERS"};
-};
-
 nlohmann::json summary(const std::string& out) { return nlohmann::json::parse(out.substr(out.find('{'))); }
 
 // Pixels of the screenshot's eye area (the top 430 rows) that are not the

@@ -148,17 +148,18 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
                 "t.attempt, t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
                 "t.completed_utc, st.staircase, st.step_index, st.intensity, st.is_reversal, "
                 "tf.lost_ms, COALESCE(fl.late, 0), "
-                "CASE WHEN t.onset_ns IS NULL THEN NULL WHEN ol.d IS NULL THEN 0 ELSE 1 END, "
+                "CASE WHEN t.onset_ns IS NULL THEN NULL ELSE COALESCE(fl.onset_late, 0) END, "
                 "t.conditions, t.stimulus FROM trials t "
                 "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
                 // One pass over the events, not one per trial.
                 "LEFT JOIN (SELECT trial_id, SUM(json_extract(detail, '$.lost_ms')) AS lost_ms "
                 "FROM events WHERE kind = 'tracking_flagged' GROUP BY trial_id) tf "
                 "ON tf.trial_id = t.trial_id "
-                "LEFT JOIN (SELECT trial_id, SUM(late) AS late FROM frames WHERE trial_id IS NOT NULL "
-                "GROUP BY trial_id) fl ON fl.trial_id = t.trial_id "
-                "LEFT JOIN (SELECT DISTINCT trial_id, predicted_display_ns AS d FROM frames WHERE late = 1) ol "
-                "ON ol.trial_id = t.trial_id AND ol.d = t.onset_ns "
+                // One pass over the frames: the trial's late frames, and whether its
+                // onset frame (displayed at onset_ns) was one of them.
+                "LEFT JOIN (SELECT f.trial_id, SUM(f.late) AS late, "
+                "MAX(f.late = 1 AND f.predicted_display_ns = ot.onset_ns) AS onset_late FROM frames f "
+                "JOIN trials ot ON ot.trial_id = f.trial_id GROUP BY f.trial_id) fl ON fl.trial_id = t.trial_id "
                 "JOIN sessions se ON se.session_id = t.session_id "
                 "JOIN participants p ON p.participant_id = se.participant_id "
                 "JOIN protocols pr ON pr.protocol_id = se.protocol_id "

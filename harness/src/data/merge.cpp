@@ -8,9 +8,9 @@
 #include "curvlab/harness/data/merge.hpp"
 
 #include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/sha256.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 
-#include <nettle/sha2.h>
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
 #include <unistd.h>
@@ -32,29 +32,6 @@ std::string in_schema(std::string sql, const std::string& schema) {
     sql.replace(at, 3, schema);
   return sql;
 }
-
-// Incremental SHA-256 through GNU Nettle (sha256.cpp hashes whole strings).
-class DigestStream {
- public:
-  DigestStream() { sha256_init(&ctx_); }
-  void add(std::string_view bytes) {
-    sha256_update(&ctx_, bytes.size(), reinterpret_cast<const std::uint8_t*>(bytes.data()));
-  }
-  std::string hex() {
-    std::array<std::uint8_t, SHA256_DIGEST_SIZE> digest{};
-    sha256_digest(&ctx_, digest.size(), digest.data());
-    static constexpr char digits[] = "0123456789abcdef";
-    std::string out;
-    for (const std::uint8_t b : digest) {
-      out += digits[b >> 4];
-      out += digits[b & 0xF];
-    }
-    return out;
-  }
-
- private:
-  sha256_ctx ctx_{};
-};
 
 // One canonical text row per stored row, in a stable order; ids become the
 // indices they stand for (trial_index, block_index, protocol sha256,
@@ -93,7 +70,7 @@ constexpr std::array<const char*, 7> digest_queries = {
 };
 
 std::string digest_session(Connection& c, const std::string& schema, std::int64_t session_id) {
-  DigestStream digest;
+  Sha256 digest;
   for (std::size_t q = 0; q < digest_queries.size(); ++q) {
     const std::string table_mark = std::to_string(q) + "#\n";
     digest.add(table_mark);
@@ -250,35 +227,41 @@ constexpr const char* mapped_trial =
     " LEFT JOIN src.trials st ON st.trial_id = x.trial_id AND st.session_id = x.session_id"
     " LEFT JOIN main.trials mt ON mt.session_id = ?2 AND mt.trial_index = st.trial_index";
 
-constexpr std::array<const char*, 6> copy_statements = {
-    "INSERT INTO main.blocks (session_id, block_index, name, is_practice, settings) SELECT ?2, block_index, "
-    "name, is_practice, settings FROM src.blocks WHERE session_id = ?1 ORDER BY block_id",
-    "INSERT INTO main.trials (session_id, block_id, trial_index, trial_in_block, conditions, stimulus, status, "
+// The copies of one session's rows, each with the summary count its rows add to.
+struct RowCopy {
+  const char* sql;
+  std::int64_t MergeInputReport::*counted = nullptr;
+};
+
+constexpr std::array<RowCopy, 6> copy_statements = {{
+    {"INSERT INTO main.blocks (session_id, block_index, name, is_practice, settings) SELECT ?2, block_index, "
+    "name, is_practice, settings FROM src.blocks WHERE session_id = ?1 ORDER BY block_id", nullptr},
+    {"INSERT INTO main.trials (session_id, block_id, trial_index, trial_in_block, conditions, stimulus, status, "
     "attempt, onset_ns, response_ns, response, rt_ns, response_device, completed_utc, end_reason) "
     "SELECT ?2, mb.block_id, x.trial_index, x.trial_in_block, x.conditions, x.stimulus, x.status, x.attempt, "
     "x.onset_ns, x.response_ns, x.response, x.rt_ns, x.response_device, x.completed_utc, x.end_reason "
     "FROM src.trials x JOIN src.blocks sb ON sb.block_id = x.block_id JOIN main.blocks mb "
-    "ON mb.session_id = ?2 AND mb.block_index = sb.block_index WHERE x.session_id = ?1 ORDER BY x.trial_id",
-    "INSERT INTO main.staircase_steps (session_id, staircase, step_index, trial_id, intensity, "
+    "ON mb.session_id = ?2 AND mb.block_index = sb.block_index WHERE x.session_id = ?1 ORDER BY x.trial_id", &MergeInputReport::trials},
+    {"INSERT INTO main.staircase_steps (session_id, staircase, step_index, trial_id, intensity, "
     "response_correct, is_reversal, next_intensity) SELECT ?2, x.staircase, x.step_index, mt.trial_id, "
     "x.intensity, x.response_correct, x.is_reversal, x.next_intensity FROM src.staircase_steps x{trial} "
-    "WHERE x.session_id = ?1 ORDER BY x.step_id",
-    "INSERT INTO main.tracking_samples (session_id, trial_id, frame_index, device, t_ns, lab_px_m, lab_py_m, "
+    "WHERE x.session_id = ?1 ORDER BY x.step_id", nullptr},
+    {"INSERT INTO main.tracking_samples (session_id, trial_id, frame_index, device, t_ns, lab_px_m, lab_py_m, "
     "lab_pz_m, lab_qx, lab_qy, lab_qz, lab_qw, position_valid, orientation_valid, virtual_pose, "
     "physical_edge, virtual_edge, laps, anchor_fraction, coherence_error_m, coherence_error_rad) "
     "SELECT ?2, mt.trial_id, x.frame_index, x.device, x.t_ns, x.lab_px_m, x.lab_py_m, x.lab_pz_m, x.lab_qx, "
     "x.lab_qy, x.lab_qz, x.lab_qw, x.position_valid, x.orientation_valid, x.virtual_pose, x.physical_edge, "
     "x.virtual_edge, x.laps, x.anchor_fraction, x.coherence_error_m, x.coherence_error_rad "
-    "FROM src.tracking_samples x{trial} WHERE x.session_id = ?1 ORDER BY x.sample_id",
-    "INSERT INTO main.frames (session_id, trial_id, frame_index, t_ns, predicted_display_ns, cpu_time_ns, "
+    "FROM src.tracking_samples x{trial} WHERE x.session_id = ?1 ORDER BY x.sample_id", &MergeInputReport::samples},
+    {"INSERT INTO main.frames (session_id, trial_id, frame_index, t_ns, predicted_display_ns, cpu_time_ns, "
     "gpu_time_ns, dropped_frames, views, passes, draws, triangles, eye_width_px, eye_height_px, eye_views, "
     "display_period_ns, late) SELECT ?2, mt.trial_id, x.frame_index, x.t_ns, x.predicted_display_ns, "
     "x.cpu_time_ns, x.gpu_time_ns, x.dropped_frames, x.views, x.passes, x.draws, x.triangles, x.eye_width_px, "
     "x.eye_height_px, x.eye_views, x.display_period_ns, x.late FROM src.frames x{trial} "
-    "WHERE x.session_id = ?1 ORDER BY x.frame_id",
-    "INSERT INTO main.events (session_id, trial_id, t_ns, kind, detail) SELECT ?2, mt.trial_id, x.t_ns, "
-    "x.kind, x.detail FROM src.events x{trial} WHERE x.session_id = ?1 ORDER BY x.event_id",
-};
+    "WHERE x.session_id = ?1 ORDER BY x.frame_id", &MergeInputReport::frames},
+    {"INSERT INTO main.events (session_id, trial_id, t_ns, kind, detail) SELECT ?2, mt.trial_id, x.t_ns, "
+    "x.kind, x.detail FROM src.events x{trial} WHERE x.session_id = ?1 ORDER BY x.event_id", nullptr},
+}};
 
 std::string with_trial_mapping(std::string sql) {
   const auto at = sql.find("{trial}");
@@ -318,24 +301,14 @@ Json schema_history(Connection& c) {
   return rows;
 }
 
-void count_rows(Connection& c, std::int64_t session_id, MergeInputReport& report) {
-  Statement s(c, "SELECT (SELECT COUNT(*) FROM main.trials WHERE session_id = ?1), "
-                 "(SELECT COUNT(*) FROM main.tracking_samples WHERE session_id = ?1), "
-                 "(SELECT COUNT(*) FROM main.frames WHERE session_id = ?1)");
-  s.bind(1, session_id);
-  s.step();
-  report.trials += s.column_int(0);
-  report.samples += s.column_int(1);
-  report.frames += s.column_int(2);
-}
-
 void add_session(Connection& c, const SourceSession& src, const std::string& input, const Json& history,
                  MergeInputReport& report) {
   const auto [number, holder] = free_session_number(c, src);
   const std::int64_t id = insert_session_row(c, src.id, number);
-  for (const char* sql : copy_statements) {
-    Statement s(c, with_trial_mapping(sql));
+  for (const auto& copy : copy_statements) {
+    Statement s(c, with_trial_mapping(copy.sql));
     s.bind(1, src.id).bind(2, id).run();
+    if (copy.counted != nullptr) report.*copy.counted += c.changes();
   }
   const std::string source_file = fs::absolute(input).lexically_normal().string();
   add_merge_event(c, id, "merged_from",
@@ -349,7 +322,6 @@ void add_session(Connection& c, const SourceSession& src, const std::string& inp
     ++report.sessions_renumbered;
   }
   ++report.sessions_added;
-  count_rows(c, id, report);
 }
 
 void compare_session(Connection& c, const SourceSession& src, std::int64_t study_id, const std::string& input,

@@ -9,12 +9,22 @@
 
 namespace curvlab::data {
 
-std::string sha256_hex(std::string_view bytes) {
+struct Sha256::State {
   sha256_ctx ctx{};
-  sha256_init(&ctx);
-  sha256_update(&ctx, bytes.size(), reinterpret_cast<const std::uint8_t*>(bytes.data()));
+};
+
+Sha256::Sha256() : state_(std::make_unique<State>()) { sha256_init(&state_->ctx); }
+
+Sha256::~Sha256() = default;
+
+Sha256& Sha256::add(std::string_view bytes) {
+  sha256_update(&state_->ctx, bytes.size(), reinterpret_cast<const std::uint8_t*>(bytes.data()));
+  return *this;
+}
+
+std::string Sha256::hex() {
   std::array<std::uint8_t, SHA256_DIGEST_SIZE> digest{};
-  sha256_digest(&ctx, digest.size(), digest.data());
+  sha256_digest(&state_->ctx, digest.size(), digest.data());
   static constexpr char hex[] = "0123456789abcdef";
   std::string out;
   out.reserve(2 * digest.size());
@@ -24,5 +34,7 @@ std::string sha256_hex(std::string_view bytes) {
   }
   return out;
 }
+
+std::string sha256_hex(std::string_view bytes) { return Sha256().add(bytes).hex(); }
 
 }  // namespace curvlab::data

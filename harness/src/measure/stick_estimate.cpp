@@ -31,16 +31,9 @@ double bend_in_plane(const Vec3& end_a, const Vec3& middle, const Vec3& end_b) {
 }
 
 // The least-squares intersection of two lines: the midpoint of their common
-// perpendicular.
+// perpendicular (geometry/perception.hpp).
 Vec3 intersect(const geometry::SightLine& l1, const geometry::SightLine& l2) {
-  const Vec3 w0 = l1.origin_m - l2.origin_m;
-  const double b = glm::dot(l1.direction, l2.direction);
-  const double d = glm::dot(l1.direction, w0);
-  const double e = glm::dot(l2.direction, w0);
-  const double den = std::max(1.0 - b * b, 1e-18);
-  const double s = (b * e - d) / den;
-  const double u = (e - b * d) / den;
-  return 0.5 * (l1.origin_m + s * l1.direction + l2.origin_m + u * l2.direction);
+  return geometry::closest_approach(l1, l2).point;
 }
 
 // P(u) = A + B u + C u², least squares per coordinate.

@@ -58,6 +58,17 @@ struct SightLine {
 std::array<SightLine, 2> sight_lines(const Space& space, const Isometry& nose,
                                      const EyeOffsets& eyes, ViewMode mode, const Point& q);
 
+// Where two (infinite) lines o1 + s d1 and o2 + u d2 come closest: the
+// midpoint of their common perpendicular and its feet's parameters. For
+// parallel lines (no single closest pair) `parallel` is set and `point` is
+// the midpoint of the origins.
+struct LineMeeting {
+  Vec3 point{0.0};
+  double s = 0.0, u = 0.0;
+  bool parallel = false;
+};
+LineMeeting closest_approach(const SightLine& a, const SightLine& b);
+
 PerceivedPoint perceive_point(const Space& space, const Isometry& nose, const EyeOffsets& eyes,
                               ViewMode mode, const Point& q);
 
