@@ -5,6 +5,7 @@
 // separate files and exporting their merged file give the same rows.
 #include "common.hpp"
 
+#include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/merge.hpp"
 
@@ -32,7 +33,7 @@ class PooledInputs {
  public:
   explicit PooledInputs(const std::vector<std::string>& inputs)
       : path_((fs::temp_directory_path() / ("curvlab-export-" + std::to_string(::getpid()) + ".sqlite")).string()) {
-    remove();
+    data::remove_database_files(path_);
     auto merged = data::merge_databases({path_, inputs, true});
     if (!merged) raise(merged.error());
     if (merged.value().conflicts.empty()) return;
@@ -40,16 +41,12 @@ class PooledInputs {
     throw UsageError("the inputs disagree about session " + c.session_uuid + ": " + c.detail +
                      " (curvlab merge lists every conflict)");
   }
-  ~PooledInputs() { remove(); }
+  ~PooledInputs() { data::remove_database_files(path_); }
   PooledInputs(const PooledInputs&) = delete;
   PooledInputs& operator=(const PooledInputs&) = delete;
   const std::string& path() const { return path_; }
 
  private:
-  void remove() const {
-    std::error_code ec;
-    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path_ + suffix, ec);
-  }
   std::string path_;
 };
 

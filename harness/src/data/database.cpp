@@ -242,4 +242,9 @@ std::string Database::integrity_check() {
   return stmt.column_text(0);
 }
 
+void remove_database_files(const std::string& path) {
+  std::error_code ec;
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path + suffix, ec);
+}
+
 }  // namespace curvlab::data

@@ -389,9 +389,9 @@ Expected<Done> merge_one(Database& work, const std::string& input, const MergeOp
 // Removes the temporary output (and its journals) unless kept.
 class TempOutput {
  public:
-  explicit TempOutput(std::string path) : path_(std::move(path)) { remove(); }
+  explicit TempOutput(std::string path) : path_(std::move(path)) { remove_database_files(path_); }
   ~TempOutput() {
-    if (!kept_) remove();
+    if (!kept_) remove_database_files(path_);
   }
   TempOutput(const TempOutput&) = delete;
   TempOutput& operator=(const TempOutput&) = delete;
@@ -399,10 +399,6 @@ class TempOutput {
   void keep() { kept_ = true; }
 
  private:
-  void remove() const {
-    std::error_code ec;
-    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path_ + suffix, ec);
-  }
   std::string path_;
   bool kept_ = false;
 };

@@ -65,6 +65,7 @@ struct StickMask {
   std::vector<int> top, bottom;       // per column from x0; −1 where empty
   std::vector<std::uint8_t> inside;   // the region, row major
   int width = 0;
+  std::uint32_t background = 0;       // the image's border colour
   [[nodiscard]] bool at(int x, int y) const {
     return inside[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] != 0;
   }
@@ -80,8 +81,7 @@ struct Regions {
   int widest_extent = 0;
 };
 
-Regions label_regions(const Rgba8Image& img) {
-  const std::uint32_t bg = border_colour(img);
+Regions label_regions(const Rgba8Image& img, std::uint32_t bg) {
   const auto w = static_cast<std::size_t>(img.width);
   const auto index = [w](int x, int y) { return static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x); };
   Regions r;
@@ -116,10 +116,12 @@ Regions label_regions(const Rgba8Image& img) {
 }
 
 std::optional<StickMask> stick_mask(const Rgba8Image& img) {
-  const Regions regions = label_regions(img);
+  const std::uint32_t bg = border_colour(img);
+  const Regions regions = label_regions(img, bg);
   if (regions.widest == 0 || regions.widest_extent < 20) return std::nullopt;
   StickMask m;
   m.width = img.width;
+  m.background = bg;
   m.inside.assign(regions.label.size(), 0);
   m.x0 = img.width;
   for (std::size_t i = 0; i < regions.label.size(); ++i)
@@ -157,7 +159,8 @@ double excess_over(const Rgba8Image& img, int x, int y, std::uint32_t bg) {
 // above the background at least half their inner neighbour's), the rule a
 // single-sample rasterizer applies at the pixel centre, so that the outline's
 // thickness and midline do not depend on the sample count.
-void drop_partial_outline(const Rgba8Image& img, StickMask& m, std::uint32_t bg) {
+void drop_partial_outline(const Rgba8Image& img, StickMask& m) {
+  const std::uint32_t bg = m.background;
   for (int x = m.x0; x <= m.x1; ++x) {
     const auto i = static_cast<std::size_t>(x - m.x0);
     int& top = m.top[i];
@@ -322,7 +325,7 @@ Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, 
   if (image.width < 8 || image.height < 8) return bad("the image is too small to hold a stick");
   auto mask = stick_mask(image);
   if (!mask) return bad("no stick in the image (no region apart from the background is 20 px wide)");
-  drop_partial_outline(image, *mask, border_colour(image));
+  drop_partial_outline(image, *mask);
   const auto half_px = ring_half_widths(*mask, renderer::kStickRingHalfWidthM / stick_radius_m);
   const auto profile = column_profile(image, *mask);
   const Cubic mid = fit_outline(*mask, Outline::midline);

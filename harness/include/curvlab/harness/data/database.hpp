@@ -71,4 +71,8 @@ DataError corrupt_file_error(const std::string& path, const std::string& what);
 // The connection settings every curvlab connection uses (WAL, busy timeout…).
 void configure_connection(Connection& connection, bool synchronous_full);
 
+// Removes a database file and its companions (-wal, -shm, -journal), if
+// there; for temporary files (merge's staging copy, a pooled export).
+void remove_database_files(const std::string& path);
+
 }  // namespace curvlab::data
