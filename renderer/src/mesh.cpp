@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
 
 namespace curvlab::renderer {
@@ -200,79 +201,66 @@ std::string_view to_string(StickMarks marks) { return marks == StickMarks::rings
 
 namespace {
 
-// Butt (u = −L/2) dark, shaft light, the last 2 cm white (tip).
-glm::vec4 stick_wood(double u, double f, double half) {
-  return f < 0.35           ? palette::stick_butt
-         : u > half - 0.02 ? palette::stick_tip
-                            : palette::stick_shaft;
-}
-
-// The axial positions of the stick's vertex rings: `along` equal pieces, and
-// with rings each band's two feet and peak, so that the tent profile is exact.
+// The rows of the stick's ribbon: `along` equal pieces (the ribbon follows
+// the bent centre line through them), plus the joint, the tip's start and,
+// with rings, each band's two feet and peak, so that no colour change falls
+// between rows unseen.
 std::vector<double> stick_rows(const geometry::BentStick& stick, int along, StickMarks marks) {
   const double half = stick.length_m / 2.0;
   std::vector<double> u;
   for (int i = 0; i <= along; ++i) u.push_back(-half + stick.length_m * i / along);
+  u.push_back(-half + kStickButtFraction * stick.length_m);
+  u.push_back(half - kStickTipM);
   if (marks == StickMarks::rings)
     for (double f : kStickRingFractions)
       for (double d : {-kStickRingHalfWidthM, 0.0, kStickRingHalfWidthM})
         u.push_back(f * stick.length_m + d);
   std::sort(u.begin(), u.end());
-  u.erase(std::unique(u.begin(), u.end()), u.end());
+  u.erase(std::unique(u.begin(), u.end(), [](double a, double b) { return std::abs(a - b) < 1e-9; }),
+          u.end());
   return u;
 }
 
-// How much a ring brightens the wood at u: 1 at a band's centre, falling
-// linearly to 0 at its half-width.
-double ring_weight(const geometry::BentStick& stick, double u) {
-  double w = 0.0;
-  for (double f : kStickRingFractions)
-    w = std::max(w, 1.0 - std::abs(u - f * stick.length_m) / kStickRingHalfWidthM);
-  return w;
+// v with its components along the unit vectors `against` removed, normalised
+// with g (tangent vectors at one point).
+glm::dvec4 orthonormal(const Space& space, glm::dvec4 v, std::initializer_list<glm::dvec4> against) {
+  for (const glm::dvec4& a : against) v -= geometry::vector_form(space, v, a) * a;
+  return v / std::sqrt(geometry::vector_form(space, v, v));
 }
 
 }  // namespace
 
 MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level, StickMarks marks) {
   MeshData m;
+  m.shading = Shading::tube;
   const Isometry frame = Isometry::identity();
-  const int along = pieces(12, level);
-  constexpr int kAround = 16;
   const double half = stick.length_m / 2.0;
-  const auto first = static_cast<std::uint32_t>(m.vertices.size());
-  const std::vector<double> rows = stick_rows(stick, along, marks);
-  for (const double u : rows) {
-    const double f = (u + half) / stick.length_m;
-    glm::vec4 color = stick_wood(u, f, half);
-    if (marks == StickMarks::rings)
-      color = glm::mix(color, palette::stick_ring, static_cast<float>(ring_weight(stick, u)));
+  const glm::vec4 design(static_cast<float>(-half + kStickButtFraction * stick.length_m),
+                         static_cast<float>(half - kStickTipM), static_cast<float>(half),
+                         marks == StickMarks::rings ? 1.0f : 0.0f);
+  // The two ends once more: the rows that carry the ribbon a little past them.
+  const std::vector<double> inner = stick_rows(stick, std::max(96, pieces(12, level)), marks);
+  std::vector<double> rows{-half};
+  rows.insert(rows.end(), inner.begin(), inner.end());
+  rows.push_back(half);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const double u = rows[i];
+    const float end = i == 0 ? -1.0f : i + 1 == rows.size() ? 1.0f : 0.0f;
     const Point c = stick.centre_point(space, frame, u);
-    for (int k = 0; k <= kAround; ++k) {
-      const double phi = 2.0 * kPi * k / kAround;
-      const Point p = stick.surface_point(space, frame, u, phi);
-      // Outward: further from the centre line along the same direction.
-      const Point out = geometry::normalize_point(space, p + 0.01 * (p - c));
-      push(m, space, p, out, color);
-    }
+    constexpr double kDu = 1e-4;
+    const glm::dvec4 t = tangent_normal(space, c, stick.centre_point(space, frame, u + kDu) -
+                                                      stick.centre_point(space, frame, u - kDu));
+    const glm::dvec4 up = orthonormal(space, tangent_normal(space, c, stick.surface_point(space, frame, u, 0.0) - c), {t});
+    const glm::dvec4 side =
+        orthonormal(space, tangent_normal(space, c, stick.surface_point(space, frame, u, kPi / 2.0) - c), {t, up});
+    for (const float across : {-1.0f, 1.0f})
+      m.tube_vertices.push_back({glm::vec4(c), glm::vec4(t), glm::vec4(up), glm::vec4(side), design,
+                                 glm::vec4(across, end, static_cast<float>(u),
+                                           static_cast<float>(stick.radius_m))});
   }
-  const int row_count = static_cast<int>(rows.size());
-  grid_indices(m, first, row_count, kAround + 1);
-  // End caps as fans.
-  for (int end = 0; end < 2; ++end) {
-    const double u = end == 0 ? -half : half;
-    const Point c = stick.centre_point(space, frame, u);
-    const Point beyond = stick.centre_point(space, frame, u + (end == 0 ? -0.01 : 0.01));
-    const glm::vec4 color = m.vertices[end == 0 ? 0 : m.vertices.size() - 1].color;
-    const auto centre_index = static_cast<std::uint32_t>(m.vertices.size());
-    push(m, space, c, beyond, color);
-    for (int k = 0; k <= kAround; ++k)
-      push(m, space, stick.surface_point(space, frame, u, 2.0 * kPi * k / kAround), beyond, color);
-    for (std::uint32_t k = 0; k < kAround; ++k) {
-      if (end == 0)
-        m.indices.insert(m.indices.end(), {centre_index, centre_index + 2 + k, centre_index + 1 + k});
-      else
-        m.indices.insert(m.indices.end(), {centre_index, centre_index + 1 + k, centre_index + 2 + k});
-    }
+  for (std::uint32_t r = 0; r + 1 < rows.size(); ++r) {
+    const std::uint32_t i = 2 * r;
+    m.indices.insert(m.indices.end(), {i, i + 2, i + 1, i + 1, i + 2, i + 3});
   }
   return m;
 }

@@ -4,7 +4,9 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <numeric>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
@@ -39,6 +41,10 @@ struct SpecData {
   std::int32_t shading;
   glm::vec3 ink;    // text panels' glyphs, linear RGB
   glm::vec3 paper;  // text panels' ground, linear RGB
+  // Tubes (tube.frag): the stick's colours, linear RGB, and its rings.
+  std::array<glm::vec3, 4> wood;  // butt, shaft, tip, ring
+  std::array<float, 5> ring_fractions;
+  float ring_half_m;
 };
 
 struct GpuMesh {
@@ -114,6 +120,8 @@ struct Renderer::Impl {
   vk::raii::Sampler sampler{nullptr};
   vk::raii::ShaderModule vert{nullptr};
   vk::raii::ShaderModule frag{nullptr};
+  vk::raii::ShaderModule tube_vert{nullptr};
+  vk::raii::ShaderModule tube_frag{nullptr};
   std::uint32_t msaa = 1;
   std::map<std::tuple<int, int, int, int, int>, vk::raii::Pipeline> pipelines;
   std::map<std::pair<std::size_t, int>, GpuMesh> meshes;
@@ -172,6 +180,10 @@ struct Renderer::Impl {
     const auto fs = compile_or_abort("scene.frag", ShaderStage::fragment);
     vert = vk::raii::ShaderModule(dev, {.codeSize = vs.size() * 4, .pCode = vs.data()});
     frag = vk::raii::ShaderModule(dev, {.codeSize = fs.size() * 4, .pCode = fs.data()});
+    const auto tvs = compile_or_abort("tube.vert", ShaderStage::vertex);
+    const auto tfs = compile_or_abort("tube.frag", ShaderStage::fragment);
+    tube_vert = vk::raii::ShaderModule(dev, {.codeSize = tvs.size() * 4, .pCode = tvs.data()});
+    tube_frag = vk::raii::ShaderModule(dev, {.codeSize = tfs.size() * 4, .pCode = tfs.data()});
 
     const auto families = ctx.physical().getQueueFamilyProperties();
     timestamps = families[ctx.queue_family()].timestampValidBits > 0;
@@ -228,37 +240,55 @@ struct Renderer::Impl {
     const auto key = std::make_tuple(static_cast<int>(proj), k, static_cast<int>(hemi),
                                      static_cast<int>(shading), static_cast<int>(topology));
     if (auto it = pipelines.find(key); it != pipelines.end()) return it->second;
-    const SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
+    const bool tube = shading == Shading::tube;
+    SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
                         static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
-                        glm::vec3(palette::text_paper)};
-    const vk::SpecializationMapEntry entries[] = {{0, offsetof(SpecData, native_view), 4},
-                                                  {1, offsetof(SpecData, curvature), 4},
-                                                  {2, offsetof(SpecData, back), 4},
-                                                  {3, offsetof(SpecData, shading), 4},
-                                                  {4, offsetof(SpecData, ink), 4},
-                                                  {5, offsetof(SpecData, ink) + 4, 4},
-                                                  {6, offsetof(SpecData, ink) + 8, 4},
-                                                  {7, offsetof(SpecData, paper), 4},
-                                                  {8, offsetof(SpecData, paper) + 4, 4},
-                                                  {9, offsetof(SpecData, paper) + 8, 4}};
-    const vk::SpecializationInfo spec_info{.mapEntryCount = 10,
-                                           .pMapEntries = entries,
+                        glm::vec3(palette::text_paper),
+                        {glm::vec3(palette::stick_butt), glm::vec3(palette::stick_shaft),
+                         glm::vec3(palette::stick_tip), glm::vec3(palette::stick_ring)},
+                        {}, static_cast<float>(kStickRingHalfWidthM)};
+    for (std::size_t i = 0; i < spec.ring_fractions.size(); ++i)
+      spec.ring_fractions[i] = static_cast<float>(kStickRingFractions[i]);
+    std::vector<vk::SpecializationMapEntry> entries{{0, offsetof(SpecData, native_view), 4},
+                                                    {1, offsetof(SpecData, curvature), 4},
+                                                    {2, offsetof(SpecData, back), 4},
+                                                    {3, offsetof(SpecData, shading), 4}};
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      entries.push_back({4 + c, static_cast<std::uint32_t>(offsetof(SpecData, ink) + 4 * c), 4});
+      entries.push_back({7 + c, static_cast<std::uint32_t>(offsetof(SpecData, paper) + 4 * c), 4});
+    }
+    for (std::uint32_t w = 0; w < 4; ++w)
+      for (std::uint32_t c = 0; c < 3; ++c)
+        entries.push_back({10 + 3 * w + c,
+                           static_cast<std::uint32_t>(offsetof(SpecData, wood) + sizeof(glm::vec3) * w + 4 * c), 4});
+    for (std::uint32_t i = 0; i < 5; ++i)
+      entries.push_back({22 + i, static_cast<std::uint32_t>(offsetof(SpecData, ring_fractions) + 4 * i), 4});
+    entries.push_back({27, offsetof(SpecData, ring_half_m), 4});
+    const vk::SpecializationInfo spec_info{.mapEntryCount = static_cast<std::uint32_t>(entries.size()),
+                                           .pMapEntries = entries.data(),
                                            .dataSize = sizeof(SpecData),
                                            .pData = &spec};
     const vk::PipelineShaderStageCreateInfo stages[] = {
-        {.stage = vk::ShaderStageFlagBits::eVertex, .module = *vert, .pName = "main",
+        {.stage = vk::ShaderStageFlagBits::eVertex, .module = tube ? *tube_vert : *vert, .pName = "main",
          .pSpecializationInfo = &spec_info},
-        {.stage = vk::ShaderStageFlagBits::eFragment, .module = *frag, .pName = "main",
+        {.stage = vk::ShaderStageFlagBits::eFragment, .module = tube ? *tube_frag : *frag, .pName = "main",
          .pSpecializationInfo = &spec_info}};
-    const vk::VertexInputBindingDescription binding{.binding = 0, .stride = sizeof(Vertex),
-                                                    .inputRate = vk::VertexInputRate::eVertex};
+    const vk::VertexInputBindingDescription binding{
+        .binding = 0, .stride = static_cast<std::uint32_t>(tube ? sizeof(TubeVertex) : sizeof(Vertex)), .inputRate = vk::VertexInputRate::eVertex};
     const vk::VertexInputAttributeDescription attrs[] = {
         {0, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, position)},
         {1, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, normal)},
         {2, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, color)}};
+    const vk::VertexInputAttributeDescription tube_attrs[] = {
+        {0, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, axis)},
+        {1, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, tangent)},
+        {2, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, up)},
+        {3, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, side)},
+        {4, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, design)},
+        {5, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, place)}};
     const vk::PipelineVertexInputStateCreateInfo vertex_input{
         .vertexBindingDescriptionCount = 1, .pVertexBindingDescriptions = &binding,
-        .vertexAttributeDescriptionCount = 3, .pVertexAttributeDescriptions = attrs};
+        .vertexAttributeDescriptionCount = tube ? 6u : 3u, .pVertexAttributeDescriptions = tube ? tube_attrs : attrs};
     const vk::PipelineInputAssemblyStateCreateInfo assembly{
         .topology = topology == Topology::lines ? vk::PrimitiveTopology::eLineList
                                                 : vk::PrimitiveTopology::eTriangleList};
@@ -276,8 +306,16 @@ struct Renderer::Impl {
     const vk::PipelineDepthStencilStateCreateInfo depth_state{
         .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE,
         .depthCompareOp = vk::CompareOp::eLess};
+    // Tubes carry their coverage in alpha and are blended over what is
+    // behind them (they are drawn after everything else).
     const vk::PipelineColorBlendAttachmentState blend{
-        .blendEnable = VK_FALSE,
+        .blendEnable = tube ? VK_TRUE : VK_FALSE,
+        .srcColorBlendFactor = vk::BlendFactor::eSrcAlpha,
+        .dstColorBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
+        .colorBlendOp = vk::BlendOp::eAdd,
+        .srcAlphaBlendFactor = vk::BlendFactor::eOne,
+        .dstAlphaBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
+        .alphaBlendOp = vk::BlendOp::eAdd,
         .colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG |
                           vk::ColorComponentFlagBits::eB | vk::ColorComponentFlagBits::eA};
     const vk::PipelineColorBlendStateCreateInfo blend_state{.attachmentCount = 1, .pAttachments = &blend};
@@ -314,11 +352,13 @@ struct Renderer::Impl {
     }
     const MeshData data = scene.objects()[object].build(level);
     GpuMesh m;
-    const std::size_t vbytes = data.vertices.size() * sizeof(Vertex);
+    const bool tube = data.shading == Shading::tube;
+    const std::size_t vbytes =
+        tube ? data.tube_vertices.size() * sizeof(TubeVertex) : data.vertices.size() * sizeof(Vertex);
     const std::size_t ibytes = data.indices.size() * sizeof(std::uint32_t);
     m.vertices = Buffer::create(ctx, std::max<std::size_t>(vbytes, 16), vk::BufferUsageFlagBits::eVertexBuffer);
     m.indices = Buffer::create(ctx, std::max<std::size_t>(ibytes, 16), vk::BufferUsageFlagBits::eIndexBuffer);
-    m.vertices.write(data.vertices.data(), vbytes);
+    m.vertices.write(tube ? static_cast<const void*>(data.tube_vertices.data()) : data.vertices.data(), vbytes);
     m.indices.write(data.indices.data(), ibytes);
     m.index_count = static_cast<std::uint32_t>(data.indices.size());
     m.primitives = data.primitive_count();
@@ -535,7 +575,8 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
     if (r.blank_target == target.identity()) r.blank_eye[e] = false;
     ViewBlock block{to_float(vp.constants.proj_front), to_float(vp.constants.proj_back),
                     to_float(vp.constants.eye_from_nose),
-                    glm::vec4(static_cast<float>(frame.space.radius_m), 0.0f, 0.0f, 0.0f)};
+                    glm::vec4(static_cast<float>(frame.space.radius_m), static_cast<float>(img.extent.width),
+                              static_cast<float>(img.extent.height), 0.0f)};
     slot.ubo.write(&block, sizeof(block), static_cast<std::size_t>(e) * kViewStride);
 
     // Meshes and textures first: building one may submit an upload.
@@ -577,7 +618,12 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
                           static_cast<std::uint32_t>(e * kViewStride));
     cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1, *r.blank.set, {});
     vk::Pipeline bound{};
-    for (std::size_t i = 0; i < vp.draws.size(); ++i) {
+    // Tubes last: they blend over what is behind them.
+    std::vector<std::size_t> order(vp.draws.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_partition(order.begin(), order.end(),
+                          [&](std::size_t i) { return draw_meshes[i]->shading != Shading::tube; });
+    for (const std::size_t i : order) {
       const PlannedDraw& d = vp.draws[i];
       GpuMesh& m = *draw_meshes[i];
       if (m.index_count == 0) continue;

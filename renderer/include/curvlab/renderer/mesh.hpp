@@ -26,13 +26,33 @@ struct Vertex {
   glm::vec4 color;     // linear RGBA; text panels: atlas uv in xy
 };
 
+// A vertex of a tube drawn as a screen-space ribbon (shaders/tube.vert): a
+// point of the tube's centre line, the line's unit tangent there and two unit
+// normals completing the frame (all model coordinates), the colour design,
+// and where along and across the ribbon the vertex lies.
+struct TubeVertex {
+  glm::vec4 axis;
+  glm::vec4 tangent;
+  glm::vec4 up;    // the cross-section's φ = 0 direction
+  glm::vec4 side;  // φ = 90°
+  // x: the butt-to-shaft joint, y: where the tip starts, z: half the length
+  // (metres along the centre line from its middle), w: 1 with rings.
+  glm::vec4 design;
+  // x: side of the ribbon (−1, +1); y: −1 / +1 for the rows that extend the
+  // ribbon past the butt / tip end, else 0; z: u (metres from the middle);
+  // w: the tube's radius in metres.
+  glm::vec4 place;
+};
+
 enum class Topology { triangles, lines };
-enum class Shading { lit = 0, unlit = 1, text = 2 };
+// tube: TubeVertex ribbons, coverage computed in the fragment shader.
+enum class Shading { lit = 0, unlit = 1, text = 2, tube = 3 };
 
 struct MeshData {
   Topology topology = Topology::triangles;
   Shading shading = Shading::lit;
   std::vector<Vertex> vertices;
+  std::vector<TubeVertex> tube_vertices;  // Shading::tube only
   std::vector<std::uint32_t> indices;
 
   [[nodiscard]] std::size_t primitive_count() const {
@@ -87,10 +107,16 @@ std::optional<StickMarks> parse_stick_marks(std::string_view text);
 std::string_view to_string(StickMarks marks);
 inline constexpr std::array<double, 5> kStickRingFractions{-0.4, -0.2, 0.0, 0.2, 0.4};
 inline constexpr double kStickRingHalfWidthM = 0.012;
+inline constexpr double kStickButtFraction = 0.35;
+inline constexpr double kStickTipM = 0.02;
 
 // The cue stick of geometry/tube.hpp with its chord along the model x axis,
-// centred at the model origin, bowed toward +z by the sagitta. Tip white,
-// shaft light wood, butt dark; optional rings.
+// centred at the model origin, bowed toward +z by the sagitta. Tip white
+// (the last kStickTipM), shaft light wood, butt dark (the first
+// kStickButtFraction of the length); optional rings. Drawn as a ribbon
+// (Shading::tube) whose edges, ends and colour joints are anti-aliased
+// analytically: every pixel's coverage is computed, not sampled, so an edge's
+// image position is carried to a small fraction of a pixel at any MSAA count.
 MeshData build_stick(const Space& space, const geometry::BentStick& stick, int level,
                      StickMarks marks = StickMarks::none);
 MeshInfo stick_info(const Space& space, const geometry::BentStick& stick);
