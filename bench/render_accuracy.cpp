@@ -10,6 +10,7 @@
 //     (render_precision.cpp).
 // Usage: bench_render_accuracy [frames-per-measurement] [precision]
 // ("precision": section 4 only)
+#include "curvlab/renderer/colour.hpp"
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/renderer.hpp"
 #include "curvlab/renderer/shader.hpp"
@@ -103,7 +104,7 @@ struct PlainGeometry {
   std::array<std::vector<std::uint32_t>, 2> indices;  // per eye, triangle list
 };
 
-PlainGeometry plain_geometry(const StimulusScene& s, const RenderPlan& plan) {
+PlainGeometry plain_geometry(const StimulusScene& s, const RenderPlan& plan, double px) {
   PlainGeometry g;
   for (int e = 0; e < 2; ++e) {
     const ViewPlan& vp = plan.views[e];
@@ -115,6 +116,12 @@ PlainGeometry plain_geometry(const StimulusScene& s, const RenderPlan& plan) {
         const glm::dvec4 clip = clip_position(vp.constants, d.hemisphere, d.model_view * glm::dvec4(v.position));
         g.verts[e].push_back({float(clip.x), float(clip.y), float(clip.z), float(clip.w), v.color.x, v.color.y,
                               v.color.z, 1.0f});
+      }
+      // The stick's ribbon at the positions tube.vert gives it (its twin).
+      for (const TubeVertex& v : mesh.tube_vertices) {
+        const glm::dvec4 clip = tube_clip_position(vp.constants, d.hemisphere, d.model_view, v, px, px);
+        g.verts[e].push_back({float(clip.x), float(clip.y), float(clip.z), float(clip.w), palette::stick_shaft.x,
+                              palette::stick_shaft.y, palette::stick_shaft.z, 1.0f});
       }
       for (const std::uint32_t i : mesh.indices) g.indices[e].push_back(first + i);
     }
@@ -334,7 +341,7 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(tourist.last.triangles), tourist.last.draws);
     if (kind == SpaceKind::E3) {
       billiards_triangles = native.last.triangles;
-      billiards_geometry = plain_geometry(s, r_native.last_plan());
+      billiards_geometry = plain_geometry(s, r_native.last_plan(), 1024.0);
       billiards_msaa = r_native.msaa();
     }
   }

@@ -7,8 +7,9 @@
 //  * each end of the stick (yaw steps): along each row through the stick,
 //    a reference column inside the stick gives the row's full coverage, and
 //    the end lies at the reference column plus the summed coverage beyond it;
-//  * the butt-to-shaft colour transition (bend steps): the same sum of the
-//    fraction of butt colour between a butt and a shaft reference column;
+//  * the butt-to-shaft colour joint (bend steps): the same sum of the
+//    fraction of butt colour between a butt and a shaft reference column a
+//    few pixels either side of it;
 //  * the stick's vertical centre at its middle (bend steps): the centroid of
 //    the columns' coverage.
 // Each feature's motion from the first step is compared with the motion of
@@ -50,9 +51,12 @@ constexpr double kBendStepM = 0.0001;
 constexpr int kSteps = 21;  // 0 … 20 steps: 0.2° of yaw, 2 mm of bend
 // Where the stick scene puts the stick (renderer/src/scene.cpp, stick).
 const Vec3 kStickAt{0.0, -0.25, -0.75};
-// The butt colour ends after 4 of the stick's 12 segments and the shaft
-// colour starts at 5 (mesh.cpp): the ramp's middle is at 0.375 of the length.
-constexpr double kTransitionFraction = 0.375;
+// The joint between the butt's and the shaft's colours (mesh.hpp).
+constexpr double kTransitionFraction = kStickButtFraction;
+// The reference columns on either side of it, in px: close, so that neither
+// the shading's slow change along the stick nor the images' 8-bit steps add
+// up over many columns.
+constexpr int kTransitionReachPx = 4;
 
 // The pixel position of a world point seen by one eye: E3 pinhole through the
 // head and eye isometries (x right, y down, pixel centres at .5).
@@ -190,10 +194,8 @@ Features measure(const OffscreenTarget& target, const StimulusScene& s, const Is
     const glm::dvec2 mid = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.0));
     f.left_end[e] = end_position(l, int(left.x) + 12, -1, left.y);
     f.right_end[e] = end_position(l, int(right.x) - 5, +1, right.y);
-    const double u_butt = -0.5 + 0.29, u_shaft = -0.5 + 0.46;
-    const glm::dvec2 butt = project(s.space, head, e, stick_point(s.space, sagitta_m, u_butt));
-    const glm::dvec2 shaft = project(s.space, head, e, stick_point(s.space, sagitta_m, u_shaft));
-    f.transition[e] = transition_position(l, int(butt.x), int(shaft.x), 0.5 * (butt.y + shaft.y));
+    const glm::dvec2 joint = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5 + kTransitionFraction));
+    f.transition[e] = transition_position(l, int(joint.x) - kTransitionReachPx, int(joint.x) + kTransitionReachPx, joint.y);
     f.middle_y[e] = vertical_centre(l, int(mid.x) - 3, int(mid.x) + 3, mid.y);
   }
   return f;

@@ -265,6 +265,44 @@ MeshData build_stick(const Space& space, const geometry::BentStick& stick, int l
   return m;
 }
 
+glm::dvec4 tube_clip_position(const ViewConstants& view, Hemisphere hemi, const glm::dmat4& model_view,
+                              const TubeVertex& v, double width_px, double height_px) {
+  constexpr double kMarginPx = 1.5;  // tube.vert MARGIN_PX
+  const Space& space = view.space;
+  const double rho = space.radius_m;
+  const glm::dvec2 size(width_px, height_px);
+  const auto clip_of = [&](const glm::dvec4& q) {
+    return clip_position(view, hemi, q * (rho / std::sqrt(std::max(geometry::point_form(space, q, q), 1e-300))));
+  };
+  const auto to_px = [&](const glm::dvec4& c) { return (glm::dvec2(c) / c.w * 0.5 + 0.5) * size; };
+  const double r = double(v.place.w);
+  const glm::dvec4 p = model_view * glm::dvec4(v.axis);
+  const glm::dvec4 t = model_view * glm::dvec4(v.tangent);
+  const glm::dvec4 n_up = model_view * glm::dvec4(v.up);
+  const glm::dvec4 n_side = model_view * glm::dvec4(v.side);
+  const glm::dvec4 clip = clip_of(p);
+  if (clip.w <= 0.0) return {0.0, 0.0, 2.0, 1.0};
+  const double sign_back = hemi == Hemisphere::back ? -1.0 : 1.0;
+  const glm::dvec4 toward = tangent_normal(space, sign_back * p, glm::dvec4(0.0, 0.0, 0.0, rho));
+  const double a = geometry::vector_form(space, toward, sign_back * n_up);
+  const double b = geometry::vector_form(space, toward, sign_back * n_side);
+  const double m = std::hypot(a, b);
+  const glm::dvec2 cs = m > 1e-6 ? glm::dvec2(a, b) / m : glm::dvec2(0.0, 1.0);
+  const glm::dvec4 c = cs.x * n_up + cs.y * n_side;
+  const glm::dvec4 s = -cs.y * n_up + cs.x * n_side;
+  const glm::dvec2 centre = to_px(clip);
+  const glm::dvec2 along = to_px(clip_of(p + r * t)) - centre;
+  const double px_per_m = glm::length(along) / r;
+  const glm::dvec2 dir = px_per_m > 0.0 ? along / (px_per_m * r) : glm::dvec2(1.0, 0.0);
+  const glm::dvec2 normal(-dir.y, dir.x);
+  const double ws = glm::dot(normal, to_px(clip_of(p + r * s)) - centre);
+  const double wc = glm::dot(normal, to_px(clip_of(p + r * c)) - centre);
+  glm::dvec2 at = centre + double(v.place.x) * (std::hypot(ws, wc) + kMarginPx) * normal;
+  if (v.place.y != 0.0f) at += double(v.place.y) * kMarginPx * dir;
+  const glm::dvec4 front = clip_of(p + sign_back * r * c);
+  return {(at / size * 2.0 - 1.0) * clip.w, front.z / front.w * clip.w, clip.w};
+}
+
 MeshInfo stick_info(const Space& space, const geometry::BentStick& stick) {
   MeshInfo info;
   info.bounds.push_back({geometry::origin(space),

@@ -44,6 +44,12 @@ struct TubeVertex {
   glm::vec4 place;
 };
 
+// The clip position tube.vert gives v (its C++ twin, for the plain-loop
+// baseline and the tests): the projected centre line plus the ribbon's
+// offsets in pixels for a target of the given size.
+glm::dvec4 tube_clip_position(const ViewConstants& view, Hemisphere hemi, const glm::dmat4& model_view,
+                              const TubeVertex& v, double width_px, double height_px);
+
 enum class Topology { triangles, lines };
 // tube: TubeVertex ribbons, coverage computed in the fragment shader.
 enum class Shading { lit = 0, unlit = 1, text = 2, tube = 3 };
