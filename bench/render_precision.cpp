@@ -58,12 +58,17 @@ constexpr double kTransitionFraction = kStickButtFraction;
 // up over many columns.
 constexpr int kTransitionReachPx = 4;
 
+// A world point in one eye's frame (E3: metres, the eye looking down −z).
+glm::dvec4 in_eye(const Space& space, const Isometry& head, int eye, const geometry::Point& world) {
+  const double side = eye == 0 ? -kIpdM / 2.0 : kIpdM / 2.0;
+  const Isometry eye_pose = head * geometry::translation_m(space, Vec3(side, 0.0, 0.0));
+  return glm::inverse(eye_pose.m) * world;
+}
+
 // The pixel position of a world point seen by one eye: E3 pinhole through the
 // head and eye isometries (x right, y down, pixel centres at .5).
 glm::dvec2 project(const Space& space, const Isometry& head, int eye, const geometry::Point& world) {
-  const double side = eye == 0 ? -kIpdM / 2.0 : kIpdM / 2.0;
-  const Isometry eye_pose = head * geometry::translation_m(space, Vec3(side, 0.0, 0.0));
-  const glm::dvec4 q = glm::inverse(eye_pose.m) * world;
+  const glm::dvec4 q = in_eye(space, head, eye, world);
   const double focal_px = (kPx / 2.0) / std::tan(kFovRad / 2.0);
   return {kPx / 2.0 + focal_px * q.x / -q.z, kPx / 2.0 - focal_px * q.y / -q.z};
 }
@@ -86,42 +91,45 @@ struct Luma {
   }
 };
 
-// Rows through the stick at column x whose contrast there is at least
-// `fraction` of the brightest row's, with that contrast as their weight.
-std::vector<std::pair<int, double>> stick_rows(const Luma& l, int x, double y_px, double fraction) {
-  std::vector<std::pair<int, double>> rows;
-  double peak = 0.0;
-  for (int r = int(y_px) - 20; r <= int(y_px) + 20; ++r) peak = std::max(peak, l.at(x, r));
-  for (int r = int(y_px) - 20; r <= int(y_px) + 20; ++r)
-    if (l.at(x, r) > fraction * peak) rows.emplace_back(r, l.at(x, r));
+// The rows the estimators read: those whose centres lie within the inner
+// 60 % of the stick's projected thickness about y_px (placed from the sweep's
+// first pose), all weighted alike. The same rows are read in every frame: the
+// tube's ends and joints are seen along curves (each end's rim, each joint's
+// circle), so a row entering or leaving the set would move the average.
+constexpr double kStickRadiusM = 0.0125;  // the stick scene's (StimulusOptions)
+
+std::vector<int> inner_rows(double y_px, double distance_m) {
+  const double half_px = kStickRadiusM * (kPx / 2.0) / std::tan(kFovRad / 2.0) / distance_m;
+  std::vector<int> rows;
+  for (int r = int(std::floor(y_px - half_px)); r <= int(std::ceil(y_px + half_px)); ++r)
+    if (std::abs(r + 0.5 - y_px) <= 0.6 * half_px) rows.push_back(r);
   return rows;
 }
 
 // The end of the stick beyond column `ref` (inside it) in direction dir (±1).
-double end_position(const Luma& l, int ref, int dir, double y_px) {
+double end_position(const Luma& l, int ref, int dir, const std::vector<int>& rows) {
   double sum = 0.0, weight = 0.0;
-  for (const auto& [r, w] : stick_rows(l, ref, y_px, 0.3)) {
+  for (const int r : rows) {
+    const double w = l.at(ref, r);
     double covered = 0.0;
     for (int k = 1; k <= 40; ++k) covered += l.at(ref + dir * k, r) / w;
     // The reference pixel counts whole: the edge lies `covered` beyond it.
     const double end = dir > 0 ? ref + 1.0 + covered : ref - covered;
-    sum += w * end;
-    weight += w;
+    sum += end;
+    weight += 1.0;
   }
   return sum / weight;
 }
 
 // The butt-to-shaft transition between a butt column and a shaft column.
-double transition_position(const Luma& l, int butt, int shaft, double y_px) {
+double transition_position(const Luma& l, int butt, int shaft, const std::vector<int>& rows) {
   double sum = 0.0, weight = 0.0;
-  // Rows inside the silhouette only: a bend tilts the silhouette, which
-  // would change a partly covered row's coverage along it.
-  for (const auto& [r, w] : stick_rows(l, shaft, y_px, 0.8)) {
+  for (const int r : rows) {
     const double lo = l.at(butt, r), hi = l.at(shaft, r);
     double butt_part = 0.0;
     for (int x = butt + 1; x < shaft; ++x) butt_part += (hi - l.at(x, r)) / (hi - lo);
-    sum += w * (butt + 1.0 + butt_part);
-    weight += w;
+    sum += butt + 1.0 + butt_part;
+    weight += 1.0;
   }
   return sum / weight;
 }
@@ -189,24 +197,75 @@ Features measure(const OffscreenTarget& target, const StimulusScene& s, const Is
   for (int e = 0; e < 2; ++e) {
     const auto y = luminance(target.image(static_cast<Eye>(e)));
     const Luma l{y, bg};
-    const glm::dvec2 left = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5));
-    const glm::dvec2 right = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.5));
+    const auto seen = [&](double u_m) {
+      const geometry::Point p = stick_point(s.space, sagitta_m, u_m);
+      return std::make_pair(project(s.space, head, e, p), -in_eye(s.space, head, e, p).z);
+    };
+    const auto [left, left_z] = seen(-0.5);
+    const auto [right, right_z] = seen(0.5);
     const glm::dvec2 mid = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.0));
-    f.left_end[e] = end_position(l, int(left.x) + 12, -1, left.y);
-    f.right_end[e] = end_position(l, int(right.x) - 5, +1, right.y);
-    const glm::dvec2 joint = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5 + kTransitionFraction));
-    f.transition[e] = transition_position(l, int(joint.x) - kTransitionReachPx, int(joint.x) + kTransitionReachPx, joint.y);
+    // Reference columns a few pixels inside each end's centre point: inside
+    // the stick on every row (each end's rim reaches beyond that point) and
+    // clear of the tip's colour joint, 2 cm in from the right end.
+    f.left_end[e] = end_position(l, int(left.x) + 3, -1, inner_rows(left.y, left_z));
+    f.right_end[e] = end_position(l, int(right.x) - 2, +1, inner_rows(right.y, right_z));
+    const auto [joint, joint_z] = seen(-0.5 + kTransitionFraction);
+    f.transition[e] = transition_position(l, int(joint.x) - kTransitionReachPx, int(joint.x) + kTransitionReachPx,
+                                          inner_rows(joint.y, joint_z));
     f.middle_y[e] = vertical_centre(l, int(mid.x) - 3, int(mid.x) + 3, mid.y);
   }
   return f;
 }
 
-Features analytic(const StimulusScene& s, const Isometry& head, double sagitta_m) {
+// Where the tube's cross-section circle at u_m is seen on the given rows, on
+// average: the front half of the circle (the rim at an end, the joint's line
+// round the stick) projected, and its x read at each row's centre. The
+// estimators read an end or a joint along rows, and on each row the tube
+// shows this circle's point, not the centre line's.
+double circle_x(const Space& space, const Isometry& head, int eye, double sagitta_m, double u_m,
+                const std::vector<int>& rows) {
+  const glm::dvec4 c4 = in_eye(space, head, eye, stick_point(space, sagitta_m, u_m));
+  const glm::dvec4 n4 = in_eye(space, head, eye, stick_point(space, sagitta_m, u_m + 1e-4));
+  const glm::dvec3 c(c4), t = glm::normalize(glm::dvec3(n4) - c);
+  const glm::dvec3 v = glm::normalize(-c);
+  const glm::dvec3 toward = glm::normalize(v - glm::dot(v, t) * t);
+  const glm::dvec3 side = glm::cross(t, toward);
+  const double focal_px = (kPx / 2.0) / std::tan(kFovRad / 2.0);
+  std::vector<glm::dvec2> curve;
+  for (int i = -400; i <= 400; ++i) {
+    const double phi = i / 400.0 * std::numbers::pi / 2.0;
+    const glm::dvec3 p = c + kStickRadiusM * (std::cos(phi) * toward + std::sin(phi) * side);
+    curve.emplace_back(kPx / 2.0 + focal_px * p.x / -p.z, kPx / 2.0 - focal_px * p.y / -p.z);
+  }
+  double sum = 0.0;
+  int n = 0;
+  for (const int r : rows) {
+    const double y = r + 0.5;
+    for (std::size_t i = 0; i + 1 < curve.size(); ++i) {
+      const glm::dvec2 a = curve[i], b = curve[i + 1];
+      if ((a.y - y) * (b.y - y) > 0.0 || a.y == b.y) continue;
+      sum += a.x + (b.x - a.x) * (y - a.y) / (b.y - a.y);
+      ++n;
+      break;
+    }
+  }
+  return sum / n;
+}
+
+// The analytic features: the ends and the joint where the tube shows them on
+// the rows the estimators read (placed from the sweep's first pose), the
+// middle's height from the centre line.
+Features analytic(const StimulusScene& s, const Isometry& head, double sagitta_m, const Isometry& first_head) {
   Features f;
   for (int e = 0; e < 2; ++e) {
-    f.left_end[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5)).x;
-    f.right_end[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.5)).x;
-    f.transition[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, -0.5 + kTransitionFraction)).x;
+    const auto rows_at = [&](double u_m) {
+      const geometry::Point p = stick_point(s.space, 0.0, u_m);
+      return inner_rows(project(s.space, first_head, e, p).y, -in_eye(s.space, first_head, e, p).z);
+    };
+    f.left_end[e] = circle_x(s.space, head, e, sagitta_m, -0.5, rows_at(-0.5));
+    f.right_end[e] = circle_x(s.space, head, e, sagitta_m, 0.5, rows_at(0.5));
+    const double joint = -0.5 + kTransitionFraction;
+    f.transition[e] = circle_x(s.space, head, e, sagitta_m, joint, rows_at(joint));
     f.middle_y[e] = project(s.space, head, e, stick_point(s.space, sagitta_m, 0.0)).y;
   }
   return f;
@@ -232,7 +291,7 @@ SweepResiduals sweep(const Context& ctx, std::uint32_t msaa) {
     const double yaw = i * kYawStepDeg * std::numbers::pi / 180.0;
     const Isometry head = straight.head * geometry::rotation(Vec3(0, 1, 0), yaw);
     r.render(straight.scene, frame_of(straight, head), target);
-    const Features m = measure(target, straight, straight.head, 0.0), a = analytic(straight, head, 0.0);
+    const Features m = measure(target, straight, straight.head, 0.0), a = analytic(straight, head, 0.0, straight.head);
     if (!m0) {
       m0 = m;
       a0 = a;
@@ -247,7 +306,7 @@ SweepResiduals sweep(const Context& ctx, std::uint32_t msaa) {
     const double sagitta = i * kBendStepM;
     const StimulusScene s = stick_scene(sagitta);
     r.render(s.scene, frame_of(s, s.head), target);
-    const Features m = measure(target, s, s.head, 0.0), a = analytic(s, s.head, sagitta);
+    const Features m = measure(target, s, s.head, 0.0), a = analytic(s, s.head, sagitta, s.head);
     if (!m0) {
       m0 = m;
       a0 = a;

@@ -38,6 +38,13 @@ layout(location = 2) out float out_u;  // metres along the centre line
 // y, z: the model "up" components of the cross-section's silhouette and
 // toward-the-viewer directions (the key light, as in scene.vert).
 layout(location = 3) out vec3 out_light;
+// The image of the tube's cross-section circle about the centre line's
+// point: the points r toward the viewer (c) and r across the line of sight
+// (s) lie at these offsets in px, along the projected centre line (x: c,
+// y: s) and across it (z: c, w: s) ...
+layout(location = 6) out vec4 out_circle;
+// ... with clip w these times the centre line's (x: c, y: s).
+layout(location = 7) out vec2 out_circle_w;
 layout(location = 4) flat out vec4 out_design;
 layout(location = 5) flat out vec4 out_tint;
 
@@ -74,6 +81,8 @@ void main() {
     out_half_px = 0.0;
     out_u = in_place.z;
     out_light = vec3(0.0);
+    out_circle = vec4(0.0);
+    out_circle_w = vec2(1.0);
     return;
   }
   // The cross-section's directions toward the viewer (c) and across the line
@@ -95,19 +104,24 @@ void main() {
   float px_per_m = length(along) / r;
   vec2 dir = px_per_m > 0.0 ? along / (px_per_m * r) : vec2(1.0, 0.0);
   vec2 normal = vec2(-dir.y, dir.x);
-  float ws = dot(normal, to_px(clip_of(p + r * s)) - centre);
-  float wc = dot(normal, to_px(clip_of(p + r * c)) - centre);
-  float half_px = length(vec2(ws, wc));
+  vec4 front = clip_of(p + sign_back * r * c);
+  vec4 aside = clip_of(p + r * s);
+  vec2 to_front = to_px(front) - centre;
+  vec2 to_aside = to_px(aside) - centre;
+  out_circle = vec4(dot(dir, to_front), dot(dir, to_aside), dot(normal, to_front), dot(normal, to_aside));
+  out_circle_w = vec2(front.w, aside.w) / clip.w;
+  float half_px = length(out_circle.zw);
 
   float across = in_place.x * (half_px + MARGIN_PX);
   vec2 at = centre + across * normal;
   float u = in_place.z;
   if (in_place.y != 0.0) {
-    at += in_place.y * MARGIN_PX * dir;
-    u += in_place.y * MARGIN_PX / max(px_per_m, 1.0e-6);
+    // Past an end by more than its rim can reach, and the margin.
+    float beyond = 1.25 * length(out_circle.xy) + MARGIN_PX;
+    at += in_place.y * beyond * dir;
+    u += in_place.y * beyond / max(px_per_m, 1.0e-6);
   }
   // Depth of the tube's front, so that it meets other objects as a tube would.
-  vec4 front = clip_of(p + sign_back * r * c);
   gl_Position = vec4((at / view.params.yz * 2.0 - 1.0) * clip.w, front.z / front.w * clip.w, clip.w);
   out_across_px = across;
   out_half_px = half_px;

@@ -295,11 +295,13 @@ glm::dvec4 tube_clip_position(const ViewConstants& view, Hemisphere hemi, const 
   const double px_per_m = glm::length(along) / r;
   const glm::dvec2 dir = px_per_m > 0.0 ? along / (px_per_m * r) : glm::dvec2(1.0, 0.0);
   const glm::dvec2 normal(-dir.y, dir.x);
-  const double ws = glm::dot(normal, to_px(clip_of(p + r * s)) - centre);
-  const double wc = glm::dot(normal, to_px(clip_of(p + r * c)) - centre);
-  glm::dvec2 at = centre + double(v.place.x) * (std::hypot(ws, wc) + kMarginPx) * normal;
-  if (v.place.y != 0.0f) at += double(v.place.y) * kMarginPx * dir;
   const glm::dvec4 front = clip_of(p + sign_back * r * c);
+  const glm::dvec2 to_front = to_px(front) - centre;
+  const glm::dvec2 to_aside = to_px(clip_of(p + r * s)) - centre;
+  const double half_px = std::hypot(glm::dot(normal, to_front), glm::dot(normal, to_aside));
+  glm::dvec2 at = centre + double(v.place.x) * (half_px + kMarginPx) * normal;
+  const double beyond = 1.25 * std::hypot(glm::dot(dir, to_front), glm::dot(dir, to_aside)) + kMarginPx;
+  if (v.place.y != 0.0f) at += double(v.place.y) * beyond * dir;
   return {(at / size * 2.0 - 1.0) * clip.w, front.z / front.w * clip.w, clip.w};
 }
 

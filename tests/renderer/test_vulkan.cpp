@@ -376,35 +376,39 @@ TEST_F(VulkanTest, TheStickIsAntiAliasedWithOneSamplePerPixel) {
   EXPECT_LT(four, 1.15 * one) << "msaa 1: " << one << ", msaa 4: " << four;
 }
 
-TEST_F(VulkanTest, TheStickEndFollowsSubPixelHeadTurns) {
-  // The head turns in steps of 0.02° (0.09 px at 512² over 90°). The stick's
-  // right end, read from the left eye's pixels by summing coverage along its
-  // rows, must move with the pinhole projection of the end point (from the
+TEST_F(VulkanTest, TheStickFollowsSubMillimetreBends) {
+  // The stick is bent toward the viewer in 0.5 mm steps (its middle moves
+  // 0.06 px per step at 512² over 90°). The middle's height, read from the
+  // left eye's pixels as the luminance centroid of the columns there, must
+  // move with the pinhole projection of the centre line's middle (from the
   // head and eye isometries, not the renderer's view math) to within 0.03 px
   // at one and at four samples per pixel; edges quantized to a sample grid
-  // are off by up to 0.2 px.
-  const StimulusScene s = make(SpaceKind::E3, SceneKind::stick);
+  // are off by up to 0.1 px.
   constexpr std::uint32_t kPx = 512;
-  const double focal = kPx / 2.0;
-  const auto project_end = [&](const Isometry& head) {
-    const Isometry eye = head * geometry::translation_m(s.space, geometry::Vec3(-0.0315, 0.0, 0.0));
-    const geometry::Point end = geometry::translation_m(s.space, geometry::Vec3(0.0, -0.25, -0.75)).m *
-                                geometry::BentStick{1.0, 0.0, 0.0125}.centre_point(s.space, Isometry::identity(), 0.5);
-    const glm::dvec4 q = glm::inverse(eye.m) * end;
-    return glm::dvec2(kPx / 2.0 + focal * q.x / -q.z, kPx / 2.0 - focal * q.y / -q.z);
+  const auto scene = [](double sagitta_m) {
+    StimulusOptions o;
+    o.stick_sagitta_m = sagitta_m;
+    return std::get<StimulusScene>(make_stimulus_scene(SpaceKind::E3, SceneKind::stick, o));
   };
-  const glm::dvec2 first = project_end(s.head);
-  const int ref = int(first.x) - 3;  // inside the white tip
-  const auto measured_end = [&](const Rgba8Image& img) {
+  const StimulusScene straight = scene(0.0);
+  const auto project_middle = [&](double sagitta_m) {
+    const Isometry eye = straight.head * geometry::translation_m(straight.space, geometry::Vec3(-0.0315, 0.0, 0.0));
+    const geometry::Point middle =
+        geometry::translation_m(straight.space, geometry::Vec3(0.0, -0.25, -0.75)).m *
+        geometry::BentStick{1.0, sagitta_m, 0.0125}.centre_point(straight.space, Isometry::identity(), 0.0);
+    const glm::dvec4 q = glm::inverse(eye.m) * middle;
+    return glm::dvec2(kPx / 2.0 + (kPx / 2.0) * q.x / -q.z, kPx / 2.0 - (kPx / 2.0) * q.y / -q.z);
+  };
+  const glm::dvec2 first = project_middle(0.0);
+  const auto measured_height = [&](const Rgba8Image& img) {
     double sum = 0.0, weight = 0.0;
-    for (int row = int(first.y) - 12; row <= int(first.y) + 12; ++row) {
-      const double bg = linear_at(img, ref + 20, row).y, w = linear_at(img, ref, row).y - bg;
-      if (w < 0.3) continue;  // rows through the stick's middle only
-      double covered = 0.0;
-      for (int k = 1; k <= 10; ++k) covered += (linear_at(img, ref + k, row).y - bg) / w;
-      sum += w * (ref + 1.0 + covered);
-      weight += w;
-    }
+    const double bg = linear_at(img, 5, 5).y;
+    for (int x = int(first.x) - 3; x <= int(first.x) + 3; ++x)
+      for (int row = int(first.y) - 15; row <= int(first.y) + 15; ++row) {
+        const double w = std::max(0.0, linear_at(img, x, row).y - bg);
+        sum += w * (row + 0.5);
+        weight += w;
+      }
     return sum / weight;
   };
   for (const std::uint32_t msaa : {1u, 4u}) {
@@ -412,13 +416,12 @@ TEST_F(VulkanTest, TheStickEndFollowsSubPixelHeadTurns) {
     OffscreenTarget target(ctx(), kPx, kPx);
     double worst = 0.0, start = 0.0;
     for (int i = 0; i <= 5; ++i) {
-      const Isometry head = s.head * geometry::rotation(geometry::Vec3(0, 1, 0), i * 0.02 * std::numbers::pi / 180.0);
-      FrameDescription f = frame_for(s, ViewPreset::tourist, kPx);
-      f.head = head;
-      renderer.render(s.scene, f, target);
-      const double end = measured_end(target.image(Eye::left));
-      if (i == 0) start = end;
-      worst = std::max(worst, std::abs((end - start) - (project_end(head).x - first.x)));
+      const double sagitta = 0.0005 * i;
+      const StimulusScene s = scene(sagitta);
+      renderer.render(s.scene, frame_for(s, ViewPreset::tourist, kPx), target);
+      const double height = measured_height(target.image(Eye::left));
+      if (i == 0) start = height;
+      worst = std::max(worst, std::abs((height - start) - (project_middle(sagitta).y - first.y)));
     }
     EXPECT_LT(worst, 0.03) << "msaa " << msaa;
   }
