@@ -228,6 +228,16 @@ double plain_loop_ms(const Context& ctx, const PlainGeometry& g, std::uint32_t p
   return median(times);
 }
 
+// The plain loop's frame time for the billiards frame (E3, native, 1024²)
+// at a sample count: the same meshes and coverage as curvlab's frame.
+double plain_billiards_ms(const Context& ctx, std::uint32_t msaa, int frames) {
+  const StimulusScene s = make(SpaceKind::E3, SceneKind::billiards);
+  Renderer r(ctx, RendererOptions{.msaa = msaa});
+  OffscreenTarget t(ctx, 1024, 1024);
+  r.render(s.scene, frame_for(s, ViewSettings::preset(ViewPreset::native), 1024), t);
+  return plain_loop_ms(ctx, plain_geometry(s, r.last_plan(), 1024.0), 1024, msaa, frames, [](int) {});
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -240,7 +250,7 @@ int main(int argc, char** argv) {
   const Context& ctx = std::get<Context>(created);
   std::printf("device: %s (%s); median of %d frames\n\n", ctx.device_name().c_str(), ctx.driver_info().c_str(), frames);
   if (argc > 2 && std::string(argv[2]) == "precision") {
-    bench::print_precision_table(ctx, frames);
+    bench::print_precision_table(ctx, frames, [&](std::uint32_t n) { return plain_billiards_ms(ctx, n, frames); });
     return 0;
   }
 
@@ -370,6 +380,6 @@ int main(int argc, char** argv) {
   std::printf("| plain loop, same meshes and coverage, 2 passes + read-back | %zu | %.1f |\n", plain_triangles, plain);
   std::printf("| ratio curvlab/plain | | %.3f |\n", billiards_ms / plain);
 
-  bench::print_precision_table(ctx, frames);
+  bench::print_precision_table(ctx, frames, [&](std::uint32_t n) { return plain_billiards_ms(ctx, n, frames); });
   return 0;
 }

@@ -4,10 +4,18 @@
 
 #include "curvlab/renderer/context.hpp"
 
+#include <cstdint>
+#include <functional>
+
 namespace bench {
 
+// The plain loop's median frame time for the billiards frame (E3, native,
+// 1024² per eye) at a sample count (render_accuracy.cpp).
+using PlainFrameMs = std::function<double(std::uint32_t msaa)>;
+
 // Prints the precision table (residual RMS and max in px and arcsec, frame
-// time ratio to msaa 1), measuring frame times over `frames` frames.
-void print_precision_table(const curvlab::renderer::Context& ctx, int frames);
+// time ratio to msaa 1, the plain loop's beside it), measuring frame times
+// over `frames` frames.
+void print_precision_table(const curvlab::renderer::Context& ctx, int frames, const PlainFrameMs& plain_ms);
 
 }  // namespace bench
