@@ -156,15 +156,17 @@ StickFeature triangulate(const StickScene& scene, double fraction, const RingSig
   std::snprintf(name, sizeof name, "ring %+.2f", fraction);
   f.name = name;
   f.u_m = fraction * scene.stick.length_m;
-  f.left_px = left.px;
-  f.right_px = right.px;
-  f.rows = std::min(left.rows, right.rows);
+  // Both eyes' sightings at the same depth on the ring: the disparity of a
+  // point of the ring, not of two points at different depths.
   f.depth_radii = 0.5 * (left.depth_radii + right.depth_radii);
-  f.position_m = intersect(sight_line(rig.eyes[0], scene.width_px, scene.height_px, left.px),
-                           sight_line(rig.eyes[1], scene.width_px, scene.height_px, right.px));
-  f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - left.px);
+  f.left_px = left.at_depth(f.depth_radii);
+  f.right_px = right.at_depth(f.depth_radii);
+  f.rows = std::min(left.rows, right.rows);
+  f.position_m = intersect(sight_line(rig.eyes[0], scene.width_px, scene.height_px, f.left_px),
+                           sight_line(rig.eyes[1], scene.width_px, scene.height_px, f.right_px));
+  f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - f.left_px);
   f.residual_right_px =
-      glm::length(project_px(rig.eyes[1], scene.width_px, scene.height_px, f.position_m) - right.px);
+      glm::length(project_px(rig.eyes[1], scene.width_px, scene.height_px, f.position_m) - f.right_px);
   f.radius_seen_m = 0.5 * (radius_seen(rig.eyes[0], scene, left, f.position_m) +
                            radius_seen(rig.eyes[1], scene, right, f.position_m));
   return f;

@@ -93,6 +93,15 @@ struct RingSighting {
   // front of the centre line, in radii, the located point lies.
   double depth_radii = 0.785;
   double half_thickness_px = 0.0;  // the stick's, across the ring's window
+  // How far the ring's column moves per radius of depth (d column / d cos α,
+  // px): the ring's points nearer the eye lie further out along the stick's
+  // image when the stick is seen obliquely. With it the two eyes' sightings
+  // are compared at the same depth on the ring (at_depth), whichever rows
+  // each eye happened to average.
+  double px_per_depth_radius = 0.0;
+  [[nodiscard]] glm::dvec2 at_depth(double radii) const {
+    return px + glm::dvec2(px_per_depth_radius * (radii - depth_radii), 0.0);
+  }
 };
 Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m);
 // Whether the image shows a stick at all (one eye of a monocular view does not).
