@@ -5,9 +5,9 @@
 // matched image points are triangulated with the recorded eye poses and
 // projections (least-squares intersection of the two lines of sight in the
 // viewer's Euclidean frame — what a Euclidean-born visual system assumes,
-// geometry/perception.hpp), and a quadratic through the triangulated points
-// gives the stick's ends and middle, whose bow toward the viewer is the
-// estimate. Sign: positive bows toward the viewer (convex), as the
+// geometry/perception.hpp), and a curve through the triangulated points
+// (the offset from their chord a quadratic along the chord) gives the stick's
+// ends and middle, whose bow toward the viewer is the estimate. Sign: positive bows toward the viewer (convex), as the
 // perception model and the protocols count it.
 //
 // The perception model computes the same quantity from the scene's geometry;
@@ -78,7 +78,7 @@ struct StickEstimate {
   double estimated_bend_m = 0.0;
   double model_bend_m = 0.0;
   bool binocular = true;  // false: one eye showed no stick (no disparity, estimate 0)
-  double fit_rms_m = 0.0; // triangulated points against the quadratic
+  double fit_rms_m = 0.0; // triangulated points against the fitted curve
   std::vector<StickFeature> features;
 };
 
