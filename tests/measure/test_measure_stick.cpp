@@ -11,8 +11,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <vector>
 
 using curvlab::testing::fresh_dir;
 using curvlab::testing::run_cli;
@@ -70,6 +72,84 @@ TEST(MeasureStick, ReadsTheCurvedSpacesIllusionsFromThePixels) {
   }
   EXPECT_GT(h3["estimated_sagitta_m"].get<double>(), 0.002) << "H3 native: a straight stick looks convex";
   EXPECT_LT(s3["estimated_sagitta_m"].get<double>(), -0.002) << "S3 native: a straight stick looks concave";
+}
+
+// The proposed study's stick (1 m long, 1 m ahead, 0.2 m below the eyes; its
+// H3 at the table's radius, 0.94 m) in an H3 tourist view, as the runner draws
+// it for the image observer (1024 px per eye over 90°; every trial of a
+// condition from the same head pose, so one reading's error is every
+// trial's). The bends of ±2 cm are seen as ±7 mm, on the steep part of the
+// response model (SD 3.3 mm, cut at 6 mm), where a millimetre moves a
+// response proportion by about 0.1: the pixels must give the model's value
+// within 1 mm. (A sRGB centroid of the rings and a plain mean over each
+// eye's rows read the straight and the concave stick 1.2 and 1.3 mm more
+// concave than the model.)
+TEST(MeasureStick, AgreesWithTheModelInH3TouristViewsAtTheProposedStudysGeometry) {
+  const auto dir = fresh_dir("measure_h3_tourist");
+  const auto protocol = (dir / "h3.toml").string();
+  std::ofstream(protocol) << R"(
+[protocol]
+name = "h3-tourist-stick"
+version = "1.0.0"
+
+[randomization]
+seed = 3
+
+[space]
+kind = "H3"
+radius_m = "from_table"
+
+[table]
+edge_m = 1.0
+
+[viewing]
+preset = "tourist"
+ipd_m = 0.063
+
+[timeline]
+fixation_ms = 100
+stimulus_ms = 300
+response_ms = 2500
+iti_ms = 100
+
+[stimulus]
+stick_length_m = 1.0
+stick_radius_m = 0.012
+stick_distance_m = 1.0
+stick_height_m = -0.2
+stick_marks = "rings"
+show_table = false
+balls = 0
+
+[factors.bend]
+sets = "stimulus.stick_sagitta_m"
+levels = [-0.02, 0.0, 0.02]
+
+[judgement]
+type = "choice"
+prompt = "Convex, straight or concave?"
+options = [
+  { value = "convex", keys = ["1"] },
+  { value = "straight", keys = ["2"] },
+  { value = "concave", keys = ["3"] },
+]
+)";
+  const auto images = (dir / "images").string();
+  const auto r = run_cli("run " + protocol + " --participant P01 --db " + (dir / "h3.sqlite").string() +
+                         " --render onset --images " + images + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::vector<double> seen;  // the model's sagitta of each trial
+  for (int trial = 0; trial < 3; ++trial) {
+    const auto j = measure(images + " --trial " + std::to_string(trial));
+    ASSERT_TRUE(j.contains("estimated_sagitta_m")) << j.dump();
+    seen.push_back(j["model_sagitta_m"].get<double>());
+    EXPECT_NEAR(j["estimated_sagitta_m"].get<double>(), seen.back(), 0.001) << "trial " << trial << ": " << j.dump(2);
+  }
+  // All three bends were shown: about −7 mm, 0 and +7 mm as the model sees them.
+  std::sort(seen.begin(), seen.end());
+  EXPECT_LT(seen[0], -0.005);
+  EXPECT_NEAR(seen[1], 0.0, 1e-6);
+  EXPECT_GT(seen[2], 0.005);
 }
 
 TEST(MeasureStick, OneEyeGivesNoDisparityAndNoBend) {

@@ -36,29 +36,74 @@ Vec3 intersect(const geometry::SightLine& l1, const geometry::SightLine& l2) {
   return geometry::closest_approach(l1, l2).point;
 }
 
-// P(u) = A + B u + C u², least squares per coordinate.
-struct Quadratic {
-  Vec3 a{0.0}, b{0.0}, c{0.0};
-  [[nodiscard]] Vec3 at(double u) const { return a + u * (b + u * c); }
+// Least-squares polynomial coefficients (degree + 1 of them) of values v
+// against t: Gauss–Jordan on the normal equations.
+template <std::size_t N>
+std::array<double, N> fit_polynomial(const std::vector<double>& t, const std::vector<double>& v) {
+  std::array<std::array<double, N + 1>, N> a{};
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    std::array<double, N> basis{};
+    double power = 1.0;
+    for (auto& b : basis) b = power, power *= t[i];
+    for (std::size_t r = 0; r < N; ++r) {
+      for (std::size_t c = 0; c < N; ++c) a[r][c] += basis[r] * basis[c];
+      a[r][N] += basis[r] * v[i];
+    }
+  }
+  for (std::size_t k = 0; k < N; ++k)
+    for (std::size_t r = 0; r < N; ++r) {
+      if (r == k || a[k][k] == 0.0) continue;
+      const double q = a[r][k] / a[k][k];
+      for (std::size_t c = k; c <= N; ++c) a[r][c] -= q * a[k][c];
+    }
+  std::array<double, N> out{};
+  for (std::size_t k = 0; k < N; ++k) out[k] = a[k][k] != 0.0 ? a[k][N] / a[k][k] : 0.0;
+  return out;
+}
+
+template <std::size_t N>
+double polynomial_at(const std::array<double, N>& c, double t) {
+  double v = 0.0;
+  for (std::size_t k = N; k-- > 0;) v = v * t + c[k];
+  return v;
+}
+
+// The perceived stick as a curve read against its chord: the position along
+// the chord as a cubic in the position along the stick, u, and the offset
+// from the chord as a quadratic in the position along the chord. A bow is a
+// shape in space, and a quadratic in u would read it through how evenly the
+// rings are seen spaced: in a curved space's tourist view they are not (H3
+// crowds the far ends together), and the quadratic's ends, extrapolated
+// past the outer rings, overstate the bow by several per cent. In E3 both
+// readings are exact.
+struct StickCurve {
+  Vec3 origin{0.0}, chord{1.0, 0.0, 0.0};
+  std::array<double, 4> along{};                 // chord coordinate (m) against u (m)
+  std::array<std::array<double, 3>, 3> offset{};  // per nose-frame axis, against the chord coordinate
+  [[nodiscard]] Vec3 at(double u) const {
+    const double s = polynomial_at(along, u);
+    Vec3 p = origin + s * chord;
+    for (int k = 0; k < 3; ++k) p[k] += polynomial_at(offset[static_cast<std::size_t>(k)], s);
+    return p;
+  }
 };
 
-Quadratic fit_quadratic(const std::vector<double>& u, const std::vector<Vec3>& p) {
-  glm::dmat3 n(0.0);
-  glm::dmat3 rhs(0.0);  // columns: x, y, z right-hand sides
-  for (std::size_t i = 0; i < u.size(); ++i) {
-    const glm::dvec3 basis(1.0, u[i], u[i] * u[i]);
-    n += glm::outerProduct(basis, basis);
-    for (int k = 0; k < 3; ++k) rhs[k] += basis * p[i][k];
+StickCurve fit_curve(const std::vector<double>& u, const std::vector<Vec3>& p, const Vec3& chord) {
+  StickCurve c;
+  c.chord = chord;
+  for (const auto& q : p) c.origin += q;
+  c.origin /= static_cast<double>(p.size());
+  std::vector<double> s;
+  std::array<std::vector<double>, 3> off;
+  for (const auto& q : p) {
+    const Vec3 d = q - c.origin;
+    s.push_back(glm::dot(d, c.chord));
+    const Vec3 o = d - s.back() * c.chord;
+    for (int k = 0; k < 3; ++k) off[static_cast<std::size_t>(k)].push_back(o[k]);
   }
-  const glm::dmat3 inv = glm::inverse(n);
-  Quadratic q;
-  for (int k = 0; k < 3; ++k) {
-    const glm::dvec3 c = inv * rhs[k];
-    q.a[k] = c[0];
-    q.b[k] = c[1];
-    q.c[k] = c[2];
-  }
-  return q;
+  c.along = fit_polynomial<4>(u, s);
+  for (std::size_t k = 0; k < 3; ++k) c.offset[k] = fit_polynomial<3>(s, off[k]);
+  return c;
 }
 
 nlohmann::ordered_json matrix_json(const glm::dmat4& m) {
@@ -156,22 +201,24 @@ StickFeature triangulate(const StickScene& scene, double fraction, const RingSig
   std::snprintf(name, sizeof name, "ring %+.2f", fraction);
   f.name = name;
   f.u_m = fraction * scene.stick.length_m;
-  f.left_px = left.px;
-  f.right_px = right.px;
-  f.rows = std::min(left.rows, right.rows);
+  // Both eyes' sightings at the same depth on the ring: the disparity of a
+  // point of the ring, not of two points at different depths.
   f.depth_radii = 0.5 * (left.depth_radii + right.depth_radii);
-  f.position_m = intersect(sight_line(rig.eyes[0], scene.width_px, scene.height_px, left.px),
-                           sight_line(rig.eyes[1], scene.width_px, scene.height_px, right.px));
-  f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - left.px);
+  f.left_px = left.at_depth(f.depth_radii);
+  f.right_px = right.at_depth(f.depth_radii);
+  f.rows = std::min(left.rows, right.rows);
+  f.position_m = intersect(sight_line(rig.eyes[0], scene.width_px, scene.height_px, f.left_px),
+                           sight_line(rig.eyes[1], scene.width_px, scene.height_px, f.right_px));
+  f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - f.left_px);
   f.residual_right_px =
-      glm::length(project_px(rig.eyes[1], scene.width_px, scene.height_px, f.position_m) - right.px);
+      glm::length(project_px(rig.eyes[1], scene.width_px, scene.height_px, f.position_m) - f.right_px);
   f.radius_seen_m = 0.5 * (radius_seen(rig.eyes[0], scene, left, f.position_m) +
                            radius_seen(rig.eyes[1], scene, right, f.position_m));
   return f;
 }
 
-// The quadratic through the rings' centre-line points gives the perceived
-// ends and middle; their bow is the estimate.
+// The curve through the rings' centre-line points (StickCurve) gives the
+// perceived ends and middle; their bow is the estimate.
 void fit_stick(const StickScene& scene, StickEstimate& e) {
   const Vec3 cyclops = 0.5 * (scene.rig.eyes[0].position_m + scene.rig.eyes[1].position_m);
   const Vec3 chord = glm::normalize(e.features.back().position_m - e.features.front().position_m);
@@ -182,7 +229,7 @@ void fit_stick(const StickScene& scene, StickEstimate& e) {
     u.push_back(f.u_m);
     p.push_back(f.position_m);
   }
-  const Quadratic q = fit_quadratic(u, p);
+  const StickCurve q = fit_curve(u, p, chord);
   double sq = 0.0;
   for (std::size_t i = 0; i < u.size(); ++i) sq += glm::dot(q.at(u[i]) - p[i], q.at(u[i]) - p[i]);
   e.fit_rms_m = std::sqrt(sq / static_cast<double>(u.size()));

@@ -5,9 +5,9 @@
 // matched image points are triangulated with the recorded eye poses and
 // projections (least-squares intersection of the two lines of sight in the
 // viewer's Euclidean frame — what a Euclidean-born visual system assumes,
-// geometry/perception.hpp), and a quadratic through the triangulated points
-// gives the stick's ends and middle, whose bow toward the viewer is the
-// estimate. Sign: positive bows toward the viewer (convex), as the
+// geometry/perception.hpp), and a curve through the triangulated points
+// (the offset from their chord a quadratic along the chord) gives the stick's
+// ends and middle, whose bow toward the viewer is the estimate. Sign: positive bows toward the viewer (convex), as the
 // perception model and the protocols count it.
 //
 // The perception model computes the same quantity from the scene's geometry;
@@ -78,7 +78,7 @@ struct StickEstimate {
   double estimated_bend_m = 0.0;
   double model_bend_m = 0.0;
   bool binocular = true;  // false: one eye showed no stick (no disparity, estimate 0)
-  double fit_rms_m = 0.0; // triangulated points against the quadratic
+  double fit_rms_m = 0.0; // triangulated points against the fitted curve
   std::vector<StickFeature> features;
 };
 
@@ -93,6 +93,15 @@ struct RingSighting {
   // front of the centre line, in radii, the located point lies.
   double depth_radii = 0.785;
   double half_thickness_px = 0.0;  // the stick's, across the ring's window
+  // How far the ring's column moves per radius of depth (d column / d cos α,
+  // px): the ring's points nearer the eye lie further out along the stick's
+  // image when the stick is seen obliquely. With it the two eyes' sightings
+  // are compared at the same depth on the ring (at_depth), whichever rows
+  // each eye happened to average.
+  double px_per_depth_radius = 0.0;
+  [[nodiscard]] glm::dvec2 at_depth(double radii) const {
+    return px + glm::dvec2(px_per_depth_radius * (radii - depth_radii), 0.0);
+  }
 };
 Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m);
 // Whether the image shows a stick at all (one eye of a monocular view does not).
