@@ -64,6 +64,46 @@ TEST(Predict, TheProposedStudyFollowsThePerceptionModel) {
   EXPECT_TRUE(view_power);
 }
 
+TEST(Predict, ConditionsSeenAlongDivergingSightLinesAreNamed) {
+  // The proposed study's S3 radius comes from its 1 m table edge
+  // (ρ = 0.637 m), so the stick 1 m ahead lies just beyond the quarter
+  // circumference ρπ/2 = 1.0 m: in the tourist view the eyes' lines of sight
+  // to it diverge. Those conditions, and only those, carry the count and a
+  // note; native and monocular views and the other spaces never diverge.
+  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/proposed_study.toml");
+  ASSERT_TRUE(loaded.ok());
+  rn::PredictOptions o;
+  o.participants = 2;
+  o.simulations = 2;
+  auto r = rn::predict(*loaded.protocol, o);
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  int flagged = 0;
+  for (const auto& c : r.value().conditions) {
+    std::string space, view;
+    for (const auto& [f, l] : c.levels) {
+      if (f == "space") space = l;
+      if (f == "view") view = l;
+    }
+    if (space == "S3" && view == "tourist" && c.judged == "stick") {
+      EXPECT_EQ(c.diverging_points, 3);
+      EXPECT_EQ(c.judged_points, 3);
+    }
+    if (space != "S3" || view != "tourist") {
+      EXPECT_EQ(c.diverging_points, 0) << space << " " << view;
+    }
+    flagged += c.diverging_points > 0 ? 1 : 0;
+  }
+  EXPECT_GE(flagged, 3);
+  int notes = 0;
+  for (const auto& n : r.value().notes)
+    if (n.find("diverging") != std::string::npos) {
+      EXPECT_NE(n.find("space=S3"), std::string::npos) << n;
+      EXPECT_NE(n.find("view=tourist"), std::string::npos) << n;
+      ++notes;
+    }
+  EXPECT_EQ(notes, flagged);
+}
+
 // Levitt's convergence points: 1-up/n-down where P^n = 1/2, and the
 // mirror image for m-up/1-down.
 TEST(Predict, StaircaseTargetsAreLevittsConvergencePoints) {

@@ -469,6 +469,7 @@ void predict_command(const PredictArgs& a) {
     cj["judged"] = c.judged;
     cj["trials_per_participant"] = c.trials_per_participant;
     cj["perceived_sagitta_m"] = c.perceived_m;
+    cj["diverging_sight_lines"] = c.diverging_points;
     Json props;
     for (std::size_t k = 0; k < c.options.size(); ++k) props[c.options[k]] = c.proportions[k];
     cj["proportions"] = props;

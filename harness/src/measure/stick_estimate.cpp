@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 namespace curvlab::harness::measure {
 namespace {
@@ -217,6 +218,28 @@ StickFeature triangulate(const StickScene& scene, double fraction, const RingSig
   return f;
 }
 
+// How much deeper than wide a small offset of the stick looks at perceived
+// distance D from the eyes, from the recorded space (S, C: sin and cos of
+// d/ρ times ρ and 1 in S3, sinh and cosh in H3, d and 1 in E3). Tourist:
+// the eyes converge as if at D = S(d)/C(d), so a step toward them looks
+// 1/C(d)² as long and a step across 1/C(d): ratio 1/C(d). Native: distances
+// from the nose are kept and widths scaled by d/S(d): ratio S(d)/d. Where D
+// cannot be inverted (S3 past the quarter circumference) the ratio is 1.
+double depth_to_width(const StickScene& scene, double perceived_m) {
+  const double rho = scene.space.radius_m;
+  const double x = perceived_m / rho;
+  switch (scene.space.kind) {
+    case geometry::SpaceKind::E3: return 1.0;
+    case geometry::SpaceKind::H3:
+      if (scene.mode == geometry::ViewMode::tourist) return x < 1.0 ? std::sqrt(1.0 - x * x) : 1.0;
+      return x > 0.0 ? std::sinh(x) / x : 1.0;
+    case geometry::SpaceKind::S3:
+      if (scene.mode == geometry::ViewMode::tourist) return x > 0.0 ? std::sqrt(1.0 + x * x) : 1.0;
+      return x > 0.0 && x < std::numbers::pi ? std::sin(x) / x : 1.0;
+  }
+  return 1.0;
+}
+
 // The curve through the rings' centre-line points (StickCurve) gives the
 // perceived ends and middle; their bow is the estimate.
 void fit_stick(const StickScene& scene, StickEstimate& e) {
@@ -225,7 +248,8 @@ void fit_stick(const StickScene& scene, StickEstimate& e) {
   std::vector<double> u;
   std::vector<Vec3> p;
   for (auto& f : e.features) {
-    f.position_m = onto_centre_line(f.position_m, cyclops, chord, f.depth_radii * f.radius_seen_m);
+    const double stretch = depth_to_width(scene, glm::length(f.position_m - cyclops));
+    f.position_m = onto_centre_line(f.position_m, cyclops, chord, f.depth_radii * f.radius_seen_m * stretch);
     u.push_back(f.u_m);
     p.push_back(f.position_m);
   }

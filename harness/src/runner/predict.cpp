@@ -206,6 +206,10 @@ Result<ConditionPrediction> predict_condition(const protocol::Protocol& p, const
   c.levels = t.levels;
   c.judged = judged_name;
   c.perceived_m = physical ? physical_sagitta_m(t.settings) : perceived_sagitta_m(world, t.settings, placement, head);
+  if (!physical) {
+    c.diverging_points = diverging_sight_lines(world, t.settings, placement, head);
+    c.judged_points = judged(t.settings) == Judged::stick ? 3 : world.table.sides + 1;
+  }
   for (const auto& b : p.blocks)
     if (b.name == t.block)
       for (const auto& opt : b.judgement.options) c.options.push_back(opt.value);
@@ -239,6 +243,20 @@ Result<Done> collect_conditions(const protocol::Protocol& p, const PredictOption
       auto c = predict_condition(p, t, judged_name, physical);
       if (!c) return c.error();
       it = index.emplace(key, out.conditions.size()).first;
+      if (c.value().diverging_points > 0) {
+        std::string label;
+        for (const auto& [f, l] : c.value().levels) label += (label.empty() ? "" : " ") + f + "=" + l;
+        char text[400];
+        std::snprintf(text, sizeof text,
+                      "%s (%s): a tourist sees %d of its %d judged points only along diverging or parallel "
+                      "lines of sight (S3, beyond the quarter circumference); the model meets them behind the "
+                      "eyes, so s = %+.3g m is ill-conditioned (where nearly parallel lines meet, a few hundredths "
+                      "of a pixel of disparity can change its sign). Place the stimulus nearer than the quarter "
+                      "circumference for this view",
+                      label.c_str(), c.value().judged.c_str(), c.value().diverging_points, c.value().judged_points,
+                      c.value().perceived_m);
+        out.notes.emplace_back(text);
+      }
       out.conditions.push_back(std::move(c).value());
     }
     ++out.conditions[it->second].trials_per_participant;

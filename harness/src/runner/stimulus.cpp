@@ -190,6 +190,31 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
   return glm::dot(centre - centroid, normal);
 }
 
+int diverging_sight_lines(const World& world, const Settings& s, const Placement& placement,
+                          const Isometry& head) {
+  if (view_mode(s) != geometry::ViewMode::tourist) return 0;
+  const auto& space = world.space;
+  std::vector<Point> points;
+  if (judged(s) == Judged::stick) {
+    const double half = placement.stick.length_m / 2.0;
+    for (const double u : {-half, 0.0, half})
+      points.push_back(placement.stick.centre_point(space, placement.stick_pose, u));
+  } else {
+    for (int e = 0; e < world.table.sides; ++e)
+      points.push_back(geometry::table_edge_frame(space, world.table, e, world.table.edge_m / 2.0).m *
+                       geometry::origin(space));
+    points.push_back(geometry::translation_m(space, Vec3(0.0, placement.table_sagitta_m, 0.0)).m *
+                     geometry::origin(space));
+  }
+  const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
+  int n = 0;
+  for (const Point& q : points) {
+    const auto seen = geometry::perceive_point(space, head, eyes, geometry::ViewMode::tourist, q);
+    n += seen.diverging || seen.parallel ? 1 : 0;
+  }
+  return n;
+}
+
 renderer::StickMarks stick_marks(const Settings& s) {
   return s.stimulus.stick_marks == protocol::StickMarks::rings ? renderer::StickMarks::rings
                                                                : renderer::StickMarks::none;

@@ -38,6 +38,11 @@ struct ConditionPrediction {
   std::string judged;                                       // stick or table
   std::int64_t trials_per_participant = 0;
   double perceived_m = 0.0;  // the perception model's signed sagitta
+  // Judged points a tourist sees only along diverging or parallel lines of
+  // sight (stimulus.hpp, diverging_sight_lines): perceived_m is then
+  // ill-conditioned, and a note says so.
+  int diverging_points = 0;
+  int judged_points = 0;
   std::vector<std::string> options;
   std::vector<double> proportions;  // expected, per option
 };

@@ -72,6 +72,15 @@ std::string view_name(const protocol::Settings& s);
 // One eye: 0 (no disparity, DESIGN.md §5).
 double perceived_sagitta_m(const World& world, const protocol::Settings& s,
                            const Placement& placement, const geometry::Isometry& head);
+// How many of the points the judgement rests on (the stick's ends and
+// middle; the table's edge midpoints and centre) a tourist's two lines of
+// sight reach only by diverging or running parallel: in S3 beyond the
+// quarter circumference ρπ/2 the eyes would have to turn outward, and the
+// model meets the lines behind the eyes (perception.hpp), where a few
+// hundredths of a pixel of disparity move a point by metres. 0 in native and
+// monocular views.
+int diverging_sight_lines(const World& world, const protocol::Settings& s, const Placement& placement,
+                          const geometry::Isometry& head);
 // The same for the physical stimulus alone (the null observer).
 double physical_sagitta_m(const protocol::Settings& s);
 // The renderer's marks for the protocol's stimulus.stick_marks.
