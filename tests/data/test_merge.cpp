@@ -119,6 +119,13 @@ void run_until_first_trial_then_kill(const std::string& participant, const fs::p
     _exit(127);
   }
   int status = 0;
+  // No reader until the session has put the file in write-ahead-log mode:
+  // before that a reader's lock can hold the writer up past its busy timeout
+  // on a loaded machine, and the session would stop before it began.
+  for (int i = 0; i < 3000 && !fs::exists(db.string() + "-wal"); ++i) {
+    if (waitpid(pid, &status, WNOHANG) != 0) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   for (int i = 0; i < 3000 && completed_trials(db, participant) < 1; ++i) {
     if (waitpid(pid, &status, WNOHANG) != 0) return;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
