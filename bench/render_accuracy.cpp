@@ -229,8 +229,10 @@ double plain_loop_ms(const Context& ctx, const PlainGeometry& g, std::uint32_t p
 }
 
 // The plain loop's frame time for the billiards frame (E3, native, 1024²)
-// at a sample count: the same meshes and coverage as curvlab's frame.
-double plain_billiards_ms(const Context& ctx, std::uint32_t msaa, int frames) {
+// at a sample count: the same meshes and coverage as curvlab's frame, or
+// nothing drawn at all (`empty`: clearing, resolving and reading back).
+double plain_billiards_ms(const Context& ctx, std::uint32_t msaa, bool empty, int frames) {
+  if (empty) return plain_loop_ms(ctx, PlainGeometry{}, 1024, msaa, frames, [](int) {});
   const StimulusScene s = make(SpaceKind::E3, SceneKind::billiards);
   Renderer r(ctx, RendererOptions{.msaa = msaa});
   OffscreenTarget t(ctx, 1024, 1024);
@@ -250,7 +252,8 @@ int main(int argc, char** argv) {
   const Context& ctx = std::get<Context>(created);
   std::printf("device: %s (%s); median of %d frames\n\n", ctx.device_name().c_str(), ctx.driver_info().c_str(), frames);
   if (argc > 2 && std::string(argv[2]) == "precision") {
-    bench::print_precision_table(ctx, frames, [&](std::uint32_t n) { return plain_billiards_ms(ctx, n, frames); });
+    bench::print_precision_table(
+        ctx, frames, [&](std::uint32_t n, bool empty) { return plain_billiards_ms(ctx, n, empty, frames); });
     return 0;
   }
 
@@ -380,6 +383,7 @@ int main(int argc, char** argv) {
   std::printf("| plain loop, same meshes and coverage, 2 passes + read-back | %zu | %.1f |\n", plain_triangles, plain);
   std::printf("| ratio curvlab/plain | | %.3f |\n", billiards_ms / plain);
 
-  bench::print_precision_table(ctx, frames, [&](std::uint32_t n) { return plain_billiards_ms(ctx, n, frames); });
+  bench::print_precision_table(
+        ctx, frames, [&](std::uint32_t n, bool empty) { return plain_billiards_ms(ctx, n, empty, frames); });
   return 0;
 }

@@ -359,19 +359,22 @@ void print_precision_table(const Context& ctx, int frames, const PlainFrameMs& p
   std::printf("   each feature's motion against the analytic projection; frame time: billiards, E3 native\n\n");
   std::printf("| msaa | samples used | residual RMS px | max px | RMS arcsec | max arcsec | ends RMS/max px | "
               "transition RMS/max px | middle RMS/max px | frame ms | ratio to msaa 1 | plain loop ms | "
-              "plain ratio to msaa 1 |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "plain ratio to msaa 1 | nothing drawn ms | nothing drawn ratio |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   const std::vector<std::uint32_t> counts{1, 2, 4, 8};
   const std::vector<double> ms = frame_times(ctx, counts, frames);
-  std::vector<double> plain;
-  for (const auto n : counts) plain.push_back(plain_ms(supported_msaa(ctx, n)));
+  std::vector<double> plain, empty;
+  for (const auto n : counts) {
+    plain.push_back(plain_ms(supported_msaa(ctx, n), false));
+    empty.push_back(plain_ms(supported_msaa(ctx, n), true));
+  }
   for (std::size_t k = 0; k < counts.size(); ++k) {
     const SweepResiduals s = sweep(ctx, counts[k]);
     const Residuals& r = s.all;
-    std::printf("| %u | %u | %.4f | %.4f | %.2f | %.2f | %.3f/%.3f | %.3f/%.3f | %.3f/%.3f | %.1f | %.2f | %.1f | %.2f |\n",
+    std::printf("| %u | %u | %.4f | %.4f | %.2f | %.2f | %.3f/%.3f | %.3f/%.3f | %.3f/%.3f | %.1f | %.2f | %.1f | %.2f | %.1f | %.2f |\n",
                 counts[k], supported_msaa(ctx, counts[k]), r.rms(), r.max_abs(), r.rms() * arcsec_per_px,
                 r.max_abs() * arcsec_per_px, s.ends.rms(), s.ends.max_abs(), s.transition.rms(),
-                s.transition.max_abs(), s.middle.rms(), s.middle.max_abs(), ms[k], ms[k] / ms[0], plain[k], plain[k] / plain[0]);
+                s.transition.max_abs(), s.middle.rms(), s.middle.max_abs(), ms[k], ms[k] / ms[0], plain[k], plain[k] / plain[0], empty[k], empty[k] / empty[0]);
   }
 }
 
