@@ -81,6 +81,7 @@ class OperatorWindow final : public runner::OperatorConsole {
     glfwSetWindowUserPointer(window_, this);
     glfwSetKeyCallback(window_, &OperatorWindow::on_key);
     glfwSetCharCallback(window_, &OperatorWindow::on_char);
+    glfwSetWindowCloseCallback(window_, &OperatorWindow::on_close);
     glfwMakeContextCurrent(nullptr);
     canvas_.width = kWidth;
     canvas_.height = kHeight;
@@ -144,6 +145,12 @@ class OperatorWindow final : public runner::OperatorConsole {
     if (action != GLFW_PRESS) return;
     static_cast<OperatorWindow*>(glfwGetWindowUserPointer(w))->key(key);
   }
+  // The window's close button ends the session as Q does (it stays
+  // resumable); the window itself stays until the session has ended.
+  static void on_close(GLFWwindow* w) {
+    glfwSetWindowShouldClose(w, GLFW_FALSE);
+    static_cast<OperatorWindow*>(glfwGetWindowUserPointer(w))->close_requested();
+  }
   static void on_char(GLFWwindow* w, unsigned int codepoint) {
     static_cast<OperatorWindow*>(glfwGetWindowUserPointer(w))->character(codepoint);
   }
@@ -175,6 +182,12 @@ class OperatorWindow final : public runner::OperatorConsole {
       case GLFW_KEY_N: note_.emplace(); skip_char_ = true; break;
       default: break;
     }
+  }
+
+  void close_requested() {
+    const std::lock_guard lock(mutex_);
+    note_.reset();
+    add(OperatorActionKind::end);
   }
 
   void character(unsigned int codepoint) {
