@@ -146,9 +146,11 @@ TEST(XrOperator, LateFramesAreCountedPerFrameAndPerTrial) {
   const auto db = (dir / "xr.db").string();
   // Three missed refreshes, and 80 frames (0.9 s, longer than a trial's
   // 0.6 s cycle) the runtime says not to render: some trial's onset is
-  // among them.
-  std::set<std::int64_t> late = {120, 330, 420};
-  std::string spec = "120,330,420";
+  // among them. All within the first 300 frames: the session lasts a fixed
+  // time, so on a loaded machine, where lavapipe misses real refreshes too,
+  // it has fewer frames (about 450 when idle, 355 seen under load).
+  std::set<std::int64_t> late = {120, 160, 300};
+  std::string spec = "120,160,300";
   for (int k = 200; k < 280; ++k) {
     late.insert(k);
     spec.append(",").append(std::to_string(k)).append("!");
@@ -178,7 +180,7 @@ TEST(XrOperator, LateFramesAreCountedPerFrameAndPerTrial) {
   }
   for (const auto k : late) EXPECT_EQ(marked.count(k), 1u) << "frame " << k << " is not marked late";
   // A missed refresh shows as a display time (skipped + 1) periods after the last.
-  for (const int k : {120, 330, 420}) {
+  for (const int k : {120, 160, 300}) {
     const auto skip = query(db, "SELECT f.predicted_display_ns - p.predicted_display_ns, f.display_period_ns, "
                                 "f.dropped_frames FROM frames f JOIN frames p ON p.frame_index = f.frame_index - 1 "
                                 "WHERE f.frame_index = " + std::to_string(k));
