@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config ccache git
   libglm-dev libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers
   glslang-dev glslang-tools spirv-tools
-  libsqlite3-dev sqlite3 nettle-dev libhidapi-dev libglfw3-dev libopenxr-dev libopenxr-loader1
+  libsqlite3-dev sqlite3 nettle-dev libhidapi-dev libglfw3-dev libx11-dev libopenxr-dev libopenxr-loader1
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libpng-dev libstb-dev
   fonts-dejavu-core xvfb xauth
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -11,8 +11,13 @@
 
 #include "curvlab/renderer/image_io.hpp"
 
+#include <X11/Xlib.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
 
 #include <cstdlib>
 #include <filesystem>
@@ -216,6 +221,76 @@ TEST(XrOperator, LateFramesAreCountedPerFrameAndPerTrial) {
                                          "AND f.predicted_display_ns = t.onset_ns WHERE f.late = 1");
   EXPECT_EQ(std::to_string(onsets_late), expected_onsets[0][0]);
   EXPECT_GE(onsets_late, 1);
+}
+
+namespace {
+
+// What a window manager sends when its close button is pressed: the
+// WM_DELETE_WINDOW client message, to the top-level window titled `title`
+// once it appears and has been up for `after`. False when no such window
+// showed within `wait`.
+bool press_close_button(const std::string& display, const std::string& title, std::chrono::milliseconds after,
+                        std::chrono::seconds wait) {
+  Display* dpy = XOpenDisplay(display.c_str());
+  if (dpy == nullptr) return false;
+  const auto give_up = std::chrono::steady_clock::now() + wait;
+  Window found = 0;
+  while (found == 0 && std::chrono::steady_clock::now() < give_up) {
+    Window root_return = 0, parent = 0, *children = nullptr;
+    unsigned int n = 0;
+    if (XQueryTree(dpy, DefaultRootWindow(dpy), &root_return, &parent, &children, &n) != 0) {
+      for (unsigned int i = 0; i < n && found == 0; ++i) {
+        char* name = nullptr;
+        if (XFetchName(dpy, children[i], &name) != 0 && name != nullptr) {
+          if (title == name) found = children[i];
+          XFree(name);
+        }
+      }
+      if (children != nullptr) XFree(children);
+    }
+    if (found == 0) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (found != 0) {
+    std::this_thread::sleep_for(after);
+    XEvent ev{};
+    ev.xclient.type = ClientMessage;
+    ev.xclient.window = found;
+    ev.xclient.message_type = XInternAtom(dpy, "WM_PROTOCOLS", False);
+    ev.xclient.format = 32;
+    ev.xclient.data.l[0] = static_cast<long>(XInternAtom(dpy, "WM_DELETE_WINDOW", False));
+    ev.xclient.data.l[1] = CurrentTime;
+    XSendEvent(dpy, found, False, NoEventMask, &ev);
+    XFlush(dpy);
+  }
+  XCloseDisplay(dpy);
+  return found != 0;
+}
+
+}  // namespace
+
+// The window's close button ends the session as Q does: interrupted,
+// resumable, and a resume completes it.
+TEST(XrOperator, TheWindowsCloseButtonEndsTheSessionResumably) {
+  curvlab::test::XServer x;
+  if (!x.available()) GTEST_SKIP() << x.reason();
+  const auto dir = fresh_dir("xr_operator_close");
+  const auto db = (dir / "xr.db").string();
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses}});
+  std::atomic<bool> pressed{false};
+  std::thread closer([&] {
+    pressed = press_close_button(x.display(), "curvlab operator", std::chrono::milliseconds(1500),
+                                 std::chrono::seconds(60));
+  });
+  const auto r = run_cli("run " + kProtocol + " --participant X01 --backend xr --db " + db + " --json");
+  closer.join();
+  ASSERT_TRUE(pressed) << "no operator window appeared\n" << r.out;
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("curvlab resume"), std::string::npos) << r.out;
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  EXPECT_EQ(query(db, "SELECT COUNT(*) FROM events WHERE kind = 'operator_action' AND "
+                      "json_extract(detail, '$.action') = 'end'")[0][0],
+            "1");
+  EXPECT_LT(std::stoi(query(db, "SELECT COUNT(*) FROM trials WHERE status = 'completed'")[0][0]), 8);
 }
 
 // The scripted operator in a headless run reports file:line for a bad line
