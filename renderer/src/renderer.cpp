@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <numeric>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
@@ -242,11 +241,11 @@ struct Renderer::Impl {
     if (auto it = pipelines.find(key); it != pipelines.end()) return it->second;
     const bool tube = shading == Shading::tube;
     SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
-                        static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
-                        glm::vec3(palette::text_paper),
-                        {glm::vec3(palette::stick_butt), glm::vec3(palette::stick_shaft),
-                         glm::vec3(palette::stick_tip), glm::vec3(palette::stick_ring)},
-                        {}, static_cast<float>(kStickRingHalfWidthM)};
+                  static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
+                  glm::vec3(palette::text_paper),
+                  {glm::vec3(palette::stick_butt), glm::vec3(palette::stick_shaft),
+                   glm::vec3(palette::stick_tip), glm::vec3(palette::stick_ring)},
+                  {}, static_cast<float>(kStickRingHalfWidthM)};
     for (std::size_t i = 0; i < spec.ring_fractions.size(); ++i)
       spec.ring_fractions[i] = static_cast<float>(kStickRingFractions[i]);
     std::vector<vk::SpecializationMapEntry> entries{{0, offsetof(SpecData, native_view), 4},
@@ -618,30 +617,30 @@ FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
                           static_cast<std::uint32_t>(e * kViewStride));
     cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1, *r.blank.set, {});
     vk::Pipeline bound{};
-    // Tubes last: they blend over what is behind them.
-    std::vector<std::size_t> order(vp.draws.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::stable_partition(order.begin(), order.end(),
-                          [&](std::size_t i) { return draw_meshes[i]->shading != Shading::tube; });
-    for (const std::size_t i : order) {
-      const PlannedDraw& d = vp.draws[i];
-      GpuMesh& m = *draw_meshes[i];
-      if (m.index_count == 0) continue;
-      const auto& pipe = r.pipeline(frame.settings.projection, k, d.hemisphere, m.shading, m.topology);
-      if (*pipe != bound) {
-        cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipe);
-        bound = *pipe;
+    // Two passes over the draws: tubes last, as they blend over what is
+    // behind them.
+    for (const bool tubes : {false, true}) {
+      for (std::size_t i = 0; i < vp.draws.size(); ++i) {
+        if ((draw_meshes[i]->shading == Shading::tube) != tubes) continue;
+        const PlannedDraw& d = vp.draws[i];
+        GpuMesh& m = *draw_meshes[i];
+        if (m.index_count == 0) continue;
+        const auto& pipe = r.pipeline(frame.settings.projection, k, d.hemisphere, m.shading, m.topology);
+        if (*pipe != bound) {
+          cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipe);
+          bound = *pipe;
+        }
+        if (draw_textures[i] != nullptr)
+          cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1,
+                                *draw_textures[i]->set, {});
+        const DrawBlock db{to_float(d.model_view), scene.objects()[d.object].tint};
+        cb.pushConstants<DrawBlock>(*r.pipeline_layout, vk::ShaderStageFlagBits::eVertex, 0, db);
+        cb.bindVertexBuffers(0, *m.vertices.buffer, vk::DeviceSize{0});
+        cb.bindIndexBuffer(*m.indices.buffer, 0, vk::IndexType::eUint32);
+        cb.drawIndexed(m.index_count, 1, 0, 0, 0);
+        ++stats.draws;
+        (m.topology == Topology::triangles ? stats.triangles : stats.lines) += m.primitives;
       }
-      if (draw_textures[i] != nullptr)
-        cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1,
-                              *draw_textures[i]->set, {});
-      const DrawBlock db{to_float(d.model_view), scene.objects()[d.object].tint};
-      cb.pushConstants<DrawBlock>(*r.pipeline_layout, vk::ShaderStageFlagBits::eVertex, 0, db);
-      cb.bindVertexBuffers(0, *m.vertices.buffer, vk::DeviceSize{0});
-      cb.bindIndexBuffer(*m.indices.buffer, 0, vk::IndexType::eUint32);
-      cb.drawIndexed(m.index_count, 1, 0, 0, 0);
-      ++stats.draws;
-      (m.topology == Topology::triangles ? stats.triangles : stats.lines) += m.primitives;
     }
     cb.endRendering();
     transition(cb, img.image, vk::ImageAspectFlagBits::eColor,

@@ -11,6 +11,35 @@
 
 namespace rn = curvlab::harness::runner;
 
+namespace {
+
+// The level a condition sets for a factor ("" if none).
+std::string level(const rn::ConditionPrediction& c, const std::string& factor) {
+  for (const auto& [n, l] : c.levels)
+    if (n == factor) return l;
+  return std::string();
+}
+
+// The proposed study predicted for `participants` over `simulations` studies.
+rn::Prediction predict_proposed_study(int participants, int simulations) {
+  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/proposed_study.toml");
+  if (!loaded.ok()) {
+    ADD_FAILURE() << "protocols/proposed_study.toml does not load";
+    return {};
+  }
+  rn::PredictOptions o;
+  o.participants = participants;
+  o.simulations = simulations;
+  auto r = rn::predict(*loaded.protocol, o);
+  if (!r.has_value()) {
+    ADD_FAILURE() << r.error().message;
+    return {};
+  }
+  return std::move(r).value();
+}
+
+}  // namespace
+
 TEST(Predict, StudentTMatchesTables) {
   // Two-sided critical values (e.g. Abramowitz & Stegun, table 26.10).
   EXPECT_NEAR(rn::student_t_two_sided_p(2.228138852, 10.0), 0.05, 1e-8);
@@ -21,19 +50,7 @@ TEST(Predict, StudentTMatchesTables) {
 }
 
 TEST(Predict, TheProposedStudyFollowsThePerceptionModel) {
-  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/proposed_study.toml");
-  ASSERT_TRUE(loaded.ok());
-  rn::PredictOptions o;
-  o.participants = 12;
-  o.simulations = 100;
-  auto r = rn::predict(*loaded.protocol, o);
-  ASSERT_TRUE(r.has_value()) << r.error().message;
-  const auto& pred = r.value();
-  auto level = [](const rn::ConditionPrediction& c, const std::string& f) {
-    for (const auto& [n, l] : c.levels)
-      if (n == f) return l;
-    return std::string();
-  };
+  const rn::Prediction pred = predict_proposed_study(12, 100);
   int checked = 0;
   for (const auto& c : pred.conditions) {
     if (c.judged != "stick" || level(c, "stick_bend") != "0") continue;
@@ -70,20 +87,10 @@ TEST(Predict, ConditionsSeenAlongDivergingSightLinesAreNamed) {
   // circumference ρπ/2 = 1.0 m: in the tourist view the eyes' lines of sight
   // to it diverge. Those conditions, and only those, carry the count and a
   // note; native and monocular views and the other spaces never diverge.
-  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/proposed_study.toml");
-  ASSERT_TRUE(loaded.ok());
-  rn::PredictOptions o;
-  o.participants = 2;
-  o.simulations = 2;
-  auto r = rn::predict(*loaded.protocol, o);
-  ASSERT_TRUE(r.has_value()) << r.error().message;
+  const rn::Prediction pred = predict_proposed_study(2, 2);
   int flagged = 0;
-  for (const auto& c : r.value().conditions) {
-    std::string space, view;
-    for (const auto& [f, l] : c.levels) {
-      if (f == "space") space = l;
-      if (f == "view") view = l;
-    }
+  for (const auto& c : pred.conditions) {
+    const std::string space = level(c, "space"), view = level(c, "view");
     if (space == "S3" && view == "tourist" && c.judged == "stick") {
       EXPECT_EQ(c.diverging_points, 3);
       EXPECT_EQ(c.judged_points, 3);
@@ -95,7 +102,7 @@ TEST(Predict, ConditionsSeenAlongDivergingSightLinesAreNamed) {
   }
   EXPECT_GE(flagged, 3);
   int notes = 0;
-  for (const auto& n : r.value().notes)
+  for (const auto& n : pred.notes)
     if (n.find("diverging") != std::string::npos) {
       EXPECT_NE(n.find("space=S3"), std::string::npos) << n;
       EXPECT_NE(n.find("view=tourist"), std::string::npos) << n;

@@ -167,21 +167,6 @@ std::array<Vec3, 3> model_points(const StickScene& scene) {
   return {seen(-half), seen(0.0), seen(half)};
 }
 
-}  // namespace
-
-double model_sagitta_m(const StickScene& scene) {
-  if (scene.mode == geometry::ViewMode::monocular) return 0.0;
-  const auto p = model_points(scene);
-  return bow_toward_viewer(p[0], p[1], p[2]);
-}
-
-double model_bend_m(const StickScene& scene) {
-  if (scene.mode == geometry::ViewMode::monocular) return 0.0;
-  const auto p = model_points(scene);
-  return bend_in_plane(p[0], p[1], p[2]);
-}
-
-namespace {
 
 // The radius a round stick must have to look as thick as it does at the
 // distance it is seen at (no knowledge of the true radius: in a curved
@@ -272,20 +257,23 @@ Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const rend
                std::to_string(right.width) + "x" + std::to_string(right.height) + "; the recorded eye geometry is " +
                std::to_string(scene.width_px) + "x" + std::to_string(scene.height_px));
   StickEstimate e;
-  e.model_sagitta_m = model_sagitta_m(scene);
-  e.model_bend_m = model_bend_m(scene);
-  const bool sees_left = shows_stick(left), sees_right = shows_stick(right);
-  if (!sees_left && !sees_right) return bad("neither image shows a stick");
-  if (!sees_left || !sees_right) {
+  if (scene.mode != geometry::ViewMode::monocular) {  // one eye: no disparity, 0
+    const auto p = model_points(scene);
+    e.model_sagitta_m = bow_toward_viewer(p[0], p[1], p[2]);
+    e.model_bend_m = bend_in_plane(p[0], p[1], p[2]);
+  }
+  const auto left_stick = find_stick(left), right_stick = find_stick(right);
+  if (!left_stick && !right_stick) return bad("neither image shows a stick");
+  if (!left_stick || !right_stick) {
     e.binocular = false;  // one eye: no disparity, nothing to triangulate
     return e;
   }
   if (scene.marks != renderer::StickMarks::rings)
     return bad("a plain stick has no features along its length to match between the eyes; "
                "mark it with rings (render --stick-marks rings, protocol stimulus.stick_marks = \"rings\")");
-  auto l = find_rings(left, scene.stick.radius_m);
+  auto l = find_rings(left, *left_stick, scene.stick.radius_m);
   if (!l) return Error{l.error().kind, "left image: " + l.error().message};
-  auto r = find_rings(right, scene.stick.radius_m);
+  auto r = find_rings(right, *right_stick, scene.stick.radius_m);
   if (!r) return Error{r.error().kind, "right image: " + r.error().message};
   for (std::size_t i = 0; i < renderer::kStickRingFractions.size(); ++i)
     e.features.push_back(triangulate(scene, renderer::kStickRingFractions[i], l.value()[i], r.value()[i]));

@@ -71,18 +71,6 @@ bool differs(std::uint32_t a, std::uint32_t b) {
   return false;
 }
 
-// The stick's pixels: per column, the first and last row of the widest
-// 4-connected region that differs from the background.
-struct StickMask {
-  int x0 = 0, x1 = -1;                // columns covered, inclusive
-  std::vector<int> top, bottom;       // per column from x0; −1 where empty
-  std::vector<std::uint8_t> inside;   // the region, row major
-  int width = 0;
-  std::uint32_t background = 0;       // the image's border colour
-  [[nodiscard]] bool at(int x, int y) const {
-    return inside[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] != 0;
-  }
-};
 
 constexpr std::array<std::pair<int, int>, 4> kSteps{{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
 
@@ -369,15 +357,19 @@ std::optional<RingSighting> refine_ring(const Rgba8Image& img, const StickMask& 
 
 }  // namespace
 
-Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m) {
-  if (image.width < 8 || image.height < 8) return bad("the image is too small to hold a stick");
+std::optional<StickMask> find_stick(const renderer::Rgba8Image& image) {
+  if (image.width < 8 || image.height < 8) return std::nullopt;
   auto mask = stick_mask(image);
-  if (!mask) return bad("no stick in the image (no region apart from the background is 20 px wide)");
-  drop_partial_outline(image, *mask);
-  const auto half_px = ring_half_widths(*mask, renderer::kStickRingHalfWidthM / stick_radius_m);
-  const auto profile = column_profile(image, *mask);
-  const Cubic mid = fit_outline(*mask, Outline::midline);
-  const Cubic thickness = fit_outline(*mask, Outline::half_thickness);
+  if (mask) drop_partial_outline(image, *mask);
+  return mask;
+}
+
+Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, const StickMask& stick,
+                                             double stick_radius_m) {
+  const auto half_px = ring_half_widths(stick, renderer::kStickRingHalfWidthM / stick_radius_m);
+  const auto profile = column_profile(image, stick);
+  const Cubic mid = fit_outline(stick, Outline::midline);
+  const Cubic thickness = fit_outline(stick, Outline::half_thickness);
   const std::size_t count = renderer::kStickRingFractions.size();
   const auto columns = ring_columns(profile, half_px, count);
   if (columns.size() < count)
@@ -389,15 +381,11 @@ Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, 
     if (half_px[c] < 1.5)
       return bad("a ring is " + std::to_string(2.0 * half_px[c]) +
                  " px wide; at least 3 px are needed (a larger image or a narrower field of view)");
-    const auto ring = refine_ring(image, *mask, mid, thickness, mask->x0 + columns[k] + 0.5, half_px[c]);
+    const auto ring = refine_ring(image, stick, mid, thickness, stick.x0 + columns[k] + 0.5, half_px[c]);
     if (!ring) return bad("ring " + std::to_string(k + 1) + " is cut by the stick's outline or the image border");
     out.push_back(*ring);
   }
   return out;
-}
-
-bool shows_stick(const renderer::Rgba8Image& image) {
-  return image.width >= 8 && image.height >= 8 && stick_mask(image).has_value();
 }
 
 }  // namespace curvlab::harness::measure

@@ -207,8 +207,9 @@ Result<ConditionPrediction> predict_condition(const protocol::Protocol& p, const
   c.judged = judged_name;
   c.perceived_m = physical ? physical_sagitta_m(t.settings) : perceived_sagitta_m(world, t.settings, placement, head);
   if (!physical) {
-    c.diverging_points = diverging_sight_lines(world, t.settings, placement, head);
-    c.judged_points = judged(t.settings) == Judged::stick ? 3 : world.table.sides + 1;
+    const SightLineCount lines = diverging_sight_lines(world, t.settings, placement, head);
+    c.diverging_points = lines.diverging;
+    c.judged_points = lines.points;
   }
   for (const auto& b : p.blocks)
     if (b.name == t.block)

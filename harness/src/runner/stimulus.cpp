@@ -150,6 +150,30 @@ std::string view_name(const Settings& s) {
   return both ? "native" : "monocular";
 }
 
+namespace {
+
+// The points a judgement rests on: the stick's ends and middle (in that
+// order: end, middle, end), or the table's edge midpoints followed by its
+// (possibly raised) centre.
+std::vector<Point> judged_points(const World& world, const Settings& s, const Placement& placement) {
+  const auto& space = world.space;
+  std::vector<Point> points;
+  if (judged(s) == Judged::stick) {
+    const double half = placement.stick.length_m / 2.0;
+    for (const double u : {-half, 0.0, half})
+      points.push_back(placement.stick.centre_point(space, placement.stick_pose, u));
+    return points;
+  }
+  for (int e = 0; e < world.table.sides; ++e)
+    points.push_back(geometry::table_edge_frame(space, world.table, e, world.table.edge_m / 2.0).m *
+                     geometry::origin(space));
+  points.push_back(geometry::translation_m(space, Vec3(0.0, placement.table_sagitta_m, 0.0)).m *
+                   geometry::origin(space));
+  return points;
+}
+
+}  // namespace
+
 double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
                            const Isometry& head) {
   const auto mode = view_mode(s);
@@ -159,28 +183,19 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
   auto seen = [&](const Point& q) {
     return geometry::perceive_point(space, head, eyes, mode, q).position_m;
   };
-  if (judged(s) == Judged::stick) {
-    const double half = placement.stick.length_m / 2.0;
-    const Vec3 a = seen(placement.stick.centre_point(space, placement.stick_pose, -half));
-    const Vec3 m = seen(placement.stick.centre_point(space, placement.stick_pose, 0.0));
-    const Vec3 b = seen(placement.stick.centre_point(space, placement.stick_pose, half));
-    return geometry::bow_toward_viewer(a, m, b);
-  }
+  std::vector<Vec3> p;
+  for (const Point& q : judged_points(world, s, placement)) p.push_back(seen(q));
+  if (judged(s) == Judged::stick) return geometry::bow_toward_viewer(p[0], p[1], p[2]);
   // The table top: its (possibly raised) centre against the plane of the
   // perceived edge midpoints (Newell's normal), oriented by the perceived up.
-  const auto& table = world.table;
-  std::vector<Vec3> mids;
-  for (int e = 0; e < table.sides; ++e)
-    mids.push_back(seen(geometry::table_edge_frame(space, table, e, table.edge_m / 2.0).m *
-                        geometry::origin(space)));
+  const Vec3 centre = p.back();
+  p.pop_back();
   Vec3 centroid(0.0);
-  for (const auto& m : mids) centroid += m;
-  centroid /= static_cast<double>(mids.size());
+  for (const auto& m : p) centroid += m;
+  centroid /= static_cast<double>(p.size());
   Vec3 normal(0.0);
-  for (std::size_t i = 0; i < mids.size(); ++i)
-    normal += glm::cross(mids[i] - centroid, mids[(i + 1) % mids.size()] - centroid);
-  const Vec3 centre = seen(geometry::translation_m(space, Vec3(0.0, placement.table_sagitta_m, 0.0)).m *
-                           geometry::origin(space));
+  for (std::size_t i = 0; i < p.size(); ++i)
+    normal += glm::cross(p[i] - centroid, p[(i + 1) % p.size()] - centroid);
   const Vec3 flat_centre = seen(geometry::origin(space));
   const Vec3 above = seen(geometry::translation_m(space, Vec3(0.0, 0.1, 0.0)).m * geometry::origin(space));
   const double nl = glm::length(normal);
@@ -190,29 +205,17 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
   return glm::dot(centre - centroid, normal);
 }
 
-int diverging_sight_lines(const World& world, const Settings& s, const Placement& placement,
-                          const Isometry& head) {
-  if (view_mode(s) != geometry::ViewMode::tourist) return 0;
-  const auto& space = world.space;
-  std::vector<Point> points;
-  if (judged(s) == Judged::stick) {
-    const double half = placement.stick.length_m / 2.0;
-    for (const double u : {-half, 0.0, half})
-      points.push_back(placement.stick.centre_point(space, placement.stick_pose, u));
-  } else {
-    for (int e = 0; e < world.table.sides; ++e)
-      points.push_back(geometry::table_edge_frame(space, world.table, e, world.table.edge_m / 2.0).m *
-                       geometry::origin(space));
-    points.push_back(geometry::translation_m(space, Vec3(0.0, placement.table_sagitta_m, 0.0)).m *
-                     geometry::origin(space));
-  }
+SightLineCount diverging_sight_lines(const World& world, const Settings& s, const Placement& placement,
+                                     const Isometry& head) {
+  const std::vector<Point> points = judged_points(world, s, placement);
+  SightLineCount count{0, static_cast<int>(points.size())};
+  if (view_mode(s) != geometry::ViewMode::tourist) return count;
   const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
-  int n = 0;
   for (const Point& q : points) {
-    const auto seen = geometry::perceive_point(space, head, eyes, geometry::ViewMode::tourist, q);
-    n += seen.diverging || seen.parallel ? 1 : 0;
+    const auto seen = geometry::perceive_point(world.space, head, eyes, geometry::ViewMode::tourist, q);
+    count.diverging += seen.diverging || seen.parallel ? 1 : 0;
   }
-  return n;
+  return count;
 }
 
 renderer::StickMarks stick_marks(const Settings& s) {

@@ -26,6 +26,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,9 +83,27 @@ struct StickEstimate {
   std::vector<StickFeature> features;
 };
 
+// The stick's pixels: per column, the first and last row of the widest
+// 4-connected region that differs from the background (the image's border
+// colour).
+struct StickMask {
+  int x0 = 0, x1 = -1;                // columns covered, inclusive
+  std::vector<int> top, bottom;       // per column from x0; −1 where empty
+  std::vector<std::uint8_t> inside;   // the region, row major
+  int width = 0;
+  std::uint32_t background = 0;       // the image's border colour
+  [[nodiscard]] bool at(int x, int y) const {
+    return inside[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] != 0;
+  }
+};
+
+// The stick in one eye's image, found once and then read for its rings; none
+// when the image shows no stick (one eye of a monocular view).
+std::optional<StickMask> find_stick(const renderer::Rgba8Image& image);
+
 // The rings' image positions in one eye, in order along the stick (butt to
-// tip, left to right in the image), or why they cannot be found (no stick, a
-// ring missing or cut by the outline, rings too small to locate).
+// tip, left to right in the image), or why they cannot be found (a ring
+// missing or cut by the outline, rings too small to locate).
 struct RingSighting {
   glm::dvec2 px{0.0};
   int rows = 0;  // image rows averaged
@@ -103,9 +122,8 @@ struct RingSighting {
     return px + glm::dvec2(px_per_depth_radius * (radii - depth_radii), 0.0);
   }
 };
-Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, double stick_radius_m);
-// Whether the image shows a stick at all (one eye of a monocular view does not).
-bool shows_stick(const renderer::Rgba8Image& image);
+Result<std::vector<RingSighting>> find_rings(const renderer::Rgba8Image& image, const StickMask& stick,
+                                             double stick_radius_m);
 
 // The line of sight through an image point, in the nose frame.
 geometry::SightLine sight_line(const renderer::EyeOffset& eye, std::uint32_t width_px,
@@ -113,11 +131,6 @@ geometry::SightLine sight_line(const renderer::EyeOffset& eye, std::uint32_t wid
 // Where a nose-frame point appears in an eye's image (Euclidean pinhole).
 glm::dvec2 project_px(const renderer::EyeOffset& eye, std::uint32_t width_px, std::uint32_t height_px,
                       const geometry::Vec3& p_m);
-
-// The perception model's sagitta and bend for the scene (0 for monocular
-// viewing).
-double model_sagitta_m(const StickScene& scene);
-double model_bend_m(const StickScene& scene);
 
 // The estimate from the two images. A plain stick has no features along its
 // length to match between the eyes: that is an error naming the fix (rings).

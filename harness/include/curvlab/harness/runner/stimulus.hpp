@@ -79,8 +79,12 @@ double perceived_sagitta_m(const World& world, const protocol::Settings& s,
 // model meets the lines behind the eyes (perception.hpp), where a few
 // hundredths of a pixel of disparity move a point by metres. 0 in native and
 // monocular views.
-int diverging_sight_lines(const World& world, const protocol::Settings& s, const Placement& placement,
-                          const geometry::Isometry& head);
+struct SightLineCount {
+  int diverging = 0;  // judged points seen only along diverging or parallel lines
+  int points = 0;     // judged points
+};
+SightLineCount diverging_sight_lines(const World& world, const protocol::Settings& s, const Placement& placement,
+                                     const geometry::Isometry& head);
 // The same for the physical stimulus alone (the null observer).
 double physical_sagitta_m(const protocol::Settings& s);
 // The renderer's marks for the protocol's stimulus.stick_marks.
