@@ -24,9 +24,11 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// An expected failure at run time (no device, disk full…): exit code 1.
+// An expected failure at run time (no device, disk full…): exit code 1, or
+// 128 + N after signal N ended a session.
 struct RuntimeFailure : std::runtime_error {
-  using std::runtime_error::runtime_error;
+  explicit RuntimeFailure(const std::string& message, int code = 1) : std::runtime_error(message), exit_code(code) {}
+  int exit_code = 1;
 };
 
 using Json = nlohmann::ordered_json;

@@ -81,7 +81,7 @@ void run_export(const ExportArgs& a, bool session_given) {
                      "export one file");
   std::unique_ptr<PooledInputs> pooled;
   if (!single) pooled = std::make_unique<PooledInputs>(inputs);
-  auto db = data::Database::open(single ? inputs.front() : pooled->path(), data::OpenMode::open_existing);
+  auto db = data::Database::open(single ? inputs.front() : pooled->path(), data::OpenMode::read_only);
   if (!db) raise(db.error());
   data::ExportOptions options{a.out_dir, std::nullopt, single ? "" : joined(inputs)};
   if (session_given) options.session_id = a.session;

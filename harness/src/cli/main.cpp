@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const curvlab::cli::RuntimeFailure& e) {
     std::cerr << "curvlab: " << e.what() << '\n';
-    return 1;
+    return e.exit_code;
   } catch (const std::exception& e) {
     std::cerr << "curvlab: unexpected failure: " << e.what() << '\n';
     return 1;

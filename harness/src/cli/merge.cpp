@@ -3,7 +3,9 @@
 // added. Conflicts leave the output unchanged and exit with code 2.
 #include "common.hpp"
 
+#include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/merge.hpp"
+#include "curvlab/harness/data/writer_lock.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -106,9 +108,33 @@ void run_merge(const MergeArgs& a) {
   throw UsageError(message);
 }
 
+// Migrates a file to the current schema in place: the one command that
+// changes an older file (export, replay and merge read it unchanged).
+void run_upgrade(const std::string& path, bool json) {
+  check_db_argument(path);
+  auto lock = data::WriterLock::for_replacing(path);
+  if (!lock) raise(lock.error());
+  const auto before = [&] {
+    auto db = data::Database::open(path, data::OpenMode::read_only);
+    if (!db) raise(db.error());
+    return data::stored_schema_version(path);
+  }();
+  auto db = data::Database::open(path, data::OpenMode::open_existing);
+  if (!db) raise(db.error());
+  Json doc{{"db", path}, {"schema_version_before", before}, {"schema_version", db.value().schema_version()}};
+  print_result(doc, json);
+}
+
 }  // namespace
 
 void add_merge_commands(CLI::App& app) {
+  auto* up = app.add_subcommand("upgrade", "migrate an older data file to the current schema in place");
+  auto up_db = std::make_shared<std::string>();
+  auto up_json = std::make_shared<bool>(false);
+  up->add_option("--db", *up_db, "curvlab database file")->required();
+  up->add_flag("--json", *up_json, "print the result as JSON");
+  up->callback([up_db, up_json] { run_upgrade(*up_db, *up_json); });
+
   auto args = std::make_shared<MergeArgs>();
   auto* cmd = app.add_subcommand("merge", "pool session databases from several machines into one study database");
   cmd->add_option("--out", args->out, "study database (created when missing, else added to)")->required();

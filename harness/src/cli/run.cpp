@@ -5,6 +5,7 @@
 
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
+#include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/random.hpp"
@@ -21,7 +22,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <atomic>
 #include <cmath>
+#include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -33,6 +37,24 @@ namespace {
 
 namespace rn = curvlab::harness::runner;
 namespace pr = curvlab::harness::protocol;
+
+// The signal that asked a session to stop (0: none). A handler may only set
+// a lock-free atomic; the session loop reads it once a frame.
+std::atomic<int> stop_signal{0};
+
+extern "C" void on_stop_signal(int sig) { stop_signal.store(sig, std::memory_order_relaxed); }
+
+// SIGINT (Ctrl-C), SIGTERM and SIGHUP (a closed terminal) end a session
+// interrupted and flushed, with the resume command printed; a second one
+// takes the default action (SA_RESETHAND), which SQLite survives too.
+void watch_stop_signals(rn::RunOptions& o) {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND | SA_RESTART;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+  o.stop_signal = &stop_signal;
+}
 
 struct ObserverArgs {
   std::string model = "perception";
@@ -275,7 +297,7 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
 }
 
 void export_all(const std::string& db_path, std::int64_t session_id, const std::string& dir, Json& doc) {
-  auto db = data::Database::open(db_path, data::OpenMode::open_existing);
+  auto db = data::Database::open(db_path, data::OpenMode::read_only);
   if (!db) raise(db.error());
   Json files = Json::array();
   for (auto [name, fn] : {std::pair{"csv", &data::export_trials_csv}, std::pair{"psychds", &data::export_psychds},
@@ -318,6 +340,9 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   if (s.status != "completed") {
     std::cerr << "session " << s.session_id << " stopped before the end; continue it with: curvlab resume --db "
               << s.db_path << " --session " << s.session_id << '\n';
+    if (const int sig = stop_signal.load(); sig != 0)
+      throw RuntimeFailure("session interrupted by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")",
+                           128 + sig);
     throw RuntimeFailure("session interrupted");
   }
 }
@@ -386,6 +411,7 @@ void run_command(const RunArgs& a) {
   }
   auto console = open_console(a.backend, std::move(script), *backend.backend, db);
   o.console = console.get();
+  watch_stop_signals(o);
   auto result = rn::run_session(p, text, db, o, *backend.backend, *backend.clock);
   console.reset();  // its last screenshot shows the session's end
   report(result, a.backend);
@@ -401,6 +427,9 @@ struct ResumeArgs {
 
 void resume_command(const ResumeArgs& a) {
   check_db_argument(a.db);
+  // Before a window or headset starts; resume_session holds the lock itself.
+  if (const auto holder = data::WriterLock::session_writer(a.db, a.session))
+    raise({harness::Error::Kind::in_use, data::session_in_use_message(a.db, a.session, *holder)});
   auto stored_v = rn::read_stored_session(a.db, a.session);
   if (!stored_v) raise(stored_v.error());
   const auto& stored = stored_v.value();
@@ -418,6 +447,7 @@ void resume_command(const ResumeArgs& a) {
   auto backend = open_backend(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
   auto console = open_console(a.backend, std::move(script), *backend.backend, a.db);
   o.console = console.get();
+  watch_stop_signals(o);
   auto result = rn::resume_session(a.db, a.session, stored, *loaded.protocol, o, *backend.backend, *backend.clock);
   console.reset();
   report(result, a.backend);

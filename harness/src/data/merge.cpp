@@ -6,6 +6,7 @@
 // and trials by their index within the session. The copy replaces the
 // output by rename only when every input merged without conflict.
 #include "curvlab/harness/data/merge.hpp"
+#include "curvlab/harness/data/writer_lock.hpp"
 
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/sha256.hpp"
@@ -118,30 +119,21 @@ std::string read_only_uri(const std::string& path) {
   return out + "?mode=ro";
 }
 
-std::int64_t schema_version_of(const std::string& path) {
-  try {
-    Connection c = Connection::open(path, OpenFlags::read_only);
-    return c.query_int("PRAGMA user_version");
-  } catch (const SqliteFailure&) {
-    return -1;
-  }
-}
-
 // An input or existing output must be a curvlab file of the current schema:
 // a merge never migrates a file (migration would give an older file's
 // sessions new random UUIDs each time, breaking idempotence).
 Expected<Done> check_current_file(const std::string& path, const std::string& role) {
   auto db = Database::open(path, OpenMode::read_only);
-  if (db) return Done{};
-  const std::int64_t version = db.error().kind == DataError::Kind::io ? schema_version_of(path) : -1;
+  if (!db) return db.error();
+  const std::int64_t version = stored_schema_version(path);
   if (version >= 0 && version < current_schema_version)
     return DataError{DataError::Kind::bad_input,
                      path + ": " + role + " has schema version " + std::to_string(version) +
                          "; merge reads files without changing them and needs version " +
                          std::to_string(current_schema_version) +
                          ". Upgrade it once in place, which gives each of its sessions a UUID, with "
-                         "curvlab export --db " + path + " --out <folder>, then merge again"};
-  return db.error();
+                         "curvlab upgrade --db " + path + ", then merge again"};
+  return Done{};
 }
 
 std::string source_of(Connection& c, std::int64_t session_id, const std::string& fallback) {
@@ -460,6 +452,9 @@ Expected<bool> merge_into(const std::string& tmp, bool existed, const MergeOptio
 
 Expected<MergeReport> merge_databases(const MergeOptions& opts) {
   if (auto ok = check_inputs(opts); !ok) return ok.error();
+  // The output is replaced by a rename: never under a live session's writer.
+  auto lock = WriterLock::for_replacing(opts.out_path);
+  if (!lock) return lock.error();
   std::error_code ec;
   const bool existed = fs::exists(opts.out_path, ec);
   TempOutput tmp(opts.out_path + ".merging-" + std::to_string(::getpid()));

@@ -1,5 +1,6 @@
 #include "curvlab/harness/data/session_reader.hpp"
 
+#include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 
 #include <nlohmann/json.hpp>
@@ -20,6 +21,9 @@ auto guarded(Database& db, F&& body) -> decltype(body()) {
     return body();
   } catch (const SqliteFailure& failure) {
     return to_data_error(failure, db.path());
+  } catch (const nlohmann::json::exception& e) {
+    // A stored JSON text of the wrong shape: the file was edited or damaged.
+    return corrupt_file_error(db.path(), std::string("a stored JSON value has the wrong shape (") + e.what() + ")");
   }
 }
 

@@ -271,9 +271,9 @@ Expected<std::vector<std::int64_t>> SessionStore::store_plan(std::int64_t sessio
   });
 }
 
-Expected<StartedSession> SessionStore::start_session(const SessionRecord& session,
-                                                     const std::vector<BlockPlan>& blocks,
-                                                     const std::vector<EventRecord>& events) {
+Expected<StartedSession> SessionStore::start_session(
+    const SessionRecord& session, const std::vector<BlockPlan>& blocks, const std::vector<EventRecord>& events,
+    const std::function<Expected<Done>(std::int64_t session_id)>& before_commit) {
   return guarded(db_, [&]() -> Expected<StartedSession> {
     Transaction txn(db_.connection());
     StartedSession out;
@@ -285,6 +285,8 @@ Expected<StartedSession> SessionStore::start_session(const SessionRecord& sessio
       e.session_id = out.session_id;
       insert_event(e);
     }
+    if (before_commit)
+      if (auto ok = before_commit(out.session_id); !ok) return ok.error();
     txn.commit();
     return out;
   });

@@ -58,7 +58,19 @@ Connection Connection::open(const std::string& path, OpenFlags flags) {
     throw SqliteFailure(rc, "cannot open database: " + msg);
   }
   sqlite3_extended_result_codes(raw, 1);
+  if (flags == OpenFlags::read_only) sqlite3_db_config(raw, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr);
   return Connection(std::move(handle), path);
+}
+
+Connection Connection::copy_into_memory(Connection& source) {
+  Connection copy = open(":memory:", OpenFlags::read_write_create);
+  sqlite3_backup* backup = sqlite3_backup_init(copy.get(), "main", source.get(), "main");
+  if (backup == nullptr) copy.fail(sqlite3_errcode(copy.get()), "copy of " + source.path());
+  const int rc = sqlite3_backup_step(backup, -1);
+  sqlite3_backup_finish(backup);
+  if (rc != SQLITE_DONE) source.fail(rc, "copy of " + source.path());
+  copy.path_ = source.path_;
+  return copy;
 }
 
 void Connection::fail(int code, std::string_view context) const {

@@ -113,7 +113,7 @@ Result<StoredFrame> read_stored_frame(const ReplayRequest& rq) {
   if (!std::filesystem::exists(rq.db_path)) return Error{Kind::not_found, rq.db_path + ": no such database"};
   // Like export and resume, an older file is migrated first (its frames then
   // have no eye geometry, and replay assumes the headless one).
-  auto opened = data::Database::open(rq.db_path, data::OpenMode::open_existing);
+  auto opened = data::Database::open(rq.db_path, data::OpenMode::read_only);
   if (!opened) return opened.error();
   auto& db = opened.value();
   auto prov = data::read_session_provenance(db, rq.session_id);

@@ -7,6 +7,7 @@
 #include "curvlab/harness/data/sample_writer.hpp"
 #include "curvlab/harness/data/session_store.hpp"
 #include "curvlab/harness/data/session_reader.hpp"
+#include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <filesystem>
@@ -90,7 +91,7 @@ Result<ResumePoint> read_resume_point(data::SessionStore& store, const std::stri
 
 Result<StoredSession> read_stored_session(const std::string& db_path, std::int64_t session_id) {
   if (!std::filesystem::exists(db_path)) return Error{Error::Kind::not_found, db_path + ": no such database"};
-  auto db = data::Database::open(db_path, data::OpenMode::open_existing);
+  auto db = data::Database::open(db_path, data::OpenMode::read_only);
   if (!db) return db.error();
   auto prov = data::read_session_provenance(*db, session_id);
   if (!prov) return prov.error();
@@ -117,6 +118,8 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
 RunResult resume_session(const std::string& db_path, std::int64_t session_id, const StoredSession& stored,
                          const protocol::Protocol& p, const RunOptions& options, Backend& backend,
                          const devices::Clock& clock) {
+  auto lock = data::WriterLock::for_session(db_path, session_id);
+  if (!lock) return lock.error();
   if (stored.status == "completed")
     return Error{Error::Kind::usage, db_path + ": session " + std::to_string(session_id) + " is already completed"};
   protocol::Design design = protocol::expand_design(p, stored.participant_number);

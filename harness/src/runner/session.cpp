@@ -6,6 +6,7 @@
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/sample_writer.hpp"
 #include "curvlab/harness/data/session_store.hpp"
+#include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/version.hpp"
 
@@ -61,7 +62,7 @@ data::SessionRecord session_record(std::int64_t protocol_id, std::int64_t partic
 Result<data::StartedSession> create(
     data::SessionStore& store, const protocol::Protocol& p, const std::string& protocol_text,
     const RunOptions& options, const BackendInfo& info, const protocol::Design& design,
-    const geometry::PhysicalTableFit& calibration, const devices::Clock& clock) {
+    const geometry::PhysicalTableFit& calibration, const devices::Clock& clock, data::WriterLock& lock) {
   auto protocol_id = store.add_protocol(p.meta.name, protocol_text, p.file);
   if (!protocol_id) return protocol_id.error();
   auto participant_id = store.add_participant({options.participant, options.ipd_m, options.dominant_eye});
@@ -77,7 +78,8 @@ Result<data::StartedSession> create(
   if (options.observer)
     events.push_back({0, std::nullopt, clock.now_ns(), "observer", observer_json(*options.observer)});
   return store.start_session(session_record(*protocol_id, *participant_id, info, design, calibration),
-                             block_plans(p, design), events);
+                             block_plans(p, design), events,
+                             [&lock](std::int64_t session_id) { return lock.claim(session_id); });
 }
 
 }  // namespace
@@ -86,11 +88,13 @@ RunResult run_session(const protocol::Protocol& p, const std::string& protocol_t
                       const RunOptions& options, Backend& backend, const devices::Clock& clock) {
   protocol::Design design = protocol::expand_design(p, options.participant_number);
   if (auto ok = check_options(p, options, design); !ok) return ok.error();
+  auto lock = data::WriterLock::for_sessions(db_path);
+  if (!lock) return lock.error();
   auto db = data::Database::open(db_path, data::OpenMode::create_or_open);
   if (!db) return db.error();
   data::SessionStore store(std::move(db).value());
   const auto calibration = options.calibration.value_or(nominal_calibration(p.session_settings()));
-  auto created = create(store, p, protocol_text, options, backend.info(), design, calibration, clock);
+  auto created = create(store, p, protocol_text, options, backend.info(), design, calibration, clock, *lock);
   if (!created) return created.error();
   auto writer = data::SampleWriter::open(db_path);
   if (!writer) return writer.error();

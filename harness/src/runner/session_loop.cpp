@@ -269,6 +269,7 @@ class SessionLoop::Impl {
     f.inputs.clear();
     f.signal = backend_.poll_input(f.inputs);
     take_operator_actions(f);
+    take_stop_signal(f);
     while (!scheduled_.empty() && scheduled_.front().t_ns <= f.timing.now_ns) {
       f.inputs.push_back({scheduled_.front().t_ns, scheduled_.front().name, "observer", true});
       scheduled_.pop_front();
@@ -301,6 +302,19 @@ class SessionLoop::Impl {
     }
     if (console_) show_status(f, stats, overlay.phase, own.count());
     return stats;
+  }
+
+  // A SIGINT, SIGTERM or SIGHUP ends the session as the operator's end does:
+  // interrupted, flushed, resumable.
+  void take_stop_signal(Frame& f) {
+    if (options_.stop_signal == nullptr) return;
+    const int sig = options_.stop_signal->load(std::memory_order_relaxed);
+    if (sig == 0) return;
+    if (!stop_logged_) {
+      event(std::nullopt, "signal", Json{{"signal", sig}});
+      stop_logged_ = true;
+    }
+    f.signal = BackendSignal::quit;
   }
 
   // ---- the operator's console ---------------------------------------------
@@ -875,6 +889,7 @@ class SessionLoop::Impl {
   OperatorConsole* console_ = nullptr;
   std::vector<OperatorAction> actions_;          // this frame's, reused
   std::deque<BackendSignal> operator_signals_;  // not yet handed to the loop
+  bool stop_logged_ = false;
   OperatorStatus status_;
   std::int64_t phase_left_ns_ = -1;  // for the next status; set before end()
   std::array<std::int64_t, 3> lost_since_{-1, -1, -1};

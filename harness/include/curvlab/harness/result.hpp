@@ -22,6 +22,7 @@ struct Error {
     newer_schema,  // a data file written by a newer curvlab; refused rather than misread (exit 2)
     not_curvlab,   // some other SQLite file, or not SQLite at all (exit 2)
     corrupt,       // a damaged curvlab file (exit 2)
+    in_use,        // a session or file a live process is writing (exit 2)
     io,            // cannot open, read or write a file (exit 1)
     read_only,     // the file or its folder is not writable (exit 1)
     disk_full,     // SQLITE_FULL, or too little free space to start (exit 1)
@@ -45,6 +46,7 @@ inline int exit_code(const Error& e) {
     case Error::Kind::newer_schema:
     case Error::Kind::not_curvlab:
     case Error::Kind::corrupt:
+    case Error::Kind::in_use:
       return 2;
     default:
       return 1;
@@ -105,6 +107,7 @@ inline const char* to_string(Error::Kind kind) {
     case Error::Kind::bad_input: return "bad_input";
     case Error::Kind::not_found: return "not_found";
     case Error::Kind::newer_schema: return "newer_schema";
+    case Error::Kind::in_use: return "in_use";
     case Error::Kind::not_curvlab: return "not_curvlab";
     case Error::Kind::corrupt: return "corrupt";
     case Error::Kind::io: return "io";

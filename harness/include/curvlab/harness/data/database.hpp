@@ -30,7 +30,8 @@ enum class OpenMode {
   create_or_open,  // for running sessions: create if missing, migrate if older,
                    // check free space and writability
   open_existing,   // for export: the file must exist; migrates if older
-  read_only,       // inspection: never writes; an older file is refused
+  read_only,       // export, replay, merge inputs: never writes, works on read-only
+                   // media; an older file is read through a migrated copy in memory
 };
 
 // Owns the connection of one thread (the session thread). WAL mode, foreign
@@ -48,6 +49,11 @@ class Database {
 
  private:
   explicit Database(Connection connection) : connection_(std::move(connection)) {}
+  // The checks after SQLite has opened the file: foreign or newer files,
+  // damaged schemas and (for writers) damaged pages; then WAL mode, the
+  // schema created or migrated. Read-only opens of an older file migrate a
+  // copy in memory.
+  static Expected<Database> checked(Connection connection, const std::string& path, OpenMode mode);
   Connection connection_;
 };
 
@@ -60,6 +66,10 @@ class Database {
 // read at all and how to recover committed data (docs/data.md, "Damaged or
 // foreign files").
 Expected<Done> check_data_file(const std::string& path);
+
+// The schema version a file records (PRAGMA user_version, read-only), or -1
+// when it cannot be read.
+std::int64_t stored_schema_version(const std::string& path);
 
 // The error for another program's SQLite file (application_id ≠ "CVLB").
 DataError foreign_file_error(const std::string& path, std::int64_t application_id);

@@ -10,6 +10,7 @@
 #include "curvlab/harness/data/records.hpp"
 #include "curvlab/harness/data/session_reader.hpp"
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,9 +44,12 @@ class SessionStore {
   // A session, its whole plan and its start events (their session_id is
   // set to the new session's) in one transaction: a kill at any instant
   // leaves either all of it or none, so a stored session can always be
-  // resumed.
-  Expected<StartedSession> start_session(const SessionRecord& session, const std::vector<BlockPlan>& blocks,
-                                         const std::vector<EventRecord>& events);
+  // resumed. `before_commit` runs with the new session's id inside that
+  // transaction (the session's writer lock is claimed there, so no other
+  // process can see the session unlocked); its error rolls everything back.
+  Expected<StartedSession> start_session(
+      const SessionRecord& session, const std::vector<BlockPlan>& blocks, const std::vector<EventRecord>& events,
+      const std::function<Expected<Done>(std::int64_t session_id)>& before_commit = {});
   // Stores every block and trial of the session in one transaction; the
   // returned ids follow the plan's order. Fails if the session has a plan.
   Expected<std::vector<std::int64_t>> store_plan(std::int64_t session_id,

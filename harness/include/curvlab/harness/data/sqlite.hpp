@@ -45,8 +45,12 @@ enum class OpenFlags { read_write_create, read_write, read_only };
 // Owns one sqlite3 connection. Move-only.
 class Connection {
  public:
-  // Throws SqliteFailure.
+  // Throws SqliteFailure. Read-only connections never checkpoint, so closing
+  // one never deletes a write-ahead log another process is still writing.
   static Connection open(const std::string& path, OpenFlags flags);
+  // A writable in-memory copy of `source` (SQLite's backup API), named after
+  // it in messages. Throws SqliteFailure.
+  static Connection copy_into_memory(Connection& source);
 
   sqlite3* get() const { return handle_.get(); }
   const std::string& path() const { return path_; }

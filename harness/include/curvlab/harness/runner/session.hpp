@@ -31,6 +31,7 @@
 #include "curvlab/harness/runner/observer.hpp"
 #include "curvlab/harness/runner/operator.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -61,6 +62,9 @@ struct RunOptions {
   std::string font_path;   // text panels; empty: the renderer's default
   // Fast runs may wait for the logger instead of dropping samples.
   bool lossless_logging = true;
+  // Set (to the signal's number) by the caller's signal handler: the session
+  // ends interrupted at the next frame. nullptr: not watched.
+  const std::atomic<int>* stop_signal = nullptr;
 };
 
 struct SessionSummary {
