@@ -233,12 +233,12 @@ TEST(CliSharing, ReadOnlyMediaAreReadAndNeverWritten) {
   ASSERT_TRUE(sh::wait_for_lines(run.out, "\"status\":\"completed\"", 2, std::chrono::seconds(60)));
   run.kill9();  // the second session's trials are still in the log
   ASSERT_TRUE(fs::exists(db + "-wal"));
-  fs::remove(db + "-shm");  // as a copy to a disc leaves it: the index is rebuilt in memory
+  // A second disc holds a finished file alone, without -wal or -shm.
   ASSERT_TRUE(mount.make_read_only()) << mount.why();
 
   const auto ex = run_cli("export --db " + db + " --out " + (dir / "ex").string() + " --json");
   EXPECT_EQ(ex.exit_code, 0) << ex.out;
-  EXPECT_TRUE(fs::exists(dir / "ex" / "csv"));
+  EXPECT_FALSE(fs::is_empty(dir / "ex")) << "nothing was exported";
   const auto rp = run_cli("replay --db " + db + " --session 2 --trial 0 --out " + (dir / "replay").string());
   EXPECT_EQ(rp.exit_code, 0) << rp.out;
   const auto mg = run_cli("merge --out " + (dir / "m.sqlite").string() + " " + db);
@@ -247,6 +247,17 @@ TEST(CliSharing, ReadOnlyMediaAreReadAndNeverWritten) {
   const auto rs = run_cli("resume --db " + db + " --session 2 --render none --quiet");
   EXPECT_EQ(rs.exit_code, 1) << rs.out;
   EXPECT_NE(rs.out.find("not writable"), std::string::npos) << rs.out;
+
+  sh::ReadOnlyMount second(dir / "disc2");
+  ASSERT_TRUE(second.ok()) << second.why();
+  const std::string alone = (second.path() / "alone.sqlite").string();
+  ASSERT_EQ(run_cli("merge --out " + alone + " " + (dir / "m.sqlite").string()).exit_code, 0);
+  ASSERT_FALSE(fs::exists(alone + "-wal"));
+  ASSERT_TRUE(second.make_read_only()) << second.why();
+  const auto ex2 = run_cli("export --db " + alone + " --out " + (dir / "ex2").string());
+  EXPECT_EQ(ex2.exit_code, 0) << ex2.out;
+  const auto mg2 = run_cli("merge --out " + (dir / "m2.sqlite").string() + " " + alone);
+  EXPECT_EQ(mg2.exit_code, 0) << mg2.out;
 }
 
 // Finding: Ctrl-C exited 130 leaving the session "running".
@@ -254,7 +265,7 @@ TEST(CliSharing, ASignalEndsTheSessionInterruptedWithTheResumeCommand) {
   const auto dir = fresh_dir("signal");
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
     const std::string db = (dir / ("s" + std::to_string(sig) + ".sqlite")).string();
-    sh::Child run = start_session(dir, db);
+    sh::Child run = start_session(dir, db, "S" + std::to_string(sig));
     ASSERT_TRUE(sh::wait_for_lines(run.out, "\"status\":\"completed\"", 1, std::chrono::seconds(60)));
     const int status = run.signal_and_wait(sig);
     ASSERT_TRUE(WIFEXITED(status)) << "signal " << sig << " killed the process instead of ending the session";

@@ -101,22 +101,7 @@ std::string describe_session(Connection& c, const std::string& schema, std::int6
 
 // A file: URI that opens `path` read-only (RFC 3986 percent-encoding).
 std::string read_only_uri(const std::string& path) {
-  const std::string absolute = fs::absolute(path).lexically_normal().string();
-  static constexpr std::string_view plain =
-      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-~";
-  static constexpr char digits[] = "0123456789ABCDEF";
-  std::string out = "file:";
-  for (const char ch : absolute) {
-    if (plain.find(ch) != std::string_view::npos) {
-      out += ch;
-    } else {
-      const auto b = static_cast<unsigned char>(ch);
-      out += '%';
-      out += digits[b >> 4];
-      out += digits[b & 0xF];
-    }
-  }
-  return out + "?mode=ro";
+  return file_uri(path, needs_immutable_open(path) ? "mode=ro&immutable=1" : "mode=ro");
 }
 
 // An input or existing output must be a curvlab file of the current schema:

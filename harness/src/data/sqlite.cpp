@@ -4,7 +4,10 @@
 
 #include <sqlite3.h>
 
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
 
 namespace curvlab::data {
 
@@ -19,7 +22,9 @@ DataError to_data_error(const SqliteFailure& failure, const std::string& path) {
       return {DataError::Kind::read_only,
               where + " (the file or its folder is not writable: choose a writable --db path)"};
     case SQLITE_CANTOPEN:
-      return {DataError::Kind::io, where + " (check that the folder exists and is writable)"};
+      return {DataError::Kind::io, where + " (check that the folder exists and is writable; on read-only media "
+                                           "a file with a write-ahead log needs its -shm file beside it, or a "
+                                           "copy of the three files in a writable folder)"};
     case SQLITE_BUSY:
     case SQLITE_LOCKED:
       return {DataError::Kind::busy, where + " (another process is writing this file)"};
@@ -43,6 +48,35 @@ void SqliteCloser::operator()(sqlite3* db) const noexcept {
 
 void StatementFinalizer::operator()(sqlite3_stmt* stmt) const noexcept { sqlite3_finalize(stmt); }
 
+bool needs_immutable_open(const std::string& path) {
+  // On read-only media SQLite cannot create the -shm index a WAL file needs
+  // (sqlite.org/wal.html, "Read-Only Databases"); without a log there is
+  // nothing it would hold, and the file can be read as immutable.
+  std::error_code ec;
+  std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  if (::access(dir.c_str(), W_OK) == 0 || std::filesystem::exists(path + "-shm", ec)) return false;
+  return !std::filesystem::exists(path + "-wal", ec) || std::filesystem::file_size(path + "-wal", ec) == 0;
+}
+
+std::string file_uri(const std::string& path, std::string_view query) {
+  const std::string absolute = std::filesystem::absolute(path).lexically_normal().string();
+  static constexpr std::string_view plain = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-~";
+  static constexpr char digits[] = "0123456789ABCDEF";
+  std::string out = "file:";
+  for (const char ch : absolute) {
+    if (plain.find(ch) != std::string_view::npos) {
+      out += ch;
+    } else {
+      const auto b = static_cast<unsigned char>(ch);
+      out += '%';
+      out += digits[b >> 4];
+      out += digits[b & 0xF];
+    }
+  }
+  return out + "?" + std::string(query);
+}
+
 Connection Connection::open(const std::string& path, OpenFlags flags) {
   int sqlite_flags = SQLITE_OPEN_NOMUTEX;  // one thread per connection by contract
   switch (flags) {
@@ -50,8 +84,11 @@ Connection Connection::open(const std::string& path, OpenFlags flags) {
     case OpenFlags::read_write: sqlite_flags |= SQLITE_OPEN_READWRITE; break;
     case OpenFlags::read_only: sqlite_flags |= SQLITE_OPEN_READONLY; break;
   }
+  const bool immutable = flags == OpenFlags::read_only && path != ":memory:" && needs_immutable_open(path);
+  const std::string name = immutable ? file_uri(path, "mode=ro&immutable=1") : path;
+  if (immutable) sqlite_flags |= SQLITE_OPEN_URI;
   sqlite3* raw = nullptr;
-  const int rc = sqlite3_open_v2(path.c_str(), &raw, sqlite_flags, nullptr);
+  const int rc = sqlite3_open_v2(name.c_str(), &raw, sqlite_flags, nullptr);
   ConnectionHandle handle(raw);
   if (rc != SQLITE_OK) {
     const std::string msg = raw ? sqlite3_errmsg(raw) : sqlite3_errstr(rc);

@@ -42,6 +42,13 @@ using StatementHandle = std::unique_ptr<sqlite3_stmt, StatementFinalizer>;
 
 enum class OpenFlags { read_write_create, read_write, read_only };
 
+// True when `path` lies in a folder that cannot be written (read-only media)
+// with no -shm file and no write-ahead log content: SQLite can then read it
+// only as immutable. Connection::open does so itself for read_only.
+bool needs_immutable_open(const std::string& path);
+// A file: URI for `path` with the given query ("mode=ro"), percent-encoded.
+std::string file_uri(const std::string& path, std::string_view query);
+
 // Owns one sqlite3 connection. Move-only.
 class Connection {
  public:
