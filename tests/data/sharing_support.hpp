@@ -127,13 +127,26 @@ inline void read_once(const std::string& curvlab, const std::string& db, const f
   fs::remove_all(scratch / "reader_export");
 }
 
+// Writes `file` until the file system is full (ENOSPC).
+inline void fill_disk(const fs::path& file) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  const std::string block(1 << 16, 'x');
+  while (::write(fd, block.data(), block.size()) > 0) {
+  }
+  const std::string small(512, 'x');
+  while (::write(fd, small.data(), small.size()) > 0) {
+  }
+  ::close(fd);
+}
+
 // A small tmpfs mounted at `path`, remounted read-only on request, unmounted
 // on destruction. Needs root (CAP_SYS_ADMIN); ok() says whether it worked.
 class ReadOnlyMount {
  public:
-  explicit ReadOnlyMount(fs::path path) : path_(std::move(path)) {
+  explicit ReadOnlyMount(fs::path path, std::string options = "size=160m")
+      : path_(std::move(path)), options_(std::move(options)) {
     fs::create_directories(path_);
-    if (::mount("tmpfs", path_.c_str(), "tmpfs", 0, "size=160m") != 0) {
+    if (::mount("tmpfs", path_.c_str(), "tmpfs", 0, options_.c_str()) != 0) {
       why_ = std::strerror(errno);
       return;
     }
@@ -148,13 +161,14 @@ class ReadOnlyMount {
   const std::string& why() const { return why_; }
   const fs::path& path() const { return path_; }
   bool make_read_only() {
-    if (::mount("tmpfs", path_.c_str(), "tmpfs", MS_REMOUNT | MS_RDONLY, "size=160m") == 0) return true;
+    if (::mount("tmpfs", path_.c_str(), "tmpfs", MS_REMOUNT | MS_RDONLY, options_.c_str()) == 0) return true;
     why_ = std::strerror(errno);
     return false;
   }
 
  private:
   fs::path path_;
+  std::string options_;
   bool mounted_ = false;
   std::string why_;
 };

@@ -276,3 +276,29 @@ TEST(CliSharing, ASignalEndsTheSessionInterruptedWithTheResumeCommand) {
     EXPECT_EQ(stored_completed(db), sh::count_lines(run.out, "\"status\":\"completed\""));
   }
 }
+
+// Finding: after the disk filled, the session stayed "running".
+TEST(CliSharing, AFullDiskEndsTheSessionInterruptedAndResumable) {
+  const auto dir = fresh_dir("full");
+  sh::ReadOnlyMount disk(dir / "disk", "size=80m");
+  if (!disk.ok()) GTEST_SKIP() << "cannot mount a file system here (needs root): " << disk.why();
+  const std::string db = (disk.path() / "f.sqlite").string();
+  sh::Child run = start_session(dir, db);
+  ASSERT_TRUE(sh::wait_for_lines(run.out, "\"status\":\"completed\"", 2, std::chrono::seconds(60)))
+      << sh::slurp(run.err);
+  const fs::path filler = disk.path() / "filler";
+  sh::fill_disk(filler);
+  const int status = run.wait();
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  const std::string err = sh::slurp(run.err);
+  EXPECT_NE(err.find("disk is full"), std::string::npos) << err;
+  EXPECT_NE(err.find("curvlab resume --db " + db + " --session 1"), std::string::npos) << err;
+  fs::remove(filler);
+  EXPECT_EQ(session_status(db, 1), "interrupted");
+  EXPECT_GE(stored_completed(db), sh::count_lines(run.out, "\"status\":\"completed\""));
+  const auto again = run_cli("resume --db " + db + " --session 1 --render none --quiet");
+  EXPECT_EQ(again.exit_code, 0) << again.out;
+  EXPECT_EQ(stored_completed(db), 8);
+  EXPECT_FALSE(fs::exists(db + ".reserve-1")) << "the reserve outlived its session";
+}

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <sstream>
 #include <utility>
 
@@ -23,6 +24,19 @@ off_t session_byte(std::int64_t session_id) { return 1 + static_cast<off_t>(sess
 off_t slot_of(std::int64_t session_id) { return slots_at + static_cast<off_t>(session_id) * slot_bytes; }
 
 std::string lock_path(const std::string& db_path) { return db_path + ".lock"; }
+std::string reserve_path(const std::string& db_path, std::int64_t session_id) {
+  return db_path + ".reserve-" + std::to_string(session_id);
+}
+constexpr off_t reserve_bytes = 1 << 20;
+
+// Sets disk space aside for the end of a session; without space to spare
+// the session still runs (the reserve is a help, not a condition).
+void make_reserve(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) return;
+  if (::posix_fallocate(fd, 0, reserve_bytes) != 0) (void)::ftruncate(fd, 0);
+  ::close(fd);
+}
 
 struct flock range(short type, off_t start) {
   struct flock f {};
@@ -131,6 +145,21 @@ std::optional<std::pair<std::int64_t, LockHolder>> live_session(int fd) {
   return std::nullopt;
 }
 
+// Reserves left by writers that died (kill -9) for sessions no one holds.
+void remove_stale_reserves(int fd, const std::string& db_path) {
+  std::error_code ec;
+  const std::filesystem::path db(db_path);
+  const std::string prefix = db.filename().string() + ".reserve-";
+  const auto dir = db.parent_path().empty() ? std::filesystem::path(".") : db.parent_path();
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 18) continue;
+    if (!held_by_other(fd, F_WRLCK, session_byte(std::stoll(digits)))) std::filesystem::remove(entry.path(), ec);
+  }
+}
+
 }  // namespace
 
 std::string session_in_use_message(const std::string& db_path, std::int64_t session_id, const LockHolder& holder) {
@@ -150,6 +179,7 @@ Expected<WriterLock> WriterLock::for_sessions(const std::string& db_path) {
                                                   " (curvlab merge --out); nothing was changed. Try again when it "
                                                   "has finished"};
   }
+  remove_stale_reserves(*fd, db_path);
   return WriterLock(*fd, db_path);
 }
 
@@ -183,7 +213,13 @@ Expected<Done> WriterLock::claim(std::int64_t session_id) {
     return DataError{DataError::Kind::in_use, session_in_use_message(db_path_, session_id, read_slot(fd_, session_id))};
   write_slot(fd_, session_id);
   session_ = session_id;
+  make_reserve(reserve_path(db_path_, session_id));
   return Done{};
+}
+
+bool WriterLock::free_reserve() noexcept {
+  if (fd_ < 0 || !session_) return false;
+  return ::unlink(reserve_path(db_path_, *session_).c_str()) == 0;
 }
 
 std::optional<LockHolder> WriterLock::session_writer(const std::string& db_path, std::int64_t session_id) {
@@ -220,6 +256,7 @@ WriterLock::~WriterLock() { release(); }
 void WriterLock::release() noexcept {
   if (fd_ < 0) return;
   if (session_) {
+    ::unlink(reserve_path(db_path_, *session_).c_str());
     clear_slot(fd_, *session_);
     unlock(fd_, session_byte(*session_));
   }

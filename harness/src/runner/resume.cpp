@@ -144,6 +144,7 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   if (!o.calibration) o.calibration = stored.calibration;
   auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), backend, clock, std::move(o),
                                 session_id, std::move(point->trial_ids));
+  setup.lock = &lock.value();
   setup.frame_offset = point->frame_offset;
   setup.first_trial_attempts = point->attempts;
   setup.first_trial_aborts = point->aborts;

@@ -103,6 +103,7 @@ RunResult run_session(const protocol::Protocol& p, const std::string& protocol_t
   o.calibration = calibration;
   auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), backend, clock, std::move(o),
                                 created->session_id, std::move(created->trial_ids));
+  setup.lock = &lock.value();
   auto result = SessionLoop(std::move(setup)).run(0, true);
   if (result) result->db_path = db_path;
   return result;

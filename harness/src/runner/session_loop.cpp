@@ -67,6 +67,7 @@ class SessionLoop::Impl {
         design_(std::move(s.design)),
         store_(*s.store),
         writer_(*s.writer),
+        lock_(s.lock),
         backend_(*s.backend),
         clock_(*s.clock),
         options_(std::move(s.options)),
@@ -168,10 +169,14 @@ class SessionLoop::Impl {
   // Leaves the session resumable: completed trials are on disk already.
   RunResult interrupted(const Error& error) {
     show_ended();
+    // The writer retries what failed; the reserve's space lets it finish.
+    if (error.kind == Error::Kind::disk_full && lock_ != nullptr) lock_->free_reserve();
     const auto ticket = writer_.journal(data::StatusChange{session_id_, data::SessionStatus::interrupted, false});
     if (!writer_.wait_durable(ticket, std::chrono::seconds(5)))
       (void)store_.set_session_status(session_id_, data::SessionStatus::interrupted);
-    return Error{error.kind, error.message};
+    const std::string id = std::to_string(session_id_);
+    return Error{error.kind, error.message + " (session " + id + " stopped before the end; continue it with: " +
+                                 "curvlab resume --db " + store_.path() + " --session " + id + ")"};
   }
 
   void summarize(SteadyTime::time_point wall0) {
@@ -857,6 +862,7 @@ class SessionLoop::Impl {
   protocol::Design design_;
   data::SessionStore& store_;
   data::SampleWriter& writer_;
+  data::WriterLock* lock_;
   Backend& backend_;
   const devices::Clock& clock_;
   RunOptions options_;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "curvlab/harness/data/sample_writer.hpp"
+#include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/data/session_store.hpp"
 #include "curvlab/harness/runner/session.hpp"
 
@@ -37,6 +38,8 @@ struct SessionSetup {
   std::int64_t first_trial_aborts = 0;
   // Committed staircase answers, in order (resume): trial id → positive.
   std::vector<std::pair<std::int64_t, bool>> staircase_history;
+  // The session's writer lock; its disk reserve is freed when the disk fills.
+  data::WriterLock* lock = nullptr;
 
   // What every run sets; a resumed run adds where it continues.
   static SessionSetup of(const protocol::Protocol& p, protocol::Design design, data::SessionStore& store,

@@ -47,6 +47,7 @@ class SessionStore {
   // resumed. `before_commit` runs with the new session's id inside that
   // transaction (the session's writer lock is claimed there, so no other
   // process can see the session unlocked); its error rolls everything back.
+  const std::string& path() const { return db_.path(); }
   Expected<StartedSession> start_session(
       const SessionRecord& session, const std::vector<BlockPlan>& blocks, const std::vector<EventRecord>& events,
       const std::function<Expected<Done>(std::int64_t session_id)>& before_commit = {});

@@ -7,6 +7,9 @@
 // - a 128-byte slot per session (and slot 0 for a replacer) naming the
 //   holder's process id, host and start time, so that a refused command can
 //   say who holds the session. A slot is cleared when its lock is released.
+// A claimed session also keeps DB.reserve-N, 1 MiB of disk set aside: when
+// the disk fills during the session, freeing it lets the session's last
+// entries and its `interrupted` status reach the file.
 // The kernel releases the locks when the holder dies (kill -9, power loss
 // releases them with the machine), so a dead writer's session is resumable
 // at once. The lock file is separate from DB: SQLite's own locks on DB are
@@ -47,6 +50,10 @@ class WriterLock {
   // Adds session `session_id` to a shared hold (a new session, inside the
   // transaction that creates it, so no other process can see it unlocked).
   Expected<Done> claim(std::int64_t session_id);
+
+  // Frees the claimed session's reserve (the disk is full); true when there
+  // was one to free.
+  bool free_reserve() noexcept;
 
   // The live writer of a session, if any, without taking a lock.
   static std::optional<LockHolder> session_writer(const std::string& db_path, std::int64_t session_id);
