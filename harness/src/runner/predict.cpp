@@ -1,7 +1,6 @@
 #include "curvlab/harness/runner/predict.hpp"
 
 #include "curvlab/harness/protocol/design.hpp"
-#include "curvlab/harness/runner/headless.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <cmath>
@@ -48,14 +47,6 @@ double incomplete_beta(double a, double b, double x) {
     if (std::abs(delta - 1.0) < 1e-14) break;
   }
   return std::exp(log_front) * f / a;
-}
-
-// The virtual head of a participant standing at the nominal table, as the
-// protocol's tracking places it: where predictions view the stimulus from.
-geometry::Isometry standing_head(const World& world, const protocol::Settings& s) {
-  auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
-                                        physical_table(s, std::nullopt));
-  return tracker->update(standing_pose(nominal_calibration(s), 1.55, 0)).pose[0];
 }
 
 // The mean observer's P(positive) in one staircase condition, as a function

@@ -1,7 +1,6 @@
 #include "curvlab/harness/runner/preview.hpp"
 
 #include "curvlab/harness/data/sha256.hpp"
-#include "curvlab/harness/runner/headless.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/version.hpp"
@@ -134,15 +133,6 @@ std::string read_bytes(const std::string& path) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
-}
-
-// The virtual head at onset: a participant standing at the nominal table,
-// placed by the protocol's tracking algorithm — where the headless runner's
-// participant stands, and where `curvlab predict` views the stimulus from.
-geometry::Isometry standing_head(const World& world, const Settings& s) {
-  auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
-                                        physical_table(s, std::nullopt));
-  return tracker->update(standing_pose(nominal_calibration(s), 1.55, 0)).pose[0];
 }
 
 const protocol::Block* find_block(const protocol::Protocol& p, const std::string& name) {

@@ -2,6 +2,7 @@
 
 #include "curvlab/geometry/maps.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/harness/runner/headless.hpp"
 #include "curvlab/renderer/mesh.hpp"
 
 #include <nlohmann/json.hpp>
@@ -121,6 +122,12 @@ Placement place_stimulus(const World& world, const Settings& s, const Isometry& 
                  geometry::translation_m(space, Vec3(0.0, st.stick_height_m, 0.0)) *
                  geometry::rotation(frame) * turn;
   return p;
+}
+
+Isometry standing_head(const World& world, const Settings& s) {
+  auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
+                                        physical_table(s, std::nullopt));
+  return tracker->update(standing_pose(nominal_calibration(s), HeadlessOptions{}.eye_height_m, 0)).pose[0];
 }
 
 geometry::ViewMode view_mode(const Settings& s) {

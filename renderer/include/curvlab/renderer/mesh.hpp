@@ -45,8 +45,9 @@ struct TubeVertex {
 };
 
 // The clip position tube.vert gives v (its C++ twin, for the plain-loop
-// baseline and the tests): the projected centre line plus the ribbon's
-// offsets in pixels for a target of the given size.
+// baseline): the projected centre line plus the ribbon's offsets in pixels
+// for a target of the given size. The vulkan test TubeShaderMatchesCpp runs
+// tube.vert's computation (shaders/tube.glsl) on the same inputs and compares.
 glm::dvec4 tube_clip_position(const ViewConstants& view, Hemisphere hemi, const glm::dmat4& model_view,
                               const TubeVertex& v, double width_px, double height_px);
 

@@ -61,6 +61,13 @@ struct Placement {
 Placement place_stimulus(const World& world, const protocol::Settings& s,
                          const geometry::Isometry& head_at_onset);
 
+// The virtual head at onset of a participant standing at the nominal table
+// (the headless backend's standing pose, at its default eye height, before
+// any sway), placed by the protocol's tracking algorithm: where the headless
+// runner's participant stands, and where `curvlab predict` and `curvlab
+// preview` view the stimulus from.
+geometry::Isometry standing_head(const World& world, const protocol::Settings& s);
+
 geometry::ViewMode view_mode(const protocol::Settings& s);
 renderer::ViewSettings view_settings(const protocol::Settings& s, renderer::Eye dominant);
 // "tourist", "native", "monocular" or "custom".
