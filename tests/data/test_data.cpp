@@ -336,7 +336,7 @@ TEST(Session, PlanResumeAndIdempotentCompletion) {
   EXPECT_EQ(next->trial_id, ids[1]);
   EXPECT_EQ(next->block_index, 1);
   ASSERT_TRUE(store.skip_trial(ids[1]));
-  EXPECT_EQ(store.count_trials(session, "completed").value(), 1);
+  EXPECT_EQ(store.count_trials(session, TrialStatus::completed).value(), 1);
   auto check = Database::open((dir / "s.db").string(), OpenMode::read_only);  // its own connection
   ASSERT_TRUE(check);
   EXPECT_EQ(check->connection().query_int("SELECT rt_ns FROM trials WHERE trial_id = " + std::to_string(ids[0])),

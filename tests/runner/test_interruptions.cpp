@@ -130,7 +130,7 @@ TEST(Interruptions, AbortPolicyGivesUpTheTrialAndWaitsForTrackingBeforeTheNext) 
   const auto out = run_demo("abort", "[tracking]\non_loss = \"abort\"\n", true,
                             [](ScriptedBackend& b) { b.head_valid = lost_between({{50, 2000}}); });
   ASSERT_FALSE(out.db.empty());
-  EXPECT_EQ(out.summary.status, "completed");
+  EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
   EXPECT_EQ(out.summary.trials_aborted, 1);
   EXPECT_EQ(out.summary.trials_completed, 7);
   EXPECT_EQ(query(out.db, "SELECT trial_index, attempt, status FROM trials WHERE status != 'completed'"),

@@ -318,7 +318,7 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   Json doc;
   doc["db"] = s.db_path;
   doc["session_id"] = s.session_id;
-  doc["status"] = s.status;
+  doc["status"] = data::to_string(s.status);
   doc["trials_planned"] = s.trials_planned;
   doc["trials_completed"] = s.trials_completed;
   doc["trials_skipped"] = s.trials_skipped;
@@ -337,7 +337,7 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   }
   if (!a.export_dir.empty()) export_all(s.db_path, s.session_id, a.export_dir, doc);
   print_result(doc, a.json);
-  if (s.status != "completed") {
+  if (s.status != data::SessionStatus::completed) {
     std::cerr << "session " << s.session_id << " stopped before the end; continue it with: curvlab resume --db "
               << s.db_path << " --session " << s.session_id << '\n';
     if (const int sig = stop_signal.load(); sig != 0)

@@ -1,5 +1,7 @@
 #include "export_common.hpp"
 
+#include "curvlab/harness/data/events.hpp"
+
 #include "curvlab/harness/data/sqlite.hpp"
 
 #include <nlohmann/json.hpp>
@@ -153,7 +155,7 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
                 "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
                 // One pass over the events, not one per trial.
                 "LEFT JOIN (SELECT trial_id, SUM(json_extract(detail, '$.lost_ms')) AS lost_ms "
-                "FROM events WHERE kind = 'tracking_flagged' GROUP BY trial_id) tf "
+                "FROM events WHERE kind = ?2 GROUP BY trial_id) tf "
                 "ON tf.trial_id = t.trial_id "
                 // One pass over the frames: the trial's late frames, and whether its
                 // onset frame (displayed at onset_ns) was one of them.
@@ -165,7 +167,7 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
                 "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
                 "JOIN blocks b ON b.block_id = t.block_id "
                 "WHERE ?1 IS NULL OR t.session_id = ?1 ORDER BY se.session_uuid, t.session_id, t.trial_index");
-    s.bind(1, options.session_id);
+    s.bind(1, options.session_id).bind_static(2, to_string(EventKind::tracking_flagged));
     std::vector<std::string> cond_names, stim_names;
     std::map<std::string, std::size_t> cond_pos, stim_pos;
     std::vector<std::pair<nlohmann::ordered_json, nlohmann::ordered_json>> extras;

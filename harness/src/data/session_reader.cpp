@@ -1,6 +1,7 @@
 #include "curvlab/harness/data/session_reader.hpp"
 
 #include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/events.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 
 #include <nlohmann/json.hpp>
@@ -31,13 +32,6 @@ DataError corrupt(Database& db, const std::string& what) {
   return DataError{Kind::corrupt, db.path() + ": " + what};
 }
 
-std::optional<SessionStatus> parse_status(const std::string& s) {
-  for (auto v : {SessionStatus::running, SessionStatus::paused, SessionStatus::completed,
-                 SessionStatus::aborted, SessionStatus::interrupted})
-    if (s == to_string(v)) return v;
-  return std::nullopt;
-}
-
 std::optional<Backend> parse_backend(const std::string& s) {
   for (auto v : {Backend::headless, Backend::desktop, Backend::xr})
     if (s == to_string(v)) return v;
@@ -55,16 +49,6 @@ template <std::size_t N>
 bool read_doubles(std::span<const std::byte> blob, std::array<double, N>& out) {
   if (blob.size() != N * sizeof(double)) return false;
   std::memcpy(out.data(), blob.data(), blob.size());
-  return true;
-}
-
-// A JSON array of 16 numbers (column-major 4×4), as the runner logs poses.
-bool read_matrix(const Json& j, std::array<double, 16>& out) {
-  if (!j.is_array() || j.size() != 16) return false;
-  for (std::size_t i = 0; i < 16; ++i) {
-    if (!j[i].is_number()) return false;
-    out[i] = j[i].get<double>();
-  }
   return true;
 }
 
@@ -102,7 +86,7 @@ Expected<SessionProvenance> read_session_provenance(Database& db, std::int64_t s
     out.dominant_eye = parse_eye(s.column_text(3));
     out.ipd_m = s.column_opt_double(4);
     out.seed = s.column_int(5);
-    const auto status = parse_status(s.column_text(6));
+    const auto status = parse_session_status(s.column_text(6));
     if (!status) return corrupt(db, "session " + std::to_string(session_id) + " has an unknown status");
     out.status = *status;
     out.backend = parse_backend(s.column_text(7));
@@ -113,17 +97,20 @@ Expected<SessionProvenance> read_session_provenance(Database& db, std::int64_t s
     last.bind(1, session_id);
     if (last.step()) out.last_t_ns = last.column_int(0);
 
-    Statement ev(c, "SELECT kind, detail FROM events WHERE session_id = ?1 AND kind IN "
-                    "('session_start', 'observer') ORDER BY event_id");
-    ev.bind(1, session_id);
+    Statement ev(c, "SELECT kind, detail FROM events WHERE session_id = ?1 AND kind IN (?2, ?3) ORDER BY event_id");
+    ev.bind(1, session_id)
+        .bind_static(2, to_string(EventKind::session_start))
+        .bind_static(3, to_string(EventKind::observer));
     while (ev.step()) {
+      if (parse_event_kind(ev.column_text(0)) == EventKind::session_start) {
+        auto start = parse_session_start(ev.column_text(1));
+        if (!start) return corrupt_file_error(db.path(), start.error().message);
+        out.participant_number = start->participant_number;
+        out.msaa = start->msaa;
+        continue;
+      }
       const Json d = Json::parse(ev.column_text(1), nullptr, false);
-      if (d.is_discarded() || !d.is_object()) continue;
-      if (ev.column_text(0) == "session_start") {
-        out.participant_number = d.value("participant_number", std::uint64_t{1});
-        if (d.contains("msaa") && d["msaa"].is_number_unsigned()) out.msaa = d["msaa"].get<std::uint32_t>();
-      } else
-        out.observer = observer_from(d);
+      if (!d.is_discarded() && d.is_object()) out.observer = observer_from(d);
     }
     return out;
   });
@@ -177,22 +164,21 @@ Expected<std::int64_t> read_trial_id(Database& db, std::int64_t session_id, std:
 
 Expected<std::optional<OnsetRecord>> read_onset(Database& db, std::int64_t trial_id) {
   return guarded(db, [&]() -> Expected<std::optional<OnsetRecord>> {
-    Statement s(db.connection(), "SELECT event_id, detail FROM events WHERE trial_id = ?1 AND kind = 'onset' "
+    Statement s(db.connection(), "SELECT event_id, detail FROM events WHERE trial_id = ?1 AND kind = ?2 "
                                  "ORDER BY event_id DESC LIMIT 1");
-    s.bind(1, trial_id);
+    s.bind(1, trial_id).bind_static(2, to_string(EventKind::onset));
     if (!s.step()) return std::optional<OnsetRecord>{};
     OnsetRecord o;
     o.event_id = s.column_int(0);
-    const Json d = Json::parse(s.column_text(1), nullptr, false);
-    const bool ok = d.is_object() && d.contains("frame_index") && d["frame_index"].is_number_integer() &&
-                    d.contains("head_pose") && read_matrix(d["head_pose"], o.head_pose) &&
-                    d.contains("stick_pose") && read_matrix(d["stick_pose"], o.stick_pose);
-    if (!ok)
+    auto onset = parse_onset(s.column_text(1));
+    if (!onset)
       return corrupt(db, "the onset event " + std::to_string(o.event_id) +
                              " lacks frame_index, head_pose or stick_pose (16 numbers each)");
-    o.frame_index = d["frame_index"].get<std::int64_t>();
-    o.predicted_display_ns = d.value("predicted_display_ns", std::int64_t{0});
-    o.attempt = d.value("attempt", std::int64_t{1});
+    o.frame_index = onset->frame_index;
+    o.head_pose = onset->head_pose;
+    o.stick_pose = onset->stick_pose;
+    o.predicted_display_ns = onset->predicted_display_ns;
+    o.attempt = onset->attempt;
     return std::optional<OnsetRecord>{o};
   });
 }
@@ -210,11 +196,12 @@ Expected<std::optional<double>> read_adjustment_at(Database& db, std::int64_t tr
                                                    std::int64_t onset_event_id, std::int64_t frame_index) {
   return guarded(db, [&]() -> Expected<std::optional<double>> {
     Statement s(db.connection(),
-                "SELECT json_extract(detail, '$.value') FROM events WHERE trial_id = ?1 AND kind = 'adjustment' "
+                "SELECT json_extract(detail, '$.value') FROM events WHERE trial_id = ?1 AND kind = ?4 "
                 "AND event_id > ?2 AND event_id < COALESCE((SELECT MIN(event_id) FROM events "
-                "WHERE trial_id = ?1 AND kind = 'onset' AND event_id > ?2), 9223372036854775807) "
+                "WHERE trial_id = ?1 AND kind = ?5 AND event_id > ?2), 9223372036854775807) "
                 "AND json_extract(detail, '$.frame_index') <= ?3 ORDER BY event_id DESC LIMIT 1");
     s.bind(1, trial_id).bind(2, onset_event_id).bind(3, frame_index);
+    s.bind_static(4, to_string(EventKind::adjustment)).bind_static(5, to_string(EventKind::onset));
     if (!s.step() || s.is_null(0)) return std::optional<double>{};
     return std::optional<double>{s.column_double(0)};
   });
@@ -249,10 +236,10 @@ Expected<std::optional<FrameSpan>> read_trial_frame_span(Database& db, std::int6
   });
 }
 
-Expected<std::int64_t> read_trial_event_count(Database& db, std::int64_t trial_id, const std::string& kind) {
+Expected<std::int64_t> read_trial_event_count(Database& db, std::int64_t trial_id, EventKind kind) {
   return guarded(db, [&]() -> Expected<std::int64_t> {
     Statement s(db.connection(), "SELECT COUNT(*) FROM events WHERE trial_id = ?1 AND kind = ?2");
-    s.bind(1, trial_id).bind(2, std::string_view(kind));
+    s.bind(1, trial_id).bind_static(2, to_string(kind));
     s.step();
     return s.column_int(0);
   });

@@ -35,6 +35,31 @@ const char* to_string(SessionStatus status) {
   }
   return "interrupted";
 }
+const char* to_string(TrialStatus status) {
+  switch (status) {
+    case TrialStatus::pending: return "pending";
+    case TrialStatus::running: return "running";
+    case TrialStatus::completed: return "completed";
+    case TrialStatus::skipped: return "skipped";
+    case TrialStatus::aborted: return "aborted";
+  }
+  return "pending";
+}
+
+std::optional<SessionStatus> parse_session_status(std::string_view text) {
+  for (auto v : {SessionStatus::running, SessionStatus::paused, SessionStatus::completed, SessionStatus::aborted,
+                 SessionStatus::interrupted})
+    if (text == to_string(v)) return v;
+  return std::nullopt;
+}
+
+std::optional<TrialStatus> parse_trial_status(std::string_view text) {
+  for (auto v : {TrialStatus::pending, TrialStatus::running, TrialStatus::completed, TrialStatus::skipped,
+                 TrialStatus::aborted})
+    if (text == to_string(v)) return v;
+  return std::nullopt;
+}
+
 const char* to_string(TrackedDevice device) {
   switch (device) {
     case TrackedDevice::head: return "head";
@@ -346,10 +371,10 @@ Expected<Done> SessionStore::complete_trial(const TrialResult& r) {
       return DataError{DataError::Kind::not_found,
                        "trial " + std::to_string(r.trial_id) + " does not exist"};
     }
-    const std::string status = st.column_text(0);
+    const auto status = parse_trial_status(st.column_text(0));
     const std::int64_t session_id = st.column_int(1);
     st.reset();
-    if (status == "completed") return Done{};  // a retry after a commit that did succeed
+    if (status == TrialStatus::completed) return Done{};  // a retry after a commit that did succeed
     auto& s = stmts_->complete_trial;
     s.bind(1, r.trial_id).bind(2, r.onset_ns).bind(3, r.response_ns);
     s.bind(4, std::string_view(r.response)).bind(5, std::string_view(r.response_device));
@@ -432,11 +457,10 @@ Expected<Done> SessionStore::close_session(std::int64_t session_id, SessionStatu
   });
 }
 
-Expected<std::int64_t> SessionStore::count_trials(std::int64_t session_id,
-                                                  const std::string& status) {
+Expected<std::int64_t> SessionStore::count_trials(std::int64_t session_id, std::optional<TrialStatus> status) {
   return guarded(db_, [&]() -> std::int64_t {
     auto& s = stmts_->count_trials;
-    s.bind(1, session_id).bind(2, std::string_view(status));
+    s.bind(1, session_id).bind_static(2, status ? std::string_view(to_string(*status)) : std::string_view());
     s.step();
     const std::int64_t n = s.column_int(0);
     s.reset();

@@ -76,7 +76,7 @@ Result<ResumePoint> read_resume_point(data::SessionStore& store, const std::stri
   if (*next) {
     rp.first = static_cast<std::size_t>((*next)->trial_index);
     rp.attempts = (*next)->attempt;
-    auto aborts = store.trial_event_count((*next)->trial_id, "trial_aborted");
+    auto aborts = store.trial_event_count((*next)->trial_id, data::EventKind::trial_aborted);
     if (!aborts) return aborts.error();
     rp.aborts = *aborts;
   }
@@ -104,7 +104,7 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
   out.participant = prov->pseudonym;
   out.participant_number = *prov->participant_number;
   out.seed = prov->seed;
-  out.status = data::to_string(prov->status);
+  out.status = prov->status;
   out.backend = prov->backend ? data::to_string(*prov->backend) : "unknown";
   if (prov->table_calibration_json) {
     auto fit = parse_calibration_json(*prov->table_calibration_json);
@@ -120,7 +120,7 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
                          const devices::Clock& clock) {
   auto lock = data::WriterLock::for_session(db_path, session_id);
   if (!lock) return lock.error();
-  if (stored.status == "completed")
+  if (stored.status == data::SessionStatus::completed)
     return Error{Error::Kind::usage, db_path + ": session " + std::to_string(session_id) + " is already completed"};
   protocol::Design design = protocol::expand_design(p, stored.participant_number);
   if (static_cast<std::int64_t>(design.seed) != stored.seed)
@@ -131,8 +131,8 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   auto point = read_resume_point(store, db_path, session_id, p, design);
   if (!point) return point.error();
   if (auto r = store.set_session_status(session_id, data::SessionStatus::running); !r) return r.error();
-  Json detail{{"from_trial", point->first}, {"backend", backend.info().name}};
-  if (auto r = store.record_event({session_id, std::nullopt, clock.now_ns(), "resume", detail.dump()}); !r)
+  const data::events::Resume resumed{point->first, backend.info().name};
+  if (auto r = store.record_event(data::event_record(session_id, std::nullopt, clock.now_ns(), resumed)); !r)
     return r.error();
   auto writer = data::SampleWriter::open(db_path);
   if (!writer) return writer.error();

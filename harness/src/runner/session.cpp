@@ -67,16 +67,13 @@ Result<data::StartedSession> create(
   if (!protocol_id) return protocol_id.error();
   auto participant_id = store.add_participant({options.participant, options.ipd_m, options.dominant_eye});
   if (!participant_id) return participant_id.error();
-  Json start{{"participant_number", options.participant_number},
-             {"seed", design.seed},
-             {"protocol_seed", design.protocol_seed},
-             {"backend", info.name},
-             {"msaa", info.msaa},
-             {"trials", design.trials.size()}};
-  if (design.counterbalance_row) start["counterbalance_row"] = *design.counterbalance_row;
-  std::vector<data::EventRecord> events{{0, std::nullopt, clock.now_ns(), "session_start", start.dump()}};
+  data::events::SessionStart start{options.participant_number, design.seed, design.protocol_seed, info.name,
+                                   info.msaa, design.trials.size(), std::nullopt};
+  if (design.counterbalance_row) start.counterbalance_row = *design.counterbalance_row;
+  std::vector<data::EventRecord> events{data::event_record(0, std::nullopt, clock.now_ns(), start)};
   if (options.observer)
-    events.push_back({0, std::nullopt, clock.now_ns(), "observer", observer_json(*options.observer)});
+    events.push_back(
+        data::event_record(0, std::nullopt, clock.now_ns(), data::events::Observer{observer_json(*options.observer)}));
   return store.start_session(session_record(*protocol_id, *participant_id, info, design, calibration),
                              block_plans(p, design), events,
                              [&lock](std::int64_t session_id) { return lock.claim(session_id); });

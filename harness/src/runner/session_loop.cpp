@@ -45,6 +45,23 @@ std::string trial_line(const PlannedTrial& t) {
 
 constexpr std::int64_t ms_to_ns(std::int64_t v) { return v * 1'000'000; }
 
+// The event a page is logged as; pages are shown only in these three phases.
+data::EventKind page_event(Phase phase) {
+  switch (phase) {
+    case Phase::instructions: return data::EventKind::instructions;
+    case Phase::break_page: return data::EventKind::break_page;
+    case Phase::done: return data::EventKind::done;
+    case Phase::fixation:
+    case Phase::stimulus:
+    case Phase::response:
+    case Phase::iti:
+    case Phase::paused:
+    case Phase::tracking_lost: break;
+  }
+  std::fprintf(stderr, "curvlab: a page shown in phase %s\n", std::string(to_string(phase)).c_str());
+  std::abort();
+}
+
 // How long the attempt's current phase lasts after `now_ns`.
 std::int64_t phase_left(const Attempt& a, Phase phase, const protocol::Timeline& tl, std::int64_t now_ns) {
   const auto onset = a.onset_frame_ns();
@@ -125,7 +142,7 @@ class SessionLoop::Impl {
       if (staircase_finished(t)) {
         writer_.journal(data::EndUnanswered{trial_ids_[i], false, "staircase_finished"});
         ++summary_.trials_skipped;
-        report_trial(i, "skipped", "staircase_finished");
+        report_trial(i, data::TrialStatus::skipped, "staircase_finished");
         continue;
       }
       if (run_trial(i) == Outcome::quit) return Outcome::quit;
@@ -139,7 +156,7 @@ class SessionLoop::Impl {
     if (block_position_ == t.block_position) return Outcome::done;
     block_position_ = t.block_position;
     const auto& pb = design_.blocks.at(t.block_position);
-    event(std::nullopt, "block_start", Json{{"block", pb.name}, {"block_index", t.block_position}});
+    event(std::nullopt, data::events::BlockStart{pb.name, static_cast<std::int64_t>(t.block_position)});
     if (t.trial_in_block != 0 && i != first) return Outcome::done;
     return pages(pb.instructions, Phase::instructions, 0, std::nullopt);
   }
@@ -157,13 +174,13 @@ class SessionLoop::Impl {
   }
 
   void end_session(data::SessionStatus status) {
-    event(std::nullopt, "session_end", Json{{"status", data::to_string(status)}});
+    event(std::nullopt, data::events::SessionEnd{status});
     show_ended();
     // The writer applies an entry after the samples pushed before it: once
     // the closing status is durable, so is everything the session logged.
     const auto ticket = writer_.journal(data::StatusChange{session_id_, status, true});
     check(writer_.wait_durable(ticket));
-    summary_.status = data::to_string(status);
+    summary_.status = status;
   }
 
   // Leaves the session resumable: completed trials are on disk already.
@@ -188,7 +205,8 @@ class SessionLoop::Impl {
       summary_.frame_cpu_median_ms = static_cast<double>(cpu_ns_[cpu_ns_.size() / 2]) * 1e-6;
       summary_.frame_cpu_p95_ms = static_cast<double>(cpu_ns_[cpu_ns_.size() * 95 / 100]) * 1e-6;
     }
-    if (auto completed = store_.count_trials(session_id_, "completed")) summary_.trials_completed = completed.value();
+    if (auto completed = store_.count_trials(session_id_, data::TrialStatus::completed))
+      summary_.trials_completed = completed.value();
   }
 
   template <class T>
@@ -197,8 +215,8 @@ class SessionLoop::Impl {
     return std::move(r).value();
   }
 
-  void event(std::optional<std::int64_t> trial_id, std::string kind, const Json& detail) {
-    writer_.journal(data::EventRecord{session_id_, trial_id, clock_.now_ns(), std::move(kind), detail.dump()});
+  void event(std::optional<std::int64_t> trial_id, const data::Event& e) {
+    writer_.journal(data::event_record(session_id_, trial_id, clock_.now_ns(), e));
   }
 
   protocol::InterleavedStaircases& staircases_for(const PlannedTrial& t) {
@@ -316,7 +334,7 @@ class SessionLoop::Impl {
     const int sig = options_.stop_signal->load(std::memory_order_relaxed);
     if (sig == 0) return;
     if (!stop_logged_) {
-      event(std::nullopt, "signal", Json{{"signal", sig}});
+      event(std::nullopt, data::events::Signal{sig});
       stop_logged_ = true;
     }
     f.signal = BackendSignal::quit;
@@ -341,13 +359,9 @@ class SessionLoop::Impl {
   void carry_out(const OperatorAction& a) {
     const std::optional<std::int64_t> trial_id =
         current_trial_ ? std::optional<std::int64_t>(trial_ids_[*current_trial_]) : std::nullopt;
-    Json detail{{"action", to_string(a.kind)}, {"source", a.source}, {"t_ns", clock_.now_ns()}};
-    if (a.kind == OperatorActionKind::note) {
-      detail["text"] = a.text;
-      event(trial_id, "operator_note", detail);
-    } else {
-      event(trial_id, "operator_action", detail);
-    }
+    data::events::OperatorAction action{std::string(to_string(a.kind)), a.source, clock_.now_ns(), std::nullopt};
+    if (a.kind == OperatorActionKind::note) action.text = a.text;
+    event(trial_id, action);
     if (const auto signal = operator_signal(a.kind)) operator_signals_.push_back(*signal);
     console_->acted(a);
   }
@@ -400,7 +414,7 @@ class SessionLoop::Impl {
   }
 
   // One line of --progress json per trial, however it ended.
-  void report_trial(std::size_t i, const std::string& status, const std::string& reason) {
+  void report_trial(std::size_t i, data::TrialStatus status, const std::string& reason) {
     ++trials_reported_;
     const PlannedTrial& t = design_.trials[i];
     if (!progress_.json()) return;
@@ -408,12 +422,12 @@ class SessionLoop::Impl {
               {"of", design_.trials.size()},
               {"trial_id", trial_ids_[i]},
               {"block", t.block},
-              {"status", status}};
+              {"status", data::to_string(status)}};
     Json levels = Json::object();
     for (const auto& [f, l] : t.levels) levels[f] = l;
     line["conditions"] = levels;
     if (!reason.empty()) line["end_reason"] = reason;
-    if (status == "completed") {
+    if (status == data::TrialStatus::completed) {
       line["response"] = status_.last_response;
       line["rt_ms"] = status_.last_rt_ms >= 0.0 ? Json(status_.last_rt_ms) : Json(nullptr);
     }
@@ -512,7 +526,7 @@ class SessionLoop::Impl {
     scene_->show(phase, false);
     Page state(f.timing.now_ns, min_ns);
     if (observer_params()) scheduled_.push_back({f.timing.now_ns + min_ns + 300'000'000, "space"});
-    event(trial_id, std::string(to_string(phase)), Json{{"page", k}, {"text", text}});
+    event(trial_id, data::events::Page{page_event(phase), k, text});
     const Overlay overlay{phase, text, true};
     for (;;) {
       const bool advance = state.frame(f.timing.now_ns, f.inputs);
@@ -533,10 +547,10 @@ class SessionLoop::Impl {
   // nothing to repeat; the session waits for the resume.
   Outcome hold(Phase phase, std::optional<std::int64_t> trial_id) {
     const std::int64_t from = clock_.now_ns();
-    event(trial_id, "paused", Json{{"phase", to_string(phase)}});
+    event(trial_id, data::events::Paused{std::string(to_string(phase))});
     if (wait_until_ready(AbortReason::pause, trial_id) == Outcome::quit) return Outcome::quit;
-    event(trial_id, "unpaused",
-          Json{{"phase", to_string(phase)}, {"paused_ms", static_cast<double>(clock_.now_ns() - from) * 1e-6}});
+    event(trial_id, data::events::Unpaused{std::string(to_string(phase)),
+                                           static_cast<double>(clock_.now_ns() - from) * 1e-6});
     return Outcome::done;
   }
 
@@ -621,11 +635,11 @@ class SessionLoop::Impl {
         complete(t, a);
         const Outcome o = inter_trial_interval(t);
         current_trial_.reset();
-        if (o == Outcome::done) report_trial(t.index, "completed", "");
+        if (o == Outcome::done) report_trial(t.index, data::TrialStatus::completed, "");
         return o;
       }
       if (a.backend_ended) return Outcome::quit;
-      event(t.id, "trial_aborted", Json{{"reason", to_string(*a.abort)}, {"attempt", a.number}});
+      event(t.id, data::events::TrialAborted{std::string(to_string(*a.abort)), a.number});
       if (*a.abort == AbortReason::quit) return Outcome::quit;
       ++t.aborts;
       if (*a.abort == AbortReason::skip) {
@@ -639,26 +653,26 @@ class SessionLoop::Impl {
         give_up(t, *a.abort, a.number);
         return Outcome::done;
       }
-      event(t.id, "trial_repeated", Json{{"reason", to_string(*a.abort)}});
+      event(t.id, data::events::TrialRepeated{std::string(to_string(*a.abort))});
     }
   }
 
   void give_up(const TrialRun& t, AbortReason reason, std::int64_t attempts) {
     writer_.journal(data::EndUnanswered{t.id, true, std::string(to_string(reason))});
-    event(t.id, "trial_abandoned", Json{{"reason", to_string(reason)}, {"attempts", attempts}});
+    event(t.id, data::events::TrialAbandoned{std::string(to_string(reason)), attempts});
     ++summary_.trials_aborted;
     current_trial_.reset();
-    report_trial(t.index, "aborted", std::string(to_string(reason)));
+    report_trial(t.index, data::TrialStatus::aborted, std::string(to_string(reason)));
   }
 
   // The operator's skip: stored `skipped` (end_reason "operator"), so a
   // resumed session never runs it again.
   void skip(const TrialRun& t) {
     writer_.journal(data::EndUnanswered{t.id, false, "operator"});
-    event(t.id, "trial_skipped", Json{{"reason", "operator"}, {"attempts", t.attempts}});
+    event(t.id, data::events::TrialSkipped{"operator", t.attempts});
     ++summary_.trials_skipped;
     current_trial_.reset();
-    report_trial(t.index, "skipped", "operator");
+    report_trial(t.index, data::TrialStatus::skipped, "operator");
   }
 
   // A new attempt: the stimulus from its start values, the observer's
@@ -751,7 +765,7 @@ class SessionLoop::Impl {
       switch (verdict.use) {
         case InputUse::ignored: break;
         case InputUse::early:
-          event(t.id, "early_input", Json{{"name", in.name}, {"device", in.device}, {"t_ns", in.t_ns}});
+          event(t.id, data::events::EarlyInput{in.name, in.device, in.t_ns});
           break;
         case InputUse::choose:
           a.answer = std::pair{t.judgement->options[verdict.option].value, in};
@@ -763,7 +777,7 @@ class SessionLoop::Impl {
           protocol::set_numeric_setting(t.settings, t.judgement->adjustment->parameter, a.adjustment->value());
           a.placement = place_stimulus(*world_, t.settings, a.head_at_onset);
           scene_->set_stimulus(t.settings, a.placement);
-          event(t.id, "adjustment", Json{{"value", a.adjustment->value()}, {"frame_index", frame_index_}});
+          event(t.id, data::events::Adjustment{a.adjustment->value(), frame_index_});
           break;
         case InputUse::confirm: {
           a.adjustment->confirm();
@@ -779,32 +793,27 @@ class SessionLoop::Impl {
 
   void log_onset(const TrialRun& t, const AttemptRun& a, const renderer::FrameStats& stats,
                  std::int64_t display_ns) {
-    Json detail{{"frame_index", frame_index_ - 1},
-                {"predicted_display_ns", display_ns},
-                {"attempt", a.number},
-                {"head_pose", matrix_json(a.head_at_onset)},
-                {"stick_pose", matrix_json(a.placement.stick_pose)},
-                {"views", stats.views},
-                {"draws", stats.draws}};
-    if (observer_) detail["perceived_sagitta_m"] = last_perceived_;
+    data::events::Onset onset{frame_index_ - 1, display_ns,         a.number,    pose16(a.head_at_onset),
+                              pose16(a.placement.stick_pose), stats.views, stats.draws, std::nullopt,
+                              std::nullopt};
+    if (observer_) onset.perceived_sagitta_m = last_perceived_;
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
       char stem[32];
       std::snprintf(stem, sizeof stem, "trial_%04zu", t.index);
       const auto path = std::filesystem::path(options_.images_dir) / stem;
       const auto files = backend_.save_frame(path.string());
       if (!files.empty()) check(write_onset_record(path.string() + ".json", *world_, t.settings, a.placement, a.onset_view));
-      detail["images"] = files;
+      onset.images = files;
       summary_.images.insert(summary_.images.end(), files.begin(), files.end());
     }
-    event(t.id, "onset", detail);
+    event(t.id, onset);
   }
 
   // The answer (or the timeout), the staircase's step and the lost tracking,
   // journalled; durable before the next trial starts.
   void complete(TrialRun& t, const AttemptRun& a) {
     if (a.lost_spells > 0) {
-      event(t.id, "tracking_flagged",
-            Json{{"lost_ms", static_cast<double>(a.lost_ns) * 1e-6}, {"spells", a.lost_spells}, {"attempt", a.number}});
+      event(t.id, data::events::TrackingFlagged{static_cast<double>(a.lost_ns) * 1e-6, a.lost_spells, a.number});
       ++summary_.trials_flagged;
     }
     data::TrialResult r;

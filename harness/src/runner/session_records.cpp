@@ -26,10 +26,10 @@ std::string staircase_key(const Protocol& p, const PlannedTrial& t) {
   return key + b.judgement.staircases.at(static_cast<std::size_t>(t.staircase)).name;
 }
 
-Json matrix_json(const geometry::Isometry& iso) {
-  Json a = Json::array();
+data::Pose16 pose16(const geometry::Isometry& iso) {
+  data::Pose16 a{};
   for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) a.push_back(iso.m[c][r]);
+    for (int r = 0; r < 4; ++r) a[static_cast<std::size_t>(c * 4 + r)] = iso.m[c][r];
   return a;
 }
 

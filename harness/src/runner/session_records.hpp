@@ -3,6 +3,7 @@
 #pragma once
 
 #include "curvlab/geometry/isometry.hpp"
+#include "curvlab/harness/data/events.hpp"
 #include "curvlab/harness/data/records.hpp"
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
@@ -23,7 +24,7 @@ const protocol::Block& block_of(const protocol::Protocol& p, const std::string& 
 // the block has several, and the staircase's own name.
 std::string staircase_key(const protocol::Protocol& p, const protocol::PlannedTrial& t);
 // A 4×4 isometry as 16 numbers, column-major.
-Json matrix_json(const geometry::Isometry& iso);
+data::Pose16 pose16(const geometry::Isometry& iso);
 // Every block and trial of a design, as the store keeps them.
 std::vector<data::BlockPlan> block_plans(const protocol::Protocol& p, const protocol::Design& d);
 

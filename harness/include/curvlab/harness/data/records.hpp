@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace curvlab::data {
@@ -13,11 +14,15 @@ namespace curvlab::data {
 enum class DominantEye { left, right, unknown };
 enum class Backend { headless, desktop, xr };
 enum class SessionStatus { running, paused, completed, aborted, interrupted };
+enum class TrialStatus { pending, running, completed, skipped, aborted };
 enum class TrackedDevice : std::uint8_t { head, left_hand, right_hand, other };
 
 const char* to_string(DominantEye eye);
 const char* to_string(Backend backend);
 const char* to_string(SessionStatus status);
+const char* to_string(TrialStatus status);
+std::optional<SessionStatus> parse_session_status(std::string_view text);
+std::optional<TrialStatus> parse_trial_status(std::string_view text);
 const char* to_string(TrackedDevice device);
 
 // No names or other identifying data: a pseudonym of [A-Za-z0-9_-], 1–32 chars.

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/events.hpp"
 #include "curvlab/harness/data/records.hpp"
 
 #include <array>
@@ -143,7 +144,7 @@ Expected<std::optional<FrameSpan>> read_trial_frame_span(Database& db, std::int6
 // How many events of `kind` a trial logged (e.g. its trial_aborted events:
 // the attempts that ended in an abort, which a resumed session's random
 // streams count).
-Expected<std::int64_t> read_trial_event_count(Database& db, std::int64_t trial_id, const std::string& kind);
+Expected<std::int64_t> read_trial_event_count(Database& db, std::int64_t trial_id, EventKind kind);
 
 Expected<std::optional<ViewGeometry>> read_view_geometry(Database& db, std::int64_t session_id,
                                                          std::int64_t frame_index);

@@ -73,7 +73,7 @@ class SessionStore {
   Expected<Done> set_session_status(std::int64_t session_id, SessionStatus status);
   // Sets the final status and the end time.
   Expected<Done> close_session(std::int64_t session_id, SessionStatus status);
-  Expected<std::int64_t> count_trials(std::int64_t session_id, const std::string& status);
+  Expected<std::int64_t> count_trials(std::int64_t session_id, std::optional<TrialStatus> status);
 
   // Reading the session back to resume it, through this store's connection
   // (the same functions as session_reader.hpp's).
@@ -82,7 +82,7 @@ class SessionStore {
   Expected<std::vector<StoredStaircaseResponse>> staircase_responses(std::int64_t session_id) {
     return read_staircase_responses(db_, session_id);
   }
-  Expected<std::int64_t> trial_event_count(std::int64_t trial_id, const std::string& kind) {
+  Expected<std::int64_t> trial_event_count(std::int64_t trial_id, EventKind kind) {
     return read_trial_event_count(db_, trial_id, kind);
   }
 

@@ -70,7 +70,7 @@ struct RunOptions {
 struct SessionSummary {
   std::string db_path;
   std::int64_t session_id = 0;
-  std::string status;  // completed, interrupted, aborted
+  data::SessionStatus status = data::SessionStatus::running;  // completed, interrupted or aborted at the end
   std::int64_t trials_planned = 0;
   std::int64_t trials_completed = 0;
   std::int64_t trials_skipped = 0;   // stopped staircases' slots
@@ -102,7 +102,7 @@ struct StoredSession {
   std::string participant;
   std::uint64_t participant_number = 1;
   std::int64_t seed = 0;
-  std::string status;
+  data::SessionStatus status = data::SessionStatus::running;
   std::string backend;
   std::optional<geometry::PhysicalTableFit> calibration;
   std::optional<ObserverParams> observer;

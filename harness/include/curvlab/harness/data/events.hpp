@@ -1,0 +1,158 @@
+// The session's events, one struct each (data_schema/codebook.md, "events"):
+// the runner builds these, the data layer turns each into its `events` row
+// (kind and JSON detail) and reads the ones it needs back. The kind names
+// and JSON keys live only here and in events.cpp.
+#pragma once
+
+#include "curvlab/harness/data/error.hpp"
+#include "curvlab/harness/data/records.hpp"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace curvlab::data {
+
+enum class EventKind {
+  session_start,
+  observer,
+  resume,
+  block_start,
+  instructions,  // an instruction page shown
+  break_page,    // a break page shown
+  done,          // the closing page shown
+  session_end,
+  signal,
+  operator_action,
+  operator_note,
+  paused,
+  unpaused,
+  trial_aborted,
+  trial_repeated,
+  trial_abandoned,
+  trial_skipped,
+  early_input,
+  adjustment,
+  onset,
+  tracking_flagged,
+  merged_from,
+  session_renumbered,
+};
+
+std::string_view to_string(EventKind kind);
+std::optional<EventKind> parse_event_kind(std::string_view text);
+
+using Pose16 = std::array<double, 16>;  // column-major 4×4
+
+namespace events {
+
+struct SessionStart {
+  std::uint64_t participant_number = 1;
+  std::uint64_t seed = 0;
+  std::uint64_t protocol_seed = 0;
+  std::string backend;
+  std::uint32_t msaa = 1;
+  std::size_t trials = 0;
+  std::optional<std::size_t> counterbalance_row;
+};
+// The simulated observer's parameters, as the runner writes them.
+struct Observer {
+  std::string params_json;
+};
+struct Resume {
+  std::size_t from_trial = 0;
+  std::string backend;
+};
+struct BlockStart {
+  std::string block;
+  std::int64_t block_index = 0;
+};
+// A page of text: `kind` is instructions, break_page or done.
+struct Page {
+  EventKind kind = EventKind::instructions;
+  std::size_t page = 0;
+  std::string text;
+};
+struct SessionEnd {
+  SessionStatus status = SessionStatus::completed;
+};
+struct Signal {
+  int signal = 0;
+};
+struct OperatorAction {
+  std::string action;
+  std::string source;
+  std::int64_t t_ns = 0;
+  std::optional<std::string> text;  // a note's text (an operator_note event)
+};
+struct Paused {
+  std::string phase;
+};
+struct Unpaused {
+  std::string phase;
+  double paused_ms = 0.0;
+};
+struct TrialAborted {
+  std::string reason;
+  std::int64_t attempt = 0;
+};
+struct TrialRepeated {
+  std::string reason;
+};
+struct TrialAbandoned {
+  std::string reason;
+  std::int64_t attempts = 0;
+};
+struct TrialSkipped {
+  std::string reason;
+  std::int64_t attempts = 0;
+};
+struct EarlyInput {
+  std::string name;
+  std::string device;
+  std::int64_t t_ns = 0;
+};
+struct Adjustment {
+  double value = 0.0;
+  std::int64_t frame_index = 0;
+};
+struct Onset {
+  std::int64_t frame_index = 0;
+  std::int64_t predicted_display_ns = 0;
+  std::int64_t attempt = 1;
+  Pose16 head_pose{};
+  Pose16 stick_pose{};
+  int views = 0;
+  int draws = 0;
+  std::optional<double> perceived_sagitta_m;
+  std::optional<std::vector<std::string>> images;
+};
+struct TrackingFlagged {
+  double lost_ms = 0.0;
+  std::int64_t spells = 0;
+  std::int64_t attempt = 0;
+};
+
+}  // namespace events
+
+using Event = std::variant<events::SessionStart, events::Observer, events::Resume, events::BlockStart, events::Page,
+                           events::SessionEnd, events::Signal, events::OperatorAction, events::Paused,
+                           events::Unpaused, events::TrialAborted, events::TrialRepeated, events::TrialAbandoned,
+                           events::TrialSkipped, events::EarlyInput, events::Adjustment, events::Onset,
+                           events::TrackingFlagged>;
+
+// The row an event is stored as.
+EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,
+                         const Event& event);
+
+// Reading back the details a resumed or replayed session needs; bad_input
+// (the caller names the file) when the stored JSON lacks a field or has the
+// wrong shape.
+Expected<events::SessionStart> parse_session_start(const std::string& detail_json);
+Expected<events::Onset> parse_onset(const std::string& detail_json);
+
+}  // namespace curvlab::data

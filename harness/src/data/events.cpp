@@ -1,0 +1,174 @@
+#include "curvlab/harness/data/events.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+
+namespace curvlab::data {
+namespace {
+
+// Key order is kept as written (ordered_json): the stored detail reads in
+// the order a person expects, and equal events give equal texts.
+using Json = nlohmann::ordered_json;
+
+constexpr std::array<std::pair<EventKind, std::string_view>, 23> kind_names{{
+    {EventKind::session_start, "session_start"},
+    {EventKind::observer, "observer"},
+    {EventKind::resume, "resume"},
+    {EventKind::block_start, "block_start"},
+    {EventKind::instructions, "instructions"},
+    {EventKind::break_page, "break_page"},
+    {EventKind::done, "done"},
+    {EventKind::session_end, "session_end"},
+    {EventKind::signal, "signal"},
+    {EventKind::operator_action, "operator_action"},
+    {EventKind::operator_note, "operator_note"},
+    {EventKind::paused, "paused"},
+    {EventKind::unpaused, "unpaused"},
+    {EventKind::trial_aborted, "trial_aborted"},
+    {EventKind::trial_repeated, "trial_repeated"},
+    {EventKind::trial_abandoned, "trial_abandoned"},
+    {EventKind::trial_skipped, "trial_skipped"},
+    {EventKind::early_input, "early_input"},
+    {EventKind::adjustment, "adjustment"},
+    {EventKind::onset, "onset"},
+    {EventKind::tracking_flagged, "tracking_flagged"},
+    {EventKind::merged_from, "merged_from"},
+    {EventKind::session_renumbered, "session_renumbered"},
+}};
+
+Json pose_json(const Pose16& m) {
+  Json a = Json::array();
+  for (const double v : m) a.push_back(v);
+  return a;
+}
+
+bool read_pose(const Json& j, Pose16& out) {
+  if (!j.is_array() || j.size() != 16) return false;
+  for (std::size_t i = 0; i < 16; ++i) {
+    if (!j[i].is_number()) return false;
+    out[i] = j[i].get<double>();
+  }
+  return true;
+}
+
+// The kind and detail (a JSON text) of each event.
+struct Detail {
+  Detail(EventKind k, const Json& j) : kind(k), text(j.dump()) {}
+  Detail(EventKind k, std::string t) : kind(k), text(std::move(t)) {}
+  EventKind kind;
+  std::string text;
+};
+
+Detail detail(const events::SessionStart& e) {
+  Json j{{"participant_number", e.participant_number}, {"seed", e.seed}, {"protocol_seed", e.protocol_seed},
+         {"backend", e.backend},  {"msaa", e.msaa},    {"trials", e.trials}};
+  if (e.counterbalance_row) j["counterbalance_row"] = *e.counterbalance_row;
+  return {EventKind::session_start, j};
+}
+Detail detail(const events::Observer& e) { return {EventKind::observer, e.params_json}; }
+Detail detail(const events::Resume& e) {
+  return {EventKind::resume, Json{{"from_trial", e.from_trial}, {"backend", e.backend}}};
+}
+Detail detail(const events::BlockStart& e) {
+  return {EventKind::block_start, Json{{"block", e.block}, {"block_index", e.block_index}}};
+}
+Detail detail(const events::Page& e) { return {e.kind, Json{{"page", e.page}, {"text", e.text}}}; }
+Detail detail(const events::SessionEnd& e) { return {EventKind::session_end, Json{{"status", to_string(e.status)}}}; }
+Detail detail(const events::Signal& e) { return {EventKind::signal, Json{{"signal", e.signal}}}; }
+Detail detail(const events::OperatorAction& e) {
+  Json j{{"action", e.action}, {"source", e.source}, {"t_ns", e.t_ns}};
+  if (e.text) j["text"] = *e.text;
+  return {e.text ? EventKind::operator_note : EventKind::operator_action, j};
+}
+Detail detail(const events::Paused& e) { return {EventKind::paused, Json{{"phase", e.phase}}}; }
+Detail detail(const events::Unpaused& e) {
+  return {EventKind::unpaused, Json{{"phase", e.phase}, {"paused_ms", e.paused_ms}}};
+}
+Detail detail(const events::TrialAborted& e) {
+  return {EventKind::trial_aborted, Json{{"reason", e.reason}, {"attempt", e.attempt}}};
+}
+Detail detail(const events::TrialRepeated& e) { return {EventKind::trial_repeated, Json{{"reason", e.reason}}}; }
+Detail detail(const events::TrialAbandoned& e) {
+  return {EventKind::trial_abandoned, Json{{"reason", e.reason}, {"attempts", e.attempts}}};
+}
+Detail detail(const events::TrialSkipped& e) {
+  return {EventKind::trial_skipped, Json{{"reason", e.reason}, {"attempts", e.attempts}}};
+}
+Detail detail(const events::EarlyInput& e) {
+  return {EventKind::early_input, Json{{"name", e.name}, {"device", e.device}, {"t_ns", e.t_ns}}};
+}
+Detail detail(const events::Adjustment& e) {
+  return {EventKind::adjustment, Json{{"value", e.value}, {"frame_index", e.frame_index}}};
+}
+Detail detail(const events::Onset& e) {
+  Json j{{"frame_index", e.frame_index},
+         {"predicted_display_ns", e.predicted_display_ns},
+         {"attempt", e.attempt},
+         {"head_pose", pose_json(e.head_pose)},
+         {"stick_pose", pose_json(e.stick_pose)},
+         {"views", e.views},
+         {"draws", e.draws}};
+  if (e.perceived_sagitta_m) j["perceived_sagitta_m"] = *e.perceived_sagitta_m;
+  if (e.images) j["images"] = *e.images;
+  return {EventKind::onset, j};
+}
+Detail detail(const events::TrackingFlagged& e) {
+  return {EventKind::tracking_flagged, Json{{"lost_ms", e.lost_ms}, {"spells", e.spells}, {"attempt", e.attempt}}};
+}
+
+DataError bad_detail(std::string_view kind, const std::string& what) {
+  return DataError{DataError::Kind::bad_input, "a stored " + std::string(kind) + " event " + what};
+}
+
+}  // namespace
+
+std::string_view to_string(EventKind kind) {
+  for (const auto& [k, name] : kind_names)
+    if (k == kind) return name;
+  return "unknown";
+}
+
+std::optional<EventKind> parse_event_kind(std::string_view text) {
+  for (const auto& [k, name] : kind_names)
+    if (name == text) return k;
+  return std::nullopt;
+}
+
+EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,
+                         const Event& event) {
+  Detail d = std::visit([](const auto& e) { return detail(e); }, event);
+  return EventRecord{session_id, trial_id, t_ns, std::string(to_string(d.kind)), std::move(d.text)};
+}
+
+Expected<events::SessionStart> parse_session_start(const std::string& detail_json) {
+  const Json d = Json::parse(detail_json, nullptr, false);
+  if (d.is_discarded() || !d.is_object()) return bad_detail("session_start", "is not a JSON object");
+  events::SessionStart s;
+  const auto number = d.find("participant_number");
+  if (number != d.end()) {
+    if (!number->is_number_unsigned()) return bad_detail("session_start", "has a participant_number that is not a whole number");
+    s.participant_number = number->get<std::uint64_t>();
+  }
+  if (const auto msaa = d.find("msaa"); msaa != d.end() && msaa->is_number_unsigned())
+    s.msaa = msaa->get<std::uint32_t>();
+  if (const auto backend = d.find("backend"); backend != d.end() && backend->is_string())
+    s.backend = backend->get<std::string>();
+  return s;
+}
+
+Expected<events::Onset> parse_onset(const std::string& detail_json) {
+  const Json d = Json::parse(detail_json, nullptr, false);
+  events::Onset o;
+  const bool ok = d.is_object() && d.contains("frame_index") && d["frame_index"].is_number_integer() &&
+                  d.contains("head_pose") && read_pose(d["head_pose"], o.head_pose) && d.contains("stick_pose") &&
+                  read_pose(d["stick_pose"], o.stick_pose);
+  if (!ok) return bad_detail("onset", "lacks frame_index, head_pose or stick_pose (16 numbers each)");
+  o.frame_index = d["frame_index"].get<std::int64_t>();
+  if (const auto t = d.find("predicted_display_ns"); t != d.end() && t->is_number_integer())
+    o.predicted_display_ns = t->get<std::int64_t>();
+  if (const auto a = d.find("attempt"); a != d.end() && a->is_number_integer()) o.attempt = a->get<std::int64_t>();
+  return o;
+}
+
+}  // namespace curvlab::data
