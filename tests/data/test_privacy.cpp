@@ -1,0 +1,72 @@
+// What a data file and its exports reveal about the people of a lab: no
+// folder of the machine they ran on (a home folder carries a name), and no
+// pseudonym that is a name with a birth date, an e-mail address or an
+// option. docs/data.md, "Privacy", lists the rules.
+#include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/session_store.hpp"
+#include "curvlab/harness/data/sqlite.hpp"
+
+#include "../cli/run_cli.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace curvlab::data;
+using curvlab::testing::run_cli;
+
+namespace {
+
+const std::string kDemo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("curvlab_privacy_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+}  // namespace
+
+TEST(Privacy, PseudonymsInUseStayValid) {
+  for (const char* ok : {"P01", "P-01", "P_01", "SIM1", "S-003", "pilot_2", "pilot1", "X01", "T1", "F01", "P1",
+                         "P2024", "S01-2024", "P01-2024-13", "0123456789", "A1234567890123456789012345678901"})
+    EXPECT_TRUE(valid_pseudonym(ok)) << ok;
+}
+
+TEST(Privacy, PseudonymsWithADateAnEmailOrALeadingDashAreRefused) {
+  for (const char* bad : {"John_Smith_1985-03-14", "js_14-03-1985", "js_03_14_1985", "JS19850314", "P14031985",
+                          "1985_3_14", "2024-12-31_P01", "--help", "-P01", "jane@example.org", "Jane Doe", "",
+                          "A12345678901234567890123456789012"})
+    EXPECT_FALSE(valid_pseudonym(bad)) << bad;
+
+  // The store refuses them with the reason.
+  const auto dir = fresh_dir("pseudonyms");
+  auto db = Database::open((dir / "s.sqlite").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(db);
+  SessionStore store(std::move(db).value());
+  const std::pair<const char*, const char*> reasons[] = {
+      {"John_Smith_1985-03-14", "the date 1985-03-14"},
+      {"--help", "begins with '-'"},
+      {"jane@example.org", "'@'"},
+  };
+  for (const auto& [pseudonym, reason] : reasons) {
+    const auto added = store.add_participant({pseudonym, std::nullopt, DominantEye::unknown});
+    ASSERT_FALSE(added) << pseudonym;
+    EXPECT_EQ(added.error().kind, DataError::Kind::bad_input);
+    EXPECT_NE(added.error().message.find(reason), std::string::npos) << added.error().message;
+  }
+}
+
+TEST(CliPrivacy, ADatedPseudonymIsRefusedBeforeAFileIsCreated) {
+  const auto dir = fresh_dir("dated");
+  const auto r = run_cli("run " + kDemo + " --participant John_Smith_1985-03-14 --db " + (dir / "s.sqlite").string() +
+                         " --render none --quiet");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("--participant"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "s.sqlite"));
+}
