@@ -248,7 +248,7 @@ TEST(MergeCli, TwoMachinesPoolIntoOneStudyKeepingEveryRowAndItsProvenance) {
     EXPECT_EQ(scalar(study, "SELECT json_extract(e.detail, '$.source_file') FROM events e JOIN sessions s "
                             "ON s.session_id = e.session_id WHERE e.kind = 'merged_from' AND s.session_uuid = '" +
                                 uuid + "'"),
-              fs::absolute(file).lexically_normal().string());
+              file.filename().string());
   }
   // B's P01 session clashed with A's session 1 of P01 and became session 2.
   const std::string b_p01 = uuid_of(m.b, "P01");

@@ -30,6 +30,20 @@ fs::path fresh_dir(const std::string& name) {
   return dir;
 }
 
+std::string scalar(const fs::path& db, const std::string& sql) {
+  auto d = Database::open(db.string(), OpenMode::read_only);
+  if (!d) return d.error().message;
+  Statement s(d.value().connection(), sql);
+  if (!s.step() || s.is_null(0)) return "NULL";
+  return s.column_text(0);
+}
+
+void run_session(const fs::path& db, const std::string& pseudonym) {
+  const auto r = run_cli("run " + kDemo + " --participant " + pseudonym + " --db " + db.string() +
+                         " --render none --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+}
+
 }  // namespace
 
 TEST(Privacy, PseudonymsInUseStayValid) {
@@ -69,4 +83,32 @@ TEST(CliPrivacy, ADatedPseudonymIsRefusedBeforeAFileIsCreated) {
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("--participant"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir / "s.sqlite"));
+}
+
+TEST(CliPrivacy, TheStoredProtocolSourceIsItsFileNameAlone) {
+  const auto dir = fresh_dir("source");
+  ASSERT_TRUE(fs::path(kDemo).is_absolute());
+  run_session(dir / "a.sqlite", "P01");
+  EXPECT_EQ(scalar(dir / "a.sqlite", "SELECT group_concat(source_path) FROM protocols"), "demo.toml");
+}
+
+TEST(CliPrivacy, MergeCarriesFileNamesNotFolders) {
+  const auto dir = fresh_dir("merge");
+  run_session(dir / "a.sqlite", "P01");
+  // As a file written before only file names were stored.
+  {
+    auto db = Database::open((dir / "a.sqlite").string(), OpenMode::open_existing);
+    ASSERT_TRUE(db);
+    db.value().connection().exec("UPDATE protocols SET source_path = '/home/jane.doe/study/demo.toml'");
+  }
+  const auto r = run_cli("merge --out " + (dir / "study.sqlite").string() + " " + (dir / "a.sqlite").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(scalar(dir / "study.sqlite", "SELECT group_concat(source_path) FROM protocols"), "demo.toml");
+  EXPECT_EQ(scalar(dir / "study.sqlite",
+                   "SELECT group_concat(json_extract(detail, '$.source_file')) FROM events WHERE kind = 'merged_from'"),
+            "a.sqlite");
+  // No event names the folder the file was in.
+  EXPECT_EQ(scalar(dir / "study.sqlite", "SELECT count(*) FROM events WHERE instr(detail, '" + dir.string() +
+                                             "') OR instr(detail, 'jane.doe')"),
+            "0");
 }

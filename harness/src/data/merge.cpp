@@ -176,7 +176,11 @@ Expected<Done> check_protocol_versions(Connection& c, const MergeOptions& opts, 
 }
 
 void copy_protocols_and_participants(Connection& c) {
-  c.exec("INSERT INTO main.protocols (name, sha256, text, source_path) SELECT name, sha256, text, source_path "
+  // source_path as its file name alone: files written before only the name
+  // was stored hold the folder, which can name a person. rtrim leaves the
+  // folder part (up to the last '/'), and the name follows it.
+  c.exec("INSERT INTO main.protocols (name, sha256, text, source_path) SELECT name, sha256, text, "
+         "substr(source_path, length(rtrim(source_path, replace(source_path, '/', ''))) + 1) "
          "FROM src.protocols WHERE sha256 NOT IN (SELECT sha256 FROM main.protocols) ORDER BY protocol_id");
   c.exec("INSERT INTO main.participants (pseudonym, ipd_m, dominant_eye, created_utc) SELECT pseudonym, ipd_m, "
          "dominant_eye, created_utc FROM src.participants WHERE pseudonym NOT IN "
@@ -310,7 +314,8 @@ void add_session(Connection& c, const SourceSession& src, const std::string& inp
     s.bind(1, src.id).bind(2, id).run();
     if (copy.counted != nullptr) report.*copy.counted += c.changes();
   }
-  const std::string source_file = fs::absolute(input).lexically_normal().string();
+  // The file name, not its folder: a folder can name a person.
+  const std::string source_file = fs::path(input).filename().string();
   add_merge_event(c, id, "merged_from",
                   {{"source_file", source_file},
                    {"source_session_id", src.id},

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -235,7 +236,9 @@ Expected<std::int64_t> SessionStore::add_protocol(const std::string& name,
     Transaction txn(db_.connection());
     auto& s = stmts_->insert_protocol;
     s.bind(1, std::string_view(name)).bind(2, std::string_view(digest)).bind(3, std::string_view(text));
-    if (source_path.empty()) s.bind_null(4); else s.bind(4, std::string_view(source_path));
+    // The file name only: the folder can name a person (/home/<name>/…).
+    const std::string file_name = std::filesystem::path(source_path).filename().string();
+    if (file_name.empty()) s.bind_null(4); else s.bind(4, std::string_view(file_name));
     s.run();
     auto& f = stmts_->find_protocol;
     f.bind(1, std::string_view(digest));
