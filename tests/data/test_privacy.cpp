@@ -30,6 +30,13 @@ fs::path fresh_dir(const std::string& name) {
   return dir;
 }
 
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 std::string scalar(const fs::path& db, const std::string& sql) {
   auto d = Database::open(db.string(), OpenMode::read_only);
   if (!d) return d.error().message;
@@ -111,4 +118,25 @@ TEST(CliPrivacy, MergeCarriesFileNamesNotFolders) {
   EXPECT_EQ(scalar(dir / "study.sqlite", "SELECT count(*) FROM events WHERE instr(detail, '" + dir.string() +
                                              "') OR instr(detail, 'jane.doe')"),
             "0");
+}
+
+TEST(CliPrivacy, ExportDescriptionsNameFilesNotFolders) {
+  const auto dir = fresh_dir("describe");
+  run_session(dir / "a.sqlite", "P01");
+  run_session(dir / "b.sqlite", "P02");
+  const auto pooled = run_cli("export --db " + (dir / "a.sqlite").string() + " " + (dir / "b.sqlite").string() +
+                              " --out " + (dir / "pooled").string());
+  ASSERT_EQ(pooled.exit_code, 0) << pooled.out;
+  const auto single = run_cli("export --db " + (dir / "a.sqlite").string() + " --out " + (dir / "single").string());
+  ASSERT_EQ(single.exit_code, 0) << single.out;
+  for (const char* out : {"pooled", "single"}) {
+    const std::string description = read_file(dir / out / "psychds" / "dataset_description.json");
+    EXPECT_NE(description.find("a.sqlite"), std::string::npos) << description;
+    EXPECT_EQ(description.find(dir.string()), std::string::npos) << description;
+    EXPECT_EQ(description.find(fs::temp_directory_path().string() + "/"), std::string::npos) << description;
+    for (const auto& e : fs::recursive_directory_iterator(dir / out)) {
+      if (!e.is_regular_file()) continue;
+      EXPECT_EQ(read_file(e.path()).find(dir.string()), std::string::npos) << e.path();
+    }
+  }
 }

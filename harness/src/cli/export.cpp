@@ -83,7 +83,10 @@ void run_export(const ExportArgs& a, bool session_given) {
   if (!single) pooled = std::make_unique<PooledInputs>(inputs);
   auto db = data::Database::open(single ? inputs.front() : pooled->path(), data::OpenMode::open_existing);
   if (!db) raise(db.error());
-  data::ExportOptions options{a.out_dir, std::nullopt, single ? "" : joined(inputs)};
+  // The description names the files, not their folders (docs/data.md, "Privacy").
+  std::vector<std::string> names;
+  for (const auto& input : inputs) names.push_back(fs::path(input).filename().string());
+  data::ExportOptions options{a.out_dir, std::nullopt, single ? "" : joined(names)};
   if (session_given) options.session_id = a.session;
   Json doc;
   doc["db"] = single ? inputs.front() : joined(inputs);

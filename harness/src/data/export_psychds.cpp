@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+
 namespace curvlab::data {
 
 using namespace exporting;
@@ -40,7 +42,8 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
   doc["description"] =
       "One row per trial of perception experiments in curved spaces (S3, E3, H3), exported by "
       "curvlab " + std::string(software_version()) + " from " +
-      (options.source.empty() ? db.path() : options.source) + ". Missing values are NA.";
+      (options.source.empty() ? std::filesystem::path(db.path()).filename().string() : options.source) +
+      ". Missing values are NA.";
   doc["keywords"] = nlohmann::ordered_json::array({"perception", "virtual reality", "curved space"});
   doc["dateCreated"] = sessions.value().empty() ? "" : sessions.value().front().started_utc;
   auto& vars = doc["variableMeasured"] = nlohmann::ordered_json::array();

@@ -15,7 +15,8 @@ namespace curvlab::data {
 struct ExportOptions {
   std::string out_dir;                    // created if missing
   std::optional<std::int64_t> session_id; // nullopt: every session
-  std::string source = {};                // the data's origin as descriptions name it; empty: the file
+  std::string source = {};                // the data's origin as descriptions name it; empty: the file's
+                                          // name (never a folder: a folder can name a person)
 };
 
 struct ExportSummary {
