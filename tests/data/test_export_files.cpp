@@ -53,6 +53,40 @@ std::size_t line_count(const std::string& text) {
   return n;
 }
 
+// Every file and folder under `root`: relative path → hash of the content.
+std::map<std::string, std::string> tree(const fs::path& root) {
+  std::map<std::string, std::string> out;
+  if (!fs::exists(root)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(root))
+    out[fs::relative(e.path(), root).string()] =
+        e.is_regular_file() ? std::to_string(std::hash<std::string>{}(read_file(e.path()))) : "folder";
+  return out;
+}
+
+// A process id that no longer exists: a child that has exited and been reaped.
+pid_t dead_pid() {
+  const pid_t pid = fork();
+  if (pid == 0) _exit(0);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return pid;
+}
+
+void touch(const fs::path& p, const std::string& content = "leftover") { std::ofstream(p) << content; }
+
+// Runs `prefix` curvlab `args` through the shell, as run_cli does: for an
+// environment variable or a resource limit in front of the command.
+curvlab::testing::CliResult run_cli_with(const std::string& prefix, const std::string& args) {
+  curvlab::testing::CliResult r;
+  FILE* pipe = popen((prefix + " " + CURVLAB_BIN + " " + args + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, pipe)) > 0;) r.out.append(buf, n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
 }  // namespace
 
 TEST(CliExportLabels, ParticipantsSharingALabelAreRefusedAndNothingIsWritten) {
@@ -129,4 +163,80 @@ TEST(CliExportCounts, ReportedRowsAreTheRowsInTheFiles) {
   std::size_t on_disk = 0;
   for (const auto& e : fs::recursive_directory_iterator(out)) on_disk += e.is_regular_file();
   EXPECT_EQ(on_disk, listed.size());
+}
+
+TEST(CliExportStaging, AFailedExportLeavesNoPartialTreeAndKeepsWhatWasThere) {
+  const auto dir = fresh_dir("staging");
+  run_sessions(dir / "one.sqlite", {"P01"});
+  run_sessions(dir / "two.sqlite", {"P01", "P02"});
+  const fs::path out = dir / "out";
+  ASSERT_EQ(run_cli("export --db " + (dir / "one.sqlite").string() + " --out " + out.string()).exit_code, 0);
+  const auto before = tree(out);
+  // A file may not grow past 40000 bytes, as on a full disk: the first
+  // motion file (about 50 kB) fails to be written (EFBIG, with SIGXFSZ
+  // ignored so that write() reports it).
+  auto limited = [&](const fs::path& db, const fs::path& to, const std::string& format) {
+    return run_cli_with("trap '' XFSZ; prlimit --fsize=40000",
+                        "export --db " + db.string() + " --out " + to.string() + " --format " + format);
+  };
+  const auto r = limited(dir / "two.sqlite", out, "bids-motion");
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("_motion.tsv"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("failed"), std::string::npos) << r.out;
+  EXPECT_EQ(tree(out), before) << "the earlier export was changed:\n" << r.out;
+
+  // Into a folder that did not exist: nothing remains, not even the folder.
+  const fs::path fresh = dir / "fresh";
+  const auto again = limited(dir / "one.sqlite", fresh, "bids-motion");
+  EXPECT_EQ(again.exit_code, 1) << again.out;
+  EXPECT_FALSE(fs::exists(fresh)) << "left behind:\n" << [&] {
+    std::string s;
+    for (const auto& [name, _] : tree(fresh)) s += name + "\n";
+    return s;
+  }();
+
+  // A complete export replaces each format's part whole: nothing of the
+  // earlier, smaller export is mixed in, and other files are left alone.
+  touch(out / "notes.txt", "mine");
+  ASSERT_EQ(run_cli("export --db " + (dir / "two.sqlite").string() + " --out " + out.string()).exit_code, 0);
+  EXPECT_TRUE(fs::exists(out / "bids" / "sub-P02"));
+  EXPECT_EQ(read_file(out / "notes.txt"), "mine");
+  for (const auto& [name, _] : tree(out)) EXPECT_EQ(name.find(".partial-"), std::string::npos) << name;
+}
+
+TEST(CliStaleStaging, MergeAndExportRemoveLeftoversOfProcessesThatAreGone) {
+  const auto dir = fresh_dir("stale");
+  run_sessions(dir / "a.sqlite", {"P01"});
+  run_sessions(dir / "b.sqlite", {"P02"});
+  const std::string dead = std::to_string(dead_pid());
+  const std::string alive = std::to_string(::getpid());
+
+  // merge stages into OUT.merging-PID beside the output.
+  const fs::path study = dir / "study.sqlite";
+  for (const auto& suffix : {dead, dead + "-journal", alive}) touch(dir / ("study.sqlite.merging-" + suffix));
+  const auto m = run_cli("merge --out " + study.string() + " " + (dir / "a.sqlite").string());
+  ASSERT_EQ(m.exit_code, 0) << m.out;
+  EXPECT_FALSE(fs::exists(dir / ("study.sqlite.merging-" + dead)));
+  EXPECT_FALSE(fs::exists(dir / ("study.sqlite.merging-" + dead + "-journal")));
+  EXPECT_TRUE(fs::exists(dir / ("study.sqlite.merging-" + alive))) << "a running merge's file was removed";
+
+  // A pooled export stages into $TMPDIR/curvlab-export-PID.sqlite, each
+  // format into a sibling of its part of the out folder.
+  const fs::path tmp = dir / "tmp";
+  const fs::path out = dir / "out";
+  fs::create_directories(tmp);
+  fs::create_directories(out / ("bids.partial-" + dead) / "sub-P01");
+  fs::create_directories(out / ("bids.partial-" + alive));
+  for (const auto& suffix : {dead + ".sqlite", dead + ".sqlite-wal", dead + ".sqlite.merging-" + dead,
+                             alive + ".sqlite"})
+    touch(tmp / ("curvlab-export-" + suffix));
+  touch(tmp / "curvlab-export-notes.txt");
+  const auto r = run_cli_with("TMPDIR=" + tmp.string(), "export --db " + (dir / "a.sqlite").string() + " " +
+                                                           (dir / "b.sqlite").string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::set<std::string> left;
+  for (const auto& entry : fs::directory_iterator(tmp)) left.insert(entry.path().filename().string());
+  EXPECT_EQ(left, (std::set<std::string>{"curvlab-export-" + alive + ".sqlite", "curvlab-export-notes.txt"}));
+  EXPECT_FALSE(fs::exists(out / ("bids.partial-" + dead)));
+  EXPECT_TRUE(fs::exists(out / ("bids.partial-" + alive))) << "a running export's folder was removed";
 }

@@ -8,6 +8,7 @@
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/merge.hpp"
+#include "curvlab/harness/data/staging.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -33,6 +34,8 @@ class PooledInputs {
  public:
   explicit PooledInputs(const std::vector<std::string>& inputs)
       : path_((fs::temp_directory_path() / ("curvlab-export-" + std::to_string(::getpid()) + ".sqlite")).string()) {
+    // An export killed while pooling leaves its copy behind.
+    data::remove_stale_staging(fs::temp_directory_path().string(), "curvlab-export-");
     data::remove_database_files(path_);
     auto merged = data::merge_databases({path_, inputs, true});
     if (!merged) raise(merged.error());

@@ -3,6 +3,7 @@
 
 #include "curvlab/harness/data/export.hpp"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,6 +53,16 @@ struct CsvText {
   std::size_t rows = 0;
 };
 CsvText render_csv(const TrialTable& table, std::optional<std::int64_t> only_session);
+
+// Writes one format's part of the out folder (`name`: trials.csv, psychds or
+// bids) under a temporary name beside it, out_dir/NAME.partial-PID (a
+// folder when `folder`), and puts it in place only when `write` succeeded:
+// a complete export replaces out_dir/NAME whole; a failed one (a full
+// disk…) removes its temporary copy and leaves out_dir/NAME as it was, and
+// removes out_dir when it made it and nothing else is in it. Leftovers of
+// killed exports are removed first. `write` is given the temporary path.
+Expected<ExportSummary> write_staged(const std::string& out_dir, const std::string& name, bool folder,
+                                     const std::function<Expected<ExportSummary>(const std::string& path)>& write);
 
 // Creates the folder (and parents); io error naming it on failure.
 std::optional<DataError> make_dir(const std::string& dir);

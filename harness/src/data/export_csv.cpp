@@ -34,11 +34,12 @@ Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& opt
   if (!sessions) return sessions.error();
   auto table = load_trial_table(db, options);
   if (!table) return table.error();
-  if (auto e = make_dir(options.out_dir)) return *e;
   const std::string name = "trials.csv";
-  const CsvText csv = render_csv(table.value(), std::nullopt);
-  if (auto e = write_text(options.out_dir + "/" + name, csv.text)) return *e;
-  return ExportSummary{{name}, csv.rows};
+  return write_staged(options.out_dir, name, false, [&](const std::string& path) -> Expected<ExportSummary> {
+    const CsvText csv = render_csv(table.value(), std::nullopt);
+    if (auto e = write_text(path, csv.text)) return *e;
+    return ExportSummary{{name}, csv.rows};
+  });
 }
 
 }  // namespace curvlab::data

@@ -10,6 +10,7 @@
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/sha256.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
+#include "curvlab/harness/data/staging.hpp"
 
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
@@ -467,6 +468,9 @@ Expected<MergeReport> merge_databases(const MergeOptions& opts) {
   if (auto ok = check_inputs(opts); !ok) return ok.error();
   std::error_code ec;
   const bool existed = fs::exists(opts.out_path, ec);
+  // A merge killed before it renamed its work leaves OUT.merging-PID behind.
+  const fs::path out(opts.out_path);
+  remove_stale_staging(out.parent_path().string(), out.filename().string() + ".merging-");
   TempOutput tmp(opts.out_path + ".merging-" + std::to_string(::getpid()));
   if (existed)
     if (auto ok = copy_existing_output(opts.out_path, tmp.path()); !ok) return ok.error();
