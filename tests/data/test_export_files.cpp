@@ -240,3 +240,23 @@ TEST(CliStaleStaging, MergeAndExportRemoveLeftoversOfProcessesThatAreGone) {
   EXPECT_FALSE(fs::exists(out / ("bids.partial-" + dead)));
   EXPECT_TRUE(fs::exists(out / ("bids.partial-" + alive))) << "a running export's folder was removed";
 }
+
+TEST(CliRunArguments, ImagesFileAndDbFolderExitTwoBeforeAnythingIsCreated) {
+  const auto dir = fresh_dir("run_args");
+  touch(dir / "picture.png", "not a folder");
+  const auto images = run_cli("run " + kDemo + " --participant P01 --db " + (dir / "s.sqlite").string() +
+                              " --render none --quiet --images " + (dir / "picture.png").string());
+  EXPECT_EQ(images.exit_code, 2) << images.out;
+  EXPECT_NE(images.out.find("--images"), std::string::npos) << images.out;
+  EXPECT_NE(images.out.find("folder"), std::string::npos) << images.out;
+  EXPECT_FALSE(fs::exists(dir / "s.sqlite"));
+  EXPECT_EQ(read_file(dir / "picture.png"), "not a folder");
+
+  fs::create_directories(dir / "results");
+  const auto db = run_cli("run " + kDemo + " --participant P01 --db " + (dir / "results").string() +
+                          " --render none --quiet");
+  EXPECT_EQ(db.exit_code, 2) << db.out;
+  EXPECT_NE(db.out.find("--db"), std::string::npos) << db.out;
+  EXPECT_NE(db.out.find("database file"), std::string::npos) << db.out;
+  EXPECT_TRUE(fs::is_empty(dir / "results"));
+}
