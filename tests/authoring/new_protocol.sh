@@ -50,5 +50,16 @@ check '[ $? -eq 2 ]' "a name that is not an identifier exits 2"
 "$curvlab" new fine --from nonexistent --dir protocols >bad2.log 2>&1
 check '[ $? -eq 2 ] && grep -q "proposed_study" bad2.log' "an unknown example exits 2 and lists the examples"
 check '[ ! -e protocols/fine.toml ]' "and writes nothing"
-if [ $fail -ne 0 ]; then cat new.log again.log bad.log bad2.log validate.log 2>/dev/null; fi
+# A --from file that is no protocol is refused before anything is written:
+# one past the loader's 1 MiB limit (here a valid protocol padded with
+# comments, which validate would refuse), and one that does not load.
+{ cat "$src/protocols/demo.toml"; yes "# padding padding padding padding padding padding padding" | head -c 2000000; } >big.toml
+"$curvlab" new big --from big.toml --dir protocols >big.log 2>&1
+check '[ $? -eq 2 ] && grep -q "larger than 1 MiB" big.log' "a --from file over 1 MiB exits 2 and says why"
+check '[ ! -e protocols/big.toml ]' "and writes nothing"
+printf '[protocol]\nname = "x"\nversion = "1"\nbogus = 1\n[randomization]\nseed = 1\n' >broken.toml
+"$curvlab" new broken --from broken.toml --dir protocols >broken.log 2>&1
+check '[ $? -eq 2 ] && grep -q "broken.toml" broken.log' "a --from file that does not load exits 2 naming it"
+check '[ ! -e protocols/broken.toml ]' "and writes nothing"
+if [ $fail -ne 0 ]; then cat new.log again.log bad.log bad2.log validate.log big.log broken.log 2>/dev/null; fi
 exit $fail

@@ -39,6 +39,21 @@ TEST(KeyScript, BadLinesNameFileLineAndWhatWasExpected) {
   EXPECT_NE(std::get<KeyScriptError>(missing).message.find("/nonexistent/keys.txt"), std::string::npos);
 }
 
+// A binary file given as --key-script: the message shows the bytes it could
+// not read as escapes, so the terminal is not sent control sequences.
+TEST(KeyScript, UnprintableBytesInAMessageAreEscaped) {
+  const char raw[] = "\x7f" "ELF\x02\x01 \x01\x00\xff\x1b[2J\x07 x\n";
+  const std::string binary(raw, sizeof raw - 1);
+  auto parsed = parse_key_script(binary, "a.out");
+  ASSERT_TRUE(std::holds_alternative<KeyScriptError>(parsed));
+  const auto& message = std::get<KeyScriptError>(parsed).message;
+  EXPECT_NE(message.find("'\\x01\\x00\\xff\\x1b[2J\\x07'"), std::string::npos) << message;
+  for (char c : message) {
+    const auto byte = static_cast<unsigned char>(c);
+    EXPECT_TRUE(byte >= 0x20 && byte < 0x7f) << "raw byte " << static_cast<int>(byte) << " in: " << message;
+  }
+}
+
 TEST(KeyScript, EachKeyWaitsForTheNextWaitAndItsDelay) {
   KeyScriptPlayer player({{"space", 100, 1}, {"2", 50, 2}});
   constexpr std::int64_t ms = 1'000'000;

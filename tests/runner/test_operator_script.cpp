@@ -48,6 +48,18 @@ TEST(OperatorScript, ReadsActionsCommentsAndVerbatimNotes) {
   EXPECT_EQ(a[4].kind, rn::OperatorActionKind::end);
 }
 
+// The source is stored with each operator_action event: the file's name and
+// line, not the folder (a home folder names a person). Messages keep the path
+// as given, to find the file.
+TEST(OperatorScript, TheStoredSourceNamesTheFileNotItsFolder) {
+  const auto r = rn::parse_operator_script("1 pause\n2 resume\n", "/home/jane.doe/study/ops.txt");
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  EXPECT_EQ(r.value().at(1).source, "script ops.txt:2");
+  const auto bad = rn::parse_operator_script("1 jump\n", "/home/jane.doe/study/ops.txt");
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_EQ(bad.error().message.rfind("/home/jane.doe/study/ops.txt:1: ", 0), 0u) << bad.error().message;
+}
+
 TEST(OperatorScript, ABadLineIsNamedByFileAndLine) {
   EXPECT_NE(parse_error("1 pause\n2 jump\n").find("ops.txt:2: unknown action 'jump'"), std::string::npos);
   EXPECT_NE(parse_error("# ok\nsoon pause\n").find("ops.txt:2: expected SECONDS ACTION"), std::string::npos);

@@ -110,6 +110,12 @@ TEST(RunHeadless, ReplayReproducesTheStimulusImage) {
   auto r = run_cli("run " + kProtocols + "demo.toml --participant P01 --db " + db + " --images " + images +
                    " --render onset --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.out;
+  // The onset events name the images by file name; the folder (here under
+  // the temporary folder, often a home folder) is not stored.
+  const auto named = query(db, "SELECT json_extract(detail, '$.images[0]') FROM events WHERE kind = 'onset' "
+                               "ORDER BY event_id LIMIT 1");
+  ASSERT_EQ(named.size(), 1u);
+  EXPECT_EQ(named[0][0], "trial_0000_left.png");
   for (int trial : {2, 5}) {
     const auto out = (dir / ("replay" + std::to_string(trial))).string();
     r = run_cli("replay --db " + db + " --session 1 --trial " + std::to_string(trial) + " --out " + out + " --json");

@@ -58,14 +58,6 @@ std::vector<std::string> example_names() {
   return names;
 }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw UsageError("cannot read " + path.string());
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string toml_string(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
@@ -148,7 +140,14 @@ void run_new(const NewArgs& a) {
   if (fs::exists(target))
     throw UsageError(target.string() + " already exists; curvlab new never overwrites a protocol "
                                        "(choose another NAME or remove the file)");
-  std::string text = read_text(source);
+  // The example must itself be a protocol: the loader refuses a file over
+  // its size limit (1 MiB) or one that does not load, as validate would.
+  const auto example = pr::load_protocol_file(source.string());
+  if (!example.ok()) {
+    for (const auto& d : example.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+    throw UsageError("--from " + source.string() + " is not a protocol that loads; nothing was written");
+  }
+  std::string text = example.text;
   std::uint64_t seed = static_cast<std::uint64_t>(a.seed);
   if (a.seed < 0) {
     std::random_device rd;

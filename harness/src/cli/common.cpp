@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -49,6 +50,9 @@ void raise(const harness::Error& e) {
 }
 
 void check_db_argument(const std::string& path) {
+  // A folder is a mistake in the command, not a file to open: exit 2.
+  if (std::error_code ec; std::filesystem::is_directory(path, ec))
+    throw UsageError("--db " + path + ": is a folder; expected a database file (created when missing)");
   if (auto checked = data::check_data_file(path); !checked) raise(checked.error());
 }
 

@@ -8,6 +8,7 @@
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/merge.hpp"
+#include "curvlab/harness/data/staging.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -33,6 +34,8 @@ class PooledInputs {
  public:
   explicit PooledInputs(const std::vector<std::string>& inputs)
       : path_((fs::temp_directory_path() / ("curvlab-export-" + std::to_string(::getpid()) + ".sqlite")).string()) {
+    // An export killed while pooling leaves its copy behind.
+    data::remove_stale_staging(fs::temp_directory_path().string(), "curvlab-export-");
     data::remove_database_files(path_);
     auto merged = data::merge_databases({path_, inputs, true});
     if (!merged) raise(merged.error());
@@ -57,6 +60,9 @@ std::string joined(const std::vector<std::string>& paths) {
 }
 
 void write_exports(data::Database& db, const ExportArgs& a, const data::ExportOptions& options, Json& doc) {
+  // Labels that would collide refuse the export before any format is written.
+  if (a.format != "csv")
+    if (auto ok = data::check_export_labels(db, options); !ok) raise(ok.error());
   Json files = Json::array();
   auto run = [&](const char* name, auto fn) {
     if (a.format != "all" && a.format != name) return;
@@ -83,7 +89,10 @@ void run_export(const ExportArgs& a, bool session_given) {
   if (!single) pooled = std::make_unique<PooledInputs>(inputs);
   auto db = data::Database::open(single ? inputs.front() : pooled->path(), data::OpenMode::read_only);
   if (!db) raise(db.error());
-  data::ExportOptions options{a.out_dir, std::nullopt, single ? "" : joined(inputs)};
+  // The description names the files, not their folders (docs/data.md, "Privacy").
+  std::vector<std::string> names;
+  for (const auto& input : inputs) names.push_back(fs::path(input).filename().string());
+  data::ExportOptions options{a.out_dir, std::nullopt, single ? "" : joined(names)};
   if (session_given) options.session_id = a.session;
   Json doc;
   doc["db"] = single ? inputs.front() : joined(inputs);

@@ -290,6 +290,9 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
   o.lossless_logging = a.backend == "headless" && a.pace == "fast";
   if (!a.images.empty()) {
     std::error_code ec;
+    if (std::filesystem::exists(a.images, ec) && !std::filesystem::is_directory(a.images, ec))
+      throw UsageError("--images " + a.images + ": is a file; expected a folder for the onset images (created when "
+                       "missing)");
     std::filesystem::create_directories(a.images, ec);
     if (ec) throw RuntimeFailure("cannot create --images folder " + a.images + ": " + ec.message());
   }

@@ -96,13 +96,8 @@ std::optional<DataError> write_sessions_file(const std::string& root, const std:
   return std::nullopt;
 }
 
-}  // namespace
-
-Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& options) {
-  auto sessions = load_sessions(db, options);
-  if (!sessions) return sessions.error();
-  const std::string root = options.out_dir + "/bids";
-  if (auto e = make_dir(root)) return *e;
+// The dataset in `root` (the bids folder).
+Expected<ExportSummary> write_dataset(Database& db, const std::vector<SessionInfo>& sessions, const std::string& root) {
   ExportSummary summary;
 
   OJson description;
@@ -118,7 +113,7 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
   std::vector<std::string> seen_subjects;
   std::map<std::string, std::string> sessions_of;  // subject label → its _sessions.tsv rows
   try {
-    for (const SessionInfo& s : sessions.value()) {
+    for (const SessionInfo& s : sessions) {
       const std::string sub = alnum_label(s.pseudonym);
       if (std::find(seen_subjects.begin(), seen_subjects.end(), sub) == seen_subjects.end()) {
         seen_subjects.push_back(sub);
@@ -275,6 +270,16 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
   if (auto e = write_text(root + "/README", bids_readme())) return *e;
   summary.files.push_back("bids/README");
   return summary;
+}
+
+}  // namespace
+
+Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& options) {
+  auto sessions = load_sessions(db, options);
+  if (!sessions) return sessions.error();
+  if (auto e = check_labels(sessions.value(), origin(db, options))) return *e;
+  return write_staged(options.out_dir, "bids", true,
+                      [&](const std::string& root) { return write_dataset(db, sessions.value(), root); });
 }
 
 }  // namespace curvlab::data

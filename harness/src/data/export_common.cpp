@@ -3,12 +3,20 @@
 #include "curvlab/harness/data/events.hpp"
 
 #include "curvlab/harness/data/sqlite.hpp"
+#include "curvlab/harness/data/staging.hpp"
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <system_error>
+#include <unistd.h>
 
 namespace curvlab::data::exporting {
 
@@ -21,6 +29,84 @@ std::optional<DataError> make_dir(const std::string& dir) {
     return DataError{DataError::Kind::io, "cannot create output folder " + dir + ": " +
                                               (ec ? ec.message() : "not a folder")};
   return std::nullopt;
+}
+
+namespace {
+
+// A staged file or folder, removed unless it was put in place, with the out
+// folder when the export made it and left it empty. Owned by one export.
+class StagedPath {
+ public:
+  StagedPath(fs::path path, fs::path out_dir, bool made_out_dir)
+      : path_(std::move(path)), out_dir_(std::move(out_dir)), made_out_dir_(made_out_dir) {}
+  ~StagedPath() {
+    if (kept_) return;
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+    if (made_out_dir_) fs::remove(out_dir_, ec);  // only when empty
+  }
+  StagedPath(const StagedPath&) = delete;
+  StagedPath& operator=(const StagedPath&) = delete;
+  const fs::path& path() const { return path_; }
+  void keep() { kept_ = true; }
+
+ private:
+  fs::path path_, out_dir_;
+  bool made_out_dir_ = false;
+  bool kept_ = false;
+};
+
+// Puts `staged` where `target` is: rename(2) replaces a file, or a folder
+// with a missing or empty one, in one step; a folder with content is
+// exchanged with it in one step (renameat2 RENAME_EXCHANGE) and the old one
+// removed, or, on a file system that cannot exchange, moved `aside` first.
+std::optional<DataError> put_in_place(const fs::path& staged, const fs::path& target, const fs::path& aside) {
+  std::error_code ec;
+  if (::rename(staged.c_str(), target.c_str()) == 0) return std::nullopt;
+  if (errno == ENOTEMPTY || errno == EEXIST) {
+    if (::renameat2(AT_FDCWD, staged.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) == 0) {
+      fs::remove_all(staged, ec);  // the old content, now under the staged name
+      return std::nullopt;
+    }
+    if ((errno == EINVAL || errno == ENOSYS) && ::rename(target.c_str(), aside.c_str()) == 0) {
+      if (::rename(staged.c_str(), target.c_str()) == 0) {
+        fs::remove_all(aside, ec);
+        return std::nullopt;
+      }
+      const int failed = errno;
+      ::rename(aside.c_str(), target.c_str());
+      errno = failed;
+    }
+  }
+  return DataError{DataError::Kind::io, "cannot put " + staged.string() + " in place of " + target.string() + ": " +
+                                            std::generic_category().message(errno)};
+}
+
+}  // namespace
+
+Expected<ExportSummary> write_staged(const std::string& out_dir, const std::string& name, bool folder,
+                                     const std::function<Expected<ExportSummary>(const std::string& path)>& write) {
+  std::error_code ec;
+  const bool out_existed = fs::exists(out_dir, ec);
+  if (auto e = make_dir(out_dir)) return *e;
+  for (const char* kind : {".partial-", ".replaced-"}) remove_stale_staging(out_dir, name + kind);
+  const std::string pid = std::to_string(::getpid());
+  const fs::path target = fs::path(out_dir) / name;
+  const bool target_existed = fs::exists(fs::symlink_status(target, ec));
+  StagedPath staged(fs::path(out_dir) / (name + ".partial-" + pid), out_dir, !out_existed);
+  auto failed = [&](DataError e) {
+    e.message += "; " + target.string() + (target_existed ? " was left as it was" : " was not written");
+    return e;
+  };
+  fs::remove_all(staged.path(), ec);
+  if (folder)
+    if (auto e = make_dir(staged.path().string())) return failed(*e);
+  auto written = write(staged.path().string());
+  if (!written) return failed(written.error());
+  if (auto e = put_in_place(staged.path(), target, fs::path(out_dir) / (name + ".replaced-" + pid)))
+    return failed(*e);
+  staged.keep();
+  return written;
 }
 
 std::optional<DataError> write_text(const std::string& path, const std::string& text) {
@@ -54,6 +140,59 @@ std::string alnum_label(const std::string& text) {
   for (char c : text)
     if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) out += c;
   return out.empty() ? "unnamed" : out;
+}
+
+namespace {
+
+// The first group of distinct `names` (pseudonyms or protocol names, in
+// order of first appearance) whose labels are equal ignoring case.
+std::optional<DataError> label_clash(const std::vector<std::string>& names, const std::string& what,
+                                     const std::string& source) {
+  std::map<std::string, std::vector<std::string>> by_label;  // lower-case label → names
+  for (const auto& name : names) {
+    std::string key = alnum_label(name);
+    for (char& c : key) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    auto& group = by_label[key];
+    if (std::find(group.begin(), group.end(), name) == group.end()) group.push_back(name);
+  }
+  for (const auto& [key, group] : by_label) {
+    if (group.size() < 2) continue;
+    std::string listed;
+    std::vector<std::string> labels;
+    for (std::size_t i = 0; i < group.size(); ++i) {
+      listed += (i == 0 ? "" : i + 1 == group.size() ? " and " : ", ") + ("\"" + group[i] + "\"");
+      const std::string label = alnum_label(group[i]);
+      if (std::find(labels.begin(), labels.end(), label) == labels.end()) labels.push_back(label);
+    }
+    std::string shared = "would share the label \"" + labels.front() + "\"";
+    if (labels.size() > 1) {
+      shared = "would get the labels";
+      for (std::size_t i = 0; i < labels.size(); ++i) shared += (i == 0 ? " \"" : ", \"") + labels[i] + "\"";
+      shared += ", which name one file on a disk that ignores case";
+    }
+    return DataError{DataError::Kind::bad_input,
+                     source + ": " + what + " " + listed + " " + shared +
+                         " in exported file names (labels keep letters and digits only), so one's files would "
+                         "overwrite another's; nothing was written. Export their sessions one at a time "
+                         "(--session), or the trial CSV alone (--format csv), which names no file after them"};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::string origin(const Database& db, const ExportOptions& options) {
+  return options.source.empty() ? db.path() : options.source;
+}
+
+std::optional<DataError> check_labels(const std::vector<SessionInfo>& sessions, const std::string& source) {
+  std::vector<std::string> pseudonyms, protocols;
+  for (const auto& s : sessions) {
+    pseudonyms.push_back(s.pseudonym);
+    protocols.push_back(s.protocol_name);
+  }
+  if (auto e = label_clash(pseudonyms, "participants", source)) return e;
+  return label_clash(protocols, "protocols", source);
 }
 
 Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptions& options) {
@@ -206,3 +345,14 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
 }
 
 }  // namespace curvlab::data::exporting
+
+namespace curvlab::data {
+
+Expected<Done> check_export_labels(Database& db, const ExportOptions& options) {
+  auto sessions = exporting::load_sessions(db, options);
+  if (!sessions) return sessions.error();
+  if (auto e = exporting::check_labels(sessions.value(), exporting::origin(db, options))) return *e;
+  return Done{};
+}
+
+}  // namespace curvlab::data

@@ -3,6 +3,7 @@
 
 #include "curvlab/harness/data/export.hpp"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,6 +40,29 @@ struct TrialTable {
 // Sessions selected by the options; not_found when --session names none.
 Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptions& options);
 Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options);
+
+// What messages call the exported data: the options' source, else the file.
+std::string origin(const Database& db, const ExportOptions& options);
+// The labels check of check_export_labels on sessions already loaded.
+std::optional<DataError> check_labels(const std::vector<SessionInfo>& sessions, const std::string& source);
+
+// The trial table as CSV (export_csv.cpp), all rows or one session's, and
+// the number of rows written.
+struct CsvText {
+  std::string text;
+  std::size_t rows = 0;
+};
+CsvText render_csv(const TrialTable& table, std::optional<std::int64_t> only_session);
+
+// Writes one format's part of the out folder (`name`: trials.csv, psychds or
+// bids) under a temporary name beside it, out_dir/NAME.partial-PID (a
+// folder when `folder`), and puts it in place only when `write` succeeded:
+// a complete export replaces out_dir/NAME whole; a failed one (a full
+// disk…) removes its temporary copy and leaves out_dir/NAME as it was, and
+// removes out_dir when it made it and nothing else is in it. Leftovers of
+// killed exports are removed first. `write` is given the temporary path.
+Expected<ExportSummary> write_staged(const std::string& out_dir, const std::string& name, bool folder,
+                                     const std::function<Expected<ExportSummary>(const std::string& path)>& write);
 
 // Creates the folder (and parents); io error naming it on failure.
 std::optional<DataError> make_dir(const std::string& dir);

@@ -7,8 +7,9 @@ namespace curvlab::data {
 using namespace exporting;
 
 namespace exporting {
-std::string render_csv(const TrialTable& table, std::optional<std::int64_t> only_session) {
-  std::string out;
+CsvText render_csv(const TrialTable& table, std::optional<std::int64_t> only_session) {
+  CsvText csv;
+  std::string& out = csv.text;
   for (std::size_t c = 0; c < table.columns.size(); ++c) {
     if (c) out += ',';
     out += csv_field(table.columns[c].name);
@@ -22,8 +23,9 @@ std::string render_csv(const TrialTable& table, std::optional<std::int64_t> only
       out += row[c] ? csv_field(*row[c]) : std::string("NA");
     }
     out += "\r\n";
+    ++csv.rows;
   }
-  return out;
+  return csv;
 }
 }  // namespace exporting
 
@@ -32,11 +34,12 @@ Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& opt
   if (!sessions) return sessions.error();
   auto table = load_trial_table(db, options);
   if (!table) return table.error();
-  if (auto e = make_dir(options.out_dir)) return *e;
   const std::string name = "trials.csv";
-  if (auto e = write_text(options.out_dir + "/" + name, render_csv(table.value(), std::nullopt)))
-    return *e;
-  return ExportSummary{{name}, table.value().rows.size()};
+  return write_staged(options.out_dir, name, false, [&](const std::string& path) -> Expected<ExportSummary> {
+    const CsvText csv = render_csv(table.value(), std::nullopt);
+    if (auto e = write_text(path, csv.text)) return *e;
+    return ExportSummary{{name}, csv.rows};
+  });
 }
 
 }  // namespace curvlab::data

@@ -7,31 +7,29 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+
 namespace curvlab::data {
 
 using namespace exporting;
 
-namespace exporting {
-std::string render_csv(const TrialTable& table, std::optional<std::int64_t> only_session);
-}
+namespace {
 
-Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& options) {
-  auto sessions = load_sessions(db, options);
-  if (!sessions) return sessions.error();
-  auto table = load_trial_table(db, options);
-  if (!table) return table.error();
-  const std::string root = options.out_dir + "/psychds";
+// The dataset in `root` (the psychds folder); `source` names the data's
+// origin in the description.
+Expected<ExportSummary> write_dataset(const std::string& root, const std::vector<SessionInfo>& sessions,
+                                      const TrialTable& table, const std::string& source) {
   if (auto e = make_dir(root + "/data")) return *e;
-
   ExportSummary summary;
-  for (const SessionInfo& s : sessions.value()) {
+  for (const SessionInfo& s : sessions) {
     const std::string name = "data/study-" + alnum_label(s.protocol_name) + "_subject-" +
                              alnum_label(s.pseudonym) + "_session-" +
                              std::to_string(s.session_number) + "_data.csv";
-    if (auto e = write_text(root + "/" + name, render_csv(table.value(), s.session_id))) return *e;
+    const CsvText csv = render_csv(table, s.session_id);
+    if (auto e = write_text(root + "/" + name, csv.text)) return *e;
     summary.files.push_back("psychds/" + name);
+    summary.rows += csv.rows;
   }
-  summary.rows = table.value().rows.size();
 
   nlohmann::ordered_json doc;
   doc["@context"] = "https://schema.org/";
@@ -39,12 +37,11 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
   doc["name"] = "curvlab trial data";
   doc["description"] =
       "One row per trial of perception experiments in curved spaces (S3, E3, H3), exported by "
-      "curvlab " + std::string(software_version()) + " from " +
-      (options.source.empty() ? db.path() : options.source) + ". Missing values are NA.";
+      "curvlab " + std::string(software_version()) + " from " + source + ". Missing values are NA.";
   doc["keywords"] = nlohmann::ordered_json::array({"perception", "virtual reality", "curved space"});
-  doc["dateCreated"] = sessions.value().empty() ? "" : sessions.value().front().started_utc;
+  doc["dateCreated"] = sessions.empty() ? "" : sessions.front().started_utc;
   auto& vars = doc["variableMeasured"] = nlohmann::ordered_json::array();
-  for (const Column& c : table.value().columns) {
+  for (const Column& c : table.columns) {
     nlohmann::ordered_json v;
     v["@type"] = "PropertyValue";
     v["name"] = c.name;
@@ -55,6 +52,21 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
   if (auto e = write_text(root + "/dataset_description.json", doc.dump(2) + "\n")) return *e;
   summary.files.insert(summary.files.begin(), "psychds/dataset_description.json");
   return summary;
+}
+
+}  // namespace
+
+Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& options) {
+  auto sessions = load_sessions(db, options);
+  if (!sessions) return sessions.error();
+  if (auto e = check_labels(sessions.value(), origin(db, options))) return *e;
+  auto table = load_trial_table(db, options);
+  if (!table) return table.error();
+  const std::string source =
+      options.source.empty() ? std::filesystem::path(db.path()).filename().string() : options.source;
+  return write_staged(options.out_dir, "psychds", true, [&](const std::string& root) {
+    return write_dataset(root, sessions.value(), table.value(), source);
+  });
 }
 
 }  // namespace curvlab::data

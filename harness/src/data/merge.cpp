@@ -11,6 +11,7 @@
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/sha256.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
+#include "curvlab/harness/data/staging.hpp"
 
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
@@ -153,7 +154,11 @@ Expected<Done> check_protocol_versions(Connection& c, const MergeOptions& opts, 
 }
 
 void copy_protocols_and_participants(Connection& c) {
-  c.exec("INSERT INTO main.protocols (name, sha256, text, source_path) SELECT name, sha256, text, source_path "
+  // source_path as its file name alone: files written before only the name
+  // was stored hold the folder, which can name a person. rtrim leaves the
+  // folder part (up to the last '/'), and the name follows it.
+  c.exec("INSERT INTO main.protocols (name, sha256, text, source_path) SELECT name, sha256, text, "
+         "substr(source_path, length(rtrim(source_path, replace(source_path, '/', ''))) + 1) "
          "FROM src.protocols WHERE sha256 NOT IN (SELECT sha256 FROM main.protocols) ORDER BY protocol_id");
   c.exec("INSERT INTO main.participants (pseudonym, ipd_m, dominant_eye, created_utc) SELECT pseudonym, ipd_m, "
          "dominant_eye, created_utc FROM src.participants WHERE pseudonym NOT IN "
@@ -287,7 +292,8 @@ void add_session(Connection& c, const SourceSession& src, const std::string& inp
     s.bind(1, src.id).bind(2, id).run();
     if (copy.counted != nullptr) report.*copy.counted += c.changes();
   }
-  const std::string source_file = fs::absolute(input).lexically_normal().string();
+  // The file name, not its folder: a folder can name a person.
+  const std::string source_file = fs::path(input).filename().string();
   add_merge_event(c, id, "merged_from",
                   {{"source_file", source_file},
                    {"source_session_id", src.id},
@@ -442,6 +448,9 @@ Expected<MergeReport> merge_databases(const MergeOptions& opts) {
   if (!lock) return lock.error();
   std::error_code ec;
   const bool existed = fs::exists(opts.out_path, ec);
+  // A merge killed before it renamed its work leaves OUT.merging-PID behind.
+  const fs::path out(opts.out_path);
+  remove_stale_staging(out.parent_path().string(), out.filename().string() + ".merging-");
   TempOutput tmp(opts.out_path + ".merging-" + std::to_string(::getpid()));
   if (existed)
     if (auto ok = copy_existing_output(opts.out_path, tmp.path()); !ok) return ok.error();

@@ -6,6 +6,11 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <optional>
+#include <string_view>
+#include <vector>
 
 namespace curvlab::data {
 
@@ -70,13 +75,97 @@ const char* to_string(TrackedDevice device) {
   return "other";
 }
 
-bool valid_pseudonym(const std::string& p) {
-  if (p.empty() || p.size() > 32) return false;
-  return std::all_of(p.begin(), p.end(), [](char ch) {
-    return (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') ||
-           ch == '-' || ch == '_';
-  });
+namespace {
+
+// A byte as a message shows it: itself when printable ASCII, else \xNN.
+std::string shown(char c) {
+  static constexpr char hex[] = "0123456789abcdef";
+  const auto byte = static_cast<unsigned char>(c);
+  if (byte >= 0x20 && byte < 0x7f) return std::string(1, c);
+  return std::string("\\x") + hex[byte >> 4] + hex[byte & 0xf];
 }
+
+// The first date in `text` (see check_pseudonym), or nothing.
+std::optional<std::string> date_in(const std::string& text) {
+  struct Run {
+    std::size_t begin, end;
+  };
+  std::vector<Run> runs;  // maximal runs of digits
+  for (std::size_t i = 0; i < text.size();) {
+    if (!std::isdigit(static_cast<unsigned char>(text[i]))) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j < text.size() && std::isdigit(static_cast<unsigned char>(text[j]))) ++j;
+    runs.push_back({i, j});
+    i = j;
+  }
+  // The number of `len` digits at `at`; the run lengths checked keep it small.
+  auto number = [&](std::size_t at, std::size_t len) { return std::stoi(text.substr(at, len)); };
+  auto year = [&](std::size_t at, std::size_t len) {
+    return len == 4 && number(at, len) >= 1900 && number(at, len) <= 2099;
+  };
+  auto month = [&](std::size_t at, std::size_t len) {
+    return len >= 1 && len <= 2 && number(at, len) >= 1 && number(at, len) <= 12;
+  };
+  auto day = [&](std::size_t at, std::size_t len) {
+    return len >= 1 && len <= 2 && number(at, len) >= 1 && number(at, len) <= 31;
+  };
+  for (const Run& r : runs) {
+    if (r.end - r.begin != 8) continue;
+    const std::size_t b = r.begin;
+    if ((year(b, 4) && month(b + 4, 2) && day(b + 6, 2)) || (day(b, 2) && month(b + 2, 2) && year(b + 4, 4)) ||
+        (month(b, 2) && day(b + 2, 2) && year(b + 4, 4)))
+      return text.substr(b, 8);
+  }
+  auto joined = [&](const Run& a, const Run& b) {
+    return b.begin == a.end + 1 && std::string_view("-_./ ").find(text[a.end]) != std::string_view::npos;
+  };
+  for (std::size_t i = 0; i + 2 < runs.size(); ++i) {
+    const Run &a = runs[i], &b = runs[i + 1], &c = runs[i + 2];
+    if (!joined(a, b) || !joined(b, c)) continue;
+    const std::size_t la = a.end - a.begin, lb = b.end - b.begin, lc = c.end - c.begin;
+    if (la > 4 || lb > 4 || lc > 4) continue;
+    if ((year(a.begin, la) && month(b.begin, lb) && day(c.begin, lc)) ||
+        (year(c.begin, lc) && ((day(a.begin, la) && month(b.begin, lb)) || (month(a.begin, la) && day(b.begin, lb)))))
+      return text.substr(a.begin, c.end - a.begin);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+Expected<Done> check_pseudonym(const std::string& p) {
+  std::string problem;
+  if (p.empty()) {
+    problem = "is empty";
+  } else if (p.size() > 32) {
+    problem = "is longer than 32 characters";
+  } else if (p.front() == '-') {
+    problem = "begins with '-', so it would read as an option";
+  } else if (p.find('@') != std::string::npos) {
+    problem = "contains '@', as an e-mail address does";
+  } else if (const auto date = date_in(p)) {
+    problem = "contains the date " + *date;
+  } else if (const auto bad = std::find_if(p.begin(), p.end(), [](char ch) {
+               return !((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') ||
+                        ch == '-' || ch == '_');
+             });
+             bad != p.end()) {
+    problem = "contains '" + shown(*bad) + "', which is not one of A-Z a-z 0-9 - _";
+  } else {
+    return Done{};
+  }
+  std::string quoted;
+  for (char c : p) quoted += shown(c);
+  return DataError{DataError::Kind::bad_input,
+                   "pseudonym \"" + quoted + "\" " + problem +
+                       "; a pseudonym is 1-32 characters of A-Z a-z 0-9 - _, not beginning with '-', with no name, "
+                       "e-mail address or date in it"};
+}
+
+bool valid_pseudonym(const std::string& p) { return check_pseudonym(p).has_value(); }
 
 namespace {
 
@@ -172,7 +261,9 @@ Expected<std::int64_t> SessionStore::add_protocol(const std::string& name,
     Transaction txn(db_.connection());
     auto& s = stmts_->insert_protocol;
     s.bind(1, std::string_view(name)).bind(2, std::string_view(digest)).bind(3, std::string_view(text));
-    if (source_path.empty()) s.bind_null(4); else s.bind(4, std::string_view(source_path));
+    // The file name only: the folder can name a person (/home/<name>/…).
+    const std::string file_name = std::filesystem::path(source_path).filename().string();
+    if (file_name.empty()) s.bind_null(4); else s.bind(4, std::string_view(file_name));
     s.run();
     auto& f = stmts_->find_protocol;
     f.bind(1, std::string_view(digest));
@@ -185,10 +276,7 @@ Expected<std::int64_t> SessionStore::add_protocol(const std::string& name,
 }
 
 Expected<std::int64_t> SessionStore::add_participant(const ParticipantRecord& p) {
-  if (!valid_pseudonym(p.pseudonym))
-    return DataError{DataError::Kind::bad_input,
-                     "participant pseudonym \"" + p.pseudonym +
-                         "\" must be 1-32 characters of A-Z a-z 0-9 - _ (no names)"};
+  if (auto ok = check_pseudonym(p.pseudonym); !ok) return ok.error();
   if (p.ipd_m && !(*p.ipd_m > 0.04 && *p.ipd_m < 0.09))
     return DataError{DataError::Kind::bad_input,
                      "participant IPD " + std::to_string(*p.ipd_m) +

@@ -8,6 +8,29 @@
 
 namespace curvlab::desktop {
 
+namespace {
+
+// A word of the script as a message shows it: bytes outside printable ASCII
+// as \xNN, so a binary file given by mistake sends no control sequences to
+// the terminal.
+std::string printable(const std::string& word) {
+  static constexpr char hex[] = "0123456789abcdef";
+  std::string out;
+  for (const char c : word) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte < 0x7f) {
+      out += c;
+    } else {
+      out += "\\x";
+      out += hex[byte >> 4];
+      out += hex[byte & 0xf];
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 std::variant<std::vector<ScriptedKey>, KeyScriptError> parse_key_script(const std::string& text,
                                                                          const std::string& origin) {
   std::vector<ScriptedKey> keys;
@@ -33,12 +56,12 @@ std::variant<std::vector<ScriptedKey>, KeyScriptError> parse_key_script(const st
       const auto [end, ec] = std::from_chars(delay.data(), delay.data() + delay.size(), ms);
       if (ec != std::errc() || end != delay.data() + delay.size() || ms < 0 || ms > 3'600'000)
         return KeyScriptError{where + "expected `KEY [DELAY_MS]` with DELAY_MS a whole number "
-                                      "of milliseconds from 0 to 3600000, got '" + delay + "'"};
+                                      "of milliseconds from 0 to 3600000, got '" + printable(delay) + "'"};
       k.delay_ns = static_cast<std::int64_t>(ms) * 1'000'000;
     }
     if (words >> extra)
       return KeyScriptError{where + "expected `KEY [DELAY_MS]`, got more after the delay: '" +
-                            extra + "'"};
+                            printable(extra) + "'"};
     keys.push_back(std::move(k));
   }
   return keys;

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <sstream>
@@ -76,7 +77,6 @@ Result<OperatorAction> parse_line(std::string_view line, const std::string& wher
   OperatorAction a;
   a.kind = *kind;
   a.at_ns = std::llround(*t * 1e9);
-  a.source = join({"script ", where});
   if (*kind == OperatorActionKind::note) {
     // The text is verbatim: everything after the blank that follows "note".
     const std::string_view rest = pos < line.size() ? line.substr(pos + 1) : std::string_view{};
@@ -147,6 +147,9 @@ Result<std::vector<OperatorAction>> parse_operator_script(std::string_view text,
     if (body.empty() || body.front() == '#') continue;
     auto a = parse_line(line, name + ":" + std::to_string(line_no));
     if (!a) return a.error();
+    // Stored with the action's event: the file's name, not its folder (a
+    // folder can name a person).
+    a.value().source = "script " + std::filesystem::path(name).filename().string() + ":" + std::to_string(line_no);
     actions.push_back(std::move(a).value());
   }
   std::stable_sort(actions.begin(), actions.end(),

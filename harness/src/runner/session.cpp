@@ -28,10 +28,8 @@ data::Backend backend_kind(const std::string& name) {
 }
 
 Result<Done> check_options(const protocol::Protocol& p, const RunOptions& options, const protocol::Design& design) {
-  if (!data::valid_pseudonym(options.participant))
-    return Error{Error::Kind::usage,
-                 "--participant must be a pseudonym of 1-32 letters, digits, '_' or '-' (no names), got '" +
-                     options.participant + "'"};
+  if (auto ok = data::check_pseudonym(options.participant); !ok)
+    return Error{Error::Kind::usage, "--participant: " + ok.error().message};
   if (options.participant_number < 1) return Error{Error::Kind::usage, "the participant number must be at least 1"};
   if (options.observer)
     if (auto ok = check_observer(*options.observer); !ok)

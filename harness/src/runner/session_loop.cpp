@@ -803,7 +803,10 @@ class SessionLoop::Impl {
       const auto path = std::filesystem::path(options_.images_dir) / stem;
       const auto files = backend_.save_frame(path.string());
       if (!files.empty()) check(write_onset_record(path.string() + ".json", *world_, t.settings, a.placement, a.onset_view));
-      onset.images = files;
+      // The files' names, not the folder: a folder can name a person.
+      std::vector<std::string> names;
+      for (const auto& f : files) names.push_back(std::filesystem::path(f).filename().string());
+      onset.images = std::move(names);
       summary_.images.insert(summary_.images.end(), files.begin(), files.end());
     }
     event(t.id, onset);

@@ -15,13 +15,24 @@ namespace curvlab::data {
 struct ExportOptions {
   std::string out_dir;                    // created if missing
   std::optional<std::int64_t> session_id; // nullopt: every session
-  std::string source = {};                // the data's origin as descriptions name it; empty: the file
+  std::string source = {};                // the data's origin as descriptions name it; empty: the file's
+                                          // name (never a folder: a folder can name a person)
 };
 
 struct ExportSummary {
   std::vector<std::string> files;  // written, relative to out_dir
   std::size_t rows = 0;            // data rows written (trials or samples)
 };
+
+// Psych-DS and BIDS name files after participants and protocols by their
+// letters and digits (P-01 → subject-P01, sub-P01): refused (bad_input,
+// naming the pseudonyms or protocol names and the label) when two of the
+// selected sessions' pseudonyms, or two protocol names, would get one label,
+// also one that differs only in case (one file on a disk that ignores case),
+// since one's files would overwrite the other's. Both exports check this
+// before writing anything; a caller writing several formats checks first,
+// so that none is written.
+Expected<Done> check_export_labels(Database& db, const ExportOptions& options);
 
 // One row per trial, wide: fixed columns, then cond_<name> and stim_<name>
 // columns in order of first appearance. Missing values are NA. → trials.csv

@@ -2,6 +2,8 @@
 // of data_schema/schema.sql (see data_schema/codebook.md for units).
 #pragma once
 
+#include "curvlab/harness/data/error.hpp"
+
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -25,8 +27,15 @@ std::optional<SessionStatus> parse_session_status(std::string_view text);
 std::optional<TrialStatus> parse_trial_status(std::string_view text);
 const char* to_string(TrackedDevice device);
 
-// No names or other identifying data: a pseudonym of [A-Za-z0-9_-], 1–32 chars.
-bool valid_pseudonym(const std::string& pseudonym);
+// No names or other identifying data (docs/data.md, "Privacy"): 1–32
+// characters of A-Z a-z 0-9 - _, not beginning with '-' (it would read as an
+// option), no '@' (an e-mail address) and no date: a four-digit year
+// 1900–2099 with a month (1–12) and a day (1–31), as year-month-day,
+// day-month-year or month-day-year with one of - _ . / or a space between
+// the numbers, or as eight digits in a row (YYYYMMDD, DDMMYYYY, MMDDYYYY).
+// The error (bad_input) quotes the pseudonym and says which rule it breaks.
+Expected<Done> check_pseudonym(const std::string& pseudonym);
+bool valid_pseudonym(const std::string& pseudonym);  // check_pseudonym succeeds
 struct ParticipantRecord {
   std::string pseudonym;
   std::optional<double> ipd_m;

@@ -35,7 +35,9 @@ class SessionStore {
 
 
   // Stores the full protocol text with its SHA-256; the same text twice
-  // returns the same id.
+  // returns the same id. Of source_path only the file name is kept (a
+  // folder can name a person); it labels diagnostics when the stored text
+  // is loaded again (resume, replay).
   Expected<std::int64_t> add_protocol(const std::string& name, const std::string& text,
                                       const std::string& source_path = {});
   // Returns the existing id when the pseudonym is already known.

@@ -34,7 +34,7 @@ struct OperatorAction {
   OperatorActionKind kind = OperatorActionKind::note;
   std::int64_t at_ns = 0;  // script: time since the session started; window: when the key was pressed
   std::string text;        // note: the free text, verbatim
-  std::string source;      // "script FILE:LINE" or "window"
+  std::string source;      // "script NAME:LINE" (the file's name, no folder) or "window"
 };
 
 // One action a line: `SECONDS ACTION [TEXT]`, seconds since the session

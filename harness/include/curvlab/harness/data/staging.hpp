@@ -1,0 +1,27 @@
+// Work in progress beside where it will land, named after the process that
+// writes it: merge's OUT.merging-PID, a pooled export's
+// $TMPDIR/curvlab-export-PID.sqlite, an export's DIR/bids.partial-PID. A
+// process stopped by kill -9 or a power cut leaves its work behind (a pooled
+// study can be hundreds of MB); the next run of the command removes what no
+// living process owns. Thread-safe (no shared state).
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <sys/types.h>
+
+namespace curvlab::data {
+
+// True while a process with this id exists: kill(pid, 0) does not fail with
+// ESRCH (another user's process, EPERM, counts as living).
+bool process_alive(pid_t pid);
+
+// Removes, files and folders alike, the entries directly in `dir` named
+// `prefix` + PID + rest, where PID is a process that no longer exists and
+// rest is empty or begins with '.' or '-' (SQLite's -wal, -shm and -journal
+// companions). Living processes' entries and other names are left alone, as
+// is anything that cannot be removed (no worse than before). Returns how
+// many entries were removed.
+std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix);
+
+}  // namespace curvlab::data
