@@ -3,6 +3,8 @@
 // read-only file system.
 #pragma once
 
+#include "data_files.hpp"
+
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/mount.h>
@@ -24,16 +26,7 @@ namespace curvlab::testing::sharing {
 
 namespace fs = std::filesystem;
 
-inline std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-inline void write_file(const fs::path& p, const std::string& bytes) {
-  std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes;
-}
+inline std::string slurp(const fs::path& p) { return read_file(p); }
 
 inline std::int64_t count_lines(const fs::path& p, const std::string& needle) {
   std::istringstream in(slurp(p));

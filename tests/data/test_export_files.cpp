@@ -5,6 +5,7 @@
 // removed on the next run, and misplaced --images and --db arguments are
 // refused before anything is created.
 #include "../cli/run_cli.hpp"
+#include "data_files.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -21,23 +22,15 @@
 namespace fs = std::filesystem;
 using curvlab::testing::run_cli;
 
+using curvlab::testing::read_file;
+using curvlab::testing::scalar;
+
 namespace {
 
+fs::path fresh_dir(const std::string& name) { return curvlab::testing::fresh_test_dir("files", name); }
+
+
 const std::string kDemo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("curvlab_files_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // One completed headless session of protocols/demo.toml per pseudonym.
 void run_sessions(const fs::path& db, const std::vector<std::string>& pseudonyms) {

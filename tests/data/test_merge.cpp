@@ -6,6 +6,8 @@
 #include "curvlab/harness/data/merge.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 
+#include "data_files.hpp"
+
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -24,7 +26,13 @@
 namespace fs = std::filesystem;
 using namespace curvlab::data;
 
+using curvlab::testing::read_file;
+using curvlab::testing::scalar;
+
 namespace {
+
+fs::path fresh_dir(const std::string& name) { return curvlab::testing::fresh_test_dir("merge", name); }
+
 
 const std::string kDemo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
 
@@ -44,13 +52,6 @@ Cli run_curvlab(const std::string& args) {
   return r;
 }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("curvlab_merge_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 // Removes this process's folders when the tests are done (machines() is
 // shared by the tests of one process, so not before).
 class RemoveFolders : public ::testing::Environment {
@@ -68,23 +69,8 @@ class RemoveFolders : public ::testing::Environment {
 };
 [[maybe_unused]] auto* const remove_folders = ::testing::AddGlobalTestEnvironment(new RemoveFolders);
 
-std::string scalar(const fs::path& db, const std::string& sql) {
-  auto d = Database::open(db.string(), OpenMode::read_only);
-  if (!d) return d.error().message;
-  Statement s(d.value().connection(), sql);
-  if (!s.step() || s.is_null(0)) return "NULL";
-  return s.column_text(0);
-}
-
 std::int64_t count(const fs::path& db, const std::string& table) {
   return std::stoll(scalar(db, "SELECT COUNT(*) FROM " + table));
-}
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 std::string run_args(const std::string& participant, const fs::path& db, const std::string& protocol = kDemo) {

@@ -7,6 +7,7 @@
 #include "curvlab/harness/data/sqlite.hpp"
 
 #include "../cli/run_cli.hpp"
+#include "data_files.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -19,31 +20,15 @@ namespace fs = std::filesystem;
 using namespace curvlab::data;
 using curvlab::testing::run_cli;
 
+using curvlab::testing::read_file;
+using curvlab::testing::scalar;
+
 namespace {
 
+fs::path fresh_dir(const std::string& name) { return curvlab::testing::fresh_test_dir("privacy", name); }
+
+
 const std::string kDemo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("curvlab_privacy_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string scalar(const fs::path& db, const std::string& sql) {
-  auto d = Database::open(db.string(), OpenMode::read_only);
-  if (!d) return d.error().message;
-  Statement s(d.value().connection(), sql);
-  if (!s.step() || s.is_null(0)) return "NULL";
-  return s.column_text(0);
-}
 
 void run_session(const fs::path& db, const std::string& pseudonym) {
   const auto r = run_cli("run " + kDemo + " --participant " + pseudonym + " --db " + db.string() +

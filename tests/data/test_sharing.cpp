@@ -7,6 +7,7 @@
 #include "curvlab/harness/data/database.hpp"
 
 #include "../cli/run_cli.hpp"
+#include "data_files.hpp"
 #include "sharing_support.hpp"
 
 #include <gtest/gtest.h>
@@ -21,16 +22,15 @@ using curvlab::testing::run_cli;
 namespace fs = std::filesystem;
 namespace sh = curvlab::testing::sharing;
 
+using curvlab::testing::read_file;
+using curvlab::testing::scalar;
+
 namespace {
 
-const std::string demo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
+fs::path fresh_dir(const std::string& name) { return curvlab::testing::fresh_test_dir("sharing", name); }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("curvlab_sharing_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+
+const std::string demo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
 
 // A realtime session of the demo protocol in the background.
 sh::Child start_session(const fs::path& dir, const std::string& db, const std::string& participant = "P01") {
@@ -128,7 +128,7 @@ TEST(CliSharing, ADamagedWriteAheadLogIsReportedAndKept) {
   ASSERT_GT(fs::file_size(db + "-wal"), 32u) << "the committed trials should still be in the log";
   std::string wal = sh::slurp(db + "-wal");
   wal[24] = static_cast<char>(wal[24] ^ 0x5a);
-  sh::write_file(db + "-wal", wal);
+  curvlab::testing::write_file(db + "-wal", wal);
   const std::string main_before = sh::slurp(db);
 
   for (const std::string& args :
@@ -213,7 +213,7 @@ TEST(CliSharing, RunOnAFileDamagedInsideAddsNoSession) {
     return c.query_int("SELECT rootpage FROM sqlite_master WHERE name = 'trials'");
   }();
   bytes.replace(static_cast<std::size_t>(page - 1) * 4096, 16, std::string(16, '\xff'));
-  sh::write_file(db, bytes);
+  curvlab::testing::write_file(db, bytes);
   const auto r = run_cli("run " + demo + " --participant P02 --db " + db + " --render none --quiet");
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("damaged curvlab data file"), std::string::npos) << r.out;
