@@ -84,6 +84,167 @@ std::optional<std::uint32_t> usable_queue_family(const vk::raii::PhysicalDevice&
   return std::nullopt;
 }
 
+// The instance's layers and extensions: the validation layer's when asked
+// for, and the embedder's.
+struct InstanceNames {
+  std::vector<const char*> layers;
+  std::vector<const char*> extensions;
+};
+
+std::variant<InstanceNames, RenderError> instance_names(const vk::raii::Context& loader,
+                                                        const ContextOptions& options,
+                                                        const ContextEmbedding& embedding) {
+  InstanceNames names;
+  if (options.validation) {
+    if (!has_layer(loader, kValidationLayer))
+      return RenderError{"validation requested but VK_LAYER_KHRONOS_validation is not "
+                         "installed (apt-get install vulkan-validationlayers)"};
+    names.layers.push_back(kValidationLayer);
+    names.extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  }
+  for (const auto& e : embedding.instance_extensions) {
+    if (!has_instance_extension(loader, e.c_str()))
+      return RenderError{"the Vulkan instance extension " + e +
+                         " is not available (a window needs the loader's surface "
+                         "extensions: install libvulkan1 and a driver with WSI support)"};
+    add_unique(names.extensions, e.c_str());
+  }
+  return names;
+}
+
+vk::DebugUtilsMessengerCreateInfoEXT messenger_create_info(ValidationLog* log) {
+  return {.messageSeverity = vk::DebugUtilsMessageSeverityFlagBitsEXT::eWarning |
+                             vk::DebugUtilsMessageSeverityFlagBitsEXT::eError,
+          .messageType = vk::DebugUtilsMessageTypeFlagBitsEXT::eGeneral |
+                         vk::DebugUtilsMessageTypeFlagBitsEXT::eValidation |
+                         vk::DebugUtilsMessageTypeFlagBitsEXT::ePerformance,
+          .pfnUserCallback = &on_validation_message,
+          .pUserData = log};
+}
+
+// The instance, made by the loader or by the embedder's hook.
+std::variant<vk::raii::Instance, RenderError> make_instance(const vk::raii::Context& loader,
+                                                            const vk::InstanceCreateInfo& info,
+                                                            const ContextHooks& hooks) {
+  if (!hooks.create_instance) return vk::raii::Instance(loader, info);
+  auto made = hooks.create_instance(static_cast<const VkInstanceCreateInfo&>(info));
+  if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+  return vk::raii::Instance(loader, std::get<VkInstance>(made));
+}
+
+// The embedder's device extensions, and the swapchain's with a surface.
+std::vector<const char*> device_extension_names(const ContextEmbedding& embedding, bool surface) {
+  std::vector<const char*> names;
+  for (const auto& e : embedding.device_extensions) add_unique(names, e.c_str());
+  if (surface) add_unique(names, VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+  return names;
+}
+
+// A physical device and the queue family curvlab uses on it.
+struct PickedDevice {
+  vk::raii::PhysicalDevice physical{nullptr};
+  std::uint32_t queue_family = 0;
+};
+
+// The device the embedder's hook names, checked for what curvlab needs.
+std::variant<PickedDevice, RenderError> embedder_device(const vk::raii::Instance& instance,
+                                                        const ContextHooks& hooks,
+                                                        const std::vector<const char*>& device_extensions,
+                                                        VkSurfaceKHR surface) {
+  auto picked = hooks.pick_physical_device(static_cast<VkInstance>(*instance));
+  if (auto* e = std::get_if<std::string>(&picked)) return RenderError{*e};
+  vk::raii::PhysicalDevice physical(instance, std::get<VkPhysicalDevice>(picked));
+  const auto props = physical.getProperties();
+  if (props.apiVersion < VK_API_VERSION_1_3)
+    return RenderError{std::string("the Vulkan device chosen by the embedder (") +
+                       props.deviceName.data() +
+                       ") does not support Vulkan 1.3, which curvlab needs for dynamic "
+                       "rendering; update its driver"};
+  if (!has_device_extensions(physical, device_extensions))
+    return RenderError{std::string("the Vulkan device chosen by the embedder (") +
+                       props.deviceName.data() + ") lacks a required device extension"};
+  const auto family = usable_queue_family(physical, surface);
+  if (!family) return RenderError{"the Vulkan device has no graphics+compute queue" +
+                                  std::string(surface ? " that can present to the window" : "")};
+  return PickedDevice{std::move(physical), *family};
+}
+
+// How much a device is preferred (higher first); -1: not acceptable.
+int device_score(const vk::PhysicalDeviceProperties& props, DeviceChoice choice) {
+  const bool cpu = props.deviceType == vk::PhysicalDeviceType::eCpu;
+  if (choice == DeviceChoice::software) return cpu ? 1 : -1;
+  return props.deviceType == vk::PhysicalDeviceType::eDiscreteGpu     ? 4
+         : props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ? 3
+         : cpu                                                        ? 1
+                                                                      : 2;
+}
+
+// Picks a device: GPUs first unless software is requested; a CPU device
+// (lavapipe) is always acceptable. Vulkan 1.3 for dynamic rendering; with a
+// surface, a queue that can present to it.
+std::variant<PickedDevice, RenderError> best_device(const vk::raii::Instance& instance, DeviceChoice choice,
+                                                    const std::vector<const char*>& device_extensions,
+                                                    VkSurfaceKHR surface) {
+  vk::raii::PhysicalDevices devices(instance);
+  PickedDevice best;
+  int best_score = -1;
+  for (auto& pd : devices) {
+    const auto props = pd.getProperties();
+    if (props.apiVersion < VK_API_VERSION_1_3) continue;
+    if (!has_device_extensions(pd, device_extensions)) continue;
+    const auto family = usable_queue_family(pd, surface);
+    if (!family) continue;
+    const int score = device_score(props, choice);
+    if (score > best_score) {
+      best_score = score;
+      best = PickedDevice{std::move(pd), *family};
+    }
+  }
+  if (best_score >= 0) return best;
+  if (surface)
+    return RenderError{"no Vulkan 1.3 device can present to the window (install a GPU "
+                       "driver, or mesa-vulkan-drivers for lavapipe)"};
+  return RenderError{choice == DeviceChoice::software
+                         ? "no CPU Vulkan device found (apt-get install mesa-vulkan-drivers "
+                           "for lavapipe)"
+                         : "no Vulkan 1.3 device found (install a GPU driver, or "
+                           "mesa-vulkan-drivers for lavapipe)"};
+}
+
+// The driver's name and version, for the session's provenance.
+std::string describe_driver(const vk::raii::PhysicalDevice& physical) {
+  const auto driver =
+      physical.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties>()
+          .get<vk::PhysicalDeviceDriverProperties>();
+  return std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
+}
+
+// The device with one queue of `queue_family`, made by the physical device
+// or by the embedder's hook.
+std::variant<vk::raii::Device, RenderError> make_device(const vk::raii::PhysicalDevice& physical,
+                                                        std::uint32_t queue_family,
+                                                        const std::vector<const char*>& extensions,
+                                                        const ContextHooks& hooks) {
+  const float priority = 1.0f;
+  const vk::DeviceQueueCreateInfo queue_info{.queueFamilyIndex = queue_family,
+                                             .queueCount = 1,
+                                             .pQueuePriorities = &priority};
+  vk::PhysicalDeviceVulkan13Features features13{.dynamicRendering = VK_TRUE};
+  vk::PhysicalDeviceFeatures2 features{.pNext = &features13};
+  features.features.fillModeNonSolid = VK_FALSE;
+  const vk::DeviceCreateInfo device_info{
+      .pNext = &features,
+      .queueCreateInfoCount = 1,
+      .pQueueCreateInfos = &queue_info,
+      .enabledExtensionCount = static_cast<std::uint32_t>(extensions.size()),
+      .ppEnabledExtensionNames = extensions.data()};
+  if (!hooks.create_device) return vk::raii::Device(physical, device_info);
+  auto made = hooks.create_device(static_cast<VkPhysicalDevice>(*physical),
+                                  static_cast<const VkDeviceCreateInfo&>(device_info));
+  if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+  return vk::raii::Device(physical, std::get<VkDevice>(made));
+}
+
 }  // namespace
 
 Context::~Context() = default;
@@ -98,36 +259,16 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
   try {
     if (c.loader_.enumerateInstanceVersion() < VK_API_VERSION_1_3)
       return RenderError{"the Vulkan loader is older than 1.3; install libvulkan1 ≥ 1.3"};
-    std::vector<const char*> layers;
-    std::vector<const char*> extensions;
-    if (options.validation) {
-      if (!has_layer(c.loader_, kValidationLayer))
-        return RenderError{"validation requested but VK_LAYER_KHRONOS_validation is not "
-                           "installed (apt-get install vulkan-validationlayers)"};
-      layers.push_back(kValidationLayer);
-      extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
-      c.validation_ = true;
-    }
-    for (const auto& e : embedding.instance_extensions) {
-      if (!has_instance_extension(c.loader_, e.c_str()))
-        return RenderError{"the Vulkan instance extension " + e +
-                           " is not available (a window needs the loader's surface "
-                           "extensions: install libvulkan1 and a driver with WSI support)"};
-      add_unique(extensions, e.c_str());
-    }
+    auto names = instance_names(c.loader_, options, embedding);
+    if (auto* e = std::get_if<RenderError>(&names)) return *e;
+    const auto& [layers, extensions] = std::get<InstanceNames>(names);
+    c.validation_ = options.validation;
     const vk::ApplicationInfo app{.pApplicationName = "curvlab",
                                   .applicationVersion = 1,
                                   .pEngineName = "curvlab",
                                   .engineVersion = 1,
                                   .apiVersion = VK_API_VERSION_1_3};
-    const vk::DebugUtilsMessengerCreateInfoEXT messenger_info{
-        .messageSeverity = vk::DebugUtilsMessageSeverityFlagBitsEXT::eWarning |
-                           vk::DebugUtilsMessageSeverityFlagBitsEXT::eError,
-        .messageType = vk::DebugUtilsMessageTypeFlagBitsEXT::eGeneral |
-                       vk::DebugUtilsMessageTypeFlagBitsEXT::eValidation |
-                       vk::DebugUtilsMessageTypeFlagBitsEXT::ePerformance,
-        .pfnUserCallback = &on_validation_message,
-        .pUserData = c.log_.get()};
+    const vk::DebugUtilsMessengerCreateInfoEXT messenger_info = messenger_create_info(c.log_.get());
     const vk::InstanceCreateInfo instance_info{
         .pNext = options.validation ? &messenger_info : nullptr,
         .pApplicationInfo = &app,
@@ -135,13 +276,9 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
         .ppEnabledLayerNames = layers.data(),
         .enabledExtensionCount = static_cast<std::uint32_t>(extensions.size()),
         .ppEnabledExtensionNames = extensions.data()};
-    if (embedding.hooks.create_instance) {
-      auto made = embedding.hooks.create_instance(static_cast<const VkInstanceCreateInfo&>(instance_info));
-      if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
-      c.instance_ = vk::raii::Instance(c.loader_, std::get<VkInstance>(made));
-    } else {
-      c.instance_ = vk::raii::Instance(c.loader_, instance_info);
-    }
+    auto instance = make_instance(c.loader_, instance_info, embedding.hooks);
+    if (auto* e = std::get_if<RenderError>(&instance)) return *e;
+    c.instance_ = std::get<vk::raii::Instance>(std::move(instance));
     if (options.validation)
       c.messenger_ = vk::raii::DebugUtilsMessengerEXT(c.instance_, messenger_info);
     if (embedding.create_surface) {
@@ -150,99 +287,23 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
       c.surface_ = vk::raii::SurfaceKHR(c.instance_, std::get<VkSurfaceKHR>(made));
     }
 
-    std::vector<const char*> device_extensions;
-    for (const auto& e : embedding.device_extensions) add_unique(device_extensions, e.c_str());
-    if (*c.surface_) add_unique(device_extensions, VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     const VkSurfaceKHR surface = *c.surface_ ? static_cast<VkSurfaceKHR>(*c.surface_) : VK_NULL_HANDLE;
-
-    if (embedding.hooks.pick_physical_device) {
-      auto picked = embedding.hooks.pick_physical_device(static_cast<VkInstance>(*c.instance_));
-      if (auto* e = std::get_if<std::string>(&picked)) return RenderError{*e};
-      c.physical_ = vk::raii::PhysicalDevice(c.instance_, std::get<VkPhysicalDevice>(picked));
-      const auto props = c.physical_.getProperties();
-      if (props.apiVersion < VK_API_VERSION_1_3)
-        return RenderError{std::string("the Vulkan device chosen by the embedder (") +
-                           props.deviceName.data() +
-                           ") does not support Vulkan 1.3, which curvlab needs for dynamic "
-                           "rendering; update its driver"};
-      if (!has_device_extensions(c.physical_, device_extensions))
-        return RenderError{std::string("the Vulkan device chosen by the embedder (") +
-                           props.deviceName.data() + ") lacks a required device extension"};
-      const auto family = usable_queue_family(c.physical_, surface);
-      if (!family) return RenderError{"the Vulkan device has no graphics+compute queue" +
-                                      std::string(surface ? " that can present to the window" : "")};
-      c.queue_family_ = *family;
-    } else {
-      // Pick a device: GPUs first unless software is requested; a CPU device
-      // (lavapipe) is always acceptable. Vulkan 1.3 for dynamic rendering;
-      // with a surface, a queue that can present to it.
-      vk::raii::PhysicalDevices devices(c.instance_);
-      int best_score = -1;
-      for (auto& pd : devices) {
-        const auto props = pd.getProperties();
-        if (props.apiVersion < VK_API_VERSION_1_3) continue;
-        if (!has_device_extensions(pd, device_extensions)) continue;
-        const auto family = usable_queue_family(pd, surface);
-        if (!family) continue;
-        int score = 0;
-        const bool cpu = props.deviceType == vk::PhysicalDeviceType::eCpu;
-        if (options.device == DeviceChoice::software) {
-          if (!cpu) continue;
-          score = 1;
-        } else {
-          score = props.deviceType == vk::PhysicalDeviceType::eDiscreteGpu     ? 4
-                  : props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ? 3
-                  : cpu                                                        ? 1
-                                                                               : 2;
-        }
-        if (score > best_score) {
-          best_score = score;
-          c.physical_ = std::move(pd);
-          c.queue_family_ = *family;
-        }
-      }
-      if (best_score < 0) {
-        if (surface)
-          return RenderError{"no Vulkan 1.3 device can present to the window (install a GPU "
-                             "driver, or mesa-vulkan-drivers for lavapipe)"};
-        return RenderError{options.device == DeviceChoice::software
-                               ? "no CPU Vulkan device found (apt-get install mesa-vulkan-drivers "
-                                 "for lavapipe)"
-                               : "no Vulkan 1.3 device found (install a GPU driver, or "
-                                 "mesa-vulkan-drivers for lavapipe)"};
-      }
-    }
+    const auto device_extensions = device_extension_names(embedding, surface != VK_NULL_HANDLE);
+    auto picked = embedding.hooks.pick_physical_device
+                      ? embedder_device(c.instance_, embedding.hooks, device_extensions, surface)
+                      : best_device(c.instance_, options.device, device_extensions, surface);
+    if (auto* e = std::get_if<RenderError>(&picked)) return *e;
+    c.physical_ = std::move(std::get<PickedDevice>(picked).physical);
+    c.queue_family_ = std::get<PickedDevice>(picked).queue_family;
     const auto props = c.physical_.getProperties();
     c.device_name_ = props.deviceName.data();
     c.software_ = props.deviceType == vk::PhysicalDeviceType::eCpu;
     c.timestamp_period_ns_ = static_cast<double>(props.limits.timestampPeriod);
-    const auto driver =
-        c.physical_.getProperties2<vk::PhysicalDeviceProperties2,
-                                   vk::PhysicalDeviceDriverProperties>()
-            .get<vk::PhysicalDeviceDriverProperties>();
-    c.driver_info_ = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
+    c.driver_info_ = describe_driver(c.physical_);
 
-    const float priority = 1.0f;
-    const vk::DeviceQueueCreateInfo queue_info{.queueFamilyIndex = c.queue_family_,
-                                               .queueCount = 1,
-                                               .pQueuePriorities = &priority};
-    vk::PhysicalDeviceVulkan13Features features13{.dynamicRendering = VK_TRUE};
-    vk::PhysicalDeviceFeatures2 features{.pNext = &features13};
-    features.features.fillModeNonSolid = VK_FALSE;
-    const vk::DeviceCreateInfo device_info{
-        .pNext = &features,
-        .queueCreateInfoCount = 1,
-        .pQueueCreateInfos = &queue_info,
-        .enabledExtensionCount = static_cast<std::uint32_t>(device_extensions.size()),
-        .ppEnabledExtensionNames = device_extensions.data()};
-    if (embedding.hooks.create_device) {
-      auto made = embedding.hooks.create_device(static_cast<VkPhysicalDevice>(*c.physical_),
-                                              static_cast<const VkDeviceCreateInfo&>(device_info));
-      if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
-      c.device_ = vk::raii::Device(c.physical_, std::get<VkDevice>(made));
-    } else {
-      c.device_ = vk::raii::Device(c.physical_, device_info);
-    }
+    auto device = make_device(c.physical_, c.queue_family_, device_extensions, embedding.hooks);
+    if (auto* e = std::get_if<RenderError>(&device)) return *e;
+    c.device_ = std::get<vk::raii::Device>(std::move(device));
     c.queue_ = vk::raii::Queue(c.device_, c.queue_family_, 0);
     c.command_pool_ = vk::raii::CommandPool(
         c.device_, {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer,

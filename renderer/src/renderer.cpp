@@ -107,6 +107,91 @@ struct EyeAttachments {
   Image depth;
 };
 
+// What the steps of recording one frame share.
+struct FrameRecording {
+  const Scene& scene;
+  const FrameDescription& frame;
+  RenderTarget& target;
+  FrameSlot& slot;
+  std::array<float, 4> background;
+  int k;  // the space's curvature sign, a pipeline specialisation
+  FrameStats& stats;
+};
+
+// The GPU meshes and text textures of one eye's draws, in the plan's order.
+struct EyeDraws {
+  std::vector<GpuMesh*> meshes;
+  std::vector<const Texture*> textures;  // null: no text
+};
+
+// The specialisation constants of a pipeline's shaders.
+SpecData spec_data(Projection proj, int k, Hemisphere hemi, Shading shading) {
+  SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
+                static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
+                glm::vec3(palette::text_paper),
+                {glm::vec3(palette::stick_butt), glm::vec3(palette::stick_shaft),
+                 glm::vec3(palette::stick_tip), glm::vec3(palette::stick_ring)},
+                {}, static_cast<float>(kStickRingHalfWidthM)};
+  for (std::size_t i = 0; i < spec.ring_fractions.size(); ++i)
+    spec.ring_fractions[i] = static_cast<float>(kStickRingFractions[i]);
+  return spec;
+}
+
+// Where each constant_id of the shaders lies in SpecData.
+std::vector<vk::SpecializationMapEntry> spec_entries() {
+  std::vector<vk::SpecializationMapEntry> entries{{0, offsetof(SpecData, native_view), 4},
+                                                  {1, offsetof(SpecData, curvature), 4},
+                                                  {2, offsetof(SpecData, back), 4},
+                                                  {3, offsetof(SpecData, shading), 4}};
+  for (std::uint32_t c = 0; c < 3; ++c) {
+    entries.push_back({4 + c, static_cast<std::uint32_t>(offsetof(SpecData, ink) + 4 * c), 4});
+    entries.push_back({7 + c, static_cast<std::uint32_t>(offsetof(SpecData, paper) + 4 * c), 4});
+  }
+  for (std::uint32_t w = 0; w < 4; ++w)
+    for (std::uint32_t c = 0; c < 3; ++c)
+      entries.push_back({10 + 3 * w + c,
+                         static_cast<std::uint32_t>(offsetof(SpecData, wood) + sizeof(glm::vec3) * w + 4 * c), 4});
+  for (std::uint32_t i = 0; i < 5; ++i)
+    entries.push_back({22 + i, static_cast<std::uint32_t>(offsetof(SpecData, ring_fractions) + 4 * i), 4});
+  entries.push_back({27, offsetof(SpecData, ring_half_m), 4});
+  return entries;
+}
+
+// The vertex layouts of scene meshes (scene.vert) and tubes (tube.vert).
+const vk::VertexInputAttributeDescription kVertexAttributes[] = {
+    {0, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, position)},
+    {1, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, normal)},
+    {2, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, color)}};
+const vk::VertexInputAttributeDescription kTubeVertexAttributes[] = {
+    {0, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, axis)},
+    {1, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, tangent)},
+    {2, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, up)},
+    {3, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, side)},
+    {4, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, design)},
+    {5, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, place)}};
+
+// No face culling: the S3 twin and the native map may flip orientation.
+const vk::PipelineRasterizationStateCreateInfo kRasterization{.polygonMode = vk::PolygonMode::eFill,
+                                                              .cullMode = vk::CullModeFlagBits::eNone,
+                                                              .frontFace = vk::FrontFace::eCounterClockwise,
+                                                              .lineWidth = 1.0f};
+const vk::PipelineDepthStencilStateCreateInfo kDepthTest{
+    .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE, .depthCompareOp = vk::CompareOp::eLess};
+
+// Tubes carry their coverage in alpha and are blended over what is behind
+// them (they are drawn after everything else); the rest is opaque.
+vk::PipelineColorBlendAttachmentState blending(bool tube) {
+  return {.blendEnable = tube ? VK_TRUE : VK_FALSE,
+          .srcColorBlendFactor = vk::BlendFactor::eSrcAlpha,
+          .dstColorBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
+          .colorBlendOp = vk::BlendOp::eAdd,
+          .srcAlphaBlendFactor = vk::BlendFactor::eOne,
+          .dstAlphaBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
+          .alphaBlendOp = vk::BlendOp::eAdd,
+          .colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG |
+                            vk::ColorComponentFlagBits::eB | vk::ColorComponentFlagBits::eA};
+}
+
 }  // namespace
 
 struct Renderer::Impl {
@@ -240,29 +325,8 @@ struct Renderer::Impl {
                                      static_cast<int>(shading), static_cast<int>(topology));
     if (auto it = pipelines.find(key); it != pipelines.end()) return it->second;
     const bool tube = shading == Shading::tube;
-    SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
-                  static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
-                  glm::vec3(palette::text_paper),
-                  {glm::vec3(palette::stick_butt), glm::vec3(palette::stick_shaft),
-                   glm::vec3(palette::stick_tip), glm::vec3(palette::stick_ring)},
-                  {}, static_cast<float>(kStickRingHalfWidthM)};
-    for (std::size_t i = 0; i < spec.ring_fractions.size(); ++i)
-      spec.ring_fractions[i] = static_cast<float>(kStickRingFractions[i]);
-    std::vector<vk::SpecializationMapEntry> entries{{0, offsetof(SpecData, native_view), 4},
-                                                    {1, offsetof(SpecData, curvature), 4},
-                                                    {2, offsetof(SpecData, back), 4},
-                                                    {3, offsetof(SpecData, shading), 4}};
-    for (std::uint32_t c = 0; c < 3; ++c) {
-      entries.push_back({4 + c, static_cast<std::uint32_t>(offsetof(SpecData, ink) + 4 * c), 4});
-      entries.push_back({7 + c, static_cast<std::uint32_t>(offsetof(SpecData, paper) + 4 * c), 4});
-    }
-    for (std::uint32_t w = 0; w < 4; ++w)
-      for (std::uint32_t c = 0; c < 3; ++c)
-        entries.push_back({10 + 3 * w + c,
-                           static_cast<std::uint32_t>(offsetof(SpecData, wood) + sizeof(glm::vec3) * w + 4 * c), 4});
-    for (std::uint32_t i = 0; i < 5; ++i)
-      entries.push_back({22 + i, static_cast<std::uint32_t>(offsetof(SpecData, ring_fractions) + 4 * i), 4});
-    entries.push_back({27, offsetof(SpecData, ring_half_m), 4});
+    const SpecData spec = spec_data(proj, k, hemi, shading);
+    const auto entries = spec_entries();
     const vk::SpecializationInfo spec_info{.mapEntryCount = static_cast<std::uint32_t>(entries.size()),
                                            .pMapEntries = entries.data(),
                                            .dataSize = sizeof(SpecData),
@@ -274,49 +338,19 @@ struct Renderer::Impl {
          .pSpecializationInfo = &spec_info}};
     const vk::VertexInputBindingDescription binding{
         .binding = 0, .stride = static_cast<std::uint32_t>(tube ? sizeof(TubeVertex) : sizeof(Vertex)), .inputRate = vk::VertexInputRate::eVertex};
-    const vk::VertexInputAttributeDescription attrs[] = {
-        {0, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, position)},
-        {1, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, normal)},
-        {2, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(Vertex, color)}};
-    const vk::VertexInputAttributeDescription tube_attrs[] = {
-        {0, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, axis)},
-        {1, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, tangent)},
-        {2, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, up)},
-        {3, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, side)},
-        {4, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, design)},
-        {5, 0, vk::Format::eR32G32B32A32Sfloat, offsetof(TubeVertex, place)}};
     const vk::PipelineVertexInputStateCreateInfo vertex_input{
         .vertexBindingDescriptionCount = 1, .pVertexBindingDescriptions = &binding,
-        .vertexAttributeDescriptionCount = tube ? 6u : 3u, .pVertexAttributeDescriptions = tube ? tube_attrs : attrs};
+        .vertexAttributeDescriptionCount = tube ? 6u : 3u,
+        .pVertexAttributeDescriptions = tube ? kTubeVertexAttributes : kVertexAttributes};
     const vk::PipelineInputAssemblyStateCreateInfo assembly{
         .topology = topology == Topology::lines ? vk::PrimitiveTopology::eLineList
                                                 : vk::PrimitiveTopology::eTriangleList};
     const vk::PipelineViewportStateCreateInfo viewport{.viewportCount = 1, .scissorCount = 1};
-    // No face culling: the S3 twin and the native map may flip orientation.
-    const vk::PipelineRasterizationStateCreateInfo raster{
-        .polygonMode = vk::PolygonMode::eFill,
-        .cullMode = vk::CullModeFlagBits::eNone,
-        .frontFace = vk::FrontFace::eCounterClockwise,
-        .lineWidth = 1.0f};
     // Multisampling anti-aliases edges only: the fragment shader runs once
     // per pixel, so text sampled from its atlas stays as sharp as without.
     const vk::PipelineMultisampleStateCreateInfo multisample{
         .rasterizationSamples = sample_bits(msaa)};
-    const vk::PipelineDepthStencilStateCreateInfo depth_state{
-        .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE,
-        .depthCompareOp = vk::CompareOp::eLess};
-    // Tubes carry their coverage in alpha and are blended over what is
-    // behind them (they are drawn after everything else).
-    const vk::PipelineColorBlendAttachmentState blend{
-        .blendEnable = tube ? VK_TRUE : VK_FALSE,
-        .srcColorBlendFactor = vk::BlendFactor::eSrcAlpha,
-        .dstColorBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
-        .colorBlendOp = vk::BlendOp::eAdd,
-        .srcAlphaBlendFactor = vk::BlendFactor::eOne,
-        .dstAlphaBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
-        .alphaBlendOp = vk::BlendOp::eAdd,
-        .colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG |
-                          vk::ColorComponentFlagBits::eB | vk::ColorComponentFlagBits::eA};
+    const vk::PipelineColorBlendAttachmentState blend = blending(tube);
     const vk::PipelineColorBlendStateCreateInfo blend_state{.attachmentCount = 1, .pAttachments = &blend};
     const vk::DynamicState dyn[] = {vk::DynamicState::eViewport, vk::DynamicState::eScissor};
     const vk::PipelineDynamicStateCreateInfo dynamic{.dynamicStateCount = 2, .pDynamicStates = dyn};
@@ -330,9 +364,9 @@ struct Renderer::Impl {
                                               .pVertexInputState = &vertex_input,
                                               .pInputAssemblyState = &assembly,
                                               .pViewportState = &viewport,
-                                              .pRasterizationState = &raster,
+                                              .pRasterizationState = &kRasterization,
                                               .pMultisampleState = &multisample,
-                                              .pDepthStencilState = &depth_state,
+                                              .pDepthStencilState = &kDepthTest,
                                               .pColorBlendState = &blend_state,
                                               .pDynamicState = &dynamic,
                                               .layout = *pipeline_layout};
@@ -340,6 +374,18 @@ struct Renderer::Impl {
     (void)inserted;
     return it->second;
   }
+
+  // Renderer::render and its steps, defined after the helpers they use.
+  FrameStats render(const Scene& scene, const FrameDescription& frame, RenderTarget& target);
+  FrameSlot& take_slot();
+  void begin_commands(const FrameSlot& slot) const;
+  void clear_eye(FrameRecording& rec, int e, const ViewPlan& vp, const EyeImage& img);
+  void draw_eye(FrameRecording& rec, int e, const ViewPlan& vp, const EyeImage& img);
+  void write_view(FrameRecording& rec, int e, const ViewPlan& vp, const EyeImage& img) const;
+  EyeDraws upload_draws(FrameRecording& rec, const ViewPlan& vp);
+  void begin_pass(FrameRecording& rec, int e, const EyeImage& img);
+  void record_draws(FrameRecording& rec, const ViewPlan& vp, const EyeDraws& draws);
+  void submit(FrameRecording& rec);
 
   GpuMesh& mesh(const Scene& scene, std::size_t object, int level, Garbage& garbage) {
     const std::uint64_t rev = scene.mesh_revision(object);
@@ -514,171 +560,219 @@ std::vector<double> frame_signature(const Scene& scene, const FrameDescription& 
 
 FrameStats Renderer::render(const Scene& scene, const FrameDescription& frame,
                             RenderTarget& target) {
+  try {
+    return impl_->render(scene, frame, target);
+  } catch (const vk::SystemError& e) {
+    Context::throw_vulkan_failure(e);
+  }
+}
+
+FrameStats Renderer::Impl::render(const Scene& scene, const FrameDescription& frame, RenderTarget& target) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  Impl& r = *impl_;
   FrameStats stats;
-  try {
-
   auto signature = frame_signature(scene, frame, target);
-  if (target.preserves_contents() && signature == r.last_signature) {
+  if (target.preserves_contents() && signature == last_signature) {
     stats.reused = true;
-    stats.back_hemisphere = r.last_plan.back_hemisphere;
+    stats.back_hemisphere = last_plan.back_hemisphere;
     stats.frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     return stats;
   }
 
-  FrameSlot& slot = r.slots[r.next_slot];
-  r.next_slot = (r.next_slot + 1) % r.slots.size();
-  if (slot.pending) {
-    r.ctx.wait_for(*slot.fence);
-    slot.pending = false;
-  }
-  slot.garbage.clear();  // everything in it was last used by this slot's finished frame
-  r.ctx.device().resetFences({*slot.fence});
-
+  FrameSlot& slot = take_slot();
   RenderPlan plan = plan_frame(scene, frame);
-  const vk::raii::CommandBuffer& cb = slot.cb;
-  cb.reset();
-  cb.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
-  if (r.timestamps) {
-    cb.resetQueryPool(*slot.queries, 0, 2);
-    cb.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *slot.queries, 0);
-  }
-  const std::array<float, 4> bg{r.options.background.x, r.options.background.y,
-                                r.options.background.z, r.options.background.w};
-  const int k = static_cast<int>(frame.space.k());
+  begin_commands(slot);
+  FrameRecording rec{scene,
+                     frame,
+                     target,
+                     slot,
+                     {options.background.x, options.background.y, options.background.z, options.background.w},
+                     static_cast<int>(frame.space.k()),
+                     stats};
   for (int e = 0; e < 2; ++e) {
     const ViewPlan& vp = plan.views[e];
     const EyeImage img = target.eye_image(vp.eye);
-    const vk::ImageSubresourceRange color_range{vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1};
-    if (!vp.rendered) {
-      // Only the background: a clear, no pass — and nothing at all when a
-      // headless target's image already holds just the background.
-      if (target.preserves_contents() && r.blank_target == target.identity() && r.blank_eye[e])
-        continue;
-      transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
-                 vk::ImageLayout::eTransferDstOptimal);
-      cb.clearColorImage(img.image, vk::ImageLayout::eTransferDstOptimal,
-                         vk::ClearColorValue{bg}, color_range);
-      transition(cb, img.image, vk::ImageAspectFlagBits::eColor,
-                 vk::ImageLayout::eTransferDstOptimal, img.final_layout);
-      target.record_after(cb, vp.eye);
-      if (target.preserves_contents()) {
-        if (r.blank_target != target.identity()) r.blank_eye = {false, false};
-        r.blank_target = target.identity();
-        r.blank_eye[e] = true;
-      }
-      continue;
-    }
-    if (r.blank_target == target.identity()) r.blank_eye[e] = false;
-    ViewBlock block{to_float(vp.constants.proj_front), to_float(vp.constants.proj_back),
-                    to_float(vp.constants.eye_from_nose),
-                    glm::vec4(static_cast<float>(frame.space.radius_m), static_cast<float>(img.extent.width),
-                              static_cast<float>(img.extent.height), 0.0f)};
-    slot.ubo.write(&block, sizeof(block), static_cast<std::size_t>(e) * kViewStride);
-
-    // Meshes and textures first: building one may submit an upload.
-    std::vector<GpuMesh*> draw_meshes;
-    std::vector<const Texture*> draw_textures;
-    for (const auto& d : vp.draws) {
-      draw_meshes.push_back(&r.mesh(scene, d.object, d.level, slot.garbage));
-      draw_textures.push_back(scene.objects()[d.object].text ? &r.texture(scene, d.object, slot.garbage)
-                                                             : nullptr);
-    }
-    check_eye_format(img);
-    const EyeAttachments& att = r.eye_attachments(e, img.extent, slot.garbage);
-    const Image& depth = att.depth;
-    transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
-               vk::ImageLayout::eColorAttachmentOptimal);
-    if (r.msaa > 1)
-      transition(cb, *att.color.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
-                 vk::ImageLayout::eColorAttachmentOptimal);
-    transition(cb, *depth.image, vk::ImageAspectFlagBits::eDepth, vk::ImageLayout::eUndefined,
-               vk::ImageLayout::eDepthAttachmentOptimal);
-    const vk::RenderingAttachmentInfo color_att = color_attachment(r.msaa, att, img, bg);
-    const vk::ClearValue depth_clear{.depthStencil = {.depth = 1.0f, .stencil = 0}};
-    const vk::RenderingAttachmentInfo depth_att{.imageView = *depth.view,
-                                                .imageLayout = vk::ImageLayout::eDepthAttachmentOptimal,
-                                                .loadOp = vk::AttachmentLoadOp::eClear,
-                                                .storeOp = vk::AttachmentStoreOp::eDontCare,
-                                                .clearValue = depth_clear};
-    cb.beginRendering({.renderArea = {{0, 0}, img.extent},
-                       .layerCount = 1,
-                       .colorAttachmentCount = 1,
-                       .pColorAttachments = &color_att,
-                       .pDepthAttachment = &depth_att});
-    ++stats.passes;
-    ++stats.views;
-    cb.setViewport(0, vk::Viewport{0.0f, 0.0f, static_cast<float>(img.extent.width),
-                                   static_cast<float>(img.extent.height), 0.0f, 1.0f});
-    cb.setScissor(0, vk::Rect2D{{0, 0}, img.extent});
-    cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 0, *slot.view_set,
-                          static_cast<std::uint32_t>(e * kViewStride));
-    cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1, *r.blank.set, {});
-    vk::Pipeline bound{};
-    // Two passes over the draws: tubes last, as they blend over what is
-    // behind them.
-    for (const bool tubes : {false, true}) {
-      for (std::size_t i = 0; i < vp.draws.size(); ++i) {
-        if ((draw_meshes[i]->shading == Shading::tube) != tubes) continue;
-        const PlannedDraw& d = vp.draws[i];
-        GpuMesh& m = *draw_meshes[i];
-        if (m.index_count == 0) continue;
-        const auto& pipe = r.pipeline(frame.settings.projection, k, d.hemisphere, m.shading, m.topology);
-        if (*pipe != bound) {
-          cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipe);
-          bound = *pipe;
-        }
-        if (draw_textures[i] != nullptr)
-          cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *r.pipeline_layout, 1,
-                                *draw_textures[i]->set, {});
-        const DrawBlock db{to_float(d.model_view), scene.objects()[d.object].tint};
-        cb.pushConstants<DrawBlock>(*r.pipeline_layout, vk::ShaderStageFlagBits::eVertex, 0, db);
-        cb.bindVertexBuffers(0, *m.vertices.buffer, vk::DeviceSize{0});
-        cb.bindIndexBuffer(*m.indices.buffer, 0, vk::IndexType::eUint32);
-        cb.drawIndexed(m.index_count, 1, 0, 0, 0);
-        ++stats.draws;
-        (m.topology == Topology::triangles ? stats.triangles : stats.lines) += m.primitives;
-      }
-    }
-    cb.endRendering();
-    transition(cb, img.image, vk::ImageAspectFlagBits::eColor,
-               vk::ImageLayout::eColorAttachmentOptimal, img.final_layout);
-    target.record_after(cb, vp.eye);
-    stats.culled += vp.culled;
-    stats.error_px = std::max(stats.error_px, vp.estimated_error_px);
+    if (vp.rendered)
+      draw_eye(rec, e, vp, img);
+    else
+      clear_eye(rec, e, vp, img);
   }
-  if (r.timestamps) cb.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *slot.queries, 1);
-  cb.end();
+  if (timestamps) slot.cb.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *slot.queries, 1);
+  slot.cb.end();
   const auto t_recorded = Clock::now();
-  // Submit and wait name their calls in a VulkanFailure (a lost device
-  // shows here first); a frame that failed stays pending for the destructor.
-  r.ctx.submit(*cb, *slot.fence);
-  slot.pending = true;
-  if (target.preserves_contents()) {
-    r.ctx.wait_for(*slot.fence);
-    slot.pending = false;
-    if (r.timestamps) {
-      std::array<std::uint64_t, 2> ts{};
-      const vk::Result res = (*r.ctx.device()).getQueryPoolResults(
-          *slot.queries, 0, 2, sizeof(ts), ts.data(), sizeof(std::uint64_t),
-          vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
-      if (res == vk::Result::eSuccess)
-        stats.gpu_ms = static_cast<double>(ts[1] - ts[0]) * r.ctx.timestamp_period_ns() * 1e-6;
-    }
-  }
+  submit(rec);
   target.frame_finished();
   stats.back_hemisphere = plan.back_hemisphere;
   stats.max_level = plan.max_level;
   stats.cpu_ms = std::chrono::duration<double, std::milli>(t_recorded - t0).count();
   stats.frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  r.last_plan = std::move(plan);
-  r.last_signature = std::move(signature);
+  last_plan = std::move(plan);
+  last_signature = std::move(signature);
   return stats;
-  } catch (const vk::SystemError& e) {
-    Context::throw_vulkan_failure(e);
+}
+
+// The next slot in turn, once the GPU has finished its previous frame.
+FrameSlot& Renderer::Impl::take_slot() {
+  FrameSlot& slot = slots[next_slot];
+  next_slot = (next_slot + 1) % slots.size();
+  if (slot.pending) {
+    ctx.wait_for(*slot.fence);
+    slot.pending = false;
   }
+  slot.garbage.clear();  // everything in it was last used by this slot's finished frame
+  ctx.device().resetFences({*slot.fence});
+  return slot;
+}
+
+void Renderer::Impl::begin_commands(const FrameSlot& slot) const {
+  const vk::raii::CommandBuffer& cb = slot.cb;
+  cb.reset();
+  cb.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+  if (timestamps) {
+    cb.resetQueryPool(*slot.queries, 0, 2);
+    cb.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *slot.queries, 0);
+  }
+}
+
+// Only the background: a clear, no pass — and nothing at all when a
+// headless target's image already holds just the background.
+void Renderer::Impl::clear_eye(FrameRecording& rec, int e, const ViewPlan& vp, const EyeImage& img) {
+  RenderTarget& target = rec.target;
+  if (target.preserves_contents() && blank_target == target.identity() && blank_eye[e]) return;
+  const vk::raii::CommandBuffer& cb = rec.slot.cb;
+  const vk::ImageSubresourceRange color_range{vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1};
+  transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+             vk::ImageLayout::eTransferDstOptimal);
+  cb.clearColorImage(img.image, vk::ImageLayout::eTransferDstOptimal, vk::ClearColorValue{rec.background},
+                     color_range);
+  transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eTransferDstOptimal,
+             img.final_layout);
+  target.record_after(cb, vp.eye);
+  if (target.preserves_contents()) {
+    if (blank_target != target.identity()) blank_eye = {false, false};
+    blank_target = target.identity();
+    blank_eye[e] = true;
+  }
+}
+
+void Renderer::Impl::draw_eye(FrameRecording& rec, int e, const ViewPlan& vp, const EyeImage& img) {
+  if (blank_target == rec.target.identity()) blank_eye[e] = false;
+  write_view(rec, e, vp, img);
+  // Meshes and textures first: building one may submit an upload.
+  const EyeDraws draws = upload_draws(rec, vp);
+  check_eye_format(img);
+  begin_pass(rec, e, img);
+  record_draws(rec, vp, draws);
+  const vk::raii::CommandBuffer& cb = rec.slot.cb;
+  cb.endRendering();
+  transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eColorAttachmentOptimal,
+             img.final_layout);
+  rec.target.record_after(cb, vp.eye);
+  rec.stats.culled += vp.culled;
+  rec.stats.error_px = std::max(rec.stats.error_px, vp.estimated_error_px);
+}
+
+// The eye's View block, at its offset in the slot's uniform buffer.
+void Renderer::Impl::write_view(FrameRecording& rec, int e, const ViewPlan& vp, const EyeImage& img) const {
+  const ViewBlock block{to_float(vp.constants.proj_front), to_float(vp.constants.proj_back),
+                        to_float(vp.constants.eye_from_nose),
+                        glm::vec4(static_cast<float>(rec.frame.space.radius_m), static_cast<float>(img.extent.width),
+                                  static_cast<float>(img.extent.height), 0.0f)};
+  rec.slot.ubo.write(&block, sizeof(block), static_cast<std::size_t>(e) * kViewStride);
+}
+
+EyeDraws Renderer::Impl::upload_draws(FrameRecording& rec, const ViewPlan& vp) {
+  EyeDraws draws;
+  for (const auto& d : vp.draws) {
+    draws.meshes.push_back(&mesh(rec.scene, d.object, d.level, rec.slot.garbage));
+    draws.textures.push_back(rec.scene.objects()[d.object].text ? &texture(rec.scene, d.object, rec.slot.garbage)
+                                                                : nullptr);
+  }
+  return draws;
+}
+
+// The eye's attachments in their drawing layouts, the pass begun, and the
+// state every draw shares bound.
+void Renderer::Impl::begin_pass(FrameRecording& rec, int e, const EyeImage& img) {
+  const vk::raii::CommandBuffer& cb = rec.slot.cb;
+  const EyeAttachments& att = eye_attachments(e, img.extent, rec.slot.garbage);
+  const Image& depth = att.depth;
+  transition(cb, img.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+             vk::ImageLayout::eColorAttachmentOptimal);
+  if (msaa > 1)
+    transition(cb, *att.color.image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+               vk::ImageLayout::eColorAttachmentOptimal);
+  transition(cb, *depth.image, vk::ImageAspectFlagBits::eDepth, vk::ImageLayout::eUndefined,
+             vk::ImageLayout::eDepthAttachmentOptimal);
+  const vk::RenderingAttachmentInfo color_att = color_attachment(msaa, att, img, rec.background);
+  const vk::ClearValue depth_clear{.depthStencil = {.depth = 1.0f, .stencil = 0}};
+  const vk::RenderingAttachmentInfo depth_att{.imageView = *depth.view,
+                                              .imageLayout = vk::ImageLayout::eDepthAttachmentOptimal,
+                                              .loadOp = vk::AttachmentLoadOp::eClear,
+                                              .storeOp = vk::AttachmentStoreOp::eDontCare,
+                                              .clearValue = depth_clear};
+  cb.beginRendering({.renderArea = {{0, 0}, img.extent},
+                     .layerCount = 1,
+                     .colorAttachmentCount = 1,
+                     .pColorAttachments = &color_att,
+                     .pDepthAttachment = &depth_att});
+  ++rec.stats.passes;
+  ++rec.stats.views;
+  cb.setViewport(0, vk::Viewport{0.0f, 0.0f, static_cast<float>(img.extent.width),
+                                 static_cast<float>(img.extent.height), 0.0f, 1.0f});
+  cb.setScissor(0, vk::Rect2D{{0, 0}, img.extent});
+  cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *pipeline_layout, 0, *rec.slot.view_set,
+                        static_cast<std::uint32_t>(e * kViewStride));
+  cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *pipeline_layout, 1, *blank.set, {});
+}
+
+void Renderer::Impl::record_draws(FrameRecording& rec, const ViewPlan& vp, const EyeDraws& draws) {
+  const vk::raii::CommandBuffer& cb = rec.slot.cb;
+  FrameStats& stats = rec.stats;
+  vk::Pipeline bound{};
+  // Two passes over the draws: tubes last, as they blend over what is
+  // behind them.
+  for (const bool tubes : {false, true}) {
+    for (std::size_t i = 0; i < vp.draws.size(); ++i) {
+      if ((draws.meshes[i]->shading == Shading::tube) != tubes) continue;
+      const PlannedDraw& d = vp.draws[i];
+      GpuMesh& m = *draws.meshes[i];
+      if (m.index_count == 0) continue;
+      const auto& pipe = pipeline(rec.frame.settings.projection, rec.k, d.hemisphere, m.shading, m.topology);
+      if (*pipe != bound) {
+        cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipe);
+        bound = *pipe;
+      }
+      if (draws.textures[i] != nullptr)
+        cb.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, *pipeline_layout, 1, *draws.textures[i]->set, {});
+      const DrawBlock db{to_float(d.model_view), rec.scene.objects()[d.object].tint};
+      cb.pushConstants<DrawBlock>(*pipeline_layout, vk::ShaderStageFlagBits::eVertex, 0, db);
+      cb.bindVertexBuffers(0, *m.vertices.buffer, vk::DeviceSize{0});
+      cb.bindIndexBuffer(*m.indices.buffer, 0, vk::IndexType::eUint32);
+      cb.drawIndexed(m.index_count, 1, 0, 0, 0);
+      ++stats.draws;
+      (m.topology == Topology::triangles ? stats.triangles : stats.lines) += m.primitives;
+    }
+  }
+}
+
+// Submit and wait name their calls in a VulkanFailure (a lost device shows
+// here first); a frame that failed stays pending for the destructor. A
+// target that keeps its contents is read back, so its frame is waited for.
+void Renderer::Impl::submit(FrameRecording& rec) {
+  FrameSlot& slot = rec.slot;
+  ctx.submit(*slot.cb, *slot.fence);
+  slot.pending = true;
+  if (!rec.target.preserves_contents()) return;
+  ctx.wait_for(*slot.fence);
+  slot.pending = false;
+  if (!timestamps) return;
+  std::array<std::uint64_t, 2> ts{};
+  const vk::Result res = (*ctx.device()).getQueryPoolResults(
+      *slot.queries, 0, 2, sizeof(ts), ts.data(), sizeof(std::uint64_t),
+      vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
+  if (res == vk::Result::eSuccess)
+    rec.stats.gpu_ms = static_cast<double>(ts[1] - ts[0]) * ctx.timestamp_period_ns() * 1e-6;
 }
 
 }  // namespace curvlab::renderer

@@ -91,6 +91,101 @@ vk::PresentModeKHR choose_mode(const std::vector<vk::PresentModeKHR>& modes, boo
   return vk::PresentModeKHR::eFifo;  // always available
 }
 
+// Shows the eye image `src` letterboxed in the window image's columns from
+// x0, w wide and area_h high.
+void show_eye(const vk::raii::CommandBuffer& cb, const Image& src, vk::Image window, std::int32_t x0,
+              std::uint32_t w, std::uint32_t area_h) {
+  const vk::ImageBlit blit = letterbox(src.extent, x0, 0, w, area_h);
+  const std::int32_t shown_w = blit.dstOffsets[1].x - blit.dstOffsets[0].x;
+  const std::int32_t shown_h = blit.dstOffsets[1].y - blit.dstOffsets[0].y;
+  if (shown_w == static_cast<std::int32_t>(src.extent.width) &&
+      shown_h == static_cast<std::int32_t>(src.extent.height)) {
+    // Shown at its rendered size (the window's natural size): a plain
+    // copy, several times cheaper than a filtered blit on a CPU device.
+    const vk::ImageCopy copy{.srcSubresource = kColorLayer,
+                             .dstSubresource = kColorLayer,
+                             .dstOffset = blit.dstOffsets[0],
+                             .extent = {src.extent.width, src.extent.height, 1}};
+    cb.copyImage(*src.image, vk::ImageLayout::eTransferSrcOptimal, window, vk::ImageLayout::eTransferDstOptimal,
+                 copy);
+  } else {
+    cb.blitImage(*src.image, vk::ImageLayout::eTransferSrcOptimal, window, vk::ImageLayout::eTransferDstOptimal,
+                 blit, vk::Filter::eLinear);
+  }
+}
+
+// The eyes the layout shows, side by side or one alone, in the window's
+// top `area` (the rest is the banner's).
+void show_eyes(const vk::raii::CommandBuffer& cb, WindowLayout layout, const std::array<Image, 2>& eyes,
+               vk::Image window, vk::Extent2D area) {
+  const auto eye = [&eyes](Eye e) -> const Image& { return eyes[static_cast<std::size_t>(e)]; };
+  switch (layout) {
+    case WindowLayout::side_by_side: {
+      const std::uint32_t half = area.width / 2;
+      show_eye(cb, eye(Eye::left), window, 0, half, area.height);
+      show_eye(cb, eye(Eye::right), window, static_cast<std::int32_t>(half), area.width - half, area.height);
+      break;
+    }
+    case WindowLayout::left_eye: show_eye(cb, eye(Eye::left), window, 0, area.width, area.height); break;
+    case WindowLayout::right_eye: show_eye(cb, eye(Eye::right), window, 0, area.width, area.height); break;
+  }
+}
+
+// The banner strip along the bottom `banner_h` rows of the window image.
+void copy_banner(const vk::raii::CommandBuffer& cb, const Buffer& banner, vk::Image window, vk::Extent2D extent,
+                 std::uint32_t banner_h) {
+  const vk::BufferImageCopy region{.imageSubresource = kColorLayer,
+                                   .imageOffset = {0, static_cast<std::int32_t>(extent.height - banner_h), 0},
+                                   .imageExtent = {extent.width, banner_h, 1}};
+  cb.copyBufferToImage(*banner.buffer, window, vk::ImageLayout::eTransferDstOptimal, region);
+}
+
+// The composed window image copied into the swapchain image, left ready
+// to present.
+void copy_to_swapchain_image(const vk::raii::CommandBuffer& cb, vk::Image window, vk::Image target,
+                             vk::Extent2D extent) {
+  transition(cb, window, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eTransferDstOptimal,
+             vk::ImageLayout::eTransferSrcOptimal);
+  transition(cb, target, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
+             vk::ImageLayout::eTransferDstOptimal);
+  cb.blitImage(window, vk::ImageLayout::eTransferSrcOptimal, target, vk::ImageLayout::eTransferDstOptimal,
+               whole(extent, extent), vk::Filter::eNearest);
+  transition(cb, target, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eTransferDstOptimal,
+             vk::ImageLayout::ePresentSrcKHR);
+}
+
+// The composition, once the image is acquired; it signals `presentable`.
+void submit_composition(const vk::raii::Queue& queue, const vk::raii::CommandBuffer& cb, vk::Semaphore acquired,
+                        vk::Semaphore presentable, vk::Fence done) {
+  const vk::PipelineStageFlags wait_stage = vk::PipelineStageFlagBits::eTransfer;
+  const vk::CommandBuffer raw = *cb;
+  queue.submit(vk::SubmitInfo{.waitSemaphoreCount = 1,
+                              .pWaitSemaphores = &acquired,
+                              .pWaitDstStageMask = &wait_stage,
+                              .commandBufferCount = 1,
+                              .pCommandBuffers = &raw,
+                              .signalSemaphoreCount = 1,
+                              .pSignalSemaphores = &presentable},
+               done);
+}
+
+// Presents the image once `presentable` is signalled; false when the
+// swapchain no longer matches the surface (suboptimal or out of date) and
+// must be recreated.
+bool present(const vk::raii::Queue& queue, vk::SwapchainKHR chain, vk::Semaphore presentable,
+             std::uint32_t image_index) {
+  try {
+    const vk::Result r = queue.presentKHR({.waitSemaphoreCount = 1,
+                                           .pWaitSemaphores = &presentable,
+                                           .swapchainCount = 1,
+                                           .pSwapchains = &chain,
+                                           .pImageIndices = &image_index});
+    return r != vk::Result::eSuboptimalKHR;
+  } catch (const vk::OutOfDateKHRError&) {
+    return false;  // the wait still happens (Vulkan spec, vkQueuePresentKHR)
+  }
+}
+
 }  // namespace
 
 vk::Extent2D natural_window_extent(const SwapchainOptions& options) {
@@ -328,80 +423,15 @@ void SwapchainTarget::frame_finished() {
     cb.clearColorImage(*window_.image, vk::ImageLayout::eTransferDstOptimal, letterbox_colour(),
                        kColorRange);
     const std::uint32_t area_h = extent_.height - banner_h;
-    if (area_h > 0) {
-      auto blit_eye = [&](Eye eye, std::int32_t x0, std::uint32_t w) {
-        const Image& src = eyes_[static_cast<std::size_t>(eye)];
-        const vk::ImageBlit blit = letterbox(src.extent, x0, 0, w, area_h);
-        const std::int32_t shown_w = blit.dstOffsets[1].x - blit.dstOffsets[0].x;
-        const std::int32_t shown_h = blit.dstOffsets[1].y - blit.dstOffsets[0].y;
-        if (shown_w == static_cast<std::int32_t>(src.extent.width) &&
-            shown_h == static_cast<std::int32_t>(src.extent.height)) {
-          // Shown at its rendered size (the window's natural size): a plain
-          // copy, several times cheaper than a filtered blit on a CPU device.
-          const vk::ImageCopy copy{.srcSubresource = kColorLayer,
-                                   .dstSubresource = kColorLayer,
-                                   .dstOffset = blit.dstOffsets[0],
-                                   .extent = {src.extent.width, src.extent.height, 1}};
-          cb.copyImage(*src.image, vk::ImageLayout::eTransferSrcOptimal, *window_.image,
-                       vk::ImageLayout::eTransferDstOptimal, copy);
-        } else {
-          cb.blitImage(*src.image, vk::ImageLayout::eTransferSrcOptimal, *window_.image,
-                       vk::ImageLayout::eTransferDstOptimal, blit, vk::Filter::eLinear);
-        }
-      };
-      switch (layout_) {
-        case WindowLayout::side_by_side: {
-          const std::uint32_t half = extent_.width / 2;
-          blit_eye(Eye::left, 0, half);
-          blit_eye(Eye::right, static_cast<std::int32_t>(half), extent_.width - half);
-          break;
-        }
-        case WindowLayout::left_eye: blit_eye(Eye::left, 0, extent_.width); break;
-        case WindowLayout::right_eye: blit_eye(Eye::right, 0, extent_.width); break;
-      }
-    }
-    if (banner && banner_h == options_.banner_height_px) {
-      const vk::BufferImageCopy region{
-          .imageSubresource = kColorLayer,
-          .imageOffset = {0, static_cast<std::int32_t>(extent_.height - banner_h), 0},
-          .imageExtent = {extent_.width, banner_h, 1}};
-      cb.copyBufferToImage(*f.banner.buffer, *window_.image, vk::ImageLayout::eTransferDstOptimal,
-                           region);
-    }
-    transition(cb, *window_.image, vk::ImageAspectFlagBits::eColor,
-               vk::ImageLayout::eTransferDstOptimal, vk::ImageLayout::eTransferSrcOptimal);
-    transition(cb, target_image, vk::ImageAspectFlagBits::eColor, vk::ImageLayout::eUndefined,
-               vk::ImageLayout::eTransferDstOptimal);
-    cb.blitImage(*window_.image, vk::ImageLayout::eTransferSrcOptimal, target_image,
-                 vk::ImageLayout::eTransferDstOptimal, whole(extent_, extent_), vk::Filter::eNearest);
-    transition(cb, target_image, vk::ImageAspectFlagBits::eColor,
-               vk::ImageLayout::eTransferDstOptimal, vk::ImageLayout::ePresentSrcKHR);
+    if (area_h > 0) show_eyes(cb, layout_, eyes_, *window_.image, {extent_.width, area_h});
+    if (banner && banner_h == options_.banner_height_px) copy_banner(cb, f.banner, *window_.image, extent_, banner_h);
+    copy_to_swapchain_image(cb, *window_.image, target_image, extent_);
     cb.end();
 
-    const vk::Semaphore wait = *f.acquired;
-    const vk::PipelineStageFlags wait_stage = vk::PipelineStageFlagBits::eTransfer;
-    const vk::Semaphore signal = *presentable_[image_index_];
-    const vk::CommandBuffer raw = *cb;
-    ctx_.queue().submit(vk::SubmitInfo{.waitSemaphoreCount = 1,
-                                       .pWaitSemaphores = &wait,
-                                       .pWaitDstStageMask = &wait_stage,
-                                       .commandBufferCount = 1,
-                                       .pCommandBuffers = &raw,
-                                       .signalSemaphoreCount = 1,
-                                       .pSignalSemaphores = &signal},
-                        *f.fence);
+    const vk::Semaphore presentable = *presentable_[image_index_];
+    submit_composition(ctx_.queue(), cb, *f.acquired, presentable, *f.fence);
     drawn_ = true;
-    const vk::SwapchainKHR chain = *swapchain_;
-    try {
-      const vk::Result r = ctx_.queue().presentKHR({.waitSemaphoreCount = 1,
-                                                    .pWaitSemaphores = &signal,
-                                                    .swapchainCount = 1,
-                                                    .pSwapchains = &chain,
-                                                    .pImageIndices = &image_index_});
-      if (r == vk::Result::eSuboptimalKHR) out_of_date_ = true;
-    } catch (const vk::OutOfDateKHRError&) {
-      out_of_date_ = true;  // the wait still happens (Vulkan spec, vkQueuePresentKHR)
-    }
+    if (!present(ctx_.queue(), *swapchain_, presentable, image_index_)) out_of_date_ = true;
     ++presented_;
   } catch (const vk::SystemError& e) {
     const VulkanFailure f(vk_call_name(e.what()), e.code().value());

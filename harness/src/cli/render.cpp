@@ -60,7 +60,17 @@ Json stick_record(const StimulusScene& stimulus, const FrameDescription& frame, 
   return harness::measure::scene_json(s);
 }
 
-void run_render(const RenderArgs& a) {
+// The arguments parsed and range-checked, before anything is made.
+struct RenderRequest {
+  geometry::SpaceKind kind;
+  ViewPreset preset;
+  SceneKind scene;
+  std::uint32_t width_px;
+  std::uint32_t height_px;
+  std::uint32_t msaa;
+};
+
+RenderRequest check_render_args(const RenderArgs& a) {
   const auto kind = geometry::parse_space_kind(a.space);
   if (!kind) throw UsageError("--space must be S3, E3 or H3, got '" + a.space + "'");
   const auto preset = parse_view_preset(a.view);
@@ -82,8 +92,11 @@ void run_render(const RenderArgs& a) {
   const auto [w, h] = parse_size(a.size, "--size");
   const std::uint32_t msaa = check_msaa(a.msaa);
   if (a.out.empty()) throw UsageError("--out DIR is required");
+  return {*kind, *preset, *scene_kind, w, h, msaa};
+}
 
-  ViewSettings settings = ViewSettings::preset(*preset);
+ViewSettings view_settings(const RenderArgs& a, ViewPreset preset) {
+  ViewSettings settings = ViewSettings::preset(preset);
   settings.back_hemisphere = a.back_hemisphere == "on";
   if (!a.eyes.empty()) {
     if (a.eyes == "both") settings.eyes = EyeSelection::both;
@@ -92,7 +105,10 @@ void run_render(const RenderArgs& a) {
     else if (a.eyes == "dominant") settings.eyes = EyeSelection::dominant;
     else throw UsageError("--eyes must be both, left, right or dominant, got '" + a.eyes + "'");
   }
+  return settings;
+}
 
+StimulusOptions stimulus_options(const RenderArgs& a) {
   StimulusOptions options;
   options.radius_m = a.radius_m;
   options.eye_height_m = a.eye_height_m;
@@ -101,45 +117,40 @@ void run_render(const RenderArgs& a) {
   if (!marks) throw UsageError("--stick-marks must be none or rings, got '" + a.stick_marks + "'");
   options.stick_marks = *marks;
   options.yaw_rad = a.yaw_deg * std::numbers::pi / 180.0;
-  auto made = make_stimulus_scene(*kind, *scene_kind, options);
-  if (auto* e = std::get_if<std::string>(&made)) throw UsageError(*e);
-  auto& stimulus = std::get<StimulusScene>(made);
+  return options;
+}
 
-  std::error_code ec;
-  std::filesystem::create_directories(a.out, ec);
-  if (ec) throw RuntimeFailure("cannot create --out directory " + a.out + ": " + ec.message());
-
-  auto created = Context::create({.device = a.software ? DeviceChoice::software : DeviceChoice::automatic,
-                                  .validation = false});
-  if (auto* e = std::get_if<RenderError>(&created)) throw RuntimeFailure(e->message);
-  const Context& ctx = std::get<Context>(created);
-  Renderer renderer(ctx, RendererOptions{.msaa = msaa});
-  warn_if_msaa_clamped(msaa, renderer.msaa());
-  OffscreenTarget target(ctx, w, h);
-
+FrameDescription frame_description(const RenderArgs& a, const RenderRequest& rq, const StimulusScene& stimulus,
+                                   const ViewSettings& settings) {
   FrameDescription frame;
   frame.space = stimulus.space;
   frame.settings = settings;
   frame.head = stimulus.head;
   frame.rig = StereoRig::from_ipd(
-      a.ipd_m, Fov::symmetric(a.fov_deg * std::numbers::pi / 180.0, double(w) / double(h)));
-  frame.width_px = w;
-  frame.height_px = h;
-  const FrameStats stats = renderer.render(stimulus.scene, frame, target);
+      a.ipd_m, Fov::symmetric(a.fov_deg * std::numbers::pi / 180.0, double(rq.width_px) / double(rq.height_px)));
+  frame.width_px = rq.width_px;
+  frame.height_px = rq.height_px;
+  return frame;
+}
 
+void write_eye_images(const std::string& dir, const OffscreenTarget& target) {
   for (Eye eye : {Eye::left, Eye::right}) {
-    const std::string path =
-        (std::filesystem::path(a.out) / (eye == Eye::left ? "left.png" : "right.png")).string();
+    const std::string path = (std::filesystem::path(dir) / (eye == Eye::left ? "left.png" : "right.png")).string();
     if (auto err = write_png(path, target.image(eye)); !err.empty()) throw RuntimeFailure(err);
   }
+}
+
+// plan.json: what was asked for, and what the render plan drew and skipped.
+Json plan_record(const RenderArgs& a, const RenderRequest& rq, const StimulusScene& stimulus,
+                 const ViewSettings& settings, const Context& ctx, const Renderer& renderer, const FrameStats& stats) {
   Json plan;
-  plan["space"] = std::string(geometry::to_string(*kind));
+  plan["space"] = std::string(geometry::to_string(rq.kind));
   plan["radius_m"] = stimulus.space.radius_m;
   plan["view"] = a.view;
   plan["projection"] = std::string(to_string(settings.projection));
   plan["scene"] = a.scene;
-  plan["width_px"] = w;
-  plan["height_px"] = h;
+  plan["width_px"] = rq.width_px;
+  plan["height_px"] = rq.height_px;
   plan["device"] = ctx.device_name();
   plan["msaa"] = renderer.msaa();
   plan["views"] = stats.views;
@@ -154,7 +165,34 @@ void run_render(const RenderArgs& a) {
   plan["cpu_ms"] = stats.cpu_ms;
   plan["gpu_ms"] = stats.gpu_ms;
   plan["frame_ms"] = stats.frame_ms;
-  if (*scene_kind == SceneKind::stick) plan["measure"] = stick_record(stimulus, frame, options);
+  return plan;
+}
+
+void run_render(const RenderArgs& a) {
+  const RenderRequest rq = check_render_args(a);
+  const ViewSettings settings = view_settings(a, rq.preset);
+  const StimulusOptions options = stimulus_options(a);
+  auto made = make_stimulus_scene(rq.kind, rq.scene, options);
+  if (auto* e = std::get_if<std::string>(&made)) throw UsageError(*e);
+  auto& stimulus = std::get<StimulusScene>(made);
+
+  std::error_code ec;
+  std::filesystem::create_directories(a.out, ec);
+  if (ec) throw RuntimeFailure("cannot create --out directory " + a.out + ": " + ec.message());
+
+  auto created = Context::create({.device = a.software ? DeviceChoice::software : DeviceChoice::automatic,
+                                  .validation = false});
+  if (auto* e = std::get_if<RenderError>(&created)) throw RuntimeFailure(e->message);
+  const Context& ctx = std::get<Context>(created);
+  Renderer renderer(ctx, RendererOptions{.msaa = rq.msaa});
+  warn_if_msaa_clamped(rq.msaa, renderer.msaa());
+  OffscreenTarget target(ctx, rq.width_px, rq.height_px);
+  const FrameDescription frame = frame_description(a, rq, stimulus, settings);
+  const FrameStats stats = renderer.render(stimulus.scene, frame, target);
+
+  write_eye_images(a.out, target);
+  Json plan = plan_record(a, rq, stimulus, settings, ctx, renderer, stats);
+  if (rq.scene == SceneKind::stick) plan["measure"] = stick_record(stimulus, frame, options);
   const std::string plan_path = (std::filesystem::path(a.out) / "plan.json").string();
   std::ofstream out(plan_path);
   out << plan.dump(2) << '\n';

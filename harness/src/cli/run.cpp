@@ -466,8 +466,19 @@ struct PredictArgs {
   bool json = false;
 };
 
-void predict_command(const PredictArgs& a) {
-  const pr::Protocol p = load_protocol_or_usage(a.protocol);
+// --effect FACTOR:LEVEL_A,LEVEL_B: the effect whose power is estimated.
+void set_effect(const std::string& effect, const pr::Protocol& p, rn::PredictOptions& o) {
+  const auto colon = effect.find(':');
+  const auto comma = effect.find(',', colon == std::string::npos ? 0 : colon);
+  if (colon == std::string::npos || comma == std::string::npos)
+    throw UsageError("--effect expects FACTOR:LEVEL_A,LEVEL_B (e.g. view:native,tourist), got '" + effect + "'");
+  o.factor = effect.substr(0, colon);
+  o.level_a = effect.substr(colon + 1, comma - colon - 1);
+  o.level_b = effect.substr(comma + 1);
+  if (!p.find_factor(o.factor)) throw UsageError("--effect: the protocol has no factor \"" + o.factor + "\"");
+}
+
+rn::PredictOptions predict_options(const PredictArgs& a, const pr::Protocol& p) {
   rn::PredictOptions o;
   o.participants = a.participants;
   o.simulations = a.simulations;
@@ -476,38 +487,48 @@ void predict_command(const PredictArgs& a) {
   auto obs = observer_params(a.observer, a.observer.seed.value_or(1));
   if (!obs) throw UsageError("predict needs a simulated observer (--observer none makes no sense here)");
   o.observer = *obs;
-  if (!a.effect.empty()) {
-    // FACTOR:LEVEL_A,LEVEL_B
-    const auto colon = a.effect.find(':');
-    const auto comma = a.effect.find(',', colon == std::string::npos ? 0 : colon);
-    if (colon == std::string::npos || comma == std::string::npos)
-      throw UsageError("--effect expects FACTOR:LEVEL_A,LEVEL_B (e.g. view:native,tourist), got '" + a.effect + "'");
-    o.factor = a.effect.substr(0, colon);
-    o.level_a = a.effect.substr(colon + 1, comma - colon - 1);
-    o.level_b = a.effect.substr(comma + 1);
-    if (!p.find_factor(o.factor)) throw UsageError("--effect: the protocol has no factor \"" + o.factor + "\"");
-  }
-  auto r = rn::predict(p, o);
-  if (!r) raise(r.error());
-  const auto& pred = r.value();
+  if (!a.effect.empty()) set_effect(a.effect, p, o);
+  return o;
+}
+
+Json condition_json(const rn::ConditionPrediction& c) {
+  Json cj;
+  for (const auto& [f, l] : c.levels) cj[f] = l;
+  cj["judged"] = c.judged;
+  cj["trials_per_participant"] = c.trials_per_participant;
+  cj["perceived_sagitta_m"] = c.perceived_m;
+  cj["diverging_sight_lines"] = c.diverging_points;
+  Json props;
+  for (std::size_t k = 0; k < c.options.size(); ++k) props[c.options[k]] = c.proportions[k];
+  cj["proportions"] = props;
+  return cj;
+}
+
+Json staircase_json(const rn::StaircasePrediction& sp) {
+  Json sj;
+  sj["block"] = sp.block;
+  for (const auto& [f, l] : sp.levels) sj[f] = l;
+  sj["judged"] = sp.judged;
+  sj["staircase"] = sp.staircase;
+  sj["parameter"] = sp.parameter;
+  sj["rule"] = std::to_string(sp.up) + "-up/" + std::to_string(sp.down) + "-down";
+  sj["target_p_" + sp.positive] = sp.target_p;
+  sj["range"] = Json::array({sp.min, sp.max});
+  sj["converges_on"] = sp.target_value ? Json(*sp.target_value) : Json(nullptr);
+  sj["p_at_min"] = sp.p_at_min;
+  sj["p_at_max"] = sp.p_at_max;
+  sj["crossings"] = sp.crossings;
+  return sj;
+}
+
+Json prediction_json(const pr::Protocol& p, const rn::PredictOptions& o, const rn::Prediction& pred) {
   Json doc;
   doc["protocol"] = p.meta.name;
   doc["participants"] = pred.participants;
   doc["observer"] = Json::parse(rn::observer_json(o.observer));
   doc["bias_sd_m"] = o.bias_sd_m;
   Json conds = Json::array();
-  for (const auto& c : pred.conditions) {
-    Json cj;
-    for (const auto& [f, l] : c.levels) cj[f] = l;
-    cj["judged"] = c.judged;
-    cj["trials_per_participant"] = c.trials_per_participant;
-    cj["perceived_sagitta_m"] = c.perceived_m;
-    cj["diverging_sight_lines"] = c.diverging_points;
-    Json props;
-    for (std::size_t k = 0; k < c.options.size(); ++k) props[c.options[k]] = c.proportions[k];
-    cj["proportions"] = props;
-    conds.push_back(cj);
-  }
+  for (const auto& c : pred.conditions) conds.push_back(condition_json(c));
   doc["conditions"] = conds;
   Json power = Json::array();
   for (const auto& pe : pred.power)
@@ -516,34 +537,35 @@ void predict_command(const PredictArgs& a) {
                      {"simulations", pe.simulations}, {"test", "paired t, two-sided, alpha 0.05"}});
   doc["power"] = power;
   Json stairs = Json::array();
-  for (const auto& sp : pred.staircases) {
-    Json sj;
-    sj["block"] = sp.block;
-    for (const auto& [f, l] : sp.levels) sj[f] = l;
-    sj["judged"] = sp.judged;
-    sj["staircase"] = sp.staircase;
-    sj["parameter"] = sp.parameter;
-    sj["rule"] = std::to_string(sp.up) + "-up/" + std::to_string(sp.down) + "-down";
-    sj["target_p_" + sp.positive] = sp.target_p;
-    sj["range"] = Json::array({sp.min, sp.max});
-    sj["converges_on"] = sp.target_value ? Json(*sp.target_value) : Json(nullptr);
-    sj["p_at_min"] = sp.p_at_min;
-    sj["p_at_max"] = sp.p_at_max;
-    sj["crossings"] = sp.crossings;
-    stairs.push_back(sj);
-  }
+  for (const auto& sp : pred.staircases) stairs.push_back(staircase_json(sp));
   doc["staircases"] = stairs;
   doc["notes"] = pred.notes;
-  if (a.json) {
-    print_result(doc, true);
-    return;
-  }
+  return doc;
+}
+
+// "factor=level factor=level " for a condition's label.
+std::string levels_label(const std::vector<std::pair<std::string, std::string>>& levels) {
+  std::string label;
+  for (const auto& [f, l] : levels) label += f + "=" + l + " ";
+  return label;
+}
+
+void print_staircase(const rn::StaircasePrediction& sp) {
+  const std::string label = sp.block + " " + levels_label(sp.levels);
+  std::printf("  %-40s %-12s %d-up/%d-down %4.1f%% %s: ", label.c_str(), sp.staircase.c_str(), sp.up, sp.down,
+              100.0 * sp.target_p, sp.positive.c_str());
+  if (sp.target_value)
+    std::printf("%s = %+.4f in [%g, %g]%s\n", sp.parameter.c_str(), *sp.target_value, sp.min, sp.max,
+                sp.crossings > 1 ? " (not monotone: more than one crossing)" : "");
+  else
+    std::printf("outside [%g, %g]\n", sp.min, sp.max);
+}
+
+void print_prediction(const pr::Protocol& p, const rn::Prediction& pred) {
   if (!pred.conditions.empty())
     std::printf("%s: expected response proportions, %d participants\n", p.meta.name.c_str(), pred.participants);
   for (const auto& c : pred.conditions) {
-    std::string label;
-    for (const auto& [f, l] : c.levels) label += f + "=" + l + " ";
-    std::printf("  %-58s %-5s s=%+.4f m ", label.c_str(), c.judged.c_str(), c.perceived_m);
+    std::printf("  %-58s %-5s s=%+.4f m ", levels_label(c.levels).c_str(), c.judged.c_str(), c.perceived_m);
     for (std::size_t k = 0; k < c.options.size(); ++k)
       std::printf(" %s %.2f", c.options[k].c_str(), c.proportions[k]);
     std::printf("\n");
@@ -555,18 +577,22 @@ void predict_command(const PredictArgs& a) {
                 pe.level_a.c_str(), pe.level_b.c_str(), pe.predicted_difference, pe.power, pe.simulations);
   if (!pred.staircases.empty())
     std::printf("staircases: the value each converges on for the mean observer (m-up/n-down target, Levitt 1971)\n");
-  for (const auto& sp : pred.staircases) {
-    std::string label = sp.block + " ";
-    for (const auto& [f, l] : sp.levels) label += f + "=" + l + " ";
-    std::printf("  %-40s %-12s %d-up/%d-down %4.1f%% %s: ", label.c_str(), sp.staircase.c_str(), sp.up, sp.down,
-                100.0 * sp.target_p, sp.positive.c_str());
-    if (sp.target_value)
-      std::printf("%s = %+.4f in [%g, %g]%s\n", sp.parameter.c_str(), *sp.target_value, sp.min, sp.max,
-                  sp.crossings > 1 ? " (not monotone: more than one crossing)" : "");
-    else
-      std::printf("outside [%g, %g]\n", sp.min, sp.max);
-  }
+  for (const auto& sp : pred.staircases) print_staircase(sp);
   for (const auto& n : pred.notes) std::printf("note: %s\n", n.c_str());
+}
+
+void predict_command(const PredictArgs& a) {
+  const pr::Protocol p = load_protocol_or_usage(a.protocol);
+  const rn::PredictOptions o = predict_options(a, p);
+  auto r = rn::predict(p, o);
+  if (!r) raise(r.error());
+  const auto& pred = r.value();
+  const Json doc = prediction_json(p, o, pred);
+  if (a.json) {
+    print_result(doc, true);
+    return;
+  }
+  print_prediction(p, pred);
 }
 
 struct ReplayArgs {

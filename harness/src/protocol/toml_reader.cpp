@@ -31,20 +31,25 @@ std::string hex4(char32_t c) {
 
 bool is_toml_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
 
-}  // namespace
+// Walks the text code point by code point, keeping the line and column.
+class Scanner {
+ public:
+  explicit Scanner(std::string_view text) : text_(text) {}
 
-std::optional<SyntaxProblem> find_toml33_hazard(std::string_view text) {
-  int line = 1, column = 1;
-  std::size_t i = 0;
-  // Decodes the code point at i (invalid UTF-8: the byte itself; toml++
-  // reports those cleanly) and advances i, line and column.
-  const auto next = [&]() -> char32_t {
-    const auto b0 = static_cast<unsigned char>(text[i]);
+  [[nodiscard]] bool at_end() const { return i_ >= text_.size(); }
+  [[nodiscard]] char peek() const { return text_[i_]; }
+  [[nodiscard]] Pos here() const { return Pos{line_, column_}; }
+  [[nodiscard]] bool starts(std::string_view s) const { return text_.substr(i_, s.size()) == s; }
+
+  // Decodes the code point here (invalid UTF-8: the byte itself; toml++
+  // reports those cleanly) and moves past it.
+  char32_t next() {
+    const auto b0 = static_cast<unsigned char>(text_[i_]);
     std::size_t len = b0 < 0x80 ? 1 : (b0 >> 5) == 6 ? 2 : (b0 >> 4) == 14 ? 3 : (b0 >> 3) == 30 ? 4 : 1;
-    if (i + len > text.size()) len = 1;
+    if (i_ + len > text_.size()) len = 1;
     char32_t c = len == 1 ? b0 : len == 2 ? (b0 & 0x1Fu) : len == 3 ? (b0 & 0x0Fu) : (b0 & 0x07u);
     for (std::size_t k = 1; k < len; ++k) {
-      const auto b = static_cast<unsigned char>(text[i + k]);
+      const auto b = static_cast<unsigned char>(text_[i_ + k]);
       if ((b >> 6) != 2) {
         len = 1;
         c = b0;
@@ -52,80 +57,38 @@ std::optional<SyntaxProblem> find_toml33_hazard(std::string_view text) {
       }
       c = (c << 6) | (b & 0x3Fu);
     }
-    i += len;
+    i_ += len;
     if (c == U'\n') {
-      ++line;
-      column = 1;
+      ++line_;
+      column_ = 1;
     } else {
-      ++column;
+      ++column_;
     }
     return c;
-  };
-  const auto here = [&] { return Pos{line, column}; };
-  const auto starts = [&](std::string_view s) { return text.substr(i, s.size()) == s; };
+  }
 
+  void skip(int code_points) {
+    for (int k = 0; k < code_points; ++k) next();
+  }
+
+  void skip_comment() {
+    while (!at_end() && peek() != '\n') next();
+  }
+
+ private:
+  std::string_view text_;
+  std::size_t i_ = 0;
+  int line_ = 1;
+  int column_ = 1;
+};
+
+// Whether a key or a value comes next, from the structure seen outside
+// strings and comments.
+struct KeyTracker {
   std::vector<char> nest;  // '[' array, '{' inline table (value side only)
   bool key_position = true;
-  char prev = '\n';  // the last character outside strings and comments
-  while (i < text.size()) {
-    const Pos at = here();
-    const char ch = text[i];
-    if (ch == '#') {
-      while (i < text.size() && text[i] != '\n') next();
-      prev = ' ';
-      continue;
-    }
-    if (ch == '"' || ch == '\'') {
-      // A quote glued to a bare value (`0"x"`) is a syntax error, but toml++
-      // first scans the whole run of characters as one value — into the
-      // "string" — classifying each, so report it here.
-      if (std::string_view(" \t\r\n=[{,.").find(prev) == std::string_view::npos)
-        return SyntaxProblem{at, std::string("unexpected quote right after '") + prev +
-                              "': expected whitespace, '=', '[', '{', ',' or '.' before a string"};
-      prev = ch;
-      const std::string_view delim = ch == '"' ? std::string_view("\"\"\"") : std::string_view("'''");
-      const bool triple = starts(delim);
-      const bool basic = ch == '"';
-      const bool is_key = key_position;
-      for (int k = 0; k < (triple ? 3 : 1); ++k) next();
-      while (i < text.size()) {
-        if (triple ? starts(delim) : text[i] == ch) {
-          for (int k = 0; k < (triple ? 3 : 1); ++k) next();
-          // A closing delimiter may be followed by up to two more quotes.
-          while (triple && i < text.size() && text[i] == ch) next();
-          break;
-        }
-        if (!triple && text[i] == '\n') break;  // unterminated: toml++ reports it
-        const Pos cp_at = here();
-        if (basic && text[i] == '\\') {
-          next();
-          if (i >= text.size()) break;
-          if (triple && is_toml_space(text[i])) {
-            while (i < text.size() && is_toml_space(text[i])) next();
-            const Pos after = here();
-            if (i < text.size() && static_cast<unsigned char>(text[i]) >= 0x80) {
-              const char32_t c = next();
-              if (unsafe_for_toml33(c))
-                return SyntaxProblem{after, "U+" + hex4(c) +
-                                         " right after a line-ending backslash cannot be read by the TOML "
-                                         "library (toml++ 3.3); write it as the escape \\u" + hex4(c)};
-            }
-            continue;
-          }
-          next();  // the escaped character
-          continue;
-        }
-        const char32_t c = next();
-        if (is_key && c >= 0x80)
-          return SyntaxProblem{cp_at, "non-ASCII character U+" + hex4(c) + " in a key: keys are ASCII names"};
-      }
-      continue;
-    }
-    const char32_t c = next();
-    prev = static_cast<char>(c);
-    if (c >= 0x80)
-      return SyntaxProblem{at, "non-ASCII character U+" + hex4(c) +
-                            " outside a string or comment (TOML allows it only inside quotes or after #)"};
+
+  void see(char32_t c) {
     switch (c) {
       case U'=': key_position = false; break;
       case U'\n': if (nest.empty()) key_position = true; break;
@@ -136,6 +99,90 @@ std::optional<SyntaxProblem> find_toml33_hazard(std::string_view text) {
       case U',': if (!nest.empty() && nest.back() == '{') key_position = true; break;
       default: break;
     }
+  }
+};
+
+// A quote glued to a bare value (`0"x"`) is a syntax error, but toml++
+// first scans the whole run of characters as one value — into the
+// "string" — classifying each, so report it here.
+std::optional<SyntaxProblem> glued_quote(char prev, Pos at) {
+  if (std::string_view(" \t\r\n=[{,.").find(prev) != std::string_view::npos) return std::nullopt;
+  return SyntaxProblem{at, std::string("unexpected quote right after '") + prev +
+                               "': expected whitespace, '=', '[', '{', ',' or '.' before a string"};
+}
+
+// After a line-ending backslash in a multi-line basic string: the
+// whitespace it trims, then the first character after it.
+std::optional<SyntaxProblem> scan_line_continuation(Scanner& s) {
+  while (!s.at_end() && is_toml_space(s.peek())) s.next();
+  const Pos after = s.here();
+  if (s.at_end() || static_cast<unsigned char>(s.peek()) < 0x80) return std::nullopt;
+  const char32_t c = s.next();
+  if (!unsafe_for_toml33(c)) return std::nullopt;
+  return SyntaxProblem{after, "U+" + hex4(c) +
+                                  " right after a line-ending backslash cannot be read by the TOML "
+                                  "library (toml++ 3.3); write it as the escape \\u" + hex4(c)};
+}
+
+// A string from its opening quote to past its closing delimiter.
+std::optional<SyntaxProblem> scan_string(Scanner& s, bool is_key) {
+  const char quote = s.peek();
+  const std::string_view delim = quote == '"' ? std::string_view("\"\"\"") : std::string_view("'''");
+  const bool triple = s.starts(delim);
+  const bool basic = quote == '"';
+  s.skip(triple ? 3 : 1);
+  while (!s.at_end()) {
+    if (triple ? s.starts(delim) : s.peek() == quote) {
+      s.skip(triple ? 3 : 1);
+      // A closing delimiter may be followed by up to two more quotes.
+      while (triple && !s.at_end() && s.peek() == quote) s.next();
+      return std::nullopt;
+    }
+    if (!triple && s.peek() == '\n') return std::nullopt;  // unterminated: toml++ reports it
+    const Pos cp_at = s.here();
+    if (basic && s.peek() == '\\') {
+      s.next();
+      if (s.at_end()) return std::nullopt;
+      if (triple && is_toml_space(s.peek())) {
+        if (auto problem = scan_line_continuation(s)) return problem;
+        continue;
+      }
+      s.next();  // the escaped character
+      continue;
+    }
+    const char32_t c = s.next();
+    if (is_key && c >= 0x80)
+      return SyntaxProblem{cp_at, "non-ASCII character U+" + hex4(c) + " in a key: keys are ASCII names"};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<SyntaxProblem> find_toml33_hazard(std::string_view text) {
+  Scanner s(text);
+  KeyTracker keys;
+  char prev = '\n';  // the last character outside strings and comments
+  while (!s.at_end()) {
+    const Pos at = s.here();
+    const char ch = s.peek();
+    if (ch == '#') {
+      s.skip_comment();
+      prev = ' ';
+      continue;
+    }
+    if (ch == '"' || ch == '\'') {
+      if (auto problem = glued_quote(prev, at)) return problem;
+      prev = ch;
+      if (auto problem = scan_string(s, keys.key_position)) return problem;
+      continue;
+    }
+    const char32_t c = s.next();
+    prev = static_cast<char>(c);
+    if (c >= 0x80)
+      return SyntaxProblem{at, "non-ASCII character U+" + hex4(c) +
+                            " outside a string or comment (TOML allows it only inside quotes or after #)"};
+    keys.see(c);
   }
   return std::nullopt;
 }

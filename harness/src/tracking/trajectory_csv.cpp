@@ -132,6 +132,89 @@ std::optional<Error> parse_table_line(const Reader& r, std::size_t line_no,
   return std::nullopt;
 }
 
+// The header row: the columns of trajectory_csv_header(), in order, and no more.
+std::optional<Error> check_header(const Reader& r, std::size_t line_no, std::string_view line,
+                                  const std::vector<Field>& fields, const std::vector<Field>& header) {
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (i >= fields.size() || fields[i].text != header[i].text) {
+      const std::size_t col = i < fields.size() ? fields[i].column : line.size() + 1;
+      return r.error(line_no, col, "header",
+                     "expected column " + std::to_string(i + 1) + " to be '" + std::string(header[i].text) +
+                         "' (header: " + trajectory_csv_header() + ")");
+    }
+  }
+  if (fields.size() != header.size())
+    return r.error(line_no, fields[header.size()].column, "header",
+                   "unexpected extra column '" + std::string(fields[header.size()].text) + "'");
+  return std::nullopt;
+}
+
+std::optional<Error> check_field_count(const Reader& r, std::size_t line_no, std::string_view line,
+                                       const std::vector<Field>& fields, const std::vector<Field>& header) {
+  if (fields.size() == header.size()) return std::nullopt;
+  const std::size_t col = fields.size() > header.size() ? fields[header.size()].column : line.size() + 1;
+  return r.error(line_no, col,
+                 fields.size() > header.size() ? "(extra)" : std::string(header[fields.size()].text),
+                 "expected " + std::to_string(header.size()) + " fields, got " + std::to_string(fields.size()));
+}
+
+// The row's time: an integer number of nanoseconds after the previous row's.
+Result<std::int64_t> read_time(const Reader& r, std::size_t line_no, const Field& f,
+                               const std::vector<geometry::TrajectorySample>& earlier) {
+  std::int64_t t = 0;
+  const auto [ptr, ec] = std::from_chars(f.text.data(), f.text.data() + f.text.size(), t);
+  if (f.text.empty() || ec != std::errc() || ptr != f.text.data() + f.text.size())
+    return r.error(line_no, f.column, "t_ns",
+                   "expected an integer number of nanoseconds, got '" + std::string(f.text) + "'");
+  if (!earlier.empty() && t <= earlier.back().t_ns)
+    return r.error(line_no, f.column, "t_ns",
+                   "expected a time after the previous row's " + std::to_string(earlier.back().t_ns) +
+                       " ns, got " + std::to_string(t));
+  return t;
+}
+
+// Device d's validity flag and pose, from its eight columns after t_ns.
+std::optional<Error> read_pose(const Reader& r, std::size_t line_no, const std::vector<Field>& fields,
+                               const std::vector<Field>& header, std::size_t d, LabPose& pose) {
+  const std::size_t base = 1 + 8 * d;
+  const Field& vf = fields[base];
+  if (vf.text != "0" && vf.text != "1")
+    return r.error(line_no, vf.column, std::string(header[base].text),
+                   "expected 1 (tracked) or 0 (lost), got '" + std::string(vf.text) + "'");
+  pose.valid = vf.text == "1";
+  if (!pose.valid) {
+    // A lost device's pose is ignored; it may be empty or not a number.
+    pose.position_m = geometry::Vec3(0.0);
+    pose.orientation = geometry::Quat(1.0, 0.0, 0.0, 0.0);
+    return std::nullopt;
+  }
+  double v[7] = {0, 0, 0, 1, 0, 0, 0};
+  for (std::size_t k = 0; k < 7; ++k)
+    if (auto e = r.number(line_no, fields[base + 1 + k], std::string(header[base + 1 + k].text), &v[k])) return e;
+  pose.position_m = geometry::Vec3(v[0], v[1], v[2]);
+  pose.orientation = geometry::Quat(v[3], v[4], v[5], v[6]);
+  const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+  if (std::abs(norm - 1.0) > 1e-3) {
+    std::ostringstream os;
+    os << "expected a unit quaternion (qw,qx,qy,qz with norm 1 ± 1e-3), got norm " << norm;
+    return r.error(line_no, fields[base + 4].column, std::string(header[base + 4].text), os.str());
+  }
+  return std::nullopt;
+}
+
+// One data row: its time and every device's pose.
+Result<geometry::TrajectorySample> read_sample(const Reader& r, std::size_t line_no,
+                                               const std::vector<Field>& fields, const std::vector<Field>& header,
+                                               const std::vector<geometry::TrajectorySample>& earlier) {
+  geometry::TrajectorySample s;
+  auto t = read_time(r, line_no, fields[0], earlier);
+  if (!t) return t.error();
+  s.t_ns = t.value();
+  for (std::size_t d = 0; d < kDeviceCount; ++d)
+    if (auto e = read_pose(r, line_no, fields, header, d, s.frame.pose[d])) return *e;
+  return s;
+}
+
 void put(std::ostream& out, double v) {
   char buf[32];
   const auto res = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17);
@@ -171,82 +254,14 @@ Result<TrajectoryFile> parse_trajectory_csv(std::istream& in, const std::string&
     }
     const std::vector<Field> fields = split(view);
     if (!header_seen) {
-      for (std::size_t i = 0; i < header_fields.size(); ++i) {
-        if (i >= fields.size() || fields[i].text != header_fields[i].text) {
-          const std::size_t col = i < fields.size() ? fields[i].column : view.size() + 1;
-          return r.error(line_no, col, "header",
-                         "expected column " + std::to_string(i + 1) + " to be '" +
-                             std::string(header_fields[i].text) + "' (header: " +
-                             trajectory_csv_header() + ")");
-        }
-      }
-      if (fields.size() != header_fields.size())
-        return r.error(line_no, fields[header_fields.size()].column, "header",
-                       "unexpected extra column '" +
-                           std::string(fields[header_fields.size()].text) + "'");
+      if (auto e = check_header(r, line_no, view, fields, header_fields)) return *e;
       header_seen = true;
       continue;
     }
-    if (fields.size() != header_fields.size()) {
-      const std::size_t col = fields.size() > header_fields.size()
-                                  ? fields[header_fields.size()].column
-                                  : view.size() + 1;
-      return r.error(line_no, col,
-                     fields.size() > header_fields.size()
-                         ? "(extra)"
-                         : std::string(header_fields[fields.size()].text),
-                     "expected " + std::to_string(header_fields.size()) + " fields, got " +
-                         std::to_string(fields.size()));
-    }
-    geometry::TrajectorySample s;
-    {
-      const Field& f = fields[0];
-      std::int64_t t = 0;
-      const auto [ptr, ec] = std::from_chars(f.text.data(), f.text.data() + f.text.size(), t);
-      if (f.text.empty() || ec != std::errc() || ptr != f.text.data() + f.text.size())
-        return r.error(line_no, f.column, "t_ns",
-                       "expected an integer number of nanoseconds, got '" + std::string(f.text) +
-                           "'");
-      if (!file.samples.empty() && t <= file.samples.back().t_ns)
-        return r.error(line_no, f.column, "t_ns",
-                       "expected a time after the previous row's " +
-                           std::to_string(file.samples.back().t_ns) + " ns, got " +
-                           std::to_string(t));
-      s.t_ns = t;
-    }
-    for (std::size_t d = 0; d < kDeviceCount; ++d) {
-      const std::size_t base = 1 + 8 * d;
-      const Field& vf = fields[base];
-      const std::string vname(header_fields[base].text);
-      if (vf.text != "0" && vf.text != "1")
-        return r.error(line_no, vf.column, vname,
-                       "expected 1 (tracked) or 0 (lost), got '" + std::string(vf.text) + "'");
-      LabPose& pose = s.frame.pose[d];
-      pose.valid = vf.text == "1";
-      double v[7] = {0, 0, 0, 1, 0, 0, 0};
-      for (std::size_t k = 0; k < 7; ++k) {
-        const Field& f = fields[base + 1 + k];
-        // A lost device's pose is ignored; it may be empty or not a number.
-        if (!pose.valid) continue;
-        if (auto e = r.number(line_no, f, std::string(header_fields[base + 1 + k].text), &v[k]))
-          return *e;
-      }
-      if (!pose.valid) {
-        pose.position_m = geometry::Vec3(0.0);
-        pose.orientation = geometry::Quat(1.0, 0.0, 0.0, 0.0);
-        continue;
-      }
-      pose.position_m = geometry::Vec3(v[0], v[1], v[2]);
-      pose.orientation = geometry::Quat(v[3], v[4], v[5], v[6]);
-      const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-      if (std::abs(norm - 1.0) > 1e-3) {
-        std::ostringstream os;
-        os << "expected a unit quaternion (qw,qx,qy,qz with norm 1 ± 1e-3), got norm " << norm;
-        return r.error(line_no, fields[base + 4].column, std::string(header_fields[base + 4].text),
-                       os.str());
-      }
-    }
-    file.samples.push_back(s);
+    if (auto e = check_field_count(r, line_no, view, fields, header_fields)) return *e;
+    auto sample = read_sample(r, line_no, fields, header_fields, file.samples);
+    if (!sample) return sample.error();
+    file.samples.push_back(sample.value());
   }
   if (!header_seen)
     return r.error(line_no + 1, 1, "header",

@@ -35,6 +35,7 @@
 namespace curvlab::xr {
 
 using harness::runner::Backend;
+using harness::Done;
 using harness::Error;
 using harness::Result;
 using harness::runner::BackendFailure;
@@ -124,6 +125,149 @@ bool located(XrSpaceLocationFlags flags) {
 }
 
 std::string vk_result(VkResult r) { return vk::to_string(static_cast<vk::Result>(r)); }
+
+// The instance extensions curvlab asks for besides XR_KHR_vulkan_enable2,
+// where the runtime offers them.
+struct OptionalExtensions {
+  bool timespec = false;  // XR_KHR_convert_timespec_time
+  // XR_FB_display_refresh_rate: the display's refresh rate before the first
+  // frame, for the session's provenance (Meta, Pico and Monado offer it).
+  bool refresh = false;
+
+  [[nodiscard]] std::vector<std::string> names() const {
+    std::vector<std::string> out;
+    if (timespec) out.emplace_back(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
+    if (refresh) out.emplace_back(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
+    return out;
+  }
+};
+
+// The extension list comes from the runtime: without one, this is where
+// XR_ERROR_RUNTIME_UNAVAILABLE shows, before anything is created.
+Result<OptionalExtensions> offered_extensions() {
+  auto offered = available_extensions();
+  if (!offered) return offered.error();
+  const auto& names = offered.value();
+  auto has = [&names](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+  if (!has(XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME))
+    return error(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
+  return OptionalExtensions{.timespec = has(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME),
+                            .refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME)};
+}
+
+// XR_KHR_vulkan_enable2's functions, for one instance and system.
+struct VulkanEnable2 {
+  XrInstance instance = XR_NULL_HANDLE;
+  XrSystemId system = XR_NULL_SYSTEM_ID;
+  PFN_xrGetVulkanGraphicsRequirements2KHR requirements = nullptr;
+  PFN_xrCreateVulkanInstanceKHR create_instance = nullptr;
+  PFN_xrGetVulkanGraphicsDevice2KHR physical_device = nullptr;
+  PFN_xrCreateVulkanDeviceKHR create_device = nullptr;
+};
+
+Result<VulkanEnable2> load_vulkan_enable2(XrInstance xr, XrSystemId sys) {
+  VulkanEnable2 fns{.instance = xr, .system = sys};
+  for (auto [name, r] : {std::pair{"xrGetVulkanGraphicsRequirements2KHR",
+                                   load(xr, "xrGetVulkanGraphicsRequirements2KHR", fns.requirements)},
+                         std::pair{"xrCreateVulkanInstanceKHR",
+                                   load(xr, "xrCreateVulkanInstanceKHR", fns.create_instance)},
+                         std::pair{"xrGetVulkanGraphicsDevice2KHR",
+                                   load(xr, "xrGetVulkanGraphicsDevice2KHR", fns.physical_device)},
+                         std::pair{"xrCreateVulkanDeviceKHR",
+                                   load(xr, "xrCreateVulkanDeviceKHR", fns.create_device)}})
+    if (XR_FAILED(r)) return error(r, name);
+  return fns;
+}
+
+// Required before the session; curvlab needs Vulkan 1.3 (dynamic rendering).
+Result<Done> check_vulkan_version(const VulkanEnable2& fns) {
+  auto req = tagged<XrGraphicsRequirementsVulkan2KHR>(XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR);
+  if (const XrResult r = fns.requirements(fns.instance, fns.system, &req); XR_FAILED(r))
+    return error(r, "xrGetVulkanGraphicsRequirements2KHR");
+  const XrVersion needed = XR_MAKE_VERSION(1, 3, 0);
+  if (req.minApiVersionSupported > needed)
+    return Error{Error::Kind::device, "the OpenXR runtime needs a newer Vulkan than 1.3, which curvlab uses; "
+                                      "update curvlab or use another runtime"};
+  if (XR_VERSION_MAJOR(req.maxApiVersionSupported) == 1 &&
+      XR_VERSION_MINOR(req.maxApiVersionSupported) < 3)
+    std::cerr << "curvlab: xr: the runtime was tested with Vulkan up to "
+              << XR_VERSION_MAJOR(req.maxApiVersionSupported) << "."
+              << XR_VERSION_MINOR(req.maxApiVersionSupported)
+              << "; curvlab uses 1.3 and tries anyway\n";
+  return Done{};
+}
+
+// The hooks through which the runtime makes the Vulkan objects from the
+// renderer's create-infos.
+renderer::ContextEmbedding runtime_made_vulkan(const VulkanEnable2& fns) {
+  renderer::ContextEmbedding runtime_made;
+  runtime_made.hooks.create_instance = [fns](const VkInstanceCreateInfo& info)
+      -> std::variant<VkInstance, std::string> {
+    auto ci = tagged<XrVulkanInstanceCreateInfoKHR>(XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR);
+    ci.systemId = fns.system;
+    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
+    ci.vulkanCreateInfo = &info;
+    VkInstance instance = VK_NULL_HANDLE;
+    VkResult vr = VK_SUCCESS;
+    if (const XrResult r = fns.create_instance(fns.instance, &ci, &instance, &vr); XR_FAILED(r))
+      return failure_of(r, "xrCreateVulkanInstanceKHR").message;
+    if (vr != VK_SUCCESS)
+      return "xrCreateVulkanInstanceKHR: vkCreateInstance returned " + vk_result(vr);
+    return instance;
+  };
+  runtime_made.hooks.pick_physical_device = [fns](VkInstance instance)
+      -> std::variant<VkPhysicalDevice, std::string> {
+    auto gi = tagged<XrVulkanGraphicsDeviceGetInfoKHR>(XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR);
+    gi.systemId = fns.system;
+    gi.vulkanInstance = instance;
+    VkPhysicalDevice physical = VK_NULL_HANDLE;
+    if (const XrResult r = fns.physical_device(fns.instance, &gi, &physical); XR_FAILED(r))
+      return failure_of(r, "xrGetVulkanGraphicsDevice2KHR").message;
+    return physical;
+  };
+  runtime_made.hooks.create_device = [fns](VkPhysicalDevice physical, const VkDeviceCreateInfo& info)
+      -> std::variant<VkDevice, std::string> {
+    auto ci = tagged<XrVulkanDeviceCreateInfoKHR>(XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR);
+    ci.systemId = fns.system;
+    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
+    ci.vulkanPhysicalDevice = physical;
+    ci.vulkanCreateInfo = &info;
+    VkDevice device = VK_NULL_HANDLE;
+    VkResult vr = VK_SUCCESS;
+    if (const XrResult r = fns.create_device(fns.instance, &ci, &device, &vr); XR_FAILED(r))
+      return failure_of(r, "xrCreateVulkanDeviceKHR").message;
+    if (vr != VK_SUCCESS) return "xrCreateVulkanDeviceKHR: vkCreateDevice returned " + vk_result(vr);
+    return device;
+  };
+  return runtime_made;
+}
+
+// Two-call enumeration of the swapchain formats the runtime offers.
+Result<std::vector<std::int64_t>> swapchain_formats(XrSession session) {
+  std::uint32_t count = 0;
+  if (const XrResult r = xrEnumerateSwapchainFormats(session, 0, &count, nullptr); XR_FAILED(r))
+    return error(r, "xrEnumerateSwapchainFormats");
+  std::vector<std::int64_t> formats(count);
+  if (const XrResult r = xrEnumerateSwapchainFormats(session, count, &count, formats.data()); XR_FAILED(r))
+    return error(r, "xrEnumerateSwapchainFormats");
+  return formats;
+}
+
+// The stereo view configuration's two views (the recommended image sizes).
+Result<std::vector<XrViewConfigurationView>> stereo_views(XrInstance xr, XrSystemId sys) {
+  std::uint32_t count = 0;
+  if (const XrResult r = xrEnumerateViewConfigurationViews(xr, sys, kViewConfig, 0, &count, nullptr);
+      XR_FAILED(r))
+    return error(r, "xrEnumerateViewConfigurationViews");
+  std::vector<XrViewConfigurationView> config(count, tagged<XrViewConfigurationView>(XR_TYPE_VIEW_CONFIGURATION_VIEW));
+  if (const XrResult r = xrEnumerateViewConfigurationViews(xr, sys, kViewConfig, count, &count, config.data());
+      XR_FAILED(r))
+    return error(r, "xrEnumerateViewConfigurationViews");
+  if (count != 2)
+    return Error{Error::Kind::device, "the headset's stereo view configuration has " + std::to_string(count) +
+                                          " views; curvlab needs 2"};
+  return config;
+}
 
 // The operator window's copies of the submitted swapchain images (FrameMirror
 // in runner/backend.hpp). The frame thread records, in a command buffer of
@@ -261,6 +405,15 @@ class XrBackend final : public Backend {
   // frame otherwise) and goes on: one unreadable button must not end a session.
   void report_once(XrResult r, const char* call);
   void mark_late(FrameTiming& timing);
+  // The steps of create(), in the order of the OpenXR lifecycle; each keeps
+  // what it made in the members.
+  Result<Done> open(const OptionalExtensions& offered);
+  Result<Done> make_context(const VulkanEnable2& vulkan);
+  Result<Done> create_session(bool refresh_rate);
+  Result<Done> make_spaces();
+  Result<Done> make_swapchains();
+  Result<Done> make_swapchain(EyeSwapchain& sc, const XrViewConfigurationView& view);
+  Result<Done> make_renderer();
 
   XrBackendOptions options_;
   Instance instance_;
@@ -303,112 +456,47 @@ class XrBackend final : public Backend {
 Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& options) {
   if (options.clock == nullptr)
     return Error{Error::Kind::usage, "the OpenXR backend needs the session clock (XrBackendOptions::clock)"};
-  // The extension list comes from the runtime: without one, this is where
-  // XR_ERROR_RUNTIME_UNAVAILABLE shows, before anything is created.
-  auto offered = available_extensions();
+  auto offered = offered_extensions();
   if (!offered) return offered.error();
-  const auto& names = offered.value();
-  auto has = [&names](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
-  if (!has(XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME))
-    return error(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
-  std::vector<std::string> extra;
-  const bool timespec = has(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
-  if (timespec) extra.emplace_back(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
-  // The display's refresh rate before the first frame, for the session's
-  // provenance (Meta, Pico and Monado offer it).
-  const bool refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
-  if (refresh) extra.emplace_back(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
-  auto made = Instance::create(options.application_name, extra);
+  auto made = Instance::create(options.application_name, offered->names());
   if (!made) return made.error();
   std::unique_ptr<XrBackend> b(new XrBackend(std::move(made).value(), options));
-  const XrInstance xr = b->instance_.handle();
-  if (timespec && XR_FAILED(load(xr, "xrConvertTimeToTimespecTimeKHR", b->to_timespec_)))
-    b->to_timespec_ = nullptr;
+  if (auto opened = b->open(offered.value()); !opened) return opened.error();
+  return std::unique_ptr<Backend>(std::move(b));
+}
 
-  auto system = b->instance_.hmd_system();
+Result<Done> XrBackend::open(const OptionalExtensions& offered) {
+  const XrInstance xr = instance_.handle();
+  if (offered.timespec && XR_FAILED(load(xr, "xrConvertTimeToTimespecTimeKHR", to_timespec_)))
+    to_timespec_ = nullptr;
+  auto system = instance_.hmd_system();
   if (!system) return system.error();
-  b->system_ = system.value();
-  const XrSystemId sys = b->system_;
+  system_ = system.value();
+  auto vulkan = load_vulkan_enable2(xr, system_);
+  if (!vulkan) return vulkan.error();
+  if (auto r = check_vulkan_version(vulkan.value()); !r) return r;
+  if (auto r = make_context(vulkan.value()); !r) return r;
+  if (auto r = create_session(offered.refresh); !r) return r;
+  if (auto r = make_spaces(); !r) return r;
+  if (auto r = make_swapchains(); !r) return r;
+  return make_renderer();
+}
 
-  PFN_xrGetVulkanGraphicsRequirements2KHR requirements_fn = nullptr;
-  PFN_xrCreateVulkanInstanceKHR create_instance_fn = nullptr;
-  PFN_xrGetVulkanGraphicsDevice2KHR device_fn = nullptr;
-  PFN_xrCreateVulkanDeviceKHR create_device_fn = nullptr;
-  for (auto [name, r] : {std::pair{"xrGetVulkanGraphicsRequirements2KHR",
-                                   load(xr, "xrGetVulkanGraphicsRequirements2KHR", requirements_fn)},
-                         std::pair{"xrCreateVulkanInstanceKHR",
-                                   load(xr, "xrCreateVulkanInstanceKHR", create_instance_fn)},
-                         std::pair{"xrGetVulkanGraphicsDevice2KHR",
-                                   load(xr, "xrGetVulkanGraphicsDevice2KHR", device_fn)},
-                         std::pair{"xrCreateVulkanDeviceKHR",
-                                   load(xr, "xrCreateVulkanDeviceKHR", create_device_fn)}})
-    if (XR_FAILED(r)) return error(r, name);
-
-  // Required before the session; curvlab needs Vulkan 1.3 (dynamic rendering).
-  auto req = tagged<XrGraphicsRequirementsVulkan2KHR>(XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR);
-  if (const XrResult r = requirements_fn(xr, sys, &req); XR_FAILED(r))
-    return error(r, "xrGetVulkanGraphicsRequirements2KHR");
-  const XrVersion needed = XR_MAKE_VERSION(1, 3, 0);
-  if (req.minApiVersionSupported > needed)
-    return Error{Error::Kind::device, "the OpenXR runtime needs a newer Vulkan than 1.3, which curvlab uses; "
-                                      "update curvlab or use another runtime"};
-  if (XR_VERSION_MAJOR(req.maxApiVersionSupported) == 1 &&
-      XR_VERSION_MINOR(req.maxApiVersionSupported) < 3)
-    std::cerr << "curvlab: xr: the runtime was tested with Vulkan up to "
-              << XR_VERSION_MAJOR(req.maxApiVersionSupported) << "."
-              << XR_VERSION_MINOR(req.maxApiVersionSupported)
-              << "; curvlab uses 1.3 and tries anyway\n";
-
-  // The Vulkan objects, made by the runtime from the renderer's create-infos.
-  renderer::ContextEmbedding runtime_made;
-  runtime_made.hooks.create_instance = [&](const VkInstanceCreateInfo& info)
-      -> std::variant<VkInstance, std::string> {
-    auto ci = tagged<XrVulkanInstanceCreateInfoKHR>(XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR);
-    ci.systemId = sys;
-    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
-    ci.vulkanCreateInfo = &info;
-    VkInstance instance = VK_NULL_HANDLE;
-    VkResult vr = VK_SUCCESS;
-    if (const XrResult r = create_instance_fn(xr, &ci, &instance, &vr); XR_FAILED(r))
-      return failure_of(r, "xrCreateVulkanInstanceKHR").message;
-    if (vr != VK_SUCCESS)
-      return "xrCreateVulkanInstanceKHR: vkCreateInstance returned " + vk_result(vr);
-    return instance;
-  };
-  runtime_made.hooks.pick_physical_device = [&](VkInstance instance) -> std::variant<VkPhysicalDevice, std::string> {
-    auto gi = tagged<XrVulkanGraphicsDeviceGetInfoKHR>(XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR);
-    gi.systemId = sys;
-    gi.vulkanInstance = instance;
-    VkPhysicalDevice physical = VK_NULL_HANDLE;
-    if (const XrResult r = device_fn(xr, &gi, &physical); XR_FAILED(r))
-      return failure_of(r, "xrGetVulkanGraphicsDevice2KHR").message;
-    return physical;
-  };
-  runtime_made.hooks.create_device = [&](VkPhysicalDevice physical, const VkDeviceCreateInfo& info)
-      -> std::variant<VkDevice, std::string> {
-    auto ci = tagged<XrVulkanDeviceCreateInfoKHR>(XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR);
-    ci.systemId = sys;
-    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
-    ci.vulkanPhysicalDevice = physical;
-    ci.vulkanCreateInfo = &info;
-    VkDevice device = VK_NULL_HANDLE;
-    VkResult vr = VK_SUCCESS;
-    if (const XrResult r = create_device_fn(xr, &ci, &device, &vr); XR_FAILED(r))
-      return failure_of(r, "xrCreateVulkanDeviceKHR").message;
-    if (vr != VK_SUCCESS) return "xrCreateVulkanDeviceKHR: vkCreateDevice returned " + vk_result(vr);
-    return device;
-  };
-  auto ctx = renderer::Context::create(renderer::ContextOptions{}, runtime_made);
+Result<Done> XrBackend::make_context(const VulkanEnable2& vulkan) {
+  auto ctx = renderer::Context::create(renderer::ContextOptions{}, runtime_made_vulkan(vulkan));
   if (auto* e = std::get_if<renderer::RenderError>(&ctx))
     return Error{Error::Kind::device, "cannot render for the headset: " + e->message};
-  b->context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));
-  const renderer::Context& c = *b->context_;
+  context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));
+  return Done{};
+}
 
+Result<Done> XrBackend::create_session(bool refresh_rate) {
   // The action set exists before the session so it can be attached to it.
-  auto set = ActionSet::create(b->instance_, curvlab_action_set());
+  auto set = ActionSet::create(instance_, curvlab_action_set());
   if (!set) return set.error();
-  b->actions_.emplace(std::move(set).value());
+  actions_.emplace(std::move(set).value());
 
+  const renderer::Context& c = *context_;
   auto binding = tagged<XrGraphicsBindingVulkan2KHR>(XR_TYPE_GRAPHICS_BINDING_VULKAN2_KHR);
   binding.instance = static_cast<VkInstance>(*c.instance());
   binding.physicalDevice = static_cast<VkPhysicalDevice>(*c.physical());
@@ -417,109 +505,116 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
   binding.queueIndex = 0;
   auto session_info = tagged<XrSessionCreateInfo>(XR_TYPE_SESSION_CREATE_INFO);
   session_info.next = &binding;
-  session_info.systemId = sys;
-  if (const XrResult r = xrCreateSession(xr, &session_info, b->session_.out()); XR_FAILED(r))
+  session_info.systemId = system_;
+  if (const XrResult r = xrCreateSession(instance_.handle(), &session_info, session_.out()); XR_FAILED(r))
     return error(r, "xrCreateSession");
-  const XrSession session = b->session_.get();
   if (PFN_xrGetDisplayRefreshRateFB rate_fn = nullptr;
-      refresh && XR_SUCCEEDED(load(xr, "xrGetDisplayRefreshRateFB", rate_fn))) {
+      refresh_rate && XR_SUCCEEDED(load(instance_.handle(), "xrGetDisplayRefreshRateFB", rate_fn))) {
     float hz = 0.0f;
-    if (XR_SUCCEEDED(rate_fn(session, &hz)) && hz > 0.0f) b->refresh_hz_ = static_cast<double>(hz);
+    if (XR_SUCCEEDED(rate_fn(session_.get(), &hz)) && hz > 0.0f) refresh_hz_ = static_cast<double>(hz);
   }
+  return Done{};
+}
 
+// The STAGE and VIEW reference spaces, and a grip space per hand once the
+// action set is attached.
+Result<Done> XrBackend::make_spaces() {
+  const XrSession session = session_.get();
   auto space_info = tagged<XrReferenceSpaceCreateInfo>(XR_TYPE_REFERENCE_SPACE_CREATE_INFO);
   space_info.poseInReferenceSpace = kIdentityPose;
   space_info.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_STAGE;
-  if (const XrResult r = xrCreateReferenceSpace(session, &space_info, b->stage_.out()); XR_FAILED(r))
+  if (const XrResult r = xrCreateReferenceSpace(session, &space_info, stage_.out()); XR_FAILED(r))
     return Error{Error::Kind::device,
                  failure_of(r, "xrCreateReferenceSpace").message +
                      " (STAGE space: set up the play area / room boundary in the runtime, so "
                      "that the floor and the table are where curvlab's lab frame says)"};
   space_info.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_VIEW;
-  if (const XrResult r = xrCreateReferenceSpace(session, &space_info, b->view_.out()); XR_FAILED(r))
+  if (const XrResult r = xrCreateReferenceSpace(session, &space_info, view_.out()); XR_FAILED(r))
     return error(r, "xrCreateReferenceSpace");
 
-  const XrActionSet action_set = b->actions_->handle();
+  const XrActionSet action_set = actions_->handle();
   auto attach = tagged<XrSessionActionSetsAttachInfo>(XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO);
   attach.countActionSets = 1;
   attach.actionSets = &action_set;
   if (const XrResult r = xrAttachSessionActionSets(session, &attach); XR_FAILED(r))
     return error(r, "xrAttachSessionActionSets");
   for (std::size_t i = 0; i < 2; ++i) {
-    if (const XrResult r = xrStringToPath(xr, i == 0 ? kLeftHand : kRightHand, &b->hand_paths_[i]);
+    if (const XrResult r = xrStringToPath(instance_.handle(), i == 0 ? kLeftHand : kRightHand, &hand_paths_[i]);
         XR_FAILED(r))
       return error(r, "xrStringToPath");
     auto info = tagged<XrActionSpaceCreateInfo>(XR_TYPE_ACTION_SPACE_CREATE_INFO);
-    info.action = b->actions_->action("grip_pose");
-    info.subactionPath = b->hand_paths_[i];
+    info.action = actions_->action("grip_pose");
+    info.subactionPath = hand_paths_[i];
     info.poseInActionSpace = kIdentityPose;
-    if (const XrResult r = xrCreateActionSpace(session, &info, b->grip_[i].out()); XR_FAILED(r))
+    if (const XrResult r = xrCreateActionSpace(session, &info, grip_[i].out()); XR_FAILED(r))
       return error(r, "xrCreateActionSpace");
   }
+  return Done{};
+}
 
-  // One swapchain per eye at the runtime's recommended size.
-  std::uint32_t count = 0;
-  if (const XrResult r = xrEnumerateViewConfigurationViews(xr, sys, kViewConfig, 0, &count, nullptr);
-      XR_FAILED(r))
-    return error(r, "xrEnumerateViewConfigurationViews");
-  std::vector<XrViewConfigurationView> config(count, tagged<XrViewConfigurationView>(XR_TYPE_VIEW_CONFIGURATION_VIEW));
-  if (const XrResult r = xrEnumerateViewConfigurationViews(xr, sys, kViewConfig, count, &count, config.data());
-      XR_FAILED(r))
-    return error(r, "xrEnumerateViewConfigurationViews");
-  if (count != 2)
-    return Error{Error::Kind::device, "the headset's stereo view configuration has " + std::to_string(count) +
-                                          " views; curvlab needs 2"};
-  if (const XrResult r = xrEnumerateSwapchainFormats(session, 0, &count, nullptr); XR_FAILED(r))
-    return error(r, "xrEnumerateSwapchainFormats");
-  std::vector<std::int64_t> formats(count);
-  if (const XrResult r = xrEnumerateSwapchainFormats(session, count, &count, formats.data()); XR_FAILED(r))
-    return error(r, "xrEnumerateSwapchainFormats");
-  const auto format = choose_swapchain_format(formats);
+// One swapchain per eye at the runtime's recommended size.
+Result<Done> XrBackend::make_swapchains() {
+  auto views = stereo_views(instance_.handle(), system_);
+  if (!views) return views.error();
+  auto formats = swapchain_formats(session_.get());
+  if (!formats) return formats.error();
+  const auto format = choose_swapchain_format(formats.value());
   if (!format)
     return Error{Error::Kind::device, "the OpenXR runtime offers no 8-bit RGBA or BGRA swapchain format "
                                       "(xrEnumerateSwapchainFormats); curvlab cannot show its images"};
-  b->swapchain_format_ = *format;
-  for (std::size_t i = 0; i < 2; ++i) {
-    EyeSwapchain& sc = b->swapchains_[i];
-    sc.width = config[i].recommendedImageRectWidth;
-    sc.height = config[i].recommendedImageRectHeight;
-    auto info = tagged<XrSwapchainCreateInfo>(XR_TYPE_SWAPCHAIN_CREATE_INFO);
-    // TRANSFER_SRC: the operator window's copies (XrMirror).
-    info.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT |
-                      XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT;
-    info.format = *format;
-    info.sampleCount = 1;
-    info.width = sc.width;
-    info.height = sc.height;
-    info.faceCount = 1;
-    info.arraySize = 1;
-    info.mipCount = 1;
-    if (const XrResult r = xrCreateSwapchain(session, &info, sc.handle.out()); XR_FAILED(r))
-      return error(r, "xrCreateSwapchain");
-    if (const XrResult r = xrEnumerateSwapchainImages(sc.handle.get(), 0, &count, nullptr); XR_FAILED(r))
-      return error(r, "xrEnumerateSwapchainImages");
-    sc.images.assign(count, tagged<XrSwapchainImageVulkan2KHR>(XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR));
-    if (const XrResult r = xrEnumerateSwapchainImages(
-            sc.handle.get(), count, &count,
-            reinterpret_cast<XrSwapchainImageBaseHeader*>(sc.images.data()));
-        XR_FAILED(r))
-      return error(r, "xrEnumerateSwapchainImages");
-  }
+  swapchain_format_ = *format;
+  for (std::size_t i = 0; i < 2; ++i)
+    if (auto r = make_swapchain(swapchains_[i], views.value()[i]); !r) return r;
+  return Done{};
+}
+
+Result<Done> XrBackend::make_swapchain(EyeSwapchain& sc, const XrViewConfigurationView& view) {
+  sc.width = view.recommendedImageRectWidth;
+  sc.height = view.recommendedImageRectHeight;
+  auto info = tagged<XrSwapchainCreateInfo>(XR_TYPE_SWAPCHAIN_CREATE_INFO);
+  // TRANSFER_SRC: the operator window's copies (XrMirror).
+  info.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT |
+                    XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT;
+  info.format = swapchain_format_;
+  info.sampleCount = 1;
+  info.width = sc.width;
+  info.height = sc.height;
+  info.faceCount = 1;
+  info.arraySize = 1;
+  info.mipCount = 1;
+  if (const XrResult r = xrCreateSwapchain(session_.get(), &info, sc.handle.out()); XR_FAILED(r))
+    return error(r, "xrCreateSwapchain");
+  std::uint32_t count = 0;
+  if (const XrResult r = xrEnumerateSwapchainImages(sc.handle.get(), 0, &count, nullptr); XR_FAILED(r))
+    return error(r, "xrEnumerateSwapchainImages");
+  sc.images.assign(count, tagged<XrSwapchainImageVulkan2KHR>(XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR));
+  if (const XrResult r = xrEnumerateSwapchainImages(
+          sc.handle.get(), count, &count,
+          reinterpret_cast<XrSwapchainImageBaseHeader*>(sc.images.data()));
+      XR_FAILED(r))
+    return error(r, "xrEnumerateSwapchainImages");
+  return Done{};
+}
+
+// The renderer, the target that draws into the swapchain images and, when
+// asked for, the operator window's mirror.
+Result<Done> XrBackend::make_renderer() {
+  const renderer::Context& c = *context_;
   try {
-    b->renderer_ = std::make_unique<renderer::Renderer>(c, renderer::RendererOptions{.msaa = options.msaa});
+    renderer_ = std::make_unique<renderer::Renderer>(c, renderer::RendererOptions{.msaa = options_.msaa});
   } catch (const renderer::VulkanFailure& f) {
     return Error{Error::Kind::api, std::string("cannot render for the headset: ") + f.what()};
   } catch (const vk::SystemError& e) {
     return Error{Error::Kind::api, "cannot render for the headset: " + renderer::vk_call_name(e.what()) +
                                        ": " + renderer::vk_result_name(e.code().value())};
   }
-  b->target_ = std::make_unique<renderer::ExternalImagesTarget>(c);
-  if (options.mirror) {
-    const bool bgra = static_cast<vk::Format>(*format) == vk::Format::eB8G8R8A8Srgb ||
-                      static_cast<vk::Format>(*format) == vk::Format::eB8G8R8A8Unorm;
-    b->mirror_ = std::make_unique<XrMirror>(c, vk::Extent2D{b->swapchains_[0].width, b->swapchains_[0].height}, bgra);
+  target_ = std::make_unique<renderer::ExternalImagesTarget>(c);
+  if (options_.mirror) {
+    const auto format = static_cast<vk::Format>(swapchain_format_);
+    const bool bgra = format == vk::Format::eB8G8R8A8Srgb || format == vk::Format::eB8G8R8A8Unorm;
+    mirror_ = std::make_unique<XrMirror>(c, vk::Extent2D{swapchains_[0].width, swapchains_[0].height}, bgra);
   }
-  return std::unique_ptr<Backend>(std::move(b));
+  return Done{};
 }
 
 XrBackend::~XrBackend() {
