@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 
 namespace curvlab::data {
 
@@ -96,179 +97,228 @@ std::optional<DataError> write_sessions_file(const std::string& root, const std:
   return std::nullopt;
 }
 
-// The dataset in `root` (the bids folder).
-Expected<ExportSummary> write_dataset(Database& db, const std::vector<SessionInfo>& sessions, const std::string& root) {
-  ExportSummary summary;
-
+std::optional<DataError> write_description(const std::string& root, ExportSummary& summary) {
   OJson description;
   description["Name"] = "curvlab motion data";
   description["BIDSVersion"] = "1.10.0";
   description["DatasetType"] = "raw";
-  description["GeneratedBy"] = OJson::array(
-      {{{"Name", "curvlab"}, {"Version", std::string(software_version())}}});
-  if (auto e = write_text(root + "/dataset_description.json", description.dump(2) + "\n")) return *e;
+  description["GeneratedBy"] = OJson::array({{{"Name", "curvlab"}, {"Version", std::string(software_version())}}});
+  if (auto e = write_text(root + "/dataset_description.json", description.dump(2) + "\n")) return e;
   summary.files.push_back("bids/dataset_description.json");
+  return std::nullopt;
+}
 
-  std::string participants = "participant_id\tipd_m\tdominant_eye\n";
-  std::vector<std::string> seen_subjects;
+// One device's samples of a session as _motion.tsv rows, with their times.
+struct Recording {
+  std::string tsv;
+  std::vector<std::int64_t> times;
+};
+
+Recording read_recording(Database& db, std::int64_t session_id, const std::string& device) {
+  Statement rows(db.connection(),
+                 "SELECT t_ns, lab_px_m, lab_py_m, lab_pz_m, lab_qx, lab_qy, lab_qz, "
+                 "lab_qw, position_valid, orientation_valid, coherence_error_m, "
+                 "coherence_error_rad FROM tracking_samples WHERE session_id = ?1 AND "
+                 "device = ?2 ORDER BY t_ns, sample_id");
+  rows.bind(1, session_id).bind(2, std::string_view(device));
+  Recording r;
+  while (rows.step()) {
+    const std::int64_t t = rows.column_int(0);
+    r.times.push_back(t);
+    char latency[40];
+    std::snprintf(latency, sizeof latency, "%.9f", static_cast<double>(t - r.times.front()) * 1e-9);
+    r.tsv += latency;
+    for (int c = 1; c <= 7; ++c) {
+      r.tsv += '\t';
+      r.tsv += number(rows.column_double(c));
+    }
+    for (int c = 8; c <= 9; ++c) {
+      r.tsv += '\t';
+      r.tsv += std::to_string(rows.column_int(c));
+    }
+    for (int c = 10; c <= 11; ++c) {
+      r.tsv += '\t';
+      r.tsv += rows.is_null(c) ? std::string("n/a") : number(rows.column_double(c));
+    }
+    r.tsv += '\n';
+  }
+  return r;
+}
+
+// The nominal rate is the median sample interval rounded to whole Hz (the
+// runtime's rate is not recorded); the effective rate is exact.
+struct Rates {
+  double duration_s = 0.0;
+  double effective_hz = 0.0;
+  double nominal_hz = 0.0;
+};
+
+Rates rates_of(const std::vector<std::int64_t>& times) {
+  Rates r;
+  const std::size_t n = times.size();
+  if (n < 2) return r;
+  r.duration_s = static_cast<double>(times.back() - times.front()) * 1e-9;
+  r.effective_hz = r.duration_s > 0 ? static_cast<double>(n - 1) / r.duration_s : 0.0;
+  std::vector<std::int64_t> dt;
+  for (std::size_t i = 1; i < n; ++i) dt.push_back(times[i] - times[i - 1]);
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+  const auto median = dt[dt.size() / 2];
+  if (median > 0) r.nominal_hz = std::round(1e9 / static_cast<double>(median));
+  return r;
+}
+
+std::string channels_tsv(const std::vector<Channel>& channels) {
+  std::string out = "name\tcomponent\ttype\ttracked_point\tunits\treference_frame\tdescription\n";
+  for (const auto& c : channels) {
+    const std::string frame = c.type == "POS" || c.type == "ORNT" ? "lab" : "n/a";
+    for (const std::string* field : {&c.name, &c.component, &c.type, &c.tracked_point, &c.units, &frame}) {
+      out += *field;
+      out += '\t';
+    }
+    out += tsv_field(c.description);
+    out += '\n';
+  }
+  return out;
+}
+
+OJson channels_json() {
+  OJson j;
+  j["reference_frame"]["Description"] = "Frame the positions and orientations are in";
+  // Orientations are unit quaternions, so no Euler rotation order applies;
+  // RotationOrder (a SHOULD) is left out rather than given as "n/a", which
+  // the BIDS validator's channels schema refuses.
+  j["reference_frame"]["Levels"]["lab"] = {
+      {"Description",
+       "Tracking space of the lab, origin at the runtime's stage origin; orientations as unit quaternions "
+       "(x, y, z, w)"},
+      {"SpatialAxes", "RSP"},
+      {"RotationRule", "right-hand"}};
+  return j;
+}
+
+OJson motion_sidecar(const SessionInfo& s, const std::string& device, const std::vector<Channel>& channels,
+                     const Rates& rates, std::size_t samples) {
+  int pos = 0, ornt = 0, misc = 0, lat = 0;
+  for (const auto& c : channels) {
+    if (c.type == "POS") ++pos;
+    else if (c.type == "ORNT") ++ornt;
+    else if (c.type == "LATENCY") ++lat;
+    else ++misc;
+  }
+  OJson j;
+  j["TaskName"] = s.protocol_name;
+  j["TaskDescription"] = "curvlab protocol " + s.protocol_name + " (sha256 " + s.protocol_sha256 + ")";
+  if (samples > 1) j["SamplingFrequency"] = rates.nominal_hz; else j["SamplingFrequency"] = "n/a";
+  j["SamplingFrequencyEffective"] = rates.effective_hz;
+  j["TrackingSystemName"] = "curvlab " + device;
+  j["Manufacturer"] = "n/a";
+  j["ManufacturersModelName"] = "n/a";
+  j["SoftwareVersions"] = "curvlab " + std::string(software_version());
+  j["RecordingType"] = "continuous";
+  j["RecordingDuration"] = rates.duration_s;
+  j["MotionChannelCount"] = channels.size();
+  j["LATENCYChannelCount"] = lat;
+  j["POSChannelCount"] = pos;
+  j["ORNTChannelCount"] = ornt;
+  j["MISCChannelCount"] = misc;
+  j["TrackedPointsCount"] = 1;
+  j["SubjectArtefactDescription"] = "n/a";
+  return j;
+}
+
+// Where a session's files go: sub-<sub>/ses-<n>/, and its recordings' stem.
+struct SessionPlace {
+  std::string sub;
+  std::string ses;
+  std::string dir;  // sub-<sub>/ses-<n>
+  std::string recording_stem(const SessionInfo& s, const std::string& device) const {
+    return dir + "/motion/sub-" + sub + "_ses-" + ses + "_task-" + alnum_label(s.protocol_name) + "_tracksys-" +
+           alnum_label(device);
+  }
+};
+
+// A device's four files (_motion.tsv/.json, _channels.tsv/.json); its row
+// of the session's _scans.tsv is appended to `scans`.
+std::optional<DataError> write_recording(Database& db, const std::string& root, const SessionInfo& s,
+                                         const SessionPlace& place, const std::string& device, std::string& scans,
+                                         ExportSummary& summary) {
+  const auto channels = channels_for(device);
+  const Recording rec = read_recording(db, s.session_id, device);
+  const std::string base = place.recording_stem(s, device);
+  if (auto e = write_text(root + "/" + base + "_motion.tsv", rec.tsv)) return e;
+  if (auto e = write_text(root + "/" + base + "_channels.tsv", channels_tsv(channels))) return e;
+  if (auto e = write_text(root + "/" + base + "_channels.json", channels_json().dump(2) + "\n")) return e;
+  const OJson sidecar = motion_sidecar(s, device, channels, rates_of(rec.times), rec.times.size());
+  if (auto e = write_text(root + "/" + base + "_motion.json", sidecar.dump(2) + "\n")) return e;
+  scans += base.substr(place.dir.size() + 1);
+  scans += "_motion.tsv\t";
+  scans += bids_time(s.started_utc);
+  scans += '\n';
+  for (const char* suffix : {"_motion.tsv", "_motion.json", "_channels.tsv", "_channels.json"})
+    summary.files.push_back("bids/" + base + suffix);
+  summary.rows += rec.times.size();
+  return std::nullopt;
+}
+
+// A session's recordings, one per tracked device, and its _scans.tsv.
+std::optional<DataError> write_session(Database& db, const std::string& root, const SessionInfo& s,
+                                       const SessionPlace& place, ExportSummary& summary) {
+  if (auto e = make_dir(root + "/" + place.dir + "/motion")) return e;
+  Statement devices(db.connection(),
+                    "SELECT DISTINCT device FROM tracking_samples WHERE session_id = ?1 ORDER BY device");
+  devices.bind(1, s.session_id);
+  std::vector<std::string> device_names;
+  while (devices.step()) device_names.push_back(devices.column_text(0));
+  std::string scans = "filename\tacq_time\n";
+  for (const std::string& device : device_names)
+    if (auto e = write_recording(db, root, s, place, device, scans, summary)) return e;
+  const std::string scans_name = place.dir + "/sub-" + place.sub + "_ses-" + place.ses + "_scans.tsv";
+  if (auto e = write_text(root + "/" + scans_name, scans)) return e;
+  summary.files.push_back("bids/" + scans_name);
+  return std::nullopt;
+}
+
+std::string participant_row(const std::string& sub, const SessionInfo& s) {
+  return "sub-" + sub + '\t' + (s.ipd_m ? number(*s.ipd_m) : std::string("n/a")) + '\t' + s.dominant_eye + '\n';
+}
+
+std::optional<DataError> write_participants(const std::string& root, const std::string& rows,
+                                            ExportSummary& summary) {
+  if (auto e = write_text(root + "/participants.tsv", "participant_id\tipd_m\tdominant_eye\n" + rows)) return e;
+  summary.files.push_back("bids/participants.tsv");
+  OJson pj;
+  pj["participant_id"]["Description"] = "Pseudonym of the participant (no identifying data)";
+  pj["ipd_m"] = {{"Description", "Interpupillary distance"}, {"Units", "m"}};
+  pj["dominant_eye"]["Description"] = "Dominant eye: left, right or unknown";
+  if (auto e = write_text(root + "/participants.json", pj.dump(2) + "\n")) return e;
+  summary.files.push_back("bids/participants.json");
+  if (auto e = write_text(root + "/README", bids_readme())) return e;
+  summary.files.push_back("bids/README");
+  return std::nullopt;
+}
+
+// The dataset in `root` (the bids folder): the description, each session's
+// recordings, then the per-subject session lists and the participants.
+Expected<ExportSummary> write_dataset(Database& db, const std::vector<SessionInfo>& sessions, const std::string& root) {
+  ExportSummary summary;
+  if (auto e = write_description(root, summary)) return *e;
+  std::string participants;
+  std::set<std::string> seen_subjects;
   std::map<std::string, std::string> sessions_of;  // subject label → its _sessions.tsv rows
   try {
     for (const SessionInfo& s : sessions) {
-      const std::string sub = alnum_label(s.pseudonym);
-      if (std::find(seen_subjects.begin(), seen_subjects.end(), sub) == seen_subjects.end()) {
-        seen_subjects.push_back(sub);
-        participants += "sub-";
-        participants += sub;
-        participants += '\t';
-        participants += s.ipd_m ? number(*s.ipd_m) : std::string("n/a");
-        participants += '\t';
-        participants += s.dominant_eye;
-        participants += '\n';
-      }
-      const std::string ses = std::to_string(s.session_number);
-      const std::string task = alnum_label(s.protocol_name);
-      const std::string ses_dir = "sub-" + sub + "/ses-" + ses;
-      if (auto e = make_dir(root + "/" + ses_dir + "/motion")) return *e;
-      std::string scans = "filename\tacq_time\n";
-
-      Statement devices(db.connection(),
-                        "SELECT DISTINCT device FROM tracking_samples WHERE session_id = ?1 "
-                        "ORDER BY device");
-      devices.bind(1, s.session_id);
-      std::vector<std::string> device_names;
-      while (devices.step()) device_names.push_back(devices.column_text(0));
-
-      for (const std::string& device : device_names) {
-        const auto channels = channels_for(device);
-        Statement rows(db.connection(),
-                       "SELECT t_ns, lab_px_m, lab_py_m, lab_pz_m, lab_qx, lab_qy, lab_qz, "
-                       "lab_qw, position_valid, orientation_valid, coherence_error_m, "
-                       "coherence_error_rad FROM tracking_samples WHERE session_id = ?1 AND "
-                       "device = ?2 ORDER BY t_ns, sample_id");
-        rows.bind(1, s.session_id).bind(2, std::string_view(device));
-        std::string tsv;
-        std::vector<std::int64_t> times;
-        while (rows.step()) {
-          const std::int64_t t = rows.column_int(0);
-          times.push_back(t);
-          char latency[40];
-          std::snprintf(latency, sizeof latency, "%.9f",
-                        static_cast<double>(t - times.front()) * 1e-9);
-          tsv += latency;
-          for (int c = 1; c <= 7; ++c) {
-            tsv += '\t';
-            tsv += number(rows.column_double(c));
-          }
-          for (int c = 8; c <= 9; ++c) {
-            tsv += '\t';
-            tsv += std::to_string(rows.column_int(c));
-          }
-          for (int c = 10; c <= 11; ++c) {
-            tsv += '\t';
-            tsv += rows.is_null(c) ? std::string("n/a") : number(rows.column_double(c));
-          }
-          tsv += '\n';
-        }
-        const std::size_t n = times.size();
-        double duration_s = n > 1 ? static_cast<double>(times.back() - times.front()) * 1e-9 : 0.0;
-        double effective_hz = duration_s > 0 ? static_cast<double>(n - 1) / duration_s : 0.0;
-        double nominal_hz = 0.0;
-        if (n > 1) {
-          std::vector<std::int64_t> dt;
-          for (std::size_t i = 1; i < n; ++i) dt.push_back(times[i] - times[i - 1]);
-          std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
-          const auto median = dt[dt.size() / 2];
-          if (median > 0) nominal_hz = std::round(1e9 / static_cast<double>(median));
-        }
-        const std::string base = ses_dir + "/motion/sub-" + sub + "_ses-" + ses + "_task-" + task +
-                                 "_tracksys-" + alnum_label(device);
-        if (auto e = write_text(root + "/" + base + "_motion.tsv", tsv)) return *e;
-
-        std::string ch_tsv = "name\tcomponent\ttype\ttracked_point\tunits\treference_frame\tdescription\n";
-        for (const auto& c : channels) {
-          const std::string frame = c.type == "POS" || c.type == "ORNT" ? "lab" : "n/a";
-          for (const std::string* field :
-               {&c.name, &c.component, &c.type, &c.tracked_point, &c.units, &frame}) {
-            ch_tsv += *field;
-            ch_tsv += '\t';
-          }
-          ch_tsv += tsv_field(c.description);
-          ch_tsv += '\n';
-        }
-        if (auto e = write_text(root + "/" + base + "_channels.tsv", ch_tsv)) return *e;
-
-        OJson ch_json;
-        ch_json["reference_frame"]["Description"] = "Frame the positions and orientations are in";
-        // Orientations are unit quaternions, so no Euler rotation order
-        // applies; RotationOrder (a SHOULD) is left out rather than given
-        // as "n/a", which the BIDS validator's channels schema refuses.
-        ch_json["reference_frame"]["Levels"]["lab"] = {
-            {"Description",
-             "Tracking space of the lab, origin at the runtime's stage origin; orientations as unit quaternions "
-             "(x, y, z, w)"},
-            {"SpatialAxes", "RSP"},
-            {"RotationRule", "right-hand"}};
-        if (auto e = write_text(root + "/" + base + "_channels.json", ch_json.dump(2) + "\n")) return *e;
-
-        int pos = 0, ornt = 0, misc = 0, lat = 0;
-        for (const auto& c : channels) {
-          if (c.type == "POS") ++pos;
-          else if (c.type == "ORNT") ++ornt;
-          else if (c.type == "LATENCY") ++lat;
-          else ++misc;
-        }
-        OJson sidecar;
-        sidecar["TaskName"] = s.protocol_name;
-        sidecar["TaskDescription"] = "curvlab protocol " + s.protocol_name + " (sha256 " +
-                                     s.protocol_sha256 + ")";
-        // The nominal rate is the median sample interval rounded to whole Hz
-        // (the runtime's rate is not recorded); the effective rate is exact.
-        if (n > 1) sidecar["SamplingFrequency"] = nominal_hz; else sidecar["SamplingFrequency"] = "n/a";
-        sidecar["SamplingFrequencyEffective"] = effective_hz;
-        sidecar["TrackingSystemName"] = "curvlab " + device;
-        sidecar["Manufacturer"] = "n/a";
-        sidecar["ManufacturersModelName"] = "n/a";
-        sidecar["SoftwareVersions"] = "curvlab " + std::string(software_version());
-        sidecar["RecordingType"] = "continuous";
-        sidecar["RecordingDuration"] = duration_s;
-        sidecar["MotionChannelCount"] = channels.size();
-        sidecar["LATENCYChannelCount"] = lat;
-        sidecar["POSChannelCount"] = pos;
-        sidecar["ORNTChannelCount"] = ornt;
-        sidecar["MISCChannelCount"] = misc;
-        sidecar["TrackedPointsCount"] = 1;
-        sidecar["SubjectArtefactDescription"] = "n/a";
-        if (auto e = write_text(root + "/" + base + "_motion.json", sidecar.dump(2) + "\n")) return *e;
-
-        const std::string acq = bids_time(s.started_utc);
-        scans += base.substr(ses_dir.size() + 1);
-        scans += "_motion.tsv\t";
-        scans += acq;
-        scans += '\n';
-        for (const char* suffix : {"_motion.tsv", "_motion.json", "_channels.tsv", "_channels.json"})
-          summary.files.push_back("bids/" + base + suffix);
-        summary.rows += n;
-      }
-      sessions_of[sub] += "ses-" + ses + "\t" + bids_time(s.started_utc) + "\t" + s.session_uuid + "\n";
-      const std::string scans_name = ses_dir + "/sub-" + sub + "_ses-" + ses + "_scans.tsv";
-      if (auto e = write_text(root + "/" + scans_name, scans)) return *e;
-      summary.files.push_back("bids/" + scans_name);
+      SessionPlace place{alnum_label(s.pseudonym), std::to_string(s.session_number), ""};
+      place.dir = "sub-" + place.sub + "/ses-" + place.ses;
+      if (seen_subjects.insert(place.sub).second) participants += participant_row(place.sub, s);
+      if (auto e = write_session(db, root, s, place, summary)) return *e;
+      sessions_of[place.sub] += "ses-" + place.ses + "\t" + bids_time(s.started_utc) + "\t" + s.session_uuid + "\n";
     }
   } catch (const SqliteFailure& f) {
     return to_data_error(f, db.path());
   }
   for (const auto& [sub, rows] : sessions_of)
     if (auto e = write_sessions_file(root, sub, rows, summary)) return *e;
-  if (auto e = write_text(root + "/participants.tsv", participants)) return *e;
-  summary.files.push_back("bids/participants.tsv");
-  OJson pj;
-  pj["participant_id"]["Description"] = "Pseudonym of the participant (no identifying data)";
-  pj["ipd_m"] = {{"Description", "Interpupillary distance"}, {"Units", "m"}};
-  pj["dominant_eye"]["Description"] = "Dominant eye: left, right or unknown";
-  if (auto e = write_text(root + "/participants.json", pj.dump(2) + "\n")) return *e;
-  summary.files.push_back("bids/participants.json");
-  if (auto e = write_text(root + "/README", bids_readme())) return *e;
-  summary.files.push_back("bids/README");
+  if (auto e = write_participants(root, participants, summary)) return *e;
   return summary;
 }
 

@@ -239,108 +239,159 @@ Cell json_cell(const nlohmann::ordered_json& v) {
 
 }  // namespace
 
-Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options) {
-  TrialTable table;
-  table.columns = {
-      {"session_id", "Database id of the session (local to the file; session_uuid identifies it across files)", ""},
-      {"session_uuid", "The session's identity across files and machines (RFC 9562 UUID)", ""},
-      {"participant", "Participant pseudonym (no identifying data)", ""},
-      {"session_number", "Session number of this participant, from 1", ""},
-      {"protocol_sha256", "SHA-256 of the protocol text the session ran", ""},
-      {"block_index", "Block position in the session, from 0", ""},
-      {"block_name", "Block name from the protocol", ""},
-      {"is_practice", "1 for practice blocks, 0 otherwise", ""},
-      {"trial_index", "Trial position in the session, from 0", ""},
-      {"trial_in_block", "Trial position in its block, from 0", ""},
-      {"status", "pending, running, completed, skipped or aborted", ""},
-      {"end_reason",
+namespace {
+
+// The trial export's fixed columns: name, description and unit beside the
+// SQL that reads them, so a column and its description cannot drift apart.
+struct FixedColumn {
+  const char* name;
+  const char* description;
+  const char* unit;
+  const char* sql;
+};
+
+const std::vector<FixedColumn>& fixed_columns() {
+  static const std::vector<FixedColumn> columns{
+    {"session_id", "Database id of the session (local to the file; session_uuid identifies it across files)", "",
+     "t.session_id"},
+    {"session_uuid", "The session's identity across files and machines (RFC 9562 UUID)", "",
+     "se.session_uuid"},
+    {"participant", "Participant pseudonym (no identifying data)", "",
+     "p.pseudonym"},
+    {"session_number", "Session number of this participant, from 1", "",
+     "se.session_number"},
+    {"protocol_sha256", "SHA-256 of the protocol text the session ran", "",
+     "pr.sha256"},
+    {"block_index", "Block position in the session, from 0", "",
+     "b.block_index"},
+    {"block_name", "Block name from the protocol", "",
+     "b.name"},
+    {"is_practice", "1 for practice blocks, 0 otherwise", "",
+     "b.is_practice"},
+    {"trial_index", "Trial position in the session, from 0", "",
+     "t.trial_index"},
+    {"trial_in_block", "Trial position in its block, from 0", "",
+     "t.trial_in_block"},
+    {"status", "pending, running, completed, skipped or aborted", "",
+     "t.status"},
+    {"end_reason",
        "Skipped or aborted trials: why (staircase_finished, operator, tracking_lost, pause, "
        "recenter, quit); empty otherwise",
-       ""},
-      {"attempt", "How many times the trial was started (more than 1 after a resume)", ""},
-      {"onset_ns", "Stimulus onset on the session's monotonic clock", "ns"},
-      {"response_ns", "Response time stamp on the session's monotonic clock", "ns"},
-      {"rt_ns", "Response time: response_ns minus onset_ns", "ns"},
-      {"response", "The participant's response", ""},
-      {"response_device", "Device that gave the response", ""},
-      {"completed_utc", "Wall-clock time the trial was committed (UTC, ISO 8601)", ""},
-      {"staircase", "Staircase trials: the staircase (block:name) the trial stepped", ""},
-      {"staircase_step", "Staircase trials: the step's index in its staircase, from 0", ""},
-      {"intensity", "Staircase trials: the value of the staircase's parameter shown", "protocol unit"},
-      {"is_reversal", "Staircase trials: 1 when the response reversed the staircase's direction", ""},
-      {"tracking_lost_ms",
+       "",
+     "t.end_reason"},
+    {"attempt", "How many times the trial was started (more than 1 after a resume)", "",
+     "t.attempt"},
+    {"onset_ns", "Stimulus onset on the session's monotonic clock", "ns",
+     "t.onset_ns"},
+    {"response_ns", "Response time stamp on the session's monotonic clock", "ns",
+     "t.response_ns"},
+    {"rt_ns", "Response time: response_ns minus onset_ns", "ns",
+     "t.rt_ns"},
+    {"response", "The participant's response", "",
+     "t.response"},
+    {"response_device", "Device that gave the response", "",
+     "t.response_device"},
+    {"completed_utc", "Wall-clock time the trial was committed (UTC, ISO 8601)", "",
+     "t.completed_utc"},
+    {"staircase", "Staircase trials: the staircase (block:name) the trial stepped", "",
+     "st.staircase"},
+    {"staircase_step", "Staircase trials: the step's index in its staircase, from 0", "",
+     "st.step_index"},
+    {"intensity", "Staircase trials: the value of the staircase's parameter shown", "protocol unit",
+     "st.intensity"},
+    {"is_reversal", "Staircase trials: 1 when the response reversed the staircase's direction", "",
+     "st.is_reversal"},
+    {"tracking_lost_ms",
        "Trials completed with tracking lost (tracking.on_loss = \"flag\"): how long the head was "
        "untracked, in spells longer than tracking.loss_ms",
-       "ms"},
-      {"frames_late",
+       "ms",
+     "tf.lost_ms"},
+    {"frames_late",
        "Frames of the trial (all attempts) the runtime reported late: the display time skipped a refresh "
        "or the frame was not to be rendered (frames.late)",
-       ""},
-      {"onset_late",
+       "",
+     "COALESCE(fl.late, 0)"},
+    {"onset_late",
        "1 when the stimulus onset frame was late (not shown at its predicted display time), 0 when on "
        "time; empty without an onset",
-       ""},
+       "",
+     "CASE WHEN t.onset_ns IS NULL THEN NULL ELSE COALESCE(fl.onset_late, 0) END"},
   };
-  const std::size_t fixed = table.columns.size();
+  return columns;
+}
+
+// The fixed columns, then the conditions and stimulus JSON texts.
+std::string trial_select() {
+  std::string sql = "SELECT ";
+  for (const auto& c : fixed_columns()) sql += std::string(c.sql) + ", ";
+  return sql +
+         "t.conditions, t.stimulus FROM trials t "
+         "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
+         // One pass over the events, not one per trial.
+         "LEFT JOIN (SELECT trial_id, SUM(json_extract(detail, '$.lost_ms')) AS lost_ms "
+         "FROM events WHERE kind = ?2 GROUP BY trial_id) tf "
+         "ON tf.trial_id = t.trial_id "
+         // One pass over the frames: the trial's late frames, and whether its
+         // onset frame (displayed at onset_ns) was one of them.
+         "LEFT JOIN (SELECT f.trial_id, SUM(f.late) AS late, "
+         "MAX(f.late = 1 AND f.predicted_display_ns = ot.onset_ns) AS onset_late FROM frames f "
+         "JOIN trials ot ON ot.trial_id = f.trial_id GROUP BY f.trial_id) fl ON fl.trial_id = t.trial_id "
+         "JOIN sessions se ON se.session_id = t.session_id "
+         "JOIN participants p ON p.participant_id = se.participant_id "
+         "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
+         "JOIN blocks b ON b.block_id = t.block_id "
+         "WHERE ?1 IS NULL OR t.session_id = ?1 ORDER BY se.session_uuid, t.session_id, t.trial_index";
+}
+
+// The names a JSON column family (conditions or stimulus) uses, in order
+// of first appearance, and each row's object.
+struct JsonColumns {
+  std::vector<std::string> names;
+  std::map<std::string, std::size_t> position;
+  std::vector<nlohmann::ordered_json> rows;
+
+  void add(const std::string& text) {
+    auto obj = nlohmann::ordered_json::parse(text, nullptr, false);
+    if (obj.is_object())
+      for (auto it = obj.begin(); it != obj.end(); ++it)
+        if (position.emplace(it.key(), names.size()).second) names.push_back(it.key());
+    rows.push_back(std::move(obj));
+  }
+
+  void append_to(TrialTable& table, const std::string& prefix, const std::string& what) const {
+    for (const auto& n : names)
+      table.columns.push_back({prefix + n, what + " \"" + n + "\" from the protocol", ""});
+    for (std::size_t r = 0; r < table.rows.size(); ++r) {
+      const auto& obj = rows[r];
+      for (const auto& n : names)
+        table.rows[r].push_back(obj.is_object() && obj.contains(n) ? json_cell(obj[n]) : std::nullopt);
+    }
+  }
+};
+
+}  // namespace
+
+Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options) {
+  TrialTable table;
+  for (const auto& c : fixed_columns()) table.columns.push_back({c.name, c.description, c.unit});
+  const int fixed = static_cast<int>(table.columns.size());
+  JsonColumns conditions, stimulus;
   try {
-    Statement s(db.connection(),
-                "SELECT t.session_id, se.session_uuid, p.pseudonym, se.session_number, pr.sha256, b.block_index, "
-                "b.name, b.is_practice, t.trial_index, t.trial_in_block, t.status, t.end_reason, "
-                "t.attempt, t.onset_ns, t.response_ns, t.rt_ns, t.response, t.response_device, "
-                "t.completed_utc, st.staircase, st.step_index, st.intensity, st.is_reversal, "
-                "tf.lost_ms, COALESCE(fl.late, 0), "
-                "CASE WHEN t.onset_ns IS NULL THEN NULL ELSE COALESCE(fl.onset_late, 0) END, "
-                "t.conditions, t.stimulus FROM trials t "
-                "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id "
-                // One pass over the events, not one per trial.
-                "LEFT JOIN (SELECT trial_id, SUM(json_extract(detail, '$.lost_ms')) AS lost_ms "
-                "FROM events WHERE kind = ?2 GROUP BY trial_id) tf "
-                "ON tf.trial_id = t.trial_id "
-                // One pass over the frames: the trial's late frames, and whether its
-                // onset frame (displayed at onset_ns) was one of them.
-                "LEFT JOIN (SELECT f.trial_id, SUM(f.late) AS late, "
-                "MAX(f.late = 1 AND f.predicted_display_ns = ot.onset_ns) AS onset_late FROM frames f "
-                "JOIN trials ot ON ot.trial_id = f.trial_id GROUP BY f.trial_id) fl ON fl.trial_id = t.trial_id "
-                "JOIN sessions se ON se.session_id = t.session_id "
-                "JOIN participants p ON p.participant_id = se.participant_id "
-                "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
-                "JOIN blocks b ON b.block_id = t.block_id "
-                "WHERE ?1 IS NULL OR t.session_id = ?1 ORDER BY se.session_uuid, t.session_id, t.trial_index");
+    Statement s(db.connection(), trial_select());
     s.bind(1, options.session_id).bind_static(2, to_string(EventKind::tracking_flagged));
-    std::vector<std::string> cond_names, stim_names;
-    std::map<std::string, std::size_t> cond_pos, stim_pos;
-    std::vector<std::pair<nlohmann::ordered_json, nlohmann::ordered_json>> extras;
     while (s.step()) {
       std::vector<Cell> row;
-      for (int c = 0; c < static_cast<int>(fixed); ++c) row.push_back(s.column_opt_text(c));
-      // conditions and stimulus follow the fixed columns in the SELECT.
-      auto cond = nlohmann::ordered_json::parse(s.column_text(static_cast<int>(fixed)), nullptr, false);
-      auto stim = nlohmann::ordered_json::parse(s.column_text(static_cast<int>(fixed) + 1), nullptr, false);
-      for (auto [obj, names, pos] : {std::tie(cond, cond_names, cond_pos),
-                                     std::tie(stim, stim_names, stim_pos)}) {
-        if (!obj.is_object()) continue;
-        for (auto it = obj.begin(); it != obj.end(); ++it)
-          if (pos.emplace(it.key(), names.size()).second) names.push_back(it.key());
-      }
+      for (int c = 0; c < fixed; ++c) row.push_back(s.column_opt_text(c));
       table.rows.push_back(std::move(row));
       table.row_session.push_back(s.column_int(0));
-      extras.emplace_back(std::move(cond), std::move(stim));
-    }
-    for (const auto& n : cond_names)
-      table.columns.push_back({"cond_" + n, "Condition value \"" + n + "\" from the protocol", ""});
-    for (const auto& n : stim_names)
-      table.columns.push_back({"stim_" + n, "Stimulus parameter \"" + n + "\" from the protocol", ""});
-    for (std::size_t r = 0; r < table.rows.size(); ++r) {
-      auto& row = table.rows[r];
-      const auto& [cond, stim] = extras[r];
-      for (const auto& n : cond_names)
-        row.push_back(cond.is_object() && cond.contains(n) ? json_cell(cond[n]) : std::nullopt);
-      for (const auto& n : stim_names)
-        row.push_back(stim.is_object() && stim.contains(n) ? json_cell(stim[n]) : std::nullopt);
+      conditions.add(s.column_text(fixed));
+      stimulus.add(s.column_text(fixed + 1));
     }
   } catch (const SqliteFailure& f) {
     return to_data_error(f, db.path());
   }
+  conditions.append_to(table, "cond_", "Condition value");
+  stimulus.append_to(table, "stim_", "Stimulus parameter");
   return table;
 }
 
