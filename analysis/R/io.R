@@ -14,6 +14,9 @@
 
 curvlab_application_id <- 1129729090  # PRAGMA application_id "CVLB"
 curvlab_schema_version <- 4L
+# This file's folder when sourced (report.R sources analysis/R/*.R): the
+# schema is read from the checkout's data_schema/ beside analysis/.
+curvlab_r_dir <- tryCatch(dirname(normalizePath(sys.frame(1)$ofile)), error = function(e) "")
 
 input_error <- function(...) {
   stop(structure(class = c("curvlab_input_error", "error", "condition"),
@@ -37,11 +40,9 @@ read_curvlab <- function(path, max_tracking_per_device = 20000L) {
 # Damaged and foreign files get the same messages as the curvlab command
 # (harness/src/data/database.cpp, docs/data.md "Damaged or foreign files"):
 # whether the file can be read at all, and how to recover committed data.
-recover_command <- function(path) {
-  quoted <- if (grepl("^[A-Za-z0-9/._+,:@%=-]+$", path)) path
-            else paste0("'", gsub("'", "'\\''", path, fixed = TRUE), "'")
-  paste0("sqlite3 ", quoted, " .recover | sqlite3 recovered.sqlite")
-}
+shell_quote <- function(path)
+  if (grepl("^[A-Za-z0-9/._+,:@%=-]+$", path)) path else paste0("'", gsub("'", "'\\''", path, fixed = TRUE), "'")
+recover_command <- function(path) paste0("sqlite3 ", shell_quote(path), " .recover | sqlite3 recovered.sqlite")
 corrupt_error <- function(path, ...) {
   input_error(path, ": damaged curvlab data file: ", ..., ", so only part of it can be read. ",
               "Recover the committed data into a new file with the SQLite shell: ", recover_command(path),
@@ -70,8 +71,10 @@ check_database_file <- function(path) {
   if (page_size == 1) page_size <- 65536
   if (page_size < 512 || page_size > 65536 || bitwAnd(page_size, page_size - 1) != 0)
     corrupt_error(path, "its header is damaged (page size ", page_size, ")")
-  # A pending write-ahead log is reconciled by SQLite on open.
+  # A pending write-ahead log is reconciled by SQLite on open, unless its
+  # header is damaged: then SQLite would silently read the file without it.
   wal <- paste0(path, "-wal")
+  check_wal_header(path, wal)
   if (file.exists(wal) && isTRUE(file.info(wal)$size > 0)) return(invisible(TRUE))
   pages <- be(header[29:32])
   if (pages > 0 && be(header[25:28]) == be(header[93:96]) && size < pages * page_size)
@@ -79,6 +82,65 @@ check_database_file <- function(path) {
                   bytes(pages * page_size), " (", bytes(pages), " pages of ", bytes(page_size), " bytes)")
   invisible(TRUE)
 }
+
+# The write-ahead log's 32-byte header: magic, version 3007000 and the
+# checksum of its first 24 bytes (sqlite.org/fileformat.html, "WAL File
+# Format", "Checksum Algorithm"); the same check and words as the curvlab
+# command. A log without frames holds nothing to lose.
+check_wal_header <- function(path, wal) {
+  size <- if (file.exists(wal)) file.info(wal)$size else 0
+  if (is.na(size) || size <= 32) return(invisible(TRUE))
+  h <- as.numeric(as.integer(readBin(wal, "raw", 32L)))
+  word <- function(i, big) {
+    b <- h[i + 1:4]
+    if (!big) b <- rev(b)
+    sum(b * 256^(3:0))
+  }
+  magic <- word(0, TRUE)
+  big <- magic %% 2 == 1
+  problem <- if (magic - magic %% 2 != 931071618  # 0x377f0682) "does not begin with the WAL magic number"
+             else if (word(4, TRUE) != 3007000) "records an unknown format version"
+             else {
+               m <- 2^32
+               s0 <- 0
+               s1 <- 0
+               for (i in c(0, 8, 16)) {
+                 s0 <- (s0 + word(i, big) + s1) %% m
+                 s1 <- (s1 + word(i + 4, big) + s0) %% m
+               }
+               if (s0 != word(24, TRUE) || s1 != word(28, TRUE)) "has a header whose checksum does not match"
+               else ""
+             }
+  if (!nzchar(problem)) return(invisible(TRUE))
+  input_error(path, ": damaged curvlab data file: its write-ahead log ", wal, " (",
+              format(size, scientific = FALSE), " bytes of transactions not yet copied into the file) ", problem,
+              ", so SQLite would discard those transactions on the next open. Nothing was changed. Before any ",
+              "program opens the file, copy ", shell_quote(path), " and ", shell_quote(wal), " aside together; docs/data.md ",
+              "(\"A damaged write-ahead log\") shows how to repair the header and recover the committed rows")
+}
+
+# The tables and columns of the current schema (data_schema/schema.sql, when
+# this checkout has it), to tell a damaged schema from a readable one.
+expected_columns <- function() {
+  candidates <- c(if (nzchar(curvlab_r_dir)) file.path(curvlab_r_dir, "..", "..", "data_schema", "schema.sql"),
+                  file.path(getwd(), "data_schema", "schema.sql"))
+  schema <- Filter(function(f) nzchar(f) && file.exists(f), candidates)
+  if (!length(schema)) return(character(0))
+  con <- DBI::dbConnect(RSQLite::SQLite(), ":memory:")
+  on.exit(DBI::dbDisconnect(con))
+  sql <- paste(readLines(schema[[1]], warn = FALSE), collapse = "\n")
+  for (stmt in strsplit(sql, ";\\s*\n")[[1]]) if (nzchar(trimws(gsub("--[^\n]*", "", stmt)))) DBI::dbExecute(con, stmt)
+  table_columns(function(q) DBI::dbGetQuery(con, q))
+}
+
+table_columns <- function(q) {
+  cols <- q(paste("SELECT m.name || '.' || p.name AS col FROM sqlite_master AS m, pragma_table_info(m.name) AS p",
+                  "WHERE m.type = 'table' AND m.name NOT LIKE 'sqlite_%'"))$col
+  sort(cols, method = "radix")  # byte order, as the curvlab command lists them
+}
+
+schema_damage <- function(path, what)
+  corrupt_error(path, "its schema is damaged (", what, "); nothing was changed")
 
 # SQLite's own words for a damaged file, as raised by RSQLite.
 is_corruption_message <- function(msg)
@@ -115,18 +177,24 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
   checked <- q("PRAGMA quick_check")[[1]]
   if (!identical(checked, "ok"))
     corrupt_error(path, "SQLite's quick_check reports \"", checked[1], "\"")
+  if (version < 1)
+    schema_damage(path, paste0("it records schema version ", version, ", which no curvlab writes"))
   if (version != curvlab_schema_version)
     input_error(path, ": schema version ", version, ", expected ", curvlab_schema_version,
                 if (version < curvlab_schema_version)
-                  " (migrate it by opening it once with `curvlab export --db FILE --out DIR`)"
+                  " (upgrade it once in place with `curvlab upgrade --db FILE`)"
                 else " (written by a newer curvlab; update the analysis scripts)")
   tables <- q("SELECT name FROM sqlite_master WHERE type = 'table'")$name
   needed <- c("protocols", "participants", "sessions", "blocks", "trials",
               "staircase_steps", "tracking_samples", "events")
   missing <- setdiff(needed, tables)
-  if (length(missing))
-    input_error(path, ": missing table(s) ", paste(missing, collapse = ", "),
-                " (expected the curvlab schema version 4, data_schema/schema.sql)")
+  expected <- expected_columns()
+  if (length(expected)) missing <- setdiff(expected, table_columns(q))
+  if (length(missing)) {
+    listed <- paste(head(missing, 4), collapse = ", ")
+    if (length(missing) > 4) listed <- paste0(listed, " and ", length(missing) - 4, " more")
+    schema_damage(path, paste0("schema version ", curvlab_schema_version, " lacks ", listed))
+  }
 
   raw_trials <- q(paste(
     "SELECT t.trial_id, t.session_id, se.session_uuid, p.pseudonym AS participant, se.session_number,",

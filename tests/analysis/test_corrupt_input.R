@@ -62,4 +62,60 @@ for (case in cases) {
   }
 }
 
+# Damaged schemas and a damaged write-ahead log: exit 2, one message, the
+# file unchanged, and the words of `curvlab export`.
+damaged_copy <- function(name, sql) {
+  file <- scratch(name)
+  for (f in paste0(file, c("", "-wal", "-shm"))) if (file.exists(f)) file.remove(f)
+  file.copy(whole, file)
+  con <- DBI::dbConnect(RSQLite::SQLite(), file)
+  for (stmt in sql) invisible(DBI::dbExecute(con, stmt))
+  DBI::dbDisconnect(con)
+  file
+}
+# A copy taken while a writer's transactions are still in its log, the
+# log's header checksum then hit (docs/data.md, "A damaged write-ahead log").
+wal_copy <- function(name) {
+  file <- scratch(name)
+  for (f in paste0(file, c("", "-wal", "-shm"))) if (file.exists(f)) file.remove(f)
+  source_db <- scratch("wal_source.sqlite")
+  for (f in paste0(source_db, c("", "-wal", "-shm"))) if (file.exists(f)) file.remove(f)
+  file.copy(whole, source_db)
+  con <- DBI::dbConnect(RSQLite::SQLite(), source_db)
+  invisible(DBI::dbGetQuery(con, "PRAGMA journal_mode = WAL"))
+  invisible(DBI::dbExecute(con, "PRAGMA wal_autocheckpoint = 0"))
+  DBI::dbBegin(con)
+  invisible(DBI::dbExecute(con, "INSERT INTO schema_migrations (version, applied_utc, note) VALUES (99, 'now', 'x')"))
+  DBI::dbCommit(con)
+  file.copy(source_db, file)
+  file.copy(paste0(source_db, "-wal"), paste0(file, "-wal"))
+  DBI::dbDisconnect(con)
+  wal <- readBin(paste0(file, "-wal"), "raw", file.info(paste0(file, "-wal"))$size)
+  check(length(wal) > 32, "the copied log holds frames")
+  wal[25] <- xor(wal[25], as.raw(0x5a))
+  writeBin(wal, paste0(file, "-wal"))
+  file
+}
+damaged <- list(
+  list(file = damaged_copy("schema_dropped.sqlite", "DROP TABLE staircase_steps"), says = "its schema is damaged"),
+  list(file = damaged_copy("schema_version0.sqlite", "PRAGMA user_version = 0"), says = "its schema is damaged"),
+  list(file = damaged_copy("schema_column.sqlite", "ALTER TABLE frames DROP COLUMN late"), says = "lacks frames.late"),
+  list(file = wal_copy("damaged_wal.sqlite"), says = "write-ahead log"))
+for (case in damaged) {
+  name <- basename(case$file)
+  before <- tools::md5sum(c(case$file, if (file.exists(paste0(case$file, "-wal"))) paste0(case$file, "-wal")))
+  r <- run(rscript, c(report_r, "--db", case$file, "--out", scratch("corrupt_out"), "--quiet"))
+  check(r$status == 2, paste(name, ": exit 2, got", r$status, paste(r$out, collapse = " | ")))
+  check(length(r$out) == 1 && grepl(case$says, r$out[1], fixed = TRUE),
+        paste(name, ": one message saying", case$says, "got:", paste(r$out, collapse = " | ")))
+  check(all(tools::md5sum(names(before)) == before), paste(name, ": left unmodified"))
+  if (nzchar(curvlab) && file.exists(curvlab)) {
+    cli <- run(curvlab, c("export", "--db", case$file, "--out", scratch("corrupt_export")))
+    same <- length(cli$out) == 1 && length(r$out) == 1 &&
+      sub("^curvlab: error: ", "", cli$out) == sub("^error: ", "", r$out)
+    check(cli$status == 2 && isTRUE(same),
+          paste(name, ": the same message as curvlab export:", paste(cli$out, "||", r$out, collapse = " | ")))
+  }
+}
+
 finish()

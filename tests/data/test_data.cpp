@@ -1,4 +1,5 @@
 #include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/data/events.hpp"
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/sample_writer.hpp"
 #include "curvlab/harness/data/session_reader.hpp"
@@ -786,4 +787,32 @@ TEST(Cli, ExportCommandAndItsErrors) {
   std::ofstream((dir / "blocker").string()) << "x";
   EXPECT_EQ(run_cli("export --db " + (dir / "c.db").string() + " --out " + (dir / "blocker" / "x").string(), &out), 1);
   EXPECT_NE(out.find("cannot create output folder"), std::string::npos) << out;
+}
+
+// The stored event kinds are what analyses select on (codebook.md): the
+// typed events must keep their names, and every name reads back.
+TEST(Events, KindsKeepTheirStoredNamesAndReadBack) {
+  const auto kind_of = [](const Event& e) { return event_record(1, std::nullopt, 0, e).kind; };
+  EXPECT_EQ(kind_of(events::Page{EventKind::instructions, 0, "a"}), "instructions");
+  EXPECT_EQ(kind_of(events::Page{EventKind::break_page, 0, "a"}), "break");
+  EXPECT_EQ(kind_of(events::Page{EventKind::done, 0, "a"}), "done");
+  EXPECT_EQ(kind_of(events::OperatorAction{"note", "window", 5, std::string("x")}), "operator_note");
+  EXPECT_EQ(kind_of(events::OperatorAction{"pause", "window", 5, std::nullopt}), "operator_action");
+  EXPECT_EQ(kind_of(events::SessionEnd{SessionStatus::interrupted}), "session_end");
+  EXPECT_EQ(event_record(1, std::nullopt, 0, events::SessionEnd{SessionStatus::interrupted}).detail_json,
+            R"({"status":"interrupted"})");
+  for (int k = 0; k <= static_cast<int>(EventKind::session_renumbered); ++k) {
+    const auto kind = static_cast<EventKind>(k);
+    EXPECT_EQ(parse_event_kind(to_string(kind)), kind) << to_string(kind);
+  }
+  events::Onset onset;
+  onset.frame_index = 41;
+  onset.head_pose[15] = 1.0;
+  onset.stick_pose[0] = 2.0;
+  const auto back = parse_onset(event_record(1, 2, 3, onset).detail_json);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->frame_index, 41);
+  EXPECT_EQ(back->head_pose[15], 1.0);
+  EXPECT_EQ(back->stick_pose[0], 2.0);
+  EXPECT_FALSE(parse_session_start(R"({"participant_number":"one"})"));
 }

@@ -17,7 +17,7 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 23> kind_names{{
     {EventKind::resume, "resume"},
     {EventKind::block_start, "block_start"},
     {EventKind::instructions, "instructions"},
-    {EventKind::break_page, "break_page"},
+    {EventKind::break_page, "break"},
     {EventKind::done, "done"},
     {EventKind::session_end, "session_end"},
     {EventKind::signal, "signal"},

@@ -23,7 +23,7 @@ enum class EventKind {
   resume,
   block_start,
   instructions,  // an instruction page shown
-  break_page,    // a break page shown
+  break_page,    // a break page shown (stored as "break")
   done,          // the closing page shown
   session_end,
   signal,
