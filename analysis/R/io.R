@@ -97,8 +97,9 @@ check_wal_header <- function(path, wal) {
     sum(b * 256^(3:0))
   }
   magic <- word(0, TRUE)
+  wal_magic <- 931071618  # 0x377f0682; the low bit says the checksums' byte order
   big <- magic %% 2 == 1
-  problem <- if (magic - magic %% 2 != 931071618  # 0x377f0682) "does not begin with the WAL magic number"
+  problem <- if (magic - magic %% 2 != wal_magic) "does not begin with the WAL magic number"
              else if (word(4, TRUE) != 3007000) "records an unknown format version"
              else {
                m <- 2^32
