@@ -14,9 +14,6 @@
 
 curvlab_application_id <- 1129729090  # PRAGMA application_id "CVLB"
 curvlab_schema_version <- 4L
-# This file's folder when sourced (report.R sources analysis/R/*.R): the
-# schema is read from the checkout's data_schema/ beside analysis/.
-curvlab_r_dir <- tryCatch(dirname(normalizePath(sys.frame(1)$ofile)), error = function(e) "")
 
 input_error <- function(...) {
   stop(structure(class = c("curvlab_input_error", "error", "condition"),
@@ -123,7 +120,9 @@ check_wal_header <- function(path, wal) {
 # The tables and columns of the current schema (data_schema/schema.sql, when
 # this checkout has it), to tell a damaged schema from a readable one.
 expected_columns <- function() {
-  candidates <- c(if (nzchar(curvlab_r_dir)) file.path(curvlab_r_dir, "..", "..", "data_schema", "schema.sql"),
+  # report.R defines analysis_root(); the schema sits beside analysis/.
+  candidates <- c(if (exists("analysis_root", mode = "function"))
+                    file.path(analysis_root(), "..", "data_schema", "schema.sql"),
                   file.path(getwd(), "data_schema", "schema.sql"))
   schema <- Filter(function(f) nzchar(f) && file.exists(f), candidates)
   if (!length(schema)) return(character(0))
