@@ -47,9 +47,9 @@ Json stick_record(const StimulusScene& stimulus, const FrameDescription& frame, 
   harness::measure::StickScene s;
   s.space = stimulus.space;
   const bool both = frame.settings.eyes == EyeSelection::both;
-  s.mode = !both ? geometry::ViewMode::monocular
-           : frame.settings.projection == Projection::tourist ? geometry::ViewMode::tourist
-                                                               : geometry::ViewMode::native;
+  s.preset = !both ? geometry::ViewPreset::monocular
+           : frame.settings.projection == Projection::tourist ? geometry::ViewPreset::tourist
+                                                               : geometry::ViewPreset::native;
   s.head = stimulus.head;
   s.rig = frame.rig;
   s.width_px = frame.width_px;

@@ -20,7 +20,7 @@ namespace {
 
 measure::StickScene stick_scene(const World& world, const protocol::Settings& s, const Placement& placement,
                                 const OnsetView& view) {
-  return {world.space,    view_mode(s),    view.head,         view.rig, view.width_px,
+  return {world.space,    perceived_preset(s),    view.head,         view.rig, view.width_px,
           view.height_px, placement.stick, placement.stick_pose, stick_marks(s)};
 }
 
@@ -55,7 +55,7 @@ Result<std::optional<double>> OnsetReader::read(const World& world, const protoc
 Result<Done> check_image_observer(const protocol::Protocol& p) {
   const protocol::Design design = protocol::expand_design(p, 1);
   for (const auto& t : design.trials)
-    if (judged(t.settings) == Judged::stick && view_mode(t.settings) != geometry::ViewMode::monocular &&
+    if (judged(t.settings) == Judged::stick && perceived_preset(t.settings) != geometry::ViewPreset::monocular &&
         t.settings.stimulus.stick_marks != protocol::StickMarks::rings)
       return Error{Error::Kind::usage,
                    "--observer image reads the stick's rings from the images, but block '" + t.block +

@@ -130,10 +130,10 @@ Isometry standing_head(const World& world, const Settings& s) {
   return tracker->update(standing_pose(nominal_calibration(s), HeadlessOptions{}.eye_height_m, 0)).pose[0];
 }
 
-geometry::ViewMode view_mode(const Settings& s) {
-  if (s.viewing.eyes != protocol::Eyes::both) return geometry::ViewMode::monocular;
-  return s.viewing.projection == protocol::Projection::native ? geometry::ViewMode::native
-                                                              : geometry::ViewMode::tourist;
+geometry::ViewPreset perceived_preset(const Settings& s) {
+  if (s.viewing.eyes != protocol::Eyes::both) return geometry::ViewPreset::monocular;
+  return s.viewing.projection == protocol::Projection::native ? geometry::ViewPreset::native
+                                                              : geometry::ViewPreset::tourist;
 }
 
 renderer::ViewSettings view_settings(const Settings& s, renderer::Eye dominant) {
@@ -183,8 +183,8 @@ std::vector<Point> judged_points(const World& world, const Settings& s, const Pl
 
 double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
                            const Isometry& head) {
-  const auto mode = view_mode(s);
-  if (mode == geometry::ViewMode::monocular) return 0.0;
+  const auto mode = perceived_preset(s);
+  if (mode == geometry::ViewPreset::monocular) return 0.0;
   const auto& space = world.space;
   const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
   auto seen = [&](const Point& q) {
@@ -216,10 +216,10 @@ SightLineCount diverging_sight_lines(const World& world, const Settings& s, cons
                                      const Isometry& head) {
   const std::vector<Point> points = judged_points(world, s, placement);
   SightLineCount count{0, static_cast<int>(points.size())};
-  if (view_mode(s) != geometry::ViewMode::tourist) return count;
+  if (perceived_preset(s) != geometry::ViewPreset::tourist) return count;
   const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
   for (const Point& q : points) {
-    const auto seen = geometry::perceive_point(world.space, head, eyes, geometry::ViewMode::tourist, q);
+    const auto seen = geometry::perceive_point(world.space, head, eyes, geometry::ViewPreset::tourist, q);
     count.diverging += seen.diverging || seen.parallel ? 1 : 0;
   }
   return count;

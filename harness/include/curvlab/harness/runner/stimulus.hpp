@@ -68,7 +68,7 @@ Placement place_stimulus(const World& world, const protocol::Settings& s,
 // preview` view the stimulus from.
 geometry::Isometry standing_head(const World& world, const protocol::Settings& s);
 
-geometry::ViewMode view_mode(const protocol::Settings& s);
+geometry::ViewPreset perceived_preset(const protocol::Settings& s);
 renderer::ViewSettings view_settings(const protocol::Settings& s, renderer::Eye dominant);
 // "tourist", "native", "monocular" or "custom".
 std::string view_name(const protocol::Settings& s);
