@@ -344,7 +344,7 @@ Result<StickScene> parse_scene_json(const nlohmann::json& j) {
     s.stick = geometry::BentStick{st.at("length_m").get<double>(), st.at("sagitta_m").get<double>(),
                                   st.at("radius_m").get<double>()};
     const auto marks = renderer::parse_stick_marks(st.at("marks").get<std::string>());
-    if (!marks) return bad("measure.stick.marks: expected none or rings");
+    if (!marks) return bad("measure.stick.marks: expected " + geometry::alternatives_text(renderer::kStickMarks));
     s.marks = *marks;
     s.stick_pose = geometry::Isometry{matrix_from(st.at("pose"))};
   } catch (const nlohmann::json::exception& e) {
