@@ -1,8 +1,10 @@
 #include "curvlab/geometry/perception.hpp"
 
+#include "curvlab/geometry/enum_names.hpp"
 #include "curvlab/geometry/maps.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 namespace curvlab::geometry {
@@ -38,20 +40,33 @@ Vec3 unit_or_forward(const Vec3& v) {
 
 }  // namespace
 
-std::string_view to_string(ViewMode mode) {
-  switch (mode) {
-    case ViewMode::tourist: return "tourist";
-    case ViewMode::native: return "native";
-    case ViewMode::monocular: return "monocular";
+std::string_view to_string(ViewPreset preset) {
+  switch (preset) {
+    case ViewPreset::tourist: return "tourist";
+    case ViewPreset::native: return "native";
+    case ViewPreset::monocular: return "monocular";
   }
   return "?";
 }
 
-std::optional<ViewMode> parse_view_mode(std::string_view text) {
-  if (text == "tourist") return ViewMode::tourist;
-  if (text == "native") return ViewMode::native;
-  if (text == "monocular") return ViewMode::monocular;
-  return std::nullopt;
+std::optional<ViewPreset> parse_view_preset(std::string_view text) { return parse_name(kViewPresets, text); }
+
+bool true_optics(ViewPreset preset) {
+  switch (preset) {
+    case ViewPreset::tourist: return true;
+    case ViewPreset::native:
+    case ViewPreset::monocular: return false;
+  }
+  std::abort();  // not a ViewPreset: a broken contract
+}
+
+bool binocular(ViewPreset preset) {
+  switch (preset) {
+    case ViewPreset::tourist:
+    case ViewPreset::native: return true;
+    case ViewPreset::monocular: return false;
+  }
+  std::abort();  // not a ViewPreset: a broken contract
 }
 
 EyeOffsets eyes_from_ipd(double ipd_m) {
@@ -59,10 +74,10 @@ EyeOffsets eyes_from_ipd(double ipd_m) {
 }
 
 std::array<SightLine, 2> sight_lines(const Space& space, const Isometry& nose,
-                                     const EyeOffsets& eyes, ViewMode mode, const Point& q) {
+                                     const EyeOffsets& eyes, ViewPreset preset, const Point& q) {
   const Vec3 offsets[2] = {eyes.left_m, eyes.right_m};
   std::array<SightLine, 2> out;
-  if (mode == ViewMode::tourist) {
+  if (true_optics(preset)) {
     // True optics: each eye is the nose translated along a geodesic, so its
     // axes are the nose's parallel-transported; the initial direction of the
     // geodesic to q, read in those axes, is where the eye looks.
@@ -80,14 +95,14 @@ std::array<SightLine, 2> sight_lines(const Space& space, const Isometry& nose,
 }
 
 PerceivedPoint perceive_point(const Space& space, const Isometry& nose, const EyeOffsets& eyes,
-                              ViewMode mode, const Point& q) {
+                              ViewPreset preset, const Point& q) {
   PerceivedPoint p;
-  if (mode == ViewMode::monocular) {
+  if (!binocular(preset)) {
     p.position_m = log_at(space, nose, q);
     p.has_disparity = false;
     return p;
   }
-  const auto lines = sight_lines(space, nose, eyes, mode, q);
+  const auto lines = sight_lines(space, nose, eyes, preset, q);
   const EyeAxes axes = eye_axes(eyes);
   p.vergence_rad = yaw_toward(axes, lines[0].direction) - yaw_toward(axes, lines[1].direction);
   const LineMeeting m = closest_approach(lines[0], lines[1]);
@@ -132,9 +147,9 @@ VergenceReading vergence_straight_ahead(const Space& space, double ipd_m, double
   const Point q = exp_origin(space, Vec3(0.0, 0.0, -d_m));
   const Isometry nose = Isometry::identity();
   VergenceReading r;
-  r.vergence_rad = perceive_point(space, nose, eyes, ViewMode::tourist, q).vergence_rad;
+  r.vergence_rad = perceive_point(space, nose, eyes, ViewPreset::tourist, q).vergence_rad;
   r.tourist_distance_m = distance_from_vergence_m(r.vergence_rad, ipd_m);
-  r.native_distance_m = -perceive_point(space, nose, eyes, ViewMode::native, q).position_m.z;
+  r.native_distance_m = -perceive_point(space, nose, eyes, ViewPreset::native, q).position_m.z;
   return r;
 }
 
@@ -143,7 +158,7 @@ Isometry stick_frame(const Space& space, double distance_m) {
 }
 
 StickPerception perceive_stick(const Space& space, const BentStick& stick, double mid_distance_m,
-                               const EyeOffsets& eyes, ViewMode mode) {
+                               const EyeOffsets& eyes, ViewPreset preset) {
   const Isometry frame = stick_frame(space, mid_distance_m);
   const Isometry nose = Isometry::identity();
   const Point o = origin(space);
@@ -153,9 +168,9 @@ StickPerception perceive_stick(const Space& space, const BentStick& stick, doubl
     const Point q = stick.centre_point(space, frame, u);
     out.distances_m[static_cast<std::size_t>(i)] = distance_m(space, o, q);
     out.perceived_m[static_cast<std::size_t>(i)] =
-        perceive_point(space, nose, eyes, mode, q).position_m;
+        perceive_point(space, nose, eyes, preset, q).position_m;
   }
-  if (mode == ViewMode::monocular) return out;
+  if (!binocular(preset)) return out;
   out.perceived_sagitta_m = bow_toward_viewer(out.perceived_m[0], out.perceived_m[2], out.perceived_m[4]);
   return out;
 }

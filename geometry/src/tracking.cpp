@@ -1,5 +1,6 @@
 #include "curvlab/geometry/tracking.hpp"
 
+#include "curvlab/geometry/enum_names.hpp"
 #include "curvlab/geometry/maps.hpp"
 
 #include <algorithm>
@@ -75,10 +76,7 @@ std::string_view to_string(TrackingAlgorithm algorithm) {
 }
 
 std::optional<TrackingAlgorithm> parse_tracking_algorithm(std::string_view text) {
-  if (text == "naive") return TrackingAlgorithm::naive;
-  if (text == "head-anchored") return TrackingAlgorithm::head_anchored;
-  if (text == "table-anchored") return TrackingAlgorithm::table_anchored;
-  return std::nullopt;
+  return parse_name(kTrackingAlgorithms, text);
 }
 
 bool usable(const LabPose& pose) {

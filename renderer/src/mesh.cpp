@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <initializer_list>
 #include <numbers>
 
@@ -191,15 +192,17 @@ MeshInfo table_info(const Space& space, const geometry::TableShape& table,
   return info;
 }
 
-std::optional<StickMarks> parse_stick_marks(std::string_view text) {
-  if (text == "none") return StickMarks::none;
-  if (text == "rings") return StickMarks::rings;
-  return std::nullopt;
-}
-
-std::string_view to_string(StickMarks marks) { return marks == StickMarks::rings ? "rings" : "none"; }
-
 namespace {
+
+// The ribbon vertices' ring switch (design.w, read by shaders/tube.frag): 1 draws
+// the rings.
+float ring_switch(StickMarks marks) {
+  switch (marks) {
+    case StickMarks::none: return 0.0f;
+    case StickMarks::rings: return 1.0f;
+  }
+  std::abort();  // not a StickMarks: a broken contract
+}
 
 // The rows of the stick's ribbon: `along` equal pieces (the ribbon follows
 // the bent centre line through them), plus the joint, the tip's start and,
@@ -237,7 +240,7 @@ MeshData build_stick(const Space& space, const geometry::BentStick& stick, int l
   const double half = stick.length_m / 2.0;
   const glm::vec4 design(static_cast<float>(-half + kStickButtFraction * stick.length_m),
                          static_cast<float>(half - kStickTipM), static_cast<float>(half),
-                         marks == StickMarks::rings ? 1.0f : 0.0f);
+                         ring_switch(marks));
   // The two ends once more: the rows that carry the ribbon a little past them.
   const std::vector<double> inner = stick_rows(stick, std::max(96, pieces(12, level)), marks);
   std::vector<double> rows{-half};

@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 
 namespace curvlab::renderer {
@@ -42,30 +43,28 @@ std::array<glm::dvec3, 4> side_normals(const Fov& fov) {
   return n;
 }
 
-}  // namespace
-
-bool may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& centre,
-                    double radius_m) {
-  if (radius_m >= 1e29) return true;
+// The side planes of the frustum are planes through the eye: the signed
+// distance to one with unit normal n is S(d) = n·xyz/ρ, and a ball is inside
+// when d ≥ −r for every side plane.
+bool tourist_may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& centre, double radius_m) {
   const Space& s = view.space;
-  const auto normals = side_normals(view.fov);
-  if (view.projection == Projection::tourist) {
-    // Signed distance to a plane through the eye with unit normal n:
-    // S(d) = n·xyz/ρ. Inside when d ≥ −r for every side plane.
-    const Point c = hemi == Hemisphere::back ? -centre : centre;
-    const double r_rad = radius_m / s.radius_m;
-    const double limit = s.kind == SpaceKind::S3 && r_rad >= std::numbers::pi / 2.0 ? -1.0 : -s.S(r_rad);
-    for (const auto& n : normals)
-      if (glm::dot(n, glm::dvec3(c)) / s.radius_m < limit) return false;
-    return true;
-  }
-  // Native: the map keeps directions from the nose and sets distance to the
-  // geodesic distance, so a ball of radius r at distance θ lands in the cone
-  // of half-angle α, sin α = S(r)/S(θ), about the centre's direction, between
-  // ρ(θ−r) and ρ(θ+r) — or, seen through the S3 antipode, about the opposite
-  // direction between ρ(2π−θ−r) and ρ(2π−θ+r). That cone section is held by
-  // a ball about the centre's image; the eye's few centimetres of offset are
-  // inside the frustum test's margin.
+  const Point c = hemi == Hemisphere::back ? -centre : centre;
+  const double r_rad = radius_m / s.radius_m;
+  const double limit = s.kind == SpaceKind::S3 && r_rad >= std::numbers::pi / 2.0 ? -1.0 : -s.S(r_rad);
+  for (const auto& n : side_normals(view.fov))
+    if (glm::dot(n, glm::dvec3(c)) / s.radius_m < limit) return false;
+  return true;
+}
+
+// The map keeps directions from the nose and sets distance to the geodesic
+// distance, so a ball of radius r at distance θ lands in the cone of
+// half-angle α, sin α = S(r)/S(θ), about the centre's direction, between
+// ρ(θ−r) and ρ(θ+r) — or, seen through the S3 antipode, about the opposite
+// direction between ρ(2π−θ−r) and ρ(2π−θ+r). That cone section is held by a
+// ball about the centre's image; the eye's few centimetres of offset are
+// inside the frustum test's margin.
+bool native_may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& centre, double radius_m) {
+  const Space& s = view.space;
   const double theta = geometry::distance_from_origin_rad(s, centre);
   const double r_rad = radius_m / s.radius_m;
   if (r_rad >= theta) return true;  // the ball holds the nose: any direction
@@ -76,15 +75,37 @@ bool may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& cen
   const double far_m = s.radius_m * ((hemi == Hemisphere::back ? 2.0 * std::numbers::pi - theta : theta) + r_rad);
   const double r = std::hypot(radius_m, far_m * sin_alpha) + 0.05;
   const glm::dvec3 e = glm::dvec3(view.eye_from_nose * glm::dvec4(q, 1.0));
-  for (const auto& n : normals)
+  for (const auto& n : side_normals(view.fov))
     if (glm::dot(n, e) < -r) return false;
   return true;
+}
+
+// Whether the projection draws a geodesic as a curve, so that long edges
+// need subdividing: the log map bends them; true optics keeps them straight.
+bool bends_geodesics(Projection projection) {
+  switch (projection) {
+    case Projection::tourist: return false;
+    case Projection::native: return true;
+  }
+  std::abort();  // not a Projection: a broken contract
+}
+
+}  // namespace
+
+bool may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& centre,
+                    double radius_m) {
+  if (radius_m >= 1e29) return true;
+  switch (view.projection) {
+    case Projection::tourist: return tourist_may_be_visible(view, hemi, centre, radius_m);
+    case Projection::native: return native_may_be_visible(view, hemi, centre, radius_m);
+  }
+  std::abort();  // not a Projection: a broken contract
 }
 
 std::pair<int, double> choose_level(const ViewConstants& view, Hemisphere hemi,
                                     const glm::dmat4& model_view, const MeshInfo& info,
                                     const FrameDescription& frame) {
-  if (view.projection == Projection::tourist || info.long_edges.empty()) return {0, 0.0};
+  if (!bends_geodesics(view.projection) || info.long_edges.empty()) return {0, 0.0};
   if (frame.settings.forced_level) {
     double err = 0.0;
     for (const auto& edge : info.long_edges)

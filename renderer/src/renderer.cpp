@@ -124,9 +124,18 @@ struct EyeDraws {
   std::vector<const Texture*> textures;  // null: no text
 };
 
+// The shaders' native_view constant (shaders/curved.glsl, curv_clip).
+std::int32_t native_view(Projection proj) {
+  switch (proj) {
+    case Projection::tourist: return 0;
+    case Projection::native: return 1;
+  }
+  std::abort();  // not a Projection: a broken contract
+}
+
 // The specialisation constants of a pipeline's shaders.
 SpecData spec_data(Projection proj, int k, Hemisphere hemi, Shading shading) {
-  SpecData spec{proj == Projection::native ? 1 : 0, k, hemi == Hemisphere::back ? 1 : 0,
+  SpecData spec{native_view(proj), k, hemi == Hemisphere::back ? 1 : 0,
                 static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
                 glm::vec3(palette::text_paper),
                 {glm::vec3(palette::stick_butt), glm::vec3(palette::stick_shaft),

@@ -6,42 +6,18 @@
 #include <glm/mat3x3.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 
 namespace curvlab::renderer {
 
 using geometry::SpaceKind;
 
-std::optional<ViewPreset> parse_view_preset(std::string_view text) {
-  if (text == "tourist") return ViewPreset::tourist;
-  if (text == "native") return ViewPreset::native;
-  if (text == "monocular") return ViewPreset::monocular;
-  return std::nullopt;
-}
-
-std::string_view to_string(ViewPreset preset) {
-  switch (preset) {
-    case ViewPreset::tourist: return "tourist";
-    case ViewPreset::native: return "native";
-    case ViewPreset::monocular: return "monocular";
-  }
-  return "?";
-}
-
-std::string_view to_string(Projection projection) {
-  return projection == Projection::tourist ? "tourist" : "native";
-}
-
 ViewSettings ViewSettings::preset(ViewPreset preset) {
   ViewSettings s;
-  switch (preset) {
-    case ViewPreset::tourist: s.projection = Projection::tourist; break;
-    case ViewPreset::native: s.projection = Projection::native; break;
-    case ViewPreset::monocular:
-      s.projection = Projection::native;
-      s.eyes = EyeSelection::dominant;
-      break;
-  }
+  const PresetViewing viewing = preset_viewing(preset);
+  s.projection = viewing.projection;
+  s.eyes = viewing.eyes;
   return s;
 }
 
@@ -104,41 +80,50 @@ ViewConstants make_view_constants(const Space& space, const ViewSettings& settin
   // (paper, "The 3-sphere", technical detail).
   const bool split = space.kind == SpaceKind::S3;
   const double front_hi = split ? 0.5 : 1.0;
-  if (settings.projection == Projection::tourist) {
-    const double c_near = projective_depth(space, settings.near_m / space.radius_m);
-    // The far limit of w/(−z): E3 0, S3 −c_near (distance π − ε), H3 1.
-    const double c_far = space.kind == SpaceKind::E3 ? 0.0
-                         : space.kind == SpaceKind::S3 ? -c_near
-                                                       : 1.0;
-    v.proj_front = projection_matrix(eye.fov, c_near, c_far, 0.0, front_hi);
-    v.proj_back = projection_matrix(eye.fov, c_near, c_far, 0.5, 1.0);
-    const Isometry eye_pose = head * geometry::translation_m(space, eye.position_m) *
-                              geometry::rotation(eye.rotation);
-    v.viewer_from_world = geometry::inverse(space, eye_pose);
-  } else {
-    // Euclidean projection of (e, 1 m): w/(−z) = 1/distance, far limit 0.
-    const double c_near = 1.0 / settings.near_m;
-    v.proj_front = projection_matrix(eye.fov, c_near, 0.0, 0.0, front_hi);
-    v.proj_back = projection_matrix(eye.fov, c_near, 0.0, 0.5, 1.0);
-    const glm::dmat3 rt = glm::transpose(eye.rotation);
-    const glm::dvec3 t = -(rt * eye.position_m);
-    glm::dmat4 m(1.0);
-    for (int c = 0; c < 3; ++c)
-      for (int r = 0; r < 3; ++r) m[c][r] = rt[c][r];
-    m[3] = glm::dvec4(t, 1.0);
-    v.eye_from_nose = m;
-    v.viewer_from_world = geometry::inverse(space, head);
+  switch (settings.projection) {
+    case Projection::tourist: {
+      const double c_near = projective_depth(space, settings.near_m / space.radius_m);
+      // The far limit of w/(−z): E3 0, S3 −c_near (distance π − ε), H3 1.
+      const double c_far = space.kind == SpaceKind::E3 ? 0.0
+                           : space.kind == SpaceKind::S3 ? -c_near
+                                                         : 1.0;
+      v.proj_front = projection_matrix(eye.fov, c_near, c_far, 0.0, front_hi);
+      v.proj_back = projection_matrix(eye.fov, c_near, c_far, 0.5, 1.0);
+      const Isometry eye_pose = head * geometry::translation_m(space, eye.position_m) *
+                                geometry::rotation(eye.rotation);
+      v.viewer_from_world = geometry::inverse(space, eye_pose);
+      break;
+    }
+    case Projection::native: {
+      // Euclidean projection of (e, 1 m): w/(−z) = 1/distance, far limit 0.
+      const double c_near = 1.0 / settings.near_m;
+      v.proj_front = projection_matrix(eye.fov, c_near, 0.0, 0.0, front_hi);
+      v.proj_back = projection_matrix(eye.fov, c_near, 0.0, 0.5, 1.0);
+      const glm::dmat3 rt = glm::transpose(eye.rotation);
+      const glm::dvec3 t = -(rt * eye.position_m);
+      glm::dmat4 m(1.0);
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) m[c][r] = rt[c][r];
+      m[3] = glm::dvec4(t, 1.0);
+      v.eye_from_nose = m;
+      v.viewer_from_world = geometry::inverse(space, head);
+      break;
+    }
   }
   return v;
 }
 
 glm::dvec4 clip_position(const ViewConstants& view, Hemisphere hemi, const Point& p) {
   const glm::dmat4& proj = hemi == Hemisphere::back ? view.proj_back : view.proj_front;
-  if (view.projection == Projection::tourist)
-    return proj * (hemi == Hemisphere::back ? -p : p);
-  const geometry::Vec3 q = hemi == Hemisphere::back ? geometry::back_log_origin(view.space, p)
-                                                    : geometry::log_origin(view.space, p);
-  return proj * (view.eye_from_nose * glm::dvec4(q, 1.0));
+  switch (view.projection) {
+    case Projection::tourist: return proj * (hemi == Hemisphere::back ? -p : p);
+    case Projection::native: {
+      const geometry::Vec3 q = hemi == Hemisphere::back ? geometry::back_log_origin(view.space, p)
+                                                        : geometry::log_origin(view.space, p);
+      return proj * (view.eye_from_nose * glm::dvec4(q, 1.0));
+    }
+  }
+  std::abort();  // not a Projection: a broken contract
 }
 
 std::optional<glm::dvec2> to_pixels(const glm::dvec4& clip, double width_px, double height_px) {

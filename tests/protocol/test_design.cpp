@@ -93,8 +93,8 @@ TEST(Design, EveryCellAppearsRepetitionsTimesPerBlock) {
         EXPECT_EQ(std::string(curvlab::geometry::to_string(t.settings.space.kind)), l);
       }
       if (f == "view" && l == "monocular") {
-        EXPECT_EQ(t.settings.viewing.eyes, Eyes::dominant);
-        EXPECT_EQ(t.settings.viewing.projection, Projection::native);
+        EXPECT_EQ(t.settings.viewing.eyes, curvlab::renderer::EyeSelection::dominant);
+        EXPECT_EQ(t.settings.viewing.projection, curvlab::renderer::Projection::native);
       }
     }
     if (t.block.rfind("table-", 0) == 0) {
@@ -200,7 +200,8 @@ TEST(Design, AdjustmentStartsLieInTheirRangeAndVary) {
   EXPECT_EQ(starts.size(), d.trials.size());
   // Block settings fall back to the session's and override it where given.
   for (const auto& t : d.trials)
-    EXPECT_EQ(t.settings.tracking, t.block == "naive" ? Tracking::naive : Tracking::table_anchored);
+    EXPECT_EQ(t.settings.tracking, t.block == "naive" ? curvlab::geometry::TrackingAlgorithm::naive
+                                                      : curvlab::geometry::TrackingAlgorithm::table_anchored);
 }
 
 TEST(Design, BreaksAreMarkedAndCounted) {

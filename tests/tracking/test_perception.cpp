@@ -110,7 +110,7 @@ TEST(Tourist, PerceivedPointsAreAnAffineImageOfTheProjectiveChart) {
                          Vec3(0.7, 0.0, -0.3)}) {
       const Point q = exp_origin(space, v);
       const PerceivedPoint p =
-          perceive_point(space, Isometry::identity(), eyes_from_ipd(ipd), ViewMode::tourist, q);
+          perceive_point(space, Isometry::identity(), eyes_from_ipd(ipd), ViewPreset::tourist, q);
       const glm::dvec3 o = oracle_tourist(k, rho, ipd, q);
       EXPECT_LT(glm::length(p.position_m - o), 1e-9 * std::max(1.0, glm::length(o)))
           << to_string(k) << " v=(" << v.x << ',' << v.y << ',' << v.z << ")";
@@ -142,8 +142,8 @@ TEST(Stick, AGeodesicStickIsStraightForTheTouristAndBowedForTheNative) {
     const Space space{k, rho};
     BentStick stick;
     stick.length_m = length;
-    const StickPerception tourist = perceive_stick(space, stick, D, eyes_from_ipd(ipd), ViewMode::tourist);
-    const StickPerception native = perceive_stick(space, stick, D, eyes_from_ipd(ipd), ViewMode::native);
+    const StickPerception tourist = perceive_stick(space, stick, D, eyes_from_ipd(ipd), ViewPreset::tourist);
+    const StickPerception native = perceive_stick(space, stick, D, eyes_from_ipd(ipd), ViewPreset::native);
     const StickOracle o = oracle_stick(k, rho, length, D);
     // Zero up to the roundoff of triangulating nearly parallel rays (in S3 at
     // D = 1 m > ρπ/2 they even diverge and the stick is seen behind the eyes).
@@ -167,7 +167,7 @@ TEST(Stick, AGeodesicStickIsStraightForTheTouristAndBowedForTheNative) {
       EXPECT_NEAR(native.perceived_sagitta_m, 0.0, 1e-12);
     }
     // One eye shut: no disparity, nothing to see bowed.
-    EXPECT_EQ(perceive_stick(space, stick, D, eyes_from_ipd(ipd), ViewMode::monocular).perceived_sagitta_m, 0.0);
+    EXPECT_EQ(perceive_stick(space, stick, D, eyes_from_ipd(ipd), ViewPreset::monocular).perceived_sagitta_m, 0.0);
   }
 }
 
@@ -177,7 +177,7 @@ TEST(Stick, AStickBentInFlatSpaceIsSeenWithItsTrueBend) {
   stick.length_m = 1.0;
   for (double h : {-0.03, 0.02}) {
     stick.sagitta_m = h;
-    for (ViewMode m : {ViewMode::tourist, ViewMode::native})
+    for (ViewPreset m : {ViewPreset::tourist, ViewPreset::native})
       EXPECT_NEAR(perceive_stick(e3, stick, 1.2, eyes_from_ipd(0.063), m).perceived_sagitta_m, h, 1e-12);
   }
 }

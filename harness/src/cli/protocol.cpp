@@ -26,9 +26,9 @@ Json settings_json(const pr::Settings& s, const pr::Derived& d) {
   j["radius_m"] = d.radius_m;
   j["table_sides"] = d.table_sides;
   j["table_side_rad"] = d.side_rad;
-  j["tracking"] = std::string(pr::to_string(s.tracking));
-  j["projection"] = std::string(pr::to_string(s.viewing.projection));
-  j["eyes"] = std::string(pr::to_string(s.viewing.eyes));
+  j["tracking"] = std::string(geometry::to_string(s.tracking));
+  j["projection"] = std::string(renderer::to_string(s.viewing.projection));
+  j["eyes"] = std::string(renderer::to_string(s.viewing.eyes));
   j["back_hemisphere"] = s.viewing.back_hemisphere;
   j["ipd_m"] = s.viewing.ipd_m;
   j["timeline_ms"] = Json::array({s.timeline.fixation_ms, s.timeline.stimulus_ms,
@@ -36,7 +36,7 @@ Json settings_json(const pr::Settings& s, const pr::Derived& d) {
   j["stick_length_m"] = s.stimulus.stick_length_m;
   j["stick_sagitta_m"] = s.stimulus.stick_sagitta_m;
   j["stick_anchor"] = std::string(pr::to_string(s.stimulus.stick_anchor));
-  j["stick_marks"] = std::string(pr::to_string(s.stimulus.stick_marks));
+  j["stick_marks"] = std::string(renderer::to_string(s.stimulus.stick_marks));
   j["stick_distance_m"] = s.stimulus.stick_distance_m;
   j["table_sagitta_m"] = s.stimulus.table_sagitta_m;
   j["table_edge_m"] = s.table.edge_m;

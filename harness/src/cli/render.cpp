@@ -4,6 +4,7 @@
 // geometry and stick that `curvlab measure stick` reads).
 #include "common.hpp"
 
+#include "curvlab/geometry/enum_names.hpp"
 #include "curvlab/harness/measure/stick.hpp"
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/renderer.hpp"
@@ -46,10 +47,7 @@ struct RenderArgs {
 Json stick_record(const StimulusScene& stimulus, const FrameDescription& frame, const StimulusOptions& options) {
   harness::measure::StickScene s;
   s.space = stimulus.space;
-  const bool both = frame.settings.eyes == EyeSelection::both;
-  s.mode = !both ? geometry::ViewMode::monocular
-           : frame.settings.projection == Projection::tourist ? geometry::ViewMode::tourist
-                                                               : geometry::ViewMode::native;
+  s.preset = perceived_preset(frame.settings.projection, frame.settings.eyes);
   s.head = stimulus.head;
   s.rig = frame.rig;
   s.width_px = frame.width_px;
@@ -63,7 +61,7 @@ Json stick_record(const StimulusScene& stimulus, const FrameDescription& frame, 
 // The arguments parsed and range-checked, before anything is made.
 struct RenderRequest {
   geometry::SpaceKind kind;
-  ViewPreset preset;
+  geometry::ViewPreset preset;
   SceneKind scene;
   std::uint32_t width_px;
   std::uint32_t height_px;
@@ -73,9 +71,9 @@ struct RenderRequest {
 RenderRequest check_render_args(const RenderArgs& a) {
   const auto kind = geometry::parse_space_kind(a.space);
   if (!kind) throw UsageError("--space must be S3, E3 or H3, got '" + a.space + "'");
-  const auto preset = parse_view_preset(a.view);
+  const auto preset = geometry::parse_view_preset(a.view);
   if (!preset)
-    throw UsageError("--view must be tourist, native or monocular, got '" + a.view + "'");
+    throw UsageError("--view must be " + geometry::alternatives_text(geometry::kViewPresets) + ", got '" + a.view + "'");
   const auto scene_kind = parse_scene_kind(a.scene);
   if (!scene_kind)
     throw UsageError("--scene must be stick, table, billiards or tiling, got '" + a.scene + "'");
@@ -95,15 +93,14 @@ RenderRequest check_render_args(const RenderArgs& a) {
   return {*kind, *preset, *scene_kind, w, h, msaa};
 }
 
-ViewSettings view_settings(const RenderArgs& a, ViewPreset preset) {
+ViewSettings view_settings(const RenderArgs& a, geometry::ViewPreset preset) {
   ViewSettings settings = ViewSettings::preset(preset);
   settings.back_hemisphere = a.back_hemisphere == "on";
   if (!a.eyes.empty()) {
-    if (a.eyes == "both") settings.eyes = EyeSelection::both;
-    else if (a.eyes == "left") settings.eyes = EyeSelection::left;
-    else if (a.eyes == "right") settings.eyes = EyeSelection::right;
-    else if (a.eyes == "dominant") settings.eyes = EyeSelection::dominant;
-    else throw UsageError("--eyes must be both, left, right or dominant, got '" + a.eyes + "'");
+    const auto eyes = parse_eye_selection(a.eyes);
+    if (!eyes)
+      throw UsageError("--eyes must be " + geometry::alternatives_text(kEyeSelections) + ", got '" + a.eyes + "'");
+    settings.eyes = *eyes;
   }
   return settings;
 }
@@ -114,7 +111,9 @@ StimulusOptions stimulus_options(const RenderArgs& a) {
   options.eye_height_m = a.eye_height_m;
   options.stick_sagitta_m = a.bend_m;
   const auto marks = parse_stick_marks(a.stick_marks);
-  if (!marks) throw UsageError("--stick-marks must be none or rings, got '" + a.stick_marks + "'");
+  if (!marks)
+    throw UsageError("--stick-marks must be " + geometry::alternatives_text(kStickMarks) + ", got '" + a.stick_marks +
+                     "'");
   options.stick_marks = *marks;
   options.yaw_rad = a.yaw_deg * std::numbers::pi / 180.0;
   return options;
@@ -209,7 +208,7 @@ void add_render_commands(CLI::App& app) {
   cmd->add_option("--space", args->space, "S3, E3 or H3")->required();
   cmd->add_option_function<double>("--radius-m", [args](double r) { args->radius_m = r; },
                                    "radius ρ in metres (default: from the 0.9 m table edge)");
-  cmd->add_option("--view", args->view, "tourist, native or monocular")->required();
+  cmd->add_option("--view", args->view, geometry::alternatives_text(geometry::kViewPresets))->required();
   cmd->add_option("--scene", args->scene, "stick, table, billiards or tiling")->required();
   cmd->add_option("--eye-height-m", args->eye_height_m, "eye height above the floor (default 1.55)");
   cmd->add_option("--size", args->size, "per-eye image size WxH (default 1024x1024)");
@@ -220,7 +219,8 @@ void add_render_commands(CLI::App& app) {
   cmd->add_option("--ipd-m", args->ipd_m, "interpupillary distance (default 0.063)");
   cmd->add_option("--bend-m", args->bend_m, "cue-stick sagitta in metres (+ toward the viewer)");
   cmd->add_option("--msaa", args->msaa, "samples per pixel: 1, 2, 4 (default) or 8");
-  cmd->add_option("--stick-marks", args->stick_marks, "cue-stick marks: none or rings (for curvlab measure)");
+  cmd->add_option("--stick-marks", args->stick_marks,
+                  "cue-stick marks: " + geometry::alternatives_text(kStickMarks) + " (for curvlab measure)");
   cmd->add_flag("--software", args->software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   cmd->add_option("--out", args->out, "output directory")->required();
   cmd->add_flag("--json", args->json, "print the plan as JSON");

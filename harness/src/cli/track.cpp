@@ -3,6 +3,7 @@
 // run over them, and the binocular perception model's numbers.
 #include "common.hpp"
 
+#include "curvlab/geometry/enum_names.hpp"
 #include "curvlab/geometry/perception.hpp"
 #include "curvlab/geometry/table.hpp"
 #include "curvlab/geometry/tracking.hpp"
@@ -30,6 +31,19 @@ void require_positive(double value, const std::string& option, const std::string
 
 void require_finite(double value, const std::string& option) {
   if (!std::isfinite(value)) throw UsageError(option + " must be a finite number");
+}
+
+// The views `inspect stick` takes: those with two eyes (one eye sees no bow).
+std::vector<std::string_view> binocular_views() {
+  std::vector<std::string_view> out;
+  for (const ViewPreset preset : kViewPresets)
+    if (binocular(preset)) out.push_back(to_string(preset));
+  return out;
+}
+
+// Names as CLI11's IsMember takes them.
+std::vector<std::string> member_names(const std::vector<std::string_view>& names) {
+  return {names.begin(), names.end()};
 }
 
 // ---- curvlab trajectory -------------------------------------------------
@@ -170,8 +184,10 @@ void run_track(const TrackArgs& a, bool radius_given, bool edge_given) {
   const auto& file = parsed.value();
   const TableShape table = resolve_table(a, radius_given, edge_given, file.table);
   const Space space{a.kind, table.radius_m};
-  const auto algorithm = *parse_tracking_algorithm(a.algorithm);
-  auto tracker = make_tracker(algorithm, space, table, file.table);
+  const auto algorithm = parse_tracking_algorithm(a.algorithm);
+  if (!algorithm)
+    throw UsageError("--algorithm must be " + alternatives_text(kTrackingAlgorithms) + ", got '" + a.algorithm + "'");
+  auto tracker = make_tracker(*algorithm, space, table, file.table);
 
   std::ofstream csv;
   if (!a.out.empty()) {
@@ -206,7 +222,7 @@ void run_track(const TrackArgs& a, bool radius_given, bool edge_given) {
   doc["radius_m"] = table.radius_m;
   doc["sides"] = table.sides;
   doc["virtual_edge_m"] = table.edge_m;
-  doc["algorithm"] = std::string(to_string(algorithm));
+  doc["algorithm"] = std::string(to_string(*algorithm));
   doc["frames"] = file.samples.size();
   doc["physical_edge"] = st.physical_edge;
   doc["virtual_edge"] = st.virtual_edge;
@@ -285,8 +301,9 @@ void run_stick(const StickArgs& a) {
   BentStick stick;
   stick.length_m = a.length_m;
   stick.sagitta_m = a.bend_m;
-  const StickPerception p =
-      perceive_stick(space, stick, a.distance_m, eyes_from_ipd(a.ipd_m), *parse_view_mode(a.view));
+  const auto view = parse_view_preset(a.view);
+  if (!view) throw UsageError("--view must be " + alternatives_text(binocular_views()) + ", got '" + a.view + "'");
+  const StickPerception p = perceive_stick(space, stick, a.distance_m, eyes_from_ipd(a.ipd_m), *view);
   Json doc;
   doc["space"] = std::string(to_string(a.kind));
   doc["radius_m"] = a.radius_m;
@@ -344,9 +361,9 @@ void add_track_commands(CLI::App& app) {
     radius->excludes(edge);
     cmd->add_option("--sides", args->sides, "virtual table sides (S3 3, E3 4, H3 ≥ 5; default per space)")
         ->check(CLI::Range(3, 1000));
-    cmd->add_option("--algorithm", args->algorithm, "naive, head-anchored or table-anchored")
+    cmd->add_option("--algorithm", args->algorithm, alternatives_text(kTrackingAlgorithms))
         ->required()
-        ->check(CLI::IsMember({"naive", "head-anchored", "table-anchored"}));
+        ->check(CLI::IsMember(member_names(names_of(kTrackingAlgorithms))));
     cmd->add_flag("--json", args->json, "print JSON");
     cmd->add_option("--out", args->out, "per-frame CSV of virtual poses and state");
     cmd->callback([args, radius, edge] { run_track(*args, radius->count() > 0, edge->count() > 0); });
@@ -372,9 +389,9 @@ void add_track_commands(CLI::App& app) {
     cmd->add_option("--length-m", args->length_m, "stick length")->required();
     cmd->add_option("--distance-m", args->distance_m, "geodesic distance of its midpoint")->required();
     cmd->add_option("--ipd-m", args->ipd_m, "interpupillary distance (default 0.063)");
-    cmd->add_option("--view", args->view, "tourist or native")
+    cmd->add_option("--view", args->view, alternatives_text(binocular_views()))
         ->required()
-        ->check(CLI::IsMember({"tourist", "native"}));
+        ->check(CLI::IsMember(member_names(binocular_views())));
     cmd->add_option("--bend-m", args->bend_m, "signed bend (sagitta), positive toward the viewer");
     cmd->add_flag("--json", args->json, "print JSON");
     cmd->callback([args] { run_stick(*args); });

@@ -32,12 +32,6 @@ DataError corrupt(Database& db, const std::string& what) {
   return DataError{Kind::corrupt, db.path() + ": " + what};
 }
 
-std::optional<Backend> parse_backend(const std::string& s) {
-  for (auto v : {Backend::headless, Backend::desktop, Backend::xr})
-    if (s == to_string(v)) return v;
-  return std::nullopt;
-}
-
 DominantEye parse_eye(const std::string& s) {
   if (s == "left") return DominantEye::left;
   if (s == "right") return DominantEye::right;

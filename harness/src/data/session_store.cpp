@@ -51,6 +51,12 @@ const char* to_string(TrialStatus status) {
   return "pending";
 }
 
+std::optional<Backend> parse_backend(std::string_view text) {
+  for (auto v : {Backend::headless, Backend::desktop, Backend::xr})
+    if (text == to_string(v)) return v;
+  return std::nullopt;
+}
+
 std::optional<SessionStatus> parse_session_status(std::string_view text) {
   for (auto v : {SessionStatus::running, SessionStatus::paused, SessionStatus::completed, SessionStatus::aborted,
                  SessionStatus::interrupted})

@@ -2,6 +2,8 @@
 // model's value for the same scene, and the JSON records.
 #include "curvlab/harness/measure/stick.hpp"
 
+#include "curvlab/geometry/enum_names.hpp"
+
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
@@ -161,7 +163,7 @@ std::array<Vec3, 3> model_points(const StickScene& scene) {
   const geometry::EyeOffsets eyes{scene.rig.eyes[0].position_m, scene.rig.eyes[1].position_m};
   const auto seen = [&](double u) {
     const auto q = scene.stick.centre_point(scene.space, scene.stick_pose, u);
-    return geometry::perceive_point(scene.space, scene.head, eyes, scene.mode, q).position_m;
+    return geometry::perceive_point(scene.space, scene.head, eyes, scene.preset, q).position_m;
   };
   const double half = scene.stick.length_m / 2.0;
   return {seen(-half), seen(0.0), seen(half)};
@@ -216,10 +218,10 @@ double depth_to_width(const StickScene& scene, double perceived_m) {
   switch (scene.space.kind) {
     case geometry::SpaceKind::E3: return 1.0;
     case geometry::SpaceKind::H3:
-      if (scene.mode == geometry::ViewMode::tourist) return x < 1.0 ? std::sqrt(1.0 - x * x) : 1.0;
+      if (geometry::true_optics(scene.preset)) return x < 1.0 ? std::sqrt(1.0 - x * x) : 1.0;
       return x > 0.0 ? std::sinh(x) / x : 1.0;
     case geometry::SpaceKind::S3:
-      if (scene.mode == geometry::ViewMode::tourist) return x > 0.0 ? std::sqrt(1.0 + x * x) : 1.0;
+      if (geometry::true_optics(scene.preset)) return x > 0.0 ? std::sqrt(1.0 + x * x) : 1.0;
       return x > 0.0 && x < std::numbers::pi ? std::sin(x) / x : 1.0;
   }
   return 1.0;
@@ -257,7 +259,7 @@ Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const rend
                std::to_string(right.width) + "x" + std::to_string(right.height) + "; the recorded eye geometry is " +
                std::to_string(scene.width_px) + "x" + std::to_string(scene.height_px));
   StickEstimate e;
-  if (scene.mode != geometry::ViewMode::monocular) {  // one eye: no disparity, 0
+  if (geometry::binocular(scene.preset)) {  // one eye: no disparity, 0
     const auto p = model_points(scene);
     e.model_sagitta_m = bow_toward_viewer(p[0], p[1], p[2]);
     e.model_bend_m = bend_in_plane(p[0], p[1], p[2]);
@@ -285,7 +287,7 @@ nlohmann::ordered_json scene_json(const StickScene& s) {
   nlohmann::ordered_json j;
   j["space"] = std::string(geometry::to_string(s.space.kind));
   j["radius_m"] = s.space.radius_m;
-  j["view_mode"] = std::string(geometry::to_string(s.mode));
+  j["view_mode"] = std::string(geometry::to_string(s.preset));
   j["head"] = matrix_json(s.head.m);
   j["width_px"] = s.width_px;
   j["height_px"] = s.height_px;
@@ -331,9 +333,9 @@ Result<StickScene> parse_scene_json(const nlohmann::json& j) {
     const auto kind = geometry::parse_space_kind(j.at("space").get<std::string>());
     if (!kind) return bad("measure.space: expected S3, E3 or H3");
     s.space = geometry::Space{*kind, j.at("radius_m").get<double>()};
-    const auto mode = geometry::parse_view_mode(j.at("view_mode").get<std::string>());
-    if (!mode) return bad("measure.view_mode: expected tourist, native or monocular");
-    s.mode = *mode;
+    const auto preset = geometry::parse_view_preset(j.at("view_mode").get<std::string>());
+    if (!preset) return bad("measure.view_mode: expected " + geometry::alternatives_text(geometry::kViewPresets));
+    s.preset = *preset;
     s.head = geometry::Isometry{matrix_from(j.at("head"))};
     s.width_px = j.at("width_px").get<std::uint32_t>();
     s.height_px = j.at("height_px").get<std::uint32_t>();
@@ -342,7 +344,7 @@ Result<StickScene> parse_scene_json(const nlohmann::json& j) {
     s.stick = geometry::BentStick{st.at("length_m").get<double>(), st.at("sagitta_m").get<double>(),
                                   st.at("radius_m").get<double>()};
     const auto marks = renderer::parse_stick_marks(st.at("marks").get<std::string>());
-    if (!marks) return bad("measure.stick.marks: expected none or rings");
+    if (!marks) return bad("measure.stick.marks: expected " + geometry::alternatives_text(renderer::kStickMarks));
     s.marks = *marks;
     s.stick_pose = geometry::Isometry{matrix_from(st.at("pose"))};
   } catch (const nlohmann::json::exception& e) {

@@ -1,33 +1,23 @@
 #include "curvlab/harness/protocol/settings.hpp"
 
+#include "curvlab/geometry/enum_names.hpp"
+#include "curvlab/geometry/perception.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 namespace curvlab::harness::protocol {
 
-std::string_view to_string(Tracking t) {
-  switch (t) {
-    case Tracking::naive: return "naive";
-    case Tracking::head_anchored: return "head-anchored";
-    case Tracking::table_anchored: return "table-anchored";
+std::string_view to_string(StickAnchor a) {
+  switch (a) {
+    case StickAnchor::head: return "head";
+    case StickAnchor::table: return "table";
   }
   return "?";
 }
-std::string_view to_string(Projection p) {
-  return p == Projection::tourist ? "tourist" : "native";
-}
-std::string_view to_string(Eyes e) {
-  switch (e) {
-    case Eyes::both: return "both";
-    case Eyes::left: return "left";
-    case Eyes::right: return "right";
-    case Eyes::dominant: return "dominant";
-  }
-  return "?";
-}
-std::string_view to_string(StickAnchor a) { return a == StickAnchor::head ? "head" : "table"; }
-std::string_view to_string(StickMarks m) { return m == StickMarks::rings ? "rings" : "none"; }
 std::string_view to_string(OnTrackingLoss o) {
   switch (o) {
     case OnTrackingLoss::repeat: return "repeat";
@@ -35,6 +25,12 @@ std::string_view to_string(OnTrackingLoss o) {
     case OnTrackingLoss::abort: return "abort";
   }
   return "?";
+}
+std::optional<StickAnchor> parse_stick_anchor(std::string_view text) {
+  return geometry::parse_name(kStickAnchors, text);
+}
+std::optional<OnTrackingLoss> parse_on_tracking_loss(std::string_view text) {
+  return geometry::parse_name(kOnTrackingLosses, text);
 }
 
 namespace {
@@ -52,20 +48,20 @@ std::vector<SettingInfo> make_registry() {
        "sides of the right-angled virtual table (S3 3, E3 4, H3 ≥ 5)"},
       {"space.e3_radius_m", K::number, 0.01, 1000.0, {},
        "the radius that defines Euclidean radians in E3"},
-      {"tracking.algorithm", K::enumeration, 0, 0, {"naive", "head-anchored", "table-anchored"},
+      {"tracking.algorithm", K::enumeration, 0, 0, geometry::names_of(geometry::kTrackingAlgorithms),
        "body-coherent tracking algorithm (paper, sections 4–5)"},
       {"tracking.loss_ms", K::integer, 10, 10000, {},
        "how long the head may be untracked before the trial counts tracking as lost"},
-      {"tracking.on_loss", K::enumeration, 0, 0, {"repeat", "flag", "abort"},
+      {"tracking.on_loss", K::enumeration, 0, 0, geometry::names_of(kOnTrackingLosses),
        "tracking lost: repeat the trial, flag it and go on, or mark it aborted"},
       {"tracking.max_attempts", K::integer, 0, 100, {},
        "attempts a trial is given before it is marked aborted (0: no limit)"},
-      {"viewing.preset", K::enumeration, 0, 0, {"tourist", "native", "monocular"},
+      {"viewing.preset", K::enumeration, 0, 0, geometry::names_of(geometry::kViewPresets),
        "sets projection and eyes: tourist = tourist/both, native = native/both, "
        "monocular = native/dominant"},
-      {"viewing.projection", K::enumeration, 0, 0, {"tourist", "native"},
+      {"viewing.projection", K::enumeration, 0, 0, geometry::names_of(renderer::kProjections),
        "tourist (true optics) or native (azimuthal-equidistant) projection"},
-      {"viewing.eyes", K::enumeration, 0, 0, {"both", "left", "right", "dominant"},
+      {"viewing.eyes", K::enumeration, 0, 0, geometry::names_of(renderer::kEyeSelections),
        "which eyes see the scene; the other shows the background"},
       {"viewing.back_hemisphere", K::boolean, 0, 0, {}, "S3: draw the antipodal images"},
       {"viewing.ipd_m", K::number, 0.045, 0.085, {},
@@ -82,7 +78,7 @@ std::vector<SettingInfo> make_registry() {
       {"stimulus.stick_radius_m", K::number, 0.001, 0.1, {}, "cue stick radius"},
       {"stimulus.stick_sagitta_m", K::number, -1.0, 1.0, {},
        "signed bend of the stick at its middle; + bows toward the viewer"},
-      {"stimulus.stick_anchor", K::enumeration, 0, 0, {"head", "table"},
+      {"stimulus.stick_anchor", K::enumeration, 0, 0, geometry::names_of(kStickAnchors),
        "the stick's pose is relative to the head or to the table"},
       {"stimulus.stick_distance_m", K::number, 0.0, 20.0, {},
        "distance from the eyes (head anchor, at least 0.1) or from the table centre toward "
@@ -91,7 +87,7 @@ std::vector<SettingInfo> make_registry() {
        "height relative to the eyes (head) or to the table top (table)"},
       {"stimulus.stick_yaw_deg", K::number, -180.0, 180.0, {},
        "rotation about the vertical; 0 lies across the line of sight"},
-      {"stimulus.stick_marks", K::enumeration, 0, 0, {"none", "rings"},
+      {"stimulus.stick_marks", K::enumeration, 0, 0, geometry::names_of(renderer::kStickMarks),
        "marks along the stick: none, or light rings at 0.1, 0.3, 0.5, 0.7 and 0.9 of its length"},
       {"stimulus.show_stick", K::boolean, 0, 0, {}, "draw the cue stick"},
       {"stimulus.show_table", K::boolean, 0, 0, {}, "draw the billiards table"},
@@ -177,9 +173,22 @@ std::string value_label(const SettingValue& v) {
   return std::get<std::string>(v);
 }
 
-// What check_setting found wrong: the protocol's to fix (bad_input).
 namespace {
+
+// What check_setting found wrong: the protocol's to fix (bad_input).
 Error setting_problem(std::string message) { return {Error::Kind::bad_input, std::move(message)}; }
+
+// apply_setting is given only values check_setting accepted, so a name that
+// does not parse there is a broken contract: it names the value and the
+// choices, and stops.
+template <class E>
+E checked(std::optional<E> parsed, const SettingInfo& info, const std::string& text) {
+  if (parsed) return *parsed;
+  std::fprintf(stderr, "curvlab: %s = \"%s\" was applied unchecked: expected one of %s\n",
+               std::string(info.path).c_str(), text.c_str(), choices_text(info).c_str());
+  std::abort();
+}
+
 }  // namespace
 
 Result<Done> check_setting(const SettingInfo& info, const SettingValue& value) {
@@ -229,7 +238,7 @@ void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& val
   const bool flag = std::holds_alternative<bool>(value) && std::get<bool>(value);
   const std::string text = std::holds_alternative<std::string>(value) ? std::get<std::string>(value) : "";
   if (p == "space.kind") {
-    s.space.kind = geometry::parse_space_kind(text).value_or(geometry::SpaceKind::E3);
+    s.space.kind = checked(geometry::parse_space_kind(text), info, text);
   } else if (p == "space.radius_m") {
     if (text == "from_table") s.space.radius_m.reset();
     else s.space.radius_m = num;
@@ -238,27 +247,21 @@ void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& val
   } else if (p == "space.e3_radius_m") {
     s.space.e3_radius_m = num;
   } else if (p == "tracking.algorithm") {
-    s.tracking = text == "naive" ? Tracking::naive
-                 : text == "head-anchored" ? Tracking::head_anchored
-                                           : Tracking::table_anchored;
+    s.tracking = checked(geometry::parse_tracking_algorithm(text), info, text);
   } else if (p == "tracking.loss_ms") {
     s.tracking_loss.loss_ms = integer;
   } else if (p == "tracking.on_loss") {
-    s.tracking_loss.on_loss = text == "flag"    ? OnTrackingLoss::flag
-                              : text == "abort" ? OnTrackingLoss::abort
-                                                : OnTrackingLoss::repeat;
+    s.tracking_loss.on_loss = checked(parse_on_tracking_loss(text), info, text);
   } else if (p == "tracking.max_attempts") {
     s.tracking_loss.max_attempts = integer;
   } else if (p == "viewing.preset") {
-    s.viewing.projection = text == "tourist" ? Projection::tourist : Projection::native;
-    s.viewing.eyes = text == "monocular" ? Eyes::dominant : Eyes::both;
+    const auto viewing = renderer::preset_viewing(checked(geometry::parse_view_preset(text), info, text));
+    s.viewing.projection = viewing.projection;
+    s.viewing.eyes = viewing.eyes;
   } else if (p == "viewing.projection") {
-    s.viewing.projection = text == "tourist" ? Projection::tourist : Projection::native;
+    s.viewing.projection = checked(renderer::parse_projection(text), info, text);
   } else if (p == "viewing.eyes") {
-    s.viewing.eyes = text == "both" ? Eyes::both
-                     : text == "left" ? Eyes::left
-                     : text == "right" ? Eyes::right
-                                       : Eyes::dominant;
+    s.viewing.eyes = checked(renderer::parse_eye_selection(text), info, text);
   } else if (p == "viewing.back_hemisphere") {
     s.viewing.back_hemisphere = flag;
   } else if (p == "viewing.ipd_m") {
@@ -276,9 +279,9 @@ void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& val
   } else if (p == "timeline.stimulus_during_response") {
     s.timeline.stimulus_during_response = flag;
   } else if (p == "stimulus.stick_anchor") {
-    s.stimulus.stick_anchor = text == "table" ? StickAnchor::table : StickAnchor::head;
+    s.stimulus.stick_anchor = checked(parse_stick_anchor(text), info, text);
   } else if (p == "stimulus.stick_marks") {
-    s.stimulus.stick_marks = text == "rings" ? StickMarks::rings : StickMarks::none;
+    s.stimulus.stick_marks = checked(renderer::parse_stick_marks(text), info, text);
   } else if (p == "stimulus.show_stick") {
     s.stimulus.show_stick = flag;
   } else if (p == "stimulus.show_table") {

@@ -20,8 +20,9 @@ namespace {
 
 measure::StickScene stick_scene(const World& world, const protocol::Settings& s, const Placement& placement,
                                 const OnsetView& view) {
-  return {world.space,    view_mode(s),    view.head,         view.rig, view.width_px,
-          view.height_px, placement.stick, placement.stick_pose, stick_marks(s)};
+  return {world.space,    perceived_preset(s), view.head,           view.rig,
+          view.width_px,  view.height_px,      placement.stick,     placement.stick_pose,
+          s.stimulus.stick_marks};
 }
 
 }  // namespace
@@ -42,7 +43,7 @@ Result<std::optional<double>> OnsetReader::read(const World& world, const protoc
       target_->image(renderer::Eye::left).height != static_cast<int>(view.height_px))
     target_.emplace(ctx_, view.width_px, view.height_px);
   renderer::Scene scene;
-  scene.add(renderer::stick_object(world.space, placement.stick, placement.stick_pose, stick_marks(s)));
+  scene.add(renderer::stick_object(world.space, placement.stick, placement.stick_pose, s.stimulus.stick_marks));
   renderer::FrameDescription frame{world.space, view.settings, view.head, view.rig, view.width_px, view.height_px};
   renderer_.render(scene, frame, *target_);
   auto estimate = measure::measure_stick(target_->image(renderer::Eye::left),
@@ -55,8 +56,8 @@ Result<std::optional<double>> OnsetReader::read(const World& world, const protoc
 Result<Done> check_image_observer(const protocol::Protocol& p) {
   const protocol::Design design = protocol::expand_design(p, 1);
   for (const auto& t : design.trials)
-    if (judged(t.settings) == Judged::stick && view_mode(t.settings) != geometry::ViewMode::monocular &&
-        t.settings.stimulus.stick_marks != protocol::StickMarks::rings)
+    if (judged(t.settings) == Judged::stick && geometry::binocular(perceived_preset(t.settings)) &&
+        t.settings.stimulus.stick_marks != renderer::StickMarks::rings)
       return Error{Error::Kind::usage,
                    "--observer image reads the stick's rings from the images, but block '" + t.block +
                        "' shows a plain stick: set stimulus.stick_marks = \"rings\" (docs/protocols.md)"};

@@ -55,12 +55,12 @@ std::vector<std::pair<std::string, std::string>> settings_rows(const Settings& s
       {"space", std::string(geometry::to_string(s.space.kind))},
       {"radius", fixed(d.radius_m, 4) + " m" + (s.space.radius_m ? "" : " (from the table)")},
       {"virtual table", std::to_string(d.table_sides) + " sides of " + fixed(d.side_rad, 4) + " rad"},
-      {"view", std::string(protocol::to_string(s.viewing.projection)) + ", " +
-                   std::string(protocol::to_string(s.viewing.eyes)) + " eye" +
-                   (s.viewing.eyes == protocol::Eyes::both ? "s" : "")},
+      {"view", std::string(renderer::to_string(s.viewing.projection)) + ", " +
+                   std::string(renderer::to_string(s.viewing.eyes)) + " eye" +
+                   (s.viewing.eyes == renderer::EyeSelection::both ? "s" : "")},
       {"back hemisphere", yes(s.viewing.back_hemisphere) + (s.space.kind == geometry::SpaceKind::S3 ? "" : " (drawn in S3 only)")},
       {"IPD", num(s.viewing.ipd_m * 1000.0) + " mm"},
-      {"tracking", std::string(protocol::to_string(s.tracking))},
+      {"tracking", std::string(geometry::to_string(s.tracking))},
       {"stick", st.show_stick ? num(st.stick_length_m) + " m long, " + num(st.stick_radius_m * 1000.0) +
                                     " mm radius, sagitta " + num(st.stick_sagitta_m * 1000.0) + " mm"
                               : "hidden"},

@@ -16,9 +16,15 @@ namespace curvlab::harness::runner {
 
 namespace {
 
-ObserverParams observer_params(const data::StoredObserver& o) {
+// A model this version does not know was written by another program or
+// version, or damaged: the session cannot go on as it began.
+Result<ObserverParams> observer_params(const data::StoredObserver& o) {
+  const auto model = parse_observer_model(o.model);
+  if (!model)
+    return Error{Error::Kind::corrupt,
+                 "its observer model is '" + o.model + "', not perception, physical, random or image"};
   ObserverParams p;
-  p.model = parse_observer_model(o.model).value_or(ObserverModel::perception);
+  p.model = *model;
   p.bias_m = o.bias_m;
   p.slope_per_m = o.slope_per_m;
   p.lapse = o.lapse;
@@ -110,7 +116,13 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
     auto fit = parse_calibration_json(*prov->table_calibration_json);
     if (fit) out.calibration = *fit;
   }
-  if (prov->observer) out.observer = observer_params(*prov->observer);
+  if (prov->observer) {
+    auto observer = observer_params(*prov->observer);
+    if (!observer)
+      return Error{observer.error().kind,
+                   db_path + ": session " + std::to_string(session_id) + ": " + observer.error().message};
+    out.observer = *observer;
+  }
   out.last_t_ns = prov->last_t_ns;
   return out;
 }

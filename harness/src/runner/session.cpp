@@ -10,6 +10,9 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/version.hpp"
 
+#include <cstdio>
+#include <cstdlib>
+
 namespace curvlab::harness::runner {
 
 std::optional<FrameDrawing> parse_frame_drawing(std::string_view text) {
@@ -21,10 +24,12 @@ std::optional<FrameDrawing> parse_frame_drawing(std::string_view text) {
 
 namespace {
 
+// Every backend names itself "headless", "desktop" or "xr" (BackendInfo):
+// another name is a broken contract.
 data::Backend backend_kind(const std::string& name) {
-  if (name == "desktop") return data::Backend::desktop;
-  if (name == "xr") return data::Backend::xr;
-  return data::Backend::headless;
+  if (const auto kind = data::parse_backend(name)) return *kind;
+  std::fprintf(stderr, "curvlab: a backend named '%s', not headless, desktop or xr\n", name.c_str());
+  std::abort();
 }
 
 Result<Done> check_options(const protocol::Protocol& p, const RunOptions& options, const protocol::Design& design) {

@@ -244,9 +244,8 @@ class SessionLoop::Impl {
     auto made = make_world(s);
     if (!made) throw Stop{{made.error().kind, "impossible table: " + made.error().message}};
     World world = std::move(made).value();
-    const auto algorithm = tracking_algorithm(s);
-    if (!tracker_ || !world_ || !world_->same_as(world) || tracker_->algorithm() != algorithm) {
-      tracker_ = geometry::make_tracker(algorithm, world.space, world.table, physical_table(s, options_.calibration));
+    if (!tracker_ || !world_ || !world_->same_as(world) || tracker_->algorithm() != s.tracking) {
+      tracker_ = geometry::make_tracker(s.tracking, world.space, world.table, physical_table(s, options_.calibration));
       if (tracker_ && last_lab_) tracker_->update(*last_lab_);
     }
     world_ = world;

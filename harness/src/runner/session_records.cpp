@@ -59,8 +59,8 @@ std::string conditions_json(const Protocol& p, const PlannedTrial& t) {
   };
   add("space", std::string(geometry::to_string(s.space.kind)));
   add("view", view_name(s));
-  add("projection", std::string(protocol::to_string(s.viewing.projection)));
-  add("eyes", std::string(protocol::to_string(s.viewing.eyes)));
+  add("projection", std::string(renderer::to_string(s.viewing.projection)));
+  add("eyes", std::string(renderer::to_string(s.viewing.eyes)));
   add("judged", judged(s) == Judged::stick ? "stick" : "table");
   if (t.staircase >= 0)
     add("staircase", block_of(p, t.block).judgement.staircases.at(static_cast<std::size_t>(t.staircase)).name);
@@ -76,12 +76,12 @@ std::string stimulus_json(const PlannedTrial& t) {
   j["stick_distance_m"] = s.stimulus.stick_distance_m;
   j["stick_height_m"] = s.stimulus.stick_height_m;
   j["stick_anchor"] = std::string(protocol::to_string(s.stimulus.stick_anchor));
-  j["stick_marks"] = std::string(protocol::to_string(s.stimulus.stick_marks));
+  j["stick_marks"] = std::string(renderer::to_string(s.stimulus.stick_marks));
   j["show_stick"] = s.stimulus.show_stick;
   j["show_table"] = s.stimulus.show_table;
   j["radius_m"] = t.derived.radius_m;
   j["table_sides"] = t.derived.table_sides;
-  j["tracking"] = std::string(protocol::to_string(s.tracking));
+  j["tracking"] = std::string(geometry::to_string(s.tracking));
   j["ipd_m"] = s.viewing.ipd_m;
   if (t.adjustment_start) j["adjustment_start"] = *t.adjustment_start;
   return j.dump();

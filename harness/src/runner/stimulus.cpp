@@ -49,15 +49,6 @@ geometry::PhysicalTable physical_table(const Settings& s,
   return t;
 }
 
-geometry::TrackingAlgorithm tracking_algorithm(const Settings& s) {
-  switch (s.tracking) {
-    case protocol::Tracking::naive: return geometry::TrackingAlgorithm::naive;
-    case protocol::Tracking::head_anchored: return geometry::TrackingAlgorithm::head_anchored;
-    case protocol::Tracking::table_anchored: return geometry::TrackingAlgorithm::table_anchored;
-  }
-  return geometry::TrackingAlgorithm::table_anchored;
-}
-
 std::string calibration_json(const geometry::PhysicalTableFit& fit) {
   nlohmann::ordered_json j;
   j["centre_x_m"] = fit.centre_m.x;
@@ -125,36 +116,34 @@ Placement place_stimulus(const World& world, const Settings& s, const Isometry& 
 }
 
 Isometry standing_head(const World& world, const Settings& s) {
-  auto tracker = geometry::make_tracker(tracking_algorithm(s), world.space, world.table,
+  auto tracker = geometry::make_tracker(s.tracking, world.space, world.table,
                                         physical_table(s, std::nullopt));
   return tracker->update(standing_pose(nominal_calibration(s), HeadlessOptions{}.eye_height_m, 0)).pose[0];
 }
 
-geometry::ViewMode view_mode(const Settings& s) {
-  if (s.viewing.eyes != protocol::Eyes::both) return geometry::ViewMode::monocular;
-  return s.viewing.projection == protocol::Projection::native ? geometry::ViewMode::native
-                                                              : geometry::ViewMode::tourist;
+geometry::ViewPreset perceived_preset(const Settings& s) {
+  return renderer::perceived_preset(s.viewing.projection, s.viewing.eyes);
 }
 
 renderer::ViewSettings view_settings(const Settings& s, renderer::Eye dominant) {
   renderer::ViewSettings v;
-  v.projection = s.viewing.projection == protocol::Projection::native ? renderer::Projection::native
-                                                                      : renderer::Projection::tourist;
-  switch (s.viewing.eyes) {
-    case protocol::Eyes::both: v.eyes = renderer::EyeSelection::both; break;
-    case protocol::Eyes::left: v.eyes = renderer::EyeSelection::left; break;
-    case protocol::Eyes::right: v.eyes = renderer::EyeSelection::right; break;
-    case protocol::Eyes::dominant: v.eyes = renderer::EyeSelection::dominant; break;
-  }
+  v.projection = s.viewing.projection;
+  v.eyes = s.viewing.eyes;
   v.dominant_eye = dominant;
   v.back_hemisphere = s.viewing.back_hemisphere;
   return v;
 }
 
 std::string view_name(const Settings& s) {
-  const bool both = s.viewing.eyes == protocol::Eyes::both;
-  if (s.viewing.projection == protocol::Projection::tourist) return both ? "tourist" : "custom";
-  return both ? "native" : "monocular";
+  const geometry::ViewPreset preset = perceived_preset(s);
+  switch (s.viewing.projection) {
+    case renderer::Projection::tourist:
+      // One tourist eye is perceived as monocular, but no preset names it.
+      if (preset == geometry::ViewPreset::monocular) return "custom";
+      break;
+    case renderer::Projection::native: break;
+  }
+  return std::string(geometry::to_string(preset));
 }
 
 namespace {
@@ -183,12 +172,12 @@ std::vector<Point> judged_points(const World& world, const Settings& s, const Pl
 
 double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
                            const Isometry& head) {
-  const auto mode = view_mode(s);
-  if (mode == geometry::ViewMode::monocular) return 0.0;
+  const geometry::ViewPreset preset = perceived_preset(s);
+  if (!geometry::binocular(preset)) return 0.0;
   const auto& space = world.space;
   const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
   auto seen = [&](const Point& q) {
-    return geometry::perceive_point(space, head, eyes, mode, q).position_m;
+    return geometry::perceive_point(space, head, eyes, preset, q).position_m;
   };
   std::vector<Vec3> p;
   for (const Point& q : judged_points(world, s, placement)) p.push_back(seen(q));
@@ -216,18 +205,13 @@ SightLineCount diverging_sight_lines(const World& world, const Settings& s, cons
                                      const Isometry& head) {
   const std::vector<Point> points = judged_points(world, s, placement);
   SightLineCount count{0, static_cast<int>(points.size())};
-  if (view_mode(s) != geometry::ViewMode::tourist) return count;
+  if (perceived_preset(s) != geometry::ViewPreset::tourist) return count;
   const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
   for (const Point& q : points) {
-    const auto seen = geometry::perceive_point(world.space, head, eyes, geometry::ViewMode::tourist, q);
+    const auto seen = geometry::perceive_point(world.space, head, eyes, geometry::ViewPreset::tourist, q);
     count.diverging += seen.diverging || seen.parallel ? 1 : 0;
   }
   return count;
-}
-
-renderer::StickMarks stick_marks(const Settings& s) {
-  return s.stimulus.stick_marks == protocol::StickMarks::rings ? renderer::StickMarks::rings
-                                                               : renderer::StickMarks::none;
 }
 
 double physical_sagitta_m(const Settings& s) {
@@ -265,7 +249,7 @@ Result<TrialScene> TrialScene::build(const World& world, const Settings& s, cons
   }
   if (st.show_stick) {
     const geometry::BentStick stick{st.stick_length_m, st.stick_sagitta_m, st.stick_radius_m};
-    t.stick_ = t.scene_.add(hidden(renderer::stick_object(space, stick, Isometry::identity(), stick_marks(s))));
+    t.stick_ = t.scene_.add(hidden(renderer::stick_object(space, stick, Isometry::identity(), st.stick_marks)));
     t.has_stick_ = true;
     t.stick_sagitta_m_ = st.stick_sagitta_m;
     t.stick_length_m_ = st.stick_length_m;
@@ -295,7 +279,7 @@ void TrialScene::set_stimulus(const Settings& s, const Placement& placement) {
   const auto& st = s.stimulus;
   if (has_stick_) {
     if (st.stick_sagitta_m != stick_sagitta_m_ || st.stick_length_m != stick_length_m_) {
-      auto o = renderer::stick_object(space, placement.stick, placement.stick_pose, stick_marks(s));
+      auto o = renderer::stick_object(space, placement.stick, placement.stick_pose, st.stick_marks);
       scene_.replace_mesh(stick_, std::move(o.build), std::move(o.info));
       stick_sagitta_m_ = st.stick_sagitta_m;
       stick_length_m_ = st.stick_length_m;

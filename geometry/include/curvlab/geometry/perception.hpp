@@ -11,6 +11,8 @@
 //             azimuthal-equidistant map; the eyes are Euclidean offsets
 //             there, so triangulation returns that image exactly;
 //   monocular one eye, no disparity: depth comes from no binocular cue.
+// These three are the view presets (DESIGN.md §4); the renderer names the
+// projection and eyes each one stands for (renderer/vocabulary.hpp).
 // Everything is expressed in the nose's frame: x right, y up, −z forward.
 #pragma once
 
@@ -22,9 +24,16 @@
 
 namespace curvlab::geometry {
 
-enum class ViewMode { tourist, native, monocular };
-std::string_view to_string(ViewMode mode);
-std::optional<ViewMode> parse_view_mode(std::string_view text);
+enum class ViewPreset { tourist, native, monocular };
+// Every preset, in the order protocols and options list them.
+inline constexpr std::array kViewPresets{ViewPreset::tourist, ViewPreset::native, ViewPreset::monocular};
+std::string_view to_string(ViewPreset preset);
+std::optional<ViewPreset> parse_view_preset(std::string_view text);
+// Whether each eye looks along true geodesics (tourist) rather than at the
+// nose's azimuthal-equidistant image (native, and monocular, one native eye).
+bool true_optics(ViewPreset preset);
+// Whether two eyes see the scene, so that there is disparity (not monocular).
+bool binocular(ViewPreset preset);
 
 // Eye positions relative to the nose, in metres (from the runtime's views or
 // from an IPD). Eye rotations relative to the head are taken as identity.
@@ -56,7 +65,7 @@ struct SightLine {
   Vec3 direction{0.0, 0.0, -1.0};
 };
 std::array<SightLine, 2> sight_lines(const Space& space, const Isometry& nose,
-                                     const EyeOffsets& eyes, ViewMode mode, const Point& q);
+                                     const EyeOffsets& eyes, ViewPreset preset, const Point& q);
 
 // Where two (infinite) lines o1 + s d1 and o2 + u d2 come closest: the
 // midpoint of their common perpendicular and its feet's parameters. For
@@ -70,7 +79,7 @@ struct LineMeeting {
 LineMeeting closest_approach(const SightLine& a, const SightLine& b);
 
 PerceivedPoint perceive_point(const Space& space, const Isometry& nose, const EyeOffsets& eyes,
-                              ViewMode mode, const Point& q);
+                              ViewPreset preset, const Point& q);
 
 // For a point straight ahead at geodesic distance d_m (symmetric eyes of
 // separation ipd_m): the vergence and the distance a Euclidean observer reads
@@ -104,7 +113,7 @@ struct StickPerception {
 double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b);
 
 StickPerception perceive_stick(const Space& space, const BentStick& stick, double distance_m,
-                               const EyeOffsets& eyes, ViewMode mode);
+                               const EyeOffsets& eyes, ViewPreset preset);
 
 // The stick's frame: the nose at the origin facing −z, the stick's chord the
 // x axis of the returned frame, +z toward the viewer.

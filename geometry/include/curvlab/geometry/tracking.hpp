@@ -120,6 +120,9 @@ struct PhysicalAnchor {
 PhysicalAnchor physical_anchor(const PhysicalTable& table, const Vec3& position_m);
 
 enum class TrackingAlgorithm { naive, head_anchored, table_anchored };
+// Every algorithm, in the order protocols and options list them.
+inline constexpr std::array kTrackingAlgorithms{TrackingAlgorithm::naive, TrackingAlgorithm::head_anchored,
+                                                TrackingAlgorithm::table_anchored};
 std::string_view to_string(TrackingAlgorithm algorithm);
 std::optional<TrackingAlgorithm> parse_tracking_algorithm(std::string_view text);
 

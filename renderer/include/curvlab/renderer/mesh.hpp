@@ -104,14 +104,12 @@ MeshData build_table(const Space& space, const geometry::TableShape& table, int 
 MeshInfo table_info(const Space& space, const geometry::TableShape& table,
                     const TableStyle& style = {});
 
-// Marks along the cue stick. `rings`: light bands centred at the fractions
-// kStickRingFractions of the length (−½ the butt end, +½ the tip), each
-// brightening the wood along a tent profile of half-width kStickRingHalfWidthM
-// so that the band's image position can be read to a fraction of a pixel
-// with or without anti-aliasing (a sharp-edged band quantizes to whole pixels).
-enum class StickMarks { none, rings };
-std::optional<StickMarks> parse_stick_marks(std::string_view text);
-std::string_view to_string(StickMarks marks);
+// Marks along the cue stick (StickMarks, vocabulary.hpp). `rings`: light
+// bands centred at the fractions kStickRingFractions of the length (−½ the
+// butt end, +½ the tip), each brightening the wood along a tent profile of
+// half-width kStickRingHalfWidthM so that the band's image position can be
+// read to a fraction of a pixel with or without anti-aliasing (a sharp-edged
+// band quantizes to whole pixels).
 inline constexpr std::array<double, 5> kStickRingFractions{-0.4, -0.2, 0.0, 0.2, 0.4};
 inline constexpr double kStickRingHalfWidthM = 0.012;
 inline constexpr double kStickButtFraction = 0.35;

@@ -7,32 +7,26 @@
 #pragma once
 
 #include "curvlab/geometry/isometry.hpp"
+#include "curvlab/renderer/vocabulary.hpp"
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec2.hpp>
 
 #include <array>
 #include <optional>
-#include <string_view>
 
 namespace curvlab::renderer {
 
 using geometry::Isometry;
 using geometry::Point;
 using geometry::Space;
+using geometry::ViewPreset;
 
-enum class Projection { tourist, native };
-enum class EyeSelection { both, left, right, dominant };
 enum class Eye { left = 0, right = 1 };
 enum class Hemisphere { front = 0, back = 1 };
-enum class ViewPreset { tourist, native, monocular };
-
-std::optional<ViewPreset> parse_view_preset(std::string_view text);
-std::string_view to_string(ViewPreset preset);
-std::string_view to_string(Projection projection);
 
 // Projection and eyes are separate settings; the presets are names for
-// common pairs (DESIGN.md §4: monocular = native, one eye).
+// common pairs (vocabulary.hpp, preset_viewing).
 struct ViewSettings {
   Projection projection = Projection::native;
   EyeSelection eyes = EyeSelection::both;

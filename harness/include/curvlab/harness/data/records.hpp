@@ -23,6 +23,7 @@ const char* to_string(DominantEye eye);
 const char* to_string(Backend backend);
 const char* to_string(SessionStatus status);
 const char* to_string(TrialStatus status);
+std::optional<Backend> parse_backend(std::string_view text);
 std::optional<SessionStatus> parse_session_status(std::string_view text);
 std::optional<TrialStatus> parse_trial_status(std::string_view text);
 const char* to_string(TrackedDevice device);

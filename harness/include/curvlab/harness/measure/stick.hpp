@@ -37,7 +37,7 @@ namespace curvlab::harness::measure {
 // The stick's pose and bend and the space serve only the model's value.
 struct StickScene {
   geometry::Space space;
-  geometry::ViewMode mode = geometry::ViewMode::native;
+  geometry::ViewPreset preset = geometry::ViewPreset::native;
   geometry::Isometry head;  // the nose in the world
   renderer::StereoRig rig;
   std::uint32_t width_px = 0;

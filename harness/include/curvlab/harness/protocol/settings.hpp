@@ -7,8 +7,11 @@
 #pragma once
 
 #include "curvlab/geometry/space.hpp"
+#include "curvlab/geometry/tracking.hpp"
 #include "curvlab/harness/result.hpp"
+#include "curvlab/renderer/vocabulary.hpp"
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -18,21 +21,19 @@
 
 namespace curvlab::harness::protocol {
 
-enum class Tracking { naive, head_anchored, table_anchored };
-enum class Projection { tourist, native };
-enum class Eyes { both, left, right, dominant };
+// The tracking algorithm (geometry/tracking.hpp), the projection, eyes and
+// stick marks (renderer/vocabulary.hpp) are the lower layers' types; these
+// two are the protocol's own.
 enum class StickAnchor { head, table };
-// Marks along the stick: none, or rings at known positions (docs/protocols.md).
-enum class StickMarks { none, rings };
+inline constexpr std::array kStickAnchors{StickAnchor::head, StickAnchor::table};
 // What a trial does when the head has been untracked for `loss_ms`.
 enum class OnTrackingLoss { repeat, flag, abort };
+inline constexpr std::array kOnTrackingLosses{OnTrackingLoss::repeat, OnTrackingLoss::flag, OnTrackingLoss::abort};
 
-std::string_view to_string(Tracking t);
-std::string_view to_string(Projection p);
-std::string_view to_string(Eyes e);
 std::string_view to_string(StickAnchor a);
-std::string_view to_string(StickMarks m);
 std::string_view to_string(OnTrackingLoss o);
+std::optional<StickAnchor> parse_stick_anchor(std::string_view text);
+std::optional<OnTrackingLoss> parse_on_tracking_loss(std::string_view text);
 
 struct SpaceSettings {
   geometry::SpaceKind kind = geometry::SpaceKind::E3;
@@ -56,8 +57,8 @@ struct TrackingLoss {
 };
 
 struct Viewing {
-  Projection projection = Projection::tourist;
-  Eyes eyes = Eyes::both;
+  renderer::Projection projection = renderer::Projection::tourist;
+  renderer::EyeSelection eyes = renderer::EyeSelection::both;
   bool back_hemisphere = true;  // S3 only: draw the antipodal images
   double ipd_m = 0.063;
   // Samples per pixel for anti-aliasing (1, 2, 4 or 8); the renderer clamps
@@ -87,7 +88,7 @@ struct Stimulus {
   double stick_distance_m = 1.0;  // from the eyes (head) or the table centre (table)
   double stick_height_m = 0.0;    // relative to eye height (head) or table top (table)
   double stick_yaw_deg = 0.0;     // rotation about the vertical, 0 = across the view
-  StickMarks stick_marks = StickMarks::none;
+  renderer::StickMarks stick_marks = renderer::StickMarks::none;
   bool show_stick = true;
   bool show_table = true;
   double table_sagitta_m = 0.0;   // signed convexity of the table top, + bulges up
@@ -102,7 +103,7 @@ struct PhysicalTable {
 
 struct Settings {
   SpaceSettings space;
-  Tracking tracking = Tracking::table_anchored;
+  geometry::TrackingAlgorithm tracking = geometry::TrackingAlgorithm::table_anchored;
   TrackingLoss tracking_loss;
   Viewing viewing;
   Timeline timeline;

@@ -41,9 +41,6 @@ geometry::PhysicalTable physical_table(const protocol::Settings& s,
 // and height centred at the lab origin, yaw 0.
 geometry::PhysicalTableFit nominal_calibration(const protocol::Settings& s);
 
-// The tracking code's algorithm for the protocol's setting.
-geometry::TrackingAlgorithm tracking_algorithm(const protocol::Settings& s);
-
 // The calibration as stored with a session (sessions.table_calibration), and
 // back; parsing names what is missing or out of range.
 std::string calibration_json(const geometry::PhysicalTableFit& fit);
@@ -68,9 +65,12 @@ Placement place_stimulus(const World& world, const protocol::Settings& s,
 // preview` view the stimulus from.
 geometry::Isometry standing_head(const World& world, const protocol::Settings& s);
 
-geometry::ViewMode view_mode(const protocol::Settings& s);
+// What the perception model is given for the trial's projection and eyes
+// (renderer::perceived_preset).
+geometry::ViewPreset perceived_preset(const protocol::Settings& s);
 renderer::ViewSettings view_settings(const protocol::Settings& s, renderer::Eye dominant);
-// "tourist", "native", "monocular" or "custom".
+// The preset the trial's projection and eyes are named by: "tourist",
+// "native", "monocular" (native, one eye) or "custom" (tourist, one eye).
 std::string view_name(const protocol::Settings& s);
 
 // The perceived signed sagitta of the judged object for a viewer whose nose
@@ -94,8 +94,6 @@ SightLineCount diverging_sight_lines(const World& world, const protocol::Setting
                                      const geometry::Isometry& head);
 // The same for the physical stimulus alone (the null observer).
 double physical_sagitta_m(const protocol::Settings& s);
-// The renderer's marks for the protocol's stimulus.stick_marks.
-renderer::StickMarks stick_marks(const protocol::Settings& s);
 
 // The scene of one trial: table, stick, balls, a prompt panel and a
 // fixation mark, with visibility switched per phase.
