@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <memory>
 #include <unistd.h>
@@ -60,20 +61,19 @@ std::string joined(const std::vector<std::string>& paths) {
 }
 
 void write_exports(data::Database& db, const ExportArgs& a, const data::ExportOptions& options, Json& doc) {
+  std::vector<const data::ExportFormat*> chosen;
+  for (const auto& format : data::export_formats())
+    if (a.format == "all" || a.format == format.name) chosen.push_back(&format);
   // Labels that would collide refuse the export before any format is written.
-  if (a.format != "csv")
+  if (std::any_of(chosen.begin(), chosen.end(), [](const auto* f) { return f->files_named_after_labels; }))
     if (auto ok = data::check_export_labels(db, options); !ok) raise(ok.error());
   Json files = Json::array();
-  auto run = [&](const char* name, auto fn) {
-    if (a.format != "all" && a.format != name) return;
-    auto result = fn(db, options);
+  for (const auto* format : chosen) {
+    auto result = format->write(db, options);
     if (!result) raise(result.error());
-    doc[std::string(name) + "_rows"] = result.value().rows;
+    doc[std::string(format->name) + "_rows"] = result.value().rows;
     for (const auto& f : result.value().files) files.push_back(f);
-  };
-  run("csv", data::export_trials_csv);
-  run("psychds", data::export_psychds);
-  run("bids-motion", data::export_bids_motion);
+  }
   doc["files"] = files;
   if (!a.json) doc["files"] = std::to_string(files.size()) + " files";
 }
@@ -110,8 +110,12 @@ void add_export_commands(CLI::App& app) {
                   "curvlab database file; several files or folders of *.sqlite files are pooled as by merge")
       ->required();
   cmd->add_option("--out", args->out_dir, "output folder (created if missing)")->required();
-  cmd->add_option("--format", args->format, "csv, psychds, bids-motion or all")
-      ->check(CLI::IsMember({"csv", "psychds", "bids-motion", "all"}));
+  std::vector<std::string> names;
+  for (const auto& format : data::export_formats()) names.emplace_back(format.name);
+  std::string help;
+  for (const auto& n : names) help += (help.empty() ? "" : ", ") + n;
+  names.emplace_back("all");
+  cmd->add_option("--format", args->format, help + " or all")->check(CLI::IsMember(names));
   auto* session = cmd->add_option("--session", args->session, "only this session id (one file only)");
   cmd->add_flag("--json", args->json, "print the result as JSON");
   cmd->callback([args, session] { run_export(*args, session->count() > 0); });

@@ -303,12 +303,11 @@ void export_all(const std::string& db_path, std::int64_t session_id, const std::
   auto db = data::Database::open(db_path, data::OpenMode::read_only);
   if (!db) raise(db.error());
   Json files = Json::array();
-  for (auto [name, fn] : {std::pair{"csv", &data::export_trials_csv}, std::pair{"psychds", &data::export_psychds},
-                          std::pair{"bids", &data::export_bids_motion}}) {
+  for (const auto& format : data::export_formats()) {
     data::ExportOptions o;
-    o.out_dir = (std::filesystem::path(dir) / name).string();
+    o.out_dir = (std::filesystem::path(dir) / format.run_folder).string();
     o.session_id = session_id;
-    auto r = fn(db.value(), o);
+    auto r = format.write(db.value(), o);
     if (!r) raise(r.error());
     for (const auto& f : r.value().files) files.push_back((std::filesystem::path(o.out_dir) / f).string());
   }

@@ -399,6 +399,15 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
 
 namespace curvlab::data {
 
+const std::vector<ExportFormat>& export_formats() {
+  static const std::vector<ExportFormat> formats{
+      {"csv", "csv", false, &export_trials_csv},
+      {"psychds", "psychds", true, &export_psychds},
+      {"bids-motion", "bids", true, &export_bids_motion},
+  };
+  return formats;
+}
+
 Expected<Done> check_export_labels(Database& db, const ExportOptions& options) {
   auto sessions = exporting::load_sessions(db, options);
   if (!sessions) return sessions.error();

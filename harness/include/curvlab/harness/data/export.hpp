@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace curvlab::data {
@@ -41,5 +42,16 @@ Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& opt
 Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& options);
 // BIDS motion dataset under out_dir/bids/ (one tracking system per device).
 Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& options);
+
+// The export formats, in the order `--format all` writes them: the one list
+// `curvlab export` and `run --export` take them from. A new format is its
+// exporter's file and one line in this list (export_common.cpp).
+struct ExportFormat {
+  std::string_view name;          // --format value; the summary's <name>_rows
+  std::string_view run_folder;    // run --export DIR writes it under DIR/<run_folder>
+  bool files_named_after_labels;  // names files after pseudonyms and protocols (check_export_labels)
+  Expected<ExportSummary> (*write)(Database& db, const ExportOptions& options);
+};
+const std::vector<ExportFormat>& export_formats();
 
 }  // namespace curvlab::data
