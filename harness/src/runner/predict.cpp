@@ -1,6 +1,7 @@
 #include "curvlab/harness/runner/predict.hpp"
 
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/staircase.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <cmath>
@@ -103,26 +104,6 @@ std::int64_t binomial(protocol::Engine& rng, std::int64_t n, double p) {
 
 }  // namespace
 
-double staircase_target_probability(int up, int down) {
-  // A run of n positives comes before a run of m negatives with probability
-  // p^(n−1)(1 − q^m) / (p^(n−1) + q^(m−1) − p^(n−1) q^(m−1)), q = 1 − p
-  // (Feller, An Introduction to Probability Theory, vol. 1, §VIII.1); it
-  // increases with p, and the staircase settles where it is 1/2.
-  const auto down_first = [&](double p) {
-    const double q = 1.0 - p;
-    const double a = std::pow(p, down - 1);
-    const double b = std::pow(q, up - 1);
-    return a * (1.0 - std::pow(q, up)) / (a + b - a * b);
-  };
-  double lo = 0.0, hi = 1.0;
-  for (int it = 0; it < 200; ++it) {
-    const double p = 0.5 * (lo + hi);
-    if (down_first(p) < 0.5) lo = p;
-    else hi = p;
-  }
-  return 0.5 * (lo + hi);
-}
-
 double student_t_two_sided_p(double t, double df) {
   if (!std::isfinite(t)) return 0.0;
   return incomplete_beta(df / 2.0, 0.5, df / (df + t * t));
@@ -177,7 +158,7 @@ Result<Done> predict_staircases(const protocol::Protocol& p, const protocol::Pla
     sp.down = sc.down;
     sp.min = sc.min;
     sp.max = sc.max;
-    sp.target_p = staircase_target_probability(sc.up, sc.down);
+    sp.target_p = protocol::staircase_target_probability(sc.up, sc.down);
     locate_target(t, j, world, mean_observer, physical, sp);
     if (!sp.target_value) out.notes.push_back(staircase_note(sp));
     out.staircases.push_back(std::move(sp));

@@ -40,6 +40,11 @@ class Staircase {
   std::vector<double> reversal_values_;
 };
 
+// The P(positive) an up/down staircase settles on: where a run of `down`
+// positive answers is as likely to come first as a run of `up` negative ones
+// (Levitt 1971): 50 % for 1-up/1-down, 70.7 % for 1-up/2-down.
+double staircase_target_probability(int up, int down);
+
 // Several staircases run interleaved: each trial goes to one that has not
 // finished, chosen uniformly with the portable draw, so the participant
 // cannot follow one track.
