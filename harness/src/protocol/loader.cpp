@@ -5,7 +5,9 @@
 #include "curvlab/harness/protocol/loader.hpp"
 
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/latin_square.hpp"
+#include "judgements/judgement_format.hpp"
 #include "table_reader.hpp"
 
 #include <algorithm>
@@ -249,232 +251,25 @@ class Loader : private TableReader {
   }
 
   // ---- judgements -------------------------------------------------------
-  std::vector<ResponseOption> read_options(const toml::table& j, const std::string& prefix) {
-    std::vector<ResponseOption> out;
-    const toml::node* n = j.get("options");
-    if (!n) {
-      error(pos_of(j), prefix + ".options", "missing required array of options ([[" + prefix + ".options]] tables)");
-      return out;
-    }
-    const auto* arr = n->as_array();
-    if (!arr) {
-      error(pos_of(*n), prefix + ".options", "expected an array of tables, found " + type_name(*n));
-      return out;
-    }
-    std::set<std::string> values, bound;
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const toml::node& e = (*arr)[i];
-      const std::string op = prefix + ".options[" + std::to_string(i + 1) + "]";
-      const auto* t = e.as_table();
-      if (!t) {
-        error(pos_of(e), op, "expected a table with value, label, keys and buttons, found " + type_name(e));
-        continue;
-      }
-      check_keys(*t, op, {"value", "label", "keys", "buttons"});
-      ResponseOption o;
-      o.value = get_string(*t, "value", op, true).value_or("");
-      if (t->contains("value") && t->get("value")->is_string() && !is_identifier(o.value))
-        error(pos_of(*t->get("value")), op + ".value", "expected a lower-case identifier (stored in the data)");
-      o.label = get_string(*t, "label", op, false).value_or(o.value);
-      o.keys = get_string_array(*t, "keys", op, &key_names());
-      o.buttons = get_string_array(*t, "buttons", op, &button_names());
-      if (!t->contains("keys") && !t->contains("buttons"))
-        error(pos_of(*t), op, "expected at least one of keys or buttons to answer with");
-      if (!o.value.empty() && !values.insert(o.value).second)
-        error(pos_of(*t), op + ".value", "duplicate option value \"" + o.value + "\"");
-      for (const auto& key : o.keys)
-        if (!bound.insert("key:" + key).second)
-          error(pos_of(*t->get("keys")), op + ".keys", "key \"" + key + "\" is bound to two options");
-      for (const auto& b : o.buttons)
-        if (!bound.insert("button:" + b).second)
-          error(pos_of(*t->get("buttons")), op + ".buttons", "button \"" + b + "\" is bound to two options");
-      out.push_back(std::move(o));
-    }
-    if (arr->size() < 2)
-      error(pos_of(*n), prefix + ".options", "expected at least 2 options, found " + std::to_string(arr->size()));
-    return out;
-  }
-
-  std::string read_parameter(const toml::table& j, const std::string& prefix, const Protocol& p) {
-    const auto param = get_string(j, "parameter", prefix, true);
-    if (!param) return "";
-    const SourcePos at = pos_of(*j.get("parameter"));
-    const auto paths = numeric_setting_paths();
-    if (std::find(paths.begin(), paths.end(), *param) == paths.end()) {
-      std::string msg = "unknown parameter \"" + *param + "\"";
-      const std::string guess = closest_match(*param, paths);
-      if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
-      if (p.find_factor(*param)) msg += " (\"" + *param + "\" is a factor, not a numeric setting)";
-      msg += " Expected a numeric setting: " + quoted_list(paths);
-      error(at, prefix + ".parameter", msg);
-      return "";
-    }
-    for (const auto& f : p.factors)
-      if (f.sets == *param)
-        error(at, prefix + ".parameter", "\"" + *param + "\" is also varied by factor \"" + f.name +
-                                             "\"; a trial's value cannot come from both");
-    return *param;
-  }
-
-  void check_range(const std::string& param, double lo, double hi, const toml::table& t,
-                   const std::string& prefix) {
-    const SettingInfo* info = find_setting(param);
-    if (!info) return;
-    if (!(lo < hi)) {
-      error(pos_of(t), prefix, "expected min < max");
-      return;
-    }
-    if (lo < info->min || hi > info->max)
-      error(pos_of(t), prefix, "min and max must lie within " + std::string(param) + "'s range [" +
-                                   value_label(SettingValue(std::in_place_type<double>, info->min)) + ", " + value_label(SettingValue(std::in_place_type<double>, info->max)) + "]");
-  }
-
+  // The common keys here; the rest is the type's (judgement.hpp).
   Judgement read_judgement(const toml::table& j, const std::string& prefix, const Protocol& p) {
     Judgement out;
     out.pos = pos_of(j);
-    const auto type = get_enum(j, "type", prefix, {"choice", "adjustment", "staircase"});
-    if (!j.contains("type")) error(pos_of(j), prefix + ".type", "missing required type: \"choice\", \"adjustment\" or \"staircase\"");
+    std::vector<std::string> names;
+    for (const JudgementType* t : judgement_types()) names.emplace_back(t->name());
+    const auto type = get_enum(j, "type", prefix, names);
+    if (!j.contains("type"))
+      error(pos_of(j), prefix + ".type", "missing required type: " + judgement_type_alternatives());
     if (!type) {
-      check_keys(j, prefix, {"type", "prompt", "options", "parameter", "positive", "staircases",
-                             "start_min", "start_max", "step", "fine_step", "min", "max",
-                             "keys_decrease", "keys_increase", "keys_confirm", "buttons_decrease",
-                             "buttons_increase", "buttons_confirm"});
+      check_keys(j, prefix, any_table_keys());
       return out;
     }
     out.prompt = get_string(j, "prompt", prefix, false).value_or("");
-    if (*type == "choice") {
-      out.type = JudgementType::choice;
-      check_keys(j, prefix, {"type", "prompt", "options"});
-      out.options = read_options(j, prefix);
-    } else if (*type == "adjustment") {
-      out.type = JudgementType::adjustment;
-      check_keys(j, prefix, {"type", "prompt", "parameter", "start_min", "start_max", "step",
-                             "fine_step", "min", "max", "keys_decrease", "keys_increase",
-                             "keys_confirm", "buttons_decrease", "buttons_increase", "buttons_confirm"});
-      AdjustmentSpec a;
-      a.parameter = read_parameter(j, prefix, p);
-      const auto mn = get_number(j, "min", prefix, true), mx = get_number(j, "max", prefix, true);
-      const auto s0 = get_number(j, "start_min", prefix, true), s1 = get_number(j, "start_max", prefix, true);
-      const auto step = get_number(j, "step", prefix, true);
-      a.fine_step = get_number(j, "fine_step", prefix, false).value_or(0.0);
-      if (mn && mx) {
-        a.min = *mn;
-        a.max = *mx;
-        if (!a.parameter.empty()) check_range(a.parameter, a.min, a.max, j, prefix);
-      }
-      if (s0 && s1 && mn && mx) {
-        a.start_min = *s0;
-        a.start_max = *s1;
-        if (!(a.min <= a.start_min && a.start_min <= a.start_max && a.start_max <= a.max))
-          error(pos_of(*j.get("start_min")), prefix + ".start_min",
-                "expected min ≤ start_min ≤ start_max ≤ max");
-      }
-      if (step) {
-        a.step = *step;
-        if (!(a.step > 0.0) || (mn && mx && a.step > a.max - a.min))
-          error(pos_of(*j.get("step")), prefix + ".step", "expected 0 < step ≤ max − min");
-      }
-      if (a.fine_step < 0.0 || (a.fine_step > 0.0 && a.fine_step > a.step))
-        error(pos_of(*j.get("fine_step")), prefix + ".fine_step", "expected 0 < fine_step ≤ step");
-      a.keys_decrease = get_string_array(j, "keys_decrease", prefix, &key_names());
-      a.keys_increase = get_string_array(j, "keys_increase", prefix, &key_names());
-      a.keys_confirm = get_string_array(j, "keys_confirm", prefix, &key_names());
-      a.buttons_decrease = get_string_array(j, "buttons_decrease", prefix, &button_names());
-      a.buttons_increase = get_string_array(j, "buttons_increase", prefix, &button_names());
-      a.buttons_confirm = get_string_array(j, "buttons_confirm", prefix, &button_names());
-      if (a.keys_decrease.empty() && a.buttons_decrease.empty()) a.keys_decrease = {"left"};
-      if (a.keys_increase.empty() && a.buttons_increase.empty()) a.keys_increase = {"right"};
-      if (a.keys_confirm.empty() && a.buttons_confirm.empty()) a.keys_confirm = {"space"};
-      out.adjustment = a;
-    } else {
-      out.type = JudgementType::staircase;
-      check_keys(j, prefix, {"type", "prompt", "options", "parameter", "positive", "staircases"});
-      out.options = read_options(j, prefix);
-      out.parameter = read_parameter(j, prefix, p);
-      if (auto pos = get_string(j, "positive", prefix, true)) {
-        const bool known = std::any_of(out.options.begin(), out.options.end(),
-                                       [&](const ResponseOption& o) { return o.value == *pos; });
-        if (!known) {
-          std::vector<std::string> values;
-          for (const auto& o : out.options) values.push_back(o.value);
-          error(pos_of(*j.get("positive")), prefix + ".positive",
-                "\"" + *pos + "\" is not an option value: expected one of " + quoted_list(values));
-        }
-        out.positive = *pos;
-      }
-      read_staircases(j, prefix, out);
-    }
+    out.type = find_judgement_type(*type);
+    check_keys(j, prefix, table_keys(*out.type));
+    JudgementSection section(*this, j, prefix, p);
+    out.type->read(section, out);
     return out;
-  }
-
-  void read_staircases(const toml::table& j, const std::string& prefix, Judgement& out) {
-    const toml::node* n = j.get("staircases");
-    if (!n) {
-      error(pos_of(j), prefix + ".staircases", "missing required [[" + prefix + ".staircases]] tables");
-      return;
-    }
-    const auto* arr = n->as_array();
-    if (!arr || arr->empty()) {
-      error(pos_of(*n), prefix + ".staircases", "expected at least one staircase table");
-      return;
-    }
-    std::set<std::string> names;
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const toml::node& e = (*arr)[i];
-      const std::string sp = prefix + ".staircases[" + std::to_string(i + 1) + "]";
-      const auto* t = e.as_table();
-      if (!t) {
-        error(pos_of(e), sp, "expected a table, found " + type_name(e));
-        continue;
-      }
-      check_keys(*t, sp, {"name", "start", "up", "down", "step_sizes", "stop_reversals",
-                          "max_trials", "discard_reversals", "min", "max"});
-      StaircaseSpec s;
-      s.name = get_string(*t, "name", sp, true).value_or("");
-      if (!s.name.empty() && !names.insert(s.name).second)
-        error(pos_of(*t->get("name")), sp + ".name", "duplicate staircase name \"" + s.name + "\"");
-      const auto start = get_number(*t, "start", sp, true);
-      s.up = static_cast<int>(get_int(*t, "up", sp, 1, 5, false).value_or(1));
-      s.down = static_cast<int>(get_int(*t, "down", sp, 1, 5, false).value_or(2));
-      s.stop_reversals = static_cast<int>(get_int(*t, "stop_reversals", sp, 1, 100, false).value_or(8));
-      s.max_trials = static_cast<int>(get_int(*t, "max_trials", sp, 1, 1000, false).value_or(50));
-      s.discard_reversals = static_cast<int>(get_int(*t, "discard_reversals", sp, 0, 99, false).value_or(2));
-      if (t->contains("discard_reversals") && s.discard_reversals >= s.stop_reversals)
-        error(pos_of(*t->get("discard_reversals")), sp + ".discard_reversals",
-              "expected fewer than stop_reversals (" + std::to_string(s.stop_reversals) +
-                  "), or no reversal is left for the estimate");
-      const auto mn = get_number(*t, "min", sp, true), mx = get_number(*t, "max", sp, true);
-      if (mn && mx) {
-        s.min = *mn;
-        s.max = *mx;
-        if (!out.parameter.empty()) check_range(out.parameter, s.min, s.max, *t, sp);
-        else if (!(s.min < s.max)) error(pos_of(*t), sp, "expected min < max");
-      }
-      if (start) {
-        s.start = *start;
-        if (mn && mx && (s.start < s.min || s.start > s.max))
-          error(pos_of(*t->get("start")), sp + ".start", "expected min ≤ start ≤ max");
-      }
-      if (const toml::node* st = t->get("step_sizes")) {
-        const auto* sa = st->as_array();
-        if (!sa || sa->empty()) {
-          error(pos_of(*st), sp + ".step_sizes", "expected a non-empty array of positive numbers");
-        } else {
-          for (std::size_t k = 0; k < sa->size(); ++k) {
-            const auto v = node_number((*sa)[k]);
-            if (!v || !(*v > 0.0) || !std::isfinite(*v)) {
-              error(pos_of((*sa)[k]), sp + ".step_sizes[" + std::to_string(k + 1) + "]",
-                    "expected a positive number");
-              continue;
-            }
-            s.step_sizes.push_back(*v);
-          }
-        }
-      } else {
-        error(pos_of(*t), sp + ".step_sizes", "missing required array of step sizes");
-      }
-      out.staircases.push_back(std::move(s));
-    }
   }
 
   // ---- blocks ------------------------------------------------------------
@@ -496,8 +291,7 @@ class Loader : private TableReader {
       b.randomize = default_randomize_;
       b.judgement = p.judgement;
       if (!has_root_judgement_)
-        error({1, 1}, "judgement", "missing required table [judgement] (type = \"choice\", "
-                                   "\"adjustment\" or \"staircase\")");
+        error({1, 1}, "judgement", "missing required table [judgement] (type = " + judgement_type_alternatives() + ")");
       b.break_every_trials = static_cast<int>(every);
       b.break_text = break_text;
       b.break_min_ms = break_ms;
@@ -553,9 +347,8 @@ class Loader : private TableReader {
       else if (has_root_judgement_) b.judgement = p.judgement;
       else error(b.pos, bp + ".judgement",
                  "this block has no judgement: add a top-level [judgement] or one for the block");
-      if (b.judgement.type == JudgementType::staircase && b.repetitions > 1)
-        error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions",
-              "expected 1 in a staircase block (its length comes from the stop rule); add staircases instead");
+      if (const auto problem = b.judgement.type ? b.judgement.type->repetitions_problem(b.repetitions) : std::nullopt)
+        error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions", *problem);
       p.blocks.push_back(std::move(b));
     }
   }
@@ -677,12 +470,7 @@ class Loader : private TableReader {
         error(b.pos, bp, "the block crosses more than " + std::to_string(kMaxCells) + " factor-level combinations");
         return;
       }
-      std::size_t trials = 0;
-      if (b.judgement.type == JudgementType::staircase) {
-        for (const auto& s : b.judgement.staircases) trials += cells * static_cast<std::size_t>(s.max_trials);
-      } else {
-        trials = cells * static_cast<std::size_t>(b.repetitions);
-      }
+      const std::size_t trials = cells * b.judgement.type->trials_per_cell(b);
       if (trials == 0) error(b.pos, bp, "the block has zero trials");
       total += trials;
       if (total > kMaxTrials) {
@@ -726,18 +514,11 @@ class Loader : private TableReader {
         else error(b.pos, bp, msg + suffix);
       };
       check_settings(s, report);
-      // The values a staircase or adjustment can reach must be possible too:
+      // The values the judgement can reach must be possible too:
       // check both ends of every range, reported at the judgement.
-      const std::string& param = b.judgement.type == JudgementType::adjustment && b.judgement.adjustment
-                                     ? b.judgement.adjustment->parameter
-                                     : b.judgement.parameter;
-      if (param.empty() || b.judgement.type == JudgementType::choice) continue;
-      std::vector<double> ends;
-      if (b.judgement.adjustment) ends = {b.judgement.adjustment->min, b.judgement.adjustment->max};
-      for (const auto& st : b.judgement.staircases) {
-        ends.push_back(st.min);
-        ends.push_back(st.max);
-      }
+      const std::string& param = b.judgement.parameter;
+      const std::vector<double> ends = b.judgement.type->reachable_values(b.judgement);
+      if (param.empty() || ends.empty()) continue;
       const std::string jfield = (b.judgement.pos.line == p.judgement.pos.line &&
                                   b.judgement.pos.column == p.judgement.pos.column)
                                      ? "judgement"

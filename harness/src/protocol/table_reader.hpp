@@ -2,7 +2,8 @@
 // written and, when it is wrong, adds a diagnostic with the file, position,
 // dotted field and what was expected, then goes on, so that an author sees
 // every problem in one pass. The loader reads the protocol's sections with
-// them.
+// them, and each judgement type reads its own table with them
+// (judgements/judgement_format.hpp).
 //
 // Internal to curvlab_protocol: it exposes toml++ types. Not thread-safe: one
 // reader per load.

@@ -9,9 +9,25 @@
 #include "curvlab/harness/protocol/random.hpp"
 
 #include <cstddef>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace curvlab::harness::protocol {
+
+// One staircase of an interleaved set (n-up/m-down, Levitt 1971).
+struct StaircaseSpec {
+  std::string name;
+  double start = 0.0;
+  int up = 1;    // consecutive negative responses before the value goes up
+  int down = 2;  // consecutive positive responses before the value goes down
+  std::vector<double> step_sizes;  // step k is used after k reversals; the last repeats
+  int stop_reversals = 8;
+  int max_trials = 50;
+  int discard_reversals = 2;  // reversals left out of the threshold estimate
+  double min = 0.0;
+  double max = 0.0;
+};
 
 class Staircase {
  public:
