@@ -3,6 +3,7 @@
 // give either a protocol or diagnostics — never a crash, hang or sanitizer
 // report — and an accepted protocol must expand.
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 
 #include <cstddef>
@@ -24,9 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // which is correct but would slow the search to a crawl.
   std::size_t trials = 0;
   for (const auto& b : r.protocol->blocks) {
-    std::size_t n = b.judgement.type == JudgementType::staircase ? 0 : static_cast<std::size_t>(b.repetitions);
-    for (const auto& s : b.judgement.staircases) n += static_cast<std::size_t>(s.max_trials);
-    trials += n * block_cells(*r.protocol, b).size();
+    trials += b.judgement.type->trials_per_cell(b) * block_cells(*r.protocol, b).size();
     if (trials > 5000) return 0;
   }
   const Design d = expand_design(*r.protocol, 1 + size % 7);

@@ -1,6 +1,7 @@
 // Design expansion: reproducible for a seed, different across seeds, every
 // cell the right number of times, blocks counterbalanced by participant.
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/latin_square.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/random.hpp"
@@ -27,7 +28,7 @@ std::vector<std::string> signature(const Design& d) {
   for (const auto& t : d.trials) {
     std::string s = t.block;
     for (const auto& [f, l] : t.levels) s += " " + f + "=" + l;
-    if (t.staircase >= 0) s += " s" + std::to_string(t.staircase);
+    if (t.staircase) s += " s" + std::to_string(t.staircase->index);
     out.push_back(s);
   }
   return out;
@@ -174,8 +175,8 @@ TEST(Design, StaircaseBlocksHoldMaxTrialsSlotsPerStaircaseAndCell) {
   std::map<std::pair<std::size_t, int>, int> slots;
   for (const auto& t : d.trials)
     if (t.block == "main") {
-      EXPECT_EQ(t.judgement, JudgementType::staircase);
-      ++slots[{t.cell, t.staircase}];
+      EXPECT_EQ(t.judgement->name(), "staircase");
+      ++slots[{t.cell, static_cast<int>(t.staircase.value().index)}];
     }
   EXPECT_EQ(slots.size(), 4u * 2u);
   for (const auto& [key, n] : slots) EXPECT_EQ(n, 40);
@@ -183,7 +184,7 @@ TEST(Design, StaircaseBlocksHoldMaxTrialsSlotsPerStaircaseAndCell) {
   std::set<std::pair<std::size_t, int>> first;
   std::size_t seen = 0;
   for (const auto& t : d.trials)
-    if (t.block == "main" && seen++ < 10) first.insert({t.cell, t.staircase});
+    if (t.block == "main" && seen++ < 10) first.insert({t.cell, static_cast<int>(t.staircase.value().index)});
   EXPECT_GT(first.size(), 2u);
 }
 

@@ -1,6 +1,7 @@
 // `curvlab predict`: Student's t against tabled values, and the paper's
 // study predicted from the perception model, and where staircases converge.
 #include "curvlab/harness/protocol/loader.hpp"
+#include "curvlab/harness/protocol/staircase.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 #include <sstream>
 
 namespace rn = curvlab::harness::runner;
+namespace pr = curvlab::harness::protocol;
 
 namespace {
 
@@ -114,11 +116,11 @@ TEST(Predict, ConditionsSeenAlongDivergingSightLinesAreNamed) {
 // Levitt's convergence points: 1-up/n-down where P^n = 1/2, and the
 // mirror image for m-up/1-down.
 TEST(Predict, StaircaseTargetsAreLevittsConvergencePoints) {
-  EXPECT_NEAR(rn::staircase_target_probability(1, 1), 0.5, 1e-12);
-  EXPECT_NEAR(rn::staircase_target_probability(1, 2), std::sqrt(0.5), 1e-12);
-  EXPECT_NEAR(rn::staircase_target_probability(1, 3), std::cbrt(0.5), 1e-12);
-  EXPECT_NEAR(rn::staircase_target_probability(2, 1), 1.0 - std::sqrt(0.5), 1e-12);
-  EXPECT_NEAR(rn::staircase_target_probability(2, 2), 0.5, 1e-12);
+  EXPECT_NEAR(pr::staircase_target_probability(1, 1), 0.5, 1e-12);
+  EXPECT_NEAR(pr::staircase_target_probability(1, 2), std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(pr::staircase_target_probability(1, 3), std::cbrt(0.5), 1e-12);
+  EXPECT_NEAR(pr::staircase_target_probability(2, 1), 1.0 - std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(pr::staircase_target_probability(2, 2), 0.5, 1e-12);
 }
 
 namespace {

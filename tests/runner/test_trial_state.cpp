@@ -149,7 +149,7 @@ TEST(TrialState, AfterAnAbortThePolicyRepeatsOrGivesUp) {
 
 TEST(TrialState, InputsAreChoicesAdjustmentsOrAnticipations) {
   pr::Judgement choice;
-  choice.type = pr::JudgementType::choice;
+  choice.type = pr::find_judgement_type("choice");
   choice.options = {{"convex", "", {"1"}, {"x"}}, {"straight", "", {"2"}, {}}, {"concave", "", {"3"}, {"b"}}};
   EXPECT_EQ(rn::classify_input(choice, "1", false).use, rn::InputUse::early);
   EXPECT_EQ(rn::classify_input(choice, "9", true).use, rn::InputUse::ignored);
@@ -158,12 +158,11 @@ TEST(TrialState, InputsAreChoicesAdjustmentsOrAnticipations) {
   EXPECT_EQ(by_button.option, 2u);
   EXPECT_EQ(rn::classify_input(choice, "2", true).option, 1u);
 
-  pr::Judgement adjust;
-  adjust.type = pr::JudgementType::adjustment;
-  adjust.adjustment.emplace();
-  adjust.adjustment->keys_increase = {"up"};
-  adjust.adjustment->keys_decrease = {"down"};
-  adjust.adjustment->buttons_confirm = {"a"};
+  pr::AdjustmentSpec spec;
+  spec.keys_increase = {"up"};
+  spec.keys_decrease = {"down"};
+  spec.buttons_confirm = {"a"};
+  const pr::Judgement adjust = pr::adjustment_judgement(spec, "stimulus.stick_sagitta_m");
   EXPECT_EQ(rn::classify_input(adjust, "up", true).use, rn::InputUse::increase);
   EXPECT_EQ(rn::classify_input(adjust, "down", true).use, rn::InputUse::decrease);
   EXPECT_EQ(rn::classify_input(adjust, "a", true).use, rn::InputUse::confirm);

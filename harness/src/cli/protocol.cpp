@@ -3,6 +3,7 @@
 #include "common.hpp"
 
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 
 #include <CLI/CLI.hpp>
@@ -86,8 +87,8 @@ Json design_json(const pr::Protocol& p, const pr::Design& d, bool with_trials) {
     Json lv = Json::object();
     for (const auto& [f, l] : t.levels) lv[f] = l;
     jt["levels"] = lv;
-    jt["judgement"] = std::string(pr::to_string(t.judgement));
-    if (t.staircase >= 0) jt["staircase"] = t.staircase;
+    jt["judgement"] = std::string(t.judgement->name());
+    if (t.staircase) jt["staircase"] = t.staircase->index;
     if (t.adjustment_start) jt["adjustment_start"] = *t.adjustment_start;
     if (t.break_before) jt["break_before"] = true;
     jt["settings"] = settings_json(t.settings, t.derived);
@@ -119,8 +120,8 @@ void run_validate(const std::string& file, bool as_json) {
               << " trials";
     const auto& src = *std::find_if(p.blocks.begin(), p.blocks.end(),
                                     [&](const pr::Block& x) { return x.name == b.name; });
-    std::cout << ", " << pr::to_string(src.judgement.type);
-    if (src.judgement.type == pr::JudgementType::staircase) std::cout << " (at most)";
+    std::cout << ", " << src.judgement.type->name();
+    if (src.judgement.type->stops_early()) std::cout << " (at most)";
     std::cout << '\n';
   }
   std::cout << "  total " << d.trials.size() << " trials, estimated duration "
@@ -142,9 +143,9 @@ void run_design(const std::string& file, std::int64_t participant, bool as_json)
   std::cout << "\n# index block trial practice judgement levels\n";
   for (const auto& t : d.trials) {
     std::cout << t.index << ' ' << t.block << ' ' << t.trial_in_block << ' ' << (t.practice ? "practice" : "-")
-              << ' ' << pr::to_string(t.judgement);
+              << ' ' << t.judgement->name();
     for (const auto& [f, l] : t.levels) std::cout << ' ' << f << '=' << l;
-    if (t.staircase >= 0) std::cout << " staircase=" << t.staircase;
+    if (t.staircase) std::cout << " staircase=" << t.staircase->index;
     if (t.adjustment_start) std::cout << " start=" << *t.adjustment_start;
     if (t.break_before) std::cout << " [break before]";
     std::cout << '\n';

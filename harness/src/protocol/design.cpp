@@ -1,5 +1,6 @@
 #include "curvlab/harness/protocol/design.hpp"
 
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/latin_square.hpp"
 #include "curvlab/harness/protocol/random.hpp"
 
@@ -43,12 +44,6 @@ std::vector<std::vector<std::size_t>> block_cells(const Protocol& p, const Block
 
 namespace {
 
-struct Slot {
-  std::size_t cell = 0;
-  int repetition = 0;
-  int staircase = -1;
-};
-
 std::vector<std::size_t> block_run_order(const Protocol& p, std::uint64_t participant, Engine& rng,
                                          std::optional<std::size_t>& row_used) {
   std::vector<std::size_t> practice, main;
@@ -90,27 +85,8 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
     const auto cells = block_cells(p, b);
     const Settings base = p.block_settings(b);
 
-    std::vector<Slot> slots;
-    if (b.judgement.type == JudgementType::staircase) {
-      // Round-robin slots, max_trials per staircase per cell; shuffling
-      // interleaves them so the participant cannot follow one track.
-      int most = 0;
-      for (const auto& s : b.judgement.staircases) most = std::max(most, s.max_trials);
-      for (int t = 0; t < most; ++t)
-        for (std::size_t c = 0; c < cells.size(); ++c)
-          for (std::size_t s = 0; s < b.judgement.staircases.size(); ++s)
-            if (t < b.judgement.staircases[s].max_trials)
-              slots.push_back({c, 0, static_cast<int>(s)});
-      if (b.randomize != RandomizeMode::none) shuffle(slots, rng);
-    } else {
-      for (int r = 0; r < b.repetitions; ++r) {
-        std::vector<Slot> rep;
-        for (std::size_t c = 0; c < cells.size(); ++c) rep.push_back({c, r, -1});
-        if (b.randomize == RandomizeMode::shuffle_within_repetition) shuffle(rep, rng);
-        slots.insert(slots.end(), rep.begin(), rep.end());
-      }
-      if (b.randomize == RandomizeMode::shuffle) shuffle(slots, rng);
-    }
+    const JudgementType& type = *b.judgement.type;
+    const std::vector<DesignSlot> slots = type.slots(b, cells.size(), rng);
 
     PlannedBlock pb;
     pb.name = b.name;
@@ -131,7 +107,7 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
       t.repetition = slots[k].repetition;
       t.cell = slots[k].cell;
       t.staircase = slots[k].staircase;
-      t.judgement = b.judgement.type;
+      t.judgement = &type;
       t.settings = base;
       const auto& cell = cells[slots[k].cell];
       for (std::size_t f = 0; f < p.factors.size(); ++f) {
@@ -140,11 +116,7 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
         t.levels.emplace_back(factor.name, level.label);
         if (const auto* info = find_setting(factor.sets)) apply_setting(t.settings, *info, level.value);
       }
-      if (b.judgement.type == JudgementType::adjustment && b.judgement.adjustment) {
-        const auto& a = *b.judgement.adjustment;
-        const double u = uniform01(rng);
-        t.adjustment_start = a.start_min + u * (a.start_max - a.start_min);
-      }
+      type.plan_trial(b.judgement, t, rng);
       const auto derived = derive(t.settings);
       t.derived = derived ? derived.value() : Derived{};
       t.break_before = b.break_every_trials > 0 && k > 0 &&

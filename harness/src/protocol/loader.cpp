@@ -5,8 +5,10 @@
 #include "curvlab/harness/protocol/loader.hpp"
 
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/latin_square.hpp"
-#include "toml_reader.hpp"
+#include "judgements/judgement_format.hpp"
+#include "table_reader.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -26,224 +28,29 @@ constexpr std::size_t kMaxTrials = 1000000;
 namespace tr = toml_reader;
 using tr::type_name;
 
-SourcePos to_source_pos(tr::Pos p) { return {p.line, p.column}; }
-SourcePos pos_of(const toml::source_region& r) { return to_source_pos(tr::pos_of(r)); }
-SourcePos pos_of(const toml::node& n) { return to_source_pos(tr::pos_of(n)); }
-
-std::string join(const std::string& prefix, std::string_view key) {
-  return prefix.empty() ? std::string(key) : prefix + "." + std::string(key);
-}
-
-std::string quoted_list(const std::vector<std::string>& items) {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", \"" : "\"") + items[i] + "\"";
-  return out;
-}
-
-bool is_identifier(const std::string& s) {
-  if (s.empty() || s.size() > 64) return false;
-  if (!(std::islower(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) {
-    return std::islower(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) ||
-           c == '_' || c == '-';
-  });
-}
-
-const std::vector<std::string>& key_names() {
-  static const std::vector<std::string> keys = [] {
-    std::vector<std::string> k;
-    for (char c = 'a'; c <= 'z'; ++c) k.emplace_back(1, c);
-    for (char c = '0'; c <= '9'; ++c) k.emplace_back(1, c);
-    for (const char* n : {"left", "right", "up", "down", "space", "enter", "tab", "backspace",
-                          "comma", "period", "slash", "semicolon", "shift", "control"})
-      k.emplace_back(n);
-    return k;  // "escape" is reserved: it pauses the session
-  }();
-  return keys;
-}
-
-const std::vector<std::string>& button_names() {
-  static const std::vector<std::string> buttons = [] {
-    std::vector<std::string> b{"a", "b", "x", "y", "left_trigger", "right_trigger", "left_grip",
-                               "right_grip"};
-    for (const char* hand : {"left", "right"})
-      for (const char* dir : {"left", "right", "up", "down", "click"})
-        b.push_back(std::string(hand) + "_thumbstick_" + dir);
-    for (int i = 1; i <= 32; ++i) b.push_back("hid_" + std::to_string(i));
-    return b;
-  }();
-  return buttons;
-}
-
-
-class Loader {
+class Loader : private TableReader {
  public:
-  explicit Loader(std::string file) : file_(std::move(file)) {}
+  explicit Loader(std::string file) : TableReader(std::move(file)) {}
 
   LoadResult run(std::string_view text) {
     LoadResult result;
-    auto parsed = tr::parse(text, file_);
+    auto parsed = tr::parse(text, file());
     if (const auto* problem = std::get_if<tr::SyntaxProblem>(&parsed)) {
       error(to_source_pos(problem->pos), "syntax", problem->message);
-      result.diagnostics = std::move(diags_);
+      result.diagnostics = take_diagnostics();
       return result;
     }
     const toml::table& root = std::get<toml::table>(parsed);
     Protocol p;
-    p.file = file_;
+    p.file = file();
     read_root(root, p);
-    if (diags_.empty()) check_design(p, root);
-    result.diagnostics = std::move(diags_);
+    if (!failed()) check_design(p, root);
+    result.diagnostics = take_diagnostics();
     if (result.diagnostics.empty()) result.protocol = std::move(p);
     return result;
   }
 
-  void error(SourcePos pos, std::string field, std::string message) {
-    diags_.push_back({file_, pos, std::move(field), std::move(message)});
-  }
-
  private:
-  // ---- generic readers -------------------------------------------------
-  void check_keys(const toml::table& t, const std::string& prefix,
-                  const std::vector<std::string>& allowed) {
-    for (const auto& unknown : tr::unknown_keys(t, allowed)) {
-      std::string msg = "unknown key \"" + unknown.key + "\"";
-      const std::string guess = closest_match(unknown.key, allowed);
-      if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
-      msg += " Expected one of: " + quoted_list(allowed);
-      error(to_source_pos(unknown.pos), join(prefix, unknown.key), msg);
-    }
-  }
-
-  const toml::table* sub_table(const toml::table& t, std::string_view key, const std::string& prefix) {
-    const toml::node* n = t.get(key);
-    if (!n) return nullptr;
-    if (const auto* tt = n->as_table()) return tt;
-    error(pos_of(*n), join(prefix, key), "expected a table, found " + type_name(*n));
-    return nullptr;
-  }
-
-  std::optional<std::string> get_string(const toml::table& t, std::string_view key,
-                                        const std::string& prefix, bool required) {
-    const auto f = tr::read_string(t, key);
-    if (f.ok()) return f.value;
-    if (f.present()) error(pos_of(*f.node), join(prefix, key), "expected a string, found " + type_name(*f.node));
-    else if (required) error(pos_of(t), join(prefix, key), "missing required string");
-    return std::nullopt;
-  }
-
-  std::optional<std::int64_t> get_int(const toml::table& t, std::string_view key,
-                                      const std::string& prefix, std::int64_t lo, std::int64_t hi,
-                                      bool required) {
-    const auto f = tr::read_integer(t, key, lo, hi);
-    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-    switch (f.status) {
-      case tr::FieldStatus::ok: return f.value;
-      case tr::FieldStatus::absent:
-        if (required) error(pos_of(t), join(prefix, key), "missing required integer in " + range);
-        break;
-      case tr::FieldStatus::out_of_range:
-        error(pos_of(*f.node), join(prefix, key),
-              "expected an integer in " + range + ", found " + std::to_string(f.value));
-        break;
-      default:
-        error(pos_of(*f.node), join(prefix, key), "expected an integer in " + range + ", found " + type_name(*f.node));
-        break;
-    }
-    return std::nullopt;
-  }
-
-  std::optional<double> node_number(const toml::node& n) {
-    if (const auto* i = n.as_integer()) return static_cast<double>(i->get());
-    if (const auto* f = n.as_floating_point()) return f->get();
-    return std::nullopt;
-  }
-
-  std::optional<double> get_number(const toml::table& t, std::string_view key,
-                                   const std::string& prefix, bool required) {
-    const auto f = tr::read_number(t, key);
-    if (f.ok()) return f.value;
-    if (!f.present()) {
-      if (required) error(pos_of(t), join(prefix, key), "missing required number");
-      return std::nullopt;
-    }
-    error(pos_of(*f.node), join(prefix, key),
-          "expected a finite number, found " +
-              (f.status == tr::FieldStatus::not_finite ? std::string("a non-finite float") : type_name(*f.node)));
-    return std::nullopt;
-  }
-
-  std::optional<bool> get_bool(const toml::table& t, std::string_view key, const std::string& prefix) {
-    const auto f = tr::read_bool(t, key);
-    if (f.status == tr::FieldStatus::wrong_type)
-      error(pos_of(*f.node), join(prefix, key), "expected true or false, found " + type_name(*f.node));
-    if (!f.ok()) return std::nullopt;
-    return f.value;
-  }
-
-  std::optional<std::string> get_enum(const toml::table& t, std::string_view key,
-                                      const std::string& prefix, const std::vector<std::string>& allowed) {
-    const toml::node* n = t.get(key);
-    if (!n) return std::nullopt;
-    const auto* s = n->as_string();
-    if (!s) {
-      error(pos_of(*n), join(prefix, key), "expected one of " + quoted_list(allowed) + ", found " + type_name(*n));
-      return std::nullopt;
-    }
-    if (std::find(allowed.begin(), allowed.end(), s->get()) != allowed.end()) return s->get();
-    std::string msg = "unknown value \"" + s->get() + "\": expected one of " + quoted_list(allowed);
-    const std::string guess = closest_match(s->get(), allowed);
-    if (!guess.empty()) msg += " (did you mean \"" + guess + "\"?)";
-    error(pos_of(*n), join(prefix, key), msg);
-    return std::nullopt;
-  }
-
-  std::vector<std::string> get_string_array(const toml::table& t, std::string_view key,
-                                            const std::string& prefix,
-                                            const std::vector<std::string>* allowed = nullptr) {
-    std::vector<std::string> out;
-    const toml::node* n = t.get(key);
-    if (!n) return out;
-    const auto* arr = n->as_array();
-    if (!arr) {
-      error(pos_of(*n), join(prefix, key), "expected an array of strings, found " + type_name(*n));
-      return out;
-    }
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const toml::node& e = (*arr)[i];
-      const std::string field = join(prefix, key) + "[" + std::to_string(i + 1) + "]";
-      const auto* s = e.as_string();
-      if (!s) {
-        error(pos_of(e), field, "expected a string, found " + type_name(e));
-        continue;
-      }
-      if (allowed && std::find(allowed->begin(), allowed->end(), s->get()) == allowed->end()) {
-        std::string msg = "unknown name \"" + s->get() + "\"";
-        const std::string guess = closest_match(s->get(), *allowed);
-        if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
-        msg += " See docs/protocols.md, \"Key and button names\"";
-        error(pos_of(e), field, msg);
-        continue;
-      }
-      out.push_back(s->get());
-    }
-    return out;
-  }
-
-  // Adds what was actually written when the registry's message does not say.
-  static std::string with_found(const std::string& message, const toml::node& n) {
-    if (message.find("found") != std::string::npos) return message;
-    return message + ", found " + type_name(n);
-  }
-
-  std::optional<SettingValue> to_value(const toml::node& n) {
-    if (const auto* b = n.as_boolean()) return SettingValue{b->get()};
-    if (const auto* i = n.as_integer()) return SettingValue{i->get()};
-    if (const auto* f = n.as_floating_point()) return SettingValue{f->get()};
-    if (const auto* s = n.as_string()) return SettingValue{s->get()};
-    return std::nullopt;
-  }
-
   // ---- settings sections (session level and per block) ----------------
   void read_settings(const toml::table& t, const std::string& prefix, std::vector<SettingOverride>& out) {
     for (const char* section : {"space", "tracking", "viewing", "timeline", "stimulus", "table"}) {
@@ -444,232 +251,25 @@ class Loader {
   }
 
   // ---- judgements -------------------------------------------------------
-  std::vector<ResponseOption> read_options(const toml::table& j, const std::string& prefix) {
-    std::vector<ResponseOption> out;
-    const toml::node* n = j.get("options");
-    if (!n) {
-      error(pos_of(j), prefix + ".options", "missing required array of options ([[" + prefix + ".options]] tables)");
-      return out;
-    }
-    const auto* arr = n->as_array();
-    if (!arr) {
-      error(pos_of(*n), prefix + ".options", "expected an array of tables, found " + type_name(*n));
-      return out;
-    }
-    std::set<std::string> values, bound;
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const toml::node& e = (*arr)[i];
-      const std::string op = prefix + ".options[" + std::to_string(i + 1) + "]";
-      const auto* t = e.as_table();
-      if (!t) {
-        error(pos_of(e), op, "expected a table with value, label, keys and buttons, found " + type_name(e));
-        continue;
-      }
-      check_keys(*t, op, {"value", "label", "keys", "buttons"});
-      ResponseOption o;
-      o.value = get_string(*t, "value", op, true).value_or("");
-      if (t->contains("value") && t->get("value")->is_string() && !is_identifier(o.value))
-        error(pos_of(*t->get("value")), op + ".value", "expected a lower-case identifier (stored in the data)");
-      o.label = get_string(*t, "label", op, false).value_or(o.value);
-      o.keys = get_string_array(*t, "keys", op, &key_names());
-      o.buttons = get_string_array(*t, "buttons", op, &button_names());
-      if (!t->contains("keys") && !t->contains("buttons"))
-        error(pos_of(*t), op, "expected at least one of keys or buttons to answer with");
-      if (!o.value.empty() && !values.insert(o.value).second)
-        error(pos_of(*t), op + ".value", "duplicate option value \"" + o.value + "\"");
-      for (const auto& key : o.keys)
-        if (!bound.insert("key:" + key).second)
-          error(pos_of(*t->get("keys")), op + ".keys", "key \"" + key + "\" is bound to two options");
-      for (const auto& b : o.buttons)
-        if (!bound.insert("button:" + b).second)
-          error(pos_of(*t->get("buttons")), op + ".buttons", "button \"" + b + "\" is bound to two options");
-      out.push_back(std::move(o));
-    }
-    if (arr->size() < 2)
-      error(pos_of(*n), prefix + ".options", "expected at least 2 options, found " + std::to_string(arr->size()));
-    return out;
-  }
-
-  std::string read_parameter(const toml::table& j, const std::string& prefix, const Protocol& p) {
-    const auto param = get_string(j, "parameter", prefix, true);
-    if (!param) return "";
-    const SourcePos at = pos_of(*j.get("parameter"));
-    const auto paths = numeric_setting_paths();
-    if (std::find(paths.begin(), paths.end(), *param) == paths.end()) {
-      std::string msg = "unknown parameter \"" + *param + "\"";
-      const std::string guess = closest_match(*param, paths);
-      if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
-      if (p.find_factor(*param)) msg += " (\"" + *param + "\" is a factor, not a numeric setting)";
-      msg += " Expected a numeric setting: " + quoted_list(paths);
-      error(at, prefix + ".parameter", msg);
-      return "";
-    }
-    for (const auto& f : p.factors)
-      if (f.sets == *param)
-        error(at, prefix + ".parameter", "\"" + *param + "\" is also varied by factor \"" + f.name +
-                                             "\"; a trial's value cannot come from both");
-    return *param;
-  }
-
-  void check_range(const std::string& param, double lo, double hi, const toml::table& t,
-                   const std::string& prefix) {
-    const SettingInfo* info = find_setting(param);
-    if (!info) return;
-    if (!(lo < hi)) {
-      error(pos_of(t), prefix, "expected min < max");
-      return;
-    }
-    if (lo < info->min || hi > info->max)
-      error(pos_of(t), prefix, "min and max must lie within " + std::string(param) + "'s range [" +
-                                   value_label(SettingValue(std::in_place_type<double>, info->min)) + ", " + value_label(SettingValue(std::in_place_type<double>, info->max)) + "]");
-  }
-
+  // The common keys here; the rest is the type's (judgement.hpp).
   Judgement read_judgement(const toml::table& j, const std::string& prefix, const Protocol& p) {
     Judgement out;
     out.pos = pos_of(j);
-    const auto type = get_enum(j, "type", prefix, {"choice", "adjustment", "staircase"});
-    if (!j.contains("type")) error(pos_of(j), prefix + ".type", "missing required type: \"choice\", \"adjustment\" or \"staircase\"");
+    std::vector<std::string> names;
+    for (const JudgementType* t : judgement_types()) names.emplace_back(t->name());
+    const auto type = get_enum(j, "type", prefix, names);
+    if (!j.contains("type"))
+      error(pos_of(j), prefix + ".type", "missing required type: " + judgement_type_alternatives());
     if (!type) {
-      check_keys(j, prefix, {"type", "prompt", "options", "parameter", "positive", "staircases",
-                             "start_min", "start_max", "step", "fine_step", "min", "max",
-                             "keys_decrease", "keys_increase", "keys_confirm", "buttons_decrease",
-                             "buttons_increase", "buttons_confirm"});
+      check_keys(j, prefix, any_table_keys());
       return out;
     }
     out.prompt = get_string(j, "prompt", prefix, false).value_or("");
-    if (*type == "choice") {
-      out.type = JudgementType::choice;
-      check_keys(j, prefix, {"type", "prompt", "options"});
-      out.options = read_options(j, prefix);
-    } else if (*type == "adjustment") {
-      out.type = JudgementType::adjustment;
-      check_keys(j, prefix, {"type", "prompt", "parameter", "start_min", "start_max", "step",
-                             "fine_step", "min", "max", "keys_decrease", "keys_increase",
-                             "keys_confirm", "buttons_decrease", "buttons_increase", "buttons_confirm"});
-      AdjustmentSpec a;
-      a.parameter = read_parameter(j, prefix, p);
-      const auto mn = get_number(j, "min", prefix, true), mx = get_number(j, "max", prefix, true);
-      const auto s0 = get_number(j, "start_min", prefix, true), s1 = get_number(j, "start_max", prefix, true);
-      const auto step = get_number(j, "step", prefix, true);
-      a.fine_step = get_number(j, "fine_step", prefix, false).value_or(0.0);
-      if (mn && mx) {
-        a.min = *mn;
-        a.max = *mx;
-        if (!a.parameter.empty()) check_range(a.parameter, a.min, a.max, j, prefix);
-      }
-      if (s0 && s1 && mn && mx) {
-        a.start_min = *s0;
-        a.start_max = *s1;
-        if (!(a.min <= a.start_min && a.start_min <= a.start_max && a.start_max <= a.max))
-          error(pos_of(*j.get("start_min")), prefix + ".start_min",
-                "expected min ≤ start_min ≤ start_max ≤ max");
-      }
-      if (step) {
-        a.step = *step;
-        if (!(a.step > 0.0) || (mn && mx && a.step > a.max - a.min))
-          error(pos_of(*j.get("step")), prefix + ".step", "expected 0 < step ≤ max − min");
-      }
-      if (a.fine_step < 0.0 || (a.fine_step > 0.0 && a.fine_step > a.step))
-        error(pos_of(*j.get("fine_step")), prefix + ".fine_step", "expected 0 < fine_step ≤ step");
-      a.keys_decrease = get_string_array(j, "keys_decrease", prefix, &key_names());
-      a.keys_increase = get_string_array(j, "keys_increase", prefix, &key_names());
-      a.keys_confirm = get_string_array(j, "keys_confirm", prefix, &key_names());
-      a.buttons_decrease = get_string_array(j, "buttons_decrease", prefix, &button_names());
-      a.buttons_increase = get_string_array(j, "buttons_increase", prefix, &button_names());
-      a.buttons_confirm = get_string_array(j, "buttons_confirm", prefix, &button_names());
-      if (a.keys_decrease.empty() && a.buttons_decrease.empty()) a.keys_decrease = {"left"};
-      if (a.keys_increase.empty() && a.buttons_increase.empty()) a.keys_increase = {"right"};
-      if (a.keys_confirm.empty() && a.buttons_confirm.empty()) a.keys_confirm = {"space"};
-      out.adjustment = a;
-    } else {
-      out.type = JudgementType::staircase;
-      check_keys(j, prefix, {"type", "prompt", "options", "parameter", "positive", "staircases"});
-      out.options = read_options(j, prefix);
-      out.parameter = read_parameter(j, prefix, p);
-      if (auto pos = get_string(j, "positive", prefix, true)) {
-        const bool known = std::any_of(out.options.begin(), out.options.end(),
-                                       [&](const ResponseOption& o) { return o.value == *pos; });
-        if (!known) {
-          std::vector<std::string> values;
-          for (const auto& o : out.options) values.push_back(o.value);
-          error(pos_of(*j.get("positive")), prefix + ".positive",
-                "\"" + *pos + "\" is not an option value: expected one of " + quoted_list(values));
-        }
-        out.positive = *pos;
-      }
-      read_staircases(j, prefix, out);
-    }
+    out.type = find_judgement_type(*type);
+    check_keys(j, prefix, table_keys(*out.type));
+    JudgementSection section(*this, j, prefix, p);
+    out.type->read(section, out);
     return out;
-  }
-
-  void read_staircases(const toml::table& j, const std::string& prefix, Judgement& out) {
-    const toml::node* n = j.get("staircases");
-    if (!n) {
-      error(pos_of(j), prefix + ".staircases", "missing required [[" + prefix + ".staircases]] tables");
-      return;
-    }
-    const auto* arr = n->as_array();
-    if (!arr || arr->empty()) {
-      error(pos_of(*n), prefix + ".staircases", "expected at least one staircase table");
-      return;
-    }
-    std::set<std::string> names;
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const toml::node& e = (*arr)[i];
-      const std::string sp = prefix + ".staircases[" + std::to_string(i + 1) + "]";
-      const auto* t = e.as_table();
-      if (!t) {
-        error(pos_of(e), sp, "expected a table, found " + type_name(e));
-        continue;
-      }
-      check_keys(*t, sp, {"name", "start", "up", "down", "step_sizes", "stop_reversals",
-                          "max_trials", "discard_reversals", "min", "max"});
-      StaircaseSpec s;
-      s.name = get_string(*t, "name", sp, true).value_or("");
-      if (!s.name.empty() && !names.insert(s.name).second)
-        error(pos_of(*t->get("name")), sp + ".name", "duplicate staircase name \"" + s.name + "\"");
-      const auto start = get_number(*t, "start", sp, true);
-      s.up = static_cast<int>(get_int(*t, "up", sp, 1, 5, false).value_or(1));
-      s.down = static_cast<int>(get_int(*t, "down", sp, 1, 5, false).value_or(2));
-      s.stop_reversals = static_cast<int>(get_int(*t, "stop_reversals", sp, 1, 100, false).value_or(8));
-      s.max_trials = static_cast<int>(get_int(*t, "max_trials", sp, 1, 1000, false).value_or(50));
-      s.discard_reversals = static_cast<int>(get_int(*t, "discard_reversals", sp, 0, 99, false).value_or(2));
-      if (t->contains("discard_reversals") && s.discard_reversals >= s.stop_reversals)
-        error(pos_of(*t->get("discard_reversals")), sp + ".discard_reversals",
-              "expected fewer than stop_reversals (" + std::to_string(s.stop_reversals) +
-                  "), or no reversal is left for the estimate");
-      const auto mn = get_number(*t, "min", sp, true), mx = get_number(*t, "max", sp, true);
-      if (mn && mx) {
-        s.min = *mn;
-        s.max = *mx;
-        if (!out.parameter.empty()) check_range(out.parameter, s.min, s.max, *t, sp);
-        else if (!(s.min < s.max)) error(pos_of(*t), sp, "expected min < max");
-      }
-      if (start) {
-        s.start = *start;
-        if (mn && mx && (s.start < s.min || s.start > s.max))
-          error(pos_of(*t->get("start")), sp + ".start", "expected min ≤ start ≤ max");
-      }
-      if (const toml::node* st = t->get("step_sizes")) {
-        const auto* sa = st->as_array();
-        if (!sa || sa->empty()) {
-          error(pos_of(*st), sp + ".step_sizes", "expected a non-empty array of positive numbers");
-        } else {
-          for (std::size_t k = 0; k < sa->size(); ++k) {
-            const auto v = node_number((*sa)[k]);
-            if (!v || !(*v > 0.0) || !std::isfinite(*v)) {
-              error(pos_of((*sa)[k]), sp + ".step_sizes[" + std::to_string(k + 1) + "]",
-                    "expected a positive number");
-              continue;
-            }
-            s.step_sizes.push_back(*v);
-          }
-        }
-      } else {
-        error(pos_of(*t), sp + ".step_sizes", "missing required array of step sizes");
-      }
-      out.staircases.push_back(std::move(s));
-    }
   }
 
   // ---- blocks ------------------------------------------------------------
@@ -691,8 +291,7 @@ class Loader {
       b.randomize = default_randomize_;
       b.judgement = p.judgement;
       if (!has_root_judgement_)
-        error({1, 1}, "judgement", "missing required table [judgement] (type = \"choice\", "
-                                   "\"adjustment\" or \"staircase\")");
+        error({1, 1}, "judgement", "missing required table [judgement] (type = " + judgement_type_alternatives() + ")");
       b.break_every_trials = static_cast<int>(every);
       b.break_text = break_text;
       b.break_min_ms = break_ms;
@@ -748,9 +347,8 @@ class Loader {
       else if (has_root_judgement_) b.judgement = p.judgement;
       else error(b.pos, bp + ".judgement",
                  "this block has no judgement: add a top-level [judgement] or one for the block");
-      if (b.judgement.type == JudgementType::staircase && b.repetitions > 1)
-        error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions",
-              "expected 1 in a staircase block (its length comes from the stop rule); add staircases instead");
+      if (const auto problem = b.judgement.type ? b.judgement.type->repetitions_problem(b.repetitions) : std::nullopt)
+        error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions", *problem);
       p.blocks.push_back(std::move(b));
     }
   }
@@ -872,12 +470,7 @@ class Loader {
         error(b.pos, bp, "the block crosses more than " + std::to_string(kMaxCells) + " factor-level combinations");
         return;
       }
-      std::size_t trials = 0;
-      if (b.judgement.type == JudgementType::staircase) {
-        for (const auto& s : b.judgement.staircases) trials += cells * static_cast<std::size_t>(s.max_trials);
-      } else {
-        trials = cells * static_cast<std::size_t>(b.repetitions);
-      }
+      const std::size_t trials = cells * b.judgement.type->trials_per_cell(b);
       if (trials == 0) error(b.pos, bp, "the block has zero trials");
       total += trials;
       if (total > kMaxTrials) {
@@ -921,18 +514,11 @@ class Loader {
         else error(b.pos, bp, msg + suffix);
       };
       check_settings(s, report);
-      // The values a staircase or adjustment can reach must be possible too:
+      // The values the judgement can reach must be possible too:
       // check both ends of every range, reported at the judgement.
-      const std::string& param = b.judgement.type == JudgementType::adjustment && b.judgement.adjustment
-                                     ? b.judgement.adjustment->parameter
-                                     : b.judgement.parameter;
-      if (param.empty() || b.judgement.type == JudgementType::choice) continue;
-      std::vector<double> ends;
-      if (b.judgement.adjustment) ends = {b.judgement.adjustment->min, b.judgement.adjustment->max};
-      for (const auto& st : b.judgement.staircases) {
-        ends.push_back(st.min);
-        ends.push_back(st.max);
-      }
+      const std::string& param = b.judgement.parameter;
+      const std::vector<double> ends = b.judgement.type->reachable_values(b.judgement);
+      if (param.empty() || ends.empty()) continue;
       const std::string jfield = (b.judgement.pos.line == p.judgement.pos.line &&
                                   b.judgement.pos.column == p.judgement.pos.column)
                                      ? "judgement"
@@ -964,8 +550,6 @@ class Loader {
                  value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_length_m / 2)));
   }
 
-  std::string file_;
-  std::vector<Diagnostic> diags_;
   RandomizeMode default_randomize_ = RandomizeMode::shuffle;
   bool has_root_judgement_ = false;
 };

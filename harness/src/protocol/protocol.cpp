@@ -4,15 +4,6 @@
 
 namespace curvlab::harness::protocol {
 
-std::string_view to_string(JudgementType t) {
-  switch (t) {
-    case JudgementType::choice: return "choice";
-    case JudgementType::adjustment: return "adjustment";
-    case JudgementType::staircase: return "staircase";
-  }
-  return "?";
-}
-
 std::string_view to_string(RandomizeMode m) {
   switch (m) {
     case RandomizeMode::none: return "none";

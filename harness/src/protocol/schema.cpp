@@ -1,58 +1,22 @@
-// Builds the protocol's JSON Schema. Settings come from the registry, so a
-// new setting reaches the editors without touching this file; the other
-// sections mirror the loader's readers (loader.cpp), and
+// Builds the protocol's JSON Schema. Settings come from the registry and
+// judgements from their types, so a new setting or judgement type reaches the
+// editors without touching this file; the other sections mirror the loader's
+// readers (loader.cpp), and
 // tests/protocol/schema_tests.cpp holds the two together key by key.
 #include "curvlab/harness/protocol/schema.hpp"
 
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
-
-#include <nlohmann/json.hpp>
+#include "judgements/judgement_format.hpp"
+#include "schema_json.hpp"
 
 #include <limits>
 
 namespace curvlab::harness::protocol {
 namespace {
 
-using Json = nlohmann::ordered_json;
-
-constexpr const char* kIdentifierPattern = "^[a-z_][a-z0-9_-]{0,63}$";
-
-Json strings(const std::vector<std::string>& items) {
-  Json a = Json::array();
-  for (const auto& s : items) a.push_back(s);
-  return a;
-}
-
-Json integer(std::int64_t lo, std::int64_t hi, std::string description) {
-  return {{"type", "integer"}, {"minimum", lo}, {"maximum", hi}, {"description", std::move(description)}};
-}
-
-Json with_default(Json j, Json value) {
-  j["default"] = std::move(value);
-  return j;
-}
-
-Json string_field(std::string description) {
-  return {{"type", "string"}, {"description", std::move(description)}};
-}
-
-Json enum_field(const std::vector<std::string>& values, std::string description) {
-  return {{"type", "string"}, {"enum", strings(values)}, {"description", std::move(description)}};
-}
-
-Json string_array(std::string description, const std::vector<std::string>* names = nullptr) {
-  Json items = {{"type", "string"}};
-  if (names) items["enum"] = strings(*names);
-  return {{"type", "array"}, {"items", items}, {"description", std::move(description)}};
-}
-
-Json closed_object(Json properties, std::string description) {
-  return {{"type", "object"},
-          {"description", std::move(description)},
-          {"properties", std::move(properties)},
-          {"additionalProperties", false}};
-}
+using namespace schema_json;
 
 // ---- settings: one schema per registry entry -------------------------------
 
@@ -184,93 +148,49 @@ Json factor_schema() {
 
 // ---- judgements -------------------------------------------------------------
 
-Json option_schema() {
-  Json props = {
-      {"value", {{"type", "string"}, {"pattern", kIdentifierPattern},
-                 {"description", "stored in the data; a lower-case identifier, unique"}}},
-      {"label", string_field("shown on the panel (default: the value)")},
-      {"keys", string_array("keyboard keys that give this answer", &response_key_names())},
-      {"buttons", string_array("controller or HID buttons that give this answer", &response_button_names())},
-  };
-  Json j = closed_object(props, "one answer");
-  j["required"] = Json::array({"value"});
-  j["anyOf"] = Json::array({Json{{"required", Json::array({"keys"})}}, Json{{"required", Json::array({"buttons"})}}});
-  return j;
+// "a, b, or c" (the types' summaries).
+std::string summaries() {
+  const auto& types = judgement_types();
+  std::string out;
+  for (std::size_t i = 0; i < types.size(); ++i) {
+    if (i > 0) out += i + 1 == types.size() ? (types.size() > 2 ? ", or " : " or ") : ", ";
+    out += types[i]->summary();
+  }
+  return out;
 }
 
-Json staircase_schema() {
-  Json props = {
-      {"name", string_field("unique within the judgement")},
-      {"start", {{"type", "number"}, {"description", "the first value; min ≤ start ≤ max"}}},
-      {"up", with_default(integer(1, 5, "consecutive negative responses before the value goes up"), 1)},
-      {"down", with_default(integer(1, 5, "consecutive positive responses before the value goes down"), 2)},
-      {"step_sizes", {{"type", "array"},
-                      {"minItems", 1},
-                      {"items", {{"type", "number"}, {"exclusiveMinimum", 0}}},
-                      {"description", "step k is used after k reversals; the last repeats"}}},
-      {"stop_reversals", with_default(integer(1, 100, "stop after this many reversals"), 8)},
-      {"max_trials", with_default(integer(1, 1000, "or after this many trials, whichever comes first"), 50)},
-      {"discard_reversals",
-       with_default(integer(0, 99, "reversals left out of the threshold estimate (< stop_reversals)"), 2)},
-      {"min", {{"type", "number"}, {"description", "the value is clamped to [min, max]"}}},
-      {"max", {{"type", "number"}, {"description", "the value is clamped to [min, max]"}}},
-  };
-  Json j = closed_object(props, "one n-up/m-down staircase (Levitt 1971)");
-  j["required"] = Json::array({"name", "start", "step_sizes", "min", "max"});
-  return j;
+// "choice and staircase: " for a key two types take.
+std::string taken_by(const std::vector<const JudgementType*>& types) {
+  std::string out;
+  for (std::size_t i = 0; i < types.size(); ++i) {
+    if (i > 0) out += i + 1 == types.size() ? " and " : ", ";
+    out += types[i]->name();
+  }
+  return out + ": ";
 }
 
+// The keys every type takes, then each type's own (judgements/), and for
+// each type the keys it allows and requires.
 Json judgement_schema() {
-  const auto& keys = response_key_names();
-  const auto& buttons = response_button_names();
+  std::vector<std::string> names;
+  for (const JudgementType* t : judgement_types()) names.emplace_back(t->name());
   Json props = {
-      {"type", enum_field({"choice", "adjustment", "staircase"},
-                          "n-alternative choice, method of adjustment, or interleaved staircases")},
+      {"type", enum_field(names, summaries())},
       {"prompt", string_field("shown on the in-headset panel")},
-      {"options", {{"type", "array"}, {"minItems", 2}, {"items", option_schema()},
-                   {"description", "choice and staircase: one table per answer"}}},
-      {"parameter", {{"type", "string"}, {"enum", strings(numeric_setting_paths())},
-                     {"description", "adjustment and staircase: the numeric setting that is varied; "
-                                     "not one a factor varies"}}},
-      {"positive", string_field("staircase: the option value that counts as a positive response")},
-      {"staircases", {{"type", "array"}, {"minItems", 1}, {"items", staircase_schema()},
-                      {"description", "staircase: interleaved staircases for every cell"}}},
-      {"start_min", {{"type", "number"}, {"description", "adjustment: start values are drawn from "
-                                                         "[start_min, start_max]; min ≤ start_min"}}},
-      {"start_max", {{"type", "number"}, {"description", "adjustment: start_min ≤ start_max ≤ max"}}},
-      {"step", {{"type", "number"}, {"exclusiveMinimum", 0},
-                {"description", "adjustment: one press; step ≤ max − min"}}},
-      {"fine_step", {{"type", "number"}, {"exclusiveMinimum", 0},
-                     {"description", "adjustment: a finer step (≤ step)"}}},
-      {"min", {{"type", "number"}, {"description", "adjustment: the adjustable range, inside the "
-                                                   "setting's own range, min < max"}}},
-      {"max", {{"type", "number"}, {"description", "adjustment: the adjustable range's upper end"}}},
-      {"keys_decrease", with_default(string_array("adjustment: keys that decrease the value", &keys),
-                                     Json::array({"left"}))},
-      {"keys_increase", with_default(string_array("adjustment: keys that increase the value", &keys),
-                                     Json::array({"right"}))},
-      {"keys_confirm", with_default(string_array("adjustment: keys that confirm the value", &keys),
-                                    Json::array({"space"}))},
-      {"buttons_decrease", string_array("adjustment: buttons that decrease the value", &buttons)},
-      {"buttons_increase", string_array("adjustment: buttons that increase the value", &buttons)},
-      {"buttons_confirm", string_array("adjustment: buttons that confirm the value", &buttons)},
   };
+  for (auto& k : type_keys()) {
+    k.schema["description"] = taken_by(k.types) + k.schema["description"].get<std::string>();
+    props[k.key] = std::move(k.schema);
+  }
   Json j = closed_object(props, "what the participant answers");
   j["required"] = Json::array({"type"});
-  const auto only = [](const char* type, std::vector<std::string> allowed, std::vector<std::string> required) {
-    return Json{{"if", {{"properties", {{"type", {{"const", type}}}}}, {"required", Json::array({"type"})}}},
-                {"then", {{"propertyNames", {{"enum", strings(allowed)}}}, {"required", strings(required)}}}};
-  };
-  j["allOf"] = Json::array({
-      only("choice", {"type", "prompt", "options"}, {"options"}),
-      only("adjustment",
-           {"type", "prompt", "parameter", "start_min", "start_max", "step", "fine_step", "min", "max",
-            "keys_decrease", "keys_increase", "keys_confirm", "buttons_decrease", "buttons_increase",
-            "buttons_confirm"},
-           {"parameter", "min", "max", "start_min", "start_max", "step"}),
-      only("staircase", {"type", "prompt", "options", "parameter", "positive", "staircases"},
-           {"parameter", "options", "positive", "staircases"}),
-  });
+  Json only = Json::array();
+  for (const JudgementType* t : judgement_types())
+    only.push_back({{"if", {{"properties", {{"type", {{"const", std::string(t->name())}}}}},
+                            {"required", Json::array({"type"})}}},
+                    {"then", {{"propertyNames", {{"enum", strings(table_keys(*t))}}},
+                              {"required", strings(fields_of(*t).required())}}}});
+  j["allOf"] = only;
   return j;
 }
 

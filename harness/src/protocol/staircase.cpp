@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 
 namespace curvlab::harness::protocol {
 
@@ -66,6 +67,26 @@ std::size_t InterleavedStaircases::next(Engine& rng) const {
     if (!stairs_[i].finished()) open.push_back(i);
   assert(!open.empty());
   return open[static_cast<std::size_t>(bounded(rng, open.size()))];
+}
+
+double staircase_target_probability(int up, int down) {
+  // A run of n positives comes before a run of m negatives with probability
+  // p^(n−1)(1 − q^m) / (p^(n−1) + q^(m−1) − p^(n−1) q^(m−1)), q = 1 − p
+  // (Feller, An Introduction to Probability Theory, vol. 1, §VIII.1); it
+  // increases with p, and the staircase settles where it is 1/2.
+  const auto down_first = [&](double p) {
+    const double q = 1.0 - p;
+    const double a = std::pow(p, down - 1);
+    const double b = std::pow(q, up - 1);
+    return a * (1.0 - std::pow(q, up)) / (a + b - a * b);
+  };
+  double lo = 0.0, hi = 1.0;
+  for (int it = 0; it < 200; ++it) {
+    const double p = 0.5 * (lo + hi);
+    if (down_first(p) < 0.5) lo = p;
+    else hi = p;
+  }
+  return 0.5 * (lo + hi);
 }
 
 }  // namespace curvlab::harness::protocol

@@ -2,20 +2,9 @@
 
 #include "curvlab/harness/protocol/random.hpp"
 
-#include <algorithm>
-#include <cmath>
-
 namespace curvlab::harness::runner {
 
 namespace {
-
-using protocol::JudgementType;
-
-std::string first_of(const std::vector<std::string>& keys, const std::vector<std::string>& buttons) {
-  if (!keys.empty()) return keys.front();
-  if (!buttons.empty()) return buttons.front();
-  return {};
-}
 
 double judged_quantity(const SimulatedObserver& observer, const World& world, const protocol::Settings& s,
                        const Placement& placement, const geometry::Isometry& head) {
@@ -23,30 +12,36 @@ double judged_quantity(const SimulatedObserver& observer, const World& world, co
   return perceived_sagitta_m(world, s, placement, head);
 }
 
-// Coarse steps toward the value the observer settles on, then the confirm.
-ObserverAnswer adjust(SimulatedObserver& observer, const World& world, const protocol::AdjustmentSpec& a,
-                      const protocol::Settings& s, const geometry::Isometry& head, std::int64_t t,
-                      double start) {
-  auto perceived = [&](double x) {
-    protocol::Settings s2 = s;
-    protocol::set_numeric_setting(s2, a.parameter, x);
-    return judged_quantity(observer, world, s2, place_stimulus(world, s2, head), head);
-  };
-  const double target = observer.adjust(perceived, a.min, a.max);
-  ObserverAnswer out;
-  out.perceived_m = perceived(start);
-  const std::string up = first_of(a.keys_increase, a.buttons_increase);
-  const std::string down = first_of(a.keys_decrease, a.buttons_decrease);
-  double v = start;
-  for (int presses = 0; std::abs(target - v) > a.step / 2.0 && presses < 400; ++presses) {
-    const bool inc = target > v;
-    out.keys.push_back({t, inc ? up : down});
-    v = std::clamp(v + (inc ? a.step : -a.step), a.min, a.max);
-    t += 80'000'000;
+// The simulated observer in the stimulus of one trial, as the judgement
+// types ask for it.
+class ObserverRespondent final : public protocol::Respondent {
+ public:
+  ObserverRespondent(SimulatedObserver& observer, const World& world, const protocol::Settings& s,
+                     const Placement& placement, const geometry::Isometry& head, std::optional<double> seen_m)
+      : observer_(observer), world_(world), s_(s), placement_(placement), head_(head), seen_m_(seen_m) {}
+
+  double judged() override { return seen_m_ ? *seen_m_ : judged_quantity(observer_, world_, s_, placement_, head_); }
+
+  double judged_at(const std::string& parameter, double value) override {
+    protocol::Settings s2 = s_;
+    protocol::set_numeric_setting(s2, parameter, value);
+    return judged_quantity(observer_, world_, s2, place_stimulus(world_, s2, head_), head_);
   }
-  out.keys.push_back({t + 200'000'000, first_of(a.keys_confirm, a.buttons_confirm)});
-  return out;
-}
+
+  std::size_t choose(double judged, std::size_t n) override { return observer_.choose(judged, n); }
+
+  double settle(const std::string& parameter, double min, double max) override {
+    return observer_.adjust([&](double x) { return judged_at(parameter, x); }, min, max);
+  }
+
+ private:
+  SimulatedObserver& observer_;
+  const World& world_;
+  const protocol::Settings& s_;
+  const Placement& placement_;
+  const geometry::Isometry& head_;
+  std::optional<double> seen_m_;
+};
 
 }  // namespace
 
@@ -62,14 +57,8 @@ ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, cons
                            const geometry::Isometry& head, std::int64_t onset_ns,
                            const std::optional<protocol::Adjustment>& adjustment, std::optional<double> seen_m) {
   const std::int64_t rt = observer.response_time_ns();
-  if (j.type == JudgementType::adjustment)
-    return adjust(observer, world, *j.adjustment, s, head, onset_ns + rt, adjustment->value());
-  ObserverAnswer out;
-  out.perceived_m = seen_m ? *seen_m : judged_quantity(observer, world, s, placement, head);
-  const auto& option = j.options.at(observer.choose(out.perceived_m, j.options.size()));
-  const std::string key = first_of(option.keys, option.buttons);
-  out.keys.push_back({onset_ns + rt, key.empty() ? option.value : key});
-  return out;
+  ObserverRespondent who(observer, world, s, placement, head, seen_m);
+  return j.type->plan_answer(j, who, onset_ns + rt, adjustment);
 }
 
 }  // namespace curvlab::harness::runner

@@ -4,26 +4,18 @@
 #pragma once
 
 #include "curvlab/harness/protocol/adjustment.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/runner/observer.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <cstdint>
 #include <optional>
-#include <string>
-#include <vector>
 
 namespace curvlab::harness::runner {
 
-struct ScheduledKey {
-  std::int64_t t_ns = 0;
-  std::string name;
-};
-
-struct ObserverAnswer {
-  std::vector<ScheduledKey> keys;  // in time order
-  double perceived_m = 0.0;        // the judged quantity at onset (logged with the onset)
-};
+using ScheduledKey = protocol::KeyPress;
+using ObserverAnswer = protocol::AnswerPlan;
 
 // The seed of the observer's random stream for one attempt of one trial:
 // from the observer's and the session's seeds, the trial's index and the
@@ -33,9 +25,10 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
                            std::int64_t attempt);
 
 // What `observer` presses for a trial whose stimulus came up at `onset_ns`
-// (session clock of the onset frame) with the head at `head`. `seen_m`: the
-// judged quantity as read from the onset images (the image observer's
-// choices); otherwise the perception model's.
+// (session clock of the onset frame) with the head at `head`: after its
+// response time, what the judgement's type plans. `seen_m`: the judged
+// quantity as read from the onset images (the image observer's choices);
+// otherwise the perception model's.
 ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, const protocol::Judgement& j,
                            const protocol::Settings& s, const Placement& placement,
                            const geometry::Isometry& head, std::int64_t onset_ns,

@@ -1,6 +1,7 @@
 #include "curvlab/harness/runner/predict.hpp"
 
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <cmath>
@@ -55,7 +56,7 @@ void locate_target(const protocol::PlannedTrial& t, const protocol::Judgement& j
                    const SimulatedObserver& observer, bool physical, StaircasePrediction& out) {
   std::size_t positive = 0;
   for (std::size_t k = 0; k < j.options.size(); ++k)
-    if (j.options[k].value == j.positive) positive = k;
+    if (j.options[k].value == out.positive) positive = k;
   const geometry::Isometry head = standing_head(world, t.settings);  // the same for every value
   auto p_positive = [&](double x) {
     protocol::Settings s = t.settings;
@@ -103,26 +104,6 @@ std::int64_t binomial(protocol::Engine& rng, std::int64_t n, double p) {
 
 }  // namespace
 
-double staircase_target_probability(int up, int down) {
-  // A run of n positives comes before a run of m negatives with probability
-  // p^(n−1)(1 − q^m) / (p^(n−1) + q^(m−1) − p^(n−1) q^(m−1)), q = 1 − p
-  // (Feller, An Introduction to Probability Theory, vol. 1, §VIII.1); it
-  // increases with p, and the staircase settles where it is 1/2.
-  const auto down_first = [&](double p) {
-    const double q = 1.0 - p;
-    const double a = std::pow(p, down - 1);
-    const double b = std::pow(q, up - 1);
-    return a * (1.0 - std::pow(q, up)) / (a + b - a * b);
-  };
-  double lo = 0.0, hi = 1.0;
-  for (int it = 0; it < 200; ++it) {
-    const double p = 0.5 * (lo + hi);
-    if (down_first(p) < 0.5) lo = p;
-    else hi = p;
-  }
-  return 0.5 * (lo + hi);
-}
-
 double student_t_two_sided_p(double t, double df) {
   if (!std::isfinite(t)) return 0.0;
   return incomplete_beta(df / 2.0, 0.5, df / (df + t * t));
@@ -153,7 +134,7 @@ std::string staircase_note(const StaircasePrediction& sp) {
   return buf;
 }
 
-// Where each staircase of a staircase condition converges for the mean observer.
+// Where each adaptive track of a condition converges for the mean observer.
 Result<Done> predict_staircases(const protocol::Protocol& p, const protocol::PlannedTrial& t,
                                 const std::string& judged_name, const SimulatedObserver& mean_observer,
                                 bool physical, Prediction& out) {
@@ -165,19 +146,19 @@ Result<Done> predict_staircases(const protocol::Protocol& p, const protocol::Pla
   if (!made) return made.error();
   const World world = std::move(made).value();
   const auto& j = block->judgement;
-  for (const auto& sc : j.staircases) {
+  for (const auto& track : j.type->convergence(j)) {
     StaircasePrediction sp;
     sp.block = t.block;
     sp.levels = t.levels;
     sp.judged = judged_name;
-    sp.staircase = sc.name;
+    sp.staircase = track.track;
     sp.parameter = j.parameter;
-    sp.positive = j.positive;
-    sp.up = sc.up;
-    sp.down = sc.down;
-    sp.min = sc.min;
-    sp.max = sc.max;
-    sp.target_p = staircase_target_probability(sc.up, sc.down);
+    sp.positive = track.positive;
+    sp.up = track.up;
+    sp.down = track.down;
+    sp.min = track.min;
+    sp.max = track.max;
+    sp.target_p = track.target_p;
     locate_target(t, j, world, mean_observer, physical, sp);
     if (!sp.target_value) out.notes.push_back(staircase_note(sp));
     out.staircases.push_back(std::move(sp));
@@ -208,12 +189,28 @@ Result<ConditionPrediction> predict_condition(const protocol::Protocol& p, const
   return c;
 }
 
+// "a, b and c".
+std::string listed(const std::vector<std::string>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  return out;
+}
+
+// "adjustment blocks are not predicted (choice and staircase only)".
+std::string not_predicted_note() {
+  std::vector<std::string> not_predicted, predicted;
+  for (const auto* type : protocol::judgement_types())
+    (type->forecast() == protocol::Forecast::none ? not_predicted : predicted).emplace_back(type->name());
+  return listed(not_predicted) + " blocks are not predicted (" + listed(predicted) + " only)";
+}
+
 // The distinct conditions of participant 1's design (every participant sees
 // the same conditions; only order and counterbalancing differ).
 Result<Done> collect_conditions(const protocol::Protocol& p, const PredictOptions& o, Prediction& out) {
   const protocol::Design design = protocol::expand_design(p, 1);
   std::map<std::string, std::size_t> index;  // condition key → out.conditions
-  std::map<std::string, bool> staircase_seen;
+  std::map<std::string, bool> adaptive_seen;
   const SimulatedObserver mean_observer(o.observer);
   const bool physical = o.observer.model == ObserverModel::physical;
   bool skipped_other = false;
@@ -221,12 +218,13 @@ Result<Done> collect_conditions(const protocol::Protocol& p, const PredictOption
     if (t.practice) continue;
     const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
     const std::string key = condition_key(t, judged_name);
-    if (t.judgement == protocol::JudgementType::staircase) {
-      if (!staircase_seen.emplace(key, true).second) continue;
+    const protocol::Forecast forecast = t.judgement->forecast();
+    if (forecast == protocol::Forecast::convergence) {
+      if (!adaptive_seen.emplace(key, true).second) continue;
       if (auto r = predict_staircases(p, t, judged_name, mean_observer, physical, out); !r) return r.error();
       continue;
     }
-    if (t.judgement != protocol::JudgementType::choice) {
+    if (forecast == protocol::Forecast::none) {
       skipped_other = true;
       continue;
     }
@@ -253,7 +251,7 @@ Result<Done> collect_conditions(const protocol::Protocol& p, const PredictOption
     }
     ++out.conditions[it->second].trials_per_participant;
   }
-  if (skipped_other) out.notes.push_back("adjustment blocks are not predicted (choice and staircase only)");
+  if (skipped_other) out.notes.push_back(not_predicted_note());
   return Done{};
 }
 

@@ -1,6 +1,7 @@
 #include "curvlab/harness/runner/preview.hpp"
 
 #include "curvlab/harness/data/sha256.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/version.hpp"
@@ -215,21 +216,16 @@ std::pair<std::uint32_t, std::uint32_t> sheet_size(const protocol::Protocol& p, 
   return {w, h};
 }
 
-// The stimulus value the runner shows at this trial's onset: a staircase's
-// start, an adjustment trial's drawn start. Returns the note for the panel.
+// The stimulus value the runner shows at this trial's onset where the
+// judgement's type sets it (a staircase's start, an adjustment trial's drawn
+// start). Returns the note for the panel.
 std::string onset_value(const protocol::Block* block, const protocol::PlannedTrial& t, Settings& s) {
-  std::string note;
-  if (block && block->judgement.type == protocol::JudgementType::staircase && !block->judgement.staircases.empty()) {
-    const auto& sc = block->judgement.staircases[t.staircase >= 0 ? static_cast<std::size_t>(t.staircase) : 0];
-    protocol::set_numeric_setting(s, block->judgement.parameter, sc.start);
-    note = "staircase \"" + sc.name + "\" at its start value, " + block->judgement.parameter + " = " + num(sc.start);
-  }
-  if (t.adjustment_start && block && block->judgement.adjustment) {
-    protocol::set_numeric_setting(s, block->judgement.adjustment->parameter, *t.adjustment_start);
-    note = "adjustment start of trial " + std::to_string(t.index) + ": " + block->judgement.adjustment->parameter +
-           " = " + fixed(*t.adjustment_start, 4) + " (the settings below are the protocol's)";
-  }
-  return note;
+  if (!block) return "";
+  const auto& j = block->judgement;
+  const auto value = j.type->onset_value(j, t);
+  if (!value) return "";
+  protocol::set_numeric_setting(s, j.parameter, value->value);
+  return value->note;
 }
 
 struct SheetRenderer {
@@ -319,8 +315,8 @@ void write_blocks(std::ostringstream& o, const protocol::Protocol& p, const prot
                  std::to_string(tl.response_ms) + " / " + std::to_string(tl.iti_ms) + " ms (" +
                  num(static_cast<double>(tl.total_ms()) / 1000.0) + " s per trial at most)";
     }
-    std::string judgement = b ? std::string(protocol::to_string(b->judgement.type)) : "";
-    if (b && b->judgement.type == protocol::JudgementType::staircase) judgement += " (trial count at most)";
+    std::string judgement = b ? std::string(b->judgement.type->name()) : "";
+    if (b && b->judgement.type->stops_early()) judgement += " (trial count at most)";
     std::string breaks = "none";
     if (b && b->break_every_trials > 0)
       breaks = "every " + std::to_string(b->break_every_trials) + " trials, at least " + duration_text(b->break_min_ms);
@@ -415,7 +411,7 @@ void write_panel(std::ostringstream& o, std::size_t k, const PreviewCondition& c
   if (!prediction || !write_predictions(o, *prediction, c, t)) {
     std::string why = "no prediction: ";
     if (t.practice) why += "practice trials are not predicted";
-    else if (t.judgement == protocol::JudgementType::adjustment) why += "adjustment is not predicted";
+    else if (t.judgement->forecast() == protocol::Forecast::none) why += std::string(t.judgement->name()) + " is not predicted";
     else why += prediction_note.empty() ? "none for this condition" : prediction_note;
     o << "<p class=\"small\">" << html(why) << "</p>\n";
   }

@@ -65,26 +65,27 @@ Result<Done> read_trial_settings(const data::SessionProvenance& prov, const Repl
   out.settings = planned.settings;
   for (const auto& b : out.protocol.blocks)
     if (b.name == planned.block) out.block = b;
-  if (planned.adjustment_start && out.block && out.block->judgement.adjustment) {
-    protocol::set_numeric_setting(out.settings, out.block->judgement.adjustment->parameter, *planned.adjustment_start);
+  if (planned.adjustment_start && out.block) {
+    protocol::set_numeric_setting(out.settings, out.block->judgement.parameter, *planned.adjustment_start);
     out.adjustment_value = *planned.adjustment_start;
   }
   return Done{};
 }
 
-// The value the trial showed: the staircase's intensity, and an adjustment's
-// value as last changed at or before the frame.
+// The value the trial showed: an adaptive method's intensity, and in an
+// adjustment trial (one planned with a start value) the value as last
+// changed at or before the frame.
 Result<Done> read_shown_value(data::Database& db, StoredFrame& out) {
   if (!out.block) return Done{};
   const auto& j = out.block->judgement;
   auto intensity = data::read_staircase_intensity(db, out.trial_id);
   if (!intensity) return intensity.error();
   if (*intensity) protocol::set_numeric_setting(out.settings, j.parameter, **intensity);
-  if (!j.adjustment) return Done{};
+  if (!out.adjustment_value) return Done{};
   auto adjusted = data::read_adjustment_at(db, out.trial_id, out.onset.event_id, out.frame_index);
   if (!adjusted) return adjusted.error();
   if (*adjusted) {
-    protocol::set_numeric_setting(out.settings, j.adjustment->parameter, **adjusted);
+    protocol::set_numeric_setting(out.settings, j.parameter, **adjusted);
     out.adjusted = true;
     out.adjustment_value = **adjusted;
   }

@@ -5,7 +5,7 @@
 #include "session_records.hpp"
 
 #include "curvlab/harness/protocol/adjustment.hpp"
-#include "curvlab/harness/protocol/staircase.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/runner/image_observer.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
@@ -25,7 +25,6 @@ namespace curvlab::harness::runner {
 namespace {
 
 using geometry::Isometry;
-using protocol::JudgementType;
 using protocol::PlannedTrial;
 using protocol::Settings;
 using SteadyTime = std::chrono::steady_clock;
@@ -98,7 +97,7 @@ class SessionLoop::Impl {
     dominant_ = options_.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
     eye_size_ = eye_image_size(backend_.info(), static_cast<std::uint32_t>(p_.resolution_width),
                                static_cast<std::uint32_t>(p_.resolution_height));
-    restore_staircases(s.staircase_history);
+    restore_adaptive(s.staircase_history);
     status_.participant = options_.participant;
     status_.session_id = session_id_;
     status_.protocol = p_.meta.name;
@@ -139,10 +138,10 @@ class SessionLoop::Impl {
     for (std::size_t i = first; i < design_.trials.size(); ++i) {
       const PlannedTrial& t = design_.trials[i];
       if (enter_block(i, first) == Outcome::quit || take_break(i, first) == Outcome::quit) return Outcome::quit;
-      if (staircase_finished(t)) {
-        writer_.journal(data::EndUnanswered{trial_ids_[i], false, "staircase_finished"});
+      if (const auto reason = skip_reason(t)) {
+        writer_.journal(data::EndUnanswered{trial_ids_[i], false, *reason});
         ++summary_.trials_skipped;
-        report_trial(i, data::TrialStatus::skipped, "staircase_finished");
+        report_trial(i, data::TrialStatus::skipped, *reason);
         continue;
       }
       if (run_trial(i) == Outcome::quit) return Outcome::quit;
@@ -169,8 +168,10 @@ class SessionLoop::Impl {
                  b.break_min_ms * 1'000'000, trial_ids_[i]);
   }
 
-  bool staircase_finished(const PlannedTrial& t) {
-    return t.staircase >= 0 && staircases_for(t).at(static_cast<std::size_t>(t.staircase)).finished();
+  // A slot an adaptive method no longer needs (a stopped staircase's).
+  std::optional<std::string> skip_reason(const PlannedTrial& t) {
+    const protocol::AdaptiveState* state = adaptive_for(t);
+    return state ? state->skip_reason(t) : std::nullopt;
   }
 
   void end_session(data::SessionStatus status) {
@@ -219,22 +220,27 @@ class SessionLoop::Impl {
     writer_.journal(data::event_record(session_id_, trial_id, clock_.now_ns(), e));
   }
 
-  protocol::InterleavedStaircases& staircases_for(const PlannedTrial& t) {
+  // The adaptive state of the trial's condition (block and cell); null when
+  // its judgement type is not adaptive.
+  protocol::AdaptiveState* adaptive_for(const PlannedTrial& t) {
     const auto key = std::pair{t.block_position, t.cell};
-    auto it = staircases_.find(key);
-    if (it == staircases_.end())
-      it = staircases_.emplace(key, protocol::InterleavedStaircases(block_of(p_, t.block).judgement.staircases)).first;
-    return it->second;
+    auto it = adaptive_.find(key);
+    if (it == adaptive_.end()) {
+      const auto& j = block_of(p_, t.block).judgement;
+      it = adaptive_.emplace(key, j.type->adaptive_state(j)).first;
+    }
+    return it->second.get();
   }
 
-  void restore_staircases(const std::vector<std::pair<std::int64_t, bool>>& history) {
+  // A resumed run replays the committed answers of adaptive trials, in order.
+  void restore_adaptive(const std::vector<std::pair<std::int64_t, bool>>& history) {
     std::map<std::int64_t, std::size_t> index_of;
     for (std::size_t i = 0; i < trial_ids_.size(); ++i) index_of[trial_ids_[i]] = i;
     for (const auto& [trial_id, positive] : history) {
       const auto it = index_of.find(trial_id);
       if (it == index_of.end()) continue;
       const auto& t = design_.trials[it->second];
-      if (t.staircase >= 0) staircases_for(t).at(static_cast<std::size_t>(t.staircase)).respond(positive);
+      if (auto* state = adaptive_for(t)) state->record(t, positive);
     }
   }
 
@@ -579,7 +585,7 @@ class SessionLoop::Impl {
     const PlannedTrial* planned = nullptr;
     const protocol::Judgement* judgement = nullptr;
     Settings settings;
-    std::optional<double> staircase_value;
+    std::optional<double> adaptive_value;  // the value an adaptive method shows
     std::string line;
     std::int64_t attempts = 0;  // attempts made so far, stored ones included
     std::int64_t aborts = 0;    // of which ended in a logged abort
@@ -607,9 +613,9 @@ class SessionLoop::Impl {
     t.judgement = &block_of(p_, t.planned->block).judgement;
     t.settings = t.planned->settings;
     t.line = trial_line(*t.planned);
-    if (t.planned->staircase >= 0) {
-      t.staircase_value = staircases_for(*t.planned).at(static_cast<std::size_t>(t.planned->staircase)).value();
-      protocol::set_numeric_setting(t.settings, t.judgement->parameter, *t.staircase_value);
+    if (const auto* state = adaptive_for(*t.planned)) {
+      t.adaptive_value = state->value(*t.planned);
+      protocol::set_numeric_setting(t.settings, t.judgement->parameter, *t.adaptive_value);
     }
     if (!resumed_trial_started_) {
       // The first trial of a resumed run may have attempts stored already.
@@ -682,10 +688,8 @@ class SessionLoop::Impl {
     status_.attempt = a.number;
     if (a.number > 1) ++summary_.attempts_repeated;
     const auto& j = *t.judgement;
-    if (j.type == JudgementType::adjustment && j.adjustment) {
-      a.adjustment.emplace(*j.adjustment, t.planned->adjustment_start.value_or(j.adjustment->start_min));
-      protocol::set_numeric_setting(t.settings, j.adjustment->parameter, a.adjustment->value());
-    }
+    a.adjustment = j.type->adjustment(j, *t.planned);
+    if (a.adjustment) protocol::set_numeric_setting(t.settings, j.parameter, a.adjustment->value());
     prepare(t.settings);
     writer_.journal(data::BeginTrial{t.id});
     if (const auto& base = observer_params()) {
@@ -773,7 +777,7 @@ class SessionLoop::Impl {
         case InputUse::increase:
         case InputUse::decrease:
           verdict.use == InputUse::increase ? a.adjustment->increase() : a.adjustment->decrease();
-          protocol::set_numeric_setting(t.settings, t.judgement->adjustment->parameter, a.adjustment->value());
+          protocol::set_numeric_setting(t.settings, t.judgement->parameter, a.adjustment->value());
           a.placement = place_stimulus(*world_, t.settings, a.head_at_onset);
           scene_->set_stimulus(t.settings, a.placement);
           event(t.id, data::events::Adjustment{a.adjustment->value(), frame_index_});
@@ -811,7 +815,7 @@ class SessionLoop::Impl {
     event(t.id, onset);
   }
 
-  // The answer (or the timeout), the staircase's step and the lost tracking,
+  // The answer (or the timeout), the adaptive method's step and the lost tracking,
   // journalled; durable before the next trial starts.
   void complete(TrialRun& t, const AttemptRun& a) {
     if (a.lost_spells > 0) {
@@ -830,14 +834,11 @@ class SessionLoop::Impl {
       r.response_ns = clock_.now_ns();
       r.response_device = "none";
     }
-    if (t.staircase_value && a.answer) {
-      auto& stair = staircases_for(*t.planned).at(static_cast<std::size_t>(t.planned->staircase));
-      const int reversals = stair.reversals();
-      const int step = stair.trials();
-      const bool positive = a.answer->first == t.judgement->positive;
-      stair.respond(positive);
-      r.staircase_step = data::StaircaseStep{staircase_key(p_, *t.planned), step, *t.staircase_value, positive,
-                                             stair.reversals() > reversals, stair.value()};
+    if (t.adaptive_value && a.answer) {
+      auto& state = *adaptive_for(*t.planned);
+      const auto step = state.record(*t.planned, state.positive(a.answer->first));
+      r.staircase_step = data::StaircaseStep{staircase_key(p_, *t.planned, step.track), step.step, step.value,
+                                             step.positive, step.reversal, step.next_value};
     }
     status_.last_response = r.response;
     status_.last_rt_ms = a.answer ? static_cast<double>(r.response_ns - r.onset_ns) * 1e-6 : -1.0;
@@ -888,7 +889,8 @@ class SessionLoop::Impl {
   std::unique_ptr<OnsetReader> onset_reader_;  // --observer image only
   renderer::Eye dominant_ = renderer::Eye::right;
   std::pair<std::uint32_t, std::uint32_t> eye_size_;  // each eye's image as the backend draws it
-  std::map<std::pair<std::size_t, std::size_t>, protocol::InterleavedStaircases> staircases_;
+  // Adaptive types' state per (block position, cell); null for the others.
+  std::map<std::pair<std::size_t, std::size_t>, std::unique_ptr<protocol::AdaptiveState>> adaptive_;
   std::optional<World> world_;
   Settings settings_;
   std::unique_ptr<geometry::Tracker> tracker_;

@@ -1,5 +1,6 @@
 #include "session_records.hpp"
 
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
@@ -19,11 +20,11 @@ const protocol::Block& block_of(const Protocol& p, const std::string& name) {
   std::abort();
 }
 
-std::string staircase_key(const Protocol& p, const PlannedTrial& t) {
+std::string staircase_key(const Protocol& p, const PlannedTrial& t, const std::string& track) {
   const auto& b = block_of(p, t.block);
   std::string key = t.block + ":";
   if (protocol::block_cells(p, b).size() > 1) key += "cell" + std::to_string(t.cell) + ":";
-  return key + b.judgement.staircases.at(static_cast<std::size_t>(t.staircase)).name;
+  return key + track;
 }
 
 data::Pose16 pose16(const geometry::Isometry& iso) {
@@ -62,8 +63,8 @@ std::string conditions_json(const Protocol& p, const PlannedTrial& t) {
   add("projection", std::string(renderer::to_string(s.viewing.projection)));
   add("eyes", std::string(renderer::to_string(s.viewing.eyes)));
   add("judged", judged(s) == Judged::stick ? "stick" : "table");
-  if (t.staircase >= 0)
-    add("staircase", block_of(p, t.block).judgement.staircases.at(static_cast<std::size_t>(t.staircase)).name);
+  const auto& judgement = block_of(p, t.block).judgement;
+  for (const auto& [name, value] : judgement.type->conditions(judgement, t)) add(name.c_str(), value);
   return j.dump();
 }
 

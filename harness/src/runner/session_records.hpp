@@ -20,9 +20,9 @@ using Json = nlohmann::ordered_json;
 // The block a planned trial belongs to. Its name comes from the design of
 // the same protocol, so a miss is a broken contract: it aborts.
 const protocol::Block& block_of(const protocol::Protocol& p, const std::string& name);
-// Staircases are named uniquely within a session: the block, the cell when
-// the block has several, and the staircase's own name.
-std::string staircase_key(const protocol::Protocol& p, const protocol::PlannedTrial& t);
+// Adaptive tracks (staircases) are named uniquely within a session: the
+// block, the cell when the block has several, and the track's own name.
+std::string staircase_key(const protocol::Protocol& p, const protocol::PlannedTrial& t, const std::string& track);
 // A 4×4 isometry as 16 numbers, column-major.
 data::Pose16 pose16(const geometry::Isometry& iso);
 // Every block and trial of a design, as the store keeps them.

@@ -1,18 +1,10 @@
 #include "curvlab/harness/runner/trial_state.hpp"
 
-#include <algorithm>
-
 namespace curvlab::harness::runner {
 
 namespace {
 
 constexpr std::int64_t ms(std::int64_t v) { return v * 1'000'000; }
-
-bool listed(const std::vector<std::string>& keys, const std::vector<std::string>& buttons,
-            const std::string& name) {
-  return std::find(keys.begin(), keys.end(), name) != keys.end() ||
-         std::find(buttons.begin(), buttons.end(), name) != buttons.end();
-}
 
 }  // namespace
 
@@ -85,17 +77,7 @@ AfterAbort after_abort(AbortReason reason, std::int64_t attempt, const protocol:
 
 InputVerdict classify_input(const protocol::Judgement& j, const std::string& name, bool answerable) {
   if (!answerable) return {InputUse::early};
-  if (j.type == protocol::JudgementType::adjustment) {
-    if (!j.adjustment) return {};
-    const auto& a = *j.adjustment;
-    if (listed(a.keys_increase, a.buttons_increase, name)) return {InputUse::increase};
-    if (listed(a.keys_decrease, a.buttons_decrease, name)) return {InputUse::decrease};
-    if (listed(a.keys_confirm, a.buttons_confirm, name)) return {InputUse::confirm};
-    return {};
-  }
-  for (std::size_t k = 0; k < j.options.size(); ++k)
-    if (listed(j.options[k].keys, j.options[k].buttons, name)) return {InputUse::choose, k};
-  return {};
+  return j.type->classify(j, name);
 }
 
 bool Page::is_continue(const std::string& name) {

@@ -6,7 +6,23 @@
 
 #include "curvlab/harness/protocol/protocol.hpp"
 
+#include <string>
+#include <vector>
+
 namespace curvlab::harness::protocol {
+
+// The adjustable range, the steps and the inputs; the parameter it varies is
+// the judgement's (Judgement::parameter).
+struct AdjustmentSpec {
+  double start_min = 0.0;
+  double start_max = 0.0;
+  double step = 0.0;
+  double fine_step = 0.0;  // 0: no fine step
+  double min = 0.0;
+  double max = 0.0;
+  std::vector<std::string> keys_decrease, keys_increase, keys_confirm;
+  std::vector<std::string> buttons_decrease, buttons_increase, buttons_confirm;
+};
 
 class Adjustment {
  public:
@@ -27,5 +43,9 @@ class Adjustment {
   int steps_ = 0;
   bool confirmed_ = false;
 };
+
+// A method-of-adjustment judgement of `parameter` built in code rather than
+// read from a protocol (judgements/adjustment.cpp).
+Judgement adjustment_judgement(const AdjustmentSpec& spec, std::string parameter);
 
 }  // namespace curvlab::harness::protocol

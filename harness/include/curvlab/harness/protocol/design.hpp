@@ -14,6 +14,20 @@
 
 namespace curvlab::harness::protocol {
 
+// A slot of a staircase block: which staircase of its cell's interleaved set
+// it belongs to (the runner skips a slot whose staircase has stopped).
+struct StaircaseSlot {
+  std::size_t index = 0;  // into the judgement's staircases
+};
+
+// One slot of a block before its trials are numbered: the judgement type
+// lays them out (judgement.hpp, JudgementType::slots).
+struct DesignSlot {
+  std::size_t cell = 0;
+  int repetition = 0;
+  std::optional<StaircaseSlot> staircase;
+};
+
 struct PlannedTrial {
   std::size_t index = 0;           // 0-based in the session
   std::size_t block_position = 0;  // 0-based position of the block in the run order
@@ -25,11 +39,9 @@ struct PlannedTrial {
   std::size_t cell = 0;  // index of the factor-level combination within the block
   Settings settings;     // resolved: session → block → levels
   Derived derived;
-  JudgementType judgement = JudgementType::choice;
-  // Staircase blocks: which staircase of this cell's interleaved set the slot
-  // belongs to; the runner skips a slot whose staircase has already stopped.
-  int staircase = -1;
-  std::optional<double> adjustment_start;
+  const JudgementType* judgement = nullptr;  // the block's judgement type
+  std::optional<StaircaseSlot> staircase;    // staircase blocks
+  std::optional<double> adjustment_start;    // adjustment blocks: the drawn start value
   bool break_before = false;
 };
 
@@ -37,7 +49,7 @@ struct PlannedBlock {
   std::string name;
   bool practice = false;
   std::size_t first_trial = 0;
-  std::size_t trial_count = 0;  // staircase blocks: the maximum
+  std::size_t trial_count = 0;  // the maximum where the judgement stops early
   std::vector<std::string> instructions;
   std::int64_t break_min_ms = 0;
 };

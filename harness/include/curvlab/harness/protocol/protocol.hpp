@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <variant>
@@ -46,8 +47,10 @@ struct Factor {
   SourcePos pos;
 };
 
-enum class JudgementType { choice, adjustment, staircase };
-std::string_view to_string(JudgementType t);
+// The family of judgement types and what a type keeps of its own table
+// (judgement.hpp).
+class JudgementType;
+class JudgementSpec;
 
 struct ResponseOption {
   std::string value;  // stored in the data, e.g. "convex"
@@ -56,40 +59,13 @@ struct ResponseOption {
   std::vector<std::string> buttons;
 };
 
-struct AdjustmentSpec {
-  std::string parameter;  // numeric setting path
-  double start_min = 0.0;
-  double start_max = 0.0;
-  double step = 0.0;
-  double fine_step = 0.0;  // 0: no fine step
-  double min = 0.0;
-  double max = 0.0;
-  std::vector<std::string> keys_decrease, keys_increase, keys_confirm;
-  std::vector<std::string> buttons_decrease, buttons_increase, buttons_confirm;
-};
-
-// One staircase of an interleaved set (n-up/m-down, Levitt 1971).
-struct StaircaseSpec {
-  std::string name;
-  double start = 0.0;
-  int up = 1;    // consecutive negative responses before the value goes up
-  int down = 2;  // consecutive positive responses before the value goes down
-  std::vector<double> step_sizes;  // step k is used after k reversals; the last repeats
-  int stop_reversals = 8;
-  int max_trials = 50;
-  int discard_reversals = 2;  // reversals left out of the threshold estimate
-  double min = 0.0;
-  double max = 0.0;
-};
-
 struct Judgement {
-  JudgementType type = JudgementType::choice;
+  // The registered type; null only in a protocol that failed to load.
+  const JudgementType* type = nullptr;
   std::string prompt;
-  std::vector<ResponseOption> options;  // choice and staircase
-  std::optional<AdjustmentSpec> adjustment;
-  std::string parameter;  // staircase: numeric setting path
-  std::string positive;   // staircase: the option value that counts as "positive"
-  std::vector<StaircaseSpec> staircases;
+  std::vector<ResponseOption> options;  // types answered by choosing: the answers
+  std::string parameter;                // types that vary a numeric setting: its path
+  std::shared_ptr<const JudgementSpec> spec;  // the rest, the type's own; shared by copies
   SourcePos pos;
 };
 

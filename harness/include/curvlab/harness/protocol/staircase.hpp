@@ -9,9 +9,25 @@
 #include "curvlab/harness/protocol/random.hpp"
 
 #include <cstddef>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace curvlab::harness::protocol {
+
+// One staircase of an interleaved set (n-up/m-down, Levitt 1971).
+struct StaircaseSpec {
+  std::string name;
+  double start = 0.0;
+  int up = 1;    // consecutive negative responses before the value goes up
+  int down = 2;  // consecutive positive responses before the value goes down
+  std::vector<double> step_sizes;  // step k is used after k reversals; the last repeats
+  int stop_reversals = 8;
+  int max_trials = 50;
+  int discard_reversals = 2;  // reversals left out of the threshold estimate
+  double min = 0.0;
+  double max = 0.0;
+};
 
 class Staircase {
  public:
@@ -39,6 +55,11 @@ class Staircase {
   int last_direction_ = 0;  // −1 down, +1 up, 0 none yet
   std::vector<double> reversal_values_;
 };
+
+// The P(positive) an up/down staircase settles on: where a run of `down`
+// positive answers is as likely to come first as a run of `up` negative ones
+// (Levitt 1971): 50 % for 1-up/1-down, 70.7 % for 1-up/2-down.
+double staircase_target_probability(int up, int down);
 
 // Several staircases run interleaved: each trial goes to one that has not
 // finished, chosen uniformly with the portable draw, so the participant

@@ -75,9 +75,6 @@ struct StaircasePrediction {
   int crossings = 0;  // how often P(positive) crosses target_p in [min, max]
 };
 
-// The P(positive) an m-up/n-down staircase converges on.
-double staircase_target_probability(int up, int down);
-
 struct Prediction {
   int participants = 0;
   std::vector<ConditionPrediction> conditions;

@@ -14,6 +14,7 @@
 // lost spells instead.
 #pragma once
 
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
 #include "curvlab/harness/runner/phase.hpp"
@@ -88,12 +89,11 @@ enum class AfterAbort { repeat, give_up };
 // Whether an aborted attempt (numbered from 1) is run again.
 AfterAbort after_abort(AbortReason reason, std::int64_t attempt, const protocol::TrackingLoss& policy);
 
-// What an input does in the response phase of a trial.
-enum class InputUse { ignored, early, choose, increase, decrease, confirm };
-struct InputVerdict {
-  InputUse use = InputUse::ignored;
-  std::size_t option = 0;  // choose: the judgement's option index
-};
+// What an input does in the response phase of a trial: an anticipation
+// before the onset reached the display, else what the judgement's type makes
+// of it (judgement.hpp).
+using protocol::InputUse;
+using protocol::InputVerdict;
 InputVerdict classify_input(const protocol::Judgement& judgement, const std::string& name,
                             bool answerable);
 
