@@ -4,6 +4,7 @@
 // geometry and stick that `curvlab measure stick` reads).
 #include "common.hpp"
 
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/geometry/enum_names.hpp"
 #include "curvlab/harness/measure/stick.hpp"
 #include "curvlab/renderer/offscreen.hpp"
@@ -181,8 +182,9 @@ void run_render(const RenderArgs& a) {
 
   auto created = Context::create({.device = a.software ? DeviceChoice::software : DeviceChoice::automatic,
                                   .validation = false});
-  if (auto* e = std::get_if<RenderError>(&created)) throw RuntimeFailure(e->message);
-  const Context& ctx = std::get<Context>(created);
+  auto context = harness::from_renderer(std::move(created));
+  if (!context) raise(context.error());
+  const Context& ctx = context.value();
   Renderer renderer(ctx, RendererOptions{.msaa = rq.msaa});
   warn_if_msaa_clamped(rq.msaa, renderer.msaa());
   OffscreenTarget target(ctx, rq.width_px, rq.height_px);

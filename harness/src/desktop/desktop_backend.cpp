@@ -1,5 +1,6 @@
 #include "desktop_backend.hpp"
 
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/renderer/image_io.hpp"
 
 #define GLFW_INCLUDE_VULKAN
@@ -228,15 +229,14 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
              "): " + take_last_error();
     return surface;
   };
-  auto ctx = renderer::Context::create(co, window_embedding);
-  if (auto* e = std::get_if<renderer::RenderError>(&ctx))
-    return Error{Error::Kind::device, "cannot render to the desktop window: " + e->message};
-  b->context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));
+  constexpr std::string_view doing = "cannot render to the desktop window: ";
+  auto ctx = harness::from_renderer(renderer::Context::create(co, window_embedding), doing);
+  if (!ctx) return ctx.error();
+  b->context_ = std::make_unique<renderer::Context>(std::move(ctx).value());
 
-  auto target = renderer::SwapchainTarget::create(*b->context_, framebuffer_extent(window), sc);
-  if (auto* e = std::get_if<renderer::RenderError>(&target))
-    return Error{Error::Kind::device, "cannot render to the desktop window: " + e->message};
-  b->target_ = std::get<std::unique_ptr<renderer::SwapchainTarget>>(std::move(target));
+  auto target = harness::from_renderer(renderer::SwapchainTarget::create(*b->context_, framebuffer_extent(window), sc), doing);
+  if (!target) return target.error();
+  b->target_ = std::move(target).value();
   try {
     b->renderer_ = std::make_unique<renderer::Renderer>(*b->context_,
                                                         renderer::RendererOptions{.msaa = options.msaa});

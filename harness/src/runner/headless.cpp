@@ -1,3 +1,4 @@
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/headless.hpp"
 
 #include "curvlab/renderer/context.hpp"
@@ -72,9 +73,9 @@ Result<std::unique_ptr<HeadlessBackend>> HeadlessBackend::create(const HeadlessO
     auto created = renderer::Context::create(
         {.device = options.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
          .validation = false});
-    if (auto* e = std::get_if<renderer::RenderError>(&created))
-      return Error{Error::Kind::device, "headless: cannot start Vulkan: " + e->message};
-    impl->ctx.emplace(std::move(std::get<renderer::Context>(created)));
+    auto made = from_renderer(std::move(created), "headless: cannot start Vulkan: ");
+    if (!made) return made.error();
+    impl->ctx.emplace(std::move(made).value());
     try {
       impl->renderer.emplace(*impl->ctx, renderer::RendererOptions{.msaa = options.msaa});
       impl->target.emplace(*impl->ctx, options.width_px, options.height_px);

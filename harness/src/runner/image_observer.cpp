@@ -1,3 +1,4 @@
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/image_observer.hpp"
 
 #include "curvlab/harness/measure/stick.hpp"
@@ -11,9 +12,9 @@ OnsetReader::OnsetReader(renderer::Context ctx) : ctx_(std::move(ctx)), renderer
 
 Result<std::unique_ptr<OnsetReader>> OnsetReader::create() {
   auto created = renderer::Context::create({.device = renderer::DeviceChoice::automatic, .validation = false});
-  if (auto* e = std::get_if<renderer::RenderError>(&created))
-    return Error{Error::Kind::device, "the image observer needs a Vulkan device: " + e->message};
-  return std::unique_ptr<OnsetReader>(new OnsetReader(std::move(std::get<renderer::Context>(created))));
+  auto made = from_renderer(std::move(created), "the image observer needs a Vulkan device: ");
+  if (!made) return made.error();
+  return std::unique_ptr<OnsetReader>(new OnsetReader(std::move(made).value()));
 }
 
 namespace {

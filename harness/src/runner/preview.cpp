@@ -1,3 +1,4 @@
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/preview.hpp"
 
 #include "curvlab/harness/data/sha256.hpp"
@@ -454,8 +455,9 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
   auto created = renderer::Context::create(
       {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
        .validation = false});
-  if (auto* e = std::get_if<renderer::RenderError>(&created)) return Error{Error::Kind::device, e->message};
-  const auto& ctx = std::get<renderer::Context>(created);
+  auto context = from_renderer(std::move(created));
+  if (!context) return context.error();
+  const auto& ctx = context.value();
   renderer::Renderer r(ctx);
   renderer::OffscreenTarget target(ctx, w, h);
   SheetRenderer sheet{r, target, w, h, dir};

@@ -1,3 +1,4 @@
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/replay.hpp"
 
 #include "curvlab/harness/data/database.hpp"
@@ -215,8 +216,9 @@ Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
   auto created = renderer::Context::create(
       {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
        .validation = false});
-  if (auto* e = std::get_if<renderer::RenderError>(&created)) return Error{Kind::device, e->message};
-  const auto& ctx = std::get<renderer::Context>(created);
+  auto context = from_renderer(std::move(created));
+  if (!context) return context.error();
+  const auto& ctx = context.value();
   const auto msaa = f.msaa > 0 ? f.msaa : static_cast<std::uint32_t>(f.settings.viewing.msaa);
   renderer::Renderer r(ctx, renderer::RendererOptions{.msaa = msaa});
   renderer::FrameDescription desc;

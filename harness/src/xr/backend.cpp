@@ -4,6 +4,7 @@
 // (XR_KHR_vulkan_enable2) → session → reference spaces and action spaces →
 // swapchains; then per frame xrWaitFrame → xrBeginFrame → locate views and
 // devices at the predicted display time → render → xrEndFrame.
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 
 #include "curvlab/harness/xr/actions.hpp"
@@ -483,10 +484,10 @@ Result<Done> XrBackend::open(const OptionalExtensions& offered) {
 }
 
 Result<Done> XrBackend::make_context(const VulkanEnable2& vulkan) {
-  auto ctx = renderer::Context::create(renderer::ContextOptions{}, runtime_made_vulkan(vulkan));
-  if (auto* e = std::get_if<renderer::RenderError>(&ctx))
-    return Error{Error::Kind::device, "cannot render for the headset: " + e->message};
-  context_ = std::make_unique<renderer::Context>(std::get<renderer::Context>(std::move(ctx)));
+  auto ctx = harness::from_renderer(renderer::Context::create(renderer::ContextOptions{}, runtime_made_vulkan(vulkan)),
+                           "cannot render for the headset: ");
+  if (!ctx) return ctx.error();
+  context_ = std::make_unique<renderer::Context>(std::move(ctx).value());
   return Done{};
 }
 
