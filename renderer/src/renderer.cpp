@@ -86,7 +86,7 @@ struct FrameSlot {
 
 std::vector<std::uint32_t> compile_or_abort(std::string_view name, ShaderStage stage) {
   auto result = compile_shader(name, stage);
-  if (auto* e = std::get_if<ShaderError>(&result)) {
+  if (auto* e = std::get_if<RenderError>(&result)) {
     // The shaders are part of the program: failing to compile them is a bug.
     std::cerr << "curvlab renderer: " << e->message << '\n';
     std::abort();

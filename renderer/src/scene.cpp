@@ -96,7 +96,7 @@ std::variant<SceneObject, std::string> text_panel_object(const Space& space, std
   const int w = 1024;
   const int h = static_cast<int>(std::lround(w * height_m / width_m));
   auto bmp = render_text(text, w, h, h / 2.5, font);
-  if (auto* e = std::get_if<TextError>(&bmp)) return e->message;
+  if (auto* e = std::get_if<RenderError>(&bmp)) return e->message;
   SceneObject o;
   o.name = std::move(name);
   o.build = [space, width_m, height_m](int level) {

@@ -18,10 +18,10 @@ const ShaderSource* find_source(std::string_view name) {
 
 // Replaces `#include "file"` lines by the embedded file's text (one level is
 // all the shaders use; deeper includes are resolved recursively anyway).
-std::variant<std::string, ShaderError> resolve_includes(std::string_view name, int depth) {
-  if (depth > 8) return ShaderError{"include depth exceeded in " + std::string(name)};
+std::variant<std::string, RenderError> resolve_includes(std::string_view name, int depth) {
+  if (depth > 8) return RenderError{"include depth exceeded in " + std::string(name)};
   const ShaderSource* src = find_source(name);
-  if (src == nullptr) return ShaderError{"no embedded shader named " + std::string(name)};
+  if (src == nullptr) return RenderError{"no embedded shader named " + std::string(name)};
   std::istringstream in{std::string(src->text)};
   std::ostringstream out;
   std::string line;
@@ -33,10 +33,10 @@ std::variant<std::string, ShaderError> resolve_includes(std::string_view name, i
       const auto open = line.find('"');
       const auto close = line.rfind('"');
       if (open == std::string::npos || close <= open)
-        return ShaderError{std::string(name) + ":" + std::to_string(line_no) +
+        return RenderError{std::string(name) + ":" + std::to_string(line_no) +
                            ": expected #include \"file\""};
       auto inner = resolve_includes(line.substr(open + 1, close - open - 1), depth + 1);
-      if (auto* e = std::get_if<ShaderError>(&inner)) return *e;
+      if (auto* e = std::get_if<RenderError>(&inner)) return *e;
       out << std::get<std::string>(inner) << '\n';
     } else {
       out << line << '\n';
@@ -56,13 +56,13 @@ EShLanguage to_glslang(ShaderStage stage) {
 
 }  // namespace
 
-std::variant<std::vector<std::uint32_t>, ShaderError> compile_shader(std::string_view name,
+std::variant<std::vector<std::uint32_t>, RenderError> compile_shader(std::string_view name,
                                                                      ShaderStage stage) {
   static std::once_flag init;
   std::call_once(init, [] { glslang::InitializeProcess(); });
 
   auto text = resolve_includes(name, 0);
-  if (auto* e = std::get_if<ShaderError>(&text)) return *e;
+  if (auto* e = std::get_if<RenderError>(&text)) return *e;
   const std::string& source = std::get<std::string>(text);
   const char* strings[] = {source.c_str()};
   const std::string name_str(name);
@@ -76,11 +76,11 @@ std::variant<std::vector<std::uint32_t>, ShaderError> compile_shader(std::string
   shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_5);
   const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
   if (!shader.parse(GetDefaultResources(), 460, false, messages))
-    return ShaderError{"GLSL compile failed in " + name_str + ":\n" + shader.getInfoLog()};
+    return RenderError{"GLSL compile failed in " + name_str + ":\n" + shader.getInfoLog()};
   glslang::TProgram program;
   program.addShader(&shader);
   if (!program.link(messages))
-    return ShaderError{"GLSL link failed for " + name_str + ":\n" + program.getInfoLog()};
+    return RenderError{"GLSL link failed for " + name_str + ":\n" + program.getInfoLog()};
   std::vector<std::uint32_t> spirv;
   glslang::SpvOptions options;
   options.validate = false;

@@ -343,7 +343,7 @@ void SwapchainTarget::render_banner() {
   if (banner_text_.empty() || width == 0 || height == 0) return;
   auto made = render_text(banner_text_, width, height, 0.7 * height, options_.font_path);
   // Without the font the window title still carries the text.
-  if (std::holds_alternative<TextError>(made)) return;
+  if (std::holds_alternative<RenderError>(made)) return;
   const auto& bmp = std::get<CoverageBitmap>(made);
   banner_rgba_.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 4);
   for (std::size_t i = 0; i < bmp.pixels.size(); ++i) {

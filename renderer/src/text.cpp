@@ -35,18 +35,18 @@ std::vector<int> decode_utf8(const std::string& s) {
 
 }  // namespace
 
-std::variant<CoverageBitmap, TextError> render_text(const std::string& text, int width,
+std::variant<CoverageBitmap, RenderError> render_text(const std::string& text, int width,
                                                     int height, double max_line_px,
                                                     const std::string& font_path) {
   std::ifstream in(font_path, std::ios::binary);
   if (!in)
-    return TextError{"cannot open font " + font_path + " (apt-get install fonts-dejavu-core)"};
+    return RenderError{"cannot open font " + font_path + " (apt-get install fonts-dejavu-core)"};
   const std::vector<unsigned char> font_data((std::istreambuf_iterator<char>(in)),
                                              std::istreambuf_iterator<char>());
   stbtt_fontinfo font;
   if (stbtt_InitFont(&font, font_data.data(), stbtt_GetFontOffsetForIndex(font_data.data(), 0)) ==
       0)
-    return TextError{font_path + " is not a TrueType font"};
+    return RenderError{font_path + " is not a TrueType font"};
 
   std::vector<std::vector<int>> lines;
   std::istringstream ls(text);

@@ -265,8 +265,8 @@ TEST(Text, RendersInkIntoThePanel) {
   EXPECT_GT(ink, 300);
   EXPECT_LT(ink, 256 * 96 / 2);
   auto missing = render_text("x", 16, 16, 10.0, "/nonexistent/font.ttf");
-  ASSERT_TRUE(std::holds_alternative<TextError>(missing));
-  EXPECT_NE(std::get<TextError>(missing).message.find("/nonexistent/font.ttf"), std::string::npos);
+  ASSERT_TRUE(std::holds_alternative<RenderError>(missing));
+  EXPECT_NE(std::get<RenderError>(missing).message.find("/nonexistent/font.ttf"), std::string::npos);
 }
 
 // ---- colour --------------------------------------------------------------

@@ -224,7 +224,7 @@ class ComputeShader {
   ComputeShader(const Context& ctx, std::string_view name, std::vector<vk::DescriptorType> bindings)
       : ctx_(ctx), types_(std::move(bindings)) {
     auto spirv = compile_shader(name, ShaderStage::compute);
-    if (auto* e = std::get_if<ShaderError>(&spirv)) {
+    if (auto* e = std::get_if<RenderError>(&spirv)) {
       error_ = e->message;
       return;
     }

@@ -178,8 +178,8 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
   std::unique_ptr<DesktopBackend> b(new DesktopBackend(options));
   if (!options.key_script.empty()) {
     auto loaded = load_key_script(options.key_script);
-    if (auto* e = std::get_if<KeyScriptError>(&loaded)) return Error{Error::Kind::bad_input, e->message};
-    b->script_.emplace(std::get<std::vector<ScriptedKey>>(std::move(loaded)));
+    if (!loaded) return loaded.error();
+    b->script_.emplace(std::move(loaded).value());
   }
 
   auto lib = GlfwLibrary::acquire();

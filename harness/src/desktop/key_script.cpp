@@ -8,6 +8,9 @@
 
 namespace curvlab::desktop {
 
+using harness::Error;
+using harness::Result;
+
 namespace {
 
 // A word of the script as a message shows it: bytes outside printable ASCII
@@ -31,7 +34,7 @@ std::string printable(const std::string& word) {
 
 }  // namespace
 
-std::variant<std::vector<ScriptedKey>, KeyScriptError> parse_key_script(const std::string& text,
+Result<std::vector<ScriptedKey>> parse_key_script(const std::string& text,
                                                                          const std::string& origin) {
   std::vector<ScriptedKey> keys;
   std::istringstream in(text);
@@ -55,21 +58,21 @@ std::variant<std::vector<ScriptedKey>, KeyScriptError> parse_key_script(const st
       long long ms = -1;
       const auto [end, ec] = std::from_chars(delay.data(), delay.data() + delay.size(), ms);
       if (ec != std::errc() || end != delay.data() + delay.size() || ms < 0 || ms > 3'600'000)
-        return KeyScriptError{where + "expected `KEY [DELAY_MS]` with DELAY_MS a whole number "
+        return Error{Error::Kind::bad_input, where + "expected `KEY [DELAY_MS]` with DELAY_MS a whole number "
                                       "of milliseconds from 0 to 3600000, got '" + printable(delay) + "'"};
       k.delay_ns = static_cast<std::int64_t>(ms) * 1'000'000;
     }
     if (words >> extra)
-      return KeyScriptError{where + "expected `KEY [DELAY_MS]`, got more after the delay: '" +
+      return Error{Error::Kind::bad_input, where + "expected `KEY [DELAY_MS]`, got more after the delay: '" +
                             printable(extra) + "'"};
     keys.push_back(std::move(k));
   }
   return keys;
 }
 
-std::variant<std::vector<ScriptedKey>, KeyScriptError> load_key_script(const std::string& path) {
+Result<std::vector<ScriptedKey>> load_key_script(const std::string& path) {
   std::ifstream file(path);
-  if (!file) return KeyScriptError{path + ": cannot open the key script"};
+  if (!file) return Error{Error::Kind::bad_input, path + ": cannot open the key script"};
   std::ostringstream text;
   text << file.rdbuf();
   return parse_key_script(text.str(), path);

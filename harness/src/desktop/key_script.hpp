@@ -5,6 +5,8 @@
 // the timing rule is tested without a window.
 #pragma once
 
+#include "curvlab/harness/result.hpp"
+
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -19,14 +21,10 @@ struct ScriptedKey {
   int line = 0;  // in the script file, for messages
 };
 
-struct KeyScriptError {
-  std::string message;  // "FILE:LINE: what was expected"
-};
-
-// Parses script text; `origin` names the file in messages.
-std::variant<std::vector<ScriptedKey>, KeyScriptError> parse_key_script(const std::string& text,
-                                                                         const std::string& origin);
-std::variant<std::vector<ScriptedKey>, KeyScriptError> load_key_script(const std::string& path);
+// Parses script text; `origin` names the file in messages. A bad line is a
+// bad_input Error "FILE:LINE: what was expected".
+harness::Result<std::vector<ScriptedKey>> parse_key_script(const std::string& text, const std::string& origin);
+harness::Result<std::vector<ScriptedKey>> load_key_script(const std::string& path);
 
 // Plays a script against the runner's overlay. The runner shows it to the
 // backend every frame (submit); a key is armed the first frame, after the

@@ -4,6 +4,7 @@
 // tests can fail on any of them.
 #pragma once
 
+#include "curvlab/renderer/error.hpp"
 #include "curvlab/renderer/vulkan_failure.hpp"
 
 #include <vulkan/vulkan_raii.hpp>
@@ -64,9 +65,6 @@ struct ContextEmbedding {
   ContextHooks hooks;
 };
 
-struct RenderError {
-  std::string message;
-};
 
 // Messages from the validation layer. Thread-safe: the layer may call from
 // any thread that uses the device.

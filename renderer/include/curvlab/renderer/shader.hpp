@@ -2,6 +2,8 @@
 // build tree from renderer/shaders/ (see cmake/embed_shaders.cmake).
 #pragma once
 
+#include "curvlab/renderer/error.hpp"
+
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -20,14 +22,9 @@ const std::vector<ShaderSource>& embedded_shader_sources();
 
 enum class ShaderStage { vertex, fragment, compute };
 
-struct ShaderError {
-  std::string message;
-};
-
 // Compiles the embedded shader `name` (resolving `#include "file"` lines from
 // the other embedded files) to SPIR-V for Vulkan 1.2. Thread-safe: glslang's
 // process-wide state is initialised once.
-std::variant<std::vector<std::uint32_t>, ShaderError> compile_shader(std::string_view name,
-                                                                     ShaderStage stage);
+std::variant<std::vector<std::uint32_t>, RenderError> compile_shader(std::string_view name, ShaderStage stage);
 
 }  // namespace curvlab::renderer

@@ -3,6 +3,8 @@
 // that a panel samples.
 #pragma once
 
+#include "curvlab/renderer/error.hpp"
+
 #include <cstdint>
 #include <string>
 #include <variant>
@@ -16,15 +18,10 @@ struct CoverageBitmap {
   std::vector<std::uint8_t> pixels;  // row major, 0 = background, 255 = ink
 };
 
-struct TextError {
-  std::string message;
-};
-
 // Lays out `text` ('\n' separates lines), centred, in a bitmap of the given
 // size with a margin, at the largest pixel height ≤ max_line_px that fits.
 // font_path: a TrueType file (default: DejaVu Sans from fonts-dejavu-core).
-std::variant<CoverageBitmap, TextError> render_text(const std::string& text, int width,
-                                                    int height, double max_line_px,
-                                                    const std::string& font_path);
+std::variant<CoverageBitmap, RenderError> render_text(const std::string& text, int width, int height,
+                                                      double max_line_px, const std::string& font_path);
 
 }  // namespace curvlab::renderer
