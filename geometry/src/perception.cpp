@@ -185,4 +185,19 @@ double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_
   return glm::dot(middle - mid, toward);
 }
 
+double height_above_rim(const std::vector<Vec3>& rim, const Vec3& centre, const Vec3& up) {
+  if (rim.size() < 3) return 0.0;
+  Vec3 centroid(0.0);
+  for (const auto& m : rim) centroid += m;
+  centroid /= static_cast<double>(rim.size());
+  Vec3 normal(0.0);
+  for (std::size_t i = 0; i < rim.size(); ++i)
+    normal += glm::cross(rim[i] - centroid, rim[(i + 1) % rim.size()] - centroid);
+  const double nl = glm::length(normal);
+  if (!(nl > 0.0)) return 0.0;
+  normal /= nl;
+  if (glm::dot(normal, up) < 0.0) normal = -normal;
+  return glm::dot(centre - centroid, normal);
+}
+
 }  // namespace curvlab::geometry

@@ -2,9 +2,11 @@
 
 #include "curvlab/geometry/holonomy.hpp"
 #include "curvlab/geometry/maps.hpp"
+#include "curvlab/geometry/perception.hpp"
 #include "curvlab/geometry/table.hpp"
 #include "curvlab/geometry/tube.hpp"
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <numbers>
@@ -165,3 +167,27 @@ TEST(HeadSquare, RotationIsThetaSquaredWithTheSignOfCurvatureAndOffsetThetaCubed
 
 }  // namespace
 }  // namespace curvlab::testing
+
+// A table top's bulge as a viewer reads it from perceived points: a regular
+// pentagon in a tilted plane, its centre raised by a known height along the
+// plane's normal; the height comes back, signed by the side `up` points to.
+TEST(TableTop, HeightAboveTheRimIsTheRaiseAlongThePlaneNormal) {
+  using curvlab::geometry::height_above_rim;
+  using Vec3 = glm::dvec3;
+  const glm::dmat3 tilt = glm::dmat3(glm::rotate(glm::dmat4(1.0), 0.4, glm::dvec3(1.0, 0.3, -0.2)));
+  const Vec3 origin(0.2, 1.1, -1.5);
+  std::vector<Vec3> rim;
+  for (int k = 0; k < 5; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / 5.0;
+    rim.push_back(origin + tilt * Vec3(0.6 * std::cos(a), 0.0, 0.6 * std::sin(a)));
+  }
+  const Vec3 up = tilt * Vec3(0.0, 1.0, 0.0);
+  for (const double h : {0.012, -0.004, 0.0}) {
+    const Vec3 centre = origin + h * up;
+    EXPECT_NEAR(height_above_rim(rim, centre, up), h, 1e-12) << h;
+    EXPECT_NEAR(height_above_rim(rim, centre, -up), -h, 1e-12) << h;
+    std::vector<Vec3> reversed(rim.rbegin(), rim.rend());  // the rim's order does not matter
+    EXPECT_NEAR(height_above_rim(reversed, centre, up), h, 1e-12) << h;
+  }
+  EXPECT_EQ(height_above_rim({origin, origin, origin}, origin + up, up), 0.0) << "a rim with no area";
+}

@@ -183,22 +183,12 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
   for (const Point& q : judged_points(world, s, placement)) p.push_back(seen(q));
   if (judged(s) == Judged::stick) return geometry::bow_toward_viewer(p[0], p[1], p[2]);
   // The table top: its (possibly raised) centre against the plane of the
-  // perceived edge midpoints (Newell's normal), oriented by the perceived up.
+  // perceived edge midpoints, oriented by the perceived up.
   const Vec3 centre = p.back();
   p.pop_back();
-  Vec3 centroid(0.0);
-  for (const auto& m : p) centroid += m;
-  centroid /= static_cast<double>(p.size());
-  Vec3 normal(0.0);
-  for (std::size_t i = 0; i < p.size(); ++i)
-    normal += glm::cross(p[i] - centroid, p[(i + 1) % p.size()] - centroid);
   const Vec3 flat_centre = seen(geometry::origin(space));
   const Vec3 above = seen(geometry::translation_m(space, Vec3(0.0, 0.1, 0.0)).m * geometry::origin(space));
-  const double nl = glm::length(normal);
-  if (!(nl > 0.0)) return 0.0;
-  normal /= nl;
-  if (glm::dot(normal, above - flat_centre) < 0.0) normal = -normal;
-  return glm::dot(centre - centroid, normal);
+  return geometry::height_above_rim(p, centre, above - flat_centre);
 }
 
 SightLineCount diverging_sight_lines(const World& world, const Settings& s, const Placement& placement,

@@ -21,6 +21,7 @@
 #include <array>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 namespace curvlab::geometry {
 
@@ -111,6 +112,12 @@ struct StickPerception {
 // nose frame), positive toward the nose: the sagitta a viewer reads from
 // three perceived points of a stick.
 double bow_toward_viewer(const Vec3& end_a, const Vec3& middle, const Vec3& end_b);
+// Signed height of `centre` above the plane of the polygon `rim` (through
+// the vertices' centroid, with Newell's normal, robust to a rim that is not
+// quite planar), positive on the side `up` points to: the bulge a viewer
+// reads from the perceived edge midpoints and centre of a table top. 0 when
+// the rim has no area.
+double height_above_rim(const std::vector<Vec3>& rim, const Vec3& centre, const Vec3& up);
 
 StickPerception perceive_stick(const Space& space, const BentStick& stick, double distance_m,
                                const EyeOffsets& eyes, ViewPreset preset);
