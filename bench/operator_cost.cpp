@@ -10,7 +10,7 @@
 // off and on so drift hits both. Needs a display: run under `xvfb-run -a`.
 //
 //   xvfb-run -a build/ci/bin/bench_operator_cost [frames_per_round] [rounds]
-#include "operator_window.hpp"
+#include "curvlab/harness/operator/operator_window.hpp"
 
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/xr/backend.hpp"

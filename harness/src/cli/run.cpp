@@ -7,6 +7,7 @@
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/operator/operator_window.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/random.hpp"
 #include "curvlab/harness/runner/desktop.hpp"
@@ -18,7 +19,6 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
-#include "operator_window.hpp"
 
 #include <CLI/CLI.hpp>
 

@@ -1,4 +1,4 @@
-#include "operator_window.hpp"
+#include "curvlab/harness/operator/operator_window.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
 #include "curvlab/renderer/text.hpp"
