@@ -26,10 +26,8 @@ namespace curvlab::testing::sharing {
 
 namespace fs = std::filesystem;
 
-inline std::string slurp(const fs::path& p) { return read_file(p); }
-
 inline std::int64_t count_lines(const fs::path& p, const std::string& needle) {
-  std::istringstream in(slurp(p));
+  std::istringstream in(read_file(p));
   std::int64_t n = 0;
   for (std::string line; std::getline(in, line);)
     if (line.find(needle) != std::string::npos) ++n;

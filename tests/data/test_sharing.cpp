@@ -65,7 +65,7 @@ TEST(CliSharing, ReadersDuringASessionThenKillNineLoseNoCompletedTrial) {
     const std::string db = (dir / ("k" + std::to_string(round) + ".sqlite")).string();
     sh::Child run = start_session(dir, db);
     ASSERT_TRUE(sh::wait_for_lines(run.out, "\"status\":\"completed\"", 1, std::chrono::seconds(60)))
-        << sh::slurp(run.err);
+        << curvlab::testing::read_file(run.err);
     const auto stop_at = std::chrono::steady_clock::now() +
                          std::chrono::milliseconds(std::uniform_int_distribution<int>(1500, 4000)(rng));
     for (int k = 0; std::chrono::steady_clock::now() < stop_at; ++k) sh::read_once(CURVLAB_BIN, db, dir, k);
@@ -86,7 +86,7 @@ TEST(CliSharing, ALiveSessionCannotBeResumedOrReplacedAndADeadOneResumesAtOnce) 
   ASSERT_EQ(run_cli("run " + demo + " --participant P02 --db " + other + " --render none --quiet").exit_code, 0);
   sh::Child run = start_session(dir, db);
   ASSERT_TRUE(sh::wait_for_lines(run.out, "\"status\":\"completed\"", 1, std::chrono::seconds(60)))
-      << sh::slurp(run.err);
+      << curvlab::testing::read_file(run.err);
 
   const auto resumed = run_cli("resume --db " + db + " --session 1 --render none --quiet");
   EXPECT_EQ(resumed.exit_code, 2) << resumed.out;
@@ -126,10 +126,10 @@ TEST(CliSharing, ADamagedWriteAheadLogIsReportedAndKept) {
   run.kill9();
   ASSERT_TRUE(fs::exists(db + "-wal"));
   ASSERT_GT(fs::file_size(db + "-wal"), 32u) << "the committed trials should still be in the log";
-  std::string wal = sh::slurp(db + "-wal");
+  std::string wal = curvlab::testing::read_file(db + "-wal");
   wal[24] = static_cast<char>(wal[24] ^ 0x5a);
   curvlab::testing::write_file(db + "-wal", wal);
-  const std::string main_before = sh::slurp(db);
+  const std::string main_before = curvlab::testing::read_file(db);
 
   for (const std::string& args :
        {"export --db " + db + " --out " + (dir / "ex").string(), "resume --db " + db + " --session 1 --render none",
@@ -141,8 +141,8 @@ TEST(CliSharing, ADamagedWriteAheadLogIsReportedAndKept) {
     EXPECT_NE(r.out.find("write-ahead log"), std::string::npos) << args << "\n" << r.out;
     EXPECT_NE(r.out.find("Nothing was changed"), std::string::npos) << args << "\n" << r.out;
   }
-  EXPECT_EQ(sh::slurp(db + "-wal"), wal) << "the log was modified";
-  EXPECT_EQ(sh::slurp(db), main_before) << "the file was modified";
+  EXPECT_EQ(curvlab::testing::read_file(db + "-wal"), wal) << "the log was modified";
+  EXPECT_EQ(curvlab::testing::read_file(db), main_before) << "the file was modified";
   EXPECT_FALSE(fs::exists(dir / "ex"));
 }
 
@@ -176,7 +176,7 @@ TEST(CliSharing, DamagedFilesAndSchemasExitTwoWithOneMessageAndStayAsTheyWere) {
       c.exec(d.sql);
       c.exec("PRAGMA wal_checkpoint(TRUNCATE)");
     }
-    const std::string before = sh::slurp(db);
+    const std::string before = curvlab::testing::read_file(db);
     std::vector<std::string> commands = {"resume --db " + db + " --session 1 --render none --quiet"};
     if (d.label != "stored JSON of the wrong shape") {
       commands.push_back("run " + demo + " --participant P09 --db " + db + " --render none --quiet");
@@ -192,7 +192,7 @@ TEST(CliSharing, DamagedFilesAndSchemasExitTwoWithOneMessageAndStayAsTheyWere) {
       EXPECT_NE(r.out.find(".recover | sqlite3 recovered.sqlite"), std::string::npos) << d.label << "\n" << r.out;
       EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << d.label << ": " << args << ": expected one line\n" << r.out;
     }
-    EXPECT_EQ(sh::slurp(db), before) << d.label << ": the file was modified";
+    EXPECT_EQ(curvlab::testing::read_file(db), before) << d.label << ": the file was modified";
     EXPECT_FALSE(fs::exists(dir / "ex")) << d.label;
     EXPECT_FALSE(fs::exists(dir / "m.sqlite")) << d.label;
   }
@@ -206,7 +206,7 @@ TEST(CliSharing, RunOnAFileDamagedInsideAddsNoSession) {
     auto c = Connection::open(db, OpenFlags::read_write);
     c.exec("PRAGMA wal_checkpoint(TRUNCATE)");
   }
-  std::string bytes = sh::slurp(db);
+  std::string bytes = curvlab::testing::read_file(db);
   // Damage the trials table's pages, as a failing disk does, keeping page 1.
   const std::int64_t page = [&] {
     auto c = Connection::open(db, OpenFlags::read_only);
@@ -217,7 +217,7 @@ TEST(CliSharing, RunOnAFileDamagedInsideAddsNoSession) {
   const auto r = run_cli("run " + demo + " --participant P02 --db " + db + " --render none --quiet");
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("damaged curvlab data file"), std::string::npos) << r.out;
-  EXPECT_EQ(sh::slurp(db), bytes) << "a session was added to a damaged file";
+  EXPECT_EQ(curvlab::testing::read_file(db), bytes) << "a session was added to a damaged file";
   EXPECT_FALSE(fs::exists(db + "-wal") && fs::file_size(db + "-wal") > 0);
 }
 
@@ -271,7 +271,7 @@ TEST(CliSharing, ASignalEndsTheSessionInterruptedWithTheResumeCommand) {
     ASSERT_TRUE(WIFEXITED(status)) << "signal " << sig << " killed the process instead of ending the session";
     EXPECT_EQ(WEXITSTATUS(status), 128 + sig);
     EXPECT_EQ(session_status(db, 1), "interrupted");
-    const std::string err = sh::slurp(run.err);
+    const std::string err = curvlab::testing::read_file(run.err);
     EXPECT_NE(err.find("curvlab resume --db " + db + " --session 1"), std::string::npos) << err;
     EXPECT_EQ(stored_completed(db), sh::count_lines(run.out, "\"status\":\"completed\""));
   }
@@ -285,13 +285,13 @@ TEST(CliSharing, AFullDiskEndsTheSessionInterruptedAndResumable) {
   const std::string db = (disk.path() / "f.sqlite").string();
   sh::Child run = start_session(dir, db);
   ASSERT_TRUE(sh::wait_for_lines(run.out, "\"status\":\"completed\"", 2, std::chrono::seconds(60)))
-      << sh::slurp(run.err);
+      << curvlab::testing::read_file(run.err);
   const fs::path filler = disk.path() / "filler";
   sh::fill_disk(filler);
   const int status = run.wait();
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 1);
-  const std::string err = sh::slurp(run.err);
+  const std::string err = curvlab::testing::read_file(run.err);
   EXPECT_NE(err.find("disk is full"), std::string::npos) << err;
   EXPECT_NE(err.find("curvlab resume --db " + db + " --session 1"), std::string::npos) << err;
   fs::remove(filler);

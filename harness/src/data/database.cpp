@@ -370,7 +370,9 @@ Expected<Database> Database::checked(Connection c, const std::string& path, Open
     if (auto ok = migrate_checked(copy, version, path); !ok) return ok.error();
     return Database(std::move(copy));
   }
-  if (!empty)
+  // Once, when a session starts or resumes: the session's writer thread and
+  // upgrade open the file again (open_existing) and need not read it all.
+  if (!empty && mode == OpenMode::create_or_open)
     if (auto ok = check_pages(c, path); !ok) return ok.error();
   c.exec("PRAGMA journal_mode = WAL");
   configure_connection(c, true);

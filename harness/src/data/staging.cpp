@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <charconv>
 #include <filesystem>
+#include <limits>
 #include <signal.h>
 
 namespace curvlab::data {
@@ -12,6 +13,13 @@ namespace fs = std::filesystem;
 bool process_alive(pid_t pid) { return pid > 0 && !(::kill(pid, 0) != 0 && errno == ESRCH); }
 
 std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix) {
+  return remove_numbered(dir, prefix, [](std::int64_t pid) {
+    return pid > 0 && pid <= std::numeric_limits<pid_t>::max() && !process_alive(static_cast<pid_t>(pid));
+  });
+}
+
+std::size_t remove_numbered(const std::string& dir, const std::string& prefix,
+                            const std::function<bool(std::int64_t number)>& stale) {
   std::error_code ec;
   std::size_t removed = 0;
   const fs::path folder = dir.empty() ? fs::path(".") : fs::path(dir);
@@ -20,10 +28,10 @@ std::size_t remove_stale_staging(const std::string& dir, const std::string& pref
     if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
     const char* first = name.data() + prefix.size();
     const char* last = name.data() + name.size();
-    pid_t pid = 0;
-    const auto [end, err] = std::from_chars(first, last, pid);
+    std::int64_t number = 0;
+    const auto [end, err] = std::from_chars(first, last, number);
     if (err != std::errc() || end == first || (end != last && *end != '.' && *end != '-')) continue;
-    if (pid <= 0 || process_alive(pid)) continue;
+    if (!stale(number)) continue;
     std::error_code remove_ec;
     if (fs::remove_all(entry.path(), remove_ec) > 0 && !remove_ec) ++removed;
   }

@@ -1,5 +1,7 @@
 #include "curvlab/harness/data/writer_lock.hpp"
 
+#include "curvlab/harness/data/staging.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -17,7 +19,7 @@ namespace curvlab::data {
 namespace {
 
 constexpr off_t file_byte = 0;
-constexpr off_t slots_at = 1 << 16;  // after the session bytes of the first 65535 sessions' slots
+constexpr off_t slots_at = 1 << 16;  // holder slots from here on (the lock bytes below never hold data)
 constexpr std::size_t slot_bytes = 128;
 
 off_t session_byte(std::int64_t session_id) { return 1 + static_cast<off_t>(session_id); }
@@ -147,17 +149,10 @@ std::optional<std::pair<std::int64_t, LockHolder>> live_session(int fd) {
 
 // Reserves left by writers that died (kill -9) for sessions no one holds.
 void remove_stale_reserves(int fd, const std::string& db_path) {
-  std::error_code ec;
   const std::filesystem::path db(db_path);
-  const std::string prefix = db.filename().string() + ".reserve-";
-  const auto dir = db.parent_path().empty() ? std::filesystem::path(".") : db.parent_path();
-  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    const std::string digits = name.substr(prefix.size());
-    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 18) continue;
-    if (!held_by_other(fd, F_WRLCK, session_byte(std::stoll(digits)))) std::filesystem::remove(entry.path(), ec);
-  }
+  remove_numbered(db.parent_path().string(), db.filename().string() + ".reserve-", [fd](std::int64_t session_id) {
+    return session_id > 0 && !held_by_other(fd, F_WRLCK, session_byte(session_id));
+  });
 }
 
 }  // namespace

@@ -796,9 +796,14 @@ class SessionLoop::Impl {
 
   void log_onset(const TrialRun& t, const AttemptRun& a, const renderer::FrameStats& stats,
                  std::int64_t display_ns) {
-    data::events::Onset onset{frame_index_ - 1, display_ns,         a.number,    pose16(a.head_at_onset),
-                              pose16(a.placement.stick_pose), stats.views, stats.draws, std::nullopt,
-                              std::nullopt};
+    data::events::Onset onset;
+    onset.frame_index = frame_index_ - 1;
+    onset.predicted_display_ns = display_ns;
+    onset.attempt = a.number;
+    onset.head_pose = pose16(a.head_at_onset);
+    onset.stick_pose = pose16(a.placement.stick_pose);
+    onset.views = stats.views;
+    onset.draws = stats.draws;
     if (observer_) onset.perceived_sagitta_m = last_perceived_;
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
       char stem[32];

@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <sys/types.h>
 
@@ -23,5 +25,11 @@ bool process_alive(pid_t pid);
 // is anything that cannot be removed (no worse than before). Returns how
 // many entries were removed.
 std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix);
+
+// The same scan with another test of staleness: removes the entries named
+// `prefix` + N + rest for which stale(N) is true (the session reserves of
+// writer_lock.cpp, whose N is a session no live process holds).
+std::size_t remove_numbered(const std::string& dir, const std::string& prefix,
+                            const std::function<bool(std::int64_t number)>& stale);
 
 }  // namespace curvlab::data
