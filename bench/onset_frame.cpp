@@ -2,7 +2,7 @@
 // run with the simulated observer while an SQLite VFS shim makes every disk
 // sync wait a set time (0 ms: a local SSD; 8 ms: a spinning disk; 30 ms: a
 // network share). For each frame the benchmark measures the runner's loop
-// time — from the backend handing out the frame to the runner asking for the
+// time — from the display handing out the frame to the runner asking for the
 // next one, so anything that holds the next frame back counts — and reports
 // it for stimulus-onset frames and for all frames, with the disk syncs
 // issued from the frame thread and from other threads.
@@ -36,13 +36,13 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// Forwards to the headless backend and times the runner's work per frame.
-class TimingBackend final : public rn::Backend {
+// Forwards to the headless display and times the runner's work per frame.
+class TimingDisplay final : public curvlab::harness::io::Display {
  public:
-  explicit TimingBackend(rn::HeadlessBackend& inner) : inner_(inner) {}
+  explicit TimingDisplay(rn::HeadlessDisplay& inner) : inner_(inner) {}
 
-  [[nodiscard]] rn::BackendInfo info() const override { return inner_.info(); }
-  std::optional<rn::FrameTiming> begin_frame() override {
+  [[nodiscard]] curvlab::harness::io::DisplayInfo info() const override { return inner_.info(); }
+  std::optional<curvlab::harness::io::FrameTiming> begin_frame() override {
     close_frame();
     // Disk syncs this thread issued from the first frame on.
     const auto syncs = vfs::syncs_from(std::this_thread::get_id());
@@ -53,14 +53,12 @@ class TimingBackend final : public rn::Backend {
     open_ = t.has_value();
     return t;
   }
-  curvlab::geometry::LabFrame poses(const rn::FrameTiming& frame) override { return inner_.poses(frame); }
-  rn::BackendSignal poll_input(std::vector<rn::InputEvent>& out) override { return inner_.poll_input(out); }
-  curvlab::renderer::StereoRig rig(const rn::FrameTiming& frame, double ipd_m) override {
+  curvlab::renderer::StereoRig rig(const curvlab::harness::io::FrameTiming& frame, double ipd_m) override {
     return inner_.rig(frame, ipd_m);
   }
   curvlab::renderer::FrameStats submit(const curvlab::renderer::Scene& scene,
                                        const curvlab::renderer::FrameDescription& frame,
-                                       const rn::Overlay& overlay, bool draw) override {
+                                       const curvlab::harness::io::Overlay& overlay, bool draw) override {
     const bool stimulus = is_stimulus(overlay);
     onset_ = stimulus && !last_stimulus_;
     last_stimulus_ = stimulus;
@@ -71,7 +69,7 @@ class TimingBackend final : public rn::Backend {
   std::int64_t first_syncs = -1, loop_syncs = 0;
 
  private:
-  static bool is_stimulus(const rn::Overlay& overlay) { return overlay.phase == rn::Phase::stimulus; }
+  static bool is_stimulus(const curvlab::harness::io::Overlay& overlay) { return overlay.phase == curvlab::harness::io::Phase::stimulus; }
   void close_frame() {
     if (!open_) return;
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - handed_out_).count();
@@ -80,7 +78,7 @@ class TimingBackend final : public rn::Backend {
     onset_ = false;
     open_ = false;
   }
-  rn::HeadlessBackend& inner_;
+  rn::HeadlessDisplay& inner_;
   Clock::time_point handed_out_;
   bool open_ = false, onset_ = false, last_stimulus_ = false;
 };
@@ -127,14 +125,13 @@ int main(int argc, char** argv) {
     ho.pace = realtime ? rn::Pace::realtime : rn::Pace::fast;
     ho.no_gpu = true;
     ho.refresh_hz = p.refresh_hz;
-    ho.table = rn::nominal_calibration(p.session_settings());
-    auto made = rn::HeadlessBackend::create(ho);
+    auto made = rn::HeadlessDevices::create(ho, rn::standing_at(rn::nominal_calibration(p.session_settings())));
     if (!made) {
-      std::fprintf(stderr, "headless backend: %s\n", made.error().message.c_str());
+      std::fprintf(stderr, "headless display: %s\n", made.error().message.c_str());
       return 1;
     }
-    auto& headless = *made.value();
-    TimingBackend backend(headless);
+    auto& headless = made.value();
+    TimingDisplay backend(*headless.display);
     rn::RunOptions o;
     o.participant = "B01";
     o.observer = rn::ObserverParams{};
@@ -146,7 +143,7 @@ int main(int argc, char** argv) {
     const auto db = (tmp / file).string();
     vfs::set_sync_delay(std::chrono::milliseconds(delay_ms));
     vfs::reset();
-    const auto result = rn::run_session(p, text.str(), db, o, backend, headless.clock());
+    const auto result = rn::run_session(p, text.str(), db, o, {&backend, headless.poses.get(), {}}, headless.clock());
     vfs::set_sync_delay(std::chrono::microseconds(0));
     if (!result) {
       std::fprintf(stderr, "%s\n", result.error().message.c_str());

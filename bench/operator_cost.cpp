@@ -61,16 +61,17 @@ bool round(bool window, int frames, const renderer::StimulusScene& s, std::vecto
   status.participant = "P01";
   status.protocol = "bench";
   status.trials = 100;
-  std::vector<rn::InputEvent> inputs;
+  std::vector<harness::io::InputEvent> inputs;
   std::vector<rn::OperatorAction> actions;
-  const rn::Overlay overlay{rn::Phase::stimulus, "bench", false};
+  const harness::io::Overlay overlay{rn::Phase::stimulus, "bench", false};
   for (int i = 0; i < frames + 30; ++i) {
     auto timing = backend.begin_frame();
     if (!timing) return false;
     const auto t0 = Clock::now();
     (void)backend.poses(*timing);
     inputs.clear();
-    (void)backend.poll_input(inputs);
+    (void)backend.poll_signal();
+    (void)backend.poll(inputs);
     if (console) console->take(timing->now_ns, actions);
     renderer::FrameDescription f;
     f.space = s.space;

@@ -77,8 +77,8 @@ int main(int argc, char** argv) {
         if (i >= 3) offscreen_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
       }
     }
-    for (const auto preview : {harness::runner::DesktopPreview::side_by_side, harness::runner::DesktopPreview::left}) {
-      harness::runner::DesktopOptions o;
+    for (const auto preview : {desktop::DesktopPreview::side_by_side, desktop::DesktopPreview::left}) {
+      desktop::DesktopOptions o;
       o.eye_width_px = size;
       o.eye_height_px = size;
       o.preview = preview;
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
       }
       auto& backend = *backend_made.value();
       std::vector<double> window_ms;
-      const harness::runner::Overlay overlay{harness::runner::Phase::stimulus, "block 1 · trial 3 of 8 · H3 native", false};
+      const harness::io::Overlay overlay{harness::io::Phase::stimulus, "block 1 · trial 3 of 8 · H3 native", false};
       Clock::time_point last{};
       for (int i = 0; i < frames + 3; ++i) {
         auto timing = backend.begin_frame();
@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
       const double off = median(offscreen_ms);
       const double win = median(window_ms);
       std::printf("%-6u %-13s %12.2f %12.2f %8.2f %8.1f\n", size,
-                  preview == harness::runner::DesktopPreview::side_by_side ? "side-by-side" : "one eye",
+                  preview == desktop::DesktopPreview::side_by_side ? "side-by-side" : "one eye",
                   off, win, win / off, 1000.0 / win);
     }
   }

@@ -65,13 +65,12 @@ int main(int argc, char** argv) {
     ho.refresh_hz = p.refresh_hz;
     ho.width_px = static_cast<std::uint32_t>(p.resolution_width);
     ho.height_px = static_cast<std::uint32_t>(p.resolution_height);
-    ho.table = rn::nominal_calibration(p.session_settings());
-    auto made = rn::HeadlessBackend::create(ho);
+    auto made = rn::HeadlessDevices::create(ho, rn::standing_at(rn::nominal_calibration(p.session_settings())));
     if (!made) {
       std::fprintf(stderr, "%s\n", made.error().message.c_str());
       return 1;
     }
-    auto& backend = *made.value();
+    const auto& devices = made.value();
     rn::RunOptions o;
     o.participant = "B01";
     o.participant_number = 1;
@@ -79,7 +78,7 @@ int main(int argc, char** argv) {
     o.drawing = row.drawing;
     o.lossless_logging = row.pace == rn::Pace::fast;
     const auto db = (tmp / ("run" + std::to_string(n++) + ".sqlite")).string();
-    const auto result = rn::run_session(p, ss.str(), db, o, backend, backend.clock());
+    const auto result = rn::run_session(p, ss.str(), db, o, devices.station(), devices.clock());
     if (!result) {
       std::fprintf(stderr, "%s\n", result.error().message.c_str());
       return 1;

@@ -151,9 +151,9 @@ TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
   unsetenv("DISPLAY");
   unsetenv("WAYLAND_DISPLAY");
   curvlab::devices::SteadyClock clock;
-  curvlab::harness::runner::DesktopOptions options;
+  curvlab::desktop::DesktopOptions options;
   options.clock = &clock;
-  auto made = curvlab::harness::runner::make_desktop_backend(options);
+  auto made = curvlab::desktop::make_desktop_backend(options);
   ASSERT_FALSE(made.has_value());
   EXPECT_EQ(made.error().kind, curvlab::harness::Error::Kind::device);
   const auto& message = made.error().message;
@@ -166,12 +166,12 @@ TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
 
 TEST(DesktopBackend, BadOptionsAreRefusedBeforeAnyWindow) {
   curvlab::devices::SteadyClock clock;
-  curvlab::harness::runner::DesktopOptions options;
-  auto no_clock = curvlab::harness::runner::make_desktop_backend(options);
+  curvlab::desktop::DesktopOptions options;
+  auto no_clock = curvlab::desktop::make_desktop_backend(options);
   ASSERT_FALSE(no_clock.has_value());
   options.clock = &clock;
   options.key_script = "/nonexistent/keys.txt";
-  auto no_script = curvlab::harness::runner::make_desktop_backend(options);
+  auto no_script = curvlab::desktop::make_desktop_backend(options);
   ASSERT_FALSE(no_script.has_value());
   EXPECT_NE(no_script.error().message.find("keys.txt"), std::string::npos);
 }

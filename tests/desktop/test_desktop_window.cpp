@@ -1,4 +1,4 @@
-// The desktop backend with a real window (on Xvfb when there is no display):
+// The desktop window (on Xvfb when there is no display):
 // the runner's frame loop driven by hand, a scripted key arriving as an
 // InputEvent, a stimulus drawn into the swapchain and saved as a screenshot
 // that shows it. Vulkan on lavapipe with the validation layer on.
@@ -22,10 +22,10 @@
 namespace {
 
 using namespace curvlab;
-using harness::runner::BackendSignal;
-using harness::runner::DesktopOptions;
-using harness::runner::InputEvent;
-using harness::runner::Overlay;
+using harness::io::Signal;
+using desktop::DesktopOptions;
+using harness::io::InputEvent;
+using harness::io::Overlay;
 
 test::XServer* g_xserver = nullptr;
 
@@ -129,7 +129,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
     const auto lab = backend.poses(*timing);
     EXPECT_TRUE(lab[geometry::Device::head].valid);
     events.clear();
-    EXPECT_EQ(backend.poll_input(events), BackendSignal::none);
+    EXPECT_EQ(backend.poll(events), Signal::none);
     for (const auto& e : events)
       if (e.device == "script") answer = e;
     renderer::FrameDescription f;
@@ -138,9 +138,9 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
     f.head = s.head;
     f.rig = backend.rig(*timing, 0.063);
     Overlay overlay;
-    overlay.phase = frames < 2 ? harness::runner::Phase::fixation : frames < 4 ? harness::runner::Phase::stimulus : harness::runner::Phase::response;
+    overlay.phase = frames < 2 ? harness::io::Phase::fixation : frames < 4 ? harness::io::Phase::stimulus : harness::io::Phase::response;
     overlay.text = "block 1 · trial 1 of 8 · E3 tourist";
-    overlay.waiting_for_input = overlay.phase == harness::runner::Phase::response;
+    overlay.waiting_for_input = overlay.phase == harness::io::Phase::response;
     const auto stats = backend.submit(s.scene, f, overlay, true);
     EXPECT_EQ(stats.views, 2);
   }
@@ -192,7 +192,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
 
 TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
   DesktopOptions options = window(200, 150);
-  options.preview = harness::runner::DesktopPreview::right;
+  options.preview = desktop::DesktopPreview::right;
   options.vsync = false;
   options.validation = validation_layer_installed();
   const auto opened = open(options);
@@ -208,7 +208,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
     f.space = s.space;
     f.head = s.head;
     f.rig = backend.rig(*timing, 0.063);
-    backend.submit(s.scene, f, Overlay{harness::runner::Phase::stimulus, "", false}, true);
+    backend.submit(s.scene, f, Overlay{harness::io::Phase::stimulus, "", false}, true);
   }
   // One eye: the window is that eye plus the banner.
   const auto window = backend.target().read_window();
@@ -230,7 +230,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
     f.space = s.space;
     f.head = s.head;
     f.rig = backend.rig(*timing, 0.063);
-    backend.submit(s.scene, f, Overlay{harness::runner::Phase::stimulus, "", false}, true);
+    backend.submit(s.scene, f, Overlay{harness::io::Phase::stimulus, "", false}, true);
   }
   EXPECT_EQ(backend.target().recreations(), 2u);
   const auto resized = backend.target().read_window();
@@ -259,12 +259,12 @@ TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
   renderer::Scene empty;
   auto frame = [&](std::vector<InputEvent>& events) {
     auto timing = backend.begin_frame();
-    if (!timing) return std::optional<BackendSignal>();
-    const BackendSignal signal = backend.poll_input(events);
+    if (!timing) return std::optional<Signal>();
+    const Signal signal = backend.poll(events);
     renderer::FrameDescription f;
     f.rig = backend.rig(*timing, 0.063);
-    backend.submit(empty, f, Overlay{harness::runner::Phase::response, "", true}, true);
-    return std::optional<BackendSignal>(signal);
+    backend.submit(empty, f, Overlay{harness::io::Phase::response, "", true}, true);
+    return std::optional<Signal>(signal);
   };
   std::vector<InputEvent> events;
   ASSERT_TRUE(frame(events));  // the window is mapped and drawn once
@@ -281,14 +281,14 @@ TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
   EXPECT_EQ(events.size(), 6u);  // and their releases
 
   ASSERT_EQ(std::system("timeout 10 xdotool search --name '^curvlab' windowfocus --sync key Escape"), 0);
-  std::optional<BackendSignal> signal;
+  std::optional<Signal> signal;
   for (int i = 0; i < 50; ++i) {
     events.clear();
     signal = frame(events);
-    if (!signal || *signal == BackendSignal::quit) break;
+    if (!signal || *signal == Signal::quit) break;
   }
   ASSERT_TRUE(signal.has_value());
-  EXPECT_EQ(*signal, BackendSignal::quit);
+  EXPECT_EQ(*signal, Signal::quit);
   ASSERT_FALSE(events.empty());
   EXPECT_EQ(events.front().name, "escape");
   EXPECT_FALSE(backend.begin_frame().has_value()) << "the session ends after Escape";
@@ -297,9 +297,9 @@ TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
 
 // A GPU lost while the window presents (the test Vulkan layer fails the 6th
 // vkQueueSubmit: the renderer's or the composition's): submit() throws
-// BackendFailure naming the call and result, and the window, swapchain and
+// DeviceFailure naming the call and result, and the window, swapchain and
 // device are torn down without throwing or terminating.
-TEST_F(DesktopWindow, DeviceLossWhilePresentingThrowsBackendFailureAndTeardownEnds) {
+TEST_F(DesktopWindow, DeviceLossWhilePresentingThrowsDeviceFailureAndTeardownEnds) {
   const curvlab::testing::VulkanFault fault("vkQueueSubmit@6");
   DesktopOptions options = window(160, 160);
   options.vsync = false;
@@ -308,7 +308,7 @@ TEST_F(DesktopWindow, DeviceLossWhilePresentingThrowsBackendFailureAndTeardownEn
   auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3, renderer::SceneKind::stick, {});
   ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
   auto& s = std::get<renderer::StimulusScene>(stimulus);
-  std::optional<harness::runner::BackendFailure> failure;
+  std::optional<harness::io::DeviceFailure> failure;
   int frames = 0;
   for (; frames < 20 && !failure; ++frames) {
     auto timing = backend->begin_frame();
@@ -318,8 +318,8 @@ TEST_F(DesktopWindow, DeviceLossWhilePresentingThrowsBackendFailureAndTeardownEn
     f.head = s.head;
     f.rig = backend->rig(*timing, 0.063);
     try {
-      (void)backend->submit(s.scene, f, Overlay{curvlab::harness::runner::Phase::stimulus, "", false}, true);
-    } catch (const harness::runner::BackendFailure& e) {
+      (void)backend->submit(s.scene, f, Overlay{curvlab::harness::io::Phase::stimulus, "", false}, true);
+    } catch (const harness::io::DeviceFailure& e) {
       failure = e;
     }
   }

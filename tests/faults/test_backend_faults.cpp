@@ -2,7 +2,7 @@
 // the test Vulkan layer makes vkQueueSubmit or vkWaitForFences of the real
 // headless backend return VK_ERROR_DEVICE_LOST at the N-th call. What must
 // hold (docs/runner.md, "Faults"): the failing method throws
-// runner::BackendFailure naming the call and its result; the backend is
+// runner::DeviceFailure naming the call and its result; the backend is
 // then destroyed without throwing or terminating, pending frames included.
 #include "fault_env.hpp"
 
@@ -20,19 +20,19 @@ using namespace curvlab;
 namespace rn = harness::runner;
 using curvlab::testing::VulkanFault;
 
-std::unique_ptr<rn::HeadlessBackend> small_headless() {
+std::unique_ptr<rn::HeadlessDisplay> small_headless() {
   rn::HeadlessOptions o;
   o.software = true;
   o.width_px = 64;
   o.height_px = 64;
-  auto made = rn::HeadlessBackend::create(o);
+  auto made = rn::HeadlessDisplay::create(o);
   EXPECT_TRUE(made.has_value()) << (made ? "" : made.error().message);
   return made ? std::move(made).value() : nullptr;
 }
 
 // Draws frames (the head moving, so none is skipped as unchanged) until the
 // backend throws; returns the failure and how many frames were drawn before.
-std::pair<std::optional<rn::BackendFailure>, int> draw_until_failure(rn::HeadlessBackend& backend, int frames) {
+std::pair<std::optional<harness::io::DeviceFailure>, int> draw_until_failure(rn::HeadlessDisplay& backend, int frames) {
   auto made = renderer::make_stimulus_scene(geometry::SpaceKind::E3, renderer::SceneKind::stick, {});
   EXPECT_TRUE(std::holds_alternative<renderer::StimulusScene>(made));
   auto& s = std::get<renderer::StimulusScene>(made);
@@ -46,8 +46,8 @@ std::pair<std::optional<rn::BackendFailure>, int> draw_until_failure(rn::Headles
     f.width_px = 64;
     f.height_px = 64;
     try {
-      (void)backend.submit(s.scene, f, rn::Overlay{curvlab::harness::runner::Phase::stimulus, "", false}, true);
-    } catch (const rn::BackendFailure& failure) {
+      (void)backend.submit(s.scene, f, harness::io::Overlay{harness::io::Phase::stimulus, "", false}, true);
+    } catch (const harness::io::DeviceFailure& failure) {
       return {failure, i};
     }
   }
@@ -66,7 +66,7 @@ TEST(HeadlessFaults, HealthyRunDrawsEveryFrame) {
   EXPECT_EQ(drawn, 6);
 }
 
-TEST(HeadlessFaults, DeviceLostInQueueSubmitThrowsBackendFailureNamingIt) {
+TEST(HeadlessFaults, DeviceLostInQueueSubmitThrowsDeviceFailureNamingIt) {
   const VulkanFault fault("vkQueueSubmit@5");
   auto backend = small_headless();
   ASSERT_TRUE(backend);

@@ -1,10 +1,10 @@
-// A backend that fails part-way through a session, in process: the session
+// A display that fails part-way through a session, in process: the session
 // ends `interrupted`, run_session returns an error naming the API call and
 // its result, every trial completed before the fault is kept, and
 // resume_session completes the session with each trial exactly once
 // (docs/runner.md, "Faults"). Faults come from a wrapper that throws
-// BackendFailure at frame N (begin_frame or submit), and from the test
-// Vulkan layer inside the real headless backend (vkQueueSubmit returns
+// DeviceFailure at frame N (begin_frame or submit), and from the test
+// Vulkan layer inside the real headless display (vkQueueSubmit returns
 // VK_ERROR_DEVICE_LOST).
 #include "fault_env.hpp"
 
@@ -33,34 +33,32 @@ using curvlab::testing::fresh_dir;
 using curvlab::testing::query;
 using curvlab::testing::VulkanFault;
 
-// Forwards to another backend and throws at frame `fail_at` (counted from
+// Forwards to another display and throws at frame `fail_at` (counted from
 // 0 by begin_frame) in the method the test chose.
-class FailingBackend final : public rn::Backend {
+class FailingDisplay final : public harness::io::Display {
  public:
   enum class Where { begin_frame, submit };
-  FailingBackend(rn::Backend& inner, std::int64_t fail_at, Where where, rn::BackendFailure failure)
+  FailingDisplay(harness::io::Display& inner, std::int64_t fail_at, Where where, harness::io::DeviceFailure failure)
       : inner_(inner), fail_at_(fail_at), where_(where), failure_(std::move(failure)) {}
 
-  [[nodiscard]] rn::BackendInfo info() const override { return inner_.info(); }
-  std::optional<rn::FrameTiming> begin_frame() override {
+  [[nodiscard]] harness::io::DisplayInfo info() const override { return inner_.info(); }
+  std::optional<harness::io::FrameTiming> begin_frame() override {
     if (where_ == Where::begin_frame && frames_ == fail_at_) throw failure_;
     ++frames_;
     return inner_.begin_frame();
   }
-  geometry::LabFrame poses(const rn::FrameTiming& f) override { return inner_.poses(f); }
-  rn::BackendSignal poll_input(std::vector<rn::InputEvent>& out) override { return inner_.poll_input(out); }
-  renderer::StereoRig rig(const rn::FrameTiming& f, double ipd_m) override { return inner_.rig(f, ipd_m); }
+  renderer::StereoRig rig(const harness::io::FrameTiming& f, double ipd_m) override { return inner_.rig(f, ipd_m); }
   renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
-                              const rn::Overlay& overlay, bool draw) override {
+                              const harness::io::Overlay& overlay, bool draw) override {
     if (where_ == Where::submit && frames_ - 1 == fail_at_) throw failure_;
     return inner_.submit(scene, frame, overlay, draw);
   }
 
  private:
-  rn::Backend& inner_;
+  harness::io::Display& inner_;
   std::int64_t fail_at_;
   Where where_;
-  rn::BackendFailure failure_;
+  harness::io::DeviceFailure failure_;
   std::int64_t frames_ = 0;
 };
 
@@ -79,17 +77,16 @@ Demo demo() {
   return {text.str(), *loaded.protocol};
 }
 
-std::unique_ptr<rn::HeadlessBackend> headless(const pr::Protocol& p, bool gpu) {
+rn::HeadlessDevices headless(const pr::Protocol& p, bool gpu) {
   rn::HeadlessOptions o;
   o.no_gpu = !gpu;
   o.software = true;
   o.width_px = 64;
   o.height_px = 64;
   o.refresh_hz = p.refresh_hz;
-  o.table = rn::nominal_calibration(p.session_settings());
-  auto made = rn::HeadlessBackend::create(o);
+  auto made = rn::HeadlessDevices::create(o, rn::standing_at(rn::nominal_calibration(p.session_settings())));
   EXPECT_TRUE(made.has_value()) << (made ? "" : made.error().message);
-  return made ? std::move(made).value() : nullptr;
+  return made ? std::move(made).value() : rn::HeadlessDevices{};
 }
 
 rn::RunOptions options(rn::FrameDrawing drawing) {
@@ -102,17 +99,17 @@ rn::RunOptions options(rn::FrameDrawing drawing) {
 
 int count(const std::string& db, const std::string& sql) { return std::stoi(query(db, sql)[0][0]); }
 
-// Runs the demo through `backend` (which fails part-way) and checks what the
-// fault left: an error naming `api_result`, the session interrupted, the
-// trials completed so far kept. Then resumes it with a healthy backend.
-void fault_then_resume(const std::string& db, rn::Backend& backend, const devices::Clock& clock,
+// Runs the demo on `station` (whose display fails part-way) and checks what
+// the fault left: an error naming `api_result`, the session interrupted, the
+// trials completed so far kept. Then resumes it with healthy devices.
+void fault_then_resume(const std::string& db, const harness::io::Station& station, const devices::Clock& clock,
                        rn::FrameDrawing drawing, const std::string& api_result, bool gpu_resume) {
   const Demo d = demo();
   std::optional<rn::RunResult> result;
   try {
-    result.emplace(rn::run_session(d.protocol, d.text, db, options(drawing), backend, clock));
-  } catch (const rn::BackendFailure& f) {
-    FAIL() << "run_session let the backend's failure escape instead of ending the session: " << f.what();
+    result.emplace(rn::run_session(d.protocol, d.text, db, options(drawing), station, clock));
+  } catch (const harness::io::DeviceFailure& f) {
+    FAIL() << "run_session let the display's failure escape instead of ending the session: " << f.what();
   }
   ASSERT_TRUE(result && !result->has_value()) << "the session ran to the end despite the fault";
   const auto& error = result->error();
@@ -136,8 +133,9 @@ void fault_then_resume(const std::string& db, rn::Backend& backend, const device
   auto loaded = pr::load_protocol_text(s.protocol_text, s.protocol_source);
   ASSERT_TRUE(loaded.ok());
   auto healthy = headless(*loaded.protocol, gpu_resume);
-  ASSERT_TRUE(healthy);
-  auto resumed = rn::resume_session(db, session, s, *loaded.protocol, options(drawing), *healthy, healthy->clock());
+  ASSERT_TRUE(healthy.display);
+  auto resumed =
+      rn::resume_session(db, session, s, *loaded.protocol, options(drawing), healthy.station(), healthy.clock());
   ASSERT_TRUE(resumed.has_value()) << resumed.error().message;
   EXPECT_EQ(resumed->status, curvlab::data::SessionStatus::completed);
   EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
@@ -154,45 +152,45 @@ void fault_then_resume(const std::string& db, rn::Backend& backend, const device
 TEST(SessionFaults, LostSessionInBeginFrameEndsInterruptedAndResumes) {
   const Demo d = demo();
   auto inner = headless(d.protocol, false);
-  ASSERT_TRUE(inner);
+  ASSERT_TRUE(inner.display);
   // Frame 300 at 90 Hz: 3.3 s in, after two or three of the ~1.2 s trials.
-  FailingBackend backend(*inner, 300, FailingBackend::Where::begin_frame,
-                         rn::BackendFailure("xrWaitFrame", "XR_ERROR_SESSION_LOST"));
+  FailingDisplay display(*inner.display, 300, FailingDisplay::Where::begin_frame,
+                         harness::io::DeviceFailure("xrWaitFrame", "XR_ERROR_SESSION_LOST"));
   const auto db = (fresh_dir("fault_begin") / "s.sqlite").string();
-  fault_then_resume(db, backend, inner->clock(), rn::FrameDrawing::none, "xrWaitFrame: XR_ERROR_SESSION_LOST",
+  fault_then_resume(db, {&display, inner.poses.get(), {}}, inner.clock(), rn::FrameDrawing::none, "xrWaitFrame: XR_ERROR_SESSION_LOST",
                     false);
 }
 
 TEST(SessionFaults, LostDeviceInSubmitEndsInterruptedAndResumes) {
   const Demo d = demo();
   auto inner = headless(d.protocol, false);
-  ASSERT_TRUE(inner);
-  FailingBackend backend(*inner, 300, FailingBackend::Where::submit,
-                         rn::BackendFailure("vkQueueSubmit", "VK_ERROR_DEVICE_LOST"));
+  ASSERT_TRUE(inner.display);
+  FailingDisplay display(*inner.display, 300, FailingDisplay::Where::submit,
+                         harness::io::DeviceFailure("vkQueueSubmit", "VK_ERROR_DEVICE_LOST"));
   const auto db = (fresh_dir("fault_submit") / "s.sqlite").string();
-  fault_then_resume(db, backend, inner->clock(), rn::FrameDrawing::none, "vkQueueSubmit: VK_ERROR_DEVICE_LOST",
+  fault_then_resume(db, {&display, inner.poses.get(), {}}, inner.clock(), rn::FrameDrawing::none, "vkQueueSubmit: VK_ERROR_DEVICE_LOST",
                     false);
 }
 
 TEST(SessionFaults, RealHeadlessDeviceLossEndsInterruptedAndResumes) {
-  // The real headless backend drawing every frame on lavapipe; the test
+  // The real headless display drawing every frame on lavapipe; the test
   // layer makes its 400th vkQueueSubmit report a lost device.
   const Demo d = demo();
   const auto db = (fresh_dir("fault_vulkan") / "s.sqlite").string();
   {
     const VulkanFault fault("vkQueueSubmit@400");
-    auto backend = headless(d.protocol, true);
-    ASSERT_TRUE(backend);
+    auto devices = headless(d.protocol, true);
+    ASSERT_TRUE(devices.display);
     std::optional<rn::RunResult> result;
     try {
-      result.emplace(rn::run_session(d.protocol, d.text, db, options(rn::FrameDrawing::all), *backend, backend->clock()));
-    } catch (const rn::BackendFailure& f) {
-      FAIL() << "run_session let the backend's failure escape instead of ending the session: " << f.what();
+      result.emplace(rn::run_session(d.protocol, d.text, db, options(rn::FrameDrawing::all), devices.station(), devices.clock()));
+    } catch (const harness::io::DeviceFailure& f) {
+      FAIL() << "run_session let the display's failure escape instead of ending the session: " << f.what();
     }
     ASSERT_TRUE(result && !result->has_value());
     EXPECT_NE(result->error().message.find("vkQueueSubmit: VK_ERROR_DEVICE_LOST"), std::string::npos)
         << result->error().message;
-  }  // the backend is destroyed on the lost device, then the layer is off
+  }  // the display is destroyed on the lost device, then the layer is off
   EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
   const int done = count(db, "SELECT count(*) FROM trials WHERE status = 'completed'");
   EXPECT_GT(done, 0);

@@ -1,4 +1,4 @@
-// Whole sessions in process for the runner's tests: the headless backend
+// Whole sessions in process for the runner's tests: the headless devices
 // without a GPU, wrapped so that a test decides when the head is lost, when
 // signals come and which keys are pressed when.
 #pragma once
@@ -23,49 +23,50 @@ namespace curvlab::testing {
 namespace rn = harness::runner;
 namespace pr = harness::protocol;
 
-// Forwards to a headless backend; the test's hooks may invalidate the head,
-// add inputs and raise signals. `phase` is the phase of the last submitted
-// frame, as a window would show it.
-class ScriptedBackend final : public rn::Backend {
+// A session's devices as a test scripts them: the headless display and
+// trajectory, with the test's hooks deciding when the head is lost, and a
+// response source adding inputs and signals. `phase` is the phase of the last
+// submitted frame, as a window would show it.
+class ScriptedDevices final : public harness::io::Display,
+                              public harness::io::PoseSource,
+                              public harness::io::ResponseSource {
  public:
-  explicit ScriptedBackend(rn::HeadlessBackend& inner) : inner_(inner) {}
+  ScriptedDevices(rn::HeadlessDisplay& display, rn::TrajectoryPoses& poses) : display_(display), poses_(poses) {}
 
   std::function<bool(std::int64_t t_ns)> head_valid = [](std::int64_t) { return true; };
-  std::function<rn::BackendSignal(const rn::FrameTiming&, const std::string& phase,
-                                  std::vector<rn::InputEvent>&)>
+  std::function<harness::io::Signal(const harness::io::FrameTiming&, const std::string& phase,
+                                    std::vector<harness::io::InputEvent>&)>
       inputs;
 
-  [[nodiscard]] rn::BackendInfo info() const override { return inner_.info(); }
-  std::optional<rn::FrameTiming> begin_frame() override {
-    auto t = inner_.begin_frame();
+  [[nodiscard]] harness::io::Station station() { return {this, this, {this}}; }
+
+  [[nodiscard]] harness::io::DisplayInfo info() const override { return display_.info(); }
+  std::optional<harness::io::FrameTiming> begin_frame() override {
+    auto t = display_.begin_frame();
     if (t) timing_ = *t;
     return t;
   }
-  geometry::LabFrame poses(const rn::FrameTiming& frame) override {
-    auto p = inner_.poses(frame);
+  geometry::LabFrame poses(const harness::io::FrameTiming& frame) override {
+    auto p = poses_.poses(frame);
     p[geometry::Device::head].valid = head_valid(frame.now_ns);
     return p;
   }
-  rn::BackendSignal poll_input(std::vector<rn::InputEvent>& out) override {
-    const auto signal = inner_.poll_input(out);
-    if (inputs) {
-      const auto mine = inputs(timing_, phase_, out);
-      if (mine != rn::BackendSignal::none) return mine;
-    }
-    return signal;
+  harness::io::Signal poll(std::vector<harness::io::InputEvent>& out) override {
+    return inputs ? inputs(timing_, phase_, out) : harness::io::Signal::none;
   }
-  renderer::StereoRig rig(const rn::FrameTiming& frame, double ipd_m) override {
-    return inner_.rig(frame, ipd_m);
+  renderer::StereoRig rig(const harness::io::FrameTiming& frame, double ipd_m) override {
+    return display_.rig(frame, ipd_m);
   }
   renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
-                              const rn::Overlay& overlay, bool draw) override {
-    phase_ = std::string(rn::to_string(overlay.phase));
-    return inner_.submit(scene, frame, overlay, draw);
+                              const harness::io::Overlay& overlay, bool draw) override {
+    phase_ = std::string(harness::io::to_string(overlay.phase));
+    return display_.submit(scene, frame, overlay, draw);
   }
 
  private:
-  rn::HeadlessBackend& inner_;
-  rn::FrameTiming timing_;
+  rn::HeadlessDisplay& display_;
+  rn::TrajectoryPoses& poses_;
+  harness::io::FrameTiming timing_;
   std::string phase_;
 };
 
@@ -77,7 +78,7 @@ struct Outcome {
 // A protocol of protocols/ (file name without .toml) with `extra` appended,
 // run to the end; `observer` answers with the default simulated observer.
 inline Outcome run_protocol(const std::string& protocol, const std::string& name, const std::string& extra,
-                            bool observer, const std::function<void(ScriptedBackend&)>& script) {
+                            bool observer, const std::function<void(ScriptedDevices&)>& script) {
   const std::string path = std::string(CURVLAB_SOURCE_DIR) + "/protocols/" + protocol + ".toml";
   std::ifstream in(path);
   std::stringstream text;
@@ -89,19 +90,18 @@ inline Outcome run_protocol(const std::string& protocol, const std::string& name
   rn::HeadlessOptions ho;
   ho.no_gpu = true;
   ho.refresh_hz = p.refresh_hz;
-  ho.table = rn::nominal_calibration(p.session_settings());
-  auto made = rn::HeadlessBackend::create(ho);
+  auto made = rn::HeadlessDevices::create(ho, rn::standing_at(rn::nominal_calibration(p.session_settings())));
   EXPECT_TRUE(made.has_value()) << (made ? "" : made.error().message);
   if (!made) return {};
-  auto& headless = *made.value();
-  ScriptedBackend backend(headless);
-  script(backend);
+  auto& headless = made.value();
+  ScriptedDevices devices(*headless.display, *headless.poses);
+  script(devices);
   rn::RunOptions o;
   o.participant = "T01";
   if (observer) o.observer = rn::ObserverParams{};
   o.drawing = rn::FrameDrawing::none;
   const auto db = (fresh_dir("in_process_" + name) / "s.sqlite").string();
-  auto result = rn::run_session(p, text.str(), db, o, backend, headless.clock());
+  auto result = rn::run_session(p, text.str(), db, o, devices.station(), headless.clock());
   EXPECT_TRUE(result.has_value()) << (result ? "" : result.error().message);
   if (!result) return {};
   return {db, result.value()};

@@ -26,8 +26,8 @@ TEST(DiskWaits, NoSyncFromTheFrameThreadAndEachTrialIsDurableBeforeTheNext) {
   std::string last_phase;
   int trials_started = 0;
   std::vector<std::pair<int, int>> durable_at_start;  // (trials started before, trials completed on disk)
-  const auto out = run_protocol("demo", "disk_waits", "", true, [&](ScriptedBackend& b) {
-    b.inputs = [&](const rn::FrameTiming&, const std::string& phase, std::vector<rn::InputEvent>&) {
+  const auto out = run_protocol("demo", "disk_waits", "", true, [&](ScriptedDevices& b) {
+    b.inputs = [&](const curvlab::harness::io::FrameTiming&, const std::string& phase, std::vector<curvlab::harness::io::InputEvent>&) {
       if (syncs_before_loop < 0) {
         frame_thread = std::this_thread::get_id();
         syncs_before_loop = vfs::syncs_from(frame_thread);
@@ -43,7 +43,7 @@ TEST(DiskWaits, NoSyncFromTheFrameThreadAndEachTrialIsDurableBeforeTheNext) {
         ++trials_started;
       }
       last_phase = phase;
-      return rn::BackendSignal::none;
+      return rn::Signal::none;
     };
   });
   vfs::set_sync_delay(std::chrono::microseconds(0));

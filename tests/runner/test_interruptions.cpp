@@ -14,7 +14,7 @@ using curvlab::testing::fresh_dir;
 using curvlab::testing::Outcome;
 using curvlab::testing::query;
 using curvlab::testing::run_protocol;
-using curvlab::testing::ScriptedBackend;
+using curvlab::testing::ScriptedDevices;
 namespace rn = harness::runner;
 namespace pr = harness::protocol;
 
@@ -23,7 +23,7 @@ using Rows = std::vector<std::vector<std::string>>;
 // The demo protocol (8 trials: 100 ms fixation, 300 ms stimulus, 2.5 s
 // response window) with `extra` appended, run to the end.
 Outcome run_demo(const std::string& name, const std::string& extra, bool observer,
-                 const std::function<void(ScriptedBackend&)>& script) {
+                 const std::function<void(ScriptedDevices&)>& script) {
   return run_protocol("demo", name, extra, observer, script);
 }
 
@@ -44,8 +44,8 @@ std::function<bool(std::int64_t)> lost_between(std::vector<std::pair<int, int>> 
 // key pressed after it does.
 TEST(Interruptions, PressesBeforeTheDisplayedOnsetAreAnticipationsNotAnswers) {
   bool answered = false;
-  const auto out = run_demo("early", "", false, [&](ScriptedBackend& b) {
-    b.inputs = [&](const rn::FrameTiming& t, const std::string& phase, std::vector<rn::InputEvent>& in) {
+  const auto out = run_demo("early", "", false, [&](ScriptedDevices& b) {
+    b.inputs = [&](const harness::io::FrameTiming& t, const std::string& phase, std::vector<harness::io::InputEvent>& in) {
       if (phase == "fixation") {
         // Includes the frame in which the runner decides onset: stamped at
         // the frame's start, before its predicted display time.
@@ -55,7 +55,7 @@ TEST(Interruptions, PressesBeforeTheDisplayedOnsetAreAnticipationsNotAnswers) {
         in.push_back({t.predicted_display_ns, "2", "keyboard", true});
         answered = true;
       }
-      return rn::BackendSignal::none;
+      return rn::Signal::none;
     };
   });
   ASSERT_FALSE(out.db.empty());
@@ -79,7 +79,7 @@ TEST(Interruptions, PressesBeforeTheDisplayedOnsetAreAnticipationsNotAnswers) {
 // its first attempt and carries the loss, in its event and in the export.
 TEST(Interruptions, FlaggedTrackingLossKeepsTheTrialAndRecordsHowLong) {
   const auto out = run_demo("flag", "[tracking]\non_loss = \"flag\"\n", true,
-                            [](ScriptedBackend& b) { b.head_valid = lost_between({{50, 550}}); });
+                            [](ScriptedDevices& b) { b.head_valid = lost_between({{50, 550}}); });
   ASSERT_FALSE(out.db.empty());
   EXPECT_EQ(out.summary.trials_completed, 8);
   EXPECT_EQ(out.summary.trials_flagged, 1);
@@ -128,7 +128,7 @@ TEST(Interruptions, FlaggedTrackingLossKeepsTheTrialAndRecordsHowLong) {
 // trials after it are not lost with it.
 TEST(Interruptions, AbortPolicyGivesUpTheTrialAndWaitsForTrackingBeforeTheNext) {
   const auto out = run_demo("abort", "[tracking]\non_loss = \"abort\"\n", true,
-                            [](ScriptedBackend& b) { b.head_valid = lost_between({{50, 2000}}); });
+                            [](ScriptedDevices& b) { b.head_valid = lost_between({{50, 2000}}); });
   ASSERT_FALSE(out.db.empty());
   EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
   EXPECT_EQ(out.summary.trials_aborted, 1);
@@ -153,7 +153,7 @@ TEST(Interruptions, MaxAttemptsEndsRepeatedLosses) {
   // Attempt 1 starts at 0 and is lost at 300 ms (loss from 50 ms); attempt 2
   // starts when the head is back at 600 ms and is lost again at 1.1 s,
   // before the simulated observer's earliest answer (onset + 450 ms).
-  const auto out = run_demo("max", "[tracking]\nmax_attempts = 2\n", true, [](ScriptedBackend& b) {
+  const auto out = run_demo("max", "[tracking]\nmax_attempts = 2\n", true, [](ScriptedDevices& b) {
     b.head_valid = lost_between({{50, 600}, {850, 1400}});
   });
   ASSERT_FALSE(out.db.empty());
@@ -173,15 +173,15 @@ TEST(Interruptions, RecenterRepeatsTheTrialEvenWhenLossesAreOnlyFlagged) {
   int recenters = 0;
   int fixation_frames = 0;
   const auto out = run_demo("recenter", "[tracking]\non_loss = \"flag\"\nmax_attempts = 3\n", true,
-                            [&](ScriptedBackend& b) {
-                              b.inputs = [&](const rn::FrameTiming&, const std::string& phase,
-                                             std::vector<rn::InputEvent>&) {
+                            [&](ScriptedDevices& b) {
+                              b.inputs = [&](const harness::io::FrameTiming&, const std::string& phase,
+                                             std::vector<harness::io::InputEvent>&) {
                                 fixation_frames = phase == "fixation" ? fixation_frames + 1 : 0;
                                 if (fixation_frames == 3 && recenters < 2) {
                                   ++recenters;
-                                  return rn::BackendSignal::recenter;
+                                  return rn::Signal::recenter;
                                 }
-                                return rn::BackendSignal::none;
+                                return rn::Signal::none;
                               };
                             });
   ASSERT_FALSE(out.db.empty());
@@ -210,17 +210,17 @@ TEST(Interruptions, UnknownLossPolicyIsRejectedWithTheAllowedValues) {
 TEST(Interruptions, APauseBetweenTrialsHoldsTheSessionUntilResumed) {
   std::int64_t paused_at = -1;
   std::int64_t resumed_at = -1;
-  const auto out = run_demo("iti_pause", "", true, [&](ScriptedBackend& b) {
-    b.inputs = [&](const rn::FrameTiming& t, const std::string& phase, std::vector<rn::InputEvent>&) {
+  const auto out = run_demo("iti_pause", "", true, [&](ScriptedDevices& b) {
+    b.inputs = [&](const harness::io::FrameTiming& t, const std::string& phase, std::vector<harness::io::InputEvent>&) {
       if (paused_at < 0 && phase == "iti") {
         paused_at = t.now_ns;
-        return rn::BackendSignal::pause;
+        return rn::Signal::pause;
       }
       if (paused_at >= 0 && resumed_at < 0 && t.now_ns >= paused_at + 700'000'000) {
         resumed_at = t.now_ns;
-        return rn::BackendSignal::resume;
+        return rn::Signal::resume;
       }
-      return rn::BackendSignal::none;
+      return rn::Signal::none;
     };
   });
   ASSERT_FALSE(out.db.empty());

@@ -96,10 +96,10 @@ TEST(OperatorScript, ActionsComeDueOnceWhenTheirTimeHasPassed) {
 TEST(OperatorScript, RepeatAndSkipAbortTheAttemptAndDecideItsFate) {
   pr::Timeline t;
   t.fixation_ms = 100;
-  for (const auto& [signal, reason] : {std::pair{rn::BackendSignal::repeat, rn::AbortReason::repeat},
-                                      std::pair{rn::BackendSignal::skip, rn::AbortReason::skip}}) {
+  for (const auto& [signal, reason] : {std::pair{rn::Signal::repeat, rn::AbortReason::repeat},
+                                      std::pair{rn::Signal::skip, rn::AbortReason::skip}}) {
     rn::Attempt a(t, {}, 0);
-    EXPECT_FALSE(a.advance({0, 10, true, rn::BackendSignal::none}).abort);
+    EXPECT_FALSE(a.advance({0, 10, true, rn::Signal::none}).abort);
     const auto step = a.advance({11'000'000, 21'000'000, true, signal});
     ASSERT_TRUE(step.abort);
     EXPECT_EQ(*step.abort, reason);

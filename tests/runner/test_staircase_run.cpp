@@ -21,7 +21,7 @@ namespace pr = curvlab::harness::protocol;
 
 TEST(StaircaseRun, PseStaircasesSettleWherePredicted) {
   const auto out = curvlab::testing::run_protocol("stick_pse_staircase", "pse", "", true,
-                                                  [](curvlab::testing::ScriptedBackend&) {});
+                                                  [](curvlab::testing::ScriptedDevices&) {});
   ASSERT_FALSE(out.db.empty());
   EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
 

@@ -23,7 +23,7 @@ pr::Timeline timeline() {
   return t;
 }
 
-rn::FrameFacts frame(std::int64_t k, bool tracked = true, rn::BackendSignal signal = rn::BackendSignal::none) {
+rn::FrameFacts frame(std::int64_t k, bool tracked = true, rn::Signal signal = rn::Signal::none) {
   return {k * kPeriod, k * kPeriod + kLatency, tracked, signal};
 }
 
@@ -78,9 +78,9 @@ TEST(TrialState, AnswersCountOnlyFromTheOnsetsDisplayTime) {
 
 TEST(TrialState, SignalsAbortTheAttempt) {
   for (const auto& [signal, reason] :
-       {std::pair{rn::BackendSignal::pause, rn::AbortReason::pause},
-        std::pair{rn::BackendSignal::recenter, rn::AbortReason::recenter},
-        std::pair{rn::BackendSignal::quit, rn::AbortReason::quit}}) {
+       {std::pair{rn::Signal::pause, rn::AbortReason::pause},
+        std::pair{rn::Signal::recenter, rn::AbortReason::recenter},
+        std::pair{rn::Signal::quit, rn::AbortReason::quit}}) {
     rn::Attempt a(timeline(), {}, 0);
     EXPECT_FALSE(a.advance(frame(0)).abort);
     const auto step = a.advance(frame(1, true, signal));
@@ -89,7 +89,7 @@ TEST(TrialState, SignalsAbortTheAttempt) {
   }
   // A resume signal is not an abort.
   rn::Attempt a(timeline(), {}, 0);
-  EXPECT_FALSE(a.advance(frame(0, true, rn::BackendSignal::resume)).abort);
+  EXPECT_FALSE(a.advance(frame(0, true, rn::Signal::resume)).abort);
 }
 
 TEST(TrialState, TrackingLostLongerThanTheThresholdAborts) {

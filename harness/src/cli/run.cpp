@@ -6,11 +6,11 @@
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/writer_lock.hpp"
+#include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/operator/operator_window.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/random.hpp"
-#include "curvlab/harness/runner/desktop.hpp"
 #include "curvlab/harness/runner/headless.hpp"
 #include "curvlab/harness/runner/image_observer.hpp"
 #include "curvlab/harness/runner/predict.hpp"
@@ -169,13 +169,13 @@ bool wants_operator_window(const BackendArgs& a) {
 }
 
 // The operator's console: the window (--operator-window), or the script
-// alone, or none. Made after the backend, so destroyed before it.
+// alone, or none. Made after the display, so destroyed before it.
 std::unique_ptr<rn::OperatorConsole> open_console(const BackendArgs& a, std::vector<rn::OperatorAction> script,
-                                                  rn::Backend& backend, const std::string& db) {
+                                                  harness::io::Display& display, const std::string& db) {
   if (wants_operator_window(a)) {
     harness::operator_console::OperatorWindowOptions o;
     o.script = std::move(script);
-    o.mirror = backend.mirror();
+    o.mirror = display.mirror();
     if (a.operator_eyes == "left") o.eyes = harness::operator_console::EyeView::left;
     else if (a.operator_eyes == "right") o.eyes = harness::operator_console::EyeView::right;
     o.screenshot_dir = a.operator_screenshot;
@@ -199,83 +199,105 @@ void check_operator_args(const BackendArgs& a) {
   (void)wants_operator_window(a);
 }
 
-// The backend, created before anything is written: a backend that cannot
-// start (no display, no OpenXR runtime) leaves no trace.
-struct Backends {
-  std::unique_ptr<rn::Backend> backend;
+// The session's devices (io/station.hpp), made before anything is written:
+// a display that cannot start (no window system, no OpenXR runtime) leaves
+// no trace. The one place where a display, a pose source and response
+// sources are put together: the headset and the desktop window are all three
+// at once; headless is an offscreen display with poses from a trajectory,
+// answered by the simulated observer (RunOptions::observer).
+struct Devices {
+  std::unique_ptr<harness::io::InteractiveDisplay> interactive;  // desktop, xr
+  rn::HeadlessDevices headless;
   std::unique_ptr<devices::SteadyClock> steady;
   const devices::Clock* clock = nullptr;
+  harness::io::Station station;
+
+  void use(harness::io::InteractiveDisplay& d) {
+    station.display = &d;
+    station.poses = &d;
+    station.responses.push_back(&d);
+  }
 };
 
-Backends open_backend_of_kind(const BackendArgs& a, const pr::Protocol& p,
-                              const geometry::PhysicalTableFit& table, std::int64_t start_ns,
-                              std::uint32_t msaa) {
-  Backends out;
+rn::HeadlessOptions headless_options(const BackendArgs& a, const pr::Protocol& p, std::int64_t start_ns,
+                                     std::uint32_t msaa) {
+  rn::HeadlessOptions o;
+  if (a.pace == "fast") o.pace = rn::Pace::fast;
+  else if (a.pace == "realtime") o.pace = rn::Pace::realtime;
+  else throw UsageError("--pace must be fast or realtime, got '" + a.pace + "'");
+  o.refresh_hz = p.refresh_hz;
+  o.width_px = static_cast<std::uint32_t>(p.resolution_width);
+  o.height_px = static_cast<std::uint32_t>(p.resolution_height);
+  o.software = a.software;
+  o.msaa = msaa;
+  o.start_ns = start_ns;
+  return o;
+}
+
+void open_headless(Devices& out, const BackendArgs& a, const pr::Protocol& p,
+                   const geometry::PhysicalTableFit& table, std::int64_t start_ns, std::uint32_t msaa) {
+  rn::TrajectoryOptions t;
+  t.table = table;
+  if (!a.trajectory.empty()) {
+    auto file = harness::read_trajectory_csv(a.trajectory);
+    if (!file) raise(file.error());
+    t.trajectory = file.value().samples;
+    if (t.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
+  }
+  auto made = rn::HeadlessDevices::create(headless_options(a, p, start_ns, msaa), std::move(t));
+  if (!made) raise(made.error());
+  out.headless = std::move(made).value();
+  out.clock = &out.headless.clock();
+  out.station = out.headless.station();
+}
+
+Devices open_devices_of_kind(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
+                             std::int64_t start_ns, std::uint32_t msaa) {
+  Devices out;
   if (a.backend == "headless") {
-    rn::HeadlessOptions o;
-    if (a.pace == "fast") o.pace = rn::Pace::fast;
-    else if (a.pace == "realtime") o.pace = rn::Pace::realtime;
-    else throw UsageError("--pace must be fast or realtime, got '" + a.pace + "'");
-    o.refresh_hz = p.refresh_hz;
-    o.width_px = static_cast<std::uint32_t>(p.resolution_width);
-    o.height_px = static_cast<std::uint32_t>(p.resolution_height);
-    o.software = a.software;
-    o.msaa = msaa;
-    o.table = table;
-    o.start_ns = start_ns;
-    if (!a.trajectory.empty()) {
-      auto file = harness::read_trajectory_csv(a.trajectory);
-      if (!file) raise(file.error());
-      o.trajectory = file.value().samples;
-      if (o.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
-    }
-    auto made = rn::HeadlessBackend::create(o);
-    if (!made) raise(made.error());
-    auto& hb = made.value();
-    out.clock = &hb->clock();
-    out.backend = std::move(hb);
+    open_headless(out, a, p, table, start_ns, msaa);
     return out;
   }
   out.steady = std::make_unique<devices::SteadyClock>();
   out.clock = out.steady.get();
   if (a.backend == "desktop") {
-    rn::DesktopOptions o;
+    desktop::DesktopOptions o;
     std::tie(o.eye_width_px, o.eye_height_px) = parse_size(a.window_size, "--window-size");
-    if (a.preview == "side-by-side") o.preview = rn::DesktopPreview::side_by_side;
-    else if (a.preview == "left") o.preview = rn::DesktopPreview::left;
-    else if (a.preview == "right") o.preview = rn::DesktopPreview::right;
+    if (a.preview == "side-by-side") o.preview = desktop::DesktopPreview::side_by_side;
+    else if (a.preview == "left") o.preview = desktop::DesktopPreview::left;
+    else if (a.preview == "right") o.preview = desktop::DesktopPreview::right;
     else throw UsageError("--preview must be side-by-side, left or right, got '" + a.preview + "'");
     o.screenshot_dir = a.screenshot;
     o.key_script = a.key_script;
     o.software = a.software;
     o.msaa = msaa;
     o.clock = out.clock;
-    auto made = rn::make_desktop_backend(o);
+    auto made = desktop::make_desktop_backend(o);
     if (!made) raise(made.error());
-    out.backend = std::move(made).value();
-    return out;
-  }
-  if (a.backend == "xr") {
+    out.interactive = std::move(made).value();
+  } else if (a.backend == "xr") {
     xr::XrBackendOptions o;
     o.clock = out.clock;
     o.mirror = wants_operator_window(a);
     o.msaa = msaa;
     auto made = xr::make_xr_backend(o);
     if (!made) raise(made.error());
-    out.backend = std::move(made).value();
-    return out;
+    out.interactive = std::move(made).value();
+  } else {
+    throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
   }
-  throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
+  out.use(*out.interactive);
+  return out;
 }
 
 // The samples per pixel: --msaa, else the protocol's [viewing] msaa; the
-// backend's renderer clamps it to the device, with a warning.
-Backends open_backend(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
-                      std::int64_t start_ns) {
+// display's renderer clamps it to the device, with a warning.
+Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
+                     std::int64_t start_ns) {
   const std::uint32_t msaa = a.msaa ? check_msaa(*a.msaa)
                                     : static_cast<std::uint32_t>(p.session_settings().viewing.msaa);
-  Backends out = open_backend_of_kind(a, p, table, start_ns, msaa);
-  warn_if_msaa_clamped(msaa, out.backend->info().msaa);
+  Devices out = open_devices_of_kind(a, p, table, start_ns, msaa);
+  warn_if_msaa_clamped(msaa, out.station.display->info().msaa);
   return out;
 }
 
@@ -406,15 +428,15 @@ void run_command(const RunArgs& a) {
   const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
-  auto backend = open_backend(a.backend, p, table, 0);
+  auto devices = open_devices(a.backend, p, table, 0);
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(parent, ec);
   }
-  auto console = open_console(a.backend, std::move(script), *backend.backend, db);
+  auto console = open_console(a.backend, std::move(script), *devices.station.display, db);
   o.console = console.get();
   watch_stop_signals(o);
-  auto result = rn::run_session(p, text, db, o, *backend.backend, *backend.clock);
+  auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
   report(result, a.backend);
 }
@@ -446,11 +468,11 @@ void resume_command(const ResumeArgs& a) {
   // A resumed session's clock continues after the last logged time.
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
-  auto backend = open_backend(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
-  auto console = open_console(a.backend, std::move(script), *backend.backend, a.db);
+  auto devices = open_devices(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
+  auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();
   watch_stop_signals(o);
-  auto result = rn::resume_session(a.db, a.session, stored, *loaded.protocol, o, *backend.backend, *backend.clock);
+  auto result = rn::resume_session(a.db, a.session, stored, *loaded.protocol, o, devices.station, *devices.clock);
   console.reset();
   report(result, a.backend);
 }

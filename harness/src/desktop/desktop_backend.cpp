@@ -17,14 +17,12 @@ namespace curvlab::desktop {
 
 using harness::Error;
 using harness::Result;
-using harness::runner::BackendFailure;
-using harness::runner::BackendInfo;
-using harness::runner::BackendSignal;
-using harness::runner::DesktopOptions;
-using harness::runner::DesktopPreview;
-using harness::runner::FrameTiming;
-using harness::runner::InputEvent;
-using harness::runner::Overlay;
+using harness::io::DeviceFailure;
+using harness::io::DisplayInfo;
+using harness::io::Signal;
+using harness::io::FrameTiming;
+using harness::io::InputEvent;
+using harness::io::Overlay;
 
 namespace {
 
@@ -251,7 +249,7 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
   return b;
 }
 
-BackendInfo DesktopBackend::info() const {
+DisplayInfo DesktopBackend::info() const {
   return {"desktop", context_->device_name(), context_->driver_info(), refresh_hz_, options_.eye_width_px,
           options_.eye_height_px, renderer_ ? renderer_->msaa() : 0};
 }
@@ -271,7 +269,7 @@ std::optional<FrameTiming> DesktopBackend::begin_frame() {
       std::this_thread::sleep_for(std::chrono::nanoseconds(wait_ns));
   }
   glfwPollEvents();
-  // Escape or the window's close button: one more frame, so poll_input can
+  // Escape or the window's close button: one more frame, so poll can
   // hand the runner the keys and the quit signal; the session ends after it.
   if (glfwWindowShouldClose(window_.get()) == GLFW_TRUE && quit_delivered_) return std::nullopt;
 
@@ -308,10 +306,10 @@ void DesktopBackend::on_key(int key, int action, int mods) {
   if (!pressed) return;
   if (key == GLFW_KEY_ESCAPE) {
     glfwSetWindowShouldClose(window_.get(), GLFW_TRUE);
-    signal_ = BackendSignal::quit;
+    signal_ = Signal::quit;
   } else if (key == GLFW_KEY_HOME) {
     body_.reset();
-    if (signal_ == BackendSignal::none) signal_ = BackendSignal::recenter;
+    if (signal_ == Signal::none) signal_ = Signal::recenter;
   } else if (key == GLFW_KEY_F12) {
     f12_ = true;
   }
@@ -341,7 +339,7 @@ void DesktopBackend::on_scroll(double dy) {
   body_.move_hand(left ? Hand::left : Hand::right, 0.0, 0.0, dy);
 }
 
-BackendSignal DesktopBackend::poll_input(std::vector<InputEvent>& out) {
+Signal DesktopBackend::poll(std::vector<InputEvent>& out) {
   if (script_) {
     if (auto key = script_->due(options_.clock->now_ns()))
       out.push_back({options_.clock->now_ns(), key->name, "script", true});
@@ -352,10 +350,10 @@ BackendSignal DesktopBackend::poll_input(std::vector<InputEvent>& out) {
   }
   if (failed_ || glfwWindowShouldClose(window_.get()) == GLFW_TRUE) {
     quit_delivered_ = true;
-    return BackendSignal::quit;
+    return Signal::quit;
   }
-  const BackendSignal s = signal_;
-  signal_ = BackendSignal::none;
+  const Signal s = signal_;
+  signal_ = Signal::none;
   return s;
 }
 
@@ -372,7 +370,7 @@ std::string DesktopBackend::banner_text(const Overlay& overlay) const {
     if (!text.empty()) text += " — ";
     text += part;
   };
-  add(std::string(harness::runner::to_string(overlay.phase)));
+  add(std::string(harness::io::to_string(overlay.phase)));
   add(overlay.text);
   if (overlay.waiting_for_input) add("waiting for a key");
   return text;
@@ -394,10 +392,10 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
   }
   if (failed_) return stats;
 
-  // A failing Vulkan call ends the session through the runner (BackendFailure).
+  // A failing Vulkan call ends the session through the runner (DeviceFailure).
   auto fail = [this](const renderer::VulkanFailure& f) {
     failed_ = true;
-    return BackendFailure(f.call, renderer::vk_result_name(f.result), "desktop window");
+    return DeviceFailure(f.call, renderer::vk_result_name(f.result), "desktop window");
   };
   std::variant<bool, renderer::RenderError> ready = false;
   try {
@@ -409,9 +407,9 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
     // The window's swapchain could not be made again (a resize to a surface
     // the device cannot draw to).
     failed_ = true;
-    throw BackendFailure("vkCreateSwapchainKHR", "unusable surface", e->message);
+    throw DeviceFailure("vkCreateSwapchainKHR", "unusable surface", e->message);
   }
-  const bool onset = overlay.phase == harness::runner::Phase::stimulus && last_phase_ != harness::runner::Phase::stimulus;
+  const bool onset = overlay.phase == harness::io::Phase::stimulus && last_phase_ != harness::io::Phase::stimulus;
   last_phase_ = overlay.phase;
   if (!std::get<bool>(ready)) return stats;  // minimised: nothing to draw into
 
@@ -465,24 +463,20 @@ std::vector<std::string> DesktopBackend::save_frame(const std::string& stem) {
     write(target_->read_window(), "_window.png");
   } catch (const renderer::VulkanFailure& f) {
     failed_ = true;
-    throw BackendFailure(f.call, renderer::vk_result_name(f.result), "reading the window back");
+    throw DeviceFailure(f.call, renderer::vk_result_name(f.result), "reading the window back");
   } catch (const vk::SystemError& e) {
     failed_ = true;
-    throw BackendFailure(renderer::vk_call_name(e.what()), renderer::vk_result_name(e.code().value()),
+    throw DeviceFailure(renderer::vk_call_name(e.what()), renderer::vk_result_name(e.code().value()),
                          "reading the window back");
   }
   screenshots_.insert(screenshots_.end(), written.begin(), written.end());
   return written;
 }
 
-}  // namespace curvlab::desktop
-
-namespace curvlab::harness::runner {
-
-Result<std::unique_ptr<Backend>> make_desktop_backend(const DesktopOptions& options) {
-  auto made = desktop::DesktopBackend::create(options);
+Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_desktop_backend(const DesktopOptions& options) {
+  auto made = DesktopBackend::create(options);
   if (!made) return made.error();
-  return std::unique_ptr<Backend>(std::move(made).value());
+  return std::unique_ptr<harness::io::InteractiveDisplay>(std::move(made).value());
 }
 
-}  // namespace curvlab::harness::runner
+}  // namespace curvlab::desktop

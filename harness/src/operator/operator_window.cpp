@@ -41,7 +41,7 @@ std::string glfw_error() {
 
 // Nearest-neighbour scaling of `src` (or one half of it) into the canvas
 // rectangle, keeping its aspect ratio, centred.
-void blit_scaled(const runner::MirrorImage& src, EyeView eyes, renderer::Rgba8Image& dst, int top, int height) {
+void blit_scaled(const io::MirrorImage& src, EyeView eyes, renderer::Rgba8Image& dst, int top, int height) {
   if (src.width == 0 || src.height == 0) return;
   const int half = static_cast<int>(src.width / 2);
   const int x0 = eyes == EyeView::right ? half : 0;
@@ -320,7 +320,7 @@ class OperatorWindow final : public runner::OperatorConsole {
   std::atomic<bool> want_status_{true};
 
   // drawing thread only
-  runner::MirrorImage eyes_;
+  io::MirrorImage eyes_;
   bool have_eyes_ = false;
   renderer::Rgba8Image canvas_;
   std::string panel_text_;

@@ -7,6 +7,7 @@
 #include "curvlab/renderer/renderer.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <thread>
@@ -45,7 +46,7 @@ LabFrame standing_pose(const geometry::PhysicalTableFit& table, double eye_heigh
   return f;
 }
 
-struct HeadlessBackend::Impl {
+struct HeadlessDisplay::Impl {
   HeadlessOptions options;
   SimulatedClock sim_clock;
   devices::SteadyClock steady;
@@ -64,7 +65,7 @@ struct HeadlessBackend::Impl {
   }
 };
 
-Result<std::unique_ptr<HeadlessBackend>> HeadlessBackend::create(const HeadlessOptions& options) {
+Result<std::unique_ptr<HeadlessDisplay>> HeadlessDisplay::create(const HeadlessOptions& options) {
   if (!(options.refresh_hz >= 1.0 && options.refresh_hz <= 1000.0))
     return Error{Error::Kind::usage, "headless: refresh rate must lie in [1, 1000] Hz"};
   auto impl = std::make_unique<Impl>(options);
@@ -88,20 +89,20 @@ Result<std::unique_ptr<HeadlessBackend>> HeadlessBackend::create(const HeadlessO
     }
   }
   impl->first_ns = options.pace == Pace::fast ? options.start_ns : impl->steady.now_ns();
-  return std::unique_ptr<HeadlessBackend>(new HeadlessBackend(std::move(impl)));
+  return std::unique_ptr<HeadlessDisplay>(new HeadlessDisplay(std::move(impl)));
 }
 
-HeadlessBackend::HeadlessBackend(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-HeadlessBackend::~HeadlessBackend() {
+HeadlessDisplay::HeadlessDisplay(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+HeadlessDisplay::~HeadlessDisplay() {
   // The members' destructors wait for their own GPU work without throwing;
   // this waits for everything first (a lost device: nothing to wait for).
   if (impl_ && impl_->ctx) impl_->ctx->wait_idle_noexcept();
 }
 
-const devices::Clock& HeadlessBackend::clock() const { return impl_->clock(); }
+const devices::Clock& HeadlessDisplay::clock() const { return impl_->clock(); }
 
-BackendInfo HeadlessBackend::info() const {
-  BackendInfo i;
+io::DisplayInfo HeadlessDisplay::info() const {
+  io::DisplayInfo i;
   i.name = "headless";
   i.refresh_hz = impl_->options.refresh_hz;
   i.eye_width_px = impl_->options.width_px;
@@ -117,9 +118,12 @@ BackendInfo HeadlessBackend::info() const {
   return i;
 }
 
-std::optional<FrameTiming> HeadlessBackend::begin_frame() {
+std::int64_t HeadlessDisplay::first_ns() const { return impl_->first_ns; }
+std::int64_t HeadlessDisplay::period_ns() const { return impl_->period_ns; }
+
+std::optional<io::FrameTiming> HeadlessDisplay::begin_frame() {
   auto& m = *impl_;
-  FrameTiming f;
+  io::FrameTiming f;
   f.index = m.index++;
   f.period_ns = m.period_ns;
   const std::int64_t due = m.first_ns + f.index * m.period_ns;
@@ -136,13 +140,24 @@ std::optional<FrameTiming> HeadlessBackend::begin_frame() {
   return f;
 }
 
-LabFrame HeadlessBackend::poses(const FrameTiming& frame) {
-  const auto& o = impl_->options;
-  const std::int64_t t = frame.predicted_display_ns - impl_->first_ns;
+Result<HeadlessDevices> HeadlessDevices::create(const HeadlessOptions& display, TrajectoryOptions trajectory) {
+  auto made = HeadlessDisplay::create(display);
+  if (!made) return made.error();
+  HeadlessDevices out;
+  out.display = std::move(made).value();
+  trajectory.start_ns = out.display->first_ns();
+  trajectory.period_ns = out.display->period_ns();
+  out.poses = std::make_unique<TrajectoryPoses>(std::move(trajectory));
+  return out;
+}
+
+LabFrame TrajectoryPoses::poses(const io::FrameTiming& frame) {
+  const auto& o = options_;
+  const std::int64_t t = frame.predicted_display_ns - o.start_ns;
   if (o.trajectory.empty()) return standing_pose(o.table, o.eye_height_m, t);
   // Recorded or generated trajectory, looped; the sample at or before t.
   const std::int64_t t0 = o.trajectory.front().t_ns;
-  const std::int64_t span = o.trajectory.back().t_ns - t0 + impl_->period_ns;
+  const std::int64_t span = o.trajectory.back().t_ns - t0 + o.period_ns;
   const std::int64_t local = t0 + (span > 0 ? t % span : 0);
   auto it = std::upper_bound(o.trajectory.begin(), o.trajectory.end(), local,
                              [](std::int64_t v, const geometry::TrajectorySample& s) { return v < s.t_ns; });
@@ -150,18 +165,16 @@ LabFrame HeadlessBackend::poses(const FrameTiming& frame) {
   return it->frame;
 }
 
-BackendSignal HeadlessBackend::poll_input(std::vector<InputEvent>&) { return BackendSignal::none; }
-
-renderer::StereoRig HeadlessBackend::rig(const FrameTiming&, double ipd_m) {
+renderer::StereoRig HeadlessDisplay::rig(const io::FrameTiming&, double ipd_m) {
   const auto& o = impl_->options;
   return renderer::StereoRig::from_ipd(
       ipd_m, renderer::Fov::symmetric(std::numbers::pi / 2.0,
                                       static_cast<double>(o.width_px) / static_cast<double>(o.height_px)));
 }
 
-renderer::FrameStats HeadlessBackend::submit(const renderer::Scene& scene,
+renderer::FrameStats HeadlessDisplay::submit(const renderer::Scene& scene,
                                              const renderer::FrameDescription& frame,
-                                             const Overlay&, bool draw) {
+                                             const io::Overlay&, bool draw) {
   auto& m = *impl_;
   if (!m.renderer) return {};
   if (draw) {
@@ -170,7 +183,7 @@ renderer::FrameStats HeadlessBackend::submit(const renderer::Scene& scene,
       m.drawn = true;
       return stats;
     } catch (const renderer::VulkanFailure& f) {
-      throw BackendFailure(f.call, renderer::vk_result_name(f.result), "headless rendering");
+      throw io::DeviceFailure(f.call, renderer::vk_result_name(f.result), "headless rendering");
     }
   }
   // Planned, not drawn: the counts the frame would have had, its CPU cost.
@@ -186,7 +199,7 @@ renderer::FrameStats HeadlessBackend::submit(const renderer::Scene& scene,
   return stats;
 }
 
-std::vector<std::string> HeadlessBackend::save_frame(const std::string& stem) {
+std::vector<std::string> HeadlessDisplay::save_frame(const std::string& stem) {
   auto& m = *impl_;
   std::vector<std::string> written;
   if (!m.target || !m.drawn) return written;

@@ -4,6 +4,15 @@
 
 namespace curvlab::harness::runner {
 
+io::Signal ObserverKeys::poll(std::vector<io::InputEvent>& out) {
+  const std::int64_t now = clock_.now_ns();
+  while (!due_.empty() && due_.front().t_ns <= now) {
+    out.push_back({due_.front().t_ns, due_.front().name, "observer", true});
+    due_.pop_front();
+  }
+  return io::Signal::none;
+}
+
 namespace {
 
 double judged_quantity(const SimulatedObserver& observer, const World& world, const protocol::Settings& s,

@@ -3,6 +3,8 @@
 // an input when its time has come, exactly as a participant's presses arrive.
 #pragma once
 
+#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/response_source.hpp"
 #include "curvlab/harness/protocol/adjustment.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
@@ -10,7 +12,9 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <cstdint>
+#include <deque>
 #include <optional>
+#include <vector>
 
 namespace curvlab::harness::runner {
 
@@ -29,6 +33,23 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
 // response time, what the judgement's type plans. `seen_m`: the judged
 // quantity as read from the onset images (the image observer's choices);
 // otherwise the perception model's.
+// The simulated observer's presses as a response source: the session
+// schedules them as it plans each answer, and each reaches the session,
+// stamped with its planned time, in the first frame that begins at or after
+// that time.
+class ObserverKeys final : public io::ResponseSource {
+ public:
+  explicit ObserverKeys(const devices::Clock& clock) : clock_(clock) {}
+  void press(ScheduledKey key) { due_.push_back(std::move(key)); }
+  void replace(const std::vector<ScheduledKey>& keys) { due_.assign(keys.begin(), keys.end()); }
+  void clear() { due_.clear(); }
+  io::Signal poll(std::vector<io::InputEvent>& out) override;
+
+ private:
+  const devices::Clock& clock_;
+  std::deque<ScheduledKey> due_;  // in time order
+};
+
 ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, const protocol::Judgement& j,
                            const protocol::Settings& s, const Placement& placement,
                            const geometry::Isometry& head, std::int64_t onset_ns,

@@ -128,7 +128,7 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
 }
 
 RunResult resume_session(const std::string& db_path, std::int64_t session_id, const StoredSession& stored,
-                         const protocol::Protocol& p, const RunOptions& options, Backend& backend,
+                         const protocol::Protocol& p, const RunOptions& options, const io::Station& station,
                          const devices::Clock& clock) {
   auto lock = data::WriterLock::for_session(db_path, session_id);
   if (!lock) return lock.error();
@@ -143,7 +143,7 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   auto point = read_resume_point(store, db_path, session_id, p, design);
   if (!point) return point.error();
   if (auto r = store.set_session_status(session_id, data::SessionStatus::running); !r) return r.error();
-  const data::events::Resume resumed{point->first, backend.info().name};
+  const data::events::Resume resumed{point->first, station.display->info().name};
   if (auto r = store.record_event(data::event_record(session_id, std::nullopt, clock.now_ns(), resumed)); !r)
     return r.error();
   auto writer = data::SampleWriter::open(db_path);
@@ -154,7 +154,7 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   o.participant_number = stored.participant_number;
   if (!o.observer) o.observer = stored.observer;
   if (!o.calibration) o.calibration = stored.calibration;
-  auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), backend, clock, std::move(o),
+  auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), station, clock, std::move(o),
                                 session_id, std::move(point->trial_ids));
   setup.lock = &lock.value();
   setup.frame_offset = point->frame_offset;

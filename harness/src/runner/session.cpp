@@ -24,7 +24,7 @@ std::optional<FrameDrawing> parse_frame_drawing(std::string_view text) {
 
 namespace {
 
-// Every backend names itself "headless", "desktop" or "xr" (BackendInfo):
+// Every backend names itself "headless", "desktop" or "xr" (DisplayInfo):
 // another name is a broken contract.
 data::Backend backend_kind(const std::string& name) {
   if (const auto kind = data::parse_backend(name)) return *kind;
@@ -43,7 +43,7 @@ Result<Done> check_options(const protocol::Protocol& p, const RunOptions& option
   return Done{};
 }
 
-data::SessionRecord session_record(std::int64_t protocol_id, std::int64_t participant_id, const BackendInfo& info,
+data::SessionRecord session_record(std::int64_t protocol_id, std::int64_t participant_id, const io::DisplayInfo& info,
                                    const protocol::Design& design, const geometry::PhysicalTableFit& calibration) {
   data::SessionRecord rec;
   rec.protocol_id = protocol_id;
@@ -64,7 +64,7 @@ data::SessionRecord session_record(std::int64_t protocol_id, std::int64_t partic
 // observer events.
 Result<data::StartedSession> create(
     data::SessionStore& store, const protocol::Protocol& p, const std::string& protocol_text,
-    const RunOptions& options, const BackendInfo& info, const protocol::Design& design,
+    const RunOptions& options, const io::DisplayInfo& info, const protocol::Design& design,
     const geometry::PhysicalTableFit& calibration, const devices::Clock& clock, data::WriterLock& lock) {
   auto protocol_id = store.add_protocol(p.meta.name, protocol_text, p.file);
   if (!protocol_id) return protocol_id.error();
@@ -85,7 +85,7 @@ Result<data::StartedSession> create(
 }  // namespace
 
 RunResult run_session(const protocol::Protocol& p, const std::string& protocol_text, const std::string& db_path,
-                      const RunOptions& options, Backend& backend, const devices::Clock& clock) {
+                      const RunOptions& options, const io::Station& station, const devices::Clock& clock) {
   protocol::Design design = protocol::expand_design(p, options.participant_number);
   if (auto ok = check_options(p, options, design); !ok) return ok.error();
   auto lock = data::WriterLock::for_sessions(db_path);
@@ -94,14 +94,14 @@ RunResult run_session(const protocol::Protocol& p, const std::string& protocol_t
   if (!db) return db.error();
   data::SessionStore store(std::move(db).value());
   const auto calibration = options.calibration.value_or(nominal_calibration(p.session_settings()));
-  auto created = create(store, p, protocol_text, options, backend.info(), design, calibration, clock, *lock);
+  auto created = create(store, p, protocol_text, options, station.display->info(), design, calibration, clock, *lock);
   if (!created) return created.error();
   auto writer = data::SampleWriter::open(db_path);
   if (!writer) return writer.error();
 
   RunOptions o = options;
   o.calibration = calibration;
-  auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), backend, clock, std::move(o),
+  auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), station, clock, std::move(o),
                                 created->session_id, std::move(created->trial_ids));
   setup.lock = &lock.value();
   auto result = SessionLoop(std::move(setup)).run(0, true);

@@ -84,7 +84,7 @@ class SessionLoop::Impl {
         store_(*s.store),
         writer_(*s.writer),
         lock_(s.lock),
-        backend_(*s.backend),
+        station_(s.station),
         clock_(*s.clock),
         options_(std::move(s.options)),
         session_id_(s.session_id),
@@ -95,7 +95,7 @@ class SessionLoop::Impl {
         progress_(options_.progress, options_.progress_json),
         console_(options_.console) {
     dominant_ = options_.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
-    eye_size_ = eye_image_size(backend_.info(), static_cast<std::uint32_t>(p_.resolution_width),
+    eye_size_ = eye_image_size(station_.display->info(), static_cast<std::uint32_t>(p_.resolution_width),
                                static_cast<std::uint32_t>(p_.resolution_height));
     restore_adaptive(s.staircase_history);
     status_.participant = options_.participant;
@@ -117,7 +117,7 @@ class SessionLoop::Impl {
     } catch (const Stop& stop) {
       return interrupted(stop.error);
     } catch (const std::exception& e) {
-      // Backend failures (BackendFailure: a Vulkan or OpenXR call, named
+      // Device failures (DeviceFailure: a Vulkan or OpenXR call, named
       // with its result) and anything else thrown from the frame loop.
       return interrupted(Error{Error::Kind::api, e.what()});
     }
@@ -272,9 +272,9 @@ class SessionLoop::Impl {
   // ---- one frame ---------------------------------------------------------
 
   struct Frame {
-    FrameTiming timing;
-    std::vector<InputEvent> inputs;
-    BackendSignal signal = BackendSignal::none;
+    io::FrameTiming timing;
+    std::vector<io::InputEvent> inputs;
+    Signal signal = Signal::none;
     bool head_tracked = false;
     SteadyTime::time_point started;
 
@@ -284,39 +284,55 @@ class SessionLoop::Impl {
   };
 
   // Begins a frame: timing, poses, tracking, input (with the observer's key
-  // presses that are due). false: the backend has ended the session.
+  // presses that are due). false: the display has ended the session.
   bool begin(Frame& f) {
-    auto timing = backend_.begin_frame();
+    auto timing = station_.display->begin_frame();
     if (!timing) return false;
     f.started = SteadyTime::now();
     f.timing = *timing;
-    lab_ = backend_.poses(f.timing);
+    lab_ = station_.poses->poses(f.timing);
     last_lab_ = lab_;
     if (tracker_) tracker_->update(lab_);
     f.head_tracked = tracker_ && tracker_->output().tracked[0];
     f.inputs.clear();
-    f.signal = backend_.poll_input(f.inputs);
+    f.signal = poll_devices(f.inputs);
     take_operator_actions(f);
     take_stop_signal(f);
-    while (!scheduled_.empty() && scheduled_.front().t_ns <= f.timing.now_ns) {
-      f.inputs.push_back({scheduled_.front().t_ns, scheduled_.front().name, "observer", true});
-      scheduled_.pop_front();
-    }
     return true;
   }
 
+  // This frame's inputs from every response source, the simulated observer's
+  // last, and one signal: the display's and the sources' in that order,
+  // those after the first kept for the next frames; a quit outranks them all.
+  io::Signal poll_devices(std::vector<io::InputEvent>& inputs) {
+    auto keep = [this](io::Signal s) {
+      if (s != io::Signal::none) device_signals_.push_back(s);
+    };
+    keep(station_.display->poll_signal());
+    for (io::ResponseSource* source : station_.responses) keep(source->poll(inputs));
+    keep(observer_keys_.poll(inputs));
+    if (device_signals_.empty()) return io::Signal::none;
+    if (std::find(device_signals_.begin(), device_signals_.end(), io::Signal::quit) != device_signals_.end()) {
+      device_signals_.clear();
+      return io::Signal::quit;
+    }
+    const io::Signal s = device_signals_.front();
+    device_signals_.pop_front();
+    return s;
+  }
+
   // Ends a frame: draw (or plan), then log the frame and its samples.
-  renderer::FrameStats end(Frame& f, const Overlay& overlay, bool onset, std::optional<std::int64_t> trial_id) {
+  renderer::FrameStats end(Frame& f, const io::Overlay& overlay, bool onset, std::optional<std::int64_t> trial_id) {
     renderer::FrameDescription desc;
     desc.space = world_->space;
     desc.settings = view_settings(settings_, dominant_);
     desc.head = head();
-    desc.rig = backend_.rig(f.timing, ipd());
+    desc.rig = station_.display->rig(f.timing, ipd());
     desc.width_px = static_cast<std::uint32_t>(p_.resolution_width);
     desc.height_px = static_cast<std::uint32_t>(p_.resolution_height);
     const bool draw = options_.drawing == FrameDrawing::all || (options_.drawing == FrameDrawing::onset && onset);
     const auto before_submit = SteadyTime::now();
-    const renderer::FrameStats stats = backend_.submit(scene_->scene(), desc, overlay, draw);
+    const renderer::FrameStats stats = station_.display->submit(scene_->scene(), desc, overlay, draw);
     const auto after_submit = SteadyTime::now();
     log_frame(f, stats, trial_id, desc.rig);
     const auto own = std::chrono::duration_cast<std::chrono::nanoseconds>((before_submit - f.started) +
@@ -342,7 +358,7 @@ class SessionLoop::Impl {
       event(std::nullopt, data::events::Signal{sig});
       stop_logged_ = true;
     }
-    f.signal = BackendSignal::quit;
+    f.signal = Signal::quit;
   }
 
   // ---- the operator's console ---------------------------------------------
@@ -355,7 +371,7 @@ class SessionLoop::Impl {
     actions_.clear();
     console_->take(f.timing.now_ns - session_start_ns_, actions_);
     for (const auto& a : actions_) carry_out(a);
-    if (f.signal == BackendSignal::none && !operator_signals_.empty()) {
+    if (f.signal == Signal::none && !operator_signals_.empty()) {
       f.signal = operator_signals_.front();
       operator_signals_.pop_front();
     }
@@ -371,14 +387,14 @@ class SessionLoop::Impl {
     console_->acted(a);
   }
 
-  static std::optional<BackendSignal> operator_signal(OperatorActionKind kind) {
+  static std::optional<Signal> operator_signal(OperatorActionKind kind) {
     switch (kind) {
-      case OperatorActionKind::pause: return BackendSignal::pause;
-      case OperatorActionKind::resume: return BackendSignal::resume;
-      case OperatorActionKind::recenter: return BackendSignal::recenter;
-      case OperatorActionKind::repeat: return BackendSignal::repeat;
-      case OperatorActionKind::skip: return BackendSignal::skip;
-      case OperatorActionKind::end: return BackendSignal::quit;
+      case OperatorActionKind::pause: return Signal::pause;
+      case OperatorActionKind::resume: return Signal::resume;
+      case OperatorActionKind::recenter: return Signal::recenter;
+      case OperatorActionKind::repeat: return Signal::repeat;
+      case OperatorActionKind::skip: return Signal::skip;
+      case OperatorActionKind::end: return Signal::quit;
       case OperatorActionKind::note: return std::nullopt;
     }
     return std::nullopt;
@@ -530,13 +546,13 @@ class SessionLoop::Impl {
     if (auto shown = scene_->set_page(text, head()); !shown) throw Stop{shown.error()};
     scene_->show(phase, false);
     Page state(f.timing.now_ns, min_ns);
-    if (observer_params()) scheduled_.push_back({f.timing.now_ns + min_ns + 300'000'000, "space"});
+    if (observer_params()) observer_keys_.press({f.timing.now_ns + min_ns + 300'000'000, "space"});
     event(trial_id, data::events::Page{page_event(phase), k, text});
-    const Overlay overlay{phase, text, true};
+    const io::Overlay overlay{phase, text, true};
     for (;;) {
       const bool advance = state.frame(f.timing.now_ns, f.inputs);
-      if (f.signal == BackendSignal::quit) return Outcome::quit;
-      if (f.signal == BackendSignal::pause) {
+      if (f.signal == Signal::quit) return Outcome::quit;
+      if (f.signal == Signal::pause) {
         // The page stays; keys pressed while paused or held from then do not count.
         if (hold(phase, trial_id) == Outcome::quit) return Outcome::quit;
         state.restart();
@@ -565,13 +581,13 @@ class SessionLoop::Impl {
     const bool paused = reason == AbortReason::pause;
     if (paused) writer_.journal(data::StatusChange{session_id_, data::SessionStatus::paused, false});
     scene_->show(Phase::iti, false);
-    const Overlay overlay{paused ? Phase::paused : Phase::tracking_lost, "waiting", false};
+    const io::Overlay overlay{paused ? Phase::paused : Phase::tracking_lost, "waiting", false};
     for (;;) {
       Frame f;
       if (!begin(f)) return Outcome::quit;
       end(f, overlay, false, trial_id);
-      if (f.signal == BackendSignal::quit) return Outcome::quit;
-      if (paused ? f.signal == BackendSignal::resume : f.head_tracked) break;
+      if (f.signal == Signal::quit) return Outcome::quit;
+      if (paused ? f.signal == Signal::resume : f.head_tracked) break;
     }
     if (paused) writer_.journal(data::StatusChange{session_id_, data::SessionStatus::running, false});
     return Outcome::done;
@@ -597,9 +613,9 @@ class SessionLoop::Impl {
     Isometry head_at_onset;
     Placement placement;
     OnsetView onset_view;  // the eyes at onset (the image observer, the images' record)
-    std::optional<std::pair<std::string, InputEvent>> answer;
+    std::optional<std::pair<std::string, io::InputEvent>> answer;
     std::optional<AbortReason> abort;
-    bool backend_ended = false;  // begin_frame gave no frame: no abort event
+    bool display_ended = false;  // begin_frame gave no frame: no abort event
     std::optional<std::int64_t> onset_ns;
     int lost_spells = 0;
     std::int64_t lost_ns = 0;
@@ -643,7 +659,7 @@ class SessionLoop::Impl {
         if (o == Outcome::done) report_trial(t.index, data::TrialStatus::completed, "");
         return o;
       }
-      if (a.backend_ended) return Outcome::quit;
+      if (a.display_ended) return Outcome::quit;
       event(t.id, data::events::TrialAborted{std::string(to_string(*a.abort)), a.number});
       if (*a.abort == AbortReason::quit) return Outcome::quit;
       ++t.aborts;
@@ -697,7 +713,7 @@ class SessionLoop::Impl {
       op.seed = attempt_seed(base->seed, design_.seed, t.index, t.aborts + 1);
       observer_.emplace(op);
     }
-    scheduled_.clear();
+    observer_keys_.clear();
     return a;
   }
 
@@ -706,7 +722,7 @@ class SessionLoop::Impl {
     Frame f;
     if (!begin(f)) {
       a.abort = AbortReason::quit;
-      a.backend_ended = true;
+      a.display_ended = true;
       return a;
     }
     Attempt state(t.settings.timeline, t.settings.tracking_loss, f.timing.now_ns);
@@ -720,14 +736,14 @@ class SessionLoop::Impl {
       if (step.onset) present_onset(t, a, f);
       take_inputs(t, a, state, f);
       scene_->show(step.phase, t.settings.timeline.stimulus_during_response);
-      const Overlay overlay{step.phase, t.line, step.phase == Phase::response || step.phase == Phase::stimulus};
+      const io::Overlay overlay{step.phase, t.line, step.phase == Phase::response || step.phase == Phase::stimulus};
       phase_left_ns_ = phase_left(state, step.phase, t.settings.timeline, f.timing.now_ns);
       const auto stats = end(f, overlay, step.onset, t.id);
       if (step.onset) log_onset(t, a, stats, f.timing.predicted_display_ns);
       if (state.over(f.timing.now_ns)) break;
       if (!begin(f)) {
         a.abort = AbortReason::quit;
-        a.backend_ended = true;
+        a.display_ended = true;
         break;
       }
     }
@@ -743,12 +759,12 @@ class SessionLoop::Impl {
     a.head_at_onset = head();
     a.placement = place_stimulus(*world_, t.settings, a.head_at_onset);
     scene_->place(a.placement, a.head_at_onset);
-    a.onset_view = {view_settings(t.settings, dominant_), a.head_at_onset, backend_.rig(f.timing, ipd()),
+    a.onset_view = {view_settings(t.settings, dominant_), a.head_at_onset, station_.display->rig(f.timing, ipd()),
                     static_cast<std::uint32_t>(p_.resolution_width), static_cast<std::uint32_t>(p_.resolution_height)};
     if (!observer_) return;
     auto answer = plan_answer(*observer_, *world_, *t.judgement, t.settings, a.placement, a.head_at_onset,
                               f.timing.now_ns, a.adjustment, read_onset(t, a));
-    scheduled_.assign(answer.keys.begin(), answer.keys.end());
+    observer_keys_.replace(answer.keys);
     last_perceived_ = answer.perceived_m;
   }
 
@@ -809,7 +825,7 @@ class SessionLoop::Impl {
       char stem[32];
       std::snprintf(stem, sizeof stem, "trial_%04zu", t.index);
       const auto path = std::filesystem::path(options_.images_dir) / stem;
-      const auto files = backend_.save_frame(path.string());
+      const auto files = station_.display->save_frame(path.string());
       if (!files.empty()) check(write_onset_record(path.string() + ".json", *world_, t.settings, a.placement, a.onset_view));
       // The files' names, not the folder: a folder can name a person.
       std::vector<std::string> names;
@@ -858,15 +874,15 @@ class SessionLoop::Impl {
     for (;;) {
       Frame g;
       if (!begin(g)) return Outcome::quit;
-      if (g.signal == BackendSignal::pause) {
+      if (g.signal == Signal::pause) {
         if (hold(Phase::iti, t.id) == Outcome::quit) return Outcome::quit;
         scene_->show(Phase::iti, false);
         iti_end = clock_.now_ns() + t.settings.timeline.iti_ms * 1'000'000;
         continue;
       }
       phase_left_ns_ = std::max<std::int64_t>(0, iti_end - g.timing.now_ns);
-      end(g, Overlay{Phase::iti, t.line, false}, false, std::nullopt);
-      if (g.signal == BackendSignal::quit) return Outcome::quit;
+      end(g, io::Overlay{Phase::iti, t.line, false}, false, std::nullopt);
+      if (g.signal == Signal::quit) return Outcome::quit;
       if (g.timing.now_ns >= iti_end) break;
     }
     check(writer_.wait_durable(completed_ticket_));
@@ -880,8 +896,9 @@ class SessionLoop::Impl {
   data::SessionStore& store_;
   data::SampleWriter& writer_;
   data::WriterLock* lock_;
-  Backend& backend_;
+  io::Station station_;
   const devices::Clock& clock_;
+  ObserverKeys observer_keys_{clock_};
   RunOptions options_;
   std::int64_t session_id_;
   std::vector<std::int64_t> trial_ids_;
@@ -893,7 +910,7 @@ class SessionLoop::Impl {
   std::optional<SimulatedObserver> observer_;
   std::unique_ptr<OnsetReader> onset_reader_;  // --observer image only
   renderer::Eye dominant_ = renderer::Eye::right;
-  std::pair<std::uint32_t, std::uint32_t> eye_size_;  // each eye's image as the backend draws it
+  std::pair<std::uint32_t, std::uint32_t> eye_size_;  // each eye's image as the display draws it
   // Adaptive types' state per (block position, cell); null for the others.
   std::map<std::pair<std::size_t, std::size_t>, std::unique_ptr<protocol::AdaptiveState>> adaptive_;
   std::optional<World> world_;
@@ -904,7 +921,6 @@ class SessionLoop::Impl {
   std::optional<std::size_t> block_position_;
   geometry::LabFrame lab_;
   std::optional<geometry::LabFrame> last_lab_;
-  std::deque<ScheduledKey> scheduled_;
   double last_perceived_ = 0.0;
   std::uint64_t completed_ticket_ = 0;
   std::int64_t session_start_ns_ = 0;
@@ -912,7 +928,8 @@ class SessionLoop::Impl {
   SessionSummary summary_;
   OperatorConsole* console_ = nullptr;
   std::vector<OperatorAction> actions_;          // this frame's, reused
-  std::deque<BackendSignal> operator_signals_;  // not yet handed to the loop
+  std::deque<Signal> operator_signals_;  // not yet handed to the loop
+  std::deque<io::Signal> device_signals_;  // raised, not yet handed to the loop
   bool stop_logged_ = false;
   OperatorStatus status_;
   std::int64_t phase_left_ns_ = -1;  // for the next status; set before end()

@@ -26,7 +26,7 @@ struct SessionSetup {
   protocol::Design design;
   data::SessionStore* store = nullptr;  // reads only while the loop runs
   data::SampleWriter* writer = nullptr;
-  Backend* backend = nullptr;
+  io::Station station;
   const devices::Clock* clock = nullptr;
   RunOptions options;
   std::int64_t session_id = 0;
@@ -43,14 +43,14 @@ struct SessionSetup {
 
   // What every run sets; a resumed run adds where it continues.
   static SessionSetup of(const protocol::Protocol& p, protocol::Design design, data::SessionStore& store,
-                         data::SampleWriter& writer, Backend& backend, const devices::Clock& clock,
+                         data::SampleWriter& writer, const io::Station& station, const devices::Clock& clock,
                          RunOptions options, std::int64_t session_id, std::vector<std::int64_t> trial_ids) {
     SessionSetup s;
     s.protocol = &p;
     s.design = std::move(design);
     s.store = &store;
     s.writer = &writer;
-    s.backend = &backend;
+    s.station = station;
     s.clock = &clock;
     s.options = std::move(options);
     s.session_id = session_id;

@@ -118,7 +118,7 @@ Placement place_stimulus(const World& world, const Settings& s, const Isometry& 
 Isometry standing_head(const World& world, const Settings& s) {
   auto tracker = geometry::make_tracker(s.tracking, world.space, world.table,
                                         physical_table(s, std::nullopt));
-  return tracker->update(standing_pose(nominal_calibration(s), HeadlessOptions{}.eye_height_m, 0)).pose[0];
+  return tracker->update(standing_pose(nominal_calibration(s), TrajectoryOptions{}.eye_height_m, 0)).pose[0];
 }
 
 geometry::ViewPreset perceived_preset(const Settings& s) {

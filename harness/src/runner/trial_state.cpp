@@ -34,11 +34,11 @@ Attempt::Attempt(const protocol::Timeline& timeline, const protocol::TrackingLos
 AttemptStep Attempt::advance(const FrameFacts& frame) {
   AttemptStep step;
   switch (frame.signal) {
-    case BackendSignal::quit: step.abort = AbortReason::quit; return step;
-    case BackendSignal::pause: step.abort = AbortReason::pause; break;
-    case BackendSignal::recenter: step.abort = AbortReason::recenter; break;
-    case BackendSignal::repeat: step.abort = AbortReason::repeat; break;
-    case BackendSignal::skip: step.abort = AbortReason::skip; break;
+    case Signal::quit: step.abort = AbortReason::quit; return step;
+    case Signal::pause: step.abort = AbortReason::pause; break;
+    case Signal::recenter: step.abort = AbortReason::recenter; break;
+    case Signal::repeat: step.abort = AbortReason::repeat; break;
+    case Signal::skip: step.abort = AbortReason::skip; break;
     default: break;
   }
   // The loss is tracked even when the frame is aborted for another reason,

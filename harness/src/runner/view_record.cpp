@@ -18,7 +18,7 @@ data::ViewGeometry record_view_geometry(const renderer::StereoRig& rig, std::uin
   return g;
 }
 
-std::pair<std::uint32_t, std::uint32_t> eye_image_size(const BackendInfo& info, std::uint32_t protocol_width_px,
+std::pair<std::uint32_t, std::uint32_t> eye_image_size(const io::DisplayInfo& info, std::uint32_t protocol_width_px,
                                                        std::uint32_t protocol_height_px) {
   if (info.eye_width_px > 0 && info.eye_height_px > 0) return {info.eye_width_px, info.eye_height_px};
   return {protocol_width_px, protocol_height_px};

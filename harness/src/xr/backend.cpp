@@ -35,16 +35,16 @@
 
 namespace curvlab::xr {
 
-using harness::runner::Backend;
 using harness::Done;
 using harness::Error;
 using harness::Result;
-using harness::runner::BackendFailure;
-using harness::runner::BackendInfo;
-using harness::runner::BackendSignal;
-using harness::runner::FrameTiming;
-using harness::runner::InputEvent;
-using harness::runner::Overlay;
+using harness::io::DeviceFailure;
+using harness::io::DisplayInfo;
+using harness::io::Signal;
+using harness::io::FrameTiming;
+using harness::io::InputEvent;
+using harness::io::InteractiveDisplay;
+using harness::io::Overlay;
 
 namespace {
 
@@ -271,13 +271,13 @@ Result<std::vector<XrViewConfigurationView>> stereo_views(XrInstance xr, XrSyste
 }
 
 // The operator window's copies of the submitted swapchain images (FrameMirror
-// in runner/backend.hpp). The frame thread records, in a command buffer of
+// in io/display.hpp). The frame thread records, in a command buffer of
 // its own submitted right after the frame's (same queue, so after it), a
 // copy of both eyes into a host-visible buffer; the operator's thread waits
 // on the fence and reads the buffer. One copy in flight; `state_` hands the
 // buffer and fence between the two threads (acquire/release): idle → requested
 // (operator) → copying (frame thread) → idle (operator, after reading).
-class XrMirror final : public harness::runner::FrameMirror {
+class XrMirror final : public harness::io::FrameMirror {
  public:
   XrMirror(const renderer::Context& ctx, vk::Extent2D eye, bool bgra)
       : ctx_(ctx),
@@ -303,7 +303,7 @@ class XrMirror final : public harness::runner::FrameMirror {
     state_.compare_exchange_strong(idle, kRequested, std::memory_order_acq_rel);
   }
 
-  bool take(harness::runner::MirrorImage& out) override {
+  bool take(harness::io::MirrorImage& out) override {
     if (state_.load(std::memory_order_acquire) != kCopying) return false;
     if (ctx_.device().waitForFences(*fence_, VK_TRUE, 0) != vk::Result::eSuccess) return false;
     out.width = eye_.width * 2;
@@ -362,22 +362,25 @@ class XrMirror final : public harness::runner::FrameMirror {
 // spaces and session, the Vulkan context (instance and device made through
 // the runtime), the action set, the OpenXR instance. Runs on one thread (the
 // runner's frame loop); not thread-safe.
-class XrBackend final : public Backend {
+class XrBackend final : public InteractiveDisplay {
  public:
-  static Result<std::unique_ptr<Backend>> create(const XrBackendOptions& options);
+  static Result<std::unique_ptr<InteractiveDisplay>> create(const XrBackendOptions& options);
   // Ends a begun frame and the session as far as the runtime still answers;
   // never throws (a lost session or device included).
   ~XrBackend() override;
 
-  [[nodiscard]] BackendInfo info() const override;
+  [[nodiscard]] DisplayInfo info() const override;
   std::optional<FrameTiming> begin_frame() override;
   geometry::LabFrame poses(const FrameTiming& frame) override;
-  BackendSignal poll_input(std::vector<InputEvent>& out) override;
+  // Session-state events: pause, resume, quit.
+  Signal poll_signal() override;
+  // The controllers' buttons.
+  Signal poll(std::vector<InputEvent>& out) override;
   renderer::StereoRig rig(const FrameTiming& frame, double ipd_m) override;
   renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
                               const Overlay& overlay, bool draw) override;
   std::vector<std::string> save_frame(const std::string& stem) override;
-  harness::runner::FrameMirror* mirror() override { return mirror_.get(); }
+  harness::io::FrameMirror* mirror() override { return mirror_.get(); }
 
  private:
   struct EyeSwapchain {
@@ -394,7 +397,7 @@ class XrBackend final : public Backend {
   void leave_session();
   std::int64_t monotonic_to_session();
   void on_state(SessionState next);
-  // Marks the backend failed and throws BackendFailure naming the call.
+  // Marks the backend failed and throws DeviceFailure naming the call.
   [[noreturn]] void fail(XrResult r, const char* call);
   [[noreturn]] void fail(const renderer::VulkanFailure& f);
   // xrEndFrame; its result is left to the caller (the frame loop fails on
@@ -435,7 +438,7 @@ class XrBackend final : public Backend {
   SessionStateMachine state_;
   PFN_xrConvertTimeToTimespecTimeKHR to_timespec_ = nullptr;
   XrClockMap clock_map_;
-  std::deque<BackendSignal> signals_;
+  std::deque<Signal> signals_;
   bool failed_ = false;
   std::vector<std::string> reported_;
   double refresh_hz_ = 90.0;
@@ -454,7 +457,7 @@ class XrBackend final : public Backend {
   XrTime last_display_ = 0;  // the previous frame's predicted display time
 };
 
-Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& options) {
+Result<std::unique_ptr<InteractiveDisplay>> XrBackend::create(const XrBackendOptions& options) {
   if (options.clock == nullptr)
     return Error{Error::Kind::usage, "the OpenXR backend needs the session clock (XrBackendOptions::clock)"};
   auto offered = offered_extensions();
@@ -463,7 +466,7 @@ Result<std::unique_ptr<Backend>> XrBackend::create(const XrBackendOptions& optio
   if (!made) return made.error();
   std::unique_ptr<XrBackend> b(new XrBackend(std::move(made).value(), options));
   if (auto opened = b->open(offered.value()); !opened) return opened.error();
-  return std::unique_ptr<Backend>(std::move(b));
+  return std::unique_ptr<InteractiveDisplay>(std::move(b));
 }
 
 Result<Done> XrBackend::open(const OptionalExtensions& offered) {
@@ -655,7 +658,7 @@ void XrBackend::leave_session() {
   }
 }
 
-BackendInfo XrBackend::info() const {
+DisplayInfo XrBackend::info() const {
   // Once frames run, the runtime's frame period; before, the display's
   // reported rate (XR_FB_display_refresh_rate) or 90 Hz, the common rate.
   const double period = static_cast<double>(frame_state_.predictedDisplayPeriod);
@@ -665,12 +668,12 @@ BackendInfo XrBackend::info() const {
 
 void XrBackend::fail(XrResult r, const char* call) {
   failed_ = true;
-  throw BackendFailure(call, result_name(r));
+  throw DeviceFailure(call, result_name(r));
 }
 
 void XrBackend::fail(const renderer::VulkanFailure& f) {
   failed_ = true;
-  throw BackendFailure(f.call, renderer::vk_result_name(f.result), "rendering for the headset");
+  throw DeviceFailure(f.call, renderer::vk_result_name(f.result), "rendering for the headset");
 }
 
 void XrBackend::on_state(SessionState next) {
@@ -689,9 +692,9 @@ void XrBackend::on_state(SessionState next) {
     if (const XrResult r = xrEndSession(session_.get()); XR_FAILED(r))
       std::cerr << "curvlab: xr: " << failure_of(r, "xrEndSession").message << '\n';
   }
-  if (u.mode == RunMode::Paused && before == RunMode::Running) signals_.push_back(BackendSignal::pause);
-  if (u.mode == RunMode::Running && before == RunMode::Paused) signals_.push_back(BackendSignal::resume);
-  if (u.mode == RunMode::Exit) signals_.push_back(BackendSignal::quit);
+  if (u.mode == RunMode::Paused && before == RunMode::Running) signals_.push_back(Signal::pause);
+  if (u.mode == RunMode::Running && before == RunMode::Paused) signals_.push_back(Signal::resume);
+  if (u.mode == RunMode::Exit) signals_.push_back(Signal::quit);
 }
 
 bool XrBackend::poll_events() {
@@ -708,7 +711,7 @@ bool XrBackend::poll_events() {
       }
       case XR_TYPE_EVENT_DATA_INSTANCE_LOSS_PENDING:
         failed_ = true;
-        throw BackendFailure("xrPollEvent", "XR_TYPE_EVENT_DATA_INSTANCE_LOSS_PENDING",
+        throw DeviceFailure("xrPollEvent", "XR_TYPE_EVENT_DATA_INSTANCE_LOSS_PENDING",
                              "the OpenXR runtime is going away");
       case XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING: {
         const auto& e = *reinterpret_cast<const XrEventDataReferenceSpaceChangePending*>(&event);
@@ -717,7 +720,7 @@ bool XrBackend::poll_events() {
         if (e.referenceSpaceType == XR_REFERENCE_SPACE_TYPE_STAGE) {
           std::cerr << "curvlab: xr: the runtime moved the STAGE space (recentred or a new play "
                        "area); check the table calibration\n";
-          signals_.push_back(BackendSignal::recenter);
+          signals_.push_back(Signal::recenter);
         }
         break;
       }
@@ -922,23 +925,27 @@ void XrBackend::read_buttons(std::vector<InputEvent>& out) {
         const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
         out.push_back({t_ns, name, device, now});
         // The trigger also advances instruction pages and breaks, which
-        // follow a button named "continue" (runner/backend.hpp).
+        // follow a button named "continue" (io/frame.hpp, Overlay).
         out.push_back({t_ns, "continue", device, now});
       }
     }
   }
 }
 
-BackendSignal XrBackend::poll_input(std::vector<InputEvent>& out) {
-  if (!failed_) poll_events();
+Signal XrBackend::poll(std::vector<InputEvent>& out) {
   if (!failed_ && state_.mode() == RunMode::Running) read_buttons(out);
-  if (signals_.empty()) return BackendSignal::none;
+  return Signal::none;
+}
+
+Signal XrBackend::poll_signal() {
+  if (!failed_) poll_events();
+  if (signals_.empty()) return Signal::none;
   // Quit outranks everything still queued.
-  if (std::find(signals_.begin(), signals_.end(), BackendSignal::quit) != signals_.end()) {
+  if (std::find(signals_.begin(), signals_.end(), Signal::quit) != signals_.end()) {
     signals_.clear();
-    return BackendSignal::quit;
+    return Signal::quit;
   }
-  const BackendSignal s = signals_.front();
+  const Signal s = signals_.front();
   signals_.pop_front();
   return s;
 }
@@ -1027,7 +1034,7 @@ std::vector<std::string> XrBackend::save_frame(const std::string& stem) {
   return written;
 }
 
-Result<std::unique_ptr<Backend>> make_xr_backend(const XrBackendOptions& options) {
+Result<std::unique_ptr<InteractiveDisplay>> make_xr_backend(const XrBackendOptions& options) {
   return XrBackend::create(options);
 }
 

@@ -1,6 +1,6 @@
 // The experimenter's operator window (DESIGN.md §6; docs/xr.md, "The operator window"): a GLFW
 // window on the desktop showing the participant's view — copies of the
-// images submitted to the headset (Backend::mirror()), never rendered a
+// images submitted to the headset (Display::mirror()), never rendered a
 // second time — and a status panel, and taking the operator's actions by key.
 //
 // Threads: GLFW wants windows made, polled and destroyed on the main thread,
@@ -18,7 +18,7 @@
 #pragma once
 
 #include "curvlab/harness/result.hpp"
-#include "curvlab/harness/runner/backend.hpp"
+#include "curvlab/harness/io/display.hpp"
 #include "curvlab/harness/runner/operator.hpp"
 
 #include <memory>
@@ -31,7 +31,7 @@ enum class EyeView { both, left, right };
 
 struct OperatorWindowOptions {
   std::vector<runner::OperatorAction> script;  // --operator-script, parsed
-  runner::FrameMirror* mirror = nullptr;       // nullptr: status panel only
+  io::FrameMirror* mirror = nullptr;       // nullptr: status panel only
   EyeView eyes = EyeView::both;
   std::string screenshot_dir;  // PNGs at each action and at the end ("" none)
   std::string db_dir;          // free disk space is read here

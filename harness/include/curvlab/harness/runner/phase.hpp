@@ -4,6 +4,8 @@
 // events, the desktop window's status line.
 #pragma once
 
+#include "curvlab/harness/io/phase.hpp"
+
 #include <array>
 #include <optional>
 #include <string_view>
@@ -11,24 +13,10 @@
 
 namespace curvlab::harness::runner {
 
-enum class Phase {
-  instructions,  // an instruction page
-  fixation,      // the fixation mark before the stimulus
-  stimulus,      // the stimulus, from its onset frame
-  response,      // the response window after the stimulus time
-  iti,           // the inter-trial interval: nothing on screen
-  break_page,    // a break page between trials
-  done,          // the closing page
-  paused,        // held until the session is resumed
-  tracking_lost, // held until the head is tracked again
-};
-
-// Something the backend (or the operator, operator.hpp) wants the runner to
-// know in a frame: the participant paused (focus lost, headset off) or
-// resumed, the view was recentred, the session is to end (window closed,
-// runtime exiting, the operator's end), or the operator repeats or skips the
-// current trial.
-enum class BackendSignal { none, pause, resume, quit, recenter, repeat, skip };
+using io::Phase;
+using io::Signal;
+using io::parse_phase;
+using io::to_string;
 
 enum class AbortReason {
   pause,          // the participant or operator paused (focus lost, pause key)
@@ -40,17 +28,6 @@ enum class AbortReason {
 };
 
 namespace phase_names {
-inline constexpr std::array<std::pair<Phase, std::string_view>, 9> phases{{
-    {Phase::instructions, "instructions"},
-    {Phase::fixation, "fixation"},
-    {Phase::stimulus, "stimulus"},
-    {Phase::response, "response"},
-    {Phase::iti, "iti"},
-    {Phase::break_page, "break"},
-    {Phase::done, "done"},
-    {Phase::paused, "paused"},
-    {Phase::tracking_lost, "tracking_lost"},
-}};
 inline constexpr std::array<std::pair<AbortReason, std::string_view>, 6> reasons{{
     {AbortReason::pause, "pause"},
     {AbortReason::recenter, "recenter"},
@@ -61,22 +38,10 @@ inline constexpr std::array<std::pair<AbortReason, std::string_view>, 6> reasons
 }};
 }  // namespace phase_names
 
-constexpr std::string_view to_string(Phase phase) {
-  for (const auto& [p, name] : phase_names::phases)
-    if (p == phase) return name;
-  return "unknown";
-}
-
 constexpr std::string_view to_string(AbortReason reason) {
   for (const auto& [r, name] : phase_names::reasons)
     if (r == reason) return name;
   return "unknown";
-}
-
-constexpr std::optional<Phase> parse_phase(std::string_view name) {
-  for (const auto& [p, n] : phase_names::phases)
-    if (n == name) return p;
-  return std::nullopt;
 }
 
 constexpr std::optional<AbortReason> parse_abort_reason(std::string_view name) {

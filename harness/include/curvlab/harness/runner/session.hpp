@@ -1,5 +1,6 @@
 // The session runner (DESIGN.md §6): Session → Block → Trial, driven frame by
-// frame by a Backend. At start the whole expanded design is stored, so a
+// frame by its devices (io/station.hpp): a display, a pose source and
+// response sources. At start the whole expanded design is stored, so a
 // crash resumes exactly: every trial runs to completion exactly once, in the
 // stored order (a trial interrupted mid-way is run again as a new attempt).
 // Each completed trial commits in its own transaction before the next one
@@ -27,7 +28,7 @@
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/result.hpp"
-#include "curvlab/harness/runner/backend.hpp"
+#include "curvlab/harness/io/station.hpp"
 #include "curvlab/harness/runner/observer.hpp"
 #include "curvlab/harness/runner/operator.hpp"
 
@@ -91,7 +92,7 @@ using RunResult = Result<SessionSummary>;
 
 // Starts a new session of `protocol` (loaded from `protocol_text`).
 RunResult run_session(const protocol::Protocol& protocol, const std::string& protocol_text,
-                      const std::string& db_path, const RunOptions& options, Backend& backend,
+                      const std::string& db_path, const RunOptions& options, const io::Station& station,
                       const devices::Clock& clock);
 
 // What a session needs from the database before a backend is opened: its
@@ -116,7 +117,8 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
 // from it; options supply the drawing and progress settings.
 RunResult resume_session(const std::string& db_path, std::int64_t session_id,
                          const StoredSession& stored, const protocol::Protocol& protocol,
-                         const RunOptions& options, Backend& backend, const devices::Clock& clock);
+                         const RunOptions& options, const io::Station& station,
+                         const devices::Clock& clock);
 
 // The stored conditions and stimulus of a planned trial (trials.conditions
 // and trials.stimulus; data_schema/codebook.md).

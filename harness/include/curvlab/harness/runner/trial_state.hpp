@@ -30,7 +30,7 @@ struct FrameFacts {
   std::int64_t now_ns = 0;         // when the frame began (session clock)
   std::int64_t display_ns = 0;     // when its image will be shown
   bool head_tracked = true;
-  BackendSignal signal = BackendSignal::none;
+  Signal signal = Signal::none;
 };
 
 struct AttemptStep {

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "curvlab/harness/data/records.hpp"
-#include "curvlab/harness/runner/backend.hpp"
+#include "curvlab/harness/io/display.hpp"
 #include "curvlab/renderer/view.hpp"
 
 #include <cstdint>
@@ -16,9 +16,9 @@ namespace curvlab::harness::runner {
 // The record of `rig` drawn at `width_px` × `height_px` per eye.
 data::ViewGeometry record_view_geometry(const renderer::StereoRig& rig, std::uint32_t width_px,
                                         std::uint32_t height_px);
-// Each eye's image size as the backend draws it: BackendInfo's, else the
+// Each eye's image size as the backend draws it: DisplayInfo's, else the
 // protocol's resolution (a backend that does not say draws at the size it is asked for).
-std::pair<std::uint32_t, std::uint32_t> eye_image_size(const BackendInfo& info, std::uint32_t protocol_width_px,
+std::pair<std::uint32_t, std::uint32_t> eye_image_size(const io::DisplayInfo& info, std::uint32_t protocol_width_px,
                                                        std::uint32_t protocol_height_px);
 // The rig a record describes; exact (every double is stored as it was).
 renderer::StereoRig rig_from_record(const data::ViewGeometry& geometry);

@@ -5,7 +5,8 @@
 #pragma once
 
 #include "curvlab/harness/devices/clock.hpp"
-#include "curvlab/harness/runner/backend.hpp"
+#include "curvlab/harness/io/station.hpp"
+#include "curvlab/harness/result.hpp"
 
 #include <memory>
 #include <string>
@@ -16,15 +17,15 @@ struct XrBackendOptions {
   std::string application_name = "curvlab";
   const devices::Clock* clock = nullptr;  // the session's; required
   // Offer copies of the submitted images for the operator window
-  // (Backend::mirror()); the swapchains can be copied from either way.
+  // (Display::mirror()); the swapchains can be copied from either way.
   bool mirror = false;
   std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
 };
 
 // No runtime or no headset: an Error of kind `device` naming the OpenXR
 // result and what to install; another failing call: `api`. Once running, a
-// failing OpenXR or Vulkan call throws BackendFailure
+// failing OpenXR or Vulkan call throws DeviceFailure
 // ("xrWaitFrame: XR_ERROR_SESSION_LOST").
-harness::Result<std::unique_ptr<harness::runner::Backend>> make_xr_backend(const XrBackendOptions& options);
+harness::Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_xr_backend(const XrBackendOptions& options);
 
 }  // namespace curvlab::xr

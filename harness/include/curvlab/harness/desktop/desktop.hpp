@@ -1,18 +1,19 @@
-// The desktop backend for piloting a protocol (DESIGN.md §6): a GLFW window
+// The desktop window for piloting a protocol (DESIGN.md §6): a GLFW window
 // with a Vulkan swapchain, both eyes side by side or one eye, the keyboard
 // and mouse moving the head and hands, trial information on screen, and
 // screenshots. Needs a display (X11 or Wayland; Xvfb works).
 #pragma once
 
 #include "curvlab/harness/devices/clock.hpp"
-#include "curvlab/harness/runner/backend.hpp"
+#include "curvlab/harness/io/station.hpp"
+#include "curvlab/harness/result.hpp"
 
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
-namespace curvlab::harness::runner {
+namespace curvlab::desktop {
 
 enum class DesktopPreview { side_by_side, left, right };
 
@@ -35,7 +36,9 @@ struct DesktopOptions {
   const devices::Clock* clock = nullptr;  // the session's; required
 };
 
-// No display or no Vulkan: an Error of kind `device`.
-Result<std::unique_ptr<Backend>> make_desktop_backend(const DesktopOptions& options);
+// The window as display, pose source (keyboard and mouse move the head and
+// hands) and response source (keys). No display or no Vulkan: an Error of
+// kind `device`.
+harness::Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_desktop_backend(const DesktopOptions& options);
 
-}  // namespace curvlab::harness::runner
+}  // namespace curvlab::desktop

@@ -1,0 +1,68 @@
+// The plain values a session exchanges with its devices each frame (DESIGN.md
+// §6): when the frame is shown, the inputs that arrived, what the runner
+// shows besides the scene, and the one exception a device throws while the
+// session runs. Free of Vulkan, OpenXR and GLFW.
+#pragma once
+
+#include "curvlab/harness/io/phase.hpp"
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace curvlab::harness::io {
+
+// A Vulkan, OpenXR or window call that failed while a session runs: a lost
+// device, a lost session, a runtime that failed. It is the only exception a
+// display, pose source or response source throws (STYLE.md: exceptions for
+// what the frame loop cannot go on from), caught by the session runner. The
+// message names the call and its result as the C APIs spell them —
+// "vkQueueSubmit: VK_ERROR_DEVICE_LOST", "xrWaitFrame: XR_ERROR_SESSION_LOST"
+// — followed by any detail. The runner ends the session `interrupted`
+// (completed trials are already committed), and it can be resumed. A device
+// that threw is not used again, only destroyed; destructors never throw.
+struct DeviceFailure : std::runtime_error {
+  DeviceFailure(std::string call_name, std::string result_name, const std::string& detail = {})
+      : std::runtime_error(call_name + ": " + result_name + (detail.empty() ? "" : " (" + detail + ")")),
+        call(std::move(call_name)),
+        result(std::move(result_name)) {}
+
+  std::string call;    // "vkQueueSubmit", "xrWaitFrame"
+  std::string result;  // "VK_ERROR_DEVICE_LOST", "XR_ERROR_SESSION_LOST"
+};
+
+struct FrameTiming {
+  std::int64_t index = 0;              // frames since the display started
+  std::int64_t now_ns = 0;             // session clock when the frame began
+  std::int64_t predicted_display_ns = 0;  // when this frame's image will be shown
+  std::int64_t period_ns = 11'111'111;
+  // The runtime's verdict on this frame (OpenXR): its display time skipped
+  // `skipped_periods` refreshes after the previous frame's (the loop missed
+  // them), or it is not shown at all (shouldRender false). Late frames are
+  // counted per trial (docs/xr.md, "Frame timing").
+  std::int32_t skipped_periods = 0;
+  bool late = false;
+};
+
+// One discrete input: a key (GLFW-style lower-case names: "1", "left",
+// "space", "escape"), a HID or controller button (names from the mapping
+// file or the XR action set), or a simulated observer's key press. The runner
+// maps names to responses through the protocol's judgement options.
+struct InputEvent {
+  std::int64_t t_ns = 0;  // session clock
+  std::string name;
+  std::string device;  // "keyboard", "hid:<name>", "xr:left", "observer", …
+  bool pressed = true;
+};
+
+// What the runner shows besides the scene (for desktop windows and logs).
+// Instruction pages and breaks advance on the key "space" or "enter", or a
+// button named "continue"; responses come from the keys and buttons of the
+// judgement's options.
+struct Overlay {
+  Phase phase = Phase::iti;
+  std::string text;   // trial information line (block, trial, condition)
+  bool waiting_for_input = false;  // instructions, response window, break
+};
+
+}  // namespace curvlab::harness::io
