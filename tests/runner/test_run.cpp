@@ -213,6 +213,28 @@ TEST(RunHeadless, BadInputIsRefusedAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(db));
 }
 
+TEST(RunHeadless, AnAbsentResponseDeviceStopsTheRunBeforeAnythingIsWritten) {
+  // The docs' example mapping names a gamepad that no test machine has.
+  const auto dir = fresh_dir("absent_hid");
+  const auto db = (dir / "never.sqlite").string();
+  const std::string mapping = std::string(CURVLAB_SOURCE_DIR) + "/tests/devices/data/docs_example.toml";
+  auto r = run_cli("run " + kProtocols + "demo.toml --participant P01 --pace realtime --responses hid:" + mapping +
+                   " --db " + db);
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("'gamepad'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("docs_example.toml"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+  // Simulated time cannot take a person's presses; a spec that is not hid: is refused.
+  r = run_cli("run " + kProtocols + "demo.toml --participant P01 --responses hid:" + mapping + " --db " + db);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("--pace realtime"), std::string::npos) << r.out;
+  r = run_cli("run " + kProtocols + "demo.toml --participant P01 --pace realtime --responses " + mapping +
+              " --db " + db);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("hid:MAPPING.toml"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
 TEST(Predict, PrintsProportionsAndPower) {
   const auto r = run_cli("predict " + kProtocols + "proposed_study.toml --participants 10 --simulations 50 --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;

@@ -8,6 +8,7 @@
 #include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/devices/responses.hpp"
 #include "curvlab/harness/operator/operator_window.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/random.hpp"
@@ -106,6 +107,7 @@ struct BackendArgs {
   std::string preview = "side-by-side";
   std::string screenshot;
   std::string key_script;
+  std::vector<std::string> responses;  // "hid:MAPPING.toml"
   bool quiet = false;
   bool json = false;
   std::string export_dir;
@@ -131,6 +133,8 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
   cmd->add_option("--screenshot", b.screenshot, "desktop: save every onset (and F12) here");
   cmd->add_option("--key-script", b.key_script, "desktop: a file of scripted key presses");
+  cmd->add_option("--responses", b.responses,
+                  "also answer from HID devices: hid:MAPPING.toml (repeatable; docs/devices.md)");
   cmd->add_option("--export", b.export_dir, "afterwards, export CSV, Psych-DS and BIDS motion here");
   cmd->add_flag("--quiet", b.quiet, "no progress bar");
   cmd->add_flag("--json", b.json, "print the summary as JSON");
@@ -210,6 +214,7 @@ struct Devices {
   rn::HeadlessDevices headless;
   std::unique_ptr<devices::SteadyClock> steady;
   const devices::Clock* clock = nullptr;
+  std::vector<std::unique_ptr<devices::HidResponses>> hid;
   harness::io::Station station;
 
   void use(harness::io::InteractiveDisplay& d) {
@@ -290,6 +295,26 @@ Devices open_devices_of_kind(const BackendArgs& a, const pr::Protocol& p, const 
   return out;
 }
 
+// The HID response devices of --responses, each file's devices all
+// connected: a bad mapping file is bad input (exit 2), an absent device a
+// device error (exit 1), before anything is written.
+void open_responses(Devices& out, const BackendArgs& a) {
+  if (a.responses.empty()) return;
+  if (a.backend == "headless" && a.pace == "fast")
+    throw UsageError("--responses needs a person answering in real time: add --pace realtime, or use --backend "
+                     "desktop or xr");
+  for (const auto& spec : a.responses) {
+    if (spec.rfind("hid:", 0) != 0)
+      throw UsageError("--responses " + spec + ": expected hid:MAPPING.toml (a HID mapping file, docs/devices.md)");
+    auto file = devices::load_mapping(spec.substr(4));
+    if (!file) raise(file.error());
+    auto opened = devices::HidResponses::open(file.value(), *out.clock);
+    if (!opened) raise(opened.error());
+    out.hid.push_back(std::move(opened).value());
+    out.station.responses.push_back(out.hid.back().get());
+  }
+}
+
 // The samples per pixel: --msaa, else the protocol's [viewing] msaa; the
 // display's renderer clamps it to the device, with a warning.
 Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
@@ -298,6 +323,7 @@ Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry
                                     : static_cast<std::uint32_t>(p.session_settings().viewing.msaa);
   Devices out = open_devices_of_kind(a, p, table, start_ns, msaa);
   warn_if_msaa_clamped(msaa, out.station.display->info().msaa);
+  open_responses(out, a);
   return out;
 }
 
