@@ -136,7 +136,8 @@ TEST(LabRun, ReplayReproducesTheDesktopOnsetFrame) {
 TEST(LabRun, XrWithoutARuntimeExitsWithTheResultAndWritesNothing) {
   const auto dir = fresh_dir("xr");
   const auto db = dir / "s.db";
-  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/demo.toml --participant P1 --db " +
+  // A protocol the controllers can answer (demo.toml binds keys only and is refused first).
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/proposed_study.toml --participant P1 --db " +
                          db.string() + " --backend xr");
   if (r.exit_code == 0) GTEST_SKIP() << "an OpenXR runtime and headset are present";
   EXPECT_EQ(r.exit_code, 1) << r.out;

@@ -235,6 +235,17 @@ TEST(RunHeadless, AnAbsentResponseDeviceStopsTheRunBeforeAnythingIsWritten) {
   EXPECT_FALSE(std::filesystem::exists(db));
 }
 
+TEST(RunHeadless, AKeysOnlyProtocolIsRefusedInTheHeadsetBeforeAnythingStarts) {
+  // No runtime is needed to learn it: the check comes before the headset starts.
+  const auto dir = fresh_dir("keys_only_xr");
+  const auto db = (dir / "never.sqlite").string();
+  auto r = run_cli("run " + kProtocols + "demo.toml --participant P01 --backend xr --db " + db);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("'convex' (keys 1)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--backend xr"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
 TEST(Predict, PrintsProportionsAndPower) {
   const auto r = run_cli("predict " + kProtocols + "proposed_study.toml --participants 10 --simulations 50 --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;

@@ -1,5 +1,6 @@
 // The trial state machine driven frame by frame with made-up facts: no
 // backend, no clock, no database.
+#include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
 
 #include <gtest/gtest.h>
@@ -170,11 +171,12 @@ TEST(TrialState, InputsAreChoicesAdjustmentsOrAnticipations) {
 }
 
 TEST(TrialState, PagesIgnoreHeldKeysAndWaitTheirMinimumTime) {
-  rn::Page page(0, 1000 * kMs);
+  const std::vector<std::string> none;
+  rn::Page page(0, 1000 * kMs, none);
   const std::vector<Press> space{{"space"}};
   EXPECT_FALSE(page.frame(2000 * kMs, space));  // first frame: a key held from before
   EXPECT_TRUE(page.frame(2000 * kMs, space));
-  rn::Page early(0, 1000 * kMs);
+  rn::Page early(0, 1000 * kMs, none);
   early.frame(0, std::vector<Press>{});
   EXPECT_FALSE(early.frame(500 * kMs, space));  // too soon
   EXPECT_FALSE(early.frame(1500 * kMs, std::vector<Press>{{"space", false}}));  // a release
@@ -194,4 +196,63 @@ TEST(TrialState, NamesRoundTrip) {
     EXPECT_EQ(rn::parse_abort_reason(rn::to_string(r)), r);
   EXPECT_EQ(rn::to_string(rn::Phase::break_page), "break");
   EXPECT_FALSE(rn::parse_phase("Stimulus"));
+}
+
+namespace {
+
+pr::Protocol example(const std::string& name) {
+  auto loaded = pr::load_protocol_file(std::string(CURVLAB_SOURCE_DIR) + "/protocols/" + name + ".toml");
+  EXPECT_TRUE(loaded.ok());
+  return *loaded.protocol;
+}
+
+curvlab::harness::io::Reach keyboard() {
+  curvlab::harness::io::Reach r;
+  r.every_key = true;
+  r.continue_phrase = "press space";
+  return r;
+}
+
+curvlab::harness::io::Reach controllers() {
+  curvlab::harness::io::Reach r;
+  r.buttons = {"left_trigger", "right_trigger", "a", "b", "x", "y"};
+  r.continue_phrase = "pull a trigger or press A";
+  return r;
+}
+
+}  // namespace
+
+TEST(TrialState, PagesAlsoContinueOnEveryAnswerTheProtocolBinds) {
+  const pr::Protocol demo = example("demo");
+  const auto continues = rn::page_continues(demo);
+  EXPECT_EQ(continues, (std::vector<std::string>{"1", "2", "3"}));
+  rn::Page page(0, 0, continues);
+  page.frame(0, std::vector<Press>{});
+  EXPECT_FALSE(page.frame(kMs, std::vector<Press>{{"q"}}));
+  EXPECT_TRUE(page.frame(2 * kMs, std::vector<Press>{{"2"}}));
+}
+
+TEST(TrialState, TheContinueLineSaysWhatTheDevicesAtHandCanDo) {
+  const pr::Protocol demo = example("demo");              // keys only
+  const pr::Protocol study = example("proposed_study");   // keys and controller buttons
+  EXPECT_EQ(rn::continue_line({keyboard()}, demo), "To continue: press space, or give any answer.");
+  // The headset cannot give the demo's keys: only its own way is offered.
+  EXPECT_EQ(rn::continue_line({controllers()}, demo), "To continue: pull a trigger or press A.");
+  EXPECT_EQ(rn::continue_line({controllers()}, study), "To continue: pull a trigger or press A, or give any answer.");
+  EXPECT_EQ(rn::continue_line({}, demo), "");
+}
+
+TEST(TrialState, AnAnswerNoDeviceCanGiveIsNamed) {
+  const pr::Protocol demo = example("demo");
+  const auto missing = rn::unreachable_answer({controllers()}, demo);
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_NE(missing->find("'convex' (keys 1)"), std::string::npos) << *missing;
+  EXPECT_NE(missing->find("choice"), std::string::npos) << *missing;
+  EXPECT_FALSE(rn::unreachable_answer({keyboard()}, demo).has_value());
+  EXPECT_FALSE(rn::unreachable_answer({controllers()}, example("proposed_study")).has_value());
+  // The adjustment's decrease, increase and confirm each need an input.
+  EXPECT_FALSE(rn::unreachable_answer({keyboard()}, example("body_coherence")).has_value());
+  const auto adjust = rn::unreachable_answer({controllers()}, example("body_coherence"));
+  ASSERT_TRUE(adjust.has_value());
+  EXPECT_NE(adjust->find("'decrease'"), std::string::npos) << *adjust;
 }

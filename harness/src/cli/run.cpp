@@ -18,6 +18,7 @@
 #include "curvlab/harness/runner/replay.hpp"
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 
@@ -295,6 +296,19 @@ Devices open_devices_of_kind(const BackendArgs& a, const pr::Protocol& p, const 
   return out;
 }
 
+// The HID mapping files of --responses, read (a bad one: exit 2).
+std::vector<devices::MappingFile> response_mappings(const BackendArgs& a) {
+  std::vector<devices::MappingFile> out;
+  for (const auto& spec : a.responses) {
+    if (spec.rfind("hid:", 0) != 0)
+      throw UsageError("--responses " + spec + ": expected hid:MAPPING.toml (a HID mapping file, docs/devices.md)");
+    auto file = devices::load_mapping(spec.substr(4));
+    if (!file) raise(file.error());
+    out.push_back(std::move(file).value());
+  }
+  return out;
+}
+
 // The HID response devices of --responses, each file's devices all
 // connected: a bad mapping file is bad input (exit 2), an absent device a
 // device error (exit 1), before anything is written.
@@ -303,15 +317,30 @@ void open_responses(Devices& out, const BackendArgs& a) {
   if (a.backend == "headless" && a.pace == "fast")
     throw UsageError("--responses needs a person answering in real time: add --pace realtime, or use --backend "
                      "desktop or xr");
-  for (const auto& spec : a.responses) {
-    if (spec.rfind("hid:", 0) != 0)
-      throw UsageError("--responses " + spec + ": expected hid:MAPPING.toml (a HID mapping file, docs/devices.md)");
-    auto file = devices::load_mapping(spec.substr(4));
-    if (!file) raise(file.error());
-    auto opened = devices::HidResponses::open(file.value(), *out.clock);
+  for (const auto& file : response_mappings(a)) {
+    auto opened = devices::HidResponses::open(file, *out.clock);
     if (!opened) raise(opened.error());
     out.hid.push_back(std::move(opened).value());
     out.station.responses.push_back(out.hid.back().get());
+  }
+}
+
+// Every answer of the protocol must be one the session's devices can give: a
+// keys-only protocol in the headset would time out every trial. Refused
+// (exit 2) before any device starts and before anything is written; nothing
+// to check when the simulated observer answers or no device does (headless
+// without an observer: every trial times out, as asked).
+void check_answers_reachable(const BackendArgs& a, const pr::Protocol& p, bool observer) {
+  std::vector<harness::io::Reach> reach;
+  if (a.backend == "desktop") reach.push_back(desktop::keyboard_reach());
+  if (a.backend == "xr") reach.push_back(xr::controller_reach());
+  for (const auto& file : response_mappings(a)) reach.push_back(devices::mapping_reach(file));
+  if (observer || reach.empty()) return;
+  if (const auto missing = rn::unreachable_answer(reach, p)) {
+    std::string with = "--backend " + a.backend;
+    for (const auto& r : a.responses) with += " --responses " + r;
+    throw UsageError(p.file + ": " + *missing + " cannot be given with " + with +
+                     "; bind it to an input these devices have (docs/protocols.md, \"Key and button names\")");
   }
 }
 
@@ -454,6 +483,7 @@ void run_command(const RunArgs& a) {
   const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
+  check_answers_reachable(a.backend, p, o.observer.has_value());
   auto devices = open_devices(a.backend, p, table, 0);
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
     std::error_code ec;
@@ -494,6 +524,7 @@ void resume_command(const ResumeArgs& a) {
   // A resumed session's clock continues after the last logged time.
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
+  check_answers_reachable(a.backend, *loaded.protocol, o.observer.has_value() || stored.observer.has_value());
   auto devices = open_devices(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();

@@ -473,6 +473,13 @@ std::vector<std::string> DesktopBackend::save_frame(const std::string& stem) {
   return written;
 }
 
+harness::io::Reach keyboard_reach() {
+  harness::io::Reach r;
+  r.every_key = true;
+  r.continue_phrase = "press space";
+  return r;
+}
+
 Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_desktop_backend(const DesktopOptions& options) {
   auto made = DesktopBackend::create(options);
   if (!made) return made.error();

@@ -47,6 +47,8 @@ class DesktopBackend final : public harness::io::InteractiveDisplay {
   // Keys (scripted ones too) and the signals they carry; quit once the
   // window is closed.
   harness::io::Signal poll(std::vector<harness::io::InputEvent>& out) override;
+  // Every key; pages continue on space.
+  [[nodiscard]] harness::io::Reach reach() const override { return keyboard_reach(); }
   renderer::StereoRig rig(const harness::io::FrameTiming& frame, double ipd_m) override;
   renderer::FrameStats submit(const renderer::Scene& scene,
                               const renderer::FrameDescription& frame,

@@ -18,7 +18,21 @@ std::string connected_list(const std::vector<HidDeviceInfo>& devices) {
   return out;
 }
 
+void add_reach(harness::io::Reach& r, const DeviceMapping& mapping) {
+  for (const auto& b : mapping.bindings) {
+    r.buttons.push_back(b.response);
+    if (b.response == "continue" && r.continue_phrase.empty())
+      r.continue_phrase = "press the continue button of " + mapping.name;
+  }
+}
+
 }  // namespace
+
+harness::io::Reach mapping_reach(const MappingFile& file) {
+  harness::io::Reach r;
+  for (const auto& m : file.devices) add_reach(r, m);
+  return r;
+}
 
 harness::Result<std::unique_ptr<HidResponses>> HidResponses::open(const MappingFile& file, const Clock& clock) {
   auto library = HidLibrary::open();
@@ -45,6 +59,7 @@ std::unique_ptr<HidResponses> HidResponses::read(
   std::unique_ptr<HidResponses> out(new HidResponses());
   for (auto& [source, mapping] : sources) {
     out->names_.emplace_back(source->label(), "hid:" + mapping.name);
+    add_reach(out->reach_, mapping);
     out->readers_.push_back(std::make_unique<DeviceReader>(std::move(source), std::move(mapping), clock, out->queue_));
   }
   return out;

@@ -50,6 +50,12 @@ std::optional<Adjustment> JudgementType::adjustment(const Judgement&, const Plan
   return std::nullopt;
 }
 
+std::vector<AnswerBinding> JudgementType::answer_bindings(const Judgement& j) const {
+  std::vector<AnswerBinding> out;
+  for (const auto& o : j.options) out.push_back({o.value, o.keys, o.buttons});
+  return out;
+}
+
 InputVerdict JudgementType::classify(const Judgement& j, const std::string& input) const {
   for (std::size_t k = 0; k < j.options.size(); ++k)
     if (binds(j.options[k].keys, j.options[k].buttons, input)) return {InputUse::choose, k};

@@ -275,7 +275,7 @@ class Loader : private TableReader {
   // ---- blocks ------------------------------------------------------------
   void read_blocks(const toml::table& root, Protocol& p) {
     std::int64_t reps = 1, every = 0, break_ms = 0;
-    std::string break_text = "Take a short break. Press any response key to continue.";
+    std::string break_text = "Take a short break.";
     if (const toml::table* s = sub_table(root, "session", "")) {
       check_keys(*s, "session", {"repetitions", "break_every_trials", "break_text", "break_min_ms"});
       reps = get_int(*s, "repetitions", "session", 1, 1000, false).value_or(1);

@@ -44,6 +44,13 @@ class ObserverKeys final : public io::ResponseSource {
   void replace(const std::vector<ScheduledKey>& keys) { due_.assign(keys.begin(), keys.end()); }
   void clear() { due_.clear(); }
   io::Signal poll(std::vector<io::InputEvent>& out) override;
+  // Presses what each answer plan asks; pages continue on space.
+  [[nodiscard]] io::Reach reach() const override {
+    io::Reach r;
+    r.simulated = true;
+    r.continue_phrase = "press space";
+    return r;
+  }
 
  private:
   const devices::Clock& clock_;

@@ -98,6 +98,10 @@ class SessionLoop::Impl {
     eye_size_ = eye_image_size(station_.display->info(), static_cast<std::uint32_t>(p_.resolution_width),
                                static_cast<std::uint32_t>(p_.resolution_height));
     restore_adaptive(s.staircase_history);
+    std::vector<io::Reach> reach;
+    for (const io::ResponseSource* source : station_.responses) reach.push_back(source->reach());
+    if (observer_params()) reach.push_back(observer_keys_.reach());
+    continue_line_ = continue_line(reach, p_);
     status_.participant = options_.participant;
     status_.session_id = session_id_;
     status_.protocol = p_.meta.name;
@@ -543,12 +547,14 @@ class SessionLoop::Impl {
                std::optional<std::int64_t> trial_id) {
     Frame f;
     if (!begin(f)) return Outcome::quit;
-    if (auto shown = scene_->set_page(text, head()); !shown) throw Stop{shown.error()};
+    // The protocol's text, then how to go on with the devices at hand.
+    const std::string shown_text = continue_line_.empty() ? text : text + "\n\n" + continue_line_;
+    if (auto shown = scene_->set_page(shown_text, head()); !shown) throw Stop{shown.error()};
     scene_->show(phase, false);
-    Page state(f.timing.now_ns, min_ns);
+    Page state(f.timing.now_ns, min_ns, continues_);
     if (observer_params()) observer_keys_.press({f.timing.now_ns + min_ns + 300'000'000, "space"});
-    event(trial_id, data::events::Page{page_event(phase), k, text});
-    const io::Overlay overlay{phase, text, true};
+    event(trial_id, data::events::Page{page_event(phase), k, shown_text});
+    const io::Overlay overlay{phase, shown_text, true};
     for (;;) {
       const bool advance = state.frame(f.timing.now_ns, f.inputs);
       if (f.signal == Signal::quit) return Outcome::quit;
@@ -899,6 +905,8 @@ class SessionLoop::Impl {
   io::Station station_;
   const devices::Clock& clock_;
   ObserverKeys observer_keys_{clock_};
+  std::vector<std::string> continues_ = page_continues(p_);  // inputs that turn pages
+  std::string continue_line_;  // under every page
   RunOptions options_;
   std::int64_t session_id_;
   std::vector<std::int64_t> trial_ids_;

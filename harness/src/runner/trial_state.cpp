@@ -1,5 +1,7 @@
 #include "curvlab/harness/runner/trial_state.hpp"
 
+#include <algorithm>
+
 namespace curvlab::harness::runner {
 
 namespace {
@@ -80,8 +82,82 @@ InputVerdict classify_input(const protocol::Judgement& j, const std::string& nam
   return j.type->classify(j, name);
 }
 
-bool Page::is_continue(const std::string& name) {
-  return name == "space" || name == "enter" || name == "return" || name == "continue";
+namespace {
+
+// Each judgement of the protocol once: the session's, then each block's own.
+template <class F>
+void for_each_judgement(const protocol::Protocol& p, F&& f) {
+  f(p.judgement, std::string("the session's judgement"));
+  for (const auto& b : p.blocks)
+    if (b.judgement.type != nullptr) f(b.judgement, "block '" + b.name + "'");
+}
+
+bool reachable(const std::vector<io::Reach>& sources, const protocol::AnswerBinding& a) {
+  return std::any_of(sources.begin(), sources.end(), [&](const io::Reach& r) {
+    return std::any_of(a.keys.begin(), a.keys.end(), [&](const std::string& k) { return r.gives_key(k); }) ||
+           std::any_of(a.buttons.begin(), a.buttons.end(), [&](const std::string& b) { return r.gives_button(b); });
+  });
+}
+
+std::string join(const std::vector<std::string>& words, const char* sep) {
+  std::string out;
+  for (std::size_t i = 0; i < words.size(); ++i) out += (i ? sep : "") + words[i];
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> page_continues(const protocol::Protocol& p) {
+  std::vector<std::string> out;
+  auto add = [&out](const std::vector<std::string>& names) {
+    for (const auto& n : names)
+      if (std::find(out.begin(), out.end(), n) == out.end()) out.push_back(n);
+  };
+  for_each_judgement(p, [&](const protocol::Judgement& j, const std::string&) {
+    if (j.type == nullptr) return;
+    for (const auto& a : j.type->answer_bindings(j)) {
+      add(a.keys);
+      add(a.buttons);
+    }
+  });
+  return out;
+}
+
+std::string continue_line(const std::vector<io::Reach>& sources, const protocol::Protocol& p) {
+  std::vector<std::string> ways;
+  for (const auto& r : sources)
+    if (!r.continue_phrase.empty() && std::find(ways.begin(), ways.end(), r.continue_phrase) == ways.end())
+      ways.push_back(r.continue_phrase);
+  bool answers = false;
+  for_each_judgement(p, [&](const protocol::Judgement& j, const std::string&) {
+    if (j.type == nullptr) return;
+    for (const auto& a : j.type->answer_bindings(j)) answers = answers || reachable(sources, a);
+  });
+  if (ways.empty() && !answers) return "";
+  if (answers) ways.emplace_back("give any answer");
+  return "To continue: " + join(ways, ", or ") + ".";
+}
+
+std::optional<std::string> unreachable_answer(const std::vector<io::Reach>& sources,
+                                              const protocol::Protocol& p) {
+  std::optional<std::string> out;
+  for_each_judgement(p, [&](const protocol::Judgement& j, const std::string& where) {
+    if (out || j.type == nullptr) return;
+    for (const auto& a : j.type->answer_bindings(j)) {
+      if (reachable(sources, a)) continue;
+      std::string inputs;
+      if (!a.keys.empty()) inputs += "keys " + join(a.keys, ", ");
+      if (!a.buttons.empty()) inputs += std::string(inputs.empty() ? "" : "; ") + "buttons " + join(a.buttons, ", ");
+      out = where + " (" + std::string(j.type->name()) + "): the answer '" + a.answer + "' (" + inputs + ")";
+      return;
+    }
+  });
+  return out;
+}
+
+bool Page::is_continue(const std::string& name) const {
+  return name == "space" || name == "enter" || name == "return" || name == "continue" ||
+         std::find(continues_.begin(), continues_.end(), name) != continues_.end();
 }
 
 }  // namespace curvlab::harness::runner

@@ -376,6 +376,7 @@ class XrBackend final : public InteractiveDisplay {
   Signal poll_signal() override;
   // The controllers' buttons.
   Signal poll(std::vector<InputEvent>& out) override;
+  [[nodiscard]] harness::io::Reach reach() const override { return controller_reach(); }
   renderer::StereoRig rig(const FrameTiming& frame, double ipd_m) override;
   renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
                               const Overlay& overlay, bool draw) override;
@@ -909,8 +910,12 @@ void XrBackend::read_buttons(std::vector<InputEvent>& out) {
           report_once(r, "xrGetActionStateBoolean");
           continue;
         }
-        if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE)
-          out.push_back({to_session_ns(st.lastChangeTime), name, device, st.currentState == XR_TRUE});
+        if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE) {
+          const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
+          out.push_back({t_ns, name, device, st.currentState == XR_TRUE});
+          // A continues pages as the trigger does (controller_reach).
+          if (name == "a") out.push_back({t_ns, "continue", device, st.currentState == XR_TRUE});
+        }
       } else {
         auto st = tagged<XrActionStateFloat>(XR_TYPE_ACTION_STATE_FLOAT);
         if (const XrResult r = xrGetActionStateFloat(session, &get, &st); XR_FAILED(r)) {
@@ -1032,6 +1037,16 @@ std::vector<std::string> XrBackend::save_frame(const std::string& stem) {
     fail(renderer::VulkanFailure(renderer::vk_call_name(e.what()), e.code().value()));
   }
   return written;
+}
+
+harness::io::Reach controller_reach() {
+  harness::io::Reach r;
+  for (const auto& a : curvlab_action_set().actions) {
+    if (a.type == ActionType::Pose) continue;
+    for (const auto& path : a.subaction_paths) r.buttons.push_back(protocol_button(a.name, path == kLeftHand));
+  }
+  r.continue_phrase = "pull a trigger or press A";
+  return r;
 }
 
 Result<std::unique_ptr<InteractiveDisplay>> make_xr_backend(const XrBackendOptions& options) {

@@ -53,6 +53,12 @@ class MethodOfAdjustment final : public JudgementType {
     return Adjustment(*a, t.adjustment_start.value_or(a->start_min));
   }
 
+  [[nodiscard]] std::vector<AnswerBinding> answer_bindings(const Judgement& j) const override {
+    const AdjustmentSpec& a = *spec_of(j);
+    return {{"decrease", a.keys_decrease, a.buttons_decrease},
+            {"increase", a.keys_increase, a.buttons_increase},
+            {"confirm", a.keys_confirm, a.buttons_confirm}};
+  }
   [[nodiscard]] InputVerdict classify(const Judgement& j, const std::string& input) const override {
     const auto* a = spec_of(j);
     if (!a) return {};

@@ -36,6 +36,9 @@ struct DesktopOptions {
   const devices::Clock* clock = nullptr;  // the session's; required
 };
 
+// What the window's keyboard can press: every key; pages continue on space.
+harness::io::Reach keyboard_reach();
+
 // The window as display, pose source (keyboard and mouse move the head and
 // hands) and response source (keys). No display or no Vulkan: an Error of
 // kind `device`.

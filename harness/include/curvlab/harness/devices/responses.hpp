@@ -19,6 +19,9 @@
 
 namespace curvlab::devices {
 
+// What the devices of a mapping file can press: each binding's response name.
+harness::io::Reach mapping_reach(const MappingFile& file);
+
 class HidResponses final : public harness::io::ResponseSource {
  public:
   // For every [[device]] of `file`, opens the first connected HID device it
@@ -37,6 +40,9 @@ class HidResponses final : public harness::io::ResponseSource {
   // Presses and releases since the last call ("hid:LABEL" as the device);
   // pause when a device went away (its message on stderr and in message()).
   harness::io::Signal poll(std::vector<harness::io::InputEvent>& out) override;
+  // The mappings' response names; pages continue on a binding named
+  // "continue" (or on any answer the protocol binds to these buttons).
+  [[nodiscard]] harness::io::Reach reach() const override { return reach_; }
   // The last unplug message ("" none).
   [[nodiscard]] const std::string& message() const { return message_; }
 
@@ -46,6 +52,7 @@ class HidResponses final : public harness::io::ResponseSource {
   std::vector<std::unique_ptr<DeviceReader>> readers_;
   std::vector<std::pair<std::string, std::string>> names_;  // source label → "hid:" + mapping name
   std::string message_;
+  harness::io::Reach reach_;
 };
 
 // A recorded report stream replayed on the session clock: each report is

@@ -7,9 +7,27 @@
 
 #include "curvlab/harness/io/frame.hpp"
 
+#include <algorithm>
+#include <string>
 #include <vector>
 
 namespace curvlab::harness::io {
+
+// What a source can press: the participant is told how to continue a page
+// from it, and a protocol whose answers no source of the session can give is
+// refused before anything is written.
+struct Reach {
+  bool every_key = false;            // a keyboard: every key name
+  std::vector<std::string> buttons;  // the button names it gives
+  bool simulated = false;            // presses whatever the judgement asks (the simulated observer)
+  // How a person continues a page with it ("press space"); "" none.
+  std::string continue_phrase;
+
+  [[nodiscard]] bool gives_key(const std::string&) const { return every_key || simulated; }
+  [[nodiscard]] bool gives_button(const std::string& name) const {
+    return simulated || std::find(buttons.begin(), buttons.end(), name) != buttons.end();
+  }
+};
 
 class ResponseSource {
  public:
@@ -21,6 +39,8 @@ class ResponseSource {
   // returns what the source asks of the session (a pause key, a device
   // unplugged). May throw DeviceFailure.
   virtual Signal poll(std::vector<InputEvent>& out) = 0;
+  // What it can press (above); nothing by default.
+  [[nodiscard]] virtual Reach reach() const { return {}; }
 };
 
 }  // namespace curvlab::harness::io

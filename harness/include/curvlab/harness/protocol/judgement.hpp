@@ -124,6 +124,14 @@ enum class Forecast {
   none,         // not predicted
 };
 
+// One answer and the inputs that give it: an option, or an adjustment's
+// decrease, increase and confirm.
+struct AnswerBinding {
+  std::string answer;  // the option's value, or "decrease", "increase", "confirm"
+  std::vector<std::string> keys;
+  std::vector<std::string> buttons;
+};
+
 // One adaptive track of a condition and the P(positive) it settles on.
 struct ConvergenceTarget {
   std::string track;     // its name
@@ -188,6 +196,9 @@ class JudgementType {
   [[nodiscard]] virtual std::unique_ptr<AdaptiveState> adaptive_state(const Judgement& j) const;
   // An attempt's adjustable value, for types answered by adjusting.
   [[nodiscard]] virtual std::optional<Adjustment> adjustment(const Judgement& j, const PlannedTrial& t) const;
+  // Every answer a participant must be able to give, with its inputs (the
+  // CLI refuses devices that cannot give one; pages continue on any of them).
+  [[nodiscard]] virtual std::vector<AnswerBinding> answer_bindings(const Judgement& j) const;
   // What an input that may answer does (never `early`).
   [[nodiscard]] virtual InputVerdict classify(const Judgement& j, const std::string& input) const;
   // What a simulated participant presses, from `t_ns` on; `adjustment` is

@@ -14,6 +14,7 @@
 // lost spells instead.
 #pragma once
 
+#include "curvlab/harness/io/response_source.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
@@ -23,6 +24,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace curvlab::harness::runner {
 
@@ -100,9 +102,27 @@ InputVerdict classify_input(const protocol::Judgement& judgement, const std::str
 // An instruction, break or closing page: it advances on "continue" (space,
 // enter, return or a button named continue) once `min_ns` has passed,
 // ignoring a key held from before the page (or from before a pause).
+// Every input bound to an answer of any of the protocol's judgements: pages
+// continue on these too, so a participant who knows how to answer knows how
+// to go on.
+std::vector<std::string> page_continues(const protocol::Protocol& p);
+
+// The line under every page telling the participant how to go on, from what
+// the session's response sources can press ("" when none can): each source's
+// own way ("press space", "pull a trigger or press A"), and any answer when a
+// source can give one of the protocol's.
+std::string continue_line(const std::vector<io::Reach>& sources, const protocol::Protocol& p);
+
+// A protocol answer that none of `sources` can give: "the answer 'convex'
+// (keys 1)", naming the block; nullopt when every answer can be given.
+std::optional<std::string> unreachable_answer(const std::vector<io::Reach>& sources, const protocol::Protocol& p);
+
 class Page {
  public:
-  Page(std::int64_t shown_ns, std::int64_t min_ns) : shown_ns_(shown_ns), min_ns_(min_ns) {}
+  // `continues`: the inputs that turn the page besides space, enter and
+  // "continue" (the protocol's answer bindings; page_continues()).
+  Page(std::int64_t shown_ns, std::int64_t min_ns, const std::vector<std::string>& continues)
+      : shown_ns_(shown_ns), min_ns_(min_ns), continues_(continues) {}
   // One frame's presses; true when the page is done after this frame.
   template <class Inputs>
   bool frame(std::int64_t now_ns, const Inputs& inputs) {
@@ -114,11 +134,12 @@ class Page {
   }
   // After a pause: keys pressed before it do not count.
   void restart() { fresh_ = true; }
-  static bool is_continue(const std::string& name);
+  [[nodiscard]] bool is_continue(const std::string& name) const;
 
  private:
   std::int64_t shown_ns_;
   std::int64_t min_ns_;
+  const std::vector<std::string>& continues_;
   bool fresh_ = true;
 };
 

@@ -22,6 +22,10 @@ struct XrBackendOptions {
   std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
 };
 
+// What the controllers of curvlab's action set can press (button names as
+// protocols write them); pages continue on a trigger or A.
+harness::io::Reach controller_reach();
+
 // No runtime or no headset: an Error of kind `device` naming the OpenXR
 // result and what to install; another failing call: `api`. Once running, a
 // failing OpenXR or Vulkan call throws DeviceFailure
