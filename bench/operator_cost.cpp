@@ -96,8 +96,8 @@ int main(int argc, char** argv) {
   const int rounds = argc > 2 ? std::max(1, std::atoi(argv[2])) : 2;
   if (std::getenv("XR_RUNTIME_JSON") == nullptr) setenv("XR_RUNTIME_JSON", CURVLAB_TEST_XR_RUNTIME_JSON, 1);
   auto made = renderer::make_stimulus_scene(geometry::SpaceKind::H3, renderer::SceneKind::billiards, {});
-  if (auto* e = std::get_if<std::string>(&made)) {
-    std::fprintf(stderr, "%s\n", e->c_str());
+  if (auto* e = std::get_if<renderer::RenderError>(&made)) {
+    std::fprintf(stderr, "%s\n", e->message.c_str());
     return 1;
   }
   const auto& s = std::get<renderer::StimulusScene>(made);

@@ -47,8 +47,8 @@ renderer::FrameDescription describe(const renderer::StimulusScene& s, std::uint3
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::max(5, std::atoi(argv[1])) : 40;
   auto made = renderer::make_stimulus_scene(geometry::SpaceKind::H3, renderer::SceneKind::billiards, {});
-  if (auto* e = std::get_if<std::string>(&made)) {
-    std::fprintf(stderr, "%s\n", e->c_str());
+  if (auto* e = std::get_if<renderer::RenderError>(&made)) {
+    std::fprintf(stderr, "%s\n", e->message.c_str());
     return 1;
   }
   const auto& s = std::get<renderer::StimulusScene>(made);

@@ -45,8 +45,8 @@ double median(std::vector<double> v) {
 
 StimulusScene make(SpaceKind kind, SceneKind scene) {
   auto made = make_stimulus_scene(kind, scene, {});
-  if (auto* e = std::get_if<std::string>(&made)) {
-    std::fprintf(stderr, "scene: %s\n", e->c_str());
+  if (auto* e = std::get_if<RenderError>(&made)) {
+    std::fprintf(stderr, "scene: %s\n", e->message.c_str());
     std::exit(1);
   }
   return std::get<StimulusScene>(std::move(made));

@@ -24,6 +24,8 @@ namespace {
 
 constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 
+RenderError device_failure(std::string message) { return {RenderError::Kind::device, std::move(message)}; }
+
 VKAPI_ATTR VkBool32 VKAPI_CALL on_validation_message(
     VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT,
     const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
@@ -97,16 +99,16 @@ std::variant<InstanceNames, RenderError> instance_names(const vk::raii::Context&
   InstanceNames names;
   if (options.validation) {
     if (!has_layer(loader, kValidationLayer))
-      return RenderError{"validation requested but VK_LAYER_KHRONOS_validation is not "
-                         "installed (apt-get install vulkan-validationlayers)"};
+      return device_failure("validation requested but VK_LAYER_KHRONOS_validation is not "
+                            "installed (apt-get install vulkan-validationlayers)");
     names.layers.push_back(kValidationLayer);
     names.extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
   }
   for (const auto& e : embedding.instance_extensions) {
     if (!has_instance_extension(loader, e.c_str()))
-      return RenderError{"the Vulkan instance extension " + e +
-                         " is not available (a window needs the loader's surface "
-                         "extensions: install libvulkan1 and a driver with WSI support)"};
+      return device_failure("the Vulkan instance extension " + e +
+                            " is not available (a window needs the loader's surface "
+                            "extensions: install libvulkan1 and a driver with WSI support)");
     add_unique(names.extensions, e.c_str());
   }
   return names;
@@ -128,7 +130,7 @@ std::variant<vk::raii::Instance, RenderError> make_instance(const vk::raii::Cont
                                                             const ContextHooks& hooks) {
   if (!hooks.create_instance) return vk::raii::Instance(loader, info);
   auto made = hooks.create_instance(static_cast<const VkInstanceCreateInfo&>(info));
-  if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+  if (auto* e = std::get_if<RenderError>(&made)) return *e;
   return vk::raii::Instance(loader, std::get<VkInstance>(made));
 }
 
@@ -152,20 +154,20 @@ std::variant<PickedDevice, RenderError> embedder_device(const vk::raii::Instance
                                                         const std::vector<const char*>& device_extensions,
                                                         VkSurfaceKHR surface) {
   auto picked = hooks.pick_physical_device(static_cast<VkInstance>(*instance));
-  if (auto* e = std::get_if<std::string>(&picked)) return RenderError{*e};
+  if (auto* e = std::get_if<RenderError>(&picked)) return *e;
   vk::raii::PhysicalDevice physical(instance, std::get<VkPhysicalDevice>(picked));
   const auto props = physical.getProperties();
   if (props.apiVersion < VK_API_VERSION_1_3)
-    return RenderError{std::string("the Vulkan device chosen by the embedder (") +
-                       props.deviceName.data() +
-                       ") does not support Vulkan 1.3, which curvlab needs for dynamic "
-                       "rendering; update its driver"};
+    return device_failure(std::string("the Vulkan device chosen by the embedder (") +
+                          props.deviceName.data() +
+                          ") does not support Vulkan 1.3, which curvlab needs for dynamic "
+                          "rendering; update its driver");
   if (!has_device_extensions(physical, device_extensions))
-    return RenderError{std::string("the Vulkan device chosen by the embedder (") +
-                       props.deviceName.data() + ") lacks a required device extension"};
+    return device_failure(std::string("the Vulkan device chosen by the embedder (") +
+                          props.deviceName.data() + ") lacks a required device extension");
   const auto family = usable_queue_family(physical, surface);
-  if (!family) return RenderError{"the Vulkan device has no graphics+compute queue" +
-                                  std::string(surface ? " that can present to the window" : "")};
+  if (!family) return device_failure("the Vulkan device has no graphics+compute queue" +
+                                     std::string(surface ? " that can present to the window" : ""));
   return PickedDevice{std::move(physical), *family};
 }
 
@@ -202,13 +204,13 @@ std::variant<PickedDevice, RenderError> best_device(const vk::raii::Instance& in
   }
   if (best_score >= 0) return best;
   if (surface)
-    return RenderError{"no Vulkan 1.3 device can present to the window (install a GPU "
-                       "driver, or mesa-vulkan-drivers for lavapipe)"};
-  return RenderError{choice == DeviceChoice::software
-                         ? "no CPU Vulkan device found (apt-get install mesa-vulkan-drivers "
-                           "for lavapipe)"
-                         : "no Vulkan 1.3 device found (install a GPU driver, or "
-                           "mesa-vulkan-drivers for lavapipe)"};
+    return device_failure("no Vulkan 1.3 device can present to the window (install a GPU "
+                          "driver, or mesa-vulkan-drivers for lavapipe)");
+  return device_failure(choice == DeviceChoice::software
+                            ? "no CPU Vulkan device found (apt-get install mesa-vulkan-drivers "
+                              "for lavapipe)"
+                            : "no Vulkan 1.3 device found (install a GPU driver, or "
+                              "mesa-vulkan-drivers for lavapipe)");
 }
 
 // The driver's name and version, for the session's provenance.
@@ -241,7 +243,7 @@ std::variant<vk::raii::Device, RenderError> make_device(const vk::raii::Physical
   if (!hooks.create_device) return vk::raii::Device(physical, device_info);
   auto made = hooks.create_device(static_cast<VkPhysicalDevice>(*physical),
                                   static_cast<const VkDeviceCreateInfo&>(device_info));
-  if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+  if (auto* e = std::get_if<RenderError>(&made)) return *e;
   return vk::raii::Device(physical, std::get<VkDevice>(made));
 }
 
@@ -258,7 +260,7 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
   Context c;
   try {
     if (c.loader_.enumerateInstanceVersion() < VK_API_VERSION_1_3)
-      return RenderError{"the Vulkan loader is older than 1.3; install libvulkan1 ≥ 1.3"};
+      return device_failure("the Vulkan loader is older than 1.3; install libvulkan1 ≥ 1.3");
     auto names = instance_names(c.loader_, options, embedding);
     if (auto* e = std::get_if<RenderError>(&names)) return *e;
     const auto& [layers, extensions] = std::get<InstanceNames>(names);
@@ -283,7 +285,7 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
       c.messenger_ = vk::raii::DebugUtilsMessengerEXT(c.instance_, messenger_info);
     if (embedding.create_surface) {
       auto made = embedding.create_surface(static_cast<VkInstance>(*c.instance_));
-      if (auto* e = std::get_if<std::string>(&made)) return RenderError{*e};
+      if (auto* e = std::get_if<RenderError>(&made)) return *e;
       c.surface_ = vk::raii::SurfaceKHR(c.instance_, std::get<VkSurfaceKHR>(made));
     }
 
@@ -309,7 +311,7 @@ std::variant<Context, RenderError> Context::create(const ContextOptions& options
         c.device_, {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer,
                     .queueFamilyIndex = c.queue_family_});
   } catch (const vk::SystemError& e) {
-    return RenderError{std::string("Vulkan initialisation failed: ") + e.what()};
+    return device_failure(std::string("Vulkan initialisation failed: ") + e.what());
   }
   return c;
 }

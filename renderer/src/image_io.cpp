@@ -4,12 +4,17 @@
 #include <stb_image.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
+#include <utility>
 
 namespace curvlab::renderer {
 namespace {
+
+RenderError file_failure(std::string message) { return {RenderError::Kind::file, std::move(message)}; }
 
 struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
@@ -43,25 +48,28 @@ bool encode(std::FILE* file, const Rgba8Image& image) {
 
 }  // namespace
 
-std::string write_png(const std::string& path, const Rgba8Image& image) {
+std::variant<Done, RenderError> write_png(const std::string& path, const Rgba8Image& image) {
   const std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "wb"));
-  if (!file || !encode(file.get(), image) || std::fflush(file.get()) != 0)
-    return "cannot write PNG " + path;
-  return {};
+  if (!file) return file_failure("cannot create PNG " + path + ": " + std::strerror(errno));
+  // libpng writes through fwrite and fflush writes what stdio buffered: a
+  // full disk or a lost mount shows in errno; without one, libpng refused.
+  errno = 0;
+  if (!encode(file.get(), image) || std::fflush(file.get()) != 0)
+    return file_failure("cannot write PNG " + path + ": " +
+                        (errno != 0 ? std::strerror(errno) : "libpng could not encode the image"));
+  return Done{};
 }
 
-bool read_png(const std::string& path, Rgba8Image& image, std::string& error) {
+std::variant<Rgba8Image, RenderError> read_png(const std::string& path) {
   int w = 0, h = 0, n = 0;
   unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 4);
-  if (data == nullptr) {
-    error = "cannot read PNG " + path + ": " + stbi_failure_reason();
-    return false;
-  }
+  if (data == nullptr) return file_failure("cannot read PNG " + path + ": " + stbi_failure_reason());
+  Rgba8Image image;
   image.width = w;
   image.height = h;
   image.pixels.assign(data, data + static_cast<std::size_t>(w * h * 4));
   stbi_image_free(data);
-  return true;
+  return image;
 }
 
 ImageDiff diff_images(const Rgba8Image& a, const Rgba8Image& b, int channel_tolerance) {

@@ -89,14 +89,14 @@ SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& co
   return o;
 }
 
-std::variant<SceneObject, std::string> text_panel_object(const Space& space, std::string name,
+std::variant<SceneObject, RenderError> text_panel_object(const Space& space, std::string name,
                                                          const std::string& text,
                                                          const std::string& font, double width_m,
                                                          double height_m, const Isometry& pose) {
   const int w = 1024;
   const int h = static_cast<int>(std::lround(w * height_m / width_m));
   auto bmp = render_text(text, w, h, h / 2.5, font);
-  if (auto* e = std::get_if<RenderError>(&bmp)) return e->message;
+  if (auto* e = std::get_if<RenderError>(&bmp)) return *e;
   SceneObject o;
   o.name = std::move(name);
   o.build = [space, width_m, height_m](int level) {
@@ -112,13 +112,13 @@ namespace {
 
 constexpr double kTableHeightM = 0.80;
 
-std::optional<std::string> add_panel(Scene& scene, const Space& space, const std::string& text,
-                                     const std::string& font, double width_m, double height_m,
-                                     const Isometry& pose) {
+std::variant<Done, RenderError> add_panel(Scene& scene, const Space& space, const std::string& text,
+                                          const std::string& font, double width_m, double height_m,
+                                          const Isometry& pose) {
   auto made = text_panel_object(space, "prompt", text, font, width_m, height_m, pose);
-  if (auto* e = std::get_if<std::string>(&made)) return *e;
+  if (auto* e = std::get_if<RenderError>(&made)) return *e;
   scene.add(std::move(std::get<SceneObject>(made)));
-  return std::nullopt;
+  return Done{};
 }
 
 // The participant stands outside edge 0 (facing −z toward the centre) and
@@ -140,7 +140,7 @@ Isometry table_viewer(const Space& space, const geometry::TableShape& table, dou
 
 }  // namespace
 
-std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, SceneKind scene_kind,
+std::variant<StimulusScene, RenderError> make_stimulus_scene(SpaceKind kind, SceneKind scene_kind,
                                                              const StimulusOptions& options) {
   StimulusScene s;
   const int sides = geometry::default_table_sides(kind);
@@ -151,7 +151,8 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
   } else {
     table = geometry::right_angled_table_from_edge(kind, options.table_edge_m, sides, 1.0);
   }
-  if (auto* e = std::get_if<geometry::GeometryError>(&table)) return e->message;
+  if (auto* e = std::get_if<geometry::GeometryError>(&table))
+    return RenderError{RenderError::Kind::stimulus, e->message};
   s.space = Space{kind, std::get<geometry::TableShape>(table).radius_m};
   const auto& shape = std::get<geometry::TableShape>(table);
   const Space& space = s.space;
@@ -165,9 +166,9 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
       s.head = geometry::rotation(Vec3(0.0, 1.0, 0.0), options.yaw_rad);
       s.scene.add(stick_object(space, stick, geometry::translation_m(space, Vec3(0.0, -0.25, -0.75)),
                                options.stick_marks));
-      if (auto err = add_panel(s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
-                               geometry::translation_m(space, Vec3(0.0, 0.22, -1.1))))
-        return *err;
+      auto added = add_panel(s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
+                             geometry::translation_m(space, Vec3(0.0, 0.22, -1.1)));
+      if (auto* e = std::get_if<RenderError>(&added)) return *e;
       break;
     }
     case SceneKind::table:
@@ -210,11 +211,10 @@ std::variant<StimulusScene, std::string> make_stimulus_scene(SpaceKind kind, Sce
                                    geometry::rotation(Vec3(1.0, 0.0, 0.0), tilt) *
                                    geometry::translation_m(space, Vec3(0.0, 0.0, half)) *
                                    geometry::rotation(Vec3(0.0, 1.0, 0.0), std::numbers::pi / 2.0)));
-      if (auto err = add_panel(
-              s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
-              geometry::translation_m(space, Vec3(0.0, 0.30, -shape.apothem_m() - 0.1)) *
-                  geometry::rotation(Vec3(1.0, 0.0, 0.0), -0.3)))
-        return *err;
+      auto added = add_panel(s.scene, space, options.prompt, options.font_path, 0.9, 0.26,
+                             geometry::translation_m(space, Vec3(0.0, 0.30, -shape.apothem_m() - 0.1)) *
+                                 geometry::rotation(Vec3(1.0, 0.0, 0.0), -0.3));
+      if (auto* e = std::get_if<RenderError>(&added)) return *e;
       break;
     }
     case SceneKind::tiling: {

@@ -19,9 +19,10 @@ const ShaderSource* find_source(std::string_view name) {
 // Replaces `#include "file"` lines by the embedded file's text (one level is
 // all the shaders use; deeper includes are resolved recursively anyway).
 std::variant<std::string, RenderError> resolve_includes(std::string_view name, int depth) {
-  if (depth > 8) return RenderError{"include depth exceeded in " + std::string(name)};
+  if (depth > 8) return RenderError{RenderError::Kind::shader, "include depth exceeded in " + std::string(name)};
   const ShaderSource* src = find_source(name);
-  if (src == nullptr) return RenderError{"no embedded shader named " + std::string(name)};
+  if (src == nullptr)
+    return RenderError{RenderError::Kind::shader, "no embedded shader named " + std::string(name)};
   std::istringstream in{std::string(src->text)};
   std::ostringstream out;
   std::string line;
@@ -33,8 +34,8 @@ std::variant<std::string, RenderError> resolve_includes(std::string_view name, i
       const auto open = line.find('"');
       const auto close = line.rfind('"');
       if (open == std::string::npos || close <= open)
-        return RenderError{std::string(name) + ":" + std::to_string(line_no) +
-                           ": expected #include \"file\""};
+        return RenderError{RenderError::Kind::shader,
+                           std::string(name) + ":" + std::to_string(line_no) + ": expected #include \"file\""};
       auto inner = resolve_includes(line.substr(open + 1, close - open - 1), depth + 1);
       if (auto* e = std::get_if<RenderError>(&inner)) return *e;
       out << std::get<std::string>(inner) << '\n';
@@ -76,11 +77,13 @@ std::variant<std::vector<std::uint32_t>, RenderError> compile_shader(std::string
   shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_5);
   const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
   if (!shader.parse(GetDefaultResources(), 460, false, messages))
-    return RenderError{"GLSL compile failed in " + name_str + ":\n" + shader.getInfoLog()};
+    return RenderError{RenderError::Kind::shader,
+                       "GLSL compile failed in " + name_str + ":\n" + shader.getInfoLog()};
   glslang::TProgram program;
   program.addShader(&shader);
   if (!program.link(messages))
-    return RenderError{"GLSL link failed for " + name_str + ":\n" + program.getInfoLog()};
+    return RenderError{RenderError::Kind::shader,
+                       "GLSL link failed for " + name_str + ":\n" + program.getInfoLog()};
   std::vector<std::uint32_t> spirv;
   glslang::SpvOptions options;
   options.validate = false;

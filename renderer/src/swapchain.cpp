@@ -22,6 +22,8 @@ constexpr vk::Format kEyeFormat = vk::Format::eR8G8B8A8Srgb;
 constexpr std::array<std::uint8_t, 3> kBannerInk{235, 235, 235};
 constexpr std::array<std::uint8_t, 3> kBannerPaper{24, 24, 28};
 
+RenderError surface_failure(std::string message) { return {RenderError::Kind::surface, std::move(message)}; }
+
 const vk::ImageSubresourceLayers kColorLayer{vk::ImageAspectFlagBits::eColor, 0, 0, 1};
 const vk::ImageSubresourceRange kColorRange{vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1};
 
@@ -222,10 +224,10 @@ SwapchainTarget::SwapchainTarget(const Context& ctx, const SwapchainOptions& opt
 std::variant<std::unique_ptr<SwapchainTarget>, RenderError> SwapchainTarget::create(
     const Context& ctx, vk::Extent2D framebuffer_px, const SwapchainOptions& options) {
   if (!*ctx.surface())
-    return RenderError{"SwapchainTarget needs a Context made with a surface "
-                       "(ContextEmbedding::create_surface)"};
+    return surface_failure("SwapchainTarget needs a Context made with a surface "
+                           "(ContextEmbedding::create_surface)");
   if (options.eye_extent.width == 0 || options.eye_extent.height == 0)
-    return RenderError{"the eye images must not be empty"};
+    return surface_failure("the eye images must not be empty");
   std::unique_ptr<SwapchainTarget> t(new SwapchainTarget(ctx, options));
   try {
     const auto& dev = ctx.device();
@@ -245,7 +247,7 @@ std::variant<std::unique_ptr<SwapchainTarget>, RenderError> SwapchainTarget::cre
     }
     if (auto e = t->recreate(framebuffer_px)) return *e;
   } catch (const vk::SystemError& e) {
-    return RenderError{std::string("creating the window's swapchain failed: ") + e.what()};
+    return surface_failure(std::string("creating the window's swapchain failed: ") + e.what());
   }
   return t;
 }
@@ -276,13 +278,13 @@ std::optional<RenderError> SwapchainTarget::recreate(vk::Extent2D framebuffer_px
     return std::nullopt;
   }
   if (!(caps.supportedUsageFlags & vk::ImageUsageFlagBits::eTransferDst))
-    return RenderError{"the window's swapchain images cannot be written by transfers "
-                       "(VK_IMAGE_USAGE_TRANSFER_DST_BIT unsupported)"};
+    return surface_failure("the window's swapchain images cannot be written by transfers "
+                           "(VK_IMAGE_USAGE_TRANSFER_DST_BIT unsupported)");
   const auto chosen = choose_format(pd.getSurfaceFormatsKHR(surface));
   if (!(pd.getFormatProperties(chosen.format).optimalTilingFeatures &
         vk::FormatFeatureFlagBits::eBlitDst))
-    return RenderError{"the window's swapchain format " + vk::to_string(chosen.format) +
-                       " cannot be a blit destination"};
+    return surface_failure("the window's swapchain format " + vk::to_string(chosen.format) +
+                           " cannot be a blit destination");
   if (!is_srgb(chosen.format) && format_ != chosen.format)
     std::fprintf(stderr, "curvlab: warning: the window offers no sRGB swapchain format; it shows %s, "
                          "darker than the stimulus PNGs\n", vk::to_string(chosen.format).c_str());
@@ -385,7 +387,7 @@ std::variant<bool, RenderError> SwapchainTarget::begin_frame(vk::Extent2D frameb
     return false;
   } catch (const vk::SystemError& e) {
     const VulkanFailure f(vk_call_name(e.what()), e.code().value());
-    failure_ = RenderError{std::string(f.what()) + " (presenting to the window)"};
+    failure_ = surface_failure(std::string(f.what()) + " (presenting to the window)");
     throw f;
   }
 }
@@ -435,7 +437,7 @@ void SwapchainTarget::frame_finished() {
     ++presented_;
   } catch (const vk::SystemError& e) {
     const VulkanFailure f(vk_call_name(e.what()), e.code().value());
-    failure_ = RenderError{std::string(f.what()) + " (presenting to the window)"};
+    failure_ = surface_failure(std::string(f.what()) + " (presenting to the window)");
     throw f;
   }
 }

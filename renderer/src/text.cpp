@@ -40,13 +40,14 @@ std::variant<CoverageBitmap, RenderError> render_text(const std::string& text, i
                                                     const std::string& font_path) {
   std::ifstream in(font_path, std::ios::binary);
   if (!in)
-    return RenderError{"cannot open font " + font_path + " (apt-get install fonts-dejavu-core)"};
+    return RenderError{RenderError::Kind::font,
+                       "cannot open font " + font_path + " (apt-get install fonts-dejavu-core)"};
   const std::vector<unsigned char> font_data((std::istreambuf_iterator<char>(in)),
                                              std::istreambuf_iterator<char>());
   stbtt_fontinfo font;
   if (stbtt_InitFont(&font, font_data.data(), stbtt_GetFontOffsetForIndex(font_data.data(), 0)) ==
       0)
-    return RenderError{font_path + " is not a TrueType font"};
+    return RenderError{RenderError::Kind::font, font_path + " is not a TrueType font"};
 
   std::vector<std::vector<int>> lines;
   std::istringstream ls(text);

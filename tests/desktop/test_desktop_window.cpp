@@ -4,6 +4,7 @@
 // that shows it. Vulkan on lavapipe with the validation layer on.
 #include "desktop_backend.hpp"
 #include "xvfb.hpp"
+#include "../support/png_files.hpp"
 
 #include "../faults/fault_env.hpp"
 
@@ -157,8 +158,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   for (const char* name : {"stimulus_001_left.png", "stimulus_001_right.png", "stimulus_001_window.png"})
     EXPECT_TRUE(std::filesystem::exists(shots / name)) << name;
   renderer::Rgba8Image left;
-  std::string error;
-  ASSERT_TRUE(renderer::read_png((shots / "stimulus_001_left.png").string(), left, error)) << error;
+  ASSERT_TRUE(test::read_png_into((shots / "stimulus_001_left.png").string(), left));
   ASSERT_EQ(left.width, 320);
   ASSERT_EQ(left.height, 320);
   // The head looks at the table centre: cloth fills the middle of the image,
@@ -170,7 +170,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
 
   // The window holds both eyes side by side and the banner below them.
   renderer::Rgba8Image window;
-  ASSERT_TRUE(renderer::read_png((shots / "stimulus_001_window.png").string(), window, error)) << error;
+  ASSERT_TRUE(test::read_png_into((shots / "stimulus_001_window.png").string(), window));
   EXPECT_EQ(window.width, 640);
   EXPECT_EQ(window.height, 320 + 28);
   EXPECT_GT(count_pixels(window, 0.1, 0.3, 0.4, 0.7, cloth), 1000) << "left eye in the left half";
@@ -239,7 +239,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
   EXPECT_EQ(resized->height, 300);
   if (std::getenv("CURVLAB_KEEP_TEST_OUTPUT") != nullptr) {
     const auto path = std::filesystem::temp_directory_path() / "curvlab_desktop_resized_window.png";
-    EXPECT_EQ(renderer::write_png(path.string(), *resized), "");
+    EXPECT_TRUE(test::png_written(renderer::write_png(path.string(), *resized)));
     std::cout << "resized window kept in " << path << '\n';
   }
   EXPECT_EQ(backend.context().validation_log().count(), 0u);

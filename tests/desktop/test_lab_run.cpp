@@ -3,6 +3,7 @@
 // backend on a machine without an OpenXR runtime.
 #include "../cli/run_cli.hpp"
 #include "xvfb.hpp"
+#include "../support/png_files.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
 
@@ -73,8 +74,7 @@ TEST(LabRun, DesktopPilotOfTheDemoCompletesWithScriptedKeys) {
     char name[40];
     std::snprintf(name, sizeof name, "stimulus_%03d_left.png", trial);
     curvlab::renderer::Rgba8Image img;
-    std::string error;
-    ASSERT_TRUE(curvlab::renderer::read_png((shots / name).string(), img, error)) << error;
+    ASSERT_TRUE(curvlab::test::read_png_into((shots / name).string(), img));
     ASSERT_EQ(img.width, 256);
     int cloth = 0;
     int distinct_from_first = 0;
@@ -120,10 +120,8 @@ TEST(LabRun, ReplayReproducesTheDesktopOnsetFrame) {
       char name[48];
       std::snprintf(name, sizeof name, "stimulus_%03d_%s.png", trial + 1, eye);
       curvlab::renderer::Rgba8Image shown, replayed;
-      std::string error;
-      ASSERT_TRUE(curvlab::renderer::read_png((shots / name).string(), shown, error)) << error;
-      ASSERT_TRUE(curvlab::renderer::read_png((out / (std::string(eye) + ".png")).string(), replayed, error))
-          << error;
+      ASSERT_TRUE(curvlab::test::read_png_into((shots / name).string(), shown));
+      ASSERT_TRUE(curvlab::test::read_png_into((out / (std::string(eye) + ".png")).string(), replayed));
       EXPECT_EQ(replayed.width, 240);
       EXPECT_EQ(replayed.height, 160);
       const auto diff = curvlab::renderer::diff_images(shown, replayed, 0);

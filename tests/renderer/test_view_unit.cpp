@@ -2,6 +2,7 @@
 // independent closed forms in long double, written here, not calls back into
 // the code under test.
 #include "stimulus_fixtures.hpp"
+#include "../support/png_files.hpp"
 
 #include "curvlab/geometry/maps.hpp"
 #include "curvlab/renderer/colour.hpp"
@@ -269,6 +270,25 @@ TEST(Text, RendersInkIntoThePanel) {
   EXPECT_NE(std::get<RenderError>(missing).message.find("/nonexistent/font.ttf"), std::string::npos);
 }
 
+// Options that give no table, and a prompt font that cannot be read, come
+// back as RenderErrors of their own kinds (the harness tells a person to fix
+// the protocol for one and the installation for the other).
+TEST(StimulusScene, ImpossibleOptionsAndAMissingFontAreRenderErrorsOfTheirKind) {
+  StimulusOptions no_table;
+  no_table.table_edge_m = -1.0;
+  const auto impossible = make_stimulus_scene(geometry::SpaceKind::H3, SceneKind::table, no_table);
+  ASSERT_TRUE(std::holds_alternative<RenderError>(impossible));
+  EXPECT_EQ(std::get<RenderError>(impossible).kind, RenderError::Kind::stimulus);
+  EXPECT_NE(std::get<RenderError>(impossible).message.find("edge length"), std::string::npos);
+
+  StimulusOptions no_font;
+  no_font.font_path = "/nonexistent/font.ttf";
+  const auto unreadable = make_stimulus_scene(geometry::SpaceKind::E3, SceneKind::stick, no_font);
+  ASSERT_TRUE(std::holds_alternative<RenderError>(unreadable));
+  EXPECT_EQ(std::get<RenderError>(unreadable).kind, RenderError::Kind::font);
+  EXPECT_NE(std::get<RenderError>(unreadable).message.find("/nonexistent/font.ttf"), std::string::npos);
+}
+
 // ---- colour --------------------------------------------------------------
 
 TEST(Colour, SrgbTransferRoundTripsAndMatchesTheStandard) {
@@ -296,7 +316,7 @@ TEST(ImageIo, PngsCarryAnSrgbChunkAndRoundTrip) {
                     ("curvlab_png_" + std::to_string(::getpid()) + ".png");
   Rgba8Image img{3, 2, {}};
   for (int i = 0; i < 24; ++i) img.pixels.push_back(static_cast<std::uint8_t>(i * 10));
-  ASSERT_EQ(write_png(path.string(), img), "");
+  ASSERT_TRUE(test::png_written(write_png(path.string(), img)));
   std::ifstream in(path, std::ios::binary);
   std::stringstream contents;
   contents << in.rdbuf();
@@ -304,9 +324,15 @@ TEST(ImageIo, PngsCarryAnSrgbChunkAndRoundTrip) {
   EXPECT_NE(bytes.find("sRGB"), std::string::npos);
   EXPECT_NE(bytes.find("gAMA"), std::string::npos);
   Rgba8Image back;
-  std::string error;
-  ASSERT_TRUE(read_png(path.string(), back, error)) << error;
+  ASSERT_TRUE(test::read_png_into(path.string(), back));
   EXPECT_EQ(back.pixels, img.pixels);
   std::filesystem::remove(path);
-  EXPECT_NE(write_png("/nonexistent-dir/x.png", img), "");
+  const auto refused = write_png("/nonexistent-dir/x.png", img);
+  ASSERT_TRUE(std::holds_alternative<RenderError>(refused));
+  EXPECT_EQ(std::get<RenderError>(refused).kind, RenderError::Kind::file);
+  EXPECT_NE(std::get<RenderError>(refused).message.find("/nonexistent-dir/x.png"), std::string::npos);
+  const auto unread = read_png("/nonexistent-dir/x.png");
+  ASSERT_TRUE(std::holds_alternative<RenderError>(unread));
+  EXPECT_EQ(std::get<RenderError>(unread).kind, RenderError::Kind::file);
+  EXPECT_NE(std::get<RenderError>(unread).message.find("/nonexistent-dir/x.png"), std::string::npos);
 }

@@ -1,6 +1,7 @@
 // Device tests on lavapipe (label "vulkan"), validation layer on: any
 // validation message fails the test.
 #include "stimulus_fixtures.hpp"
+#include "../support/png_files.hpp"
 
 #include "curvlab/renderer/colour.hpp"
 #include "curvlab/renderer/mesh.hpp"
@@ -96,13 +97,12 @@ TEST_P(Golden, MatchesApprovedImage) {
   // Every run leaves its output where approve_goldens picks it up.
   const std::filesystem::path out_dir = CURVLAB_GOLDEN_OUT_DIR;
   std::filesystem::create_directories(out_dir / "diff");
-  ASSERT_EQ(write_png((out_dir / (name + ".png")).string(), actual), "");
+  ASSERT_TRUE(test::png_written(write_png((out_dir / (name + ".png")).string(), actual)));
 
   const std::filesystem::path golden = std::filesystem::path(CURVLAB_GOLDEN_DIR) / (name + ".png");
   Rgba8Image expected;
-  std::string error;
-  ASSERT_TRUE(read_png(golden.string(), expected, error))
-      << error << "\nnew output: " << (out_dir / (name + ".png")).string()
+  ASSERT_TRUE(test::read_png_into(golden.string(), expected))
+      << "\nnew output: " << (out_dir / (name + ".png")).string()
       << "\nlook at it, then run: cmake --build <build> --target approve_goldens";
   // Tolerance: a channel may differ by 6/255, and 0.3 % of pixels by more
   // (other drivers rasterise edges slightly differently; lavapipe itself is
@@ -111,6 +111,8 @@ TEST_P(Golden, MatchesApprovedImage) {
   const int allowed = actual.width * actual.height * 3 / 1000;
   if (d.differing_pixels > allowed) {
     const auto diff_path = out_dir / "diff" / (name + ".diff.png");
+    // The diff image is a help for the person reading the failure below,
+    // which is reported whether or not it could be written.
     (void)write_png(diff_path.string(), d.visual);
     ADD_FAILURE() << name << ": " << d.differing_pixels << " pixels differ (allowed " << allowed
                   << ", max channel difference " << d.max_channel_diff << ")\n"

@@ -2,6 +2,7 @@
 // observer: the paper's study, reproducibility, replay, bad input.
 #include "run_cli.hpp"
 #include "session_db.hpp"
+#include "../support/png_files.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
 
@@ -122,11 +123,10 @@ TEST(RunHeadless, ReplayReproducesTheStimulusImage) {
     ASSERT_EQ(r.exit_code, 0) << r.out;
     for (const char* eye : {"left", "right"}) {
       curvlab::renderer::Rgba8Image saved, replayed;
-      std::string err;
       char stem[32];
       std::snprintf(stem, sizeof stem, "trial_%04d_%s.png", trial, eye);
-      ASSERT_TRUE(curvlab::renderer::read_png(images + "/" + stem, saved, err)) << err;
-      ASSERT_TRUE(curvlab::renderer::read_png(out + "/" + eye + ".png", replayed, err)) << err;
+      ASSERT_TRUE(curvlab::test::read_png_into(images + "/" + stem, saved));
+      ASSERT_TRUE(curvlab::test::read_png_into(out + "/" + eye + ".png", replayed));
       const auto diff = curvlab::renderer::diff_images(saved, replayed, 0);
       EXPECT_EQ(diff.differing_pixels, 0) << "trial " << trial << " " << eye;
     }
@@ -144,9 +144,8 @@ TEST(RunHeadless, ReplayReproducesTheStimulusImage) {
     std::ifstream json(assumed + "/replay.json");
     EXPECT_EQ(nlohmann::json::parse(json)["eye_geometry"], "assumed");
     curvlab::renderer::Rgba8Image saved, replayed;
-    std::string err;
-    ASSERT_TRUE(curvlab::renderer::read_png(images + "/trial_0005_left.png", saved, err)) << err;
-    ASSERT_TRUE(curvlab::renderer::read_png(assumed + "/left.png", replayed, err)) << err;
+    ASSERT_TRUE(curvlab::test::read_png_into(images + "/trial_0005_left.png", saved));
+    ASSERT_TRUE(curvlab::test::read_png_into(assumed + "/left.png", replayed));
     EXPECT_EQ(curvlab::renderer::diff_images(saved, replayed, 0).differing_pixels, 0);
   }
   // A frame outside the trial is refused with the trial's frame range.
@@ -192,9 +191,8 @@ TEST(RunHeadless, ReplayShowsTheAdjustmentInForceAtTheFrame) {
   }
   EXPECT_DOUBLE_EQ(replay(changes.back()[0], "unadjusted")["adjustment_value"].get<double>(), start);
   curvlab::renderer::Rgba8Image adjusted, unadjusted;
-  std::string err;
-  ASSERT_TRUE(curvlab::renderer::read_png((dir / "last" / "left.png").string(), adjusted, err)) << err;
-  ASSERT_TRUE(curvlab::renderer::read_png((dir / "unadjusted" / "left.png").string(), unadjusted, err)) << err;
+  ASSERT_TRUE(curvlab::test::read_png_into((dir / "last" / "left.png").string(), adjusted));
+  ASSERT_TRUE(curvlab::test::read_png_into((dir / "unadjusted" / "left.png").string(), unadjusted));
   EXPECT_GT(curvlab::renderer::diff_images(adjusted, unadjusted, 0).differing_pixels, 100);
 }
 

@@ -7,6 +7,7 @@
 // sRGB image treated as linear, a UNORM swapchain given sRGB bytes), in
 // anti-aliasing or in geometry shows up as a large difference.
 #include "../cli/run_cli.hpp"
+#include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
@@ -109,8 +110,7 @@ Difference compare(const curvlab::renderer::Rgba8Image& a, const curvlab::render
 
 curvlab::renderer::Rgba8Image read(const std::string& path) {
   curvlab::renderer::Rgba8Image img;
-  std::string error;
-  EXPECT_TRUE(curvlab::renderer::read_png(path, img, error)) << error;
+  EXPECT_TRUE(curvlab::test::read_png_into(path, img));
   return img;
 }
 

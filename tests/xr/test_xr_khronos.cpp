@@ -11,6 +11,7 @@
 //    runtime and must report nothing; a deliberate misuse shows that its
 //    reports reach the file the tests read.
 #include "khronos_layer.hpp"
+#include "../support/png_files.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
 
@@ -248,8 +249,7 @@ TEST(KhronosHelloXr, RunsThroughTheTestRuntimeAndExitsWhenAsked) {
   ASSERT_FALSE(pngs.empty());
   std::sort(pngs.begin(), pngs.end());  // any one of them; sorted for a repeatable choice
   curvlab::renderer::Rgba8Image img;
-  std::string error;
-  ASSERT_TRUE(curvlab::renderer::read_png(pngs.back().string(), img, error)) << error;
+  ASSERT_TRUE(curvlab::test::read_png_into(pngs.back().string(), img));
   const CubePixels px = cube_pixels(img);
   EXPECT_GT(px.cube, 100) << pngs.back();
   EXPECT_GT(px.clear, img.width * img.height / 2) << pngs.back();

@@ -7,6 +7,7 @@
 #include "../cli/run_cli.hpp"
 #include "../desktop/xvfb.hpp"
 #include "../runner/session_db.hpp"
+#include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
@@ -130,8 +131,7 @@ TEST(XrOperator, ScriptedActionsAndTheWindowsScreenshots) {
   for (const char* name : {"action_1_note.png", "action_2_pause.png", "action_3_resume.png", "action_4_skip.png",
                            "end.png"}) {
     curvlab::renderer::Rgba8Image img;
-    std::string error;
-    ASSERT_TRUE(curvlab::renderer::read_png((shots / name).string(), img, error)) << error;
+    ASSERT_TRUE(curvlab::test::read_png_into((shots / name).string(), img));
     ASSERT_EQ(img.width, 960) << name;
     ASSERT_EQ(img.height, 720) << name;
     const auto s = inspect(img);

@@ -4,6 +4,7 @@
 // times, head poses, controller presses, session states) and the images it
 // received; the tests check the session database against that log.
 #include "../cli/run_cli.hpp"
+#include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
@@ -246,8 +247,7 @@ TEST(XrSession, DemoRunsThroughTheRuntimeWithControllersAndAFocusLoss) {
     const std::string png = log.capture_at(onset);
     ASSERT_FALSE(png.empty()) << "no capture of the onset frame";
     curvlab::renderer::Rgba8Image img;
-    std::string err;
-    ASSERT_TRUE(curvlab::renderer::read_png(png, img, err)) << err;
+    ASSERT_TRUE(curvlab::test::read_png_into(png, img));
     ASSERT_EQ(img.width, 320);
     const auto w = static_cast<std::size_t>(img.width), h = static_cast<std::size_t>(img.height);
     const auto at = [&img](double fx, double fy) {
@@ -376,9 +376,8 @@ TEST(XrSession, ReplayReproducesTheOnsetFrameTheRuntimeReceived) {
     std::ifstream json(out / "replay.json");
     EXPECT_EQ(nlohmann::json::parse(json)["eye_geometry"], "recorded");
     curvlab::renderer::Rgba8Image received, replayed;
-    std::string err;
-    ASSERT_TRUE(curvlab::renderer::read_png(png, received, err)) << err;
-    ASSERT_TRUE(curvlab::renderer::read_png((out / "left.png").string(), replayed, err)) << err;
+    ASSERT_TRUE(curvlab::test::read_png_into(png, received));
+    ASSERT_TRUE(curvlab::test::read_png_into((out / "left.png").string(), replayed));
     EXPECT_EQ(replayed.width, 288);
     EXPECT_EQ(replayed.height, 256);
     const auto diff = curvlab::renderer::diff_images(received, replayed, 0);

@@ -16,6 +16,8 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <utility>
+#include <variant>
 
 namespace curvlab::cli {
 namespace {
@@ -84,12 +86,13 @@ StickScene read_scene(const PairFiles& files) {
   return scene.value();
 }
 
+// An image named on the command line that is missing or does not decode is
+// the command's to fix (exit 2), whatever the renderer's kind says.
 renderer::Rgba8Image read_image(const fs::path& path) {
-  renderer::Rgba8Image image;
-  std::string error;
   if (!fs::exists(path)) throw UsageError(path.string() + ": no such image");
-  if (!renderer::read_png(path.string(), image, error)) throw UsageError(error);
-  return image;
+  auto read = renderer::read_png(path.string());
+  if (auto* e = std::get_if<renderer::RenderError>(&read)) throw UsageError(e->message);
+  return std::get<renderer::Rgba8Image>(std::move(read));
 }
 
 void print_text(const harness::measure::StickEstimate& e) {

@@ -136,7 +136,8 @@ FrameDescription frame_description(const RenderArgs& a, const RenderRequest& rq,
 void write_eye_images(const std::string& dir, const OffscreenTarget& target) {
   for (Eye eye : {Eye::left, Eye::right}) {
     const std::string path = (std::filesystem::path(dir) / (eye == Eye::left ? "left.png" : "right.png")).string();
-    if (auto err = write_png(path, target.image(eye)); !err.empty()) throw RuntimeFailure(err);
+    if (auto written = harness::from_renderer(write_png(path, target.image(eye))); !written)
+      raise(written.error());
   }
 }
 
@@ -172,9 +173,10 @@ void run_render(const RenderArgs& a) {
   const RenderRequest rq = check_render_args(a);
   const ViewSettings settings = view_settings(a, rq.preset);
   const StimulusOptions options = stimulus_options(a);
-  auto made = make_stimulus_scene(rq.kind, rq.scene, options);
-  if (auto* e = std::get_if<std::string>(&made)) throw UsageError(*e);
-  auto& stimulus = std::get<StimulusScene>(made);
+  // Options that give no table are bad input (exit 2); an unreadable prompt font is io (exit 1).
+  auto made = harness::from_renderer(make_stimulus_scene(rq.kind, rq.scene, options));
+  if (!made) raise(made.error());
+  auto& stimulus = made.value();
 
   std::error_code ec;
   std::filesystem::create_directories(a.out, ec);

@@ -219,12 +219,14 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
   std::uint32_t count = 0;
   const char** required = glfwGetRequiredInstanceExtensions(&count);
   for (std::uint32_t i = 0; i < count; ++i) window_embedding.instance_extensions.emplace_back(required[i]);
-  window_embedding.create_surface = [window](VkInstance instance) -> std::variant<VkSurfaceKHR, std::string> {
+  window_embedding.create_surface = [window](VkInstance instance)
+      -> std::variant<VkSurfaceKHR, renderer::RenderError> {
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     if (const VkResult r = glfwCreateWindowSurface(instance, window, nullptr, &surface);
         r != VK_SUCCESS)
-      return "glfwCreateWindowSurface failed (" + vk::to_string(static_cast<vk::Result>(r)) +
-             "): " + take_last_error();
+      return renderer::RenderError{renderer::RenderError::Kind::surface,
+                                   "glfwCreateWindowSurface failed (" +
+                                       vk::to_string(static_cast<vk::Result>(r)) + "): " + take_last_error()};
     return surface;
   };
   constexpr std::string_view doing = "cannot render to the desktop window: ";
@@ -451,8 +453,9 @@ std::vector<std::string> DesktopBackend::save_frame(const std::string& stem) {
   auto write = [&](const std::optional<renderer::Rgba8Image>& image, const std::string& suffix) {
     if (!image) return;
     const std::string path = stem + suffix;
-    if (const std::string err = renderer::write_png(path, *image); !err.empty()) {
-      std::cerr << "curvlab: screenshot not saved: " << err << '\n';
+    const auto saved = renderer::write_png(path, *image);
+    if (const auto* err = std::get_if<renderer::RenderError>(&saved)) {
+      std::cerr << "curvlab: screenshot not saved: " << err->message << '\n';
       return;
     }
     written.push_back(path);

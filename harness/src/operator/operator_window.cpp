@@ -299,8 +299,11 @@ class OperatorWindow final : public runner::OperatorConsole {
                        shot.pixels.begin() + static_cast<std::ptrdiff_t>((y + 1) * row),
                        shot.pixels.begin() + static_cast<std::ptrdiff_t>((fh - 1 - y) * row));
     const auto path = (std::filesystem::path(options_.screenshot_dir) / (stem + ".png")).string();
-    if (const std::string err = renderer::write_png(path, shot); !err.empty())
-      std::cerr << "curvlab: operator window: screenshot not saved: " << err << '\n';
+    // A screenshot is the operator's convenience, not session data: a failed
+    // write is told on stderr and the session goes on.
+    const auto saved = renderer::write_png(path, shot);
+    if (const auto* err = std::get_if<renderer::RenderError>(&saved))
+      std::cerr << "curvlab: operator window: screenshot not saved: " << err->message << '\n';
   }
 
   OperatorWindowOptions options_;

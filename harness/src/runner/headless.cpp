@@ -9,6 +9,7 @@
 #include <chrono>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <thread>
 
@@ -206,7 +207,14 @@ std::vector<std::string> HeadlessDisplay::save_frame(const std::string& stem) {
   for (auto [eye, suffix] : {std::pair{renderer::Eye::left, "_left.png"},
                              std::pair{renderer::Eye::right, "_right.png"}}) {
     const std::string path = stem + suffix;
-    if (renderer::write_png(path, m.target->image(eye)).empty()) written.push_back(path);
+    // A frame that cannot be written is left out of the files returned (the
+    // onset's record names only images that exist) and told on stderr, as the
+    // other backends do; the session goes on.
+    const auto saved = renderer::write_png(path, m.target->image(eye));
+    if (const auto* err = std::get_if<renderer::RenderError>(&saved))
+      std::fprintf(stderr, "curvlab: headless: frame not saved: %s\n", err->message.c_str());
+    else
+      written.push_back(path);
   }
   return written;
 }

@@ -267,12 +267,13 @@ Result<Rendered> render_condition(const protocol::Protocol& p, const protocol::P
   out.anaglyph = stem + "_anaglyph.png";
   const auto& left = out_to.target.image(renderer::Eye::left);
   const auto& right = out_to.target.image(renderer::Eye::right);
+  const fs::path images = out_to.dir / "images";
   for (const auto& [name, image] : {std::pair{out.left, &left}, std::pair{out.right, &right}})
-    if (auto err = renderer::write_png((out_to.dir / "images" / name).string(), *image); !err.empty())
-      return Error{Error::Kind::io, err};
-  if (auto err = renderer::write_png((out_to.dir / "images" / out.anaglyph).string(), anaglyph(left, right));
-      !err.empty())
-    return Error{Error::Kind::io, err};
+    if (auto written = from_renderer(renderer::write_png((images / name).string(), *image)); !written)
+      return written.error();
+  if (auto written = from_renderer(renderer::write_png((images / out.anaglyph).string(), anaglyph(left, right)));
+      !written)
+    return written.error();
   return out;
 }
 

@@ -165,7 +165,8 @@ Result<ReplayResult> write_outputs(const ReplayRequest& rq, const StoredFrame& f
   out.device = device;
   for (auto [eye, name] : {std::pair{renderer::Eye::left, "left.png"}, std::pair{renderer::Eye::right, "right.png"}}) {
     const auto path = (std::filesystem::path(rq.out_dir) / name).string();
-    if (auto err = renderer::write_png(path, target.image(eye)); !err.empty()) return Error{Kind::io, err};
+    if (auto written = from_renderer(renderer::write_png(path, target.image(eye))); !written)
+      return written.error();
     out.files.push_back(path);
   }
   Json j;

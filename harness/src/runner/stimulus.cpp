@@ -2,6 +2,7 @@
 
 #include "curvlab/geometry/maps.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/headless.hpp"
 #include "curvlab/renderer/mesh.hpp"
 
@@ -248,10 +249,10 @@ Result<TrialScene> TrialScene::build(const World& world, const Settings& s, cons
        {std::tuple{&t.prompt_, "prompt", prompt, 1.0, 0.22},
         std::tuple{&t.fixation_, "fixation", std::string("+"), 0.08, 0.08},
         std::tuple{&t.page_, "page", std::string(" "), 1.0, 0.5}}) {
-    auto made = renderer::text_panel_object(space, name, text.empty() ? std::string(" ") : text, font_path,
-                                            w, h, Isometry::identity());
-    if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::io, *e};  // the font
-    *index = t.scene_.add(hidden(std::move(std::get<renderer::SceneObject>(made))));
+    auto made = from_renderer(renderer::text_panel_object(space, name, text.empty() ? std::string(" ") : text,
+                                                          font_path, w, h, Isometry::identity()));
+    if (!made) return made.error();  // the font: io
+    *index = t.scene_.add(hidden(std::move(made).value()));
   }
   return t;
 }
@@ -301,10 +302,10 @@ void TrialScene::show(Phase phase, bool stimulus_during_response) {
 
 Result<Done> TrialScene::set_page(const std::string& text, const Isometry& head) {
   if (text != page_text_) {
-    auto made = renderer::text_panel_object(world_.space, "page", text.empty() ? std::string(" ") : text,
-                                            font_path_, 1.0, 0.5, Isometry::identity());
-    if (auto* e = std::get_if<std::string>(&made)) return Error{Error::Kind::io, *e};  // the font
-    auto& o = std::get<renderer::SceneObject>(made);
+    auto made = from_renderer(renderer::text_panel_object(
+        world_.space, "page", text.empty() ? std::string(" ") : text, font_path_, 1.0, 0.5, Isometry::identity()));
+    if (!made) return made.error();  // the font: io
+    auto& o = made.value();
     scene_.replace_mesh(page_, std::move(o.build), std::move(o.info), std::move(o.text));
     page_text_ = text;
   }

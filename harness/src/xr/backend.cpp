@@ -198,12 +198,17 @@ Result<Done> check_vulkan_version(const VulkanEnable2& fns) {
   return Done{};
 }
 
+// A failing runtime call in a hook: no Vulkan device through this runtime.
+renderer::RenderError runtime_failure(std::string message) {
+  return {renderer::RenderError::Kind::device, std::move(message)};
+}
+
 // The hooks through which the runtime makes the Vulkan objects from the
 // renderer's create-infos.
 renderer::ContextEmbedding runtime_made_vulkan(const VulkanEnable2& fns) {
   renderer::ContextEmbedding runtime_made;
   runtime_made.hooks.create_instance = [fns](const VkInstanceCreateInfo& info)
-      -> std::variant<VkInstance, std::string> {
+      -> std::variant<VkInstance, renderer::RenderError> {
     auto ci = tagged<XrVulkanInstanceCreateInfoKHR>(XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR);
     ci.systemId = fns.system;
     ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
@@ -211,23 +216,23 @@ renderer::ContextEmbedding runtime_made_vulkan(const VulkanEnable2& fns) {
     VkInstance instance = VK_NULL_HANDLE;
     VkResult vr = VK_SUCCESS;
     if (const XrResult r = fns.create_instance(fns.instance, &ci, &instance, &vr); XR_FAILED(r))
-      return failure_of(r, "xrCreateVulkanInstanceKHR").message;
+      return runtime_failure(failure_of(r, "xrCreateVulkanInstanceKHR").message);
     if (vr != VK_SUCCESS)
-      return "xrCreateVulkanInstanceKHR: vkCreateInstance returned " + vk_result(vr);
+      return runtime_failure("xrCreateVulkanInstanceKHR: vkCreateInstance returned " + vk_result(vr));
     return instance;
   };
   runtime_made.hooks.pick_physical_device = [fns](VkInstance instance)
-      -> std::variant<VkPhysicalDevice, std::string> {
+      -> std::variant<VkPhysicalDevice, renderer::RenderError> {
     auto gi = tagged<XrVulkanGraphicsDeviceGetInfoKHR>(XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR);
     gi.systemId = fns.system;
     gi.vulkanInstance = instance;
     VkPhysicalDevice physical = VK_NULL_HANDLE;
     if (const XrResult r = fns.physical_device(fns.instance, &gi, &physical); XR_FAILED(r))
-      return failure_of(r, "xrGetVulkanGraphicsDevice2KHR").message;
+      return runtime_failure(failure_of(r, "xrGetVulkanGraphicsDevice2KHR").message);
     return physical;
   };
   runtime_made.hooks.create_device = [fns](VkPhysicalDevice physical, const VkDeviceCreateInfo& info)
-      -> std::variant<VkDevice, std::string> {
+      -> std::variant<VkDevice, renderer::RenderError> {
     auto ci = tagged<XrVulkanDeviceCreateInfoKHR>(XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR);
     ci.systemId = fns.system;
     ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
@@ -236,8 +241,9 @@ renderer::ContextEmbedding runtime_made_vulkan(const VulkanEnable2& fns) {
     VkDevice device = VK_NULL_HANDLE;
     VkResult vr = VK_SUCCESS;
     if (const XrResult r = fns.create_device(fns.instance, &ci, &device, &vr); XR_FAILED(r))
-      return failure_of(r, "xrCreateVulkanDeviceKHR").message;
-    if (vr != VK_SUCCESS) return "xrCreateVulkanDeviceKHR: vkCreateDevice returned " + vk_result(vr);
+      return runtime_failure(failure_of(r, "xrCreateVulkanDeviceKHR").message);
+    if (vr != VK_SUCCESS)
+      return runtime_failure("xrCreateVulkanDeviceKHR: vkCreateDevice returned " + vk_result(vr));
     return device;
   };
   return runtime_made;
@@ -1025,8 +1031,9 @@ std::vector<std::string> XrBackend::save_frame(const std::string& stem) {
       const auto image = target_->read_eye(eye);
       if (!image) continue;
       const std::string path = stem + (eye == renderer::Eye::left ? "_left.png" : "_right.png");
-      if (const std::string err = renderer::write_png(path, *image); !err.empty()) {
-        std::cerr << "curvlab: xr: frame not saved: " << err << '\n';
+      const auto saved = renderer::write_png(path, *image);
+      if (const auto* err = std::get_if<renderer::RenderError>(&saved)) {
+        std::cerr << "curvlab: xr: frame not saved: " << err->message << '\n';
         continue;
       }
       written.push_back(path);

@@ -29,16 +29,17 @@ enum class DeviceChoice {
 // (xrGetVulkanGraphicsDevice2KHR) and creates the device
 // (xrCreateVulkanDeviceKHR) from create-infos the application prepares. Each
 // hook gets the create-info the context would have used itself and returns
-// the handle, or a message for a person. Handles returned are owned by the
-// context from then on (destroyed with vkDestroyInstance / vkDestroyDevice,
-// as XR_KHR_vulkan_enable2 requires of the application). Empty hooks: the
-// context creates and picks as usual.
+// the handle, or a RenderError (kind `device`, a message for a person naming
+// the call that failed) that Context::create returns as it is. Handles
+// returned are owned by the context from then on (destroyed with
+// vkDestroyInstance / vkDestroyDevice, as XR_KHR_vulkan_enable2 requires of
+// the application). Empty hooks: the context creates and picks as usual.
 struct ContextHooks {
-  std::function<std::variant<VkInstance, std::string>(const VkInstanceCreateInfo& info)>
+  std::function<std::variant<VkInstance, RenderError>(const VkInstanceCreateInfo& info)>
       create_instance;
-  std::function<std::variant<VkPhysicalDevice, std::string>(VkInstance instance)>
+  std::function<std::variant<VkPhysicalDevice, RenderError>(VkInstance instance)>
       pick_physical_device;
-  std::function<std::variant<VkDevice, std::string>(VkPhysicalDevice physical,
+  std::function<std::variant<VkDevice, RenderError>(VkPhysicalDevice physical,
                                                     const VkDeviceCreateInfo& info)>
       create_device;
 };
@@ -60,8 +61,9 @@ struct ContextEmbedding {
   // Called once the instance exists to make the surface a window presents
   // to (e.g. glfwCreateWindowSurface). The context owns the surface, adds
   // VK_KHR_swapchain to the device and picks a queue family that can present
-  // to it. Empty: no surface (headless, OpenXR).
-  std::function<std::variant<VkSurfaceKHR, std::string>(VkInstance instance)> create_surface;
+  // to it; a RenderError (kind `surface`) is returned by Context::create as
+  // it is. Empty: no surface (headless, OpenXR).
+  std::function<std::variant<VkSurfaceKHR, RenderError>(VkInstance instance)> create_surface;
   ContextHooks hooks;
 };
 

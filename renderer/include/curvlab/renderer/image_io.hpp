@@ -2,8 +2,11 @@
 // stb_image).
 #pragma once
 
+#include "curvlab/renderer/error.hpp"
+
 #include <cstdint>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace curvlab::renderer {
@@ -14,11 +17,13 @@ struct Rgba8Image {
   std::vector<std::uint8_t> pixels;  // row major, 4 bytes per pixel
 };
 
-// Writes sRGB-encoded pixels as a PNG with an sRGB chunk. Returns an empty
-// string on success, else a message naming the file.
-std::string write_png(const std::string& path, const Rgba8Image& image);
-// Reads a PNG as RGBA8; false with a message on failure.
-bool read_png(const std::string& path, Rgba8Image& image, std::string& error);
+// Writes sRGB-encoded pixels as a PNG with an sRGB chunk. A file that
+// cannot be created, encoded or flushed is a RenderError of kind `file`
+// naming the path and the step that failed.
+std::variant<Done, RenderError> write_png(const std::string& path, const Rgba8Image& image);
+// Reads a PNG (any colour type) as RGBA8; a RenderError of kind `file`
+// naming the path and the decoder's reason when it cannot.
+std::variant<Rgba8Image, RenderError> read_png(const std::string& path);
 
 struct ImageDiff {
   int differing_pixels = 0;  // channels differing by more than the tolerance

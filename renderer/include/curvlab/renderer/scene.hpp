@@ -3,6 +3,7 @@
 // counts its revisions so an unchanged headless frame is not re-rendered.
 #pragma once
 
+#include "curvlab/renderer/error.hpp"
 #include "curvlab/renderer/mesh.hpp"
 #include "curvlab/renderer/text.hpp"
 
@@ -56,9 +57,9 @@ SceneObject table_object(const Space& space, const geometry::TableShape& table,
                          const TableStyle& style = {});
 SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour,
                         const Isometry& pose);
-// A text panel of width × height metres (about 1000 px per metre), or why
-// the text could not be drawn.
-std::variant<SceneObject, std::string> text_panel_object(const Space& space, std::string name,
+// A text panel of width × height metres (about 1000 px per metre), or a
+// RenderError of kind `font` when the font cannot be read.
+std::variant<SceneObject, RenderError> text_panel_object(const Space& space, std::string name,
                                                          const std::string& text,
                                                          const std::string& font, double width_m,
                                                          double height_m, const Isometry& pose);
@@ -90,8 +91,10 @@ struct StimulusScene {
 
 // The stimulus scenes of the study (DESIGN.md §4). The space's radius comes
 // from the table's physical edge (S3 triangle, E3 square, H3 pentagon, all
-// right-angled) unless options.radius_m is given.
-std::variant<StimulusScene, std::string> make_stimulus_scene(geometry::SpaceKind kind,
+// right-angled) unless options.radius_m is given. Options that give no table
+// (geometry's GeometryError) are a RenderError of kind `stimulus` with
+// geometry's message; a prompt font that cannot be read, of kind `font`.
+std::variant<StimulusScene, RenderError> make_stimulus_scene(geometry::SpaceKind kind,
                                                              SceneKind scene,
                                                              const StimulusOptions& options);
 
