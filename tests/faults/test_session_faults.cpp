@@ -75,8 +75,8 @@ Demo demo() {
   std::stringstream text;
   text << in.rdbuf();
   auto loaded = pr::load_protocol_text(text.str(), path);
-  EXPECT_TRUE(loaded.ok());
-  return {text.str(), *loaded.protocol};
+  EXPECT_TRUE(loaded.has_value());
+  return {text.str(), *loaded};
 }
 
 std::unique_ptr<rn::HeadlessBackend> headless(const pr::Protocol& p, bool gpu) {
@@ -134,10 +134,10 @@ void fault_then_resume(const std::string& db, rn::Backend& backend, const device
   ASSERT_TRUE(stored.has_value()) << stored.error().message;
   const auto& s = stored.value();
   auto loaded = pr::load_protocol_text(s.protocol_text, s.protocol_source);
-  ASSERT_TRUE(loaded.ok());
-  auto healthy = headless(*loaded.protocol, gpu_resume);
+  ASSERT_TRUE(loaded.has_value());
+  auto healthy = headless(*loaded, gpu_resume);
   ASSERT_TRUE(healthy);
-  auto resumed = rn::resume_session(db, session, s, *loaded.protocol, options(drawing), *healthy, healthy->clock());
+  auto resumed = rn::resume_session(db, session, s, *loaded, options(drawing), *healthy, healthy->clock());
   ASSERT_TRUE(resumed.has_value()) << resumed.error().message;
   EXPECT_EQ(resumed->status, curvlab::data::SessionStatus::completed);
   EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");

@@ -123,12 +123,12 @@ void run_design(const std::string& file, std::int64_t participant, bool as_json)
 
 pr::Protocol load_protocol_or_usage(const std::string& path, std::string* text) {
   auto result = pr::load_protocol_file(path);
-  if (result.ok()) {
-    if (text) *text = std::move(result.text);
-    return std::move(*result.protocol);
+  if (result) {
+    if (text) *text = result->text;
+    return std::move(result).value();
   }
-  for (const auto& d : result.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
-  const auto n = result.diagnostics.size();
+  for (const auto& d : result.error().diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+  const auto n = result.error().diagnostics.size();
   throw UsageError(std::to_string(n) + (n == 1 ? " error" : " errors") + " in " + path +
                    "; nothing was run or written");
 }
