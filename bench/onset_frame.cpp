@@ -106,11 +106,11 @@ int main(int argc, char** argv) {
   std::stringstream text;
   text << in.rdbuf();
   auto loaded = pr::load_protocol_text(text.str(), path);
-  if (!loaded.ok()) {
+  if (!loaded) {
     std::fprintf(stderr, "%s does not load\n", path.c_str());
     return 1;
   }
-  const auto& p = *loaded.protocol;
+  const auto& p = *loaded;
   const auto tmp = std::filesystem::temp_directory_path() / "curvlab_bench_onset";
   std::filesystem::remove_all(tmp);
   std::filesystem::create_directories(tmp);

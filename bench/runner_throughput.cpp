@@ -55,11 +55,11 @@ int main(int argc, char** argv) {
     std::stringstream ss;
     ss << in.rdbuf();
     auto loaded = pr::load_protocol_text(ss.str(), path);
-    if (!loaded.ok()) {
+    if (!loaded) {
       std::fprintf(stderr, "%s does not load\n", path.c_str());
       return 1;
     }
-    const auto& p = *loaded.protocol;
+    const auto& p = *loaded;
     rn::HeadlessOptions ho;
     ho.pace = row.pace;
     ho.refresh_hz = p.refresh_hz;

@@ -16,8 +16,8 @@ using curvlab::harness::runner::preview_conditions;
 
 pr::Design design_of(const std::string& name, std::uint64_t participant) {
   auto r = pr::load_protocol_file(std::string(CURVLAB_SOURCE_DIR) + "/protocols/" + name);
-  EXPECT_TRUE(r.ok()) << name;
-  return pr::expand_design(*r.protocol, participant);
+  EXPECT_TRUE(r.has_value()) << name;
+  return pr::expand_design(*r, participant);
 }
 
 std::size_t counted(const std::vector<curvlab::harness::runner::PreviewCondition>& cs) {

@@ -53,7 +53,8 @@ std::set<std::string> schema_keys(const std::string& pointer) {
 // contains `needle`: the loader's list of what it accepts there.
 std::set<std::string> loader_list(const std::string& text, const std::string& needle, const std::string& marker) {
   const auto r = pr::load_protocol_text(text, "t.toml");
-  for (const auto& d : r.diagnostics) {
+  const std::vector<pr::Diagnostic> none;
+  for (const auto& d : r ? none : r.error().diagnostics) {
     if (d.message.find(needle) == std::string::npos) continue;
     const auto from = d.message.find(marker);
     if (from == std::string::npos) continue;
@@ -75,7 +76,8 @@ std::set<std::string> loader_list(const std::string& text, const std::string& ne
 // The [lo, hi] of "expected an integer in [lo, hi]" for a value out of range.
 std::pair<double, double> loader_range(const std::string& text) {
   const auto r = pr::load_protocol_text(text, "t.toml");
-  for (const auto& d : r.diagnostics) {
+  const std::vector<pr::Diagnostic> none;
+  for (const auto& d : r ? none : r.error().diagnostics) {
     const auto open = d.message.find("in [");
     if (open == std::string::npos) continue;
     double lo = 0.0, hi = 0.0;

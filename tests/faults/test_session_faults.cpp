@@ -73,8 +73,8 @@ Demo demo() {
   std::stringstream text;
   text << in.rdbuf();
   auto loaded = pr::load_protocol_text(text.str(), path);
-  EXPECT_TRUE(loaded.ok());
-  return {text.str(), *loaded.protocol};
+  EXPECT_TRUE(loaded.has_value());
+  return {text.str(), *loaded};
 }
 
 rn::HeadlessDevices headless(const pr::Protocol& p, bool gpu) {
@@ -131,11 +131,10 @@ void fault_then_resume(const std::string& db, const harness::io::Station& statio
   ASSERT_TRUE(stored.has_value()) << stored.error().message;
   const auto& s = stored.value();
   auto loaded = pr::load_protocol_text(s.protocol_text, s.protocol_source);
-  ASSERT_TRUE(loaded.ok());
-  auto healthy = headless(*loaded.protocol, gpu_resume);
+  ASSERT_TRUE(loaded.has_value());
+  auto healthy = headless(*loaded, gpu_resume);
   ASSERT_TRUE(healthy.display);
-  auto resumed =
-      rn::resume_session(db, session, s, *loaded.protocol, options(drawing), healthy.station(), healthy.clock());
+  auto resumed = rn::resume_session(db, session, s, *loaded, options(drawing), healthy.station(), healthy.clock());
   ASSERT_TRUE(resumed.has_value()) << resumed.error().message;
   EXPECT_EQ(resumed->status, curvlab::data::SessionStatus::completed);
   EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");

@@ -18,8 +18,9 @@ namespace {
 
 Protocol load(const std::string& name) {
   const auto r = load_protocol_file(std::string(CURVLAB_SOURCE_DIR) + "/protocols/" + name);
-  for (const auto& d : r.diagnostics) ADD_FAILURE() << format_diagnostic(d);
-  return *r.protocol;
+  if (!r)
+    for (const auto& d : r.error().diagnostics) ADD_FAILURE() << format_diagnostic(d);
+  return *r;
 }
 
 // One string per trial: block and levels, the parts an order is made of.

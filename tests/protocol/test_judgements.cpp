@@ -19,8 +19,9 @@ const std::string kHead = "[protocol]\nname = \"t\"\nversion = \"1\"\n[randomiza
 
 Protocol load(const std::string& judgement) {
   const auto r = load_protocol_text(kHead + judgement, "t.toml");
-  for (const auto& d : r.diagnostics) ADD_FAILURE() << format_diagnostic(d);
-  return *r.protocol;
+  if (!r)
+    for (const auto& d : r.error().diagnostics) ADD_FAILURE() << format_diagnostic(d);
+  return *r;
 }
 
 // Answers as a test says: a fixed choice, a fixed value to settle on, and a
@@ -50,11 +51,11 @@ TEST(Judgements, TheLoaderNamesEveryRegisteredTypeInOrder) {
   EXPECT_EQ(find_judgement_type("psi"), nullptr);
 
   const auto r = load_protocol_text(kHead + "[judgement]\nprompt = \"x\"\n", "t.toml");
-  ASSERT_FALSE(r.ok());
+  ASSERT_FALSE(r.has_value());
   bool named = false;
-  for (const auto& d : r.diagnostics)
+  for (const auto& d : r.error().diagnostics)
     named |= d.message == "missing required type: \"choice\", \"adjustment\" or \"staircase\"";
-  EXPECT_TRUE(named) << format_diagnostic(r.diagnostics.front());
+  EXPECT_TRUE(named) << format_diagnostic(r.error().diagnostics.front());
 }
 
 // One 1-up/1-down staircase that stops at its first reversal: the state the

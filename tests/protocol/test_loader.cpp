@@ -12,12 +12,19 @@
 #include <fstream>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
 using namespace curvlab::harness::protocol;
 
 namespace {
+
+// Every problem a load reported; none when the protocol loaded.
+const std::vector<Diagnostic>& problems(const curvlab::harness::Result<Protocol>& r) {
+  static const std::vector<Diagnostic> none;
+  return r ? none : r.error().diagnostics;
+}
 
 std::vector<fs::path> files_in(const fs::path& dir) {
   std::vector<fs::path> out;
@@ -76,10 +83,10 @@ TEST(ProtocolFiles, EveryShippedProtocolValidatesAndExpands) {
   for (const auto& f : files) {
     SCOPED_TRACE(f.string());
     const auto r = load_protocol_file(f.string());
-    for (const auto& d : r.diagnostics) ADD_FAILURE() << format_diagnostic(d);
-    ASSERT_TRUE(r.ok());
+    for (const auto& d : problems(r)) ADD_FAILURE() << format_diagnostic(d);
+    ASSERT_TRUE(r.has_value());
     for (std::uint64_t participant = 1; participant <= 3; ++participant) {
-      const auto d = expand_design(*r.protocol, participant);
+      const auto d = expand_design(*r, participant);
       EXPECT_FALSE(d.trials.empty());
       for (const auto& t : d.trials) EXPECT_GT(t.derived.radius_m, 0.0);
     }
@@ -88,8 +95,8 @@ TEST(ProtocolFiles, EveryShippedProtocolValidatesAndExpands) {
 
 TEST(ProtocolFiles, DemoIsShort) {
   const auto r = load_protocol_file((kSource / "protocols/demo.toml").string());
-  ASSERT_TRUE(r.ok());
-  const auto d = expand_design(*r.protocol, 1);
+  ASSERT_TRUE(r.has_value());
+  const auto d = expand_design(*r, 1);
   EXPECT_LE(d.trials.size(), 12u);
   EXPECT_LT(d.estimated_duration_ms(), 30000);
 }
@@ -102,16 +109,16 @@ TEST(MalformedCorpus, EachFileYieldsItsExpectedDiagnostic) {
     const Expectation want = read_expectation(f);
     ASSERT_GT(want.line, 0) << "first line must be '# expect: LINE:COLUMN FIELD'";
     const auto r = load_protocol_file(f.string());
-    EXPECT_FALSE(r.ok());
-    ASSERT_FALSE(r.diagnostics.empty());
+    EXPECT_FALSE(r.has_value());
+    ASSERT_FALSE(problems(r).empty());
     bool found = false;
-    for (const auto& d : r.diagnostics) {
+    for (const auto& d : problems(r)) {
       EXPECT_GT(d.pos.line, 0) << format_diagnostic(d);
       EXPECT_EQ(d.file, f.string());
       if (d.pos.line == want.line && d.pos.column == want.column && d.field == want.field) found = true;
     }
     std::string all;
-    for (const auto& d : r.diagnostics) all += format_diagnostic(d) + "\n";
+    for (const auto& d : problems(r)) all += format_diagnostic(d) + "\n";
     EXPECT_TRUE(found) << "expected " << want.line << ":" << want.column << " " << want.field
                        << ", got:\n" << all;
   }
@@ -159,15 +166,15 @@ TEST(Cli, DesignJsonListsEveryTrialWithItsSeed) {
 
 TEST(Diagnostics, UnknownKeySuggestsTheClosestAndListsAllowed) {
   const auto r = load_protocol_file((kSource / "tests/protocol/malformed/unknown_key.toml").string());
-  ASSERT_EQ(r.diagnostics.size(), 1u);
-  EXPECT_NE(r.diagnostics[0].message.find("did you mean \"projection\""), std::string::npos);
-  EXPECT_NE(r.diagnostics[0].message.find("\"ipd_m\""), std::string::npos);
+  ASSERT_EQ(problems(r).size(), 1u);
+  EXPECT_NE(problems(r)[0].message.find("did you mean \"projection\""), std::string::npos);
+  EXPECT_NE(problems(r)[0].message.find("\"ipd_m\""), std::string::npos);
 }
 
 TEST(Diagnostics, UnknownEnumListsEveryAllowedValue) {
   const auto r = load_protocol_file((kSource / "tests/protocol/malformed/unknown_enum.toml").string());
-  ASSERT_FALSE(r.diagnostics.empty());
-  const auto& m = r.diagnostics[0].message;
+  ASSERT_FALSE(problems(r).empty());
+  const auto& m = problems(r)[0].message;
   for (const char* v : {"\"choice\"", "\"adjustment\"", "\"staircase\""}) EXPECT_NE(m.find(v), std::string::npos) << m;
 }
 
@@ -188,10 +195,37 @@ type = "choice"
 options = [{ value = "a", keys = ["1"] }, { value = "b", keys = ["2"] }]
 )";
   const auto r = load_protocol_text(text, "inline.toml");
-  ASSERT_EQ(r.diagnostics.size(), 3u);
+  ASSERT_EQ(problems(r).size(), 3u);
   std::set<std::string> fields;
-  for (const auto& d : r.diagnostics) fields.insert(d.field);
+  for (const auto& d : problems(r)) fields.insert(d.field);
   EXPECT_EQ(fields, (std::set<std::string>{"viewing.eyse", "viewing.ipd_m", "timeline.iti_ms"}));
+}
+
+TEST(Diagnostics, AFailureIsOneErrorCarryingEveryProblem) {
+  using Kind = curvlab::harness::Error::Kind;
+  const auto missing = load_protocol_file("no/such/file.toml");
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_EQ(missing.error().kind, Kind::not_found);
+  ASSERT_EQ(problems(missing).size(), 1u);
+  EXPECT_EQ(format_diagnostic(problems(missing)[0]), "no/such/file.toml: error: cannot open the file for reading");
+  const auto bad = load_protocol_text("[protocol]\nname = \"x\"\nversion = 1\n[viewing]\neyse = \"both\"\n",
+                                      "inline.toml");
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_EQ(bad.error().kind, Kind::bad_input);
+  ASSERT_GE(problems(bad).size(), 2u);
+  EXPECT_EQ(bad.error().message, format_diagnostic(problems(bad)[0]) + " (and " +
+                                     std::to_string(problems(bad).size() - 1) + " more)");
+}
+
+TEST(ProtocolFiles, ALoadedProtocolKeepsItsText) {
+  const auto path = kSource / "protocols/demo.toml";
+  const auto r = load_protocol_file(path.string());
+  ASSERT_TRUE(r.has_value());
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(r->text, text.str());
+  EXPECT_EQ(r->file, path.string());
 }
 
 TEST(Diagnostics, MsaaTakesOnlyTheSampleCountsAndDefaultsToFour) {
@@ -199,16 +233,16 @@ TEST(Diagnostics, MsaaTakesOnlyTheSampleCountsAndDefaultsToFour) {
   const std::string tail = "[judgement]\ntype = \"choice\"\n"
                            "options = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n";
   const auto bad = load_protocol_text(head + "[viewing]\nmsaa = 3\n" + tail, "inline.toml");
-  ASSERT_EQ(bad.diagnostics.size(), 1u);
-  EXPECT_EQ(bad.diagnostics[0].field, "viewing.msaa");
-  EXPECT_NE(bad.diagnostics[0].message.find("expected one of 1, 2, 4, 8, found 3"), std::string::npos)
-      << bad.diagnostics[0].message;
+  ASSERT_EQ(problems(bad).size(), 1u);
+  EXPECT_EQ(problems(bad)[0].field, "viewing.msaa");
+  EXPECT_NE(problems(bad)[0].message.find("expected one of 1, 2, 4, 8, found 3"), std::string::npos)
+      << problems(bad)[0].message;
   const auto eight = load_protocol_text(head + "[viewing]\nmsaa = 8\n" + tail, "inline.toml");
-  ASSERT_TRUE(eight.ok());
-  EXPECT_EQ(eight.protocol->session_settings().viewing.msaa, 8);
+  ASSERT_TRUE(eight.has_value());
+  EXPECT_EQ(eight->session_settings().viewing.msaa, 8);
   const auto unset = load_protocol_text(head + tail, "inline.toml");
-  ASSERT_TRUE(unset.ok());
-  EXPECT_EQ(unset.protocol->session_settings().viewing.msaa, 4);
+  ASSERT_TRUE(unset.has_value());
+  EXPECT_EQ(unset->session_settings().viewing.msaa, 4);
 }
 
 TEST(Diagnostics, GarbageNeverCrashes) {
@@ -216,8 +250,8 @@ TEST(Diagnostics, GarbageNeverCrashes) {
                                  std::string("a = [") + std::string(5000, '['), std::string("x = 1e999"),
                                  std::string("[protocol]\nname = 5\n"), std::string("blocks = 3\nfactors = []\n")}) {
     const auto r = load_protocol_text(text, "garbage.toml");
-    EXPECT_FALSE(r.ok());
-    EXPECT_FALSE(r.diagnostics.empty());
+    EXPECT_FALSE(r.has_value());
+    EXPECT_FALSE(problems(r).empty());
   }
 }
 
@@ -231,8 +265,8 @@ TEST(Diagnostics, NonAsciiTextInValueStringsIsAccepted) {
       "[judgement]\ntype = \"choice\"\noptions = [{ value = \"a\", label = \"gewölbt\", keys = [\"1\"] },"
       " { value = \"b\", label = \"gerade\", keys = [\"2\"] }]\n";
   const auto r = load_protocol_text(text, "unicode.toml");
-  for (const auto& d : r.diagnostics) ADD_FAILURE() << format_diagnostic(d);
-  ASSERT_TRUE(r.ok());
-  EXPECT_EQ(r.protocol->instructions_start.at(0), "Bitte drücken Sie die Taste — ¿listo? 「はい」");
-  EXPECT_EQ(r.protocol->judgement.options.at(0).label, "gewölbt");
+  for (const auto& d : problems(r)) ADD_FAILURE() << format_diagnostic(d);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->instructions_start.at(0), "Bitte drücken Sie die Taste — ¿listo? 「はい」");
+  EXPECT_EQ(r->judgement.options.at(0).label, "gewölbt");
 }

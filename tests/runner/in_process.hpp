@@ -84,9 +84,9 @@ inline Outcome run_protocol(const std::string& protocol, const std::string& name
   std::stringstream text;
   text << in.rdbuf() << '\n' << extra;
   auto loaded = pr::load_protocol_text(text.str(), path);
-  EXPECT_TRUE(loaded.ok()) << (loaded.diagnostics.empty() ? "" : pr::format_diagnostic(loaded.diagnostics[0]));
-  if (!loaded.ok()) return {};
-  const auto& p = *loaded.protocol;
+  EXPECT_TRUE(loaded.has_value()) << (loaded ? "" : pr::format_diagnostic(loaded.error().diagnostics[0]));
+  if (!loaded) return {};
+  const auto& p = *loaded;
   rn::HeadlessOptions ho;
   ho.no_gpu = true;
   ho.refresh_hz = p.refresh_hz;

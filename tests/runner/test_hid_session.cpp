@@ -45,8 +45,8 @@ std::string button_protocol() {
 TEST(HidSession, ARecordedButtonBoxAnswersEveryTrialOnTheSessionClock) {
   const std::string text = button_protocol();
   auto loaded = pr::load_protocol_text(text, "buttons.toml");
-  ASSERT_TRUE(loaded.ok()) << pr::format_diagnostic(loaded.diagnostics.at(0));
-  const auto& p = *loaded.protocol;
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  const auto& p = *loaded;
 
   rn::HeadlessOptions ho;
   ho.pace = rn::Pace::realtime;

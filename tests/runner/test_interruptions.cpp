@@ -197,8 +197,8 @@ TEST(Interruptions, UnknownLossPolicyIsRejectedWithTheAllowedValues) {
       "[protocol]\nname = \"x\"\nversion = \"1\"\n[randomization]\nseed = 1\n[tracking]\non_loss = \"retry\"\n"
       "[judgement]\ntype = \"choice\"\noptions = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n",
       "bad.toml");
-  ASSERT_FALSE(loaded.ok());
-  const auto message = pr::format_diagnostic(loaded.diagnostics.at(0));
+  ASSERT_FALSE(loaded.has_value());
+  const auto message = pr::format_diagnostic(loaded.error().diagnostics.at(0));
   EXPECT_NE(message.find("bad.toml:7"), std::string::npos) << message;
   EXPECT_NE(message.find("on_loss"), std::string::npos) << message;
   EXPECT_NE(message.find("\"repeat\", \"flag\", \"abort\""), std::string::npos) << message;

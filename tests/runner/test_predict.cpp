@@ -25,14 +25,14 @@ std::string level(const rn::ConditionPrediction& c, const std::string& factor) {
 // The proposed study predicted for `participants` over `simulations` studies.
 rn::Prediction predict_proposed_study(int participants, int simulations) {
   auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/proposed_study.toml");
-  if (!loaded.ok()) {
+  if (!loaded) {
     ADD_FAILURE() << "protocols/proposed_study.toml does not load";
     return {};
   }
   rn::PredictOptions o;
   o.participants = participants;
   o.simulations = simulations;
-  auto r = rn::predict(*loaded.protocol, o);
+  auto r = rn::predict(*loaded, o);
   if (!r.has_value()) {
     ADD_FAILURE() << r.error().message;
     return {};
@@ -158,13 +158,13 @@ std::string staircase_protocol_text(int down) {
 TEST(Predict, PhysicalObserverStaircasesConvergeOnTheClosedForm) {
   for (int down : {1, 2}) {
     auto loaded = curvlab::harness::protocol::load_protocol_text(staircase_protocol_text(down), "pse.toml");
-    ASSERT_TRUE(loaded.ok());
+    ASSERT_TRUE(loaded.has_value());
     rn::PredictOptions o;
     o.observer.model = rn::ObserverModel::physical;
     o.observer.bias_m = 0.01;
     o.observer.slope_per_m = 250.0;
     o.observer.lapse = 0.04;
-    auto r = rn::predict(*loaded.protocol, o);
+    auto r = rn::predict(*loaded, o);
     ASSERT_TRUE(r.has_value()) << r.error().message;
     const auto& pred = r.value();
     ASSERT_EQ(pred.staircases.size(), 8u);  // 2 spaces × 2 projections × 2 staircases
@@ -183,8 +183,8 @@ TEST(Predict, PhysicalObserverStaircasesConvergeOnTheClosedForm) {
 // a monotone judgement, where the perception model says it should.
 TEST(Predict, TheStickPseStaircasesConvergeInsideTheirRanges) {
   auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
-  ASSERT_TRUE(loaded.ok());
-  auto r = rn::predict(*loaded.protocol, rn::PredictOptions{});
+  ASSERT_TRUE(loaded.has_value());
+  auto r = rn::predict(*loaded, rn::PredictOptions{});
   ASSERT_TRUE(r.has_value()) << r.error().message;
   const auto& pred = r.value();
   ASSERT_EQ(pred.staircases.size(), 8u);
@@ -205,8 +205,8 @@ TEST(Predict, AStaircaseRangeThatMissesTheTargetIsReported) {
   const std::string text =
       replace_all(replace_all(staircase_protocol_text(1), "min = -0.15", "min = 0.005"), "start = -0.06", "start = 0.01");
   auto loaded = curvlab::harness::protocol::load_protocol_text(text, "narrow.toml");
-  ASSERT_TRUE(loaded.ok()) << curvlab::harness::protocol::format_diagnostic(loaded.diagnostics.at(0));
-  auto r = rn::predict(*loaded.protocol, rn::PredictOptions{});
+  ASSERT_TRUE(loaded.has_value()) << curvlab::harness::protocol::format_diagnostic(loaded.error().diagnostics.at(0));
+  auto r = rn::predict(*loaded, rn::PredictOptions{});
   ASSERT_TRUE(r.has_value());
   const auto& pred = r.value();
   int missing = 0;

@@ -26,8 +26,8 @@ TEST(StaircaseRun, PseStaircasesSettleWherePredicted) {
   EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
 
   auto loaded = pr::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
-  ASSERT_TRUE(loaded.ok());
-  auto predicted = rn::predict(*loaded.protocol, rn::PredictOptions{});
+  ASSERT_TRUE(loaded.has_value());
+  auto predicted = rn::predict(*loaded, rn::PredictOptions{});
   ASSERT_TRUE(predicted.has_value());
   std::map<std::string, double> expected;  // "space projection" → value
   for (const auto& sp : predicted.value().staircases) {

@@ -202,8 +202,8 @@ namespace {
 
 pr::Protocol example(const std::string& name) {
   auto loaded = pr::load_protocol_file(std::string(CURVLAB_SOURCE_DIR) + "/protocols/" + name + ".toml");
-  EXPECT_TRUE(loaded.ok());
-  return *loaded.protocol;
+  EXPECT_TRUE(loaded.has_value());
+  return *loaded;
 }
 
 curvlab::harness::io::Reach keyboard() {

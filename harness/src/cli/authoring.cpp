@@ -143,11 +143,11 @@ void run_new(const NewArgs& a) {
   // The example must itself be a protocol: the loader refuses a file over
   // its size limit (1 MiB) or one that does not load, as validate would.
   const auto example = pr::load_protocol_file(source.string());
-  if (!example.ok()) {
-    for (const auto& d : example.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+  if (!example) {
+    for (const auto& d : example.error().diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
     throw UsageError("--from " + source.string() + " is not a protocol that loads; nothing was written");
   }
-  std::string text = example.text;
+  std::string text = example->text;
   std::uint64_t seed = static_cast<std::uint64_t>(a.seed);
   if (a.seed < 0) {
     std::random_device rd;
@@ -160,8 +160,8 @@ void run_new(const NewArgs& a) {
   point_schema_directive(text, a.dir);
   // The copy must load exactly as the example did.
   const auto loaded = pr::load_protocol_text(text, target.string());
-  if (!loaded.ok()) {
-    for (const auto& d : loaded.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+  if (!loaded) {
+    for (const auto& d : loaded.error().diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
     throw UsageError("the copy of " + source.string() + " does not load; nothing was written");
   }
   std::error_code ec;

@@ -5,6 +5,7 @@
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
+#include "curvlab/harness/protocol/settings_json.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -19,40 +20,6 @@ namespace pr = curvlab::harness::protocol;
 std::string duration_text(std::int64_t ms) {
   const std::int64_t s = (ms + 500) / 1000;
   return std::to_string(s / 60) + " min " + std::to_string(s % 60) + " s";
-}
-
-Json settings_json(const pr::Settings& s, const pr::Derived& d) {
-  Json j;
-  j["space"] = std::string(geometry::to_string(s.space.kind));
-  j["radius_m"] = d.radius_m;
-  j["table_sides"] = d.table_sides;
-  j["table_side_rad"] = d.side_rad;
-  j["tracking"] = std::string(geometry::to_string(s.tracking));
-  j["projection"] = std::string(renderer::to_string(s.viewing.projection));
-  j["eyes"] = std::string(renderer::to_string(s.viewing.eyes));
-  j["back_hemisphere"] = s.viewing.back_hemisphere;
-  j["ipd_m"] = s.viewing.ipd_m;
-  j["timeline_ms"] = Json::array({s.timeline.fixation_ms, s.timeline.stimulus_ms,
-                                  s.timeline.response_ms, s.timeline.iti_ms});
-  j["stick_length_m"] = s.stimulus.stick_length_m;
-  j["stick_sagitta_m"] = s.stimulus.stick_sagitta_m;
-  j["stick_anchor"] = std::string(pr::to_string(s.stimulus.stick_anchor));
-  j["stick_marks"] = std::string(renderer::to_string(s.stimulus.stick_marks));
-  j["stick_distance_m"] = s.stimulus.stick_distance_m;
-  j["table_sagitta_m"] = s.stimulus.table_sagitta_m;
-  j["table_edge_m"] = s.table.edge_m;
-  // The rest of what a participant sees, so that trials with equal levels
-  // and equal settings are the same condition (`curvlab preview`'s panels).
-  j["stick_radius_m"] = s.stimulus.stick_radius_m;
-  j["stick_height_m"] = s.stimulus.stick_height_m;
-  j["stick_yaw_deg"] = s.stimulus.stick_yaw_deg;
-  j["show_stick"] = s.stimulus.show_stick;
-  j["show_table"] = s.stimulus.show_table;
-  j["balls"] = s.stimulus.balls;
-  j["ball_radius_m"] = s.stimulus.ball_radius_m;
-  j["table_height_m"] = s.table.height_m;
-  j["stimulus_during_response"] = s.timeline.stimulus_during_response;
-  return j;
 }
 
 Json design_json(const pr::Protocol& p, const pr::Design& d, bool with_trials) {
@@ -91,7 +58,7 @@ Json design_json(const pr::Protocol& p, const pr::Design& d, bool with_trials) {
     if (t.staircase) jt["staircase"] = t.staircase->index;
     if (t.adjustment_start) jt["adjustment_start"] = *t.adjustment_start;
     if (t.break_before) jt["break_before"] = true;
-    jt["settings"] = settings_json(t.settings, t.derived);
+    jt["settings"] = pr::settings_json(t.settings, t.derived, pr::SettingsRecord::condition);
     trials.push_back(jt);
   }
   doc["trials"] = trials;
@@ -156,12 +123,12 @@ void run_design(const std::string& file, std::int64_t participant, bool as_json)
 
 pr::Protocol load_protocol_or_usage(const std::string& path, std::string* text) {
   auto result = pr::load_protocol_file(path);
-  if (result.ok()) {
-    if (text) *text = std::move(result.text);
-    return std::move(*result.protocol);
+  if (result) {
+    if (text) *text = result->text;
+    return std::move(result).value();
   }
-  for (const auto& d : result.diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
-  const auto n = result.diagnostics.size();
+  for (const auto& d : result.error().diagnostics) std::cerr << pr::format_diagnostic(d) << '\n';
+  const auto n = result.error().diagnostics.size();
   throw UsageError(std::to_string(n) + (n == 1 ? " error" : " errors") + " in " + path +
                    "; nothing was run or written");
 }

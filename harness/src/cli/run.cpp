@@ -514,22 +514,22 @@ void resume_command(const ResumeArgs& a) {
   if (!stored_v) raise(stored_v.error());
   const auto& stored = stored_v.value();
   auto loaded = pr::load_protocol_text(stored.protocol_text, stored.protocol_source);
-  if (!loaded.ok())
+  if (!loaded)
     throw RuntimeFailure("the stored protocol no longer loads: " +
-                         pr::format_diagnostic(loaded.diagnostics.front()));
+                         pr::format_diagnostic(loaded.error().diagnostics.front()));
   rn::RunOptions o = drawing_options(a.backend);
   if (a.observer_given && a.backend.backend == "headless")
     o.observer = observer_params(a.observer, stored.observer ? stored.observer->seed : 1);
-  const auto table = stored.calibration.value_or(rn::nominal_calibration(loaded.protocol->session_settings()));
+  const auto table = stored.calibration.value_or(rn::nominal_calibration(loaded->session_settings()));
   // A resumed session's clock continues after the last logged time.
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
-  check_answers_reachable(a.backend, *loaded.protocol, o.observer.has_value() || stored.observer.has_value());
-  auto devices = open_devices(a.backend, *loaded.protocol, table, stored.last_t_ns + 1'000'000'000);
+  check_answers_reachable(a.backend, *loaded, o.observer.has_value() || stored.observer.has_value());
+  auto devices = open_devices(a.backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();
   watch_stop_signals(o);
-  auto result = rn::resume_session(a.db, a.session, stored, *loaded.protocol, o, devices.station, *devices.clock);
+  auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
   console.reset();
   report(result, a.backend);
 }

@@ -4,22 +4,6 @@
 
 namespace curvlab::harness::protocol {
 
-std::string format_diagnostic(const Diagnostic& d) {
-  std::string out = d.file;
-  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on
-  // `":" + std::to_string(…)`.
-  if (d.pos.line > 0) {
-    out += ':';
-    out += std::to_string(d.pos.line);
-    out += ':';
-    out += std::to_string(d.pos.column);
-  }
-  out += ": error: ";
-  if (!d.field.empty()) out += d.field + ": ";
-  out += d.message;
-  return out;
-}
-
 std::size_t edit_distance(const std::string& a, const std::string& b) {
   std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
   for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -28,26 +29,33 @@ constexpr std::size_t kMaxTrials = 1000000;
 namespace tr = toml_reader;
 using tr::type_name;
 
+// Every problem of a file as one failure; the message names the first, for
+// a caller that shows only the message.
+Error load_failure(Error::Kind kind, std::vector<Diagnostic> diagnostics) {
+  std::string message = format_diagnostic(diagnostics.front());
+  if (diagnostics.size() > 1) message += " (and " + std::to_string(diagnostics.size() - 1) + " more)";
+  return {kind, std::move(message), std::move(diagnostics)};
+}
+
 class Loader : private TableReader {
  public:
   explicit Loader(std::string file) : TableReader(std::move(file)) {}
 
-  LoadResult run(std::string_view text) {
-    LoadResult result;
+  Result<Protocol> run(std::string_view text) {
     auto parsed = tr::parse(text, file());
     if (const auto* problem = std::get_if<tr::SyntaxProblem>(&parsed)) {
       error(to_source_pos(problem->pos), "syntax", problem->message);
-      result.diagnostics = take_diagnostics();
-      return result;
+      return load_failure(Error::Kind::bad_input, take_diagnostics());
     }
     const toml::table& root = std::get<toml::table>(parsed);
     Protocol p;
     p.file = file();
+    p.text = std::string(text);
     read_root(root, p);
     if (!failed()) check_design(p, root);
-    result.diagnostics = take_diagnostics();
-    if (result.diagnostics.empty()) result.protocol = std::move(p);
-    return result;
+    if (auto diagnostics = take_diagnostics(); !diagnostics.empty())
+      return load_failure(Error::Kind::bad_input, std::move(diagnostics));
+    return p;
   }
 
  private:
@@ -556,38 +564,33 @@ class Loader : private TableReader {
 
 }  // namespace
 
-LoadResult load_protocol_text(std::string_view text, const std::string& file) {
+Result<Protocol> load_protocol_text(std::string_view text, const std::string& file) {
   Loader loader(file);
   try {
     return loader.run(text);
   } catch (const std::exception& e) {
     // Only allocation failure can get here; report it rather than crash.
-    LoadResult r;
-    r.diagnostics.push_back({file, {}, "", std::string("internal failure while loading: ") + e.what()});
-    return r;
+    return load_failure(Error::Kind::bad_input,
+                        {{file, {}, "", std::string("internal failure while loading: ") + e.what()}});
   }
 }
 
-LoadResult load_protocol_file(const std::string& path) {
+Result<Protocol> load_protocol_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    LoadResult r;
-    r.diagnostics.push_back({path, {}, "", "cannot open the file for reading"});
-    return r;
+    std::error_code ec;
+    const auto kind = std::filesystem::exists(path, ec) ? Error::Kind::io : Error::Kind::not_found;
+    return load_failure(kind, {{path, {}, "", "cannot open the file for reading"}});
   }
   std::string text;
   char buf[65536];
   while (in.read(buf, sizeof buf) || in.gcount() > 0) {
     text.append(buf, static_cast<std::size_t>(in.gcount()));
-    if (text.size() > kMaxFileBytes) {
-      LoadResult r;
-      r.diagnostics.push_back({path, {}, "", "the file is larger than 1 MiB; a protocol is a short text file"});
-      return r;
-    }
+    if (text.size() > kMaxFileBytes)
+      return load_failure(Error::Kind::bad_input,
+                          {{path, {}, "", "the file is larger than 1 MiB; a protocol is a short text file"}});
   }
-  LoadResult r = load_protocol_text(text, path);
-  r.text = std::move(text);
-  return r;
+  return load_protocol_text(text, path);
 }
 
 }  // namespace curvlab::harness::protocol

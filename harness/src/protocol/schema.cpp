@@ -26,31 +26,9 @@ std::string key_of(std::string_view path) { return std::string(path.substr(path.
 // The built-in default of a setting, read from a default-constructed
 // Settings; null where the default depends on something else.
 Json default_of(const SettingInfo& info) {
-  const Settings s;
-  const std::string_view p = info.path;
-  if (p == "space.kind") return std::string(geometry::to_string(s.space.kind));
-  if (p == "space.radius_m") return s.space.radius_m ? Json(*s.space.radius_m) : Json("from_table");
-  if (p == "space.table_sides" || p == "viewing.preset") return nullptr;
-  if (p == "tracking.algorithm") return std::string(to_string(s.tracking));
-  if (p == "tracking.loss_ms") return s.tracking_loss.loss_ms;
-  if (p == "tracking.on_loss") return std::string(to_string(s.tracking_loss.on_loss));
-  if (p == "tracking.max_attempts") return s.tracking_loss.max_attempts;
-  if (p == "viewing.projection") return std::string(to_string(s.viewing.projection));
-  if (p == "viewing.eyes") return std::string(to_string(s.viewing.eyes));
-  if (p == "viewing.back_hemisphere") return s.viewing.back_hemisphere;
-  if (p == "viewing.msaa") return s.viewing.msaa;
-  if (p == "timeline.fixation_ms") return s.timeline.fixation_ms;
-  if (p == "timeline.stimulus_ms") return s.timeline.stimulus_ms;
-  if (p == "timeline.response_ms") return s.timeline.response_ms;
-  if (p == "timeline.iti_ms") return s.timeline.iti_ms;
-  if (p == "timeline.stimulus_during_response") return s.timeline.stimulus_during_response;
-  if (p == "stimulus.stick_anchor") return std::string(to_string(s.stimulus.stick_anchor));
-  if (p == "stimulus.stick_marks") return std::string(to_string(s.stimulus.stick_marks));
-  if (p == "stimulus.show_stick") return s.stimulus.show_stick;
-  if (p == "stimulus.show_table") return s.stimulus.show_table;
-  if (p == "stimulus.balls") return s.stimulus.balls;
-  if (const auto v = numeric_setting(s, p)) return *v;
-  return nullptr;
+  const auto value = info.get(Settings{});
+  if (!value) return nullptr;
+  return std::visit([](const auto& v) { return Json(v); }, *value);
 }
 
 // What one value of the setting may be: the same rule check_setting applies.

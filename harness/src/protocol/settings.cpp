@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <type_traits>
+#include <utility>
 
 namespace curvlab::harness::protocol {
 
@@ -37,66 +39,209 @@ namespace {
 
 using K = SettingKind;
 
+std::optional<double> as_number(const SettingValue& v) {
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return static_cast<double>(*i);
+  if (const auto* d = std::get_if<double>(&v)) return *d;
+  return std::nullopt;
+}
+
+// The space kinds in the order a protocol's documentation lists them.
+constexpr std::array kSpaceKinds{geometry::SpaceKind::S3, geometry::SpaceKind::E3, geometry::SpaceKind::H3};
+
+// ---- typed access: a field of Settings named by its member pointers --------
+
+// The field `s.*m1.*m2…`: &Settings::tracking, or &Settings::stimulus followed
+// by &Stimulus::stick_length_m.
+template <auto... Members, class S>
+auto& field(S& s) {
+  return (s .* ... .* Members);
+}
+
+// A field's value as a protocol writes it, and back; false for a value of
+// the wrong type.
+SettingValue protocol_value(bool b) { return b; }
+SettingValue protocol_value(std::int64_t i) { return i; }
+SettingValue protocol_value(double d) { return d; }
+
+bool assign(bool& to, const SettingValue& v) {
+  const auto* b = std::get_if<bool>(&v);
+  if (b) to = *b;
+  return b != nullptr;
+}
+bool assign(std::int64_t& to, const SettingValue& v) {
+  const auto* i = std::get_if<std::int64_t>(&v);
+  if (i) to = *i;
+  return i != nullptr;
+}
+bool assign(double& to, const SettingValue& v) {
+  const auto n = as_number(v);  // a TOML integer is a number too
+  if (n) to = *n;
+  return n.has_value();
+}
+
+// An entry whose field is a bool, an integer or a number, read and written
+// as it is.
+template <auto... Members>
+SettingInfo plain(std::string_view path, SettingKind kind, double min, double max,
+                  std::vector<std::string_view> choices, std::string_view meaning) {
+  return {path, kind, min, max, std::move(choices), meaning,
+          [](const Settings& s) -> std::optional<SettingValue> { return protocol_value(field<Members...>(s)); },
+          [](Settings& s, const SettingValue& v) { return assign(field<Members...>(s), v); }};
+}
+
+// The type of the field `Members` name; each kind below takes one type, so
+// a kind that does not fit its field does not compile.
+template <auto... Members>
+using FieldType = std::remove_cvref_t<decltype(field<Members...>(std::declval<Settings&>()))>;
+
+template <auto... Members>
+SettingInfo boolean(std::string_view path, std::string_view meaning) {
+  static_assert(std::is_same_v<FieldType<Members...>, bool>);
+  return plain<Members...>(path, K::boolean, 0, 0, {}, meaning);
+}
+template <auto... Members>
+SettingInfo integer(std::string_view path, double min, double max, std::string_view meaning,
+                    std::vector<std::string_view> only = {}) {
+  static_assert(std::is_same_v<FieldType<Members...>, std::int64_t>);
+  return plain<Members...>(path, K::integer, min, max, std::move(only), meaning);
+}
+template <auto... Members>
+SettingInfo number(std::string_view path, double min, double max, std::string_view meaning) {
+  static_assert(std::is_same_v<FieldType<Members...>, double>);
+  return plain<Members...>(path, K::number, min, max, {}, meaning);
+}
+
+// An entry whose field is an enumeration: written by name, one of `Values`
+// (listed beside the enumeration's declaration; geometry/enum_names.hpp).
+template <const auto& Values, auto... Members>
+SettingInfo enumeration(std::string_view path, std::string_view meaning) {
+  static_assert(std::is_same_v<FieldType<Members...>, typename std::remove_cvref_t<decltype(Values)>::value_type>);
+  return {path, K::enumeration, 0, 0, geometry::names_of(Values), meaning,
+          [](const Settings& s) -> std::optional<SettingValue> {
+            return std::string(to_string(field<Members...>(s)));
+          },
+          [](Settings& s, const SettingValue& v) {
+            const auto* name = std::get_if<std::string>(&v);
+            const auto parsed = name ? geometry::parse_name(Values, *name) : std::nullopt;
+            if (parsed) field<Members...>(s) = *parsed;
+            return parsed.has_value();
+          }};
+}
+
+// ---- the three settings that are not one plain field ------------------------
+
+// space.radius_m: metres, or "from_table" (unset: derived from the table).
+std::optional<SettingValue> get_radius(const Settings& s) {
+  if (s.space.radius_m) return *s.space.radius_m;
+  return std::string("from_table");
+}
+bool set_radius(Settings& s, const SettingValue& v) {
+  if (const auto* text = std::get_if<std::string>(&v)) {
+    if (*text != "from_table") return false;
+    s.space.radius_m.reset();
+    return true;
+  }
+  const auto n = as_number(v);
+  if (n) s.space.radius_m = *n;
+  return n.has_value();
+}
+
+// space.table_sides: 0 stands for the space's default and is never written.
+std::optional<SettingValue> get_table_sides(const Settings& s) {
+  if (s.space.table_sides == 0) return std::nullopt;
+  return std::int64_t{s.space.table_sides};
+}
+bool set_table_sides(Settings& s, const SettingValue& v) {
+  const auto* i = std::get_if<std::int64_t>(&v);
+  if (i) s.space.table_sides = static_cast<int>(*i);
+  return i != nullptr;
+}
+
+// viewing.preset: a name for a projection and eyes pair, which it sets; it
+// holds no value of its own.
+std::optional<SettingValue> get_preset(const Settings&) { return std::nullopt; }
+bool set_preset(Settings& s, const SettingValue& v) {
+  const auto* name = std::get_if<std::string>(&v);
+  const auto preset = name ? geometry::parse_view_preset(*name) : std::nullopt;
+  if (!preset) return false;
+  const auto viewing = renderer::preset_viewing(*preset);
+  s.viewing.projection = viewing.projection;
+  s.viewing.eyes = viewing.eyes;
+  return true;
+}
+
+// ---- the registry -----------------------------------------------------------
+
+using S = Settings;
+
 std::vector<SettingInfo> make_registry() {
   // Ranges are what a lab can physically mean, wide enough for pilots; they
   // catch unit slips (millimetres written as metres, seconds as ms).
   return {
-      {"space.kind", K::enumeration, 0, 0, {"S3", "E3", "H3"}, "the space"},
+      enumeration<kSpaceKinds, &S::space, &SpaceSettings::kind>("space.kind", "the space"),
       {"space.radius_m", K::number_or_from_table, 0.01, 1000.0, {},
-       "ρ in metres, or \"from_table\": ρ = table.edge_m / side_rad"},
+       "ρ in metres, or \"from_table\": ρ = table.edge_m / side_rad", get_radius, set_radius},
       {"space.table_sides", K::integer, 3, 12, {},
-       "sides of the right-angled virtual table (S3 3, E3 4, H3 ≥ 5)"},
-      {"space.e3_radius_m", K::number, 0.01, 1000.0, {},
-       "the radius that defines Euclidean radians in E3"},
-      {"tracking.algorithm", K::enumeration, 0, 0, geometry::names_of(geometry::kTrackingAlgorithms),
-       "body-coherent tracking algorithm (paper, sections 4–5)"},
-      {"tracking.loss_ms", K::integer, 10, 10000, {},
-       "how long the head may be untracked before the trial counts tracking as lost"},
-      {"tracking.on_loss", K::enumeration, 0, 0, geometry::names_of(kOnTrackingLosses),
-       "tracking lost: repeat the trial, flag it and go on, or mark it aborted"},
-      {"tracking.max_attempts", K::integer, 0, 100, {},
-       "attempts a trial is given before it is marked aborted (0: no limit)"},
+       "sides of the right-angled virtual table (S3 3, E3 4, H3 ≥ 5)", get_table_sides, set_table_sides},
+      number<&S::space, &SpaceSettings::e3_radius_m>("space.e3_radius_m", 0.01, 1000.0,
+                                                     "the radius that defines Euclidean radians in E3"),
+      enumeration<geometry::kTrackingAlgorithms, &S::tracking>(
+          "tracking.algorithm", "body-coherent tracking algorithm (paper, sections 4–5)"),
+      integer<&S::tracking_loss, &TrackingLoss::loss_ms>(
+          "tracking.loss_ms", 10, 10000,
+          "how long the head may be untracked before the trial counts tracking as lost"),
+      enumeration<kOnTrackingLosses, &S::tracking_loss, &TrackingLoss::on_loss>(
+          "tracking.on_loss", "tracking lost: repeat the trial, flag it and go on, or mark it aborted"),
+      integer<&S::tracking_loss, &TrackingLoss::max_attempts>(
+          "tracking.max_attempts", 0, 100, "attempts a trial is given before it is marked aborted (0: no limit)"),
       {"viewing.preset", K::enumeration, 0, 0, geometry::names_of(geometry::kViewPresets),
        "sets projection and eyes: tourist = tourist/both, native = native/both, "
-       "monocular = native/dominant"},
-      {"viewing.projection", K::enumeration, 0, 0, geometry::names_of(renderer::kProjections),
-       "tourist (true optics) or native (azimuthal-equidistant) projection"},
-      {"viewing.eyes", K::enumeration, 0, 0, geometry::names_of(renderer::kEyeSelections),
-       "which eyes see the scene; the other shows the background"},
-      {"viewing.back_hemisphere", K::boolean, 0, 0, {}, "S3: draw the antipodal images"},
-      {"viewing.ipd_m", K::number, 0.045, 0.085, {},
-       "default interpupillary distance (used when the runtime gives none)"},
-      {"viewing.msaa", K::integer, 1, 8, {"1", "2", "4", "8"},
-       "samples per pixel for anti-aliased edges (1: none); clamped to what the device supports"},
-      {"timeline.fixation_ms", K::integer, 0, 60000, {}, "fixation mark before the stimulus"},
-      {"timeline.stimulus_ms", K::integer, 1, 600000, {}, "stimulus duration"},
-      {"timeline.response_ms", K::integer, 1, 600000, {}, "response window"},
-      {"timeline.iti_ms", K::integer, 0, 60000, {}, "inter-trial interval"},
-      {"timeline.stimulus_during_response", K::boolean, 0, 0, {},
-       "keep the stimulus visible during the response window"},
-      {"stimulus.stick_length_m", K::number, 0.05, 5.0, {}, "cue stick length"},
-      {"stimulus.stick_radius_m", K::number, 0.001, 0.1, {}, "cue stick radius"},
-      {"stimulus.stick_sagitta_m", K::number, -1.0, 1.0, {},
-       "signed bend of the stick at its middle; + bows toward the viewer"},
-      {"stimulus.stick_anchor", K::enumeration, 0, 0, geometry::names_of(kStickAnchors),
-       "the stick's pose is relative to the head or to the table"},
-      {"stimulus.stick_distance_m", K::number, 0.0, 20.0, {},
-       "distance from the eyes (head anchor, at least 0.1) or from the table centre toward "
-       "the participant's edge (table anchor)"},
-      {"stimulus.stick_height_m", K::number, -2.0, 2.0, {},
-       "height relative to the eyes (head) or to the table top (table)"},
-      {"stimulus.stick_yaw_deg", K::number, -180.0, 180.0, {},
-       "rotation about the vertical; 0 lies across the line of sight"},
-      {"stimulus.stick_marks", K::enumeration, 0, 0, geometry::names_of(renderer::kStickMarks),
-       "marks along the stick: none, or light rings at 0.1, 0.3, 0.5, 0.7 and 0.9 of its length"},
-      {"stimulus.show_stick", K::boolean, 0, 0, {}, "draw the cue stick"},
-      {"stimulus.show_table", K::boolean, 0, 0, {}, "draw the billiards table"},
-      {"stimulus.table_sagitta_m", K::number, -1.0, 1.0, {},
-       "signed convexity of the table top at its centre; + bulges up"},
-      {"stimulus.balls", K::integer, 0, 16, {}, "number of balls on the table"},
-      {"stimulus.ball_radius_m", K::number, 0.005, 0.2, {}, "ball radius"},
-      {"table.edge_m", K::number, 0.2, 5.0, {}, "physical table edge length"},
-      {"table.height_m", K::number, 0.3, 1.5, {}, "physical table top height above the floor"},
+       "monocular = native/dominant",
+       get_preset, set_preset},
+      enumeration<renderer::kProjections, &S::viewing, &Viewing::projection>(
+          "viewing.projection", "tourist (true optics) or native (azimuthal-equidistant) projection"),
+      enumeration<renderer::kEyeSelections, &S::viewing, &Viewing::eyes>(
+          "viewing.eyes", "which eyes see the scene; the other shows the background"),
+      boolean<&S::viewing, &Viewing::back_hemisphere>("viewing.back_hemisphere", "S3: draw the antipodal images"),
+      number<&S::viewing, &Viewing::ipd_m>("viewing.ipd_m", 0.045, 0.085,
+                                           "default interpupillary distance (used when the runtime gives none)"),
+      integer<&S::viewing, &Viewing::msaa>(
+          "viewing.msaa", 1, 8,
+          "samples per pixel for anti-aliased edges (1: none); clamped to what the device supports",
+          {"1", "2", "4", "8"}),
+      integer<&S::timeline, &Timeline::fixation_ms>("timeline.fixation_ms", 0, 60000,
+                                                    "fixation mark before the stimulus"),
+      integer<&S::timeline, &Timeline::stimulus_ms>("timeline.stimulus_ms", 1, 600000, "stimulus duration"),
+      integer<&S::timeline, &Timeline::response_ms>("timeline.response_ms", 1, 600000, "response window"),
+      integer<&S::timeline, &Timeline::iti_ms>("timeline.iti_ms", 0, 60000, "inter-trial interval"),
+      boolean<&S::timeline, &Timeline::stimulus_during_response>(
+          "timeline.stimulus_during_response", "keep the stimulus visible during the response window"),
+      number<&S::stimulus, &Stimulus::stick_length_m>("stimulus.stick_length_m", 0.05, 5.0, "cue stick length"),
+      number<&S::stimulus, &Stimulus::stick_radius_m>("stimulus.stick_radius_m", 0.001, 0.1, "cue stick radius"),
+      number<&S::stimulus, &Stimulus::stick_sagitta_m>(
+          "stimulus.stick_sagitta_m", -1.0, 1.0, "signed bend of the stick at its middle; + bows toward the viewer"),
+      enumeration<kStickAnchors, &S::stimulus, &Stimulus::stick_anchor>(
+          "stimulus.stick_anchor", "the stick's pose is relative to the head or to the table"),
+      number<&S::stimulus, &Stimulus::stick_distance_m>(
+          "stimulus.stick_distance_m", 0.0, 20.0,
+          "distance from the eyes (head anchor, at least 0.1) or from the table centre toward "
+          "the participant's edge (table anchor)"),
+      number<&S::stimulus, &Stimulus::stick_height_m>(
+          "stimulus.stick_height_m", -2.0, 2.0, "height relative to the eyes (head) or to the table top (table)"),
+      number<&S::stimulus, &Stimulus::stick_yaw_deg>("stimulus.stick_yaw_deg", -180.0, 180.0,
+                                                     "rotation about the vertical; 0 lies across the line of sight"),
+      enumeration<renderer::kStickMarks, &S::stimulus, &Stimulus::stick_marks>(
+          "stimulus.stick_marks",
+          "marks along the stick: none, or light rings at 0.1, 0.3, 0.5, 0.7 and 0.9 of its length"),
+      boolean<&S::stimulus, &Stimulus::show_stick>("stimulus.show_stick", "draw the cue stick"),
+      boolean<&S::stimulus, &Stimulus::show_table>("stimulus.show_table", "draw the billiards table"),
+      number<&S::stimulus, &Stimulus::table_sagitta_m>("stimulus.table_sagitta_m", -1.0, 1.0,
+                                                       "signed convexity of the table top at its centre; + bulges up"),
+      integer<&S::stimulus, &Stimulus::balls>("stimulus.balls", 0, 16, "number of balls on the table"),
+      number<&S::stimulus, &Stimulus::ball_radius_m>("stimulus.ball_radius_m", 0.005, 0.2, "ball radius"),
+      number<&S::table, &PhysicalTable::edge_m>("table.edge_m", 0.2, 5.0, "physical table edge length"),
+      number<&S::table, &PhysicalTable::height_m>("table.height_m", 0.3, 1.5,
+                                                  "physical table top height above the floor"),
   };
 }
 
@@ -136,12 +281,6 @@ std::string range_text(const SettingInfo& info) {
   return out;
 }
 
-std::optional<double> as_number(const SettingValue& v) {
-  if (const auto* i = std::get_if<std::int64_t>(&v)) return static_cast<double>(*i);
-  if (const auto* d = std::get_if<double>(&v)) return *d;
-  return std::nullopt;
-}
-
 }  // namespace
 
 const std::vector<SettingInfo>& all_settings() {
@@ -177,17 +316,6 @@ namespace {
 
 // What check_setting found wrong: the protocol's to fix (bad_input).
 Error setting_problem(std::string message) { return {Error::Kind::bad_input, std::move(message)}; }
-
-// apply_setting is given only values check_setting accepted, so a name that
-// does not parse there is a broken contract: it names the value and the
-// choices, and stops.
-template <class E>
-E checked(std::optional<E> parsed, const SettingInfo& info, const std::string& text) {
-  if (parsed) return *parsed;
-  std::fprintf(stderr, "curvlab: %s = \"%s\" was applied unchecked: expected one of %s\n",
-               std::string(info.path).c_str(), text.c_str(), choices_text(info).c_str());
-  std::abort();
-}
 
 }  // namespace
 
@@ -232,106 +360,39 @@ Result<Done> check_setting(const SettingInfo& info, const SettingValue& value) {
 }
 
 void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& value) {
-  const std::string_view p = info.path;
-  const auto num = as_number(value).value_or(0.0);
-  const auto integer = std::holds_alternative<std::int64_t>(value) ? std::get<std::int64_t>(value) : 0;
-  const bool flag = std::holds_alternative<bool>(value) && std::get<bool>(value);
-  const std::string text = std::holds_alternative<std::string>(value) ? std::get<std::string>(value) : "";
-  if (p == "space.kind") {
-    s.space.kind = checked(geometry::parse_space_kind(text), info, text);
-  } else if (p == "space.radius_m") {
-    if (text == "from_table") s.space.radius_m.reset();
-    else s.space.radius_m = num;
-  } else if (p == "space.table_sides") {
-    s.space.table_sides = static_cast<int>(integer);
-  } else if (p == "space.e3_radius_m") {
-    s.space.e3_radius_m = num;
-  } else if (p == "tracking.algorithm") {
-    s.tracking = checked(geometry::parse_tracking_algorithm(text), info, text);
-  } else if (p == "tracking.loss_ms") {
-    s.tracking_loss.loss_ms = integer;
-  } else if (p == "tracking.on_loss") {
-    s.tracking_loss.on_loss = checked(parse_on_tracking_loss(text), info, text);
-  } else if (p == "tracking.max_attempts") {
-    s.tracking_loss.max_attempts = integer;
-  } else if (p == "viewing.preset") {
-    const auto viewing = renderer::preset_viewing(checked(geometry::parse_view_preset(text), info, text));
-    s.viewing.projection = viewing.projection;
-    s.viewing.eyes = viewing.eyes;
-  } else if (p == "viewing.projection") {
-    s.viewing.projection = checked(renderer::parse_projection(text), info, text);
-  } else if (p == "viewing.eyes") {
-    s.viewing.eyes = checked(renderer::parse_eye_selection(text), info, text);
-  } else if (p == "viewing.back_hemisphere") {
-    s.viewing.back_hemisphere = flag;
-  } else if (p == "viewing.ipd_m") {
-    s.viewing.ipd_m = num;
-  } else if (p == "viewing.msaa") {
-    s.viewing.msaa = integer;
-  } else if (p == "timeline.fixation_ms") {
-    s.timeline.fixation_ms = integer;
-  } else if (p == "timeline.stimulus_ms") {
-    s.timeline.stimulus_ms = integer;
-  } else if (p == "timeline.response_ms") {
-    s.timeline.response_ms = integer;
-  } else if (p == "timeline.iti_ms") {
-    s.timeline.iti_ms = integer;
-  } else if (p == "timeline.stimulus_during_response") {
-    s.timeline.stimulus_during_response = flag;
-  } else if (p == "stimulus.stick_anchor") {
-    s.stimulus.stick_anchor = checked(parse_stick_anchor(text), info, text);
-  } else if (p == "stimulus.stick_marks") {
-    s.stimulus.stick_marks = checked(renderer::parse_stick_marks(text), info, text);
-  } else if (p == "stimulus.show_stick") {
-    s.stimulus.show_stick = flag;
-  } else if (p == "stimulus.show_table") {
-    s.stimulus.show_table = flag;
-  } else if (p == "stimulus.balls") {
-    s.stimulus.balls = integer;
-  } else {
-    set_numeric_setting(s, p, num);
-  }
+  if (info.set(s, value)) return;
+  // Only values check_setting accepted may reach here: a broken contract.
+  const auto checked = check_setting(info, value);
+  std::fprintf(stderr, "curvlab: %s = %s was applied unchecked: %s\n", std::string(info.path).c_str(),
+               value_label(value).c_str(), checked ? "the setting refused it" : checked.error().message.c_str());
+  std::abort();
 }
 
 namespace {
-template <typename S>
-auto numeric_field(S& s, std::string_view p) -> decltype(&s.space.e3_radius_m) {
-  if (p == "space.radius_m") return nullptr;  // may be "from_table"; not adjustable
-  if (p == "space.e3_radius_m") return &s.space.e3_radius_m;
-  if (p == "viewing.ipd_m") return &s.viewing.ipd_m;
-  if (p == "stimulus.stick_length_m") return &s.stimulus.stick_length_m;
-  if (p == "stimulus.stick_radius_m") return &s.stimulus.stick_radius_m;
-  if (p == "stimulus.stick_sagitta_m") return &s.stimulus.stick_sagitta_m;
-  if (p == "stimulus.stick_distance_m") return &s.stimulus.stick_distance_m;
-  if (p == "stimulus.stick_height_m") return &s.stimulus.stick_height_m;
-  if (p == "stimulus.stick_yaw_deg") return &s.stimulus.stick_yaw_deg;
-  if (p == "stimulus.table_sagitta_m") return &s.stimulus.table_sagitta_m;
-  if (p == "stimulus.ball_radius_m") return &s.stimulus.ball_radius_m;
-  if (p == "table.edge_m") return &s.table.edge_m;
-  if (p == "table.height_m") return &s.table.height_m;
-  return nullptr;
+// The settings a staircase or an adjustment may vary: plain numbers (not
+// space.radius_m, which may be "from_table").
+const SettingInfo* numeric_info(std::string_view path) {
+  const SettingInfo* info = find_setting(path);
+  return info && info->kind == K::number ? info : nullptr;
 }
 }  // namespace
 
 std::vector<std::string> numeric_setting_paths() {
   std::vector<std::string> out;
-  const Settings s;
   for (const auto& info : all_settings())
-    if (numeric_setting(s, info.path)) out.emplace_back(info.path);
+    if (info.kind == K::number) out.emplace_back(info.path);
   return out;
 }
 
 std::optional<double> numeric_setting(const Settings& s, std::string_view path) {
-  if (const double* f = numeric_field(s, path)) return *f;
-  return std::nullopt;
+  const SettingInfo* info = numeric_info(path);
+  if (!info) return std::nullopt;
+  return as_number(info->get(s).value());
 }
 
 bool set_numeric_setting(Settings& s, std::string_view path, double value) {
-  if (double* f = numeric_field(s, path)) {
-    *f = value;
-    return true;
-  }
-  return false;
+  const SettingInfo* info = numeric_info(path);
+  return info && info->set(s, SettingValue(std::in_place_type<double>, value));
 }
 
 }  // namespace curvlab::harness::protocol

@@ -54,10 +54,10 @@ struct StoredFrame {
 Result<Done> read_trial_settings(const data::SessionProvenance& prov, const ReplayRequest& rq, StoredFrame& out) {
   auto loaded = protocol::load_protocol_text(prov.protocol_text,
                                              prov.protocol_source_path.value_or("stored protocol"));
-  if (!loaded.ok())
+  if (!loaded)
     return Error{Kind::bad_input, "the stored protocol no longer loads: " +
-                                      protocol::format_diagnostic(loaded.diagnostics.front())};
-  out.protocol = *loaded.protocol;
+                                      protocol::format_diagnostic(loaded.error().diagnostics.front())};
+  out.protocol = std::move(loaded).value();
   const protocol::Design design = protocol::expand_design(out.protocol, prov.participant_number.value_or(1));
   if (rq.trial_index < 0 || rq.trial_index >= static_cast<std::int64_t>(design.trials.size()))
     return Error{Kind::usage, "--trial must lie in [0, " + std::to_string(design.trials.size() - 1) +

@@ -1,6 +1,7 @@
 #include "session_records.hpp"
 
 #include "curvlab/harness/protocol/judgement.hpp"
+#include "curvlab/harness/protocol/settings_json.hpp"
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
@@ -69,21 +70,7 @@ std::string conditions_json(const Protocol& p, const PlannedTrial& t) {
 }
 
 std::string stimulus_json(const PlannedTrial& t) {
-  const auto& s = t.settings;
-  Json j;
-  j["stick_sagitta_m"] = s.stimulus.stick_sagitta_m;
-  j["table_sagitta_m"] = s.stimulus.table_sagitta_m;
-  j["stick_length_m"] = s.stimulus.stick_length_m;
-  j["stick_distance_m"] = s.stimulus.stick_distance_m;
-  j["stick_height_m"] = s.stimulus.stick_height_m;
-  j["stick_anchor"] = std::string(protocol::to_string(s.stimulus.stick_anchor));
-  j["stick_marks"] = std::string(renderer::to_string(s.stimulus.stick_marks));
-  j["show_stick"] = s.stimulus.show_stick;
-  j["show_table"] = s.stimulus.show_table;
-  j["radius_m"] = t.derived.radius_m;
-  j["table_sides"] = t.derived.table_sides;
-  j["tracking"] = std::string(geometry::to_string(s.tracking));
-  j["ipd_m"] = s.viewing.ipd_m;
+  Json j = protocol::settings_json(t.settings, t.derived, protocol::SettingsRecord::stimulus);
   if (t.adjustment_start) j["adjustment_start"] = *t.adjustment_start;
   return j.dump();
 }

@@ -3,7 +3,8 @@
 // foreign database, a full disk, a lost GPU — is a value the caller must
 // handle, carrying a message a person can act on and a kind that decides the
 // exit code. Broken contracts abort instead: value() on an error and error()
-// on a value are bugs, not failures.
+// on a value are bugs, not failures. An input checked as a whole (a
+// protocol file) fails once with every problem found, each with its place.
 #pragma once
 
 #include <cstdio>
@@ -11,8 +12,43 @@
 #include <string>
 #include <utility>
 #include <variant>
+#include <vector>
 
 namespace curvlab::harness {
+
+// A 1-based position in a text file; line 0 means "no position known" (for
+// example a problem with the file as a whole).
+struct SourcePos {
+  int line = 0;
+  int column = 0;
+};
+
+// One problem at a place in an input file: the protocol loader reports
+// every problem of a file this way, in one pass.
+struct Diagnostic {
+  std::string file;
+  SourcePos pos;
+  std::string field;    // dotted path, e.g. "blocks[2].timeline.iti_ms"
+  std::string message;  // what was found and what was expected
+};
+
+// "file:line:column: error: field: message" (the position is left out when
+// unknown, the field part when the problem is not tied to one field).
+inline std::string format_diagnostic(const Diagnostic& d) {
+  std::string out = d.file;
+  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on
+  // `":" + std::to_string(…)`.
+  if (d.pos.line > 0) {
+    out += ':';
+    out += std::to_string(d.pos.line);
+    out += ':';
+    out += std::to_string(d.pos.column);
+  }
+  out += ": error: ";
+  if (!d.field.empty()) out += d.field + ": ";
+  out += d.message;
+  return out;
+}
 
 struct Error {
   enum class Kind {
@@ -32,6 +68,9 @@ struct Error {
   };
   Kind kind = Kind::io;
   std::string message;  // names the file, call or field and what to do about it
+  // Every located problem behind the failure, for a caller that lists them
+  // (`curvlab validate` prints one line each); empty for other errors.
+  std::vector<Diagnostic> diagnostics = {};
 };
 
 const char* to_string(Error::Kind kind);

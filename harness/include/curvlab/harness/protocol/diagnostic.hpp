@@ -1,30 +1,19 @@
 // Where a protocol is wrong and what was expected. Loading never throws for
-// bad input: every problem becomes one Diagnostic, and the caller decides
-// what to print (the CLI prints `file:line:column: error: field: message`).
+// bad input: every problem becomes one Diagnostic (harness/result.hpp), all
+// of a file's in one Error, and the caller decides what to print (the CLI
+// prints `file:line:column: error: field: message`).
 #pragma once
+
+#include "curvlab/harness/result.hpp"
 
 #include <string>
 #include <vector>
 
 namespace curvlab::harness::protocol {
 
-// A 1-based position in the protocol text; line 0 means "no position known"
-// (for example a problem with the file as a whole).
-struct SourcePos {
-  int line = 0;
-  int column = 0;
-};
-
-struct Diagnostic {
-  std::string file;
-  SourcePos pos;
-  std::string field;    // dotted path, e.g. "blocks[2].timeline.iti_ms"
-  std::string message;  // what was found and what was expected
-};
-
-// "file:line:column: error: field: message" (the field part is left out
-// when the problem is not tied to one field).
-std::string format_diagnostic(const Diagnostic& d);
+using harness::Diagnostic;
+using harness::format_diagnostic;
+using harness::SourcePos;
 
 // Levenshtein distance, used for "did you mean" suggestions.
 std::size_t edit_distance(const std::string& a, const std::string& b);

@@ -92,6 +92,7 @@ struct Block {
 
 struct Protocol {
   std::string file;
+  std::string text;  // the TOML it was loaded from (sessions store it)
   Metadata meta;
   std::vector<SettingOverride> session_overrides;
   std::vector<Factor> factors;

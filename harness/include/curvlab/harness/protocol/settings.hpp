@@ -4,6 +4,11 @@
 // override and as a factor level, so the three can never disagree about what
 // is allowed. Values resolve session → block → factor level (UXF's fallback
 // from trial to block to session, with the factor level winning).
+//
+// Each registry entry also reads and writes its field of Settings, so that
+// applying a value, the staircase's numeric access, the JSON Schema's
+// defaults and the settings records (settings_json.hpp) all walk the one
+// table: a new setting is a field here and an entry in settings.cpp.
 #pragma once
 
 #include "curvlab/geometry/space.hpp"
@@ -125,6 +130,14 @@ struct SettingInfo {
   // any in the range)
   std::vector<std::string_view> choices;
   std::string_view meaning;  // one line, with the unit
+  // The setting's value in `s` as a protocol writes it (an enumeration's
+  // name, "from_table"); nullopt where it holds no value of its own:
+  // viewing.preset only sets projection and eyes, and space.table_sides' 0
+  // stands for the space's default.
+  std::optional<SettingValue> (*get)(const Settings& s) = nullptr;
+  // Writes a value into `s`; false, leaving `s` as it was, for a value
+  // check_setting refuses.
+  bool (*set)(Settings& s, const SettingValue& value) = nullptr;
 };
 
 // Every setting, in documentation order.
@@ -137,14 +150,17 @@ bool is_setting_section(std::string_view section);
 // Done when the value fits; otherwise an Error (bad_input) saying what was
 // expected — a fragment the loader places and completes with what was found.
 Result<Done> check_setting(const SettingInfo& info, const SettingValue& value);
-// Applies a value that check_setting accepted.
+// Applies a value that check_setting accepted (one it refuses is a broken
+// contract: the process stops, naming the setting and the value).
 void apply_setting(Settings& s, const SettingInfo& info, const SettingValue& value);
-// Reads a numeric setting (for staircases and adjustment); nullopt if not numeric.
+// Reads a numeric setting (for staircases and adjustment): the number kind
+// only; nullopt for any other path.
 std::optional<double> numeric_setting(const Settings& s, std::string_view path);
 // The paths numeric_setting reads: what a staircase's or an adjustment's
 // parameter may name (the loader checks it, the JSON Schema lists it).
 std::vector<std::string> numeric_setting_paths();
-// Writes a numeric setting (staircase/adjustment value for one trial).
+// Writes a numeric setting (staircase/adjustment value for one trial); false
+// for a path numeric_setting does not read.
 bool set_numeric_setting(Settings& s, std::string_view path, double value);
 
 // A level's label: strings as written, numbers in shortest round-trip form.
