@@ -65,6 +65,7 @@ std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text, cons
 void add_inspect_commands(CLI::App& app);
 void add_devices_commands(CLI::App& app);
 void add_export_commands(CLI::App& app);
+void add_sessions_commands(CLI::App& app);  // sessions: what a data file holds
 void add_merge_commands(CLI::App& app);
 // Database arguments of merge and export: each folder is replaced by the
 // *.sqlite files directly in it (sorted by name), leaving out `exclude`.

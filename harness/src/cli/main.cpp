@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   curvlab::cli::add_inspect_commands(app);
   curvlab::cli::add_devices_commands(app);
   curvlab::cli::add_export_commands(app);
+  curvlab::cli::add_sessions_commands(app);
   curvlab::cli::add_merge_commands(app);
   curvlab::cli::add_track_commands(app);
   curvlab::cli::add_render_commands(app);

@@ -1,7 +1,7 @@
 #include "export_common.hpp"
 
 #include "curvlab/harness/data/events.hpp"
-
+#include "curvlab/harness/data/session_list.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 #include "curvlab/harness/data/staging.hpp"
 
@@ -219,9 +219,7 @@ Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptio
       info.session_uuid = s.column_opt_text(9).value_or("");
       out.push_back(std::move(info));
     }
-    if (out.empty() && options.session_id)
-      return DataError{DataError::Kind::not_found,
-                       db.path() + ": no session with id " + std::to_string(*options.session_id)};
+    if (out.empty() && options.session_id) return missing_session_error(db, *options.session_id);
     return out;
   } catch (const SqliteFailure& f) {
     return to_data_error(f, db.path());

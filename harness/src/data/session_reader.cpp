@@ -2,6 +2,7 @@
 
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/events.hpp"
+#include "curvlab/harness/data/session_list.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 
 #include <nlohmann/json.hpp>
@@ -70,8 +71,7 @@ Expected<SessionProvenance> read_session_provenance(Database& db, std::int64_t s
                 "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
                 "JOIN participants p ON p.participant_id = se.participant_id WHERE se.session_id = ?1");
     s.bind(1, session_id);
-    if (!s.step())
-      return DataError{Kind::not_found, db.path() + ": no session with id " + std::to_string(session_id)};
+    if (!s.step()) return missing_session_error(db, session_id);
     SessionProvenance out;
     out.session_id = session_id;
     out.protocol_text = s.column_text(0);
