@@ -53,7 +53,7 @@ class ProtocolVersions {
     std::optional<std::string> version;
     if (auto text = data::read_protocol_text(db_, sha256)) {
       const auto loaded = harness::protocol::load_protocol_text(text.value(), "stored protocol");
-      if (loaded.ok() && !loaded.protocol->meta.version.empty()) version = loaded.protocol->meta.version;
+      if (loaded && !loaded->meta.version.empty()) version = loaded->meta.version;
     }
     known_.emplace(sha256, version);
     return version;
