@@ -119,13 +119,15 @@ void show_eye(const vk::raii::CommandBuffer& cb, const Image& src, vk::Image win
 // The eyes the layout shows, side by side or one alone, in the window's
 // top `area` (the rest is the banner's).
 void show_eyes(const vk::raii::CommandBuffer& cb, WindowLayout layout, const std::array<Image, 2>& eyes,
-               vk::Image window, vk::Extent2D area) {
+               vk::Image window, vk::Extent2D area, std::uint32_t gap_px) {
   const auto eye = [&eyes](Eye e) -> const Image& { return eyes[static_cast<std::size_t>(e)]; };
   switch (layout) {
     case WindowLayout::side_by_side: {
-      const std::uint32_t half = area.width / 2;
+      const std::uint32_t gap = std::min(gap_px, area.width / 4);  // a narrow window keeps its eyes
+      const std::uint32_t half = (area.width - gap) / 2;
       show_eye(cb, eye(Eye::left), window, 0, half, area.height);
-      show_eye(cb, eye(Eye::right), window, static_cast<std::int32_t>(half), area.width - half, area.height);
+      show_eye(cb, eye(Eye::right), window, static_cast<std::int32_t>(half + gap), area.width - half - gap,
+               area.height);
       break;
     }
     case WindowLayout::left_eye: show_eye(cb, eye(Eye::left), window, 0, area.width, area.height); break;
@@ -191,8 +193,9 @@ bool present(const vk::raii::Queue& queue, vk::SwapchainKHR chain, vk::Semaphore
 }  // namespace
 
 vk::Extent2D natural_window_extent(const SwapchainOptions& options) {
-  const std::uint32_t eyes = options.layout == WindowLayout::side_by_side ? 2 : 1;
-  return {options.eye_extent.width * eyes, options.eye_extent.height + options.banner_height_px};
+  const bool both = options.layout == WindowLayout::side_by_side;
+  return {options.eye_extent.width * (both ? 2 : 1) + (both ? options.eye_gap_px : 0),
+          options.eye_extent.height + options.banner_height_px};
 }
 
 Rgba8Image read_image(const Context& ctx, vk::Image image, vk::Extent2D extent) {
@@ -425,7 +428,7 @@ void SwapchainTarget::frame_finished() {
     cb.clearColorImage(*window_.image, vk::ImageLayout::eTransferDstOptimal, letterbox_colour(),
                        kColorRange);
     const std::uint32_t area_h = extent_.height - banner_h;
-    if (area_h > 0) show_eyes(cb, layout_, eyes_, *window_.image, {extent_.width, area_h});
+    if (area_h > 0) show_eyes(cb, layout_, eyes_, *window_.image, {extent_.width, area_h}, options_.eye_gap_px);
     if (banner && banner_h == options_.banner_height_px) copy_banner(cb, f.banner, *window_.image, extent_, banner_h);
     copy_to_swapchain_image(cb, *window_.image, target_image, extent_);
     cb.end();

@@ -2,10 +2,14 @@
 // the pilot body's start pose and movement, key names.
 #include "desktop_backend.hpp"
 
+#include "curvlab/harness/numbered_files.hpp"
+
 #include <GLFW/glfw3.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <cstdlib>
 #include <iostream>
 
@@ -177,3 +181,36 @@ TEST(DesktopBackend, BadOptionsAreRefusedBeforeAnyWindow) {
 }
 
 }  // namespace
+
+TEST(PilotLegend, SaysWhichKeysAnswerAndHowPagesContinue) {
+  using curvlab::harness::io::Overlay;
+  using curvlab::harness::io::Phase;
+  Overlay page(Phase::break_page, "Take a short break.", true);
+  EXPECT_EQ(legend_text(page), "space: continue");
+  Overlay response(Phase::response, "block main · trial 3 of 8", true);
+  response.prompt = "Convex, straight or concave?";
+  response.answers = {{"convex", {"1", "left"}, {"left_trigger"}}, {"straight", {"2"}, {}},
+                      {"concave", {}, {"right_trigger"}}};
+  response.value = "stimulus.stick_sagitta_m = 0.0125";
+  EXPECT_EQ(legend_text(response),
+            "Convex, straight or concave?  1/left convex · 2 straight · concave: no key  "
+            "(stimulus.stick_sagitta_m = 0.0125)");
+  EXPECT_EQ(legend_text(Overlay(Phase::fixation, "", false)), "");
+}
+
+TEST(NumberedFiles, ANewImageNeverTakesAnOlderOnesName) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "curvlab_numbered_files";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  EXPECT_EQ(curvlab::harness::unused_stem(dir, "trial_0004"), "trial_0004");
+  EXPECT_EQ(curvlab::harness::highest_number(dir, "stimulus_"), 0);
+  for (const char* name : {"trial_0004_left.png", "trial_0004.json", "trial_0004_2_left.png", "trial_00045_left.png",
+                           "stimulus_007_left.png", "stimulus_012_window.png", "stimulus_x.png"})
+    std::ofstream(dir / name) << "x";
+  EXPECT_EQ(curvlab::harness::unused_stem(dir, "trial_0004"), "trial_0004_3");
+  EXPECT_EQ(curvlab::harness::unused_stem(dir, "trial_0005"), "trial_0005");
+  EXPECT_EQ(curvlab::harness::highest_number(dir, "stimulus_"), 12);
+  EXPECT_EQ(curvlab::harness::highest_number(dir / "missing", "stimulus_"), 0);
+  fs::remove_all(dir);
+}

@@ -168,10 +168,11 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   EXPECT_GT(count_pixels(left, 0.3, 0.5, 0.7, 1.0, wood), 100) << "cue pixels below the centre";
   EXPECT_LT(count_pixels(left, 0.0, 0.0, 1.0, 0.15, cloth), count_pixels(left, 0.0, 0.4, 1.0, 0.55, cloth));
 
-  // The window holds both eyes side by side and the banner below them.
+  // The window holds both eyes side by side, a strip between them, and the
+  // banner below them.
   renderer::Rgba8Image window;
   ASSERT_TRUE(test::read_png_into((shots / "stimulus_001_window.png").string(), window));
-  EXPECT_EQ(window.width, 640);
+  EXPECT_EQ(window.width, 640 + static_cast<int>(renderer::SwapchainOptions{}.eye_gap_px));
   EXPECT_EQ(window.height, 320 + 28);
   EXPECT_GT(count_pixels(window, 0.1, 0.3, 0.4, 0.7, cloth), 1000) << "left eye in the left half";
   EXPECT_GT(count_pixels(window, 0.6, 0.3, 0.9, 0.7, cloth), 1000) << "right eye in the right half";
@@ -188,6 +189,44 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   // CURVLAB_KEEP_TEST_OUTPUT=1 keeps the screenshots for a person to look at.
   if (std::getenv("CURVLAB_KEEP_TEST_OUTPUT") == nullptr) std::filesystem::remove_all(dir);
   else std::cout << "screenshots kept in " << shots << '\n';
+}
+
+TEST_F(DesktopWindow, SideBySideEyesAreSeparatedByAGap) {
+  // Two abutting stick images read as one long stick; a dark strip keeps the
+  // eyes apart at the window's natural size.
+  DesktopOptions options = window(200, 150);
+  options.vsync = false;
+  const auto opened = open(options);
+  ASSERT_NE(opened, nullptr);
+  auto& backend = *opened;
+  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3, renderer::SceneKind::stick, {});
+  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
+  auto& s = std::get<renderer::StimulusScene>(stimulus);
+  for (int i = 0; i < 3; ++i) {
+    auto timing = backend.begin_frame();
+    ASSERT_TRUE(timing.has_value());
+    renderer::FrameDescription f;
+    f.space = s.space;
+    f.head = s.head;
+    f.rig = backend.rig(*timing, 0.063);
+    backend.submit(s.scene, f, Overlay{harness::io::Phase::stimulus, "", false}, true);
+  }
+  const auto w = backend.target().read_window();
+  ASSERT_TRUE(w.has_value());
+  const int gap = w->width - 2 * 200;
+  EXPECT_GE(gap, 16) << "the eyes abut";
+  // Every pixel of the strip is the window's background; the eyes' edge
+  // columns beside it are the scene's (not the background).
+  auto px = [&](int x, int y) {
+    const auto* p = &w->pixels[4 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(w->width) + x)];
+    return std::array<int, 3>{p[0], p[1], p[2]};
+  };
+  const auto strip = px(200, 10);
+  for (int y = 0; y < 150; y += 7)
+    for (int x = 200; x < 200 + gap; ++x) ASSERT_EQ(px(x, y), strip) << x << "," << y;
+  int differing = 0;
+  for (int y = 0; y < 150; ++y) differing += px(199, y) != strip;
+  EXPECT_GT(differing, 100) << "the left eye's last column looks like the gap";
 }
 
 TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <sstream>
 #include <map>
 
 using curvlab::testing::fresh_dir;
@@ -17,6 +18,13 @@ using curvlab::testing::query;
 using curvlab::testing::run_cli;
 
 namespace {
+
+std::string read_file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  if (in) bytes << in.rdbuf();
+  return bytes.str();
+}
 
 const std::string kProtocols = std::string(CURVLAB_SOURCE_DIR) + "/protocols/";
 
@@ -242,6 +250,28 @@ TEST(RunHeadless, AKeysOnlyProtocolIsRefusedInTheHeadsetBeforeAnythingStarts) {
   EXPECT_NE(r.out.find("'convex' (keys 1)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("--backend xr"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(db));
+}
+
+TEST(RunHeadless, ASecondRunIntoTheSameImagesFolderReplacesNothing) {
+  const auto dir = fresh_dir("images_twice");
+  const auto db = (dir / "s.sqlite").string();
+  const auto images = (dir / "images").string();
+  auto r = run_cli("run " + kProtocols + "demo.toml --participant P01 --db " + db + " --images " + images +
+                   " --render onset --quiet --msaa 1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto first = read_file_bytes(images + "/trial_0000_left.png");
+  ASSERT_FALSE(first.empty());
+  r = run_cli("run " + kProtocols + "demo.toml --participant P02 --db " + db + " --images " + images +
+              " --render onset --quiet --msaa 1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(read_file_bytes(images + "/trial_0000_left.png"), first);
+  EXPECT_FALSE(read_file_bytes(images + "/trial_0000_2_left.png").empty());
+  // Each session's onset events name its own files.
+  const auto named = query(db, "SELECT json_extract(detail, '$.images[0]') FROM events e JOIN sessions s "
+                               "USING (session_id) WHERE e.kind = 'onset' AND s.session_id = 2 ORDER BY e.event_id "
+                               "LIMIT 1");
+  ASSERT_EQ(named.size(), 1u);
+  EXPECT_EQ(named[0][0].rfind("_2_left.png"), named[0][0].size() - 11) << named[0][0];
 }
 
 TEST(Predict, PrintsProportionsAndPower) {

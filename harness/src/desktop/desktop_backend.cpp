@@ -1,5 +1,6 @@
 #include "desktop_backend.hpp"
 
+#include "curvlab/harness/numbered_files.hpp"
 #include "curvlab/harness/render_result.hpp"
 #include "curvlab/renderer/image_io.hpp"
 
@@ -174,6 +175,11 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
                                          std::to_string(options.eye_width_px) + "x" +
                                          std::to_string(options.eye_height_px)};
   std::unique_ptr<DesktopBackend> b(new DesktopBackend(options));
+  // Screenshots of an earlier run (a resumed session) keep their numbers.
+  if (!options.screenshot_dir.empty()) {
+    b->stimulus_onsets_ = harness::highest_number(options.screenshot_dir, "stimulus_");
+    b->f12_count_ = harness::highest_number(options.screenshot_dir, "screenshot_");
+  }
   if (!options.key_script.empty()) {
     auto loaded = load_key_script(options.key_script);
     if (!loaded) return loaded.error();
@@ -365,6 +371,22 @@ renderer::StereoRig DesktopBackend::rig(const FrameTiming& frame, double ipd_m) 
   return renderer::StereoRig::from_ipd(ipd_m, renderer::Fov::symmetric(kHorizontalFovRad, aspect));
 }
 
+std::string legend_text(const Overlay& overlay) {
+  using harness::io::Phase;
+  if (overlay.phase == Phase::instructions || overlay.phase == Phase::break_page || overlay.phase == Phase::done)
+    return overlay.waiting_for_input ? "space: continue" : "";
+  if (overlay.answers.empty()) return "";
+  std::string text = overlay.prompt.empty() ? "" : overlay.prompt + "  ";
+  for (std::size_t i = 0; i < overlay.answers.size(); ++i) {
+    const auto& a = overlay.answers[i];
+    std::string keys;
+    for (const auto& k : a.keys) keys += (keys.empty() ? "" : "/") + k;
+    text += (i ? " · " : "") + (keys.empty() ? a.answer + ": no key" : keys + " " + a.answer);
+  }
+  if (!overlay.value.empty()) text += "  (" + overlay.value + ")";
+  return text;
+}
+
 std::string DesktopBackend::banner_text(const Overlay& overlay) const {
   std::string text;
   auto add = [&text](const std::string& part) {
@@ -374,7 +396,7 @@ std::string DesktopBackend::banner_text(const Overlay& overlay) const {
   };
   add(std::string(harness::io::to_string(overlay.phase)));
   add(overlay.text);
-  if (overlay.waiting_for_input) add("waiting for a key");
+  add(legend_text(overlay));
   return text;
 }
 

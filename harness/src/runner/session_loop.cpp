@@ -4,6 +4,7 @@
 #include "progress.hpp"
 #include "session_records.hpp"
 
+#include "curvlab/harness/numbered_files.hpp"
 #include "curvlab/harness/protocol/adjustment.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/runner/image_observer.hpp"
@@ -723,6 +724,25 @@ class SessionLoop::Impl {
     return a;
   }
 
+  // What the pilot window shows beside the scene during an attempt: the
+  // trial's line, and from the onset the question, its answers and the value
+  // shown when a method varies one.
+  io::Overlay trial_overlay(const TrialRun& t, const AttemptRun& a, Phase phase) const {
+    io::Overlay o{phase, t.line, phase == Phase::response || phase == Phase::stimulus};
+    if (!o.waiting_for_input) return o;
+    const auto& j = *t.judgement;
+    o.prompt = j.prompt;
+    for (const auto& b : j.type->answer_bindings(j)) o.answers.push_back({b.answer, b.keys, b.buttons});
+    std::optional<double> shown = t.adaptive_value;
+    if (a.adjustment) shown = a.adjustment->value();
+    if (shown) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, " = %.6g", *shown);
+      o.value = j.parameter + buf;
+    }
+    return o;
+  }
+
   AttemptRun run_attempt(TrialRun& t) {
     AttemptRun a = begin_attempt(t);
     Frame f;
@@ -742,7 +762,7 @@ class SessionLoop::Impl {
       if (step.onset) present_onset(t, a, f);
       take_inputs(t, a, state, f);
       scene_->show(step.phase, t.settings.timeline.stimulus_during_response);
-      const io::Overlay overlay{step.phase, t.line, step.phase == Phase::response || step.phase == Phase::stimulus};
+      const io::Overlay overlay = trial_overlay(t, a, step.phase);
       phase_left_ns_ = phase_left(state, step.phase, t.settings.timeline, f.timing.now_ns);
       const auto stats = end(f, overlay, step.onset, t.id);
       if (step.onset) log_onset(t, a, stats, f.timing.predicted_display_ns);
@@ -828,9 +848,11 @@ class SessionLoop::Impl {
     onset.draws = stats.draws;
     if (observer_) onset.perceived_sagitta_m = last_perceived_;
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
+      // A trial run again (a later attempt, a resumed session, another
+      // session into the same folder) gets trial_NNNN_2, …: none is replaced.
       char stem[32];
       std::snprintf(stem, sizeof stem, "trial_%04zu", t.index);
-      const auto path = std::filesystem::path(options_.images_dir) / stem;
+      const auto path = std::filesystem::path(options_.images_dir) / unused_stem(options_.images_dir, stem);
       const auto files = station_.display->save_frame(path.string());
       if (!files.empty()) check(write_onset_record(path.string() + ".json", *world_, t.settings, a.placement, a.onset_view));
       // The files' names, not the folder: a folder can name a person.

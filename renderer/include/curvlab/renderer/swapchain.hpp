@@ -28,6 +28,9 @@ struct SwapchainOptions {
   WindowLayout layout = WindowLayout::side_by_side;
   bool vsync = true;  // FIFO; otherwise MAILBOX or IMMEDIATE when offered
   std::uint32_t banner_height_px = 28;  // the text line along the bottom
+  // Side by side: the dark strip between the eyes, so that the two images
+  // never read as one wide picture (two abutting sticks as one long stick).
+  std::uint32_t eye_gap_px = 32;
   std::string font_path = CURVLAB_DEFAULT_FONT;
 };
 

@@ -39,6 +39,12 @@ struct DesktopOptions {
 // What the window's keyboard can press: every key; pages continue on space.
 harness::io::Reach keyboard_reach();
 
+// The key legend the window's banner shows for what is on screen: on a page
+// "space: continue"; during a trial the question, each answer with its keys
+// ("1 convex · 2 straight · 3 concave"; an answer bound to no key says so)
+// and the value a method varies; "" otherwise.
+std::string legend_text(const harness::io::Overlay& overlay);
+
 // The window as display, pose source (keyboard and mouse move the head and
 // hands) and response source (keys). No display or no Vulkan: an Error of
 // kind `device`.

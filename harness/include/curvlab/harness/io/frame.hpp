@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace curvlab::harness::io {
 
@@ -55,14 +56,30 @@ struct InputEvent {
   bool pressed = true;
 };
 
+// One answer of the judgement on screen and the inputs that give it.
+struct AnswerInputs {
+  std::string answer;  // an option's value, or "decrease", "increase", "confirm"
+  std::vector<std::string> keys;
+  std::vector<std::string> buttons;
+};
+
 // What the runner shows besides the scene (for desktop windows and logs).
 // Instruction pages and breaks advance on the key "space" or "enter", or a
 // button named "continue"; responses come from the keys and buttons of the
 // judgement's options.
 struct Overlay {
+  Overlay() = default;
+  Overlay(Phase p, std::string line, bool waiting) : phase(p), text(std::move(line)), waiting_for_input(waiting) {}
+
   Phase phase = Phase::iti;
   std::string text;   // trial information line (block, trial, condition)
   bool waiting_for_input = false;  // instructions, response window, break
+  // During a trial: the judgement's question, its answers with their inputs
+  // (the pilot window's key legend), and the value an adaptive method or an
+  // adjustment shows ("stimulus.stick_sagitta_m = 0.0125").
+  std::string prompt;
+  std::vector<AnswerInputs> answers;
+  std::string value;
 };
 
 }  // namespace curvlab::harness::io
