@@ -121,6 +121,7 @@ std::variant<PhysicalTableFit, GeometryError> fit_square_table(std::span<const V
     const double r = glm::length(corners_m[static_cast<std::size_t>(j)] -
                                  physical_table_corner(fit, j));
     sum2 += r * r;
+    fit.corner_residual_m[static_cast<std::size_t>(j)] = r;
     if (r > fit.max_residual_m) {
       fit.max_residual_m = r;
       fit.worst_corner = j;

@@ -183,7 +183,7 @@ TEST(Schema, EverySectionAllowsExactlyTheLoadersKeys) {
        "/properties/blocks/items/properties/judgement/allOf/0/then/propertyNames/enum"},
   };
   for (const char* section : {"space", "tracking", "viewing", "timeline", "stimulus", "table", "backend",
-                              "counterbalance", "session", "instructions"}) {
+                              "calibration", "counterbalance", "session", "instructions"}) {
     cases.push_back({std::string("[") + section + "]", doc(std::string("[") + section + "]\n" + bad),
                      std::string("/properties/") + section});
   }

@@ -172,6 +172,32 @@ TEST(Calibration, SimulatedCalibrationIsReproducibleAndRecovered) {
   EXPECT_LT(angle_diff_rad(fit.yaw_rad, -2.5), 0.2 * std::numbers::pi / 180.0);
 }
 
+// Each touch's residual is its distance from the fitted corner, in touch
+// order; the largest is the one the fit names as worst.
+TEST(Calibration, ResidualsAreGivenPerCorner) {
+  const Truth t{0.2, -0.4, 0.5, 0.9, 0.75};
+  std::vector<Vec3> touches;
+  for (int j = 0; j < 4; ++j) touches.push_back(true_corner(t, j));
+  touches[1].y += 0.006;  // 6 mm high: only the height moves, by a quarter of it
+  const auto fit = std::get<PhysicalTableFit>(fit_square_table(touches));
+  double sum2 = 0.0;
+  for (int j = 0; j < 4; ++j) {
+    const double r = glm::length(touches[static_cast<std::size_t>(j)] - physical_table_corner(fit, j));
+    EXPECT_NEAR(fit.corner_residual_m[static_cast<std::size_t>(j)], r, 1e-12) << j;
+    sum2 += r * r;
+  }
+  EXPECT_NEAR(fit.corner_residual_m[1], 0.0045, 1e-9);
+  EXPECT_NEAR(fit.corner_residual_m[0], 0.0015, 1e-9);
+  EXPECT_EQ(fit.worst_corner, 1);
+  EXPECT_DOUBLE_EQ(fit.max_residual_m, fit.corner_residual_m[1]);
+  EXPECT_NEAR(fit.rms_residual_m, std::sqrt(sum2 / 4.0), 1e-12);
+  // Three corners: the fourth entry stays 0.
+  touches.pop_back();
+  const auto three = std::get<PhysicalTableFit>(fit_square_table(touches));
+  EXPECT_EQ(three.corner_residual_m[3], 0.0);
+  EXPECT_GT(three.corner_residual_m[1], 0.0);
+}
+
 std::string error_of(const std::vector<Vec3>& touches) {
   const auto result = fit_square_table(touches);
   if (std::holds_alternative<PhysicalTableFit>(result)) return "";

@@ -43,6 +43,29 @@ TEST(KeyScript, BadLinesNameFileLineAndWhatWasExpected) {
   EXPECT_NE(missing.error().message.find("/nonexistent/keys.txt"), std::string::npos);
 }
 
+// A hand line puts a hand on a lab position (a table corner) for scripted
+// calibrations; a malformed one names the form it expected.
+TEST(KeyScript, HandLinesPlaceAHand) {
+  auto parsed = parse_key_script("hand right -0.45 0.76 0.45 120\nspace\nhand left 0 1 -0.5\n", "keys.txt");
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  const auto& keys = parsed.value();
+  ASSERT_EQ(keys.size(), 3u);
+  ASSERT_TRUE(keys[0].hand_m.has_value());
+  EXPECT_FALSE(keys[0].left_hand);
+  EXPECT_EQ(*keys[0].hand_m, glm::dvec3(-0.45, 0.76, 0.45));
+  EXPECT_EQ(keys[0].delay_ns, 120'000'000);
+  EXPECT_FALSE(keys[1].hand_m.has_value());
+  EXPECT_TRUE(keys[2].left_hand);
+  EXPECT_EQ(keys[2].delay_ns, 300'000'000);
+  for (const char* bad : {"space\nhand middle 0 1 0\n", "space\nhand right 0 1\n", "space\nhand right 0 1 x\n",
+                          "space\nhand right 0 1 40\n", "space\nhand right 0 1 0 10 3\n"}) {
+    auto refused = parse_key_script(bad, "keys.txt");
+    ASSERT_FALSE(refused) << bad;
+    EXPECT_EQ(refused.error().message.rfind("keys.txt:2: expected `hand left|right X Y Z [DELAY_MS]`", 0), 0u)
+        << refused.error().message;
+  }
+}
+
 // A binary file given as --key-script: the message shows the bytes it could
 // not read as escapes, so the terminal is not sent control sequences.
 TEST(KeyScript, UnprintableBytesInAMessageAreEscaped) {
@@ -59,7 +82,7 @@ TEST(KeyScript, UnprintableBytesInAMessageAreEscaped) {
 }
 
 TEST(KeyScript, EachKeyWaitsForTheNextWaitAndItsDelay) {
-  KeyScriptPlayer player({{"space", 100, 1}, {"2", 50, 2}});
+  KeyScriptPlayer player({{"space", 100, 1, std::nullopt, false}, {"2", 50, 2, std::nullopt, false}});
   constexpr std::int64_t ms = 1'000'000;
   EXPECT_FALSE(player.due(0));            // nothing armed yet
   player.on_frame(false, 0);              // fixation: not waiting
@@ -136,6 +159,18 @@ TEST(PilotBody, HandsMoveWithinReach) {
   EXPECT_LE(glm::length(moved[curvlab::geometry::Device::left_hand].position_m -
                         moved[curvlab::geometry::Device::head].position_m),
             0.9 + 1e-9);
+}
+
+// A placed hand is where it was put, and then moves with the head.
+TEST(PilotBody, APlacedHandIsWhereItWasPutAndFollowsTheHead) {
+  PilotBody body;
+  body.look(80.0, 0.0);  // turned away from the start heading
+  const glm::dvec3 corner(-0.45, 0.76, 0.45);
+  body.place_hand(Hand::right, corner);
+  EXPECT_LT(glm::length(body.frame()[curvlab::geometry::Device::right_hand].position_m - corner), 1e-12);
+  body.walk(1.0, 0.0, 0.0, 0.25);  // 0.2 m forward
+  const auto moved = body.frame()[curvlab::geometry::Device::right_hand].position_m;
+  EXPECT_NEAR(glm::length(moved - corner), 0.2, 1e-12);
 }
 
 TEST(KeyNames, GlfwStyleLowerCase) {

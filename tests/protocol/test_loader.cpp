@@ -245,6 +245,32 @@ TEST(Diagnostics, MsaaTakesOnlyTheSampleCountsAndDefaultsToFour) {
   EXPECT_EQ(unset->session_settings().viewing.msaa, 4);
 }
 
+// [calibration]: the table is calibrated before the session, with the
+// tip offset and residual limit written; without the section nothing is.
+TEST(Diagnostics, CalibrationSectionIsReadAndChecked) {
+  const std::string head = "[protocol]\nname = \"x\"\nversion = \"1\"\n[randomization]\nseed = 1\n";
+  const std::string tail = "[judgement]\ntype = \"choice\"\n"
+                           "options = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n";
+  const auto unset = load_protocol_text(head + tail, "inline.toml");
+  ASSERT_TRUE(unset.has_value());
+  EXPECT_FALSE(unset->calibration.at_start);
+  EXPECT_EQ(unset->calibration.max_residual_mm, 15.0);
+  const auto set = load_protocol_text(
+      head + "[calibration]\nat_start = true\ntip_offset_m = [0.0, -0.01, -0.06]\nmax_residual_mm = 10\n" + tail,
+      "inline.toml");
+  ASSERT_TRUE(set.has_value()) << set.error().message;
+  EXPECT_TRUE(set->calibration.at_start);
+  EXPECT_EQ(set->calibration.tip_offset_m, (std::array<double, 3>{0.0, -0.01, -0.06}));
+  EXPECT_EQ(set->calibration.max_residual_mm, 10.0);
+  const auto bad = load_protocol_text(
+      head + "[calibration]\nat_start = \"yes\"\nmax_residual_mm = 0.5\ntip_offset_m = [0, 0, 2]\n" + tail,
+      "inline.toml");
+  std::set<std::string> fields;
+  for (const auto& d : problems(bad)) fields.insert(d.field);
+  EXPECT_EQ(fields, (std::set<std::string>{"calibration.at_start", "calibration.max_residual_mm",
+                                           "calibration.tip_offset_m"}));
+}
+
 TEST(Diagnostics, GarbageNeverCrashes) {
   for (const std::string& text : {std::string(), std::string("\0\0\0", 3), std::string("[[[[["),
                                  std::string("a = [") + std::string(5000, '['), std::string("x = 1e999"),

@@ -189,7 +189,8 @@ TEST(TrialState, PagesIgnoreHeldKeysAndWaitTheirMinimumTime) {
 
 TEST(TrialState, NamesRoundTrip) {
   for (auto p : {rn::Phase::instructions, rn::Phase::fixation, rn::Phase::stimulus, rn::Phase::response,
-                 rn::Phase::iti, rn::Phase::break_page, rn::Phase::done, rn::Phase::paused, rn::Phase::tracking_lost})
+                 rn::Phase::iti, rn::Phase::break_page, rn::Phase::done, rn::Phase::paused, rn::Phase::tracking_lost,
+                 rn::Phase::calibration})
     EXPECT_EQ(rn::parse_phase(rn::to_string(p)), p);
   for (auto r : {rn::AbortReason::pause, rn::AbortReason::recenter, rn::AbortReason::tracking_lost,
                  rn::AbortReason::quit})

@@ -76,6 +76,7 @@ void add_measure_commands(CLI::App& app);  // measure stick
 void add_protocol_commands(CLI::App& app);
 void add_authoring_commands(CLI::App& app);  // schema, new, preview
 void add_run_commands(CLI::App& app);
+void add_calibrate_commands(CLI::App& app);  // calibrate: the physical table
 // Reads and loads a protocol file, or prints every diagnostic and throws a
 // UsageError (exit 2). `text`, when given, receives the text that was loaded
 // (sessions store it).

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   curvlab::cli::add_protocol_commands(app);
   curvlab::cli::add_authoring_commands(app);
   curvlab::cli::add_run_commands(app);
+  curvlab::cli::add_calibrate_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

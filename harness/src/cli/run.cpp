@@ -2,6 +2,8 @@
 // participant (or the simulated observer), their continuation after a crash,
 // predictions before a study, and re-rendering of what was seen.
 #include "common.hpp"
+#include "calibrate.hpp"
+#include "station.hpp"
 
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/export.hpp"
@@ -40,23 +42,9 @@ namespace {
 namespace rn = curvlab::harness::runner;
 namespace pr = curvlab::harness::protocol;
 
-// The signal that asked a session to stop (0: none). A handler may only set
-// a lock-free atomic; the session loop reads it once a frame.
-std::atomic<int> stop_signal{0};
-
-extern "C" void on_stop_signal(int sig) { stop_signal.store(sig, std::memory_order_relaxed); }
-
 // SIGINT (Ctrl-C), SIGTERM and SIGHUP (a closed terminal) end a session
-// interrupted and flushed, with the resume command printed; a second one
-// takes the default action (SA_RESETHAND), which SQLite survives too.
-void watch_stop_signals(rn::RunOptions& o) {
-  struct sigaction sa {};
-  sa.sa_handler = on_stop_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND | SA_RESTART;
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
-  o.stop_signal = &stop_signal;
-}
+// interrupted and flushed, with the resume command printed (station.hpp).
+void watch_stop_signals(rn::RunOptions& o) { o.stop_signal = &catch_stop_signals(); }
 
 struct ObserverArgs {
   std::string model = "perception";
@@ -96,29 +84,6 @@ std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::ui
   return p;
 }
 
-struct BackendArgs {
-  std::string backend = "headless";
-  std::string pace = "fast";
-  std::string render = "all";
-  std::string images;
-  std::string trajectory;
-  std::optional<int> msaa;  // overrides the protocol's [viewing] msaa
-  bool software = false;
-  std::string window_size = "960x960";
-  std::string preview = "side-by-side";
-  std::string screenshot;
-  std::string key_script;
-  std::vector<std::string> responses;  // "hid:MAPPING.toml"
-  bool quiet = false;
-  bool json = false;
-  std::string export_dir;
-  std::string progress = "bar";
-  std::string operator_window = "auto";
-  std::string operator_script;
-  std::string operator_screenshot;
-  std::string operator_eyes = "both";
-};
-
 void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--backend", b.backend, "headless (default), desktop or xr");
   cmd->add_option("--pace", b.pace, "headless: fast (simulated time, default) or realtime");
@@ -157,22 +122,6 @@ std::vector<rn::OperatorAction> read_operator_script(const BackendArgs& a) {
   return std::move(script).value();
 }
 
-bool display_present() {
-  const char* x = std::getenv("DISPLAY");
-  const char* wl = std::getenv("WAYLAND_DISPLAY");
-  return (x != nullptr && *x != '\0') || (wl != nullptr && *wl != '\0');
-}
-
-// Whether the run opens the operator window; a bad value is a usage error.
-bool wants_operator_window(const BackendArgs& a) {
-  if (a.operator_window == "off") return false;
-  if (a.operator_window == "on") return true;
-  if (a.operator_window != "auto")
-    throw UsageError("--operator-window must be auto, on or off, got '" + a.operator_window + "'");
-  // The desktop pilot's own window is the participant's view: its panel opens on request.
-  return a.backend == "xr" && display_present();
-}
-
 // The operator's console: the window (--operator-window), or the script
 // alone, or none. Made after the display, so destroyed before it.
 std::unique_ptr<rn::OperatorConsole> open_console(const BackendArgs& a, std::vector<rn::OperatorAction> script,
@@ -204,126 +153,6 @@ void check_operator_args(const BackendArgs& a) {
   (void)wants_operator_window(a);
 }
 
-// The session's devices (io/station.hpp), made before anything is written:
-// a display that cannot start (no window system, no OpenXR runtime) leaves
-// no trace. The one place where a display, a pose source and response
-// sources are put together: the headset and the desktop window are all three
-// at once; headless is an offscreen display with poses from a trajectory,
-// answered by the simulated observer (RunOptions::observer).
-struct Devices {
-  std::unique_ptr<harness::io::InteractiveDisplay> interactive;  // desktop, xr
-  rn::HeadlessDevices headless;
-  std::unique_ptr<devices::SteadyClock> steady;
-  const devices::Clock* clock = nullptr;
-  std::vector<std::unique_ptr<devices::HidResponses>> hid;
-  harness::io::Station station;
-
-  void use(harness::io::InteractiveDisplay& d) {
-    station.display = &d;
-    station.poses = &d;
-    station.responses.push_back(&d);
-  }
-};
-
-rn::HeadlessOptions headless_options(const BackendArgs& a, const pr::Protocol& p, std::int64_t start_ns,
-                                     std::uint32_t msaa) {
-  rn::HeadlessOptions o;
-  if (a.pace == "fast") o.pace = rn::Pace::fast;
-  else if (a.pace == "realtime") o.pace = rn::Pace::realtime;
-  else throw UsageError("--pace must be fast or realtime, got '" + a.pace + "'");
-  o.refresh_hz = p.refresh_hz;
-  o.width_px = static_cast<std::uint32_t>(p.resolution_width);
-  o.height_px = static_cast<std::uint32_t>(p.resolution_height);
-  o.software = a.software;
-  o.msaa = msaa;
-  o.start_ns = start_ns;
-  return o;
-}
-
-void open_headless(Devices& out, const BackendArgs& a, const pr::Protocol& p,
-                   const geometry::PhysicalTableFit& table, std::int64_t start_ns, std::uint32_t msaa) {
-  rn::TrajectoryOptions t;
-  t.table = table;
-  if (!a.trajectory.empty()) {
-    auto file = harness::read_trajectory_csv(a.trajectory);
-    if (!file) raise(file.error());
-    t.trajectory = file.value().samples;
-    if (t.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
-  }
-  auto made = rn::HeadlessDevices::create(headless_options(a, p, start_ns, msaa), std::move(t));
-  if (!made) raise(made.error());
-  out.headless = std::move(made).value();
-  out.clock = &out.headless.clock();
-  out.station = out.headless.station();
-}
-
-Devices open_devices_of_kind(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
-                             std::int64_t start_ns, std::uint32_t msaa) {
-  Devices out;
-  if (a.backend == "headless") {
-    open_headless(out, a, p, table, start_ns, msaa);
-    return out;
-  }
-  out.steady = std::make_unique<devices::SteadyClock>();
-  out.clock = out.steady.get();
-  if (a.backend == "desktop") {
-    desktop::DesktopOptions o;
-    std::tie(o.eye_width_px, o.eye_height_px) = parse_size(a.window_size, "--window-size");
-    if (a.preview == "side-by-side") o.preview = desktop::DesktopPreview::side_by_side;
-    else if (a.preview == "left") o.preview = desktop::DesktopPreview::left;
-    else if (a.preview == "right") o.preview = desktop::DesktopPreview::right;
-    else throw UsageError("--preview must be side-by-side, left or right, got '" + a.preview + "'");
-    o.screenshot_dir = a.screenshot;
-    o.key_script = a.key_script;
-    o.software = a.software;
-    o.msaa = msaa;
-    o.clock = out.clock;
-    auto made = desktop::make_desktop_backend(o);
-    if (!made) raise(made.error());
-    out.interactive = std::move(made).value();
-  } else if (a.backend == "xr") {
-    xr::XrBackendOptions o;
-    o.clock = out.clock;
-    o.mirror = wants_operator_window(a);
-    o.msaa = msaa;
-    auto made = xr::make_xr_backend(o);
-    if (!made) raise(made.error());
-    out.interactive = std::move(made).value();
-  } else {
-    throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
-  }
-  out.use(*out.interactive);
-  return out;
-}
-
-// The HID mapping files of --responses, read (a bad one: exit 2).
-std::vector<devices::MappingFile> response_mappings(const BackendArgs& a) {
-  std::vector<devices::MappingFile> out;
-  for (const auto& spec : a.responses) {
-    if (spec.rfind("hid:", 0) != 0)
-      throw UsageError("--responses " + spec + ": expected hid:MAPPING.toml (a HID mapping file, docs/devices.md)");
-    auto file = devices::load_mapping(spec.substr(4));
-    if (!file) raise(file.error());
-    out.push_back(std::move(file).value());
-  }
-  return out;
-}
-
-// The HID response devices of --responses, each file's devices all
-// connected: a bad mapping file is bad input (exit 2), an absent device a
-// device error (exit 1), before anything is written.
-void open_responses(Devices& out, const BackendArgs& a) {
-  if (a.responses.empty()) return;
-  if (a.backend == "headless" && a.pace == "fast")
-    throw UsageError("--responses needs a person answering in real time: add --pace realtime, or use --backend "
-                     "desktop or xr");
-  for (const auto& file : response_mappings(a)) {
-    auto opened = devices::HidResponses::open(file, *out.clock);
-    if (!opened) raise(opened.error());
-    out.hid.push_back(std::move(opened).value());
-    out.station.responses.push_back(out.hid.back().get());
-  }
-}
 
 // Every answer of the protocol must be one the session's devices can give: a
 // keys-only protocol in the headset would time out every trial. Refused
@@ -348,12 +177,14 @@ void check_answers_reachable(const BackendArgs& a, const pr::Protocol& p, bool o
 // display's renderer clamps it to the device, with a warning.
 Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
                      std::int64_t start_ns) {
-  const std::uint32_t msaa = a.msaa ? check_msaa(*a.msaa)
-                                    : static_cast<std::uint32_t>(p.session_settings().viewing.msaa);
-  Devices out = open_devices_of_kind(a, p, table, start_ns, msaa);
-  warn_if_msaa_clamped(msaa, out.station.display->info().msaa);
-  open_responses(out, a);
-  return out;
+  StationNeeds n;
+  n.msaa = a.msaa ? check_msaa(*a.msaa) : static_cast<std::uint32_t>(p.session_settings().viewing.msaa);
+  n.refresh_hz = p.refresh_hz;
+  n.width_px = static_cast<std::uint32_t>(p.resolution_width);
+  n.height_px = static_cast<std::uint32_t>(p.resolution_height);
+  n.table = table;
+  n.start_ns = start_ns;
+  return open_station(a, n);
 }
 
 rn::RunOptions drawing_options(const BackendArgs& a) {
@@ -419,7 +250,7 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   if (s.status != data::SessionStatus::completed) {
     std::cerr << "session " << s.session_id << " stopped before the end; continue it with: curvlab resume --db "
               << s.db_path << " --session " << s.session_id << '\n';
-    if (const int sig = stop_signal.load(); sig != 0)
+    if (const int sig = stop_signal_received(); sig != 0)
       throw RuntimeFailure("session interrupted by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")",
                            128 + sig);
     throw RuntimeFailure("session interrupted");
@@ -457,6 +288,29 @@ std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& pa
   return *fit;
 }
 
+// The protocol's [calibration] step runs before the session with a person
+// at the devices (desktop, xr); a headless run's simulated participant has
+// no hand to touch with, so it uses the nominal or --calibration table.
+bool calibrates_at_start(const pr::Protocol& p, const BackendArgs& a) {
+  return p.calibration.at_start && a.backend != "headless";
+}
+
+// The step's options: the table as known (--calibration, else nominal) and
+// the protocol's tip offset and residual limit.
+rn::CalibrationOptions calibration_options(const pr::Protocol& p, const geometry::PhysicalTableFit& known,
+                                           const RunArgs& a, const rn::RunOptions& o) {
+  rn::CalibrationOptions c;
+  c.known = known;
+  c.tip_offset_m = {p.calibration.tip_offset_m[0], p.calibration.tip_offset_m[1], p.calibration.tip_offset_m[2]};
+  c.limits.max_residual_m = p.calibration.max_residual_mm / 1000.0;
+  c.ipd_m = o.ipd_m.value_or(p.session_settings().viewing.ipd_m);
+  c.width_px = static_cast<std::uint32_t>(p.resolution_width);
+  c.height_px = static_cast<std::uint32_t>(p.resolution_height);
+  c.screenshot_dir = a.backend.screenshot;
+  c.stop_signal = o.stop_signal;
+  return c;
+}
+
 void run_command(const RunArgs& a) {
   std::string text;
   const pr::Protocol p = load_protocol_or_usage(a.protocol, &text);
@@ -485,13 +339,14 @@ void run_command(const RunArgs& a) {
   auto script = read_operator_script(a.backend);
   check_answers_reachable(a.backend, p, o.observer.has_value());
   auto devices = open_devices(a.backend, p, table, 0);
+  watch_stop_signals(o);
+  if (calibrates_at_start(p, a.backend)) o.calibration = calibrate_on(devices, calibration_options(p, table, a, o)).fit;
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(parent, ec);
   }
   auto console = open_console(a.backend, std::move(script), *devices.station.display, db);
   o.console = console.get();
-  watch_stop_signals(o);
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
   report(result, a.backend);

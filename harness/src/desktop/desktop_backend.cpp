@@ -349,8 +349,10 @@ void DesktopBackend::on_scroll(double dy) {
 
 Signal DesktopBackend::poll(std::vector<InputEvent>& out) {
   if (script_) {
-    if (auto key = script_->due(options_.clock->now_ns()))
-      out.push_back({options_.clock->now_ns(), key->name, "script", true});
+    if (auto key = script_->due(options_.clock->now_ns())) {
+      if (key->hand_m) body_.place_hand(key->left_hand ? Hand::left : Hand::right, *key->hand_m);
+      else out.push_back({options_.clock->now_ns(), key->name, "script", true});
+    }
   }
   while (!pending_.empty()) {
     out.push_back(std::move(pending_.front()));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -34,6 +35,24 @@ std::string printable(const std::string& word) {
 
 }  // namespace
 
+namespace {
+
+// "X Y Z" of a hand line, in metres within 10 m of the origin.
+std::optional<glm::dvec3> hand_position(std::istringstream& words) {
+  glm::dvec3 p{0.0};
+  for (int i = 0; i < 3; ++i) {
+    std::string word;
+    if (!(words >> word)) return std::nullopt;
+    double v = 0.0;
+    const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), v);
+    if (ec != std::errc() || end != word.data() + word.size() || !(std::abs(v) <= 10.0)) return std::nullopt;
+    p[i] = v;
+  }
+  return p;
+}
+
+}  // namespace
+
 Result<std::vector<ScriptedKey>> parse_key_script(const std::string& text,
                                                                          const std::string& origin) {
   std::vector<ScriptedKey> keys;
@@ -54,16 +73,26 @@ Result<std::vector<ScriptedKey>> parse_key_script(const std::string& text,
     std::transform(key.begin(), key.end(), key.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     k.name = key;
+    const std::string form = key == "hand" ? "`hand left|right X Y Z [DELAY_MS]`" : "`KEY [DELAY_MS]`";
+    if (key == "hand") {
+      std::string side;
+      words >> side;
+      k.left_hand = side == "left";
+      k.hand_m = hand_position(words);
+      if ((side != "left" && side != "right") || !k.hand_m)
+        return Error{Error::Kind::bad_input, where + "expected " + form +
+                                                 " with the hand's lab position X Y Z in metres (each within 10)"};
+    }
     if (words >> delay) {
       long long ms = -1;
       const auto [end, ec] = std::from_chars(delay.data(), delay.data() + delay.size(), ms);
       if (ec != std::errc() || end != delay.data() + delay.size() || ms < 0 || ms > 3'600'000)
-        return Error{Error::Kind::bad_input, where + "expected `KEY [DELAY_MS]` with DELAY_MS a whole number "
+        return Error{Error::Kind::bad_input, where + "expected " + form + " with DELAY_MS a whole number "
                                       "of milliseconds from 0 to 3600000, got '" + printable(delay) + "'"};
       k.delay_ns = static_cast<std::int64_t>(ms) * 1'000'000;
     }
     if (words >> extra)
-      return Error{Error::Kind::bad_input, where + "expected `KEY [DELAY_MS]`, got more after the delay: '" +
+      return Error{Error::Kind::bad_input, where + "expected " + form + ", got more after the delay: '" +
                             printable(extra) + "'"};
     keys.push_back(std::move(k));
   }

@@ -1,11 +1,15 @@
 // Key presses made for the participant in scripted pilots and tests
 // (DesktopOptions::key_script): one `KEY [DELAY_MS]` per line, '#' starts a
 // comment. Each key is pressed DELAY_MS (default 300) after the runner next
-// waits for input. Parsing is separate from playing, and both are pure, so
+// waits for input. A line `hand left|right X Y Z [DELAY_MS]` instead puts
+// that hand at the lab position (X, Y, Z) metres, by the same timing rule
+// (scripted table calibrations: the hand on a corner, then `space`). Parsing is separate from playing, and both are pure, so
 // the timing rule is tested without a window.
 #pragma once
 
 #include "curvlab/harness/result.hpp"
+
+#include <glm/vec3.hpp>
 
 #include <cstdint>
 #include <optional>
@@ -16,9 +20,12 @@
 namespace curvlab::desktop {
 
 struct ScriptedKey {
-  std::string name;  // lower-case, as InputEvent names keys ("1", "space", "left")
+  std::string name;  // lower-case, as InputEvent names keys ("1", "space", "left"); "hand" for a hand line
   std::int64_t delay_ns = 300'000'000;
   int line = 0;  // in the script file, for messages
+  // A hand line: where the hand goes (lab metres), and which hand.
+  std::optional<glm::dvec3> hand_m;
+  bool left_hand = false;
 };
 
 // Parses script text; `origin` names the file in messages. A bad line is a

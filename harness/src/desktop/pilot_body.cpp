@@ -53,6 +53,11 @@ void PilotBody::move_hand(Hand hand, double dx_px, double dy_px, double scroll_s
   if (reach > 0.9) offset *= 0.9 / reach;
 }
 
+void PilotBody::place_hand(Hand hand, const glm::dvec3& lab_m) {
+  // The offset is kept in the heading frame (frame() turns it back).
+  (hand == Hand::left ? left_offset_m_ : right_offset_m_) = glm::inverse(heading(yaw_rad_)) * (lab_m - head_m_);
+}
+
 geometry::LabFrame PilotBody::frame() const {
   geometry::LabFrame f;
   const glm::dquat h = heading(yaw_rad_);

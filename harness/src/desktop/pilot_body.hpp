@@ -36,6 +36,10 @@ class PilotBody {
   // Moves a hand in the head's heading frame: right, up (mouse, pixels) and
   // forward (scroll steps).
   void move_hand(Hand hand, double dx_px, double dy_px, double scroll_steps);
+  // Puts a hand at a lab position (scripted pilots: a touch on a table
+  // corner), wherever the head is; the hand then moves with the head as
+  // before. Not limited to an arm's reach.
+  void place_hand(Hand hand, const glm::dvec3& lab_m);
   // Back to the start pose, hands included.
   void reset();
 

@@ -90,11 +90,12 @@ class Loader : private TableReader {
   // ---- top level ---------------------------------------------------------
   void read_root(const toml::table& root, Protocol& p) {
     check_keys(root, "", {"protocol", "space", "tracking", "viewing", "timeline", "stimulus",
-                          "table", "backend", "randomization", "counterbalance", "session",
+                          "table", "backend", "calibration", "randomization", "counterbalance", "session",
                           "factors", "judgement", "instructions", "blocks"});
     read_metadata(root, p);
     read_settings(root, "", p.session_overrides);
     read_backend(root, p);
+    read_calibration(root, p);
     read_randomization(root, p);
     read_factors(root, p);
     // A top-level [judgement] is required unless every block has its own
@@ -152,6 +153,32 @@ class Loader : private TableReader {
           p.resolution_height = static_cast<int>(h);
         }
       }
+    }
+  }
+
+  void read_calibration(const toml::table& root, Protocol& p) {
+    const toml::table* c = sub_table(root, "calibration", "");
+    if (!c) return;
+    check_keys(*c, "calibration", {"at_start", "tip_offset_m", "max_residual_mm"});
+    p.calibration.at_start = get_bool(*c, "at_start", "calibration").value_or(false);
+    if (const toml::node* t = c->get("tip_offset_m")) {
+      const auto* arr = t->as_array();
+      bool ok = arr != nullptr && arr->size() == 3;
+      for (std::size_t i = 0; ok && i < 3; ++i) {
+        const auto v = node_number((*arr)[i]);
+        ok = v && std::abs(*v) <= 0.5;
+        if (ok) p.calibration.tip_offset_m[i] = *v;
+      }
+      if (!ok)
+        error(pos_of(*t), "calibration.tip_offset_m",
+              with_found("expected [x, y, z] in metres, three numbers in [-0.5, 0.5]", *t));
+    }
+    if (const auto mm = get_number(*c, "max_residual_mm", "calibration", false)) {
+      if (*mm < 1.0 || *mm > 100.0)
+        error(pos_of(*c->get("max_residual_mm")), "calibration.max_residual_mm",
+              with_found("expected a number in [1, 100] millimetres", *c->get("max_residual_mm")));
+      else
+        p.calibration.max_residual_mm = *mm;
     }
   }
 

@@ -211,6 +211,29 @@ Json block_schema() {
   return j;
 }
 
+// [calibration]: the physical table's calibration as a session step (loader.cpp, read_calibration).
+Json calibration_schema() {
+  return closed_object(
+      {{"at_start", with_default(Json{{"type", "boolean"},
+                                      {"description", "calibrate the physical table by touching its corners "
+                                                      "before the session (desktop and xr runs)"}},
+                                 false)},
+       {"tip_offset_m", {{"type", "array"},
+                         {"minItems", 3},
+                         {"maxItems", 3},
+                         {"items", {{"type", "number"}, {"minimum", -0.5}, {"maximum", 0.5}}},
+                         {"default", Json::array({0.0, 0.0, 0.0})},
+                         {"description", "[x, y, z]: the touching tip in the right controller's grip frame, "
+                                         "metres"}}},
+       {"max_residual_mm", with_default(Json{{"type", "number"},
+                                             {"minimum", 1},
+                                             {"maximum", 100},
+                                             {"description", "a touch farther than this from its fitted corner "
+                                                             "is refused (millimetres)"}},
+                                        15.0)}},
+      "the physical table's calibration as a session step (docs/devices.md)");
+}
+
 Json root_schema() {
   Json props = Json::object();
   Json meta = closed_object({{"name", {{"type", "string"}, {"minLength", 1},
@@ -231,6 +254,7 @@ Json root_schema() {
                        {"items", {{"type", "integer"}, {"minimum", 16}, {"maximum", 8192}}},
                        {"description", "[width, height] in pixels"}}}},
       "the backend and display");
+  props["calibration"] = calibration_schema();
   Json randomization = closed_object(
       {{"seed", integer(0, std::numeric_limits<std::int64_t>::max(),
                         "the protocol's seed: every order is reproducible from it")},

@@ -56,7 +56,8 @@ data::EventKind page_event(Phase phase) {
     case Phase::response:
     case Phase::iti:
     case Phase::paused:
-    case Phase::tracking_lost: break;
+    case Phase::tracking_lost:
+    case Phase::calibration: break;
   }
   std::fprintf(stderr, "curvlab: a page shown in phase %s\n", std::string(to_string(phase)).c_str());
   std::abort();

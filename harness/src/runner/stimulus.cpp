@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -60,6 +61,12 @@ std::string calibration_json(const geometry::PhysicalTableFit& fit) {
   j["rms_residual_m"] = fit.rms_residual_m;
   j["max_residual_m"] = fit.max_residual_m;
   j["corners_used"] = fit.corners_used;
+  // Each touch's distance from its fitted corner, in touch order (none for a
+  // table that was not touched: the nominal one).
+  auto residuals = nlohmann::ordered_json::array();
+  for (int c = 0; c < std::clamp(fit.corners_used, 0, 4); ++c)
+    residuals.push_back(fit.corner_residual_m[static_cast<std::size_t>(c)]);
+  j["residuals_m"] = residuals;
   return j.dump();
 }
 
@@ -77,6 +84,10 @@ Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& tex
     fit.rms_residual_m = j.value("rms_residual_m", 0.0);
     fit.max_residual_m = j.value("max_residual_m", 0.0);
     fit.corners_used = j.value("corners_used", 0);
+    const auto residuals = j.value("residuals_m", std::vector<double>{});
+    if (residuals.size() > 4 || fit.corners_used < 0 || fit.corners_used > 4)
+      return bad("corners_used must lie in 0 … 4, with at most one residual each in residuals_m");
+    std::copy(residuals.begin(), residuals.end(), fit.corner_residual_m.begin());
   } catch (const nlohmann::json::exception& e) {
     return bad(std::string(e.what()) + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
   }

@@ -18,6 +18,11 @@
 //                            BUTTON a b x y menu trigger squeeze; SECONDS after
 //                            the session first became FOCUSED; repeated every
 //                            EVERY s; held HOLD s, default 0.08)
+//   CURVLAB_TEST_XR_HAND     hand placements, semicolon-separated
+//                            HAND@SECONDS=X,Y,Z: from SECONDS after focus on,
+//                            that hand's grip is at (X, Y, Z) in STAGE,
+//                            unrotated, until its next placement (before
+//                            the first: resting on the table's near edge)
 //   CURVLAB_TEST_XR_UNFOCUS  spells without input focus, SECONDS+DURATION,
 //                            comma-separated: FOCUSED → VISIBLE → FOCUSED
 //   CURVLAB_TEST_XR_EXIT     SECONDS: the runtime asks the application to exit
@@ -1153,7 +1158,8 @@ std::pair<Pose, bool> stage_pose(const Space& sp, XrTime t) {
     // action is bound in the active profile.
     const Session& s = *sp.session;
     tracked = s.state == XR_SESSION_STATE_FOCUSED && sp.action->set->attached_to == &s;
-    base = hand_pose(sp.hand, ts);
+    const double since_focus_s = static_cast<double>(to_mono(t) - s.focus_t0_ns) * 1e-9;
+    base = hand_pose(s.instance->script, sp.hand, ts, s.focused_once ? since_focus_s : -1.0);
   } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_MAX_ENUM) {
     tracked = false;  // an action space whose action was destroyed
   } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_VIEW) {

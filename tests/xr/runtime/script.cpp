@@ -92,6 +92,28 @@ std::optional<Press> parse_press(const std::string& item) {
   return p;
 }
 
+// "right@1.5=0.45,0.76,-0.45": the right grip at that point from 1.5 s on.
+std::optional<Placement> parse_placement(const std::string& item) {
+  Placement p;
+  const auto at = item.find('@');
+  const auto eq = item.find('=');
+  if (at == std::string::npos || eq == std::string::npos || eq < at) return std::nullopt;
+  const std::string hand = item.substr(0, at);
+  if (hand != "left" && hand != "right") return std::nullopt;
+  p.hand = hand == "left" ? 0 : 1;
+  const auto start = number(item.substr(at + 1, eq - at - 1));
+  const auto xyz = split(item.substr(eq + 1), ',');
+  if (!start || *start < 0.0 || xyz.size() != 3) return std::nullopt;
+  p.at_s = *start;
+  double* out[3] = {&p.position_m.x, &p.position_m.y, &p.position_m.z};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const auto v = number(xyz[i]);
+    if (!v || std::abs(*v) > 10.0) return std::nullopt;
+    *out[i] = *v;
+  }
+  return p;
+}
+
 }  // namespace
 
 std::optional<Script> read_script(std::string& error) {
@@ -106,6 +128,17 @@ std::optional<Script> read_script(std::string& error) {
         return std::nullopt;
       }
       s.presses.push_back(*p);
+    }
+  }
+  if (const char* v = env("CURVLAB_TEST_XR_HAND")) {
+    for (const auto& item : split(v, ';')) {
+      auto p = parse_placement(item);
+      if (!p) {
+        error = "CURVLAB_TEST_XR_HAND: '" + item +
+                "': expected HAND@SECONDS=X,Y,Z with HAND left or right and X, Y, Z in metres (each within 10)";
+        return std::nullopt;
+      }
+      s.placements.push_back(*p);
     }
   }
   if (const char* v = env("CURVLAB_TEST_XR_UNFOCUS")) {
@@ -200,6 +233,13 @@ Pose head_pose(double t_s) {
 Pose hand_pose(int hand, double t_s) {
   (void)t_s;
   return {Quat{}, {hand == 0 ? -0.25 : 0.25, 0.79, 0.52}};
+}
+
+Pose hand_pose(const Script& script, int hand, double t_s, double since_focus_s) {
+  const Placement* latest = nullptr;
+  for (const Placement& p : script.placements)
+    if (p.hand == hand && p.at_s <= since_focus_s && (latest == nullptr || p.at_s >= latest->at_s)) latest = &p;
+  return latest != nullptr ? Pose{Quat{}, latest->position_m} : hand_pose(hand, t_s);
 }
 
 std::optional<double> held_since(const Press& press, double t_s) {

@@ -45,6 +45,15 @@ struct Press {
   double hold_s = 0.08;
 };
 
+// A scripted hand placement: from `at_s` (seconds after the session first
+// became FOCUSED) on, until the same hand's next placement, the hand's grip
+// is at `position_m` in STAGE, unrotated.
+struct Placement {
+  int hand = 1;  // 0 left, 1 right
+  double at_s = 0.0;
+  Vec3 position_m;
+};
+
 // A spell without input focus: FOCUSED → VISIBLE at `at_s`, back after `for_s`.
 struct Unfocus {
   double at_s = 0.0;
@@ -61,6 +70,7 @@ struct Fault {
 
 struct Script {
   std::vector<Press> presses;
+  std::vector<Placement> placements;  // CURVLAB_TEST_XR_HAND, in time order per hand
   std::optional<Fault> fault;
   std::vector<Unfocus> unfocus;
   std::optional<double> exit_at_s;  // request exit (STOPPING) at this time
@@ -87,6 +97,10 @@ std::optional<Script> read_script(std::string& error);
 Pose head_pose(double t_s);
 // Left (hand 0) or right (hand 1) grip pose: resting on the near edge.
 Pose hand_pose(int hand, double t_s);
+// The same, where the script places the hand: the latest placement of that
+// hand at or before `since_focus_s` (seconds after the session first became
+// FOCUSED), else the resting pose.
+Pose hand_pose(const Script& script, int hand, double t_s, double since_focus_s);
 
 // Interpupillary distance of the scripted headset.
 inline constexpr double kIpdM = 0.064;

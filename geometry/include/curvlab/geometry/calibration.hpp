@@ -21,6 +21,7 @@
 
 #include <glm/vec2.hpp>
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <variant>
@@ -44,6 +45,9 @@ struct PhysicalTableFit {
   double max_residual_m = 0.0;
   int worst_corner = -1;  // index of the touch with the largest residual
   int corners_used = 0;
+  // Each touch's distance from its fitted corner, in touch order; the first
+  // corners_used entries are meaningful, the rest are 0.
+  std::array<double, 4> corner_residual_m{};
 };
 
 struct CalibrationLimits {

@@ -21,6 +21,7 @@ enum class Phase {
   done,          // the closing page
   paused,        // held until the session is resumed
   tracking_lost, // held until the head is tracked again
+  calibration,   // the physical table's corners are being touched (runner/calibration.hpp)
 };
 
 // Something a device (or the operator, runner/operator.hpp) wants the session
@@ -30,7 +31,7 @@ enum class Phase {
 // current trial.
 enum class Signal { none, pause, resume, quit, recenter, repeat, skip };
 
-inline constexpr std::array<std::pair<Phase, std::string_view>, 9> kPhaseNames{{
+inline constexpr std::array<std::pair<Phase, std::string_view>, 10> kPhaseNames{{
     {Phase::instructions, "instructions"},
     {Phase::fixation, "fixation"},
     {Phase::stimulus, "stimulus"},
@@ -40,6 +41,7 @@ inline constexpr std::array<std::pair<Phase, std::string_view>, 9> kPhaseNames{{
     {Phase::done, "done"},
     {Phase::paused, "paused"},
     {Phase::tracking_lost, "tracking_lost"},
+    {Phase::calibration, "calibration"},
 }};
 
 constexpr std::string_view to_string(Phase phase) {

@@ -8,6 +8,7 @@
 #include "curvlab/harness/protocol/settings.hpp"
 #include "curvlab/harness/result.hpp"
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -90,6 +91,17 @@ struct Block {
   SourcePos pos;
 };
 
+// The [calibration] section: the physical table calibrated by touching its
+// corners with the participant's devices as the session's first step
+// (runner/calibration.hpp; docs/devices.md, "Physical-table calibration").
+// Session level only: the table does not change between blocks.
+struct CalibrationStep {
+  bool at_start = false;  // calibrate before the session (desktop and xr runs)
+  // The touching tip in the right controller's grip frame, metres.
+  std::array<double, 3> tip_offset_m{0.0, 0.0, 0.0};
+  double max_residual_mm = 15.0;  // a touch farther from its fitted corner is refused
+};
+
 struct Protocol {
   std::string file;
   std::string text;  // the TOML it was loaded from (sessions store it)
@@ -108,6 +120,7 @@ struct Protocol {
   std::string backend_preferred = "headless";
   int refresh_hz = 90;
   int resolution_width = 1024, resolution_height = 1024;
+  CalibrationStep calibration;
 
   // The session's settings: defaults with the session sections applied.
   [[nodiscard]] Settings session_settings() const;

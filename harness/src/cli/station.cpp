@@ -1,0 +1,154 @@
+#include "station.hpp"
+
+#include "curvlab/harness/desktop/desktop.hpp"
+#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/xr/backend.hpp"
+
+#include <csignal>
+#include <cstdlib>
+#include <tuple>
+
+namespace curvlab::cli {
+namespace {
+
+namespace rn = curvlab::harness::runner;
+
+// The signal that asked a frame loop to stop (0: none). A handler may only
+// set a lock-free atomic.
+std::atomic<int> stop_signal{0};
+
+extern "C" void on_stop_signal(int sig) { stop_signal.store(sig, std::memory_order_relaxed); }
+
+bool display_present() {
+  const char* x = std::getenv("DISPLAY");
+  const char* wl = std::getenv("WAYLAND_DISPLAY");
+  return (x != nullptr && *x != '\0') || (wl != nullptr && *wl != '\0');
+}
+
+rn::HeadlessOptions headless_options(const BackendArgs& a, const StationNeeds& n) {
+  rn::HeadlessOptions o;
+  if (a.pace == "fast") o.pace = rn::Pace::fast;
+  else if (a.pace == "realtime") o.pace = rn::Pace::realtime;
+  else throw UsageError("--pace must be fast or realtime, got '" + a.pace + "'");
+  o.refresh_hz = n.refresh_hz;
+  o.width_px = n.width_px;
+  o.height_px = n.height_px;
+  o.software = a.software;
+  o.msaa = n.msaa;
+  o.start_ns = n.start_ns;
+  return o;
+}
+
+void open_headless(Devices& out, const BackendArgs& a, const StationNeeds& n) {
+  rn::TrajectoryOptions t;
+  t.table = n.table;
+  if (!a.trajectory.empty()) {
+    auto file = harness::read_trajectory_csv(a.trajectory);
+    if (!file) raise(file.error());
+    t.trajectory = file.value().samples;
+    if (t.trajectory.empty()) throw UsageError(a.trajectory + ": the trajectory has no samples");
+  }
+  auto made = rn::HeadlessDevices::create(headless_options(a, n), std::move(t));
+  if (!made) raise(made.error());
+  out.headless = std::move(made).value();
+  out.clock = &out.headless.clock();
+  out.station = out.headless.station();
+}
+
+Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
+  Devices out;
+  if (a.backend == "headless") {
+    open_headless(out, a, n);
+    return out;
+  }
+  out.steady = std::make_unique<devices::SteadyClock>();
+  out.clock = out.steady.get();
+  if (a.backend == "desktop") {
+    desktop::DesktopOptions o;
+    std::tie(o.eye_width_px, o.eye_height_px) = parse_size(a.window_size, "--window-size");
+    if (a.preview == "side-by-side") o.preview = desktop::DesktopPreview::side_by_side;
+    else if (a.preview == "left") o.preview = desktop::DesktopPreview::left;
+    else if (a.preview == "right") o.preview = desktop::DesktopPreview::right;
+    else throw UsageError("--preview must be side-by-side, left or right, got '" + a.preview + "'");
+    o.screenshot_dir = a.screenshot;
+    o.key_script = a.key_script;
+    o.software = a.software;
+    o.msaa = n.msaa;
+    o.clock = out.clock;
+    auto made = desktop::make_desktop_backend(o);
+    if (!made) raise(made.error());
+    out.interactive = std::move(made).value();
+  } else if (a.backend == "xr") {
+    xr::XrBackendOptions o;
+    o.clock = out.clock;
+    o.mirror = wants_operator_window(a);
+    o.msaa = n.msaa;
+    auto made = xr::make_xr_backend(o);
+    if (!made) raise(made.error());
+    out.interactive = std::move(made).value();
+  } else {
+    throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
+  }
+  out.use(*out.interactive);
+  return out;
+}
+
+// The HID response devices of --responses, each file's devices all
+// connected: a bad mapping file is bad input (exit 2), an absent device a
+// device error (exit 1), before anything is written.
+void open_responses(Devices& out, const BackendArgs& a) {
+  if (a.responses.empty()) return;
+  if (a.backend == "headless" && a.pace == "fast")
+    throw UsageError("--responses needs a person answering in real time: add --pace realtime, or use --backend "
+                     "desktop or xr");
+  for (const auto& file : response_mappings(a)) {
+    auto opened = devices::HidResponses::open(file, *out.clock);
+    if (!opened) raise(opened.error());
+    out.hid.push_back(std::move(opened).value());
+    out.station.responses.push_back(out.hid.back().get());
+  }
+}
+
+}  // namespace
+
+// Whether the run opens the operator window; a bad value is a usage error.
+bool wants_operator_window(const BackendArgs& a) {
+  if (a.operator_window == "off") return false;
+  if (a.operator_window == "on") return true;
+  if (a.operator_window != "auto")
+    throw UsageError("--operator-window must be auto, on or off, got '" + a.operator_window + "'");
+  // The desktop pilot's own window is the participant's view: its panel opens on request.
+  return a.backend == "xr" && display_present();
+}
+
+std::vector<devices::MappingFile> response_mappings(const BackendArgs& a) {
+  std::vector<devices::MappingFile> out;
+  for (const auto& spec : a.responses) {
+    if (spec.rfind("hid:", 0) != 0)
+      throw UsageError("--responses " + spec + ": expected hid:MAPPING.toml (a HID mapping file, docs/devices.md)");
+    auto file = devices::load_mapping(spec.substr(4));
+    if (!file) raise(file.error());
+    out.push_back(std::move(file).value());
+  }
+  return out;
+}
+
+const std::atomic<int>& catch_stop_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND | SA_RESTART;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+  return stop_signal;
+}
+
+int stop_signal_received() { return stop_signal.load(); }
+
+Devices open_station(const BackendArgs& a, const StationNeeds& needs) {
+  Devices out = open_devices_of_kind(a, needs);
+  warn_if_msaa_clamped(needs.msaa, out.station.display->info().msaa);
+  open_responses(out, a);
+  return out;
+}
+
+}  // namespace curvlab::cli

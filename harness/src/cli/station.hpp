@@ -1,0 +1,103 @@
+// Where `curvlab run`, `resume` and `calibrate` open their devices (DESIGN.md
+// §6; io/station.hpp): the display, pose source and response sources a lab
+// sets up, from the command's options, before anything is written. The one
+// place where they are composed, so a calibration runs on exactly the
+// devices its session would.
+#pragma once
+
+#include "common.hpp"
+
+#include "curvlab/geometry/calibration.hpp"
+#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/devices/mapping.hpp"
+#include "curvlab/harness/devices/responses.hpp"
+#include "curvlab/harness/io/station.hpp"
+#include "curvlab/harness/runner/headless.hpp"
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace curvlab::cli {
+
+struct BackendArgs {
+  std::string backend = "headless";
+  std::string pace = "fast";
+  std::string render = "all";
+  std::string images;
+  std::string trajectory;
+  std::optional<int> msaa;  // overrides the protocol's [viewing] msaa
+  bool software = false;
+  std::string window_size = "960x960";
+  std::string preview = "side-by-side";
+  std::string screenshot;
+  std::string key_script;
+  std::vector<std::string> responses;  // "hid:MAPPING.toml"
+  bool quiet = false;
+  bool json = false;
+  std::string export_dir;
+  std::string progress = "bar";
+  std::string operator_window = "auto";
+  std::string operator_script;
+  std::string operator_screenshot;
+  std::string operator_eyes = "both";
+};
+
+// The session's devices (io/station.hpp), made before anything is written:
+// a display that cannot start (no window system, no OpenXR runtime) leaves
+// no trace. The one place where a display, a pose source and response
+// sources are put together: the headset and the desktop window are all three
+// at once; headless is an offscreen display with poses from a trajectory,
+// answered by the simulated observer (RunOptions::observer).
+struct Devices {
+  std::unique_ptr<harness::io::InteractiveDisplay> interactive;  // desktop, xr
+  harness::runner::HeadlessDevices headless;
+  std::unique_ptr<devices::SteadyClock> steady;
+  const devices::Clock* clock = nullptr;
+  std::vector<std::unique_ptr<devices::HidResponses>> hid;
+  harness::io::Station station;
+
+  void use(harness::io::InteractiveDisplay& d) {
+    station.display = &d;
+    station.poses = &d;
+    station.responses.push_back(&d);
+  }
+};
+
+// What opening needs besides the options: the samples per pixel (already
+// chosen), and for the headless display its refresh rate, eye images, the
+// table its simulated participant stands at and where its clock starts.
+struct StationNeeds {
+  std::uint32_t msaa = 4;
+  int refresh_hz = 90;
+  std::uint32_t width_px = 1024;
+  std::uint32_t height_px = 1024;
+  geometry::PhysicalTableFit table;
+  std::int64_t start_ns = 0;
+};
+
+// Opens --backend's display (with --responses' HID devices). A bad option
+// or file is a UsageError (exit 2); a display or device that cannot start, a
+// RuntimeFailure (exit 1). Warns when the device draws with fewer samples
+// than asked.
+Devices open_station(const BackendArgs& a, const StationNeeds& needs);
+
+// The HID mapping files of --responses, read (a bad one: exit 2).
+std::vector<devices::MappingFile> response_mappings(const BackendArgs& a);
+
+// Whether the run opens the operator window; a bad value is a usage error.
+bool wants_operator_window(const BackendArgs& a);
+
+// From now on SIGINT (Ctrl-C), SIGTERM and SIGHUP (a closed terminal) set the
+// returned flag to the signal's number instead of ending the process, so a
+// frame loop (a session, a calibration) can end in order, reading the flag
+// once a frame; a second signal takes the default action (SA_RESETHAND),
+// which SQLite survives too.
+const std::atomic<int>& catch_stop_signals();
+// The signal caught since, or 0.
+int stop_signal_received();
+
+}  // namespace curvlab::cli
