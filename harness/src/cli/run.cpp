@@ -102,7 +102,7 @@ struct BackendArgs {
   std::string render = "all";
   std::string images;
   std::string trajectory;
-  std::optional<int> msaa;  // overrides the protocol's [viewing] msaa
+  std::optional<std::string> msaa;  // auto or a count: overrides the protocol's [viewing] msaa
   bool software = false;
   std::string window_size = "960x960";
   std::string preview = "side-by-side";
@@ -127,8 +127,9 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--images", b.images, "save each trial's stimulus onset as PNGs in this folder");
   cmd->add_option("--trajectory", b.trajectory,
                   "headless: lab poses from a trajectory CSV (curvlab trajectory …), looped");
-  cmd->add_option_function<int>("--msaa", [&b](int n) { b.msaa = n; },
-                                "samples per pixel, 1, 2, 4 or 8 (default: the protocol's [viewing] msaa)");
+  cmd->add_option_function<std::string>("--msaa", [&b](const std::string& n) { b.msaa = n; },
+                                        "samples per pixel: auto (4 on a GPU, 1 on a CPU device), 1, 2, 4 or 8 "
+                                        "(default: the protocol's [viewing] msaa, itself auto by default)");
   cmd->add_flag("--software", b.software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   cmd->add_option("--window-size", b.window_size, "desktop: per-eye size WxH (default 960x960)");
   cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
@@ -226,7 +227,7 @@ struct Devices {
 };
 
 rn::HeadlessOptions headless_options(const BackendArgs& a, const pr::Protocol& p, std::int64_t start_ns,
-                                     std::uint32_t msaa) {
+                                     std::optional<std::uint32_t> msaa) {
   rn::HeadlessOptions o;
   if (a.pace == "fast") o.pace = rn::Pace::fast;
   else if (a.pace == "realtime") o.pace = rn::Pace::realtime;
@@ -241,7 +242,8 @@ rn::HeadlessOptions headless_options(const BackendArgs& a, const pr::Protocol& p
 }
 
 void open_headless(Devices& out, const BackendArgs& a, const pr::Protocol& p,
-                   const geometry::PhysicalTableFit& table, std::int64_t start_ns, std::uint32_t msaa) {
+                   const geometry::PhysicalTableFit& table, std::int64_t start_ns,
+                   std::optional<std::uint32_t> msaa) {
   rn::TrajectoryOptions t;
   t.table = table;
   if (!a.trajectory.empty()) {
@@ -258,7 +260,7 @@ void open_headless(Devices& out, const BackendArgs& a, const pr::Protocol& p,
 }
 
 Devices open_devices_of_kind(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
-                             std::int64_t start_ns, std::uint32_t msaa) {
+                             std::int64_t start_ns, std::optional<std::uint32_t> msaa) {
   Devices out;
   if (a.backend == "headless") {
     open_headless(out, a, p, table, start_ns, msaa);
@@ -344,14 +346,15 @@ void check_answers_reachable(const BackendArgs& a, const pr::Protocol& p, bool o
   }
 }
 
-// The samples per pixel: --msaa, else the protocol's [viewing] msaa; the
-// display's renderer clamps it to the device, with a warning.
+// The samples per pixel: --msaa, else the protocol's [viewing] msaa. "auto"
+// (nullopt) lets the display's renderer pick for its device; a count is
+// clamped to the device, with a warning. The count drawn with is the
+// display's (DisplayInfo::msaa), stored with the session.
 Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
                      std::int64_t start_ns) {
-  const std::uint32_t msaa = a.msaa ? check_msaa(*a.msaa)
-                                    : static_cast<std::uint32_t>(p.session_settings().viewing.msaa);
+  const std::optional<std::uint32_t> msaa = a.msaa ? parse_msaa(*a.msaa) : p.session_settings().viewing.msaa;
   Devices out = open_devices_of_kind(a, p, table, start_ns, msaa);
-  warn_if_msaa_clamped(msaa, out.station.display->info().msaa);
+  if (msaa) warn_if_msaa_clamped(*msaa, out.station.display->info().msaa);
   open_responses(out, a);
   return out;
 }
@@ -391,7 +394,9 @@ void export_all(const std::string& db_path, std::int64_t session_id, const std::
   doc["exports"] = files;
 }
 
-void report(const rn::RunResult& result, const BackendArgs& a) {
+// The session's summary; `msaa` is the samples per pixel the display drew
+// with (0: nothing drawn).
+void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msaa) {
   if (!result) raise(result.error());
   const auto& s = result.value();
   Json doc;
@@ -405,6 +410,7 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   doc["trials_flagged"] = s.trials_flagged;
   doc["attempts_repeated"] = s.attempts_repeated;
   doc["frames"] = s.frames;
+  doc["msaa"] = msaa;
   doc["samples_dropped"] = s.samples_dropped;
   doc["session_s"] = s.session_s;
   doc["wall_s"] = s.wall_s;
@@ -494,7 +500,7 @@ void run_command(const RunArgs& a) {
   watch_stop_signals(o);
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
-  report(result, a.backend);
+  report(result, a.backend, devices.station.display->info().msaa);
 }
 
 struct ResumeArgs {
@@ -531,7 +537,7 @@ void resume_command(const ResumeArgs& a) {
   watch_stop_signals(o);
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
   console.reset();
-  report(result, a.backend);
+  report(result, a.backend, devices.station.display->info().msaa);
 }
 
 struct PredictArgs {
