@@ -25,6 +25,7 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
@@ -113,6 +114,7 @@ struct BackendArgs {
   bool json = false;
   std::string export_dir;
   std::string progress = "bar";
+  double progress_interval_s = 10.0;
   std::string operator_window = "auto";
   std::string operator_script;
   std::string operator_screenshot;
@@ -140,7 +142,11 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--export", b.export_dir, "afterwards, export CSV, Psych-DS and BIDS motion here");
   cmd->add_flag("--quiet", b.quiet, "no progress bar");
   cmd->add_flag("--json", b.json, "print the summary as JSON");
-  cmd->add_option("--progress", b.progress, "bar (default: on a terminal's stderr) or json (a line per trial on stdout)");
+  cmd->add_option("--progress", b.progress,
+                  "bar (default: on a terminal's stderr; otherwise a line every --progress-interval-s) or json "
+                  "(a line per trial on stdout)");
+  cmd->add_option("--progress-interval-s", b.progress_interval_s,
+                  "seconds between progress lines when stderr is not a terminal (default 10)");
   cmd->add_option("--operator-window", b.operator_window,
                   "the experimenter's window: auto (default: with --backend xr when a display exists), on or off");
   cmd->add_option("--operator-script", b.operator_script,
@@ -367,6 +373,9 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
   o.images_dir = a.images;
   o.progress = !a.quiet && !a.json && a.progress == "bar";
   o.progress_json = a.progress == "json";
+  if (!(a.progress_interval_s > 0.0 && a.progress_interval_s <= 86400.0))
+    throw UsageError("--progress-interval-s must lie in (0, 86400] seconds");
+  o.progress_every = std::chrono::milliseconds(std::llround(a.progress_interval_s * 1000.0));
   o.lossless_logging = a.backend == "headless" && a.pace == "fast";
   if (!a.images.empty()) {
     std::error_code ec;

@@ -92,7 +92,7 @@ class SessionLoop::Impl {
         frame_index_(s.frame_offset),
         first_trial_attempts_(s.first_trial_attempts),
         first_trial_aborts_(s.first_trial_aborts),
-        progress_(options_.progress, options_.progress_json),
+        progress_(options_.progress, options_.progress_json, options_.progress_every),
         console_(options_.console) {
     dominant_ = options_.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
     eye_size_ = eye_image_size(station_.display->info(), static_cast<std::uint32_t>(p_.resolution_width),
@@ -149,7 +149,7 @@ class SessionLoop::Impl {
         continue;
       }
       if (run_trial(i) == Outcome::quit) return Outcome::quit;
-      progress_.update(static_cast<std::int64_t>(i + 1), summary_.trials_planned, t.block);
+      progress_.update(progress_point());
     }
     return pages(p_.instructions_end, Phase::done, 0, std::nullopt);
   }
@@ -349,7 +349,23 @@ class SessionLoop::Impl {
       ++late_session_;
     }
     if (console_) show_status(f, stats, overlay.phase, own.count());
+    progress_.tick(progress_point());
     return stats;
+  }
+
+  // Where the session stands: the trial running (or the last one ended),
+  // the trials ended in this run and those left.
+  ProgressPoint progress_point() const {
+    const auto total = static_cast<std::int64_t>(design_.trials.size());
+    const std::int64_t ended_all = first_reported_ + trials_reported_;
+    ProgressPoint p;
+    p.trial = current_trial_ ? static_cast<std::int64_t>(*current_trial_) + 1
+                             : std::max<std::int64_t>(1, ended_all);
+    p.total = total;
+    p.ended = trials_reported_;
+    p.left = total - ended_all;
+    p.block = status_.block;
+    return p;
   }
 
   // A SIGINT, SIGTERM or SIGHUP ends the session as the operator's end does:

@@ -33,6 +33,7 @@
 #include "curvlab/harness/runner/operator.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -54,7 +55,8 @@ struct RunOptions {
   std::optional<ObserverParams> observer;  // answers for the participant
   FrameDrawing drawing = FrameDrawing::all;
   std::string images_dir;  // stimulus images of every onset ("" none)
-  bool progress = false;   // a progress bar on stderr
+  bool progress = false;   // progress on stderr: a bar on a terminal, else a line every progress_every
+  std::chrono::milliseconds progress_every{10'000};
   bool progress_json = false;  // one JSON object per trial on stdout (docs/xr.md, "The operator window")
   // The experimenter's console (operator.hpp): status shown, actions taken.
   // Not owned; outlives the run. nullptr: none.
