@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,21 @@ TEST(Settings, MsaaIsAutoUnlessACountIsGiven) {
   for (const SettingValue& bad : {SettingValue(std::int64_t{3}), SettingValue(std::string("max")),
                                  SettingValue(2.0), SettingValue(true)})
     EXPECT_FALSE(check_setting(msaa, bad).has_value()) << value_label(bad);
+}
+
+TEST(Settings, StimulusKeysNameEveryParameterUniquely) {
+  // Where the stimulus record holds a setting, under the record's own name;
+  // others under the condition record's or their key.
+  EXPECT_EQ(stimulus_key("stimulus.stick_sagitta_m"), "stick_sagitta_m");
+  EXPECT_EQ(stimulus_key("viewing.ipd_m"), "ipd_m");
+  EXPECT_EQ(stimulus_key("table.edge_m"), "table_edge_m");
+  EXPECT_EQ(stimulus_key("stimulus.stick_yaw_deg"), "stick_yaw_deg");
+  EXPECT_EQ(stimulus_key("space.e3_radius_m"), "e3_radius_m");
+  std::set<std::string> keys;
+  for (const auto& path : numeric_setting_paths()) EXPECT_TRUE(keys.insert(stimulus_key(path)).second) << path;
+  // None collides with a value the record derives.
+  for (const char* derived : {"radius_m", "table_sides", "tracking", "adjustment_start"})
+    EXPECT_EQ(keys.count(derived), 0u) << derived;
 }
 
 TEST(Settings, StaircasesReachThePlainNumbersOnly) {

@@ -883,6 +883,8 @@ class SessionLoop::Impl {
       r.staircase_step = data::StaircaseStep{staircase_key(p_, *t.planned, step.track), step.step, step.value,
                                              step.positive, step.reversal, step.next_value};
     }
+    // A staircase's or an adjustment's value is stored with the trial.
+    if (!t.judgement->parameter.empty()) r.stimulus_json = shown_stimulus_json(p_, *t.planned, t.settings);
     status_.last_response = r.response;
     status_.last_rt_ms = a.answer ? static_cast<double>(r.response_ns - r.onset_ns) * 1e-6 : -1.0;
     completed_ticket_ = writer_.journal(std::move(r));

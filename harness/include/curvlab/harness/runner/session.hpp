@@ -123,8 +123,15 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id,
                          const devices::Clock& clock);
 
 // The stored conditions and stimulus of a planned trial (trials.conditions
-// and trials.stimulus; data_schema/codebook.md).
+// and trials.stimulus; data_schema/codebook.md). The parameter of a
+// judgement that sets it on each trial (staircase, adjustment) is null in
+// the plan and filled in when the trial ends with its answer or a timeout:
+// shown_stimulus_json, with `shown` the trial's settings then (a
+// staircase's value as shown from its onset, an adjustment's as confirmed
+// or, on a timeout, as last shown).
 std::string conditions_json(const protocol::Protocol& p, const protocol::PlannedTrial& t);
-std::string stimulus_json(const protocol::PlannedTrial& t);
+std::string stimulus_json(const protocol::Protocol& p, const protocol::PlannedTrial& t);
+std::string shown_stimulus_json(const protocol::Protocol& p, const protocol::PlannedTrial& t,
+                                const protocol::Settings& shown);
 
 }  // namespace curvlab::harness::runner
