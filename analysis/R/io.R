@@ -385,6 +385,8 @@ normalise_trials <- function(trials) {
 
 # The intensity a trial showed, in metres of signed sagitta: the staircase
 # step's intensity where there is one, otherwise the judged object's sagitta.
+# (Sessions store a staircase's value in its stim_ column as well; files of
+# earlier versions hold the protocol's value there, so the step comes first.)
 stimulus_intensity <- function(trials) {
   n <- nrow(trials)
   pick <- function(col) if (col %in% names(trials)) as.numeric(trials[[col]]) else rep(NA_real_, n)

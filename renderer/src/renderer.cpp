@@ -232,7 +232,8 @@ struct Renderer::Impl {
   // Bound to set 1 for draws without text, so every pipeline's sets are bound.
   Texture blank;
 
-  Impl(const Context& c, RendererOptions o) : ctx(c), options(o), msaa(supported_msaa(c, o.msaa)) {
+  Impl(const Context& c, RendererOptions o)
+      : ctx(c), options(o), msaa(o.msaa ? supported_msaa(c, *o.msaa) : automatic_msaa(c)) {
     const auto& dev = ctx.device();
     const vk::DescriptorSetLayoutBinding view_binding{
         .binding = 0,
@@ -499,6 +500,9 @@ std::uint32_t supported_msaa(const Context& ctx, std::uint32_t requested) {
     if (n <= requested && (both & sample_bits(n))) return n;
   return 1;
 }
+
+std::uint32_t automatic_msaa(const Context& ctx) { return ctx.is_software() ? 1 : supported_msaa(ctx, 4); }
+
 void Renderer::wait_idle() {
   try {
     impl_->wait_all();

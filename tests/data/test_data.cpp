@@ -328,10 +328,12 @@ TEST(Session, PlanResumeAndIdempotentCompletion) {
   EXPECT_EQ(again->trial_id, ids[0]);
   EXPECT_EQ(again->attempt, 1);
   EXPECT_EQ(store.begin_trial(first->trial_id).value(), 2);
-  TrialResult r{first->trial_id, 1'000, 351'000, "convex", "keyboard", StaircaseStep{"s1", 0, 0.02, true, false, 0.015}};
+  // The stimulus as shown (a staircase's value) replaces the planned record.
+  TrialResult r{first->trial_id, 1'000, 351'000, "convex", "keyboard",
+                StaircaseStep{"s1", 0, 0.02, true, false, 0.015}, "{\"sagitta_m\":0.02}"};
   ASSERT_TRUE(store.complete_trial(r));
   ASSERT_TRUE(store.complete_trial(r));  // retried after an uncertain commit
-  EXPECT_FALSE(store.complete_trial({ids[1], 10, 5, "x", "k", std::nullopt}));  // response before onset
+  EXPECT_FALSE(store.complete_trial({ids[1], 10, 5, "x", "k", std::nullopt, std::nullopt}));  // response before onset
   auto next = store.next_incomplete_trial(session).value();
   ASSERT_TRUE(next);
   EXPECT_EQ(next->trial_id, ids[1]);
@@ -343,6 +345,13 @@ TEST(Session, PlanResumeAndIdempotentCompletion) {
   EXPECT_EQ(check->connection().query_int("SELECT rt_ns FROM trials WHERE trial_id = " + std::to_string(ids[0])),
             350'000);
   EXPECT_EQ(check->connection().query_int("SELECT count(*) FROM staircase_steps"), 1);
+  EXPECT_EQ(check->connection().query_int("SELECT ROUND(1000 * json_extract(stimulus, '$.sagitta_m')) FROM trials "
+                                          "WHERE trial_id = " + std::to_string(ids[0])),
+            20);
+  // Without one, the plan's record stays.
+  EXPECT_EQ(check->connection().query_int("SELECT ROUND(1000 * json_extract(stimulus, '$.sagitta_m')) FROM trials "
+                                          "WHERE trial_id = " + std::to_string(ids[1])),
+            10);
   ASSERT_TRUE(store.close_session(session, SessionStatus::completed));
   EXPECT_FALSE(store.close_session(session + 100, SessionStatus::completed));
 }
@@ -417,7 +426,7 @@ TEST(SessionReader, ReadsWhatResumeNeeds) {
   ASSERT_TRUE(store.record_event({session, ids[0], 9'000, "note", "{}"}));
   ASSERT_TRUE(store.begin_trial(ids[0]));
   ASSERT_TRUE(store.complete_trial({ids[0], 1'000, 2'000, "convex", "keyboard",
-                                    StaircaseStep{"s1", 0, 0.02, false, false, 0.025}}));
+                                    StaircaseStep{"s1", 0, 0.02, false, false, 0.025}, std::nullopt}));
 
   auto db = Database::open((dir / "r.db").string(), OpenMode::read_only).value();
   const auto prov = read_session_provenance(db, session);
@@ -660,7 +669,7 @@ void fill_export_db(const fs::path& path) {
   const auto session = make_session(store, "P-01");
   const auto ids = store.store_plan(session, two_blocks()).value();
   ASSERT_TRUE(store.begin_trial(ids[0]));
-  ASSERT_TRUE(store.complete_trial({ids[0], 100, 450'000'100, "convex", "keyboard", std::nullopt}));
+  ASSERT_TRUE(store.complete_trial({ids[0], 100, 450'000'100, "convex", "keyboard", std::nullopt, std::nullopt}));
   auto writer = SampleWriter::open(path.string()).value();
   for (int i = 0; i < 1000; ++i) {
     for (int d = 0; d < 2; ++d) {

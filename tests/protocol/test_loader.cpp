@@ -228,7 +228,7 @@ TEST(ProtocolFiles, ALoadedProtocolKeepsItsText) {
   EXPECT_EQ(r->file, path.string());
 }
 
-TEST(Diagnostics, MsaaTakesOnlyTheSampleCountsAndDefaultsToFour) {
+TEST(Diagnostics, MsaaTakesTheSampleCountsOrAutoAndDefaultsToAuto) {
   const std::string head = "[protocol]\nname = \"x\"\nversion = \"1\"\n[randomization]\nseed = 1\n";
   const std::string tail = "[judgement]\ntype = \"choice\"\n"
                            "options = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n";
@@ -237,12 +237,21 @@ TEST(Diagnostics, MsaaTakesOnlyTheSampleCountsAndDefaultsToFour) {
   EXPECT_EQ(problems(bad)[0].field, "viewing.msaa");
   EXPECT_NE(problems(bad)[0].message.find("expected one of 1, 2, 4, 8, found 3"), std::string::npos)
       << problems(bad)[0].message;
+  const auto word = load_protocol_text(head + "[viewing]\nmsaa = \"four\"\n" + tail, "inline.toml");
+  ASSERT_EQ(problems(word).size(), 1u);
+  EXPECT_NE(problems(word)[0].message.find("expected \"auto\" or one of 1, 2, 4, 8, found \"four\""),
+            std::string::npos)
+      << problems(word)[0].message;
   const auto eight = load_protocol_text(head + "[viewing]\nmsaa = 8\n" + tail, "inline.toml");
   ASSERT_TRUE(eight.has_value());
-  EXPECT_EQ(eight->session_settings().viewing.msaa, 8);
+  EXPECT_EQ(eight->session_settings().viewing.msaa, 8u);
+  // "auto" and no value at all: the renderer picks for its device.
+  const auto automatic = load_protocol_text(head + "[viewing]\nmsaa = \"auto\"\n" + tail, "inline.toml");
+  ASSERT_TRUE(automatic.has_value());
+  EXPECT_FALSE(automatic->session_settings().viewing.msaa.has_value());
   const auto unset = load_protocol_text(head + tail, "inline.toml");
   ASSERT_TRUE(unset.has_value());
-  EXPECT_EQ(unset->session_settings().viewing.msaa, 4);
+  EXPECT_FALSE(unset->session_settings().viewing.msaa.has_value());
 }
 
 // [calibration]: the table is calibrated before the session, with the

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@ SettingValue other_value(const SettingInfo& info) {
   switch (info.kind) {
     case SettingKind::boolean: return !std::get<bool>(*info.get(Settings{}));
     case SettingKind::integer:
+    case SettingKind::integer_or_auto:
       if (!info.choices.empty()) return std::int64_t{std::stoll(std::string(info.choices.front()))};
       return static_cast<std::int64_t>(info.max);
     case SettingKind::number:
@@ -58,6 +60,34 @@ TEST(Settings, RadiusFromTheTableAndDefaultTableSidesHoldNoNumber) {
   EXPECT_EQ(s.space.radius_m, 3.0);
   apply_setting(s, *find_setting("space.radius_m"), SettingValue(std::string("from_table")));
   EXPECT_FALSE(s.space.radius_m.has_value());
+}
+
+TEST(Settings, MsaaIsAutoUnlessACountIsGiven) {
+  const SettingInfo& msaa = *find_setting("viewing.msaa");
+  EXPECT_EQ(std::get<std::string>(*msaa.get(Settings{})), "auto");
+  Settings s;
+  apply_setting(s, msaa, SettingValue(std::int64_t{2}));
+  EXPECT_EQ(s.viewing.msaa, 2u);
+  apply_setting(s, msaa, SettingValue(std::string("auto")));
+  EXPECT_FALSE(s.viewing.msaa.has_value());
+  for (const SettingValue& bad : {SettingValue(std::int64_t{3}), SettingValue(std::string("max")),
+                                 SettingValue(2.0), SettingValue(true)})
+    EXPECT_FALSE(check_setting(msaa, bad).has_value()) << value_label(bad);
+}
+
+TEST(Settings, StimulusKeysNameEveryParameterUniquely) {
+  // Where the stimulus record holds a setting, under the record's own name;
+  // others under the condition record's or their key.
+  EXPECT_EQ(stimulus_key("stimulus.stick_sagitta_m"), "stick_sagitta_m");
+  EXPECT_EQ(stimulus_key("viewing.ipd_m"), "ipd_m");
+  EXPECT_EQ(stimulus_key("table.edge_m"), "table_edge_m");
+  EXPECT_EQ(stimulus_key("stimulus.stick_yaw_deg"), "stick_yaw_deg");
+  EXPECT_EQ(stimulus_key("space.e3_radius_m"), "e3_radius_m");
+  std::set<std::string> keys;
+  for (const auto& path : numeric_setting_paths()) EXPECT_TRUE(keys.insert(stimulus_key(path)).second) << path;
+  // None collides with a value the record derives.
+  for (const char* derived : {"radius_m", "table_sides", "tracking", "adjustment_start"})
+    EXPECT_EQ(keys.count(derived), 0u) << derived;
 }
 
 TEST(Settings, StaircasesReachThePlainNumbersOnly) {

@@ -561,6 +561,15 @@ TEST_F(VulkanTest, MultisamplingIsClampedToTheDevice) {
   EXPECT_EQ(supported_msaa(ctx(), 4), 4u);  // every Vulkan device supports 4 (spec, "Required Limits")
 }
 
+// "auto" (no count asked) draws a CPU device such as lavapipe with one sample,
+// where multisampling costs per sample and per pixel.
+TEST_F(VulkanTest, AutomaticMultisamplingIsOneSampleOnACpuDevice) {
+  ASSERT_TRUE(ctx().is_software());
+  EXPECT_EQ(automatic_msaa(ctx()), 1u);
+  EXPECT_EQ(Renderer(ctx(), RendererOptions{.msaa = std::nullopt}).msaa(), 1u);
+  EXPECT_EQ(Renderer(ctx(), RendererOptions{}).msaa(), 4u);  // the renderer's own default stays 4
+}
+
 TEST_F(VulkanTest, MultisampledEdgesApproachASupersampledImage) {
   // The table at 128² (the image's lower half: the prompt panel above is
   // text, sampled from its atlas), against the same scene drawn at 512² with

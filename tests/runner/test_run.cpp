@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 #include <map>
+#include <sstream>
 
 using curvlab::testing::fresh_dir;
 using curvlab::testing::query;
@@ -312,4 +313,42 @@ TEST(RunHeadless, MsaaIsClampedWarnedAndStoredWithTheSession) {
   r = run_cli("run " + kProtocols + "demo.toml --participant P02 --db " + db + " --render none --msaa 3");
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("--msaa must be 1, 2, 4 or 8, got 3"), std::string::npos) << r.out;
+}
+
+// msaa "auto", the default, draws with one sample on a CPU device (4 on a
+// GPU); a number in the protocol or on the command line wins, and
+// `--msaa auto` gives the choice back to the device. The count drawn with is
+// in the summary and in the session's provenance.
+TEST(RunHeadless, MsaaAutoDrawsWithOneSampleOnACpuDeviceAndANumberWins) {
+  const auto dir = fresh_dir("msaa_auto");
+  const auto db = (dir / "demo.sqlite").string();
+  std::ifstream in(kProtocols + "demo.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const auto four = (dir / "demo_msaa4.toml").string();
+  std::ofstream(four) << text.str() << "\n[viewing]\nmsaa = 4\n";
+  struct Case {
+    std::string protocol, extra;
+    int samples;
+  };
+  const std::vector<Case> cases = {{kProtocols + "demo.toml", "", 1},
+                                   {four, "", 4},
+                                   {four, " --msaa auto", 1},
+                                   {kProtocols + "demo.toml", " --msaa 4", 4}};
+  int participant = 0;
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.protocol + c.extra);
+    const auto r = run_cli("run " + c.protocol + " --participant P0" + std::to_string(++participant) + " --db " +
+                           db + " --render onset --software --quiet --json" + c.extra);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    EXPECT_NE(r.out.find("\"msaa\": " + std::to_string(c.samples) + ","), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("warning"), std::string::npos) << r.out;
+    const auto start = query(db, "SELECT detail FROM events WHERE kind = 'session_start' ORDER BY event_id DESC "
+                                 "LIMIT 1");
+    ASSERT_EQ(start.size(), 1u);
+    EXPECT_EQ(nlohmann::json::parse(start[0][0]).at("msaa"), c.samples);
+  }
+  const auto bad = run_cli("run " + kProtocols + "demo.toml --participant P09 --db " + db + " --msaa four");
+  EXPECT_EQ(bad.exit_code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("--msaa must be auto, 1, 2, 4 or 8, got 'four'"), std::string::npos) << bad.out;
 }

@@ -146,7 +146,7 @@ void calibrate_now(const CalibrateArgs& a) {
   o.ipd_m = a.ipd_m;
   o.screenshot_dir = a.backend.screenshot;
   StationNeeds needs;
-  needs.msaa = a.backend.msaa ? check_msaa(*a.backend.msaa) : 4;
+  needs.msaa = a.backend.msaa ? parse_msaa(*a.backend.msaa) : std::nullopt;
   needs.table = o.known;
   const Devices devices = open_station(a.backend, needs);
   o.stop_signal = &catch_stop_signals();
@@ -219,7 +219,7 @@ void add_calibrate_commands(CLI::App& app) {
   c->add_option("--tip-offset-m", args->tip_offset,
                 "X,Y,Z: the touching tip in the right controller's grip frame (default 0,0,0)");
   c->add_option("--ipd-m", args->ipd_m, "interpupillary distance in metres (default 0.063)");
-  c->add_option_function<int>("--msaa", [args](int n) { args->backend.msaa = n; },
+  c->add_option_function<std::string>("--msaa", [args](const std::string& n) { args->backend.msaa = n; },
                               "samples per pixel, 1, 2, 4 (default) or 8");
   c->add_flag("--software", args->backend.software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   c->add_option("--window-size", args->backend.window_size, "desktop: per-eye size WxH (default 960x960)");

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -93,6 +94,15 @@ std::uint32_t check_msaa(int samples) {
   if (samples != 1 && samples != 2 && samples != 4 && samples != 8)
     throw UsageError("--msaa must be 1, 2, 4 or 8, got " + std::to_string(samples));
   return static_cast<std::uint32_t>(samples);
+}
+
+std::optional<std::uint32_t> parse_msaa(const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  int samples = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), samples);
+  if (ec != std::errc{} || end != text.data() + text.size())
+    throw UsageError("--msaa must be auto, 1, 2, 4 or 8, got '" + text + "'");
+  return check_msaa(samples);
 }
 
 void warn_if_msaa_clamped(std::uint32_t requested, std::uint32_t effective) {

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -55,6 +56,9 @@ void add_space_option(CLI::App* cmd, geometry::SpaceKind* kind);
 // --msaa N: samples per pixel, 1, 2, 4 or 8; a UsageError naming --msaa
 // otherwise.
 std::uint32_t check_msaa(int samples);
+// --msaa auto|N: nullopt for "auto" (the device's automatic count), else
+// check_msaa of the number.
+std::optional<std::uint32_t> parse_msaa(const std::string& text);
 // A warning on stderr when the device draws with fewer samples than asked.
 void warn_if_msaa_clamped(std::uint32_t requested, std::uint32_t effective);
 

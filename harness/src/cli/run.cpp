@@ -27,6 +27,7 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
@@ -92,8 +93,9 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--images", b.images, "save each trial's stimulus onset as PNGs in this folder");
   cmd->add_option("--trajectory", b.trajectory,
                   "headless: lab poses from a trajectory CSV (curvlab trajectory …), looped");
-  cmd->add_option_function<int>("--msaa", [&b](int n) { b.msaa = n; },
-                                "samples per pixel, 1, 2, 4 or 8 (default: the protocol's [viewing] msaa)");
+  cmd->add_option_function<std::string>("--msaa", [&b](const std::string& n) { b.msaa = n; },
+                                        "samples per pixel: auto (4 on a GPU, 1 on a CPU device), 1, 2, 4 or 8 "
+                                        "(default: the protocol's [viewing] msaa, itself auto by default)");
   cmd->add_flag("--software", b.software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   cmd->add_option("--window-size", b.window_size, "desktop: per-eye size WxH (default 960x960)");
   cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
@@ -104,7 +106,11 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--export", b.export_dir, "afterwards, export CSV, Psych-DS and BIDS motion here");
   cmd->add_flag("--quiet", b.quiet, "no progress bar");
   cmd->add_flag("--json", b.json, "print the summary as JSON");
-  cmd->add_option("--progress", b.progress, "bar (default: on a terminal's stderr) or json (a line per trial on stdout)");
+  cmd->add_option("--progress", b.progress,
+                  "bar (default: on a terminal's stderr; otherwise a line every --progress-interval-s) or json "
+                  "(a line per trial on stdout)");
+  cmd->add_option("--progress-interval-s", b.progress_interval_s,
+                  "seconds between progress lines when stderr is not a terminal (default 10)");
   cmd->add_option("--operator-window", b.operator_window,
                   "the experimenter's window: auto (default: with --backend xr when a display exists), on or off");
   cmd->add_option("--operator-script", b.operator_script,
@@ -173,12 +179,14 @@ void check_answers_reachable(const BackendArgs& a, const pr::Protocol& p, bool o
   }
 }
 
-// The samples per pixel: --msaa, else the protocol's [viewing] msaa; the
-// display's renderer clamps it to the device, with a warning.
+// The samples per pixel: --msaa, else the protocol's [viewing] msaa. "auto"
+// (nullopt) lets the display's renderer pick for its device; a count is
+// clamped to the device, with a warning. The count drawn with is the
+// display's (DisplayInfo::msaa), stored with the session.
 Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
                      std::int64_t start_ns) {
   StationNeeds n;
-  n.msaa = a.msaa ? check_msaa(*a.msaa) : static_cast<std::uint32_t>(p.session_settings().viewing.msaa);
+  n.msaa = a.msaa ? parse_msaa(*a.msaa) : p.session_settings().viewing.msaa;
   n.refresh_hz = p.refresh_hz;
   n.width_px = static_cast<std::uint32_t>(p.resolution_width);
   n.height_px = static_cast<std::uint32_t>(p.resolution_height);
@@ -195,6 +203,9 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
   o.images_dir = a.images;
   o.progress = !a.quiet && !a.json && a.progress == "bar";
   o.progress_json = a.progress == "json";
+  if (!(a.progress_interval_s > 0.0 && a.progress_interval_s <= 86400.0))
+    throw UsageError("--progress-interval-s must lie in (0, 86400] seconds");
+  o.progress_every = std::chrono::milliseconds(std::llround(a.progress_interval_s * 1000.0));
   o.lossless_logging = a.backend == "headless" && a.pace == "fast";
   if (!a.images.empty()) {
     std::error_code ec;
@@ -222,7 +233,9 @@ void export_all(const std::string& db_path, std::int64_t session_id, const std::
   doc["exports"] = files;
 }
 
-void report(const rn::RunResult& result, const BackendArgs& a) {
+// The session's summary; `msaa` is the samples per pixel the display drew
+// with (0: nothing drawn).
+void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msaa) {
   if (!result) raise(result.error());
   const auto& s = result.value();
   Json doc;
@@ -236,6 +249,7 @@ void report(const rn::RunResult& result, const BackendArgs& a) {
   doc["trials_flagged"] = s.trials_flagged;
   doc["attempts_repeated"] = s.attempts_repeated;
   doc["frames"] = s.frames;
+  doc["msaa"] = msaa;
   doc["samples_dropped"] = s.samples_dropped;
   doc["session_s"] = s.session_s;
   doc["wall_s"] = s.wall_s;
@@ -349,7 +363,7 @@ void run_command(const RunArgs& a) {
   o.console = console.get();
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
-  report(result, a.backend);
+  report(result, a.backend, devices.station.display->info().msaa);
 }
 
 struct ResumeArgs {
@@ -386,7 +400,7 @@ void resume_command(const ResumeArgs& a) {
   watch_stop_signals(o);
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
   console.reset();
-  report(result, a.backend);
+  report(result, a.backend, devices.station.display->info().msaa);
 }
 
 struct PredictArgs {

@@ -146,7 +146,7 @@ int stop_signal_received() { return stop_signal.load(); }
 
 Devices open_station(const BackendArgs& a, const StationNeeds& needs) {
   Devices out = open_devices_of_kind(a, needs);
-  warn_if_msaa_clamped(needs.msaa, out.station.display->info().msaa);
+  if (needs.msaa) warn_if_msaa_clamped(*needs.msaa, out.station.display->info().msaa);
   open_responses(out, a);
   return out;
 }

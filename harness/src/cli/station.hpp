@@ -29,7 +29,7 @@ struct BackendArgs {
   std::string render = "all";
   std::string images;
   std::string trajectory;
-  std::optional<int> msaa;  // overrides the protocol's [viewing] msaa
+  std::optional<std::string> msaa;  // auto or a count: overrides the protocol's [viewing] msaa
   bool software = false;
   std::string window_size = "960x960";
   std::string preview = "side-by-side";
@@ -40,6 +40,7 @@ struct BackendArgs {
   bool json = false;
   std::string export_dir;
   std::string progress = "bar";
+  double progress_interval_s = 10.0;
   std::string operator_window = "auto";
   std::string operator_script;
   std::string operator_screenshot;
@@ -68,10 +69,10 @@ struct Devices {
 };
 
 // What opening needs besides the options: the samples per pixel (already
-// chosen), and for the headless display its refresh rate, eye images, the
+// chosen; nullopt: auto, the display picks for its device), and for the headless display its refresh rate, eye images, the
 // table its simulated participant stands at and where its clock starts.
 struct StationNeeds {
-  std::uint32_t msaa = 4;
+  std::optional<std::uint32_t> msaa;
   int refresh_hz = 90;
   std::uint32_t width_px = 1024;
   std::uint32_t height_px = 1024;

@@ -356,9 +356,11 @@ struct JsonColumns {
     rows.push_back(std::move(obj));
   }
 
-  void append_to(TrialTable& table, const std::string& prefix, const std::string& what) const {
+  // Columns `prefix`<name>, described as `what` "<name>" `source`.
+  void append_to(TrialTable& table, const std::string& prefix, const std::string& what,
+                 const std::string& source) const {
     for (const auto& n : names)
-      table.columns.push_back({prefix + n, what + " \"" + n + "\" from the protocol", ""});
+      table.columns.push_back({prefix + n, what + " \"" + n + "\" " + source, ""});
     for (std::size_t r = 0; r < table.rows.size(); ++r) {
       const auto& obj = rows[r];
       for (const auto& n : names)
@@ -388,8 +390,10 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
   } catch (const SqliteFailure& f) {
     return to_data_error(f, db.path());
   }
-  conditions.append_to(table, "cond_", "Condition value");
-  stimulus.append_to(table, "stim_", "Stimulus parameter");
+  conditions.append_to(table, "cond_", "Condition value", "from the protocol");
+  stimulus.append_to(table, "stim_", "Stimulus parameter",
+                     "as shown: the protocol's value, or the value a staircase or an adjustment set on the trial "
+                     "(empty where the trial showed none)");
   return table;
 }
 

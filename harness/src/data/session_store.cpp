@@ -229,7 +229,8 @@ struct SessionStore::Statements {
                        "RETURNING attempt"),
         complete_trial(c, std::string("UPDATE trials SET status = 'completed', onset_ns = ?2, "
                                       "response_ns = ?3, response = ?4, rt_ns = ?3 - ?2, "
-                                      "response_device = ?5, completed_utc = ") +
+                                      "response_device = ?5, stimulus = COALESCE(?6, stimulus), "
+                                      "completed_utc = ") +
                               utc_now + " WHERE trial_id = ?1 AND status != 'completed'"),
         trial_status(c, "SELECT status, session_id FROM trials WHERE trial_id = ?1"),
         insert_step(c, "INSERT OR REPLACE INTO staircase_steps (session_id, staircase, "
@@ -472,6 +473,7 @@ Expected<Done> SessionStore::complete_trial(const TrialResult& r) {
     auto& s = stmts_->complete_trial;
     s.bind(1, r.trial_id).bind(2, r.onset_ns).bind(3, r.response_ns);
     s.bind(4, std::string_view(r.response)).bind(5, std::string_view(r.response_device));
+    if (r.stimulus_json) s.bind(6, std::string_view(*r.stimulus_json)); else s.bind_null(6);
     s.run();
     if (r.staircase_step) {
       const StaircaseStep& step = *r.staircase_step;

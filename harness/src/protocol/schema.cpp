@@ -31,21 +31,26 @@ Json default_of(const SettingInfo& info) {
   return std::visit([](const auto& v) { return Json(v); }, *value);
 }
 
+// An integer in the setting's range, one of its choices when it lists any.
+Json integer_schema(const SettingInfo& info) {
+  Json j = {{"type", "integer"},
+            {"minimum", static_cast<std::int64_t>(info.min)},
+            {"maximum", static_cast<std::int64_t>(info.max)}};
+  if (!info.choices.empty()) {
+    Json values = Json::array();
+    for (auto c : info.choices) values.push_back(std::stoll(std::string(c)));
+    j["enum"] = values;
+  }
+  return j;
+}
+
 // What one value of the setting may be: the same rule check_setting applies.
 Json value_schema(const SettingInfo& info) {
   switch (info.kind) {
     case SettingKind::boolean: return {{"type", "boolean"}};
-    case SettingKind::integer: {
-      Json j = {{"type", "integer"},
-                {"minimum", static_cast<std::int64_t>(info.min)},
-                {"maximum", static_cast<std::int64_t>(info.max)}};
-      if (!info.choices.empty()) {
-        Json values = Json::array();
-        for (auto c : info.choices) values.push_back(std::stoll(std::string(c)));
-        j["enum"] = values;
-      }
-      return j;
-    }
+    case SettingKind::integer: return integer_schema(info);
+    case SettingKind::integer_or_auto:
+      return {{"anyOf", Json::array({integer_schema(info), Json{{"const", "auto"}}})}};
     case SettingKind::number: return {{"type", "number"}, {"minimum", info.min}, {"maximum", info.max}};
     case SettingKind::number_or_from_table:
       return {{"anyOf", Json::array({Json{{"type", "number"}, {"minimum", info.min}, {"maximum", info.max}},

@@ -157,6 +157,24 @@ bool set_table_sides(Settings& s, const SettingValue& v) {
   return i != nullptr;
 }
 
+// viewing.msaa: a sample count, or "auto" (unset: the renderer picks for its
+// device).
+std::optional<SettingValue> get_msaa(const Settings& s) {
+  if (s.viewing.msaa) return std::int64_t{*s.viewing.msaa};
+  return std::string("auto");
+}
+bool set_msaa(Settings& s, const SettingValue& v) {
+  if (const auto* text = std::get_if<std::string>(&v)) {
+    if (*text != "auto") return false;
+    s.viewing.msaa.reset();
+    return true;
+  }
+  const auto* i = std::get_if<std::int64_t>(&v);
+  if (i == nullptr || *i < 1 || *i > 8) return false;
+  s.viewing.msaa = static_cast<std::uint32_t>(*i);
+  return true;
+}
+
 // viewing.preset: a name for a projection and eyes pair, which it sets; it
 // holds no value of its own.
 std::optional<SettingValue> get_preset(const Settings&) { return std::nullopt; }
@@ -205,10 +223,10 @@ std::vector<SettingInfo> make_registry() {
       boolean<&S::viewing, &Viewing::back_hemisphere>("viewing.back_hemisphere", "S3: draw the antipodal images"),
       number<&S::viewing, &Viewing::ipd_m>("viewing.ipd_m", 0.045, 0.085,
                                            "default interpupillary distance (used when the runtime gives none)"),
-      integer<&S::viewing, &Viewing::msaa>(
-          "viewing.msaa", 1, 8,
-          "samples per pixel for anti-aliased edges (1: none); clamped to what the device supports",
-          {"1", "2", "4", "8"}),
+      {"viewing.msaa", K::integer_or_auto, 1, 8, {"1", "2", "4", "8"},
+       "samples per pixel for anti-aliased edges (1: none), clamped to what the device supports; "
+       "\"auto\": 4 on a GPU, 1 on a CPU device (lavapipe)",
+       get_msaa, set_msaa},
       integer<&S::timeline, &Timeline::fixation_ms>("timeline.fixation_ms", 0, 60000,
                                                     "fixation mark before the stimulus"),
       integer<&S::timeline, &Timeline::stimulus_ms>("timeline.stimulus_ms", 1, 600000, "stimulus duration"),
@@ -324,6 +342,14 @@ Result<Done> check_setting(const SettingInfo& info, const SettingValue& value) {
     case K::boolean:
       if (!std::holds_alternative<bool>(value)) return setting_problem("expected true or false");
       return Done{};
+    case K::integer_or_auto:
+      if (const auto* s = std::get_if<std::string>(&value)) {
+        if (*s == "auto") return Done{};
+        return setting_problem("expected \"auto\" or one of " + values_text(info) + ", found \"" + *s + "\"");
+      }
+      if (!std::holds_alternative<std::int64_t>(value))
+        return setting_problem("expected \"auto\" or one of " + values_text(info));
+      [[fallthrough]];
     case K::integer: {
       const auto* i = std::get_if<std::int64_t>(&value);
       if (!i) return setting_problem("expected an integer in " + range_text(info));

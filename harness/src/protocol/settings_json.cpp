@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -87,7 +88,21 @@ Json value_of(const Settings& s, std::string_view path) {
   return std::visit([](const auto& v) { return Json(v); }, *value);
 }
 
+// The name a record gives the setting at `path`, when it holds it alone
+// under one key.
+std::optional<std::string_view> name_in(const std::vector<RecordKey>& record, std::string_view path) {
+  for (const RecordKey& key : record)
+    if (!key.derived && key.paths.size() == 1 && key.paths.front() == path) return key.name;
+  return std::nullopt;
+}
+
 }  // namespace
+
+std::string stimulus_key(std::string_view path) {
+  if (const auto name = name_in(stimulus_record(), path)) return std::string(*name);
+  if (const auto name = name_in(condition_record(), path)) return std::string(*name);
+  return std::string(path.substr(path.find('.') + 1));
+}
 
 Json settings_json(const Settings& s, const Derived& d, SettingsRecord record) {
   Json j = Json::object();

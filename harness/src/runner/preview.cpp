@@ -279,7 +279,7 @@ Result<Rendered> render_condition(const protocol::Protocol& p, const protocol::P
 
 void write_header(std::ostringstream& o, const protocol::Protocol& p, const PreviewRequest& rq,
                   const protocol::Design& design, std::size_t conditions, const std::string& device,
-                  std::uint32_t w, std::uint32_t h) {
+                  std::uint32_t w, std::uint32_t h, std::uint32_t msaa) {
   o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
     << html(p.meta.name + " " + p.meta.version) << " — curvlab preview</title>\n<style>" << kStyle
     << "</style>\n</head>\n<body>\n";
@@ -292,7 +292,7 @@ void write_header(std::ostringstream& o, const protocol::Protocol& p, const Prev
     << "<tr><td>software</td><td>curvlab " << html(std::string(software_version())) << " ("
     << html(std::string(git_commit())) << ")</td></tr>\n"
     << "<tr><td>renderer</td><td>" << html(device) << ", " << w << "×" << h
-    << " px per eye, 90° horizontal field of view</td></tr>\n"
+    << " px per eye, 90° horizontal field of view, " << msaa << " samples per pixel</td></tr>\n"
     << "<tr><td>participant</td><td>" << design.participant << " (seed " << design.seed;
   if (design.counterbalance_row) o << ", counterbalance row " << *design.counterbalance_row + 1;
   o << ")</td></tr>\n"
@@ -436,6 +436,15 @@ Result<std::string> write_atomically(const fs::path& dir, const std::string& tex
   return index.string();
 }
 
+// The Vulkan device the sheet is drawn on. Mesa keeps a shader cache under
+// the home folder; the sheet writes only under its own folder.
+Result<renderer::Context> sheet_context(bool software) {
+  ::setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
+  return from_renderer(renderer::Context::create(
+      {.device = software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
+       .validation = false}));
+}
+
 }  // namespace
 
 Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRequest& rq) {
@@ -450,16 +459,11 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
   fs::create_directories(dir / "images", ec);
   if (ec) return Error{Error::Kind::io, "cannot create " + (dir / "images").string() + ": " + ec.message()};
 
-  // Mesa keeps a shader cache under the home folder; the sheet writes only
-  // under its own folder.
-  ::setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
-  auto created = renderer::Context::create(
-      {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
-       .validation = false});
-  auto context = from_renderer(std::move(created));
+  auto context = sheet_context(rq.software);
   if (!context) return context.error();
   const auto& ctx = context.value();
-  renderer::Renderer r(ctx);
+  // Drawn as the runner draws on this device: the protocol's [viewing] msaa.
+  renderer::Renderer r(ctx, {.msaa = p.session_settings().viewing.msaa});
   renderer::OffscreenTarget target(ctx, w, h);
   SheetRenderer sheet{r, target, w, h, dir};
 
@@ -484,7 +488,7 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
   else prediction = std::move(predicted).value();
 
   std::ostringstream o;
-  write_header(o, p, rq, design, conditions.size(), ctx.device_name(), w, h);
+  write_header(o, p, rq, design, conditions.size(), ctx.device_name(), w, h, r.msaa());
   write_blocks(o, p, design);
   write_texts(o, p, design);
   o << "<h2>Conditions (" << conditions.size() << ")</h2>\n<p class=\"small\">Each stereo pair is the first "

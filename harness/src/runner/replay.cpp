@@ -220,7 +220,7 @@ Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
   auto context = from_renderer(std::move(created));
   if (!context) return context.error();
   const auto& ctx = context.value();
-  const auto msaa = f.msaa > 0 ? f.msaa : static_cast<std::uint32_t>(f.settings.viewing.msaa);
+  const std::optional<std::uint32_t> msaa = f.msaa > 0 ? std::optional(f.msaa) : f.settings.viewing.msaa;
   renderer::Renderer r(ctx, renderer::RendererOptions{.msaa = msaa});
   renderer::FrameDescription desc;
   desc.space = world.space;

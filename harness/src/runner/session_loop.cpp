@@ -94,7 +94,7 @@ class SessionLoop::Impl {
         frame_index_(s.frame_offset),
         first_trial_attempts_(s.first_trial_attempts),
         first_trial_aborts_(s.first_trial_aborts),
-        progress_(options_.progress, options_.progress_json),
+        progress_(options_.progress, options_.progress_json, options_.progress_every),
         console_(options_.console) {
     dominant_ = options_.dominant_eye == data::DominantEye::left ? renderer::Eye::left : renderer::Eye::right;
     eye_size_ = eye_image_size(station_.display->info(), static_cast<std::uint32_t>(p_.resolution_width),
@@ -151,7 +151,7 @@ class SessionLoop::Impl {
         continue;
       }
       if (run_trial(i) == Outcome::quit) return Outcome::quit;
-      progress_.update(static_cast<std::int64_t>(i + 1), summary_.trials_planned, t.block);
+      progress_.update(progress_point());
     }
     return pages(p_.instructions_end, Phase::done, 0, std::nullopt);
   }
@@ -351,7 +351,23 @@ class SessionLoop::Impl {
       ++late_session_;
     }
     if (console_) show_status(f, stats, overlay.phase, own.count());
+    progress_.tick(progress_point());
     return stats;
+  }
+
+  // Where the session stands: the trial running (or the last one ended),
+  // the trials ended in this run and those left.
+  ProgressPoint progress_point() const {
+    const auto total = static_cast<std::int64_t>(design_.trials.size());
+    const std::int64_t ended_all = first_reported_ + trials_reported_;
+    ProgressPoint p;
+    p.trial = current_trial_ ? static_cast<std::int64_t>(*current_trial_) + 1
+                             : std::max<std::int64_t>(1, ended_all);
+    p.total = total;
+    p.ended = trials_reported_;
+    p.left = total - ended_all;
+    p.block = status_.block;
+    return p;
   }
 
   // A SIGINT, SIGTERM or SIGHUP ends the session as the operator's end does:
@@ -890,6 +906,8 @@ class SessionLoop::Impl {
       r.staircase_step = data::StaircaseStep{staircase_key(p_, *t.planned, step.track), step.step, step.value,
                                              step.positive, step.reversal, step.next_value};
     }
+    // A staircase's or an adjustment's value is stored with the trial.
+    if (!t.judgement->parameter.empty()) r.stimulus_json = shown_stimulus_json(p_, *t.planned, t.settings);
     status_.last_response = r.response;
     status_.last_rt_ms = a.answer ? static_cast<double>(r.response_ns - r.onset_ns) * 1e-6 : -1.0;
     completed_ticket_ = writer_.journal(std::move(r));

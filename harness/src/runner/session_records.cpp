@@ -45,7 +45,7 @@ std::vector<data::BlockPlan> block_plans(const Protocol& p, const protocol::Desi
     bp.settings_json = settings.dump();
     for (std::size_t k = 0; k < b.trial_count; ++k) {
       const auto& t = d.trials.at(b.first_trial + k);
-      bp.trials.push_back({conditions_json(p, t), stimulus_json(t)});
+      bp.trials.push_back({conditions_json(p, t), stimulus_json(p, t)});
     }
     out.push_back(std::move(bp));
   }
@@ -69,10 +69,34 @@ std::string conditions_json(const Protocol& p, const PlannedTrial& t) {
   return j.dump();
 }
 
-std::string stimulus_json(const PlannedTrial& t) {
-  Json j = protocol::settings_json(t.settings, t.derived, protocol::SettingsRecord::stimulus);
+namespace {
+
+// The stimulus record of settings `s`. The parameter of a judgement that
+// sets it on each trial (a staircase's, an adjustment's) is stored under its
+// own key: its value when the trial `shown` it, null in the plan, where the
+// value is not known yet (a staircase's next value depends on the answers).
+std::string stimulus_record(const Protocol& p, const PlannedTrial& t, const protocol::Settings& s,
+                            const protocol::Derived& d, bool shown) {
+  Json j = protocol::settings_json(s, d, protocol::SettingsRecord::stimulus);
   if (t.adjustment_start) j["adjustment_start"] = *t.adjustment_start;
+  const std::string& parameter = block_of(p, t.block).judgement.parameter;
+  if (!parameter.empty()) {
+    const auto value = shown ? protocol::numeric_setting(s, parameter) : std::nullopt;
+    j[protocol::stimulus_key(parameter)] = value ? Json(*value) : Json(nullptr);
+  }
   return j.dump();
+}
+
+}  // namespace
+
+std::string stimulus_json(const Protocol& p, const PlannedTrial& t) {
+  return stimulus_record(p, t, t.settings, t.derived, false);
+}
+
+std::string shown_stimulus_json(const Protocol& p, const PlannedTrial& t, const protocol::Settings& shown) {
+  // The parameter may move a derived value (table.edge_m the radius).
+  const auto derived = protocol::derive(shown);
+  return stimulus_record(p, t, shown, derived ? *derived : t.derived, true);
 }
 
 }  // namespace curvlab::harness::runner

@@ -14,6 +14,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <tuple>
 
 namespace curvlab::renderer {
@@ -23,12 +24,20 @@ struct RendererOptions {
   std::size_t frames_in_flight = 2;
   // Samples per pixel (1, 2, 4 or 8); the renderer uses the largest count
   // the device supports that is not above this (Renderer::msaa()).
-  std::uint32_t msaa = 4;
+  // nullopt: the device's automatic count (automatic_msaa).
+  std::optional<std::uint32_t> msaa = 4;
 };
 
 // The sample count a device can draw with: the largest of 1, 2, 4, 8 not
 // above `requested` that both its colour and depth framebuffers support.
 std::uint32_t supported_msaa(const Context& ctx, std::uint32_t requested);
+
+// The count "auto" draws with: 4 on a GPU, 1 on a CPU device (lavapipe).
+// A GPU multisamples at little cost; a CPU device pays per sample and per
+// pixel (4 samples cost lavapipe about 5 times a frame's time), while the
+// cue stick's edges do not depend on samples at all (docs/renderer.md,
+// "The cue stick's coverage"): only the table's and balls' edges alias.
+std::uint32_t automatic_msaa(const Context& ctx);
 
 // Owns pipelines, meshes, textures, depth images and frame slots. Holds a
 // reference to the Context, which must outlive it. Not thread-safe.

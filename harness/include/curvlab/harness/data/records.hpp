@@ -99,6 +99,9 @@ struct TrialResult {
   std::string response;
   std::string response_device;
   std::optional<StaircaseStep> staircase_step;  // committed in the same transaction
+  // The stimulus as shown, replacing the planned trials.stimulus (a
+  // staircase's or an adjustment's value filled in); nullopt: as planned.
+  std::optional<std::string> stimulus_json;
 };
 
 struct EventRecord {

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,7 +32,7 @@ struct DesktopOptions {
   std::string key_script;
   bool software = false;  // lavapipe even with a GPU
   bool vsync = true;
-  std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
+  std::optional<std::uint32_t> msaa;  // samples per pixel requested (clamped); nullopt: the device's automatic count
   bool validation = false;  // Khronos validation layer on (tests); messages go to stderr
   const devices::Clock* clock = nullptr;  // the session's; required
 };

@@ -66,9 +66,11 @@ struct Viewing {
   renderer::EyeSelection eyes = renderer::EyeSelection::both;
   bool back_hemisphere = true;  // S3 only: draw the antipodal images
   double ipd_m = 0.063;
-  // Samples per pixel for anti-aliasing (1, 2, 4 or 8); the renderer clamps
-  // it to what the device supports.
-  std::int64_t msaa = 4;
+  // Samples per pixel for anti-aliasing (1, 2, 4 or 8), clamped by the
+  // renderer to what the device supports; nullopt ("auto"): the renderer's
+  // choice for its device, 4 on a GPU and 1 on a CPU device
+  // (renderer::automatic_msaa).
+  std::optional<std::uint32_t> msaa;
 };
 
 // Per-trial timeline in milliseconds: fixation → stimulus → response window
@@ -119,7 +121,7 @@ struct Settings {
 // A value as written in the protocol (TOML integers stay integers).
 using SettingValue = std::variant<bool, std::int64_t, double, std::string>;
 
-enum class SettingKind { boolean, integer, number, enumeration, number_or_from_table };
+enum class SettingKind { boolean, integer, number, enumeration, number_or_from_table, integer_or_auto };
 
 struct SettingInfo {
   std::string_view path;  // "section.key"

@@ -11,6 +11,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <string>
+#include <string_view>
+
 namespace curvlab::harness::protocol {
 
 enum class SettingsRecord {
@@ -24,5 +27,13 @@ enum class SettingsRecord {
 };
 
 nlohmann::ordered_json settings_json(const Settings& s, const Derived& d, SettingsRecord record);
+
+// The key under which the stimulus record holds a setting's value: its own
+// key where the record names it ("stimulus.stick_sagitta_m" →
+// "stick_sagitta_m"), else the condition record's ("table.edge_m" →
+// "table_edge_m"), else the part after the section ("space.e3_radius_m" →
+// "e3_radius_m"). A staircase's or an adjustment's parameter is stored
+// under it on every trial (the export's stim_<key> column).
+std::string stimulus_key(std::string_view path);
 
 }  // namespace curvlab::harness::protocol

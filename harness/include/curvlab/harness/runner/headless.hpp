@@ -39,7 +39,9 @@ struct HeadlessOptions {
   std::uint32_t width_px = 1024;  // per eye
   std::uint32_t height_px = 1024;
   bool software = false;  // lavapipe even with a GPU
-  std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
+  // Samples per pixel requested (clamped to the device); nullopt: the
+  // device's automatic count (renderer::automatic_msaa).
+  std::optional<std::uint32_t> msaa;
   std::int64_t start_ns = 0;  // the session clock at the first frame
   // No renderer at all (predictions, tests of the state machine): submit()
   // plans nothing and returns zero counts.

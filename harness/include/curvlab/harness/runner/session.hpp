@@ -33,6 +33,7 @@
 #include "curvlab/harness/runner/operator.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -54,7 +55,8 @@ struct RunOptions {
   std::optional<ObserverParams> observer;  // answers for the participant
   FrameDrawing drawing = FrameDrawing::all;
   std::string images_dir;  // stimulus images of every onset ("" none)
-  bool progress = false;   // a progress bar on stderr
+  bool progress = false;   // progress on stderr: a bar on a terminal, else a line every progress_every
+  std::chrono::milliseconds progress_every{10'000};
   bool progress_json = false;  // one JSON object per trial on stdout (docs/xr.md, "The operator window")
   // The experimenter's console (operator.hpp): status shown, actions taken.
   // Not owned; outlives the run. nullptr: none.
@@ -121,8 +123,15 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id,
                          const devices::Clock& clock);
 
 // The stored conditions and stimulus of a planned trial (trials.conditions
-// and trials.stimulus; data_schema/codebook.md).
+// and trials.stimulus; data_schema/codebook.md). The parameter of a
+// judgement that sets it on each trial (staircase, adjustment) is null in
+// the plan and filled in when the trial ends with its answer or a timeout:
+// shown_stimulus_json, with `shown` the trial's settings then (a
+// staircase's value as shown from its onset, an adjustment's as confirmed
+// or, on a timeout, as last shown).
 std::string conditions_json(const protocol::Protocol& p, const protocol::PlannedTrial& t);
-std::string stimulus_json(const protocol::PlannedTrial& t);
+std::string stimulus_json(const protocol::Protocol& p, const protocol::PlannedTrial& t);
+std::string shown_stimulus_json(const protocol::Protocol& p, const protocol::PlannedTrial& t,
+                                const protocol::Settings& shown);
 
 }  // namespace curvlab::harness::runner

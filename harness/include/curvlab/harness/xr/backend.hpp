@@ -9,6 +9,7 @@
 #include "curvlab/harness/result.hpp"
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace curvlab::xr {
@@ -19,7 +20,7 @@ struct XrBackendOptions {
   // Offer copies of the submitted images for the operator window
   // (Display::mirror()); the swapchains can be copied from either way.
   bool mirror = false;
-  std::uint32_t msaa = 4;  // samples per pixel requested (clamped to the device)
+  std::optional<std::uint32_t> msaa;  // samples per pixel requested (clamped); nullopt: the device's automatic count
 };
 
 // What the controllers of curvlab's action set can press (button names as
