@@ -114,24 +114,35 @@ void MethodOfAdjustment::read(JudgementSection& section, Judgement& out) const {
   const auto s0 = r.get_number(j, "start_min", prefix, true), s1 = r.get_number(j, "start_max", prefix, true);
   const auto step = r.get_number(j, "step", prefix, true);
   a.fine_step = r.get_number(j, "fine_step", prefix, false).value_or(0.0);
+  bool range_ok = false;
   if (mn && mx) {
     a.min = *mn;
     a.max = *mx;
-    if (!out.parameter.empty()) check_range(r, out.parameter, a.min, a.max, j, prefix);
+    range_ok = check_range(r, out.parameter, a.min, a.max, j, prefix);
   }
-  if (s0 && s1 && mn && mx) {
+  // The start and the steps only against a range that is one (min ≥ max is
+  // reported above), the fine step only against a step that was given.
+  if (s0 && s1 && range_ok) {
     a.start_min = *s0;
     a.start_max = *s1;
     if (!(a.min <= a.start_min && a.start_min <= a.start_max && a.start_max <= a.max))
-      r.error(pos_of(*j.get("start_min")), prefix + ".start_min", "expected min ≤ start_min ≤ start_max ≤ max");
+      r.error(pos_of(*j.get("start_min")), prefix + ".start_min",
+              "expected " + number_label(a.min) + " ≤ start_min ≤ start_max ≤ " + number_label(a.max) +
+                  ", got start_min = " + number_label(a.start_min) + ", start_max = " + number_label(a.start_max));
   }
   if (step) {
     a.step = *step;
-    if (!(a.step > 0.0) || (mn && mx && a.step > a.max - a.min))
-      r.error(pos_of(*j.get("step")), prefix + ".step", "expected 0 < step ≤ max − min");
+    if (!(a.step > 0.0))
+      r.error(pos_of(*j.get("step")), prefix + ".step", "expected 0 < step, got " + number_label(a.step));
+    else if (range_ok && a.step > a.max - a.min)
+      r.error(pos_of(*j.get("step")), prefix + ".step",
+              "expected 0 < step ≤ max − min = " + number_label(a.max - a.min) + ", got " + number_label(a.step));
   }
-  if (a.fine_step < 0.0 || (a.fine_step > 0.0 && a.fine_step > a.step))
-    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step", "expected 0 < fine_step ≤ step");
+  if (a.fine_step < 0.0)
+    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step", "expected 0 < fine_step, got " + number_label(a.fine_step));
+  else if (step && a.step > 0.0 && a.fine_step > a.step)
+    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step",
+            "expected 0 < fine_step ≤ step = " + number_label(a.step) + ", got " + number_label(a.fine_step));
   a.keys_decrease = r.get_string_array(j, "keys_decrease", prefix, &key_names());
   a.keys_increase = r.get_string_array(j, "keys_increase", prefix, &key_names());
   a.keys_confirm = r.get_string_array(j, "keys_confirm", prefix, &key_names());
