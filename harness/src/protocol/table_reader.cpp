@@ -18,6 +18,13 @@ std::string join(const std::string& prefix, std::string_view key) {
 
 std::string number_label(double v) { return value_label(SettingValue(std::in_place_type<double>, v)); }
 
+std::string interval_label(double lo, double hi) {
+  // Appends, not operator+ on a literal: GCC 12 warns falsely (-Wrestrict).
+  std::string out = "[";
+  out.append(number_label(lo)).append(", ").append(number_label(hi)).append("]");
+  return out;
+}
+
 std::string quoted_list(const std::vector<std::string>& items) {
   std::string out;
   for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", \"" : "\"") + items[i] + "\"";

@@ -74,11 +74,22 @@ class MethodOfAdjustment final : public JudgementType {
   [[nodiscard]] Forecast forecast() const override { return Forecast::none; }
 
   [[nodiscard]] std::optional<OnsetValue> onset_value(const Judgement& j, const PlannedTrial& t) const override {
-    if (!t.adjustment_start || !spec_of(j)) return std::nullopt;
+    const auto* a = spec_of(j);
+    if (!t.adjustment_start || !a) return std::nullopt;
     char value[64];
     std::snprintf(value, sizeof value, "%.4f", *t.adjustment_start);
-    return OnsetValue{*t.adjustment_start, "adjustment start of trial " + std::to_string(t.index) + ": " +
-                                               j.parameter + " = " + value + " (the settings below are the protocol's)"};
+    return OnsetValue{*t.adjustment_start, "adjustment start of trial " + std::to_string(t.index) + ", " +
+                                               j.parameter + " = " + value + " (each trial draws its own from " +
+                                               interval_label(a->start_min, a->start_max) + ")"};
+  }
+
+  [[nodiscard]] std::vector<std::pair<std::string, std::string>> settings_summary(const Judgement& j) const override {
+    const auto* a = spec_of(j);
+    if (!a) return {};
+    return {{"start", "drawn for each trial from " + interval_label(a->start_min, a->start_max)},
+            {"step", number_label(a->step) + " per press" +
+                         (a->fine_step > 0.0 ? ", fine step " + number_label(a->fine_step) : std::string())},
+            {"range", interval_label(a->min, a->max)}};
   }
 };
 
@@ -139,7 +150,8 @@ void MethodOfAdjustment::read(JudgementSection& section, Judgement& out) const {
               "expected 0 < step ≤ max − min = " + number_label(a.max - a.min) + ", got " + number_label(a.step));
   }
   if (a.fine_step < 0.0)
-    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step", "expected 0 < fine_step, got " + number_label(a.fine_step));
+    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step",
+            "expected 0 < fine_step, got " + number_label(a.fine_step));
   else if (step && a.step > 0.0 && a.fine_step > a.step)
     r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step",
             "expected 0 < fine_step ≤ step = " + number_label(a.step) + ", got " + number_label(a.fine_step));

@@ -8,7 +8,6 @@
 #include "curvlab/harness/protocol/staircase.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -124,11 +123,11 @@ class InterleavedStaircaseJudgement final : public JudgementType {
     const auto& all = stairs(j);
     if (all.empty()) return std::nullopt;
     const auto& sc = all[t.staircase ? t.staircase->index : 0];
-    char start[64];
-    const auto written = std::to_chars(start, start + sizeof start, sc.start);
     return OnsetValue{sc.start, "staircase \"" + sc.name + "\" at its start value, " + j.parameter + " = " +
-                                    std::string(start, written.ptr)};
+                                    number_label(sc.start)};
   }
+
+  [[nodiscard]] std::vector<std::pair<std::string, std::string>> settings_summary(const Judgement& j) const override;
 
  private:
   static const std::vector<StaircaseSpec>& stairs(const Judgement& j) {
@@ -276,6 +275,28 @@ void InterleavedStaircaseJudgement::read_step_sizes(TableReader& r, const toml::
     }
     s.step_sizes.push_back(*v);
   }
+}
+
+std::vector<std::pair<std::string, std::string>> InterleavedStaircaseJudgement::settings_summary(
+    const Judgement& j) const {
+  const auto* table = table_of(j);
+  if (!table) return {};
+  std::vector<std::pair<std::string, std::string>> rows{{"positive answer", table->positive}};
+  for (const auto& s : table->staircases) {
+    std::string steps;
+    for (const double step : s.step_sizes) steps += (steps.empty() ? "" : ", ") + number_label(step);
+    const std::string rule = std::to_string(s.up) + "-up/" + std::to_string(s.down) + "-down";
+    char target[32];
+    std::snprintf(target, sizeof target, "%.1f", 100.0 * staircase_target_probability(s.up, s.down));
+    rows.emplace_back("staircase \"" + s.name + "\"",
+                      "start " + number_label(s.start) + "; step sizes " + steps +
+                          " (step k after k reversals, the last repeating); " + rule + ", converging on " + target +
+                          " % \"" + table->positive + "\"; stops after " + std::to_string(s.stop_reversals) +
+                          " reversals or " + std::to_string(s.max_trials) +
+                          " trials; threshold: mean of the reversals after the first " +
+                          std::to_string(s.discard_reversals) + "; clamped to " + interval_label(s.min, s.max));
+  }
+  return rows;
 }
 
 // Round-robin slots, max_trials per staircase per cell; shuffling interleaves
