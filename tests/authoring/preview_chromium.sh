@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `curvlab preview` in a real browser: headless Chromium loads the sheet,
 # every image must load, and there is one condition panel per distinct
-# condition of `curvlab design` (distinct factor levels and settings). The
+# condition of `curvlab design` (distinct factor levels and settings,
+# practice trials apart, one per staircase). The
 # sheet writes nothing outside its folder; a bad protocol gets the
 # validator's messages, exit code 2 and no folder.
 # Usage: preview_chromium.sh SOURCE_DIR CURVLAB PROTOCOL
@@ -37,7 +38,9 @@ sheet="$work/cwd/sheet/index.html"
 expected=$("$py" - "$work/design.json" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
-print(len({json.dumps([t["levels"], t["settings"]], sort_keys=True) for t in d["trials"]}))
+# Practice trials apart, and one per staircase.
+print(len({json.dumps([t["levels"], t["settings"], t["practice"], t.get("staircase")], sort_keys=True)
+           for t in d["trials"]}))
 PY
 )
 echo "curvlab design: $expected distinct conditions"

@@ -305,3 +305,104 @@ TEST(Diagnostics, NonAsciiTextInValueStringsIsAccepted) {
   EXPECT_EQ(r->instructions_start.at(0), "Bitte drücken Sie die Taste — ¿listo? 「はい」");
   EXPECT_EQ(r->judgement.options.at(0).label, "gewölbt");
 }
+
+namespace {
+
+const std::string kHead = "[protocol]\nname = \"x\"\nversion = \"1\"\n[randomization]\nseed = 1\n";
+const std::string kChoice = "[judgement]\ntype = \"choice\"\n"
+                            "options = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n";
+
+// The one diagnostic of a text, "field: message"; a failure when it has
+// none or more than one.
+std::string only_problem(const std::string& text) {
+  const auto r = load_protocol_text(text, "inline.toml");
+  std::string all;
+  for (const auto& d : problems(r)) all += format_diagnostic(d) + "\n";
+  EXPECT_EQ(problems(r).size(), 1u) << all;
+  return problems(r).empty() ? "" : problems(r)[0].field + ": " + problems(r)[0].message;
+}
+
+}  // namespace
+
+TEST(Diagnostics, AMisspeltLevelGetsASuggestionAndNoSecondErrorWhereABlockNamesIt) {
+  const auto r = load_protocol_file((kSource / "tests/protocol/malformed/misspelt_level_value.toml").string());
+  ASSERT_EQ(problems(r).size(), 1u) << r.error().message;
+  EXPECT_EQ(problems(r)[0].field, "factors.view.levels[2]");
+  EXPECT_EQ(problems(r)[0].message,
+            "unknown value \"natve\"; did you mean \"native\"? Expected one of \"tourist\", \"native\", "
+            "\"monocular\" (levels of viewing.preset)");
+}
+
+TEST(Diagnostics, MisspeltValuesEverywhereGetASuggestion) {
+  const std::string stair = "[judgement]\ntype = \"staircase\"\nparameter = \"stimulus.stick_sagitta_m\"\n"
+                            "options = [{ value = \"convex\", keys = [\"1\"] }, "
+                            "{ value = \"concave\", keys = [\"2\"] }]\n"
+                            "staircases = [{ name = \"s\", start = 0, min = -0.1, max = 0.1, step_sizes = [0.01] }]\n";
+  EXPECT_EQ(only_problem(kHead + "[viewing]\npreset = \"natve\"\n" + kChoice),
+            "viewing.preset: unknown value \"natve\"; did you mean \"native\"? Expected one of \"tourist\", "
+            "\"native\", \"monocular\"");
+  EXPECT_EQ(only_problem(kHead + "[space]\nradius_m = \"from_tabel\"\n" + kChoice),
+            "space.radius_m: expected a number of metres in [0.01, 1000] or \"from_table\", found \"from_tabel\"; "
+            "did you mean \"from_table\"?");
+  EXPECT_EQ(only_problem(kHead + stair + "positive = \"convx\"\n"),
+            "judgement.positive: \"convx\" is not an option value; did you mean \"convex\"? Expected one of "
+            "\"convex\", \"concave\"");
+  EXPECT_EQ(only_problem(kHead + "[factors.space]\nsets = \"space.kind\"\nlevels = [\"E3\", \"H3\"]\n" + kChoice +
+                         "[[blocks]]\nname = \"one\"\nlevels = { space = \"E4\" }\n"),
+            "blocks[1].levels.space: unknown level \"E4\"; did you mean \"E3\"? Expected one of \"E3\", \"H3\"");
+  EXPECT_EQ(only_problem(kHead + kChoice + "[[blocks]]\nname = \"near\"\n[[blocks]]\nname = \"far\"\n"
+                         "[counterbalance]\nblocks = \"latin_square\"\n"
+                         "square = [[\"near\", \"farr\"], [\"far\", \"near\"]]\n"),
+            "counterbalance.square[1][2]: unknown block \"farr\"; did you mean \"far\"? "
+            "Expected one of \"near\", \"far\"");
+  // Nothing close: the list alone.
+  EXPECT_EQ(only_problem(kHead + "[space]\nkind = \"flat\"\n" + kChoice),
+            "space.kind: unknown value \"flat\": expected one of \"S3\", \"E3\", \"H3\"");
+}
+
+TEST(Diagnostics, RangeMessagesGiveTheValuesFound) {
+  const std::string stair_head = "[judgement]\ntype = \"staircase\"\nparameter = \"stimulus.stick_sagitta_m\"\n"
+                                 "positive = \"a\"\n"
+                                 "options = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n";
+  const auto stair = [&](const std::string& fields) {
+    return kHead + stair_head + "staircases = [{ name = \"s\", step_sizes = [0.01], " + fields + " }]\n";
+  };
+  EXPECT_EQ(only_problem(stair("start = 0.2, min = 0.01, max = 0.05")),
+            "judgement.staircases[1].start: expected 0.01 ≤ start ≤ 0.05, got 0.2");
+  // An empty range is reported once, not again for its start.
+  EXPECT_EQ(only_problem(stair("start = 0.2, min = 0.05, max = 0.01")),
+            "judgement.staircases[1]: expected min < max, got min = 0.05, max = 0.01");
+  EXPECT_EQ(only_problem(stair("start = 0, min = -2, max = 0.01")),
+            "judgement.staircases[1]: expected -1 ≤ min < max ≤ 1 (stimulus.stick_sagitta_m's range), "
+            "got min = -2, max = 0.01");
+  EXPECT_EQ(only_problem(stair("start = 0, min = -0.1, max = 0.1, stop_reversals = 4, discard_reversals = 6")),
+            "judgement.staircases[1].discard_reversals: expected discard_reversals < stop_reversals = 4, got 6 "
+            "(no reversal would be left for the estimate)");
+  EXPECT_EQ(only_problem(kHead + stair_head +
+                         "staircases = [{ name = \"s\", start = 0, min = -0.1, max = 0.1, "
+                         "step_sizes = [0.01, -0.5] }]\n"),
+            "judgement.staircases[1].step_sizes[2]: expected a positive number, got -0.5");
+
+  const auto adjust = [&](const std::string& fields) {
+    return kHead + "[judgement]\ntype = \"adjustment\"\nparameter = \"stimulus.stick_sagitta_m\"\n" + fields;
+  };
+  EXPECT_EQ(only_problem(adjust("min = -0.05\nmax = 0.05\nstart_min = -0.1\nstart_max = 0.02\nstep = 0.01\n")),
+            "judgement.start_min: expected -0.05 ≤ start_min ≤ start_max ≤ 0.05, got start_min = -0.1, "
+            "start_max = 0.02");
+  EXPECT_EQ(only_problem(adjust("min = -0.05\nmax = 0.05\nstart_min = 0\nstart_max = 0\nstep = 0.5\n")),
+            "judgement.step: expected 0 < step ≤ max − min = 0.1, got 0.5");
+  EXPECT_EQ(only_problem(adjust("min = -0.05\nmax = 0.05\nstart_min = 0\nstart_max = 0\nstep = 0.01\n"
+                                "fine_step = 0.02\n")),
+            "judgement.fine_step: expected 0 < fine_step ≤ step = 0.01, got 0.02");
+  // A missing step is reported once: the fine step is not compared with it.
+  EXPECT_EQ(only_problem(adjust("min = -0.05\nmax = 0.05\nstart_min = 0\nstart_max = 0\nfine_step = 0.02\n")),
+            "judgement.step: missing required number");
+
+  EXPECT_EQ(only_problem(kHead + "[backend]\nresolution = [8, 1024]\n" + kChoice),
+            "backend.resolution: expected each size in [16, 8192] pixels, got [8, 1024]");
+  EXPECT_EQ(only_problem(kHead + "[stimulus]\nstick_length_m = 0.5\nstick_sagitta_m = 0.3\n" + kChoice),
+            "stimulus.stick_sagitta_m: expected |sagitta| < stick_length_m / 2 = 0.25, got 0.3");
+  EXPECT_EQ(only_problem(stair("start = 0, min = -0.1, max = 0.1") + "[[blocks]]\nname = \"m\"\nrepetitions = 3\n"),
+            "blocks[1].repetitions: expected 1 in a staircase block, got 3 (its length comes from the stop rule); "
+            "add staircases instead");
+}

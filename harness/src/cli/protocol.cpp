@@ -65,15 +65,44 @@ Json design_json(const pr::Protocol& p, const pr::Design& d, bool with_trials) {
   return doc;
 }
 
+// One problem as `validate --json` lists it; line, column and field are
+// null where the problem has none (a file that cannot be read).
+Json diagnostic_json(const harness::Diagnostic& d) {
+  Json j;
+  j["file"] = d.file;
+  j["line"] = d.pos.line > 0 ? Json(d.pos.line) : Json(nullptr);
+  j["column"] = d.pos.line > 0 ? Json(d.pos.column) : Json(nullptr);
+  j["field"] = d.field.empty() ? Json(nullptr) : Json(d.field);
+  j["message"] = d.message;
+  return j;
+}
+
+// A file that does not load, as one JSON document on stdout: every problem
+// (exit 2, as without --json).
+[[noreturn]] void reject_as_json(const std::string& file, const harness::Error& e) {
+  Json doc;
+  doc["ok"] = false;
+  doc["file"] = file;
+  Json list = Json::array();
+  for (const auto& d : e.diagnostics) list.push_back(diagnostic_json(d));
+  if (list.empty()) list.push_back(diagnostic_json({file, {}, "", e.message}));
+  doc["diagnostics"] = list;
+  // A file name need not be UTF-8; JSON must be.
+  std::cout << doc.dump(2, ' ', false, Json::error_handler_t::replace) << '\n';
+  throw UsageError(std::to_string(list.size()) + (list.size() == 1 ? " error" : " errors") + " in " + file);
+}
+
 void run_validate(const std::string& file, bool as_json) {
-  const auto p = load_protocol_or_usage(file);
-  const auto d = pr::expand_design(p, 1);
   if (as_json) {
-    Json doc = design_json(p, d, false);
+    auto loaded = pr::load_protocol_file(file);
+    if (!loaded) reject_as_json(file, loaded.error());
+    Json doc = design_json(*loaded, pr::expand_design(*loaded, 1), false);
     doc["ok"] = true;
     std::cout << doc.dump(2) << '\n';
     return;
   }
+  const auto p = load_protocol_or_usage(file);
+  const auto d = pr::expand_design(p, 1);
   std::cout << "OK " << file << ": " << p.meta.name << " " << p.meta.version << '\n';
   std::cout << "  seed " << p.seed << (p.seed_per_participant ? " (mixed with the participant number)" : "")
             << ", block order " << pr::to_string(p.block_order) << '\n';

@@ -33,4 +33,20 @@ std::string closest_match(const std::string& word, const std::vector<std::string
   return best;
 }
 
+std::string did_you_mean(const std::string& word, const std::vector<std::string>& candidates) {
+  const std::string guess = closest_match(word, candidates);
+  return guess.empty() ? std::string() : "; did you mean \"" + guess + "\"?";
+}
+
+std::string expected_one_of(const std::string& word, const std::vector<std::string>& allowed) {
+  const std::string guess = did_you_mean(word, allowed);
+  std::string out = guess.empty() ? ": expected one of " : guess + " Expected one of ";
+  for (std::size_t i = 0; i < allowed.size(); ++i) out += (i ? ", \"" : "\"") + allowed[i] + "\"";
+  return out;
+}
+
+std::string unknown_value(const std::string& word, const std::vector<std::string>& allowed) {
+  return "unknown value \"" + word + "\"" + expected_one_of(word, allowed);
+}
+
 }  // namespace curvlab::harness::protocol

@@ -80,6 +80,10 @@ std::optional<OnsetValue> JudgementType::onset_value(const Judgement&, const Pla
   return std::nullopt;
 }
 
+std::vector<std::pair<std::string, std::string>> JudgementType::settings_summary(const Judgement&) const {
+  return {};
+}
+
 const JudgementType* find_judgement_type(std::string_view name) {
   for (const JudgementType* t : judgement_types())
     if (t->name() == name) return t;

@@ -147,7 +147,9 @@ class Loader : private TableReader {
       } else {
         const auto w = wn->get(), h = hn->get();
         if (w < 16 || w > 8192 || h < 16 || h > 8192)
-          error(pos_of(*r), "backend.resolution", "expected each size in [16, 8192] pixels");
+          error(pos_of(*r), "backend.resolution",
+                "expected each size in [16, 8192] pixels, got [" + std::to_string(w) + ", " + std::to_string(h) +
+                    "]");
         else {
           p.resolution_width = static_cast<int>(w);
           p.resolution_height = static_cast<int>(h);
@@ -267,10 +269,12 @@ class Loader : private TableReader {
           if (info) {
             if (const auto checked = check_setting(*info, *value); !checked) {
               error(pos_of(e), field, with_found(checked.error().message, e) + " (levels of " + f.sets + ")");
+              rejected_levels_[f.name].insert(value_label(*value));
               continue;
             }
           } else if (!std::holds_alternative<std::string>(*value) && !t->contains("sets")) {
             error(pos_of(e), field, "a factor without \"sets\" only labels trials: expected a string");
+            rejected_levels_[f.name].insert(value_label(*value));
             continue;
           }
           Level level{value_label(*value), *value, pos_of(e)};
@@ -416,11 +420,14 @@ class Loader : private TableReader {
         const std::string label = value ? value_label(*value) : "";
         const auto it = std::find_if(f->levels.begin(), f->levels.end(),
                                      [&](const Level& l) { return l.label == label; });
+        // A level the factor's own list got wrong is reported there, once.
+        if (value && it == f->levels.end() && rejected_levels_[name].contains(label)) continue;
         if (!value || it == f->levels.end()) {
           std::vector<std::string> labels;
           for (const auto& l : f->levels) labels.push_back(l.label);
-          error(pos_of(*item), field, (value ? "unknown level \"" + label + "\"" : "expected a level, found " + type_name(*item)) +
-                                          ": expected one of " + quoted_list(labels));
+          error(pos_of(*item), field,
+                value ? "unknown level \"" + label + "\"" + expected_one_of(label, labels)
+                      : "expected a level, found " + type_name(*item) + ": expected one of " + quoted_list(labels));
           continue;
         }
         const auto idx = static_cast<std::size_t>(it - f->levels.begin());
@@ -472,8 +479,14 @@ class Loader : private TableReader {
         const auto* s = cell.as_string();
         const auto it = s ? std::find(main.begin(), main.end(), s->get()) : main.end();
         if (it == main.end()) {
+          const bool practice = s && std::any_of(p.blocks.begin(), p.blocks.end(), [&](const Block& b) {
+                                  return b.practice && b.name == s->get();
+                                });
           error(pos_of(cell), field + "[" + std::to_string(k + 1) + "]",
-                "expected the name of a non-practice block: " + quoted_list(main));
+                !s         ? "expected the name of a non-practice block: " + quoted_list(main)
+                : practice ? "\"" + s->get() + "\" is a practice block (practice runs first, in file order): " +
+                                 "expected one of " + quoted_list(main)
+                           : "unknown block \"" + s->get() + "\"" + expected_one_of(s->get(), main));
           return;
         }
         idx.push_back(static_cast<std::size_t>(it - main.begin()));
@@ -580,13 +593,16 @@ class Loader : private TableReader {
              "a head-anchored stick must be at least 0.1 m from the eyes, found " +
                  value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_distance_m)));
     if (std::abs(s.stimulus.stick_sagitta_m) >= s.stimulus.stick_length_m / 2)
-      report("stimulus.stick_sagitta_m",
-             "expected |sagitta| < stick_length_m / 2 = " +
-                 value_label(SettingValue(std::in_place_type<double>, s.stimulus.stick_length_m / 2)));
+      report("stimulus.stick_sagitta_m", "expected |sagitta| < stick_length_m / 2 = " +
+                                             number_label(s.stimulus.stick_length_m / 2) + ", got " +
+                                             number_label(s.stimulus.stick_sagitta_m));
   }
 
   RandomizeMode default_randomize_ = RandomizeMode::shuffle;
   bool has_root_judgement_ = false;
+  // Factor → labels of its levels that were reported and left out; a block
+  // naming one gets no second error.
+  std::map<std::string, std::set<std::string>> rejected_levels_;
 };
 
 }  // namespace
@@ -603,6 +619,10 @@ Result<Protocol> load_protocol_text(std::string_view text, const std::string& fi
 }
 
 Result<Protocol> load_protocol_file(const std::string& path) {
+  // A folder opens as a stream that reads nothing; say what it is instead of
+  // reporting an empty protocol.
+  if (std::error_code ec; std::filesystem::is_directory(path, ec))
+    return load_failure(Error::Kind::bad_input, {{path, {}, "", "is a folder, not a protocol file"}});
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     std::error_code ec;
@@ -617,6 +637,7 @@ Result<Protocol> load_protocol_file(const std::string& path) {
       return load_failure(Error::Kind::bad_input,
                           {{path, {}, "", "the file is larger than 1 MiB; a protocol is a short text file"}});
   }
+  if (in.bad()) return load_failure(Error::Kind::io, {{path, {}, "", "cannot read the file"}});
   return load_protocol_text(text, path);
 }
 

@@ -2,6 +2,7 @@
 
 #include "curvlab/geometry/enum_names.hpp"
 #include "curvlab/geometry/perception.hpp"
+#include "curvlab/harness/protocol/diagnostic.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -364,7 +365,7 @@ Result<Done> check_setting(const SettingInfo& info, const SettingValue& value) {
       if (const auto* s = std::get_if<std::string>(&value)) {
         if (*s == "from_table") return Done{};
         return setting_problem("expected a number of metres in " + range_text(info) +
-               " or \"from_table\", found \"" + *s + "\"");
+                               " or \"from_table\", found \"" + *s + "\"" + did_you_mean(*s, {"from_table"}));
       }
       [[fallthrough]];
     case K::number: {
@@ -379,7 +380,7 @@ Result<Done> check_setting(const SettingInfo& info, const SettingValue& value) {
       if (!s) return setting_problem("expected one of " + choices_text(info));
       for (auto c : info.choices)
         if (c == *s) return Done{};
-      return setting_problem("unknown value \"" + *s + "\": expected one of " + choices_text(info));
+      return setting_problem(unknown_value(*s, {info.choices.begin(), info.choices.end()}));
     }
   }
   return setting_problem("unsupported setting");

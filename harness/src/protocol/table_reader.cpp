@@ -16,6 +16,15 @@ std::string join(const std::string& prefix, std::string_view key) {
   return prefix.empty() ? std::string(key) : prefix + "." + std::string(key);
 }
 
+std::string number_label(double v) { return value_label(SettingValue(std::in_place_type<double>, v)); }
+
+std::string interval_label(double lo, double hi) {
+  // Appends, not operator+ on a literal: GCC 12 warns falsely (-Wrestrict).
+  std::string out = "[";
+  out.append(number_label(lo)).append(", ").append(number_label(hi)).append("]");
+  return out;
+}
+
 std::string quoted_list(const std::vector<std::string>& items) {
   std::string out;
   for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", \"" : "\"") + items[i] + "\"";
@@ -150,10 +159,7 @@ std::optional<std::string> TableReader::get_enum(const toml::table& t, std::stri
     return std::nullopt;
   }
   if (std::find(allowed.begin(), allowed.end(), s->get()) != allowed.end()) return s->get();
-  std::string msg = "unknown value \"" + s->get() + "\": expected one of " + quoted_list(allowed);
-  const std::string guess = closest_match(s->get(), allowed);
-  if (!guess.empty()) msg += " (did you mean \"" + guess + "\"?)";
-  error(pos_of(*n), join(prefix, key), msg);
+  error(pos_of(*n), join(prefix, key), unknown_value(s->get(), allowed));
   return std::nullopt;
 }
 
@@ -190,7 +196,8 @@ std::vector<std::string> TableReader::get_string_array(const toml::table& t, std
 }
 
 std::string TableReader::with_found(const std::string& message, const toml::node& n) {
-  if (message.find("found") != std::string::npos) return message;
+  // An unknown name quotes what was written already.
+  if (message.find("found") != std::string::npos || message.starts_with("unknown value")) return message;
   return message + ", found " + type_name(n);
 }
 

@@ -27,6 +27,10 @@ SourcePos to_source_pos(toml_reader::Pos p);
 
 // "prefix.key", or "key" at the top level.
 std::string join(const std::string& prefix, std::string_view key);
+// A number as the protocol would write it, in shortest form: 0.05, -1, 1e-06.
+std::string number_label(double v);
+// "[lo, hi]" with number_label's numbers.
+std::string interval_label(double lo, double hi);
 // "\"a\", \"b\", \"c\"".
 std::string quoted_list(const std::vector<std::string>& items);
 // A lower-case identifier: a-z or _ first, then a-z, 0-9, _ and -; at most 64.

@@ -35,6 +35,10 @@ std::string num(double v) {
   return std::string(buf, r.ptr);
 }
 
+// Metres as millimetres, to the micrometre: 0.07 m is "70", not the
+// "70.00000000000001" that 0.07 * 1000 prints in shortest form.
+std::string mm(double metres) { return num(std::round(metres * 1e6) / 1e3); }
+
 std::string fixed(double v, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, v);
@@ -61,16 +65,16 @@ std::vector<std::pair<std::string, std::string>> settings_rows(const Settings& s
                    std::string(renderer::to_string(s.viewing.eyes)) + " eye" +
                    (s.viewing.eyes == renderer::EyeSelection::both ? "s" : "")},
       {"back hemisphere", yes(s.viewing.back_hemisphere) + (s.space.kind == geometry::SpaceKind::S3 ? "" : " (drawn in S3 only)")},
-      {"IPD", num(s.viewing.ipd_m * 1000.0) + " mm"},
+      {"IPD", mm(s.viewing.ipd_m) + " mm"},
       {"tracking", std::string(geometry::to_string(s.tracking))},
-      {"stick", st.show_stick ? num(st.stick_length_m) + " m long, " + num(st.stick_radius_m * 1000.0) +
-                                    " mm radius, sagitta " + num(st.stick_sagitta_m * 1000.0) + " mm"
+      {"stick", st.show_stick ? num(st.stick_length_m) + " m long, " + mm(st.stick_radius_m) +
+                                    " mm radius, sagitta " + mm(st.stick_sagitta_m) + " mm"
                               : "hidden"},
       {"stick pose", std::string(protocol::to_string(st.stick_anchor)) + " anchor, " +
                          num(st.stick_distance_m) + " m away, height " + num(st.stick_height_m) +
                          " m, yaw " + num(st.stick_yaw_deg) + "°"},
-      {"table top", st.show_table ? "sagitta " + num(st.table_sagitta_m * 1000.0) + " mm" : "hidden"},
-      {"balls", std::to_string(st.balls) + " × " + num(st.ball_radius_m * 1000.0) + " mm radius"},
+      {"table top", st.show_table ? "sagitta " + mm(st.table_sagitta_m) + " mm" : "hidden"},
+      {"balls", std::to_string(st.balls) + " × " + mm(st.ball_radius_m) + " mm radius"},
       {"physical table", num(s.table.edge_m) + " m edge, " + num(s.table.height_m) + " m high"},
       {"timeline", std::to_string(s.timeline.fixation_ms) + " / " + std::to_string(s.timeline.stimulus_ms) +
                        " / " + std::to_string(s.timeline.response_ms) + " / " +
@@ -151,8 +155,45 @@ std::string levels_text(const std::vector<std::pair<std::string, std::string>>& 
 
 struct Rendered {
   std::string left, right, anaglyph;  // file names under images/
-  std::string note;                   // how the stimulus value was chosen
 };
+
+// What a trial's onset shows: its planned settings with the value its
+// judgement's type sets then (a staircase's start, an adjustment trial's
+// drawn start), and the note that says so ("" when the type sets none).
+struct Onset {
+  Settings settings;
+  protocol::Derived derived;
+  std::string note;
+};
+
+Onset onset_of(const protocol::Protocol& p, const protocol::PlannedTrial& t) {
+  Onset out{t.settings, t.derived, ""};
+  const protocol::Block* block = find_block(p, t.block);
+  if (!block) return out;
+  const auto& j = block->judgement;
+  const auto value = j.type->onset_value(j, t);
+  if (!value) return out;
+  protocol::set_numeric_setting(out.settings, j.parameter, value->value);
+  // The loader checked every value a judgement reaches, so this derives;
+  // the planned values stay where it would not.
+  if (const auto derived = protocol::derive(out.settings)) out.derived = *derived;
+  out.note = value->note;
+  return out;
+}
+
+// What the judgement's type tells apart within a cell (a staircase).
+std::vector<std::pair<std::string, std::string>> tracks_of(const protocol::Protocol& p,
+                                                           const protocol::PlannedTrial& t) {
+  const protocol::Block* block = find_block(p, t.block);
+  if (!block) return {};
+  return block->judgement.type->conditions(block->judgement, t);
+}
+
+std::string condition_title(const PreviewCondition& c) {
+  std::string out = levels_text(c.levels);
+  for (const auto& [name, value] : c.tracks) out += ", " + name + " \"" + value + "\"";
+  return c.practice ? out + " — practice" : out;
+}
 
 constexpr const char* kStyle = R"(
 body { font: 15px/1.4 "DejaVu Sans", sans-serif; margin: 24px; color: #1d1d1f; background: #fafafa; }
@@ -172,19 +213,31 @@ table { border-collapse: collapse; margin: 8px 0; } td, th { border: 1px solid #
 
 }  // namespace
 
-std::vector<PreviewCondition> preview_conditions(const protocol::Design& design) {
+std::vector<PreviewCondition> preview_conditions(const protocol::Protocol& p, const protocol::Design& design) {
   std::vector<PreviewCondition> out;
   std::map<std::string, std::size_t> index;
   for (const auto& t : design.trials) {
-    auto rows = settings_rows(t.settings, t.derived);
-    std::string key;
+    // Trials are one condition when their levels, tracks and planned
+    // settings agree and both are practice or both are not; an adjustment
+    // trial's own start value does not make a condition of its own.
+    auto tracks = tracks_of(p, t);
+    std::string key = t.practice ? "practice\x1e" : "main\x1e";
     for (const auto& [f, l] : t.levels) key += f + "=" + l + "\x1f";
     key += "\x1e";
-    for (const auto& [n, v] : rows) key += n + "=" + v + "\x1f";
+    for (const auto& [n, v] : tracks) key += n + "=" + v + "\x1f";
+    key += "\x1e";
+    for (const auto& [n, v] : settings_rows(t.settings, t.derived)) key += n + "=" + v + "\x1f";
     auto it = index.find(key);
     if (it == index.end()) {
       it = index.emplace(key, out.size()).first;
-      out.push_back({t.levels, std::move(rows), t.index, {}});
+      const Onset onset = onset_of(p, t);
+      out.push_back({.levels = t.levels,
+                     .tracks = std::move(tracks),
+                     .practice = t.practice,
+                     .settings = settings_rows(onset.settings, onset.derived),
+                     .onset_note = onset.note,
+                     .first_trial = t.index,
+                     .trials_per_block = {}});
     }
     auto& per_block = out[it->second].trials_per_block;
     const auto found = std::find_if(per_block.begin(), per_block.end(),
@@ -193,12 +246,14 @@ std::vector<PreviewCondition> preview_conditions(const protocol::Design& design)
     else ++found->second;
   }
   // Block by block in run order, each in factorial order (the last factor
-  // varying fastest), rather than in the shuffled order of the trials.
-  std::stable_sort(out.begin(), out.end(), [&](const PreviewCondition& a, const PreviewCondition& b) {
-    const auto& ta = design.trials[a.first_trial];
-    const auto& tb = design.trials[b.first_trial];
-    return std::pair{ta.block_position, ta.cell} < std::pair{tb.block_position, tb.cell};
-  });
+  // varying fastest) and its staircases in file order, rather than in the
+  // shuffled order of the trials.
+  const auto order = [&](const PreviewCondition& c) {
+    const auto& t = design.trials[c.first_trial];
+    return std::tuple{t.block_position, t.cell, t.staircase ? t.staircase->index : 0};
+  };
+  std::stable_sort(out.begin(), out.end(),
+                   [&](const PreviewCondition& a, const PreviewCondition& b) { return order(a) < order(b); });
   return out;
 }
 
@@ -217,18 +272,6 @@ std::pair<std::uint32_t, std::uint32_t> sheet_size(const protocol::Protocol& p, 
   return {w, h};
 }
 
-// The stimulus value the runner shows at this trial's onset where the
-// judgement's type sets it (a staircase's start, an adjustment trial's drawn
-// start). Returns the note for the panel.
-std::string onset_value(const protocol::Block* block, const protocol::PlannedTrial& t, Settings& s) {
-  if (!block) return "";
-  const auto& j = block->judgement;
-  const auto value = j.type->onset_value(j, t);
-  if (!value) return "";
-  protocol::set_numeric_setting(s, j.parameter, value->value);
-  return value->note;
-}
-
 struct SheetRenderer {
   renderer::Renderer& r;
   renderer::OffscreenTarget& target;
@@ -239,10 +282,9 @@ struct SheetRenderer {
 // One condition's onset stereo pair and anaglyph, written under images/.
 Result<Rendered> render_condition(const protocol::Protocol& p, const protocol::PlannedTrial& t, std::size_t k,
                                   SheetRenderer& out_to) {
-  Settings s = t.settings;
+  const Settings s = onset_of(p, t).settings;
   Rendered out;
   const protocol::Block* block = find_block(p, t.block);
-  out.note = onset_value(block, t, s);
   auto made = make_world(s);
   if (!made) return made.error();
   const World world = std::move(made).value();
@@ -354,13 +396,58 @@ void write_texts(std::ostringstream& o, const protocol::Protocol& p, const proto
   o << "</table>\n";
 }
 
+std::string names_text(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out.empty() ? "—" : out;
+}
+
+// One judgement's answers with the keys and buttons that give them, then
+// its type, parameter and own settings (each staircase's start, steps and
+// rules; an adjustment's start range and steps).
+std::string judgement_tables(const protocol::Judgement& j) {
+  std::string out = "<table class=\"responses\">\n<tr><th>answer</th><th>label</th><th>keys</th>"
+                    "<th>buttons</th></tr>\n";
+  for (const auto& a : j.type->answer_bindings(j)) {
+    const auto option = std::find_if(j.options.begin(), j.options.end(),
+                                     [&](const protocol::ResponseOption& o) { return o.value == a.answer; });
+    out += "<tr><td>" + html(a.answer) + "</td><td>" + html(option == j.options.end() ? "—" : option->label) +
+           "</td><td>" + html(names_text(a.keys)) + "</td><td>" + html(names_text(a.buttons)) + "</td></tr>\n";
+  }
+  out += "</table>\n<table class=\"judgement\">\n<tr><th>judgement</th><td>" +
+         html(std::string(j.type->name()) + " (" + std::string(j.type->summary()) + ")") + "</td></tr>\n";
+  if (!j.parameter.empty()) out += "<tr><th>parameter</th><td>" + html(j.parameter) + "</td></tr>\n";
+  for (const auto& [label, text] : j.type->settings_summary(j))
+    out += "<tr><th>" + html(label) + "</th><td>" + html(text) + "</td></tr>\n";
+  return out + "</table>\n";
+}
+
+// Every judgement of the session in run order, once: blocks that answer
+// the same way with the same settings share one entry.
+void write_responses(std::ostringstream& o, const protocol::Protocol& p, const protocol::Design& design) {
+  std::vector<std::pair<std::vector<std::string>, std::string>> entries;  // blocks, tables
+  for (const auto& pb : design.blocks) {
+    const protocol::Block* b = find_block(p, pb.name);
+    if (!b) continue;
+    const std::string tables = judgement_tables(b->judgement);
+    const std::string name = pb.name + (pb.practice ? " (practice)" : "");
+    const auto same = std::find_if(entries.begin(), entries.end(), [&](const auto& e) { return e.second == tables; });
+    if (same == entries.end()) entries.push_back({{name}, tables});
+    else same->first.push_back(name);
+  }
+  o << "<h2>Responses and judgement settings</h2>\n";
+  for (const auto& [blocks, tables] : entries)
+    o << "<h3>" << (blocks.size() == 1 ? "Block " : "Blocks ") << html(names_text(blocks)) << "</h3>\n" << tables;
+}
+
 // The predictions for a condition's levels and judged object; false when none.
 bool write_predictions(std::ostringstream& o, const Prediction& prediction, const PreviewCondition& c,
                        const protocol::PlannedTrial& t) {
   bool any = false;
   const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
+  const bool proportions = t.judgement->forecast() == protocol::Forecast::proportions;
   for (const auto& pc : prediction.conditions) {
-    if (pc.levels != c.levels || pc.judged != judged_name) continue;
+    if (!proportions || pc.levels != c.levels || pc.judged != judged_name) continue;
     o << "<p class=\"small\">Predicted responses (perceived " << judged_name << " sagitta "
       << fixed(pc.perceived_m * 1000.0, 2) << " mm):</p>\n<table>\n";
     for (std::size_t i = 0; i < pc.options.size() && i < pc.proportions.size(); ++i)
@@ -376,6 +463,10 @@ bool write_predictions(std::ostringstream& o, const Prediction& prediction, cons
     if (sp.levels != c.levels) continue;
     if (std::none_of(c.trials_per_block.begin(), c.trials_per_block.end(),
                      [&](const auto& e) { return e.first == sp.block; }))
+      continue;
+    // A staircase's panel shows its own convergence only.
+    if (!c.tracks.empty() &&
+        std::none_of(c.tracks.begin(), c.tracks.end(), [&](const auto& e) { return e.second == sp.staircase; }))
       continue;
     rows += "<tr><td>" + html(sp.staircase) + " (" + std::to_string(sp.up) + "-up/" + std::to_string(sp.down) +
             "-down, " + fixed(sp.target_p * 100.0, 1) + " % " + html(sp.positive) + ")</td><td>" +
@@ -394,15 +485,15 @@ bool write_predictions(std::ostringstream& o, const Prediction& prediction, cons
 void write_panel(std::ostringstream& o, std::size_t k, const PreviewCondition& c, const Rendered& img,
                  const protocol::PlannedTrial& t, const std::optional<Prediction>& prediction,
                  const std::string& prediction_note, const fs::path& dir) {
-  o << "<section class=\"condition\" id=\"condition-" << k + 1 << "\">\n<h3>" << k + 1 << ". "
-    << html(levels_text(c.levels)) << "</h3>\n<div class=\"pair\">\n";
+  o << "<section class=\"condition" << (c.practice ? " practice" : "") << "\" id=\"condition-" << k + 1
+    << "\">\n<h3>" << k + 1 << ". " << html(condition_title(c)) << "</h3>\n<div class=\"pair\">\n";
   for (const auto& [file, caption] : {std::pair{img.left, "left eye"}, std::pair{img.right, "right eye"},
                                       std::pair{img.anaglyph, "anaglyph (red left, cyan right)"}})
     o << "<figure><img alt=\"" << caption << "\" src=\"data:image/png;base64,"
       << base64(read_bytes((dir / "images" / file).string())) << "\"><figcaption>" << caption
       << "</figcaption></figure>\n";
   o << "</div>\n";
-  if (!img.note.empty()) o << "<p class=\"small\">Rendered with the " << html(img.note) << ".</p>\n";
+  if (!c.onset_note.empty()) o << "<p class=\"small\">Rendered with the " << html(c.onset_note) << ".</p>\n";
   o << "<table>\n";
   for (const auto& [name, value] : c.settings)
     o << "<tr><th>" << html(name) << "</th><td>" << html(value) << "</td></tr>\n";
@@ -410,9 +501,9 @@ void write_panel(std::ostringstream& o, std::size_t k, const PreviewCondition& c
   for (std::size_t i = 0; i < c.trials_per_block.size(); ++i)
     o << (i ? ", " : "") << html(c.trials_per_block[i].first) << ": " << c.trials_per_block[i].second;
   o << "</td></tr>\n</table>\n";
-  if (!prediction || !write_predictions(o, *prediction, c, t)) {
+  if (c.practice || !prediction || !write_predictions(o, *prediction, c, t)) {
     std::string why = "no prediction: ";
-    if (t.practice) why += "practice trials are not predicted";
+    if (c.practice) why += "practice trials are not predicted";
     else if (t.judgement->forecast() == protocol::Forecast::none) why += std::string(t.judgement->name()) + " is not predicted";
     else why += prediction_note.empty() ? "none for this condition" : prediction_note;
     o << "<p class=\"small\">" << html(why) << "</p>\n";
@@ -449,7 +540,7 @@ Result<renderer::Context> sheet_context(bool software) {
 
 Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRequest& rq) {
   const protocol::Design design = protocol::expand_design(p, rq.participant);
-  const auto conditions = preview_conditions(design);
+  const auto conditions = preview_conditions(p, design);
   const auto report = [&](std::size_t done, const std::string& what) {
     if (rq.progress) rq.progress(done, conditions.size(), what);
   };
@@ -474,7 +565,7 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
     auto rendered = render_condition(p, design.trials[conditions[k].first_trial], k, sheet);
     if (!rendered) return rendered.error();
     images.push_back(std::move(rendered).value());
-    report(k + 1, levels_text(conditions[k].levels));
+    report(k + 1, condition_title(conditions[k]));
   }
 
   // Predicted proportions from the simulated observer (choice and
@@ -490,6 +581,7 @@ Result<PreviewResult> write_preview(const protocol::Protocol& p, const PreviewRe
   std::ostringstream o;
   write_header(o, p, rq, design, conditions.size(), ctx.device_name(), w, h, r.msaa());
   write_blocks(o, p, design);
+  write_responses(o, p, design);
   write_texts(o, p, design);
   o << "<h2>Conditions (" << conditions.size() << ")</h2>\n<p class=\"small\">Each stereo pair is the first "
        "frame of the stimulus as the headless runner renders it, seen by a participant standing at the "

@@ -74,11 +74,22 @@ class MethodOfAdjustment final : public JudgementType {
   [[nodiscard]] Forecast forecast() const override { return Forecast::none; }
 
   [[nodiscard]] std::optional<OnsetValue> onset_value(const Judgement& j, const PlannedTrial& t) const override {
-    if (!t.adjustment_start || !spec_of(j)) return std::nullopt;
+    const auto* a = spec_of(j);
+    if (!t.adjustment_start || !a) return std::nullopt;
     char value[64];
     std::snprintf(value, sizeof value, "%.4f", *t.adjustment_start);
-    return OnsetValue{*t.adjustment_start, "adjustment start of trial " + std::to_string(t.index) + ": " +
-                                               j.parameter + " = " + value + " (the settings below are the protocol's)"};
+    return OnsetValue{*t.adjustment_start, "adjustment start of trial " + std::to_string(t.index) + ", " +
+                                               j.parameter + " = " + value + " (each trial draws its own from " +
+                                               interval_label(a->start_min, a->start_max) + ")"};
+  }
+
+  [[nodiscard]] std::vector<std::pair<std::string, std::string>> settings_summary(const Judgement& j) const override {
+    const auto* a = spec_of(j);
+    if (!a) return {};
+    return {{"start", "drawn for each trial from " + interval_label(a->start_min, a->start_max)},
+            {"step", number_label(a->step) + " per press" +
+                         (a->fine_step > 0.0 ? ", fine step " + number_label(a->fine_step) : std::string())},
+            {"range", interval_label(a->min, a->max)}};
   }
 };
 
@@ -114,24 +125,36 @@ void MethodOfAdjustment::read(JudgementSection& section, Judgement& out) const {
   const auto s0 = r.get_number(j, "start_min", prefix, true), s1 = r.get_number(j, "start_max", prefix, true);
   const auto step = r.get_number(j, "step", prefix, true);
   a.fine_step = r.get_number(j, "fine_step", prefix, false).value_or(0.0);
+  bool range_ok = false;
   if (mn && mx) {
     a.min = *mn;
     a.max = *mx;
-    if (!out.parameter.empty()) check_range(r, out.parameter, a.min, a.max, j, prefix);
+    range_ok = check_range(r, out.parameter, a.min, a.max, j, prefix);
   }
-  if (s0 && s1 && mn && mx) {
+  // The start and the steps only against a range that is one (min ≥ max is
+  // reported above), the fine step only against a step that was given.
+  if (s0 && s1 && range_ok) {
     a.start_min = *s0;
     a.start_max = *s1;
     if (!(a.min <= a.start_min && a.start_min <= a.start_max && a.start_max <= a.max))
-      r.error(pos_of(*j.get("start_min")), prefix + ".start_min", "expected min ≤ start_min ≤ start_max ≤ max");
+      r.error(pos_of(*j.get("start_min")), prefix + ".start_min",
+              "expected " + number_label(a.min) + " ≤ start_min ≤ start_max ≤ " + number_label(a.max) +
+                  ", got start_min = " + number_label(a.start_min) + ", start_max = " + number_label(a.start_max));
   }
   if (step) {
     a.step = *step;
-    if (!(a.step > 0.0) || (mn && mx && a.step > a.max - a.min))
-      r.error(pos_of(*j.get("step")), prefix + ".step", "expected 0 < step ≤ max − min");
+    if (!(a.step > 0.0))
+      r.error(pos_of(*j.get("step")), prefix + ".step", "expected 0 < step, got " + number_label(a.step));
+    else if (range_ok && a.step > a.max - a.min)
+      r.error(pos_of(*j.get("step")), prefix + ".step",
+              "expected 0 < step ≤ max − min = " + number_label(a.max - a.min) + ", got " + number_label(a.step));
   }
-  if (a.fine_step < 0.0 || (a.fine_step > 0.0 && a.fine_step > a.step))
-    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step", "expected 0 < fine_step ≤ step");
+  if (a.fine_step < 0.0)
+    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step",
+            "expected 0 < fine_step, got " + number_label(a.fine_step));
+  else if (step && a.step > 0.0 && a.fine_step > a.step)
+    r.error(pos_of(*j.get("fine_step")), prefix + ".fine_step",
+            "expected 0 < fine_step ≤ step = " + number_label(a.step) + ", got " + number_label(a.fine_step));
   a.keys_decrease = r.get_string_array(j, "keys_decrease", prefix, &key_names());
   a.keys_increase = r.get_string_array(j, "keys_increase", prefix, &key_names());
   a.keys_confirm = r.get_string_array(j, "keys_confirm", prefix, &key_names());

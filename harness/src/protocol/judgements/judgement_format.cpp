@@ -77,19 +77,21 @@ std::string JudgementSection::parameter() {
   return *param;
 }
 
-void check_range(TableReader& reader, const std::string& param, double lo, double hi, const toml::table& at,
+bool check_range(TableReader& reader, const std::string& param, double lo, double hi, const toml::table& at,
                  const std::string& field) {
-  const SettingInfo* info = find_setting(param);
-  if (!info) return;
+  const std::string got = ", got min = " + number_label(lo) + ", max = " + number_label(hi);
   if (!(lo < hi)) {
-    reader.error(pos_of(at), field, "expected min < max");
-    return;
+    reader.error(pos_of(at), field, "expected min < max" + got);
+    return false;
   }
-  if (lo < info->min || hi > info->max)
+  const SettingInfo* info = param.empty() ? nullptr : find_setting(param);
+  if (info && (lo < info->min || hi > info->max)) {
     reader.error(pos_of(at), field,
-                 "min and max must lie within " + std::string(param) + "'s range [" +
-                     value_label(SettingValue(std::in_place_type<double>, info->min)) + ", " +
-                     value_label(SettingValue(std::in_place_type<double>, info->max)) + "]");
+                 "expected " + number_label(info->min) + " ≤ min < max ≤ " + number_label(info->max) + " (" +
+                     param + "'s range)" + got);
+    return false;
+  }
+  return true;
 }
 
 namespace {

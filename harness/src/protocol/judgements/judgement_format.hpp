@@ -36,9 +36,9 @@ class JudgementSection {
   std::string parameter();
 };
 
-// lo < hi inside the parameter's own range; otherwise reported at `at`
-// (`field`).
-void check_range(TableReader& reader, const std::string& param, double lo, double hi, const toml::table& at,
+// lo < hi, inside the parameter's own range when `param` names one;
+// otherwise reported at `at` (`field`) with both values, and false.
+bool check_range(TableReader& reader, const std::string& param, double lo, double hi, const toml::table& at,
                  const std::string& field);
 
 // The keys one type's table takes besides `type` and `prompt`, in order, each

@@ -8,7 +8,6 @@
 #include "curvlab/harness/protocol/staircase.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -74,7 +73,8 @@ class InterleavedStaircaseJudgement final : public JudgementType {
 
   [[nodiscard]] std::optional<std::string> repetitions_problem(int repetitions) const override {
     if (repetitions <= 1) return std::nullopt;
-    return "expected 1 in a staircase block (its length comes from the stop rule); add staircases instead";
+    return "expected 1 in a staircase block, got " + std::to_string(repetitions) +
+           " (its length comes from the stop rule); add staircases instead";
   }
 
   [[nodiscard]] std::vector<double> reachable_values(const Judgement& j) const override {
@@ -123,11 +123,11 @@ class InterleavedStaircaseJudgement final : public JudgementType {
     const auto& all = stairs(j);
     if (all.empty()) return std::nullopt;
     const auto& sc = all[t.staircase ? t.staircase->index : 0];
-    char start[64];
-    const auto written = std::to_chars(start, start + sizeof start, sc.start);
     return OnsetValue{sc.start, "staircase \"" + sc.name + "\" at its start value, " + j.parameter + " = " +
-                                    std::string(start, written.ptr)};
+                                    number_label(sc.start)};
   }
+
+  [[nodiscard]] std::vector<std::pair<std::string, std::string>> settings_summary(const Judgement& j) const override;
 
  private:
   static const std::vector<StaircaseSpec>& stairs(const Judgement& j) {
@@ -181,7 +181,7 @@ void InterleavedStaircaseJudgement::read(JudgementSection& section, Judgement& o
       std::vector<std::string> values;
       for (const auto& o : out.options) values.push_back(o.value);
       section.reader.error(pos_of(*j.get("positive")), section.prefix + ".positive",
-                           "\"" + *pos + "\" is not an option value: expected one of " + quoted_list(values));
+                           "\"" + *pos + "\" is not an option value" + expected_one_of(*pos, values));
     }
     table->positive = *pos;
   }
@@ -234,19 +234,21 @@ StaircaseSpec InterleavedStaircaseJudgement::read_staircase(TableReader& r, cons
   s.discard_reversals = static_cast<int>(r.get_int(t, "discard_reversals", sp, 0, 99, false).value_or(2));
   if (t.contains("discard_reversals") && s.discard_reversals >= s.stop_reversals)
     r.error(pos_of(*t.get("discard_reversals")), sp + ".discard_reversals",
-            "expected fewer than stop_reversals (" + std::to_string(s.stop_reversals) +
-                "), or no reversal is left for the estimate");
+            "expected discard_reversals < stop_reversals = " + std::to_string(s.stop_reversals) + ", got " +
+                std::to_string(s.discard_reversals) + " (no reversal would be left for the estimate)");
   const auto mn = r.get_number(t, "min", sp, true), mx = r.get_number(t, "max", sp, true);
   if (mn && mx) {
     s.min = *mn;
     s.max = *mx;
-    if (!parameter.empty()) check_range(r, parameter, s.min, s.max, t, sp);
-    else if (!(s.min < s.max)) r.error(pos_of(t), sp, "expected min < max");
+    check_range(r, parameter, s.min, s.max, t, sp);
   }
   if (start) {
     s.start = *start;
-    if (mn && mx && (s.start < s.min || s.start > s.max))
-      r.error(pos_of(*t.get("start")), sp + ".start", "expected min ≤ start ≤ max");
+    // Only against a range that is one: min ≥ max is reported above.
+    if (mn && mx && s.min < s.max && (s.start < s.min || s.start > s.max))
+      r.error(pos_of(*t.get("start")), sp + ".start",
+              "expected " + number_label(s.min) + " ≤ start ≤ " + number_label(s.max) + ", got " +
+                  number_label(s.start));
   }
   return s;
 }
@@ -266,11 +268,35 @@ void InterleavedStaircaseJudgement::read_step_sizes(TableReader& r, const toml::
   for (std::size_t k = 0; k < sa->size(); ++k) {
     const auto v = TableReader::node_number((*sa)[k]);
     if (!v || !(*v > 0.0) || !std::isfinite(*v)) {
-      r.error(pos_of((*sa)[k]), sp + ".step_sizes[" + std::to_string(k + 1) + "]", "expected a positive number");
+      r.error(pos_of((*sa)[k]), sp + ".step_sizes[" + std::to_string(k + 1) + "]",
+              "expected a positive number, " +
+                  (v ? "got " + number_label(*v) : "found " + tr::type_name((*sa)[k])));
       continue;
     }
     s.step_sizes.push_back(*v);
   }
+}
+
+std::vector<std::pair<std::string, std::string>> InterleavedStaircaseJudgement::settings_summary(
+    const Judgement& j) const {
+  const auto* table = table_of(j);
+  if (!table) return {};
+  std::vector<std::pair<std::string, std::string>> rows{{"positive answer", table->positive}};
+  for (const auto& s : table->staircases) {
+    std::string steps;
+    for (const double step : s.step_sizes) steps += (steps.empty() ? "" : ", ") + number_label(step);
+    const std::string rule = std::to_string(s.up) + "-up/" + std::to_string(s.down) + "-down";
+    char target[32];
+    std::snprintf(target, sizeof target, "%.1f", 100.0 * staircase_target_probability(s.up, s.down));
+    rows.emplace_back("staircase \"" + s.name + "\"",
+                      "start " + number_label(s.start) + "; step sizes " + steps +
+                          " (step k after k reversals, the last repeating); " + rule + ", converging on " + target +
+                          " % \"" + table->positive + "\"; stops after " + std::to_string(s.stop_reversals) +
+                          " reversals or " + std::to_string(s.max_trials) +
+                          " trials; threshold: mean of the reversals after the first " +
+                          std::to_string(s.discard_reversals) + "; clamped to " + interval_label(s.min, s.max));
+  }
+  return rows;
 }
 
 // Round-robin slots, max_trials per staircase per cell; shuffling interleaves

@@ -212,6 +212,11 @@ class JudgementType {
   [[nodiscard]] virtual std::vector<ConvergenceTarget> convergence(const Judgement& j) const;
   // The parameter's value at the trial's onset, when the type sets it.
   [[nodiscard]] virtual std::optional<OnsetValue> onset_value(const Judgement& j, const PlannedTrial& t) const;
+  // The type's own settings as the preview sheet lists them, label → text
+  // (each staircase's start, steps, up/down and stop rules; an adjustment's
+  // start range and steps); empty for a type that has none beyond its
+  // answers.
+  [[nodiscard]] virtual std::vector<std::pair<std::string, std::string>> settings_summary(const Judgement& j) const;
 };
 
 // The registered types, in the order users see them (judgements/registry.cpp).

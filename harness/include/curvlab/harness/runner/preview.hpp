@@ -1,10 +1,12 @@
 // `curvlab preview`: a self-contained HTML sheet of a protocol for one
 // participant — every distinct condition's onset stereo pair rendered with the
 // runner's own pieces (make_world, place_stimulus, TrialScene, view_settings,
-// the offscreen renderer), a red/cyan anaglyph of it, the simulated
-// observer's predicted response proportions (predict.hpp) and its trial
-// count per block; the block order, timelines, instruction and break texts,
-// the estimated duration, the protocol's SHA-256 and the software version.
+// the offscreen renderer), a red/cyan anaglyph of it, the settings it was
+// rendered with, the simulated observer's predicted response proportions
+// (predict.hpp) and its trial count per block; the block order, timelines,
+// each judgement's answers with their keys and buttons and its own settings
+// (staircases, adjustment), instruction and break texts, the estimated
+// duration, the protocol's SHA-256 and the software version.
 // Something to look at before spending participant hours, and to attach to a
 // preregistration. Writes only under the output folder.
 #pragma once
@@ -25,17 +27,28 @@
 namespace curvlab::harness::runner {
 
 // One distinct condition of a design: the trials that share their factor
-// levels and every resolved setting (the judgement and the block may differ).
+// levels, every resolved setting, what the judgement's type tells apart (a
+// staircase) and whether they are practice (the judgement and the block may
+// differ; practice trials are never merged with the others).
 struct PreviewCondition {
   std::vector<std::pair<std::string, std::string>> levels;  // factor → level
-  std::vector<std::pair<std::string, std::string>> settings;  // name → value, as shown
+  // What the judgement's type adds to the trial's conditions (a staircase's
+  // name; JudgementType::conditions).
+  std::vector<std::pair<std::string, std::string>> tracks;
+  bool practice = false;
+  // name → value, as shown: the settings the first trial's onset is rendered
+  // with, including the value the judgement sets then (a staircase's start,
+  // an adjustment trial's drawn start).
+  std::vector<std::pair<std::string, std::string>> settings;
+  std::string onset_note;  // how the judgement chose that value; "" when it sets none
   std::size_t first_trial = 0;  // index in the design of its first trial
   std::vector<std::pair<std::string, std::size_t>> trials_per_block;  // run order
 };
 
 // The distinct conditions of a design, block by block in run order (the
-// block where each first appears) and in factorial order within it. Pure.
-std::vector<PreviewCondition> preview_conditions(const protocol::Design& design);
+// block where each first appears) and in factorial order within it, a
+// staircase block's staircases in the order the protocol lists them. Pure.
+std::vector<PreviewCondition> preview_conditions(const protocol::Protocol& p, const protocol::Design& design);
 
 struct PreviewRequest {
   std::string protocol_path;  // shown on the sheet
