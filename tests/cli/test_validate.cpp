@@ -137,3 +137,26 @@ TEST(ValidateJson, AGoodFileKeepsItsSummary) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(ValidateBackend, AnswersTheChosenDevicesCannotGiveAreRefused) {
+  // demo.toml binds its answers to keys only: fine on the desktop, refused
+  // in the headset (whose controllers have no number keys).
+  auto r = run_split("validate protocols/demo.toml --backend desktop");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = run_split("validate protocols/demo.toml --backend xr");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("'convex' (keys 1) cannot be given with --backend xr"), std::string::npos) << r.err;
+  r = run_split("validate protocols/demo.toml --backend xr --json");
+  EXPECT_EQ(r.exit_code, 2);
+  json doc = document(r);
+  EXPECT_EQ(doc["ok"], false);
+  ASSERT_EQ(doc["diagnostics"].size(), 1u);
+  EXPECT_EQ(doc["diagnostics"][0]["field"], "judgement");
+  // proposed_study.toml binds controller buttons as well.
+  EXPECT_EQ(run_split("validate protocols/proposed_study.toml --backend xr").exit_code, 0);
+  EXPECT_EQ(run_split("validate protocols/demo.toml --backend vr").exit_code, 2);
+}
+
+}  // namespace

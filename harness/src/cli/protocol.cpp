@@ -1,6 +1,7 @@
 // `curvlab validate` and `curvlab design`: what an author runs while writing a
 // protocol. Both only read the file; neither writes anything.
 #include "common.hpp"
+#include "station.hpp"
 
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
@@ -92,16 +93,30 @@ Json diagnostic_json(const harness::Diagnostic& d) {
   throw UsageError(std::to_string(list.size()) + (list.size() == 1 ? " error" : " errors") + " in " + file);
 }
 
-void run_validate(const std::string& file, bool as_json) {
+// With --backend (and --responses): every answer must be one those devices
+// can give, as run checks before a session starts.
+void check_devices(const std::string& file, const pr::Protocol& p, const BackendArgs& devices, bool as_json) {
+  if (devices.backend.empty()) return;
+  if (devices.backend != "headless" && devices.backend != "desktop" && devices.backend != "xr")
+    throw UsageError("--backend must be headless, desktop or xr, got '" + devices.backend + "'");
+  const auto missing = unreachable_answer(devices, p);
+  if (!missing) return;
+  if (as_json) reject_as_json(file, {harness::Error::Kind::bad_input, *missing, {{file, {}, "judgement", *missing}}});
+  throw UsageError(*missing);
+}
+
+void run_validate(const std::string& file, bool as_json, const BackendArgs& devices) {
   if (as_json) {
     auto loaded = pr::load_protocol_file(file);
     if (!loaded) reject_as_json(file, loaded.error());
+    check_devices(file, *loaded, devices, true);
     Json doc = design_json(*loaded, pr::expand_design(*loaded, 1), false);
     doc["ok"] = true;
     std::cout << doc.dump(2) << '\n';
     return;
   }
   const auto p = load_protocol_or_usage(file);
+  check_devices(file, p, devices, false);
   const auto d = pr::expand_design(p, 1);
   std::cout << "OK " << file << ": " << p.meta.name << " " << p.meta.version << '\n';
   std::cout << "  seed " << p.seed << (p.seed_per_participant ? " (mixed with the participant number)" : "")
@@ -167,13 +182,18 @@ void add_protocol_commands(CLI::App& app) {
     std::string file;
     bool json = false;
     std::int64_t participant = 0;
+    BackendArgs devices;  // validate --backend / --responses
   };
   auto args = std::make_shared<Args>();
 
   auto* validate = app.add_subcommand("validate", "check a protocol file; prints a summary or every error");
   validate->add_option("file", args->file, "protocol (TOML)")->required();
   validate->add_flag("--json", args->json, "print the summary as JSON");
-  validate->callback([args] { run_validate(args->file, args->json); });
+  validate->add_option("--backend", args->devices.backend,
+                       "also check that every answer can be given on this backend: headless, desktop or xr");
+  validate->add_option("--responses", args->devices.responses,
+                       "with --backend: HID devices that answer too, hid:MAPPING.toml (repeatable)");
+  validate->callback([args] { run_validate(args->file, args->json, args->devices); });
 
   auto* design = app.add_subcommand("design", "print the expanded trial list for one participant");
   design->add_option("protocol", args->file, "protocol (TOML)")->required();

@@ -160,25 +160,6 @@ void check_operator_args(const BackendArgs& a) {
 }
 
 
-// Every answer of the protocol must be one the session's devices can give: a
-// keys-only protocol in the headset would time out every trial. Refused
-// (exit 2) before any device starts and before anything is written; nothing
-// to check when the simulated observer answers or no device does (headless
-// without an observer: every trial times out, as asked).
-void check_answers_reachable(const BackendArgs& a, const pr::Protocol& p, bool observer) {
-  std::vector<harness::io::Reach> reach;
-  if (a.backend == "desktop") reach.push_back(desktop::keyboard_reach());
-  if (a.backend == "xr") reach.push_back(xr::controller_reach());
-  for (const auto& file : response_mappings(a)) reach.push_back(devices::mapping_reach(file));
-  if (observer || reach.empty()) return;
-  if (const auto missing = rn::unreachable_answer(reach, p)) {
-    std::string with = "--backend " + a.backend;
-    for (const auto& r : a.responses) with += " --responses " + r;
-    throw UsageError(p.file + ": " + *missing + " cannot be given with " + with +
-                     "; bind it to an input these devices have (docs/protocols.md, \"Key and button names\")");
-  }
-}
-
 // The samples per pixel: --msaa, else the protocol's [viewing] msaa. "auto"
 // (nullopt) lets the display's renderer pick for its device; a count is
 // clamped to the device, with a warning. The count drawn with is the

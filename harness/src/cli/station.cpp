@@ -1,6 +1,7 @@
 #include "station.hpp"
 
 #include "curvlab/harness/desktop/desktop.hpp"
+#include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 
@@ -143,6 +144,25 @@ const std::atomic<int>& catch_stop_signals() {
 }
 
 int stop_signal_received() { return stop_signal.load(); }
+
+std::optional<std::string> unreachable_answer(const BackendArgs& a, const harness::protocol::Protocol& p) {
+  std::vector<harness::io::Reach> reach;
+  if (a.backend == "desktop") reach.push_back(desktop::keyboard_reach());
+  if (a.backend == "xr") reach.push_back(xr::controller_reach());
+  for (const auto& file : response_mappings(a)) reach.push_back(devices::mapping_reach(file));
+  if (reach.empty()) return std::nullopt;
+  const auto missing = harness::runner::unreachable_answer(reach, p);
+  if (!missing) return std::nullopt;
+  std::string with = "--backend " + a.backend;
+  for (const auto& r : a.responses) with += " --responses " + r;
+  return p.file + ": " + *missing + " cannot be given with " + with +
+         "; bind it to an input these devices have (docs/protocols.md, \"Key and button names\")";
+}
+
+void check_answers_reachable(const BackendArgs& a, const harness::protocol::Protocol& p, bool observer) {
+  if (observer) return;
+  if (auto missing = unreachable_answer(a, p)) throw UsageError(*missing);
+}
 
 Devices open_station(const BackendArgs& a, const StationNeeds& needs) {
   Devices out = open_devices_of_kind(a, needs);

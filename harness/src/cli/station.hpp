@@ -89,6 +89,17 @@ Devices open_station(const BackendArgs& a, const StationNeeds& needs);
 // The HID mapping files of --responses, read (a bad one: exit 2).
 std::vector<devices::MappingFile> response_mappings(const BackendArgs& a);
 
+// Every answer of the protocol must be one the devices of `a` (--backend's
+// keyboard or controllers, --responses' HID devices) can give: a keys-only
+// protocol in the headset would time out every trial. Returns what cannot be
+// given ("PROTOCOL: the session's judgement (choice): the answer 'convex'
+// (keys 1) cannot be given with --backend xr; …"), nullopt when all can or
+// when no device answers (headless: the simulated observer, or nobody).
+std::optional<std::string> unreachable_answer(const BackendArgs& a, const harness::protocol::Protocol& p);
+// The same as a UsageError (exit 2), for run and resume before any device
+// starts; nothing to check when the simulated observer answers.
+void check_answers_reachable(const BackendArgs& a, const harness::protocol::Protocol& p, bool observer);
+
 // Whether the run opens the operator window; a bad value is a usage error.
 bool wants_operator_window(const BackendArgs& a);
 
