@@ -14,8 +14,8 @@ struct CliResult {
   std::string out;  // stdout and stderr together
 };
 
-inline CliResult run_cli(const std::string& args) {
-  const std::string cmd = std::string(CURVLAB_BIN) + " " + args + " 2>&1";
+// Runs a shell command line; its stdout and exit code.
+inline CliResult run_shell(const std::string& cmd) {
   CliResult r;
   FILE* pipe = popen(cmd.c_str(), "r");
   if (pipe == nullptr) return r;
@@ -26,5 +26,7 @@ inline CliResult run_cli(const std::string& args) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+inline CliResult run_cli(const std::string& args) { return run_shell(std::string(CURVLAB_BIN) + " " + args + " 2>&1"); }
 
 }  // namespace curvlab::testing

@@ -2,6 +2,8 @@
 // stdout whatever is wrong with the file (a broken rule, a TOML syntax
 // error, a file that cannot be read), exit code 2, and for a good file the
 // summary it has always printed.
+#include "run_cli.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -30,15 +32,9 @@ struct Split {
 // Runs `curvlab ARGS` in the source folder, stdout and stderr kept apart.
 Split run_split(const std::string& args) {
   const fs::path err = fs::temp_directory_path() / ("curvlab-validate-err-" + std::to_string(::getpid()));
-  const std::string cmd = "cd '" + kSource.string() + "' && " + CURVLAB_BIN + " " + args + " 2>'" + err.string() + "'";
-  Split r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const auto run = curvlab::testing::run_shell("cd '" + kSource.string() + "' && " + CURVLAB_BIN + " " + args +
+                                               " 2>'" + err.string() + "'");
+  Split r{run.exit_code, run.out, ""};
   std::ifstream in(err);
   std::ostringstream text;
   text << in.rdbuf();

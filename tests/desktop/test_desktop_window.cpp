@@ -71,6 +71,19 @@ bool cloth(int r, int g, int b) { return g > 40 && g > r + 25 && g > b + 15; }
 // above green above blue — wood, which nothing else in the scene is.
 bool wood(int r, int g, int b) { return r > 40 && r > g + 10 && g > b + 5 && r < 250; }
 
+// One frame of a stimulus scene, as the runner submits it; false: the
+// window gave no frame.
+bool show_stimulus_frame(desktop::DesktopBackend& backend, const renderer::StimulusScene& s) {
+  auto timing = backend.begin_frame();
+  if (!timing) return false;
+  renderer::FrameDescription f;
+  f.space = s.space;
+  f.head = s.head;
+  f.rig = backend.rig(*timing, 0.063);
+  backend.submit(s.scene, f, Overlay{harness::io::Phase::stimulus, "", false}, true);
+  return true;
+}
+
 class DesktopWindow : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -203,13 +216,7 @@ TEST_F(DesktopWindow, SideBySideEyesAreSeparatedByAGap) {
   ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
   auto& s = std::get<renderer::StimulusScene>(stimulus);
   for (int i = 0; i < 3; ++i) {
-    auto timing = backend.begin_frame();
-    ASSERT_TRUE(timing.has_value());
-    renderer::FrameDescription f;
-    f.space = s.space;
-    f.head = s.head;
-    f.rig = backend.rig(*timing, 0.063);
-    backend.submit(s.scene, f, Overlay{harness::io::Phase::stimulus, "", false}, true);
+    ASSERT_TRUE(show_stimulus_frame(backend, s));
   }
   const auto w = backend.target().read_window();
   ASSERT_TRUE(w.has_value());
@@ -241,13 +248,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
   ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
   auto& s = std::get<renderer::StimulusScene>(stimulus);
   for (int i = 0; i < 4; ++i) {
-    auto timing = backend.begin_frame();
-    ASSERT_TRUE(timing.has_value());
-    renderer::FrameDescription f;
-    f.space = s.space;
-    f.head = s.head;
-    f.rig = backend.rig(*timing, 0.063);
-    backend.submit(s.scene, f, Overlay{harness::io::Phase::stimulus, "", false}, true);
+    ASSERT_TRUE(show_stimulus_frame(backend, s));
   }
   // One eye: the window is that eye plus the banner.
   const auto window = backend.target().read_window();
@@ -263,13 +264,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
     GTEST_SKIP() << "xdotool is not installed: resizing not tested";
   ASSERT_EQ(std::system("timeout 10 xdotool search --name '^curvlab' windowsize --sync 420 300"), 0);
   for (int i = 0; i < 50 && backend.target().window_extent().width != 420; ++i) {
-    auto timing = backend.begin_frame();
-    ASSERT_TRUE(timing.has_value());
-    renderer::FrameDescription f;
-    f.space = s.space;
-    f.head = s.head;
-    f.rig = backend.rig(*timing, 0.063);
-    backend.submit(s.scene, f, Overlay{harness::io::Phase::stimulus, "", false}, true);
+    ASSERT_TRUE(show_stimulus_frame(backend, s));
   }
   EXPECT_EQ(backend.target().recreations(), 2u);
   const auto resized = backend.target().read_window();

@@ -3,6 +3,7 @@
 // a refused set touched again, the fit kept with Enter; then a protocol with
 // [calibration] at_start runs its session on the table it calibrated.
 #include "../cli/run_cli.hpp"
+#include "../runner/session_db.hpp"
 #include "../support/png_files.hpp"
 #include "xvfb.hpp"
 
@@ -10,7 +11,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
@@ -46,21 +46,6 @@ std::string touch_lines(const std::vector<Vec3>& touches) {
   out.precision(17);
   for (const auto& p : touches) out << "hand right " << p.x << ' ' << p.y << ' ' << p.z << " 60\nspace 60\n";
   return out.str();
-}
-
-std::string query_one(const fs::path& db_path, const std::string& sql) {
-  sqlite3* db = nullptr;
-  std::string out = "(no row)";
-  if (sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_stmt* stmt = nullptr;
-    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) == SQLITE_OK && sqlite3_step(stmt) == SQLITE_ROW) {
-      const auto* text = sqlite3_column_text(stmt, 0);
-      out = text == nullptr ? "NULL" : reinterpret_cast<const char*>(text);
-    }
-    sqlite3_finalize(stmt);
-  }
-  sqlite3_close(db);
-  return out;
 }
 
 void expect_same_table(const nlohmann::json& doc, const PhysicalTableFit& fit, const std::string& what) {
@@ -157,7 +142,9 @@ TEST(LabCalibration, AProtocolThatCalibratesAtStartRunsOnTheFittedTable) {
                          (dir / "keys.txt").string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("\"status\": \"completed\""), std::string::npos) << r.out;
-  const auto stored = nlohmann::json::parse(query_one(db, "SELECT table_calibration FROM sessions"));
+  const auto rows = curvlab::testing::query(db.string(), "SELECT table_calibration FROM sessions");
+  ASSERT_EQ(rows.size(), 1u);
+  const auto stored = nlohmann::json::parse(rows[0][0]);
   expect_same_table(stored, std::get<PhysicalTableFit>(fit_square_table(touches)), "sessions.table_calibration");
   fs::remove_all(dir);
 }
