@@ -156,3 +156,37 @@ TEST(ValidateBackend, AnswersTheChosenDevicesCannotGiveAreRefused) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(ValidateBackend, AProtocolsResponseDevicesCountForItsAnswers) {
+  // Answers bound only to HID buttons: the headset alone cannot give them;
+  // with the protocol's [responses] mapping file (beside it) it can.
+  const fs::path dir = fs::temp_directory_path() / ("curvlab-responses-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "box.toml") << "[[device]]\nname = \"box\"\nvendor_id = 0x1234\n"
+                                     "[[device.binding]]\nresponse = \"hid_1\"\nkind = \"bit\"\nbyte = 0\nbit = 0\n"
+                                     "[[device.binding]]\nresponse = \"hid_2\"\nkind = \"bit\"\nbyte = 0\nbit = 1\n";
+  std::ifstream demo(kSource / "protocols" / "demo.toml");
+  std::stringstream text;
+  text << demo.rdbuf();
+  std::string s = text.str();
+  s = s.substr(0, s.find("[judgement]"));
+  s += "[judgement]\ntype = \"choice\"\nprompt = \"Convex or concave?\"\noptions = [\n"
+       "  { value = \"convex\", buttons = [\"hid_1\"] },\n  { value = \"concave\", buttons = [\"hid_2\"] },\n]\n";
+  std::ofstream(dir / "without.toml") << s;
+  std::ofstream(dir / "with.toml") << s << "\n[responses]\nhid = [\"box.toml\"]\n";
+  auto r = run_split("validate '" + (dir / "without.toml").string() + "' --backend xr");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("'convex' (buttons hid_1)"), std::string::npos) << r.err;
+  r = run_split("validate '" + (dir / "with.toml").string() + "' --backend xr");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::ofstream(dir / "bad.toml") << s << "\n[responses]\nhid = \"box.toml\"\n";
+  r = run_split("validate '" + (dir / "bad.toml").string() + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("responses.hid"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
+}  // namespace

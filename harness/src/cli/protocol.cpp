@@ -99,7 +99,7 @@ void check_devices(const std::string& file, const pr::Protocol& p, const Backend
   if (devices.backend.empty()) return;
   if (devices.backend != "headless" && devices.backend != "desktop" && devices.backend != "xr")
     throw UsageError("--backend must be headless, desktop or xr, got '" + devices.backend + "'");
-  const auto missing = unreachable_answer(devices, p);
+  const auto missing = unreachable_answer(with_protocol_responses(devices, p), p);
   if (!missing) return;
   if (as_json) reject_as_json(file, {harness::Error::Kind::bad_input, *missing, {{file, {}, "judgement", *missing}}});
   throw UsageError(*missing);

@@ -332,8 +332,9 @@ void run_command(const RunArgs& a) {
   const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
-  check_answers_reachable(a.backend, p, o.observer.has_value());
-  auto devices = open_devices(a.backend, p, table, 0);
+  const BackendArgs backend = with_protocol_responses(a.backend, p);
+  check_answers_reachable(backend, p, o.observer.has_value());
+  auto devices = open_devices(backend, p, table, 0);
   watch_stop_signals(o);
   if (calibrates_at_start(p, a.backend)) o.calibration = calibrate_on(devices, calibration_options(p, table, a, o)).fit;
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
@@ -374,8 +375,9 @@ void resume_command(const ResumeArgs& a) {
   // A resumed session's clock continues after the last logged time.
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
-  check_answers_reachable(a.backend, *loaded, o.observer.has_value() || stored.observer.has_value());
-  auto devices = open_devices(a.backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
+  const BackendArgs backend = with_protocol_responses(a.backend, *loaded);
+  check_answers_reachable(backend, *loaded, o.observer.has_value() || stored.observer.has_value());
+  auto devices = open_devices(backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();
   watch_stop_signals(o);

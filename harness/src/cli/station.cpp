@@ -6,6 +6,7 @@
 #include "curvlab/harness/xr/backend.hpp"
 
 #include <csignal>
+#include <filesystem>
 #include <cstdlib>
 #include <tuple>
 
@@ -144,6 +145,16 @@ const std::atomic<int>& catch_stop_signals() {
 }
 
 int stop_signal_received() { return stop_signal.load(); }
+
+BackendArgs with_protocol_responses(BackendArgs a, const harness::protocol::Protocol& p) {
+  if (a.backend != "desktop" && a.backend != "xr") return a;
+  const std::filesystem::path folder = std::filesystem::path(p.file).parent_path();
+  for (const auto& m : p.hid_mappings) {
+    const std::filesystem::path path(m);
+    a.responses.push_back("hid:" + (path.is_absolute() ? path : folder / path).string());
+  }
+  return a;
+}
 
 std::optional<std::string> unreachable_answer(const BackendArgs& a, const harness::protocol::Protocol& p) {
   std::vector<harness::io::Reach> reach;

@@ -89,6 +89,12 @@ Devices open_station(const BackendArgs& a, const StationNeeds& needs);
 // The HID mapping files of --responses, read (a bad one: exit 2).
 std::vector<devices::MappingFile> response_mappings(const BackendArgs& a);
 
+// The options with the protocol's [responses] HID mapping files added as
+// --responses (resolved against the protocol file's folder), for desktop and
+// xr runs, where a person answers; headless runs are answered by the
+// simulated observer and keep the options as they are.
+BackendArgs with_protocol_responses(BackendArgs a, const harness::protocol::Protocol& p);
+
 // Every answer of the protocol must be one the devices of `a` (--backend's
 // keyboard or controllers, --responses' HID devices) can give: a keys-only
 // protocol in the headset would time out every trial. Returns what cannot be

@@ -90,12 +90,16 @@ class Loader : private TableReader {
   // ---- top level ---------------------------------------------------------
   void read_root(const toml::table& root, Protocol& p) {
     check_keys(root, "", {"protocol", "space", "tracking", "viewing", "timeline", "stimulus",
-                          "table", "backend", "calibration", "randomization", "counterbalance", "session",
+                          "table", "backend", "calibration", "responses", "randomization", "counterbalance", "session",
                           "factors", "judgement", "instructions", "blocks"});
     read_metadata(root, p);
     read_settings(root, "", p.session_overrides);
     read_backend(root, p);
     read_calibration(root, p);
+    if (const toml::table* r = sub_table(root, "responses", "")) {
+      check_keys(*r, "responses", {"hid"});
+      p.hid_mappings = get_string_array(*r, "hid", "responses");
+    }
     read_randomization(root, p);
     read_factors(root, p);
     // A top-level [judgement] is required unless every block has its own

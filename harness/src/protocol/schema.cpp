@@ -260,6 +260,12 @@ Json root_schema() {
                        {"description", "[width, height] in pixels"}}}},
       "the backend and display");
   props["calibration"] = calibration_schema();
+  props["responses"] = closed_object(
+      {{"hid", {{"type", "array"},
+                {"items", {{"type", "string"}, {"minLength", 1}}},
+                {"description", "HID mapping files (relative to this file) whose devices answer in desktop and "
+                                "xr runs, beside the keyboard or controllers (docs/devices.md)"}}}},
+      "response devices besides the backend's own");
   Json randomization = closed_object(
       {{"seed", integer(0, std::numeric_limits<std::int64_t>::max(),
                         "the protocol's seed: every order is reproducible from it")},

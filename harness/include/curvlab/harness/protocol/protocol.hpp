@@ -104,6 +104,10 @@ struct CalibrationStep {
 
 struct Protocol {
   std::string file;
+  // The [responses] section: HID mapping files whose devices answer when a
+  // person does (desktop and xr runs; docs/devices.md), as written, relative
+  // to the protocol file's folder.
+  std::vector<std::string> hid_mappings;
   std::string text;  // the TOML it was loaded from (sessions store it)
   Metadata meta;
   std::vector<SettingOverride> session_overrides;
