@@ -54,7 +54,7 @@ class RuntimeEnv {
  private:
   std::optional<CoreValidation> layer_;
   static constexpr const char* kAll[] = {"CURVLAB_TEST_XR_PRESS",         "CURVLAB_TEST_XR_UNFOCUS",
-                                         "CURVLAB_TEST_XR_HAND",
+                                         "CURVLAB_TEST_XR_HAND",          "CURVLAB_TEST_XR_LOSS",
                                          "CURVLAB_TEST_XR_EXIT",          "CURVLAB_TEST_XR_LATE",
                                          "CURVLAB_TEST_XR_CAPTURE_DIR",   "CURVLAB_TEST_XR_CAPTURE_EVERY",
                                          "CURVLAB_TEST_XR_LOG",           "CURVLAB_TEST_XR_SIZE",

@@ -105,14 +105,15 @@ TEST(SessionState, FullLifecycleWithFocusLossAndResume) {
   EXPECT_FALSE(u.unexpected);
 }
 
-TEST(SessionState, LossPendingEndsARunningSession) {
+TEST(SessionState, LossPendingLeavesARunningSessionWithoutEndingIt) {
   SessionStateMachine m;
   for (auto s : {SessionState::Idle, SessionState::Ready, SessionState::Synchronized,
                  SessionState::Visible, SessionState::Focused})
     m.on_state_changed(s);
   const auto u = m.on_state_changed(SessionState::LossPending);
   EXPECT_TRUE(u.lost);
-  EXPECT_TRUE(u.end_session);
+  EXPECT_FALSE(u.end_session) << "xrEndSession is valid only in STOPPING";
+  EXPECT_FALSE(m.session_running());
   EXPECT_EQ(u.mode, RunMode::Exit);
   EXPECT_FALSE(u.unexpected);
   EXPECT_NE(u.message.find("can be resumed"), std::string::npos);

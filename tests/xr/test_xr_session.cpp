@@ -428,4 +428,37 @@ TEST(XrSession, RuntimeExitRequestLeavesTheSessionResumable) {
   fs::remove_all(dir);
 }
 
+TEST(XrSession, ALostSessionIsLeftWithoutEndingItAndResumes) {
+  // LOSS_PENDING (headset unplugged, runtime going away): curvlab must not
+  // call xrEndSession, which the runtime refuses outside STOPPING; frame
+  // calls then fail XR_ERROR_SESSION_LOST. The session stays resumable.
+  const auto dir = fresh_dir("loss");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  {
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_LOSS", "2.5"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli("run " + kProtocol + " --participant X03 --backend xr --db " + db.string() + " --quiet");
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("curvlab resume --db " + db.string() + " --session 1"), std::string::npos) << r.out;
+  }
+  {
+    const RuntimeLog log(log_path);
+    EXPECT_TRUE(log.problems.empty()) << log.problems.front();
+    ASSERT_FALSE(log.states.empty());
+    EXPECT_EQ(log.states.back(), "XR_SESSION_STATE_LOSS_PENDING");
+    EXPECT_EQ(std::count_if(log.lines.begin(), log.lines.end(),
+                            [](const std::string& l) { return l.rfind("end_session", 0) == 0; }),
+              0)
+        << "xrEndSession was called on a session being lost";
+  }
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses}, {"CURVLAB_TEST_XR_LOG", log_path.string() + "2"}});
+  const auto r = run_cli("resume --db " + db.string() + " --session 1 --backend xr --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  fs::remove_all(dir);
+}
+
 }  // namespace

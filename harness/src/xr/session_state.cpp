@@ -98,7 +98,9 @@ SessionUpdate SessionStateMachine::on_state_changed(SessionState next) {
       u.message += "the OpenXR runtime is stopping the session";
       break;
     case SessionState::LossPending:
-      u.end_session = running_;
+      // xrEndSession is valid only in STOPPING (OpenXR 1.0, 10.3.4): a
+      // session being lost is left and destroyed, never ended.
+      u.end_session = false;
       running_ = false;
       u.lost = true;
       mode_ = RunMode::Exit;

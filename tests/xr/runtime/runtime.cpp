@@ -28,6 +28,9 @@
 //   CURVLAB_TEST_XR_EXIT     SECONDS: the runtime asks the application to exit
 //                            (VISIBLE, SYNCHRONIZED, STOPPING; after
 //                            xrEndSession IDLE and EXITING)
+//   CURVLAB_TEST_XR_LOSS     SECONDS: the session is being lost (LOSS_PENDING,
+//                            from any state; xrWaitFrame and xrEndFrame
+//                            return XR_ERROR_SESSION_LOST half a second later)
 //   CURVLAB_TEST_XR_FAIL     CALL@SECONDS:RESULT: from SECONDS after focus on,
 //                            CALL (xrWaitFrame or xrEndFrame) returns RESULT
 //                            (XR_ERROR_SESSION_LOST, XR_ERROR_RUNTIME_FAILURE
@@ -215,6 +218,7 @@ struct Session {
   XrSessionState state = XR_SESSION_STATE_UNKNOWN;
   bool running = false;
   bool exit_requested = false;
+  std::int64_t lost_from_ns = -1;  // CURVLAB_TEST_XR_LOSS: frame calls fail from then on
   bool focused_once = false;
   bool faulted = false;  // the scripted fault (CURVLAB_TEST_XR_FAIL) has happened
   std::int64_t focus_t0_ns = 0;  // CLOCK_MONOTONIC when first FOCUSED
@@ -369,7 +373,12 @@ void tick(Session& s) {
     queue_state(s, XR_SESSION_STATE_STOPPING);
     return;
   }
-  if (s.exit_requested) return;
+  if (script.loss_at_s && t >= *script.loss_at_s && s.lost_from_ns < 0) {
+    queue_state(s, XR_SESSION_STATE_LOSS_PENDING);
+    s.lost_from_ns = monotonic_ns() + 500'000'000;
+    return;
+  }
+  if (s.exit_requested || s.lost_from_ns >= 0) return;
   for (std::size_t i = 0; i < script.unfocus.size(); ++i) {
     const Unfocus& u = script.unfocus[i];
     if (s.unfocus_phase[i] == 0 && t >= u.at_s && s.state == XR_SESSION_STATE_FOCUSED) {
@@ -384,6 +393,7 @@ void tick(Session& s) {
 
 // The scripted fault of `call`, if it is due: its result (logged once).
 std::optional<XrResult> scripted_fault(Session& s, const char* call) {
+  if (s.lost_from_ns >= 0 && monotonic_ns() >= s.lost_from_ns) return XR_ERROR_SESSION_LOST;
   const auto& fault = s.instance->script.fault;
   if (!fault || fault->call != call || !s.focused_once) return std::nullopt;
   const double t = static_cast<double>(monotonic_ns() - s.focus_t0_ns) * 1e-9;

@@ -161,6 +161,14 @@ std::optional<Script> read_script(std::string& error) {
     }
     s.exit_at_s = *at;
   }
+  if (const char* v = env("CURVLAB_TEST_XR_LOSS")) {
+    const auto at = number(v);
+    if (!at || *at < 0.0) {
+      error = std::string("CURVLAB_TEST_XR_LOSS: '") + v + "': expected seconds after focus";
+      return std::nullopt;
+    }
+    s.loss_at_s = *at;
+  }
   if (const char* v = env("CURVLAB_TEST_XR_FAIL")) {
     const std::string text(v);
     const auto at = text.find('@');

@@ -74,6 +74,7 @@ struct Script {
   std::optional<Fault> fault;
   std::vector<Unfocus> unfocus;
   std::optional<double> exit_at_s;  // request exit (STOPPING) at this time
+  std::optional<double> loss_at_s;  // LOSS_PENDING at this time; frame calls fail SESSION_LOST 0.5 s later
   std::string capture_dir;          // left-eye PNGs of submitted frames
   int capture_every = 1;            // every n-th submitted frame
   std::string log_path;             // what the runtime handed out and saw
