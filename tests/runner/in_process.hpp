@@ -37,6 +37,10 @@ class ScriptedDevices final : public harness::io::Display,
   std::function<harness::io::Signal(const harness::io::FrameTiming&, const std::string& phase,
                                     std::vector<harness::io::InputEvent>&)>
       inputs;
+  // Sees what each frame shows besides the scene (a participant reading the screen).
+  std::function<void(const harness::io::Overlay&)> shown;
+  // What the scripted inputs can press (the page's continue line is made from it).
+  harness::io::Reach reach_as;
 
   [[nodiscard]] harness::io::Station station() { return {this, this, {this}}; }
 
@@ -51,6 +55,7 @@ class ScriptedDevices final : public harness::io::Display,
     p[geometry::Device::head].valid = head_valid(frame.now_ns);
     return p;
   }
+  [[nodiscard]] harness::io::Reach reach() const override { return reach_as; }
   harness::io::Signal poll(std::vector<harness::io::InputEvent>& out) override {
     return inputs ? inputs(timing_, phase_, out) : harness::io::Signal::none;
   }
@@ -60,6 +65,7 @@ class ScriptedDevices final : public harness::io::Display,
   renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
                               const harness::io::Overlay& overlay, bool draw) override {
     phase_ = std::string(harness::io::to_string(overlay.phase));
+    if (shown) shown(overlay);
     return display_.submit(scene, frame, overlay, draw);
   }
 

@@ -1,6 +1,7 @@
 // Whole headless sessions through the program, answered by the simulated
 // observer: the paper's study, reproducibility, replay, bad input.
 #include "run_cli.hpp"
+#include "../data/data_files.hpp"
 #include "session_db.hpp"
 #include "../support/png_files.hpp"
 
@@ -19,13 +20,6 @@ using curvlab::testing::query;
 using curvlab::testing::run_cli;
 
 namespace {
-
-std::string read_file_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  if (in) bytes << in.rdbuf();
-  return bytes.str();
-}
 
 const std::string kProtocols = std::string(CURVLAB_SOURCE_DIR) + "/protocols/";
 
@@ -260,13 +254,13 @@ TEST(RunHeadless, ASecondRunIntoTheSameImagesFolderReplacesNothing) {
   auto r = run_cli("run " + kProtocols + "demo.toml --participant P01 --db " + db + " --images " + images +
                    " --render onset --quiet --msaa 1");
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  const auto first = read_file_bytes(images + "/trial_0000_left.png");
+  const auto first = curvlab::testing::read_file(images + "/trial_0000_left.png");
   ASSERT_FALSE(first.empty());
   r = run_cli("run " + kProtocols + "demo.toml --participant P02 --db " + db + " --images " + images +
               " --render onset --quiet --msaa 1");
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  EXPECT_EQ(read_file_bytes(images + "/trial_0000_left.png"), first);
-  EXPECT_FALSE(read_file_bytes(images + "/trial_0000_2_left.png").empty());
+  EXPECT_EQ(curvlab::testing::read_file(images + "/trial_0000_left.png"), first);
+  EXPECT_FALSE(curvlab::testing::read_file(images + "/trial_0000_2_left.png").empty());
   // Each session's onset events name its own files.
   const auto named = query(db, "SELECT json_extract(detail, '$.images[0]') FROM events e JOIN sessions s "
                                "USING (session_id) WHERE e.kind = 'onset' AND s.session_id = 2 ORDER BY e.event_id "

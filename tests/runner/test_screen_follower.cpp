@@ -5,13 +5,10 @@
 // or a legend naming a key that does not answer, would leave this
 // participant waiting for ever (the session would time out trial after
 // trial).
+#include "in_process.hpp"
 #include "session_db.hpp"
 
 #include "curvlab/harness/desktop/desktop.hpp"
-#include "curvlab/harness/protocol/loader.hpp"
-#include "curvlab/harness/runner/headless.hpp"
-#include "curvlab/harness/runner/session.hpp"
-#include "curvlab/harness/runner/stimulus.hpp"
 
 #include <gtest/gtest.h>
 
@@ -22,9 +19,6 @@ namespace {
 
 using namespace curvlab;
 namespace io = harness::io;
-namespace rn = harness::runner;
-namespace pr = harness::protocol;
-using curvlab::testing::fresh_dir;
 using curvlab::testing::query;
 
 // The key a page's last line names: "To continue: press space, or …" → "space".
@@ -60,79 +54,61 @@ std::string legend_key(const std::string& legend) {
   return pick;
 }
 
-// The headless display, seen by a participant at a keyboard who presses what
-// the screen names.
-class ScreenFollower final : public io::Display, public io::ResponseSource {
+// A participant at a keyboard who presses what the screen names.
+class ScreenFollower {
  public:
-  ScreenFollower(rn::HeadlessDisplay& display, const devices::Clock& clock) : display_(display), clock_(clock) {}
-
-  [[nodiscard]] io::DisplayInfo info() const override { return display_.info(); }
-  std::optional<io::FrameTiming> begin_frame() override { return display_.begin_frame(); }
-  renderer::StereoRig rig(const io::FrameTiming& f, double ipd_m) override { return display_.rig(f, ipd_m); }
-  renderer::FrameStats submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
-                              const io::Overlay& overlay, bool draw) override {
-    const std::string seen = std::string(io::to_string(overlay.phase)) + "\n" + overlay.text + "\n" +
-                             desktop::legend_text(overlay);
-    if (seen != seen_) {
-      seen_ = seen;
-      next_ns_ = clock_.now_ns() + 400'000'000;
-      presses_ = 0;
-      key_ = "";
-      if (overlay.waiting_for_input)
-        key_ = overlay.answers.empty() ? continue_key(overlay.text) : legend_key(desktop::legend_text(overlay));
-      if (overlay.waiting_for_input && key_.empty()) unreadable_.push_back(seen);
-    }
-    return display_.submit(scene, frame, overlay, draw);
+  // Reads each frame's overlay as the pilot window shows it.
+  void read(const io::Overlay& overlay) {
+    const std::string legend = desktop::legend_text(overlay);
+    const std::string seen = std::string(io::to_string(overlay.phase)) + "\n" + overlay.text + "\n" + legend;
+    if (seen == seen_) return;
+    seen_ = seen;
+    next_ns_ = now_ns_ + 400'000'000;
+    presses_ = 0;
+    key_ = "";
+    if (!overlay.waiting_for_input) return;
+    key_ = overlay.answers.empty() ? continue_key(overlay.text) : legend_key(legend);
+    if (key_.empty()) unreadable_.push_back(seen);
   }
-  io::Signal poll(std::vector<io::InputEvent>& out) override {
+  // Presses 400 ms after the screen asks, and again each second while it
+  // still asks (a break that must last longer ignores the first press).
+  io::Signal press(std::int64_t now_ns, std::vector<io::InputEvent>& out) {
+    now_ns_ = now_ns;
     // A screen that names no key would hold a page for ever: give up.
     if (!unreadable_.empty()) return io::Signal::quit;
-    // 400 ms after the screen asks, and again each second while it still
-    // asks (a break that must last longer ignores the first press).
-    if (!key_.empty() && clock_.now_ns() >= next_ns_) {
-      out.push_back({clock_.now_ns(), key_, "keyboard", true});
-      out.push_back({clock_.now_ns(), key_, "keyboard", false});
-      next_ns_ = clock_.now_ns() + 1'000'000'000;
-      if (++presses_ > 600) return io::Signal::quit;  // ten minutes on one screen: it does not listen
-    }
-    return io::Signal::none;
+    if (key_.empty() || now_ns < next_ns_) return io::Signal::none;
+    out.push_back({now_ns, key_, "keyboard", true});
+    out.push_back({now_ns, key_, "keyboard", false});
+    next_ns_ = now_ns + 1'000'000'000;
+    return ++presses_ > 600 ? io::Signal::quit : io::Signal::none;  // ten minutes on one screen: not listening
   }
-  [[nodiscard]] io::Reach reach() const override { return desktop::keyboard_reach(); }
 
   std::vector<std::string> unreadable_;  // screens that asked without saying how
 
  private:
-  rn::HeadlessDisplay& display_;
-  const devices::Clock& clock_;
   std::string seen_, key_;
-  std::int64_t next_ns_ = 0;
+  std::int64_t now_ns_ = 0, next_ns_ = 0;
   int presses_ = 0;
 };
 
 class ScreenFollowerRun : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(ScreenFollowerRun, CompletesWithEveryTrialAnswered) {
-  const std::string path = std::string(CURVLAB_SOURCE_DIR) + "/protocols/" + GetParam() + ".toml";
-  auto loaded = pr::load_protocol_file(path);
-  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
-  const auto& p = *loaded;
-  rn::HeadlessOptions ho;
-  ho.no_gpu = true;
-  ho.refresh_hz = p.refresh_hz;
-  auto made = rn::HeadlessDevices::create(ho, rn::standing_at(rn::nominal_calibration(p.session_settings())));
-  ASSERT_TRUE(made.has_value()) << made.error().message;
-  auto& headless = made.value();
-  ScreenFollower person(*headless.display, headless.clock());
-  rn::RunOptions o;
-  o.participant = "S01";
-  o.drawing = rn::FrameDrawing::none;
-  const auto db = (fresh_dir(std::string("screen_") + GetParam()) / "s.sqlite").string();
-  auto result = rn::run_session(p, p.text, db, o, {&person, headless.poses.get(), {&person}}, headless.clock());
-  ASSERT_TRUE(result.has_value()) << result.error().message;
+  ScreenFollower person;
+  const auto out = curvlab::testing::run_protocol(GetParam(), std::string("screen_") + GetParam(), "", false,
+                                                  [&](curvlab::testing::ScriptedDevices& d) {
+                                                    d.reach_as = desktop::keyboard_reach();
+                                                    d.shown = [&](const io::Overlay& o) { person.read(o); };
+                                                    d.inputs = [&](const io::FrameTiming& t, const std::string&,
+                                                                   std::vector<io::InputEvent>& in) {
+                                                      return person.press(t.now_ns, in);
+                                                    };
+                                                  });
+  ASSERT_FALSE(out.db.empty());
   EXPECT_TRUE(person.unreadable_.empty()) << "a screen asked without saying how:\n" << person.unreadable_.front();
-  EXPECT_EQ(result->status, curvlab::data::SessionStatus::completed);
-  EXPECT_GT(result->trials_completed, 0);
-  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed' AND response IS NULL")[0][0], "0")
+  EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
+  EXPECT_GT(out.summary.trials_completed, 0);
+  EXPECT_EQ(query(out.db, "SELECT count(*) FROM trials WHERE status = 'completed' AND response IS NULL")[0][0], "0")
       << "trials timed out: the legend named keys that do not answer";
 }
 

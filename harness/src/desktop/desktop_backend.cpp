@@ -377,7 +377,7 @@ std::string legend_text(const Overlay& overlay) {
   using harness::io::Phase;
   if (overlay.phase == Phase::instructions || overlay.phase == Phase::break_page || overlay.phase == Phase::done)
     return overlay.waiting_for_input ? "space: continue" : "";
-  if (overlay.answers.empty()) return "";
+  if (!overlay.waiting_for_input || overlay.answers.empty()) return "";
   std::string text = overlay.prompt.empty() ? "" : overlay.prompt + "  ";
   for (std::size_t i = 0; i < overlay.answers.size(); ++i) {
     const auto& a = overlay.answers[i];

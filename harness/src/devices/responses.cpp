@@ -65,7 +65,7 @@ std::unique_ptr<HidResponses> HidResponses::read(
   return out;
 }
 
-HidResponses::~HidResponses() { readers_.clear(); }
+HidResponses::~HidResponses() = default;  // the readers (declared after the queue) stop and join first
 
 harness::io::Signal HidResponses::poll(std::vector<harness::io::InputEvent>& out) {
   harness::io::Signal signal = harness::io::Signal::none;

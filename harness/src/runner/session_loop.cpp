@@ -742,22 +742,28 @@ class SessionLoop::Impl {
   }
 
   // What the pilot window shows beside the scene during an attempt: the
-  // trial's line, and from the onset the question, its answers and the value
-  // shown when a method varies one.
-  io::Overlay trial_overlay(const TrialRun& t, const AttemptRun& a, Phase phase) const {
-    io::Overlay o{phase, t.line, phase == Phase::response || phase == Phase::stimulus};
-    if (!o.waiting_for_input) return o;
+  // trial's line, the question and its answers (shown while the runner waits
+  // for one). Made once per attempt; each frame sets only the phase and the
+  // value (set_overlay_value).
+  static io::Overlay attempt_overlay(const TrialRun& t) {
+    io::Overlay o{Phase::fixation, t.line, false};
     const auto& j = *t.judgement;
     o.prompt = j.prompt;
     for (const auto& b : j.type->answer_bindings(j)) o.answers.push_back({b.answer, b.keys, b.buttons});
+    return o;
+  }
+
+  // The value a method varies, as the overlay shows it: written again only
+  // when it changed (an adjustment step), not every frame.
+  static void set_overlay_value(io::Overlay& o, const TrialRun& t, const AttemptRun& a,
+                                std::optional<double>& written) {
     std::optional<double> shown = t.adaptive_value;
     if (a.adjustment) shown = a.adjustment->value();
-    if (shown) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, " = %.6g", *shown);
-      o.value = j.parameter + buf;
-    }
-    return o;
+    if (!shown || shown == written) return;
+    written = shown;
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " = %.6g", *shown);
+    o.value = t.judgement->parameter + buf;
   }
 
   AttemptRun run_attempt(TrialRun& t) {
@@ -769,6 +775,8 @@ class SessionLoop::Impl {
       return a;
     }
     Attempt state(t.settings.timeline, t.settings.tracking_loss, f.timing.now_ns);
+    io::Overlay overlay = attempt_overlay(t);
+    std::optional<double> value_written;
     scene_->place(place_stimulus(*world_, t.settings, head()), head());
     for (;;) {
       const AttemptStep step = state.advance(f.facts());
@@ -779,7 +787,9 @@ class SessionLoop::Impl {
       if (step.onset) present_onset(t, a, f);
       take_inputs(t, a, state, f);
       scene_->show(step.phase, t.settings.timeline.stimulus_during_response);
-      const io::Overlay overlay = trial_overlay(t, a, step.phase);
+      overlay.phase = step.phase;
+      overlay.waiting_for_input = step.phase == Phase::response || step.phase == Phase::stimulus;
+      set_overlay_value(overlay, t, a, value_written);
       phase_left_ns_ = phase_left(state, step.phase, t.settings.timeline, f.timing.now_ns);
       const auto stats = end(f, overlay, step.onset, t.id);
       if (step.onset) log_onset(t, a, stats, f.timing.predicted_display_ns);

@@ -75,8 +75,9 @@ struct Overlay {
   std::string text;   // trial information line (block, trial, condition)
   bool waiting_for_input = false;  // instructions, response window, break
   // During a trial: the judgement's question, its answers with their inputs
-  // (the pilot window's key legend), and the value an adaptive method or an
-  // adjustment shows ("stimulus.stick_sagitta_m = 0.0125").
+  // (the pilot window's key legend, shown while waiting_for_input), and the
+  // value an adaptive method or an adjustment shows
+  // ("stimulus.stick_sagitta_m = 0.0125").
   std::string prompt;
   std::vector<AnswerInputs> answers;
   std::string value;
