@@ -59,11 +59,15 @@ double vergence_of(const EyeOffsets& eyes, const std::array<SightLine, 2>& lines
   return yaw(a, lines[0].direction) - yaw(a, lines[1].direction);
 }
 
+double beyond_reach_rad(const HumanVision& v, double demand_rad) {
+  return demand_rad - std::clamp(demand_rad, -v.divergence_limit_deg * kDegree, v.convergence_limit_deg * kDegree);
+}
+
 Fixation fixate(const HumanVision& v, double demand_rad, double ipd_m) {
   Fixation f;
   f.demand_rad = demand_rad;
-  f.achieved_rad = std::clamp(demand_rad, -v.divergence_limit_deg * kDegree, v.convergence_limit_deg * kDegree);
-  f.pedestal_rad = demand_rad - f.achieved_rad;
+  f.pedestal_rad = beyond_reach_rad(v, demand_rad);
+  f.achieved_rad = demand_rad - f.pedestal_rad;
   // Dioptres signalled by the achieved vergence (negative when diverging),
   // pulled toward the specific distance's.
   const double signalled = 2.0 * std::tan(0.5 * f.achieved_rad) / ipd_m;
@@ -84,10 +88,6 @@ Vec3 perceive_with(const Fixation& f, const EyeOffsets& eyes, const std::array<S
   return m.point + 1e9 * cyclopean(lines);
 }
 
-double fusion_limit_rad(const HumanVision& v, double eccentricity_rad) {
-  return v.fusion_arcmin * kArcmin + v.fusion_per_eccentricity * std::abs(eccentricity_rad);
-}
-
 double stereo_threshold_rad(const HumanVision& v, double pedestal_rad) {
   return v.threshold_arcsec * kArcsec + v.pedestal_fraction * std::abs(pedestal_rad);
 }
@@ -104,12 +104,10 @@ HumanPercept perceive_human(const HumanVision& v, const EyeOffsets& eyes,
   fixated = std::min(fixated, lines.size() - 1);
   const double ipd = ipd_of(eyes);
   p.fixation = fixate(v, vergence_of(eyes, lines[fixated]), ipd);
-  const Vec3 looking = cyclopean(lines[fixated]);
   for (const auto& pair : lines) {
     p.points_m.push_back(perceive_with(p.fixation, eyes, pair));
-    const double eccentricity = std::acos(std::clamp(glm::dot(cyclopean(pair), looking), -1.0, 1.0));
-    const double disparity = vergence_of(eyes, pair) - p.fixation.achieved_rad;
-    p.worst_fusion = std::max(p.worst_fusion, std::abs(disparity) / fusion_limit_rad(v, eccentricity));
+    const double missed = std::abs(beyond_reach_rad(v, vergence_of(eyes, pair)));
+    p.worst_fusion = std::max(p.worst_fusion, missed / (v.fusion_arcmin * kArcmin));
   }
   p.fused = p.worst_fusion <= 1.0;
   p.threshold_rad = stereo_threshold_rad(v, p.fixation.pedestal_rad);
@@ -117,17 +115,22 @@ HumanPercept perceive_human(const HumanVision& v, const EyeOffsets& eyes,
   return p;
 }
 
+HumanPercept perceive_human_at(const Space& space, const Isometry& nose, const EyeOffsets& eyes, ViewPreset preset,
+                               const std::vector<Point>& points, std::size_t fixated, const HumanVision& v) {
+  std::vector<std::array<SightLine, 2>> lines;
+  for (const Point& q : points) lines.push_back(sight_lines(space, nose, eyes, preset, q));
+  return perceive_human(v, eyes, lines, fixated);
+}
+
 HumanStickPerception perceive_stick_human(const Space& space, const BentStick& stick, double distance_m,
                                           const EyeOffsets& eyes, ViewPreset preset, const HumanVision& v) {
   HumanStickPerception out;
   if (!binocular(preset)) return out;
   const Isometry frame = stick_frame(space, distance_m);
-  const Isometry nose = Isometry::identity();
-  std::vector<std::array<SightLine, 2>> lines;
+  std::vector<Point> points;
   const double half = stick.length_m / 2.0;
-  for (const double u : {-half, 0.0, half})
-    lines.push_back(sight_lines(space, nose, eyes, preset, stick.centre_point(space, frame, u)));
-  out.percept = perceive_human(v, eyes, lines, 1);
+  for (const double u : {-half, 0.0, half}) points.push_back(stick.centre_point(space, frame, u));
+  out.percept = perceive_human_at(space, Isometry::identity(), eyes, preset, points, 1, v);
   const auto& p = out.percept.points_m;
   out.perceived_sagitta_m = bow_toward_viewer(p[0], p[1], p[2]);
   return out;

@@ -16,6 +16,7 @@
 #include "curvlab/harness/protocol/random.hpp"
 #include "curvlab/harness/runner/headless.hpp"
 #include "curvlab/harness/runner/image_observer.hpp"
+#include "curvlab/harness/runner/percept.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 #include "curvlab/harness/runner/replay.hpp"
 #include "curvlab/harness/runner/session.hpp"
@@ -26,6 +27,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -48,7 +50,8 @@ namespace pr = curvlab::harness::protocol;
 void watch_stop_signals(rn::RunOptions& o) { o.stop_signal = &catch_stop_signals(); }
 
 struct ObserverArgs {
-  std::string model = "perception";
+  std::string model = "human";
+  geometry::HumanVision vision;
   double bias_m = 0.0;
   double slope_per_m = 300.0;
   double lapse = 0.02;
@@ -58,10 +61,18 @@ struct ObserverArgs {
 
 void add_observer_options(CLI::App* cmd, ObserverArgs& o) {
   cmd->add_option("--observer", o.model,
-                  "who answers in headless runs: perception (default), physical (null model), random, image "
-                  "(reads the stick from the rendered onset pair), or none");
+                  "who answers in headless runs: human (default: human limits), triangulation (the ideal "
+                  "geometer; 'perception' is its former name), physical (null model), random, image (the human "
+                  "model reading the stick from the rendered onset pair), or none");
   cmd->add_option("--observer-bias-m", o.bias_m, "simulated observer: bias added to the perceived sagitta (m)");
-  cmd->add_option("--observer-slope-per-m", o.slope_per_m, "simulated observer: 1 / noise SD (default 300 /m)");
+  cmd->add_option("--observer-slope-per-m", o.slope_per_m,
+                  "simulated observer: 1 / noise SD in metres (triangulation and physical; the human model's without "
+                  "disparity; default 300 /m)");
+  for (const auto& setting : rn::vision_settings()) {
+    std::string flag = "--observer-" + std::string(setting.name);
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    cmd->add_option(flag, o.vision.*setting.field, "human observer: " + std::string(setting.help));
+  }
   cmd->add_option("--observer-lapse", o.lapse, "simulated observer: lapse rate (default 0.02)");
   cmd->add_option("--observer-criterion-m", o.criterion_m,
                   "simulated observer: half-width of the 'straight' band (default 0.006 m)");
@@ -73,9 +84,11 @@ std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::ui
   if (a.model == "none") return std::nullopt;
   const auto model = rn::parse_observer_model(a.model);
   if (!model)
-    throw UsageError("--observer must be perception, physical, random, image or none, got '" + a.model + "'");
+    throw UsageError("--observer must be human, triangulation, physical, random, image or none, got '" + a.model +
+                     "'");
   rn::ObserverParams p;
   p.model = *model;
+  p.vision = a.vision;
   p.bias_m = a.bias_m;
   p.slope_per_m = a.slope_per_m;
   p.lapse = a.lapse;
@@ -427,6 +440,8 @@ Json condition_json(const rn::ConditionPrediction& c) {
   cj["judged"] = c.judged;
   cj["trials_per_participant"] = c.trials_per_participant;
   cj["perceived_sagitta_m"] = c.perceived_m;
+  cj["noise_sd_m"] = c.noise_sd_m;
+  if (c.human) cj["human"] = Json::parse(rn::human_account_json(*c.human));
   cj["diverging_sight_lines"] = c.diverging_points;
   Json props;
   for (std::size_t k = 0; k < c.options.size(); ++k) props[c.options[k]] = c.proportions[k];
@@ -463,7 +478,7 @@ Json prediction_json(const pr::Protocol& p, const rn::PredictOptions& o, const r
   Json power = Json::array();
   for (const auto& pe : pred.power)
     power.push_back({{"factor", pe.factor}, {"level_a", pe.level_a}, {"level_b", pe.level_b},
-                     {"predicted_difference", pe.predicted_difference}, {"power", pe.power},
+                     {"measure", pe.measure}, {"predicted_difference", pe.predicted_difference}, {"power", pe.power},
                      {"simulations", pe.simulations}, {"test", "paired t, two-sided, alpha 0.05"}});
   doc["power"] = power;
   Json stairs = Json::array();
@@ -491,23 +506,35 @@ void print_staircase(const rn::StaircasePrediction& sp) {
     std::printf("outside [%g, %g]\n", sp.min, sp.max);
 }
 
+void print_condition(const rn::ConditionPrediction& c) {
+  std::printf("  %-52s %-5s %+8.4f", levels_label(c.levels).c_str(), c.judged.c_str(), c.perceived_m);
+  if (c.human)
+    std::printf(" %+8.0f %6.0f %+7.2f %-5s %5.2f", c.human->signal_arcsec, c.human->threshold_arcsec, c.human->d_prime,
+                c.human->fused ? "yes" : "no", c.human->perceived_distance_m);
+  for (std::size_t k = 0; k < c.options.size(); ++k) std::printf(" %s %.2f", c.options[k].c_str(), c.proportions[k]);
+  std::printf("\n");
+}
+
 void print_prediction(const pr::Protocol& p, const rn::Prediction& pred) {
-  if (!pred.conditions.empty())
+  if (!pred.conditions.empty()) {
     std::printf("%s: expected response proportions, %d participants\n", p.meta.name.c_str(), pred.participants);
-  for (const auto& c : pred.conditions) {
-    std::printf("  %-58s %-5s s=%+.4f m ", levels_label(c.levels).c_str(), c.judged.c_str(), c.perceived_m);
-    for (std::size_t k = 0; k < c.options.size(); ++k)
-      std::printf(" %s %.2f", c.options[k].c_str(), c.proportions[k]);
-    std::printf("\n");
+    const bool human = pred.conditions.front().human.has_value();
+    std::printf("  %-52s %-5s %8s", "condition", "", "s (m)");
+    if (human) std::printf(" %8s %6s %7s %-5s %5s", "signal\"", "thr\"", "d'", "fused", "D' m");
+    std::printf(" proportions\n");
+    if (human)
+      std::printf("  (s: perceived sagitta; signal: the disparity it amounts to at the perceived distance D'; thr: "
+                  "stereo threshold; arcseconds)\n");
   }
-  if (!pred.power.empty())
-    std::printf("power (P(first option) at level a vs b, paired t across participants, alpha 0.05):\n");
-  for (const auto& pe : pred.power)
-    std::printf("  %-12s %s vs %s: difference %+.3f, power %.2f (%d simulated studies)\n", pe.factor.c_str(),
-                pe.level_a.c_str(), pe.level_b.c_str(), pe.predicted_difference, pe.power, pe.simulations);
+  for (const auto& c : pred.conditions) print_condition(c);
   if (!pred.staircases.empty())
-    std::printf("staircases: the value each converges on for the mean observer (m-up/n-down target, Levitt 1971)\n");
+    std::printf("adaptive tracks: the value each converges on for the mean observer (m-up/n-down target, Levitt 1971)\n");
   for (const auto& sp : pred.staircases) print_staircase(sp);
+  if (!pred.power.empty()) std::printf("power (level a vs b, paired t across participants, alpha 0.05):\n");
+  for (const auto& pe : pred.power)
+    std::printf("  %-12s %s vs %s: %s difference %+.4g, power %.2f (%d simulated studies)\n", pe.factor.c_str(),
+                pe.level_a.c_str(), pe.level_b.c_str(), pe.measure.c_str(), pe.predicted_difference, pe.power,
+                pe.simulations);
   for (const auto& n : pred.notes) std::printf("note: %s\n", n.c_str());
 }
 
@@ -573,8 +600,9 @@ void add_run_commands(CLI::App& app) {
   add_observer_options(rs, res->observer);
   add_backend_options(rs, res->backend);
   rs->callback([res, rs] {
-    res->observer_given = rs->count("--observer") + rs->count("--observer-bias-m") +
-                              rs->count("--observer-slope-per-m") + rs->count("--observer-lapse") > 0;
+    res->observer_given = false;
+    for (const CLI::Option* opt : rs->get_options())
+      if (opt->get_name().starts_with("--observer") && opt->count() > 0) res->observer_given = true;
     resume_command(*res);
   });
 

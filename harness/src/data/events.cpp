@@ -110,6 +110,7 @@ Detail detail(const events::Onset& e) {
          {"views", e.views},
          {"draws", e.draws}};
   if (e.perceived_sagitta_m) j["perceived_sagitta_m"] = *e.perceived_sagitta_m;
+  if (e.percept_json) j["percept"] = Json::parse(*e.percept_json);
   if (e.images) j["images"] = *e.images;
   return {EventKind::onset, j};
 }

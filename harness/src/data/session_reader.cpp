@@ -47,18 +47,6 @@ bool read_doubles(std::span<const std::byte> blob, std::array<double, N>& out) {
   return true;
 }
 
-StoredObserver observer_from(const Json& d) {
-  StoredObserver o;
-  o.model = d.value("model", o.model);
-  o.bias_m = d.value("bias_m", o.bias_m);
-  o.slope_per_m = d.value("slope_per_m", o.slope_per_m);
-  o.lapse = d.value("lapse", o.lapse);
-  o.criterion_m = d.value("criterion_m", o.criterion_m);
-  o.rt_base_ms = d.value("rt_base_ms", o.rt_base_ms);
-  o.rt_mean_extra_ms = d.value("rt_mean_extra_ms", o.rt_mean_extra_ms);
-  o.seed = d.value("seed", o.seed);
-  return o;
-}
 
 }  // namespace
 
@@ -103,8 +91,7 @@ Expected<SessionProvenance> read_session_provenance(Database& db, std::int64_t s
         out.msaa = start->msaa;
         continue;
       }
-      const Json d = Json::parse(ev.column_text(1), nullptr, false);
-      if (!d.is_discarded() && d.is_object()) out.observer = observer_from(d);
+      out.observer = StoredObserver{std::string(ev.column_text(1))};
     }
     return out;
   });

@@ -158,15 +158,25 @@ glm::dvec2 project_px(const renderer::EyeOffset& eye, std::uint32_t width_px, st
 
 namespace {
 
-// The perceived ends and middle of the stick's centre line.
-std::array<Vec3, 3> model_points(const StickScene& scene) {
-  const geometry::EyeOffsets eyes{scene.rig.eyes[0].position_m, scene.rig.eyes[1].position_m};
-  const auto seen = [&](double u) {
-    const auto q = scene.stick.centre_point(scene.space, scene.stick_pose, u);
-    return geometry::perceive_point(scene.space, scene.head, eyes, scene.preset, q).position_m;
-  };
+geometry::EyeOffsets eyes_of(const StickScene& scene) {
+  return {scene.rig.eyes[0].position_m, scene.rig.eyes[1].position_m};
+}
+
+// The perceived ends and middle of the stick's centre line: the ideal
+// geometer's, or the human observer's fixating the middle.
+std::array<Vec3, 3> model_points(const StickScene& scene, const geometry::HumanVision* vision) {
+  const auto eyes = eyes_of(scene);
   const double half = scene.stick.length_m / 2.0;
-  return {seen(-half), seen(0.0), seen(half)};
+  std::vector<geometry::Point> q;
+  for (const double u : {-half, 0.0, half}) q.push_back(scene.stick.centre_point(scene.space, scene.stick_pose, u));
+  if (vision != nullptr) {
+    const auto p = geometry::perceive_human_at(scene.space, scene.head, eyes, scene.preset, q, 1, *vision).points_m;
+    return {p[0], p[1], p[2]};
+  }
+  const auto seen = [&](const geometry::Point& x) {
+    return geometry::perceive_point(scene.space, scene.head, eyes, scene.preset, x).position_m;
+  };
+  return {seen(q[0]), seen(q[1]), seen(q[2])};
 }
 
 
@@ -181,28 +191,36 @@ double radius_seen(const renderer::EyeOffset& eye, const StickScene& scene, cons
   return glm::length(p - eye.position_m) * std::tan(angle);
 }
 
-StickFeature triangulate(const StickScene& scene, double fraction, const RingSighting& left,
-                         const RingSighting& right) {
-  const auto& rig = scene.rig;
+// One ring seen in both eyes, at the same depth on the ring (the disparity
+// of a point of the ring, not of two points at different depths), and the
+// two lines of sight through it.
+StickFeature sighted(const StickScene& scene, double fraction, const RingSighting& left, const RingSighting& right,
+                     std::array<geometry::SightLine, 2>& lines) {
   StickFeature f;
   char name[32];
   std::snprintf(name, sizeof name, "ring %+.2f", fraction);
   f.name = name;
   f.u_m = fraction * scene.stick.length_m;
-  // Both eyes' sightings at the same depth on the ring: the disparity of a
-  // point of the ring, not of two points at different depths.
   f.depth_radii = 0.5 * (left.depth_radii + right.depth_radii);
   f.left_px = left.at_depth(f.depth_radii);
   f.right_px = right.at_depth(f.depth_radii);
   f.rows = std::min(left.rows, right.rows);
-  f.position_m = intersect(sight_line(rig.eyes[0], scene.width_px, scene.height_px, f.left_px),
-                           sight_line(rig.eyes[1], scene.width_px, scene.height_px, f.right_px));
+  lines = {sight_line(scene.rig.eyes[0], scene.width_px, scene.height_px, f.left_px),
+           sight_line(scene.rig.eyes[1], scene.width_px, scene.height_px, f.right_px)};
+  return f;
+}
+
+// The ring placed where the observer perceives it, with its reprojection
+// residuals and seen radius.
+void place(const StickScene& scene, const RingSighting& left, const RingSighting& right, const Vec3& position,
+           StickFeature& f) {
+  const auto& rig = scene.rig;
+  f.position_m = position;
   f.residual_left_px = glm::length(project_px(rig.eyes[0], scene.width_px, scene.height_px, f.position_m) - f.left_px);
   f.residual_right_px =
       glm::length(project_px(rig.eyes[1], scene.width_px, scene.height_px, f.position_m) - f.right_px);
   f.radius_seen_m = 0.5 * (radius_seen(rig.eyes[0], scene, left, f.position_m) +
                            radius_seen(rig.eyes[1], scene, right, f.position_m));
-  return f;
 }
 
 // How much deeper than wide a small offset of the stick looks at perceived
@@ -252,7 +270,7 @@ void fit_stick(const StickScene& scene, StickEstimate& e) {
 }  // namespace
 
 Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const renderer::Rgba8Image& right,
-                                    const StickScene& scene) {
+                                    const StickScene& scene, const geometry::HumanVision* vision) {
   if (left.width != static_cast<int>(scene.width_px) || left.height != static_cast<int>(scene.height_px) ||
       right.width != left.width || right.height != left.height)
     return bad("the images are " + std::to_string(left.width) + "x" + std::to_string(left.height) + " and " +
@@ -260,7 +278,7 @@ Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const rend
                std::to_string(scene.width_px) + "x" + std::to_string(scene.height_px));
   StickEstimate e;
   if (geometry::binocular(scene.preset)) {  // one eye: no disparity, 0
-    const auto p = model_points(scene);
+    const auto p = model_points(scene, vision);
     e.model_sagitta_m = bow_toward_viewer(p[0], p[1], p[2]);
     e.model_bend_m = bend_in_plane(p[0], p[1], p[2]);
   }
@@ -277,8 +295,17 @@ Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const rend
   if (!l) return Error{l.error().kind, "left image: " + l.error().message};
   auto r = find_rings(right, *right_stick, scene.stick.radius_m);
   if (!r) return Error{r.error().kind, "right image: " + r.error().message};
-  for (std::size_t i = 0; i < renderer::kStickRingFractions.size(); ++i)
-    e.features.push_back(triangulate(scene, renderer::kStickRingFractions[i], l.value()[i], r.value()[i]));
+  const auto& fractions = renderer::kStickRingFractions;
+  std::vector<std::array<geometry::SightLine, 2>> lines(fractions.size());
+  std::size_t middle = 0;
+  for (std::size_t i = 0; i < fractions.size(); ++i) {
+    e.features.push_back(sighted(scene, fractions[i], l.value()[i], r.value()[i], lines[i]));
+    if (std::abs(fractions[i]) < std::abs(fractions[middle])) middle = i;
+  }
+  if (vision != nullptr) e.human = geometry::perceive_human(*vision, eyes_of(scene), lines, middle);
+  for (std::size_t i = 0; i < fractions.size(); ++i)
+    place(scene, l.value()[i], r.value()[i],
+          e.human ? e.human->points_m[i] : intersect(lines[i][0], lines[i][1]), e.features[i]);
   fit_stick(scene, e);
   return e;
 }

@@ -37,9 +37,10 @@ Result<Done> write_onset_record(const std::string& path, const World& world, con
   return Done{};
 }
 
-Result<std::optional<double>> OnsetReader::read(const World& world, const protocol::Settings& s,
-                                                const Placement& placement, const OnsetView& view) {
-  if (judged(s) != Judged::stick) return std::optional<double>{};
+Result<std::optional<Percept>> OnsetReader::read(const World& world, const protocol::Settings& s,
+                                                 const Placement& placement, const OnsetView& view,
+                                                 const ObserverParams& observer) {
+  if (judged(s) != Judged::stick) return std::optional<Percept>{};
   if (!target_ || target_->image(renderer::Eye::left).width != static_cast<int>(view.width_px) ||
       target_->image(renderer::Eye::left).height != static_cast<int>(view.height_px))
     target_.emplace(ctx_, view.width_px, view.height_px);
@@ -49,9 +50,10 @@ Result<std::optional<double>> OnsetReader::read(const World& world, const protoc
   renderer_.render(scene, frame, *target_);
   auto estimate = measure::measure_stick(target_->image(renderer::Eye::left),
                                          target_->image(renderer::Eye::right),
-                                         stick_scene(world, s, placement, view));
+                                         stick_scene(world, s, placement, view), &observer.vision);
   if (!estimate) return Error{estimate.error().kind, "image observer: " + estimate.error().message};
-  return std::optional<double>(estimate->estimated_sagitta_m);
+  if (!estimate->human) return std::optional<Percept>(without_disparity(observer));  // one eye
+  return std::optional<Percept>(human_percept(*estimate->human, estimate->estimated_sagitta_m, observer));
 }
 
 Result<Done> check_image_observer(const protocol::Protocol& p) {

@@ -10,7 +10,8 @@ namespace curvlab::harness::runner {
 
 std::string_view to_string(ObserverModel m) {
   switch (m) {
-    case ObserverModel::perception: return "perception";
+    case ObserverModel::human: return "human";
+    case ObserverModel::triangulation: return "triangulation";
     case ObserverModel::physical: return "physical";
     case ObserverModel::random: return "random";
     case ObserverModel::image: return "image";
@@ -19,7 +20,8 @@ std::string_view to_string(ObserverModel m) {
 }
 
 std::optional<ObserverModel> parse_observer_model(std::string_view text) {
-  if (text == "perception") return ObserverModel::perception;
+  if (text == "human") return ObserverModel::human;
+  if (text == "triangulation" || text == "perception") return ObserverModel::triangulation;
   if (text == "physical") return ObserverModel::physical;
   if (text == "random") return ObserverModel::random;
   if (text == "image") return ObserverModel::image;
@@ -34,7 +36,37 @@ Result<Done> check_observer(const ObserverParams& p) {
   if (!(p.lapse >= 0.0 && p.lapse <= 1.0)) return bad("lapse must lie in [0, 1]");
   if (!(p.criterion_m >= 0.0 && p.criterion_m <= 1.0)) return bad("criterion_m must lie in [0, 1] metres");
   if (!(p.rt_base_ms >= 0.0 && p.rt_mean_extra_ms >= 0.0)) return bad("response-time parameters must not be negative");
+  const auto& v = p.vision;
+  if (!(v.vergence_weight >= 0.0 && v.vergence_weight <= 1.0)) return bad("vergence_weight must lie in [0, 1]");
+  if (!(v.specific_distance_m >= 0.1 && v.specific_distance_m <= 50.0))
+    return bad("specific_distance_m must lie in [0.1, 50] metres");
+  if (!(v.threshold_arcsec > 0.0 && v.threshold_arcsec <= 3600.0))
+    return bad("threshold_arcsec must lie in (0, 3600] arcseconds");
+  if (!(v.pedestal_fraction >= 0.0 && v.pedestal_fraction <= 1.0)) return bad("pedestal_fraction must lie in [0, 1]");
+  if (!(v.fusion_arcmin > 0.0 && v.fusion_arcmin <= 600.0)) return bad("fusion_arcmin must lie in (0, 600] arcminutes");
+  if (!(v.divergence_limit_deg >= 0.0 && v.divergence_limit_deg <= 10.0))
+    return bad("divergence_limit_deg must lie in [0, 10] degrees");
+  if (!(v.convergence_limit_deg > 0.0 && v.convergence_limit_deg <= 60.0))
+    return bad("convergence_limit_deg must lie in (0, 60] degrees");
   return Done{};
+}
+
+bool human_limits(ObserverModel m) { return m == ObserverModel::human || m == ObserverModel::image; }
+
+std::span<const VisionSetting> vision_settings() {
+  using V = geometry::HumanVision;
+  static constexpr VisionSetting kSettings[] = {
+      {"vergence_weight", &V::vergence_weight,
+       "weight of the vergence distance against the specific distance, in dioptres (default 0.5)"},
+      {"specific_distance_m", &V::specific_distance_m,
+       "the distance perceived distance is pulled toward (default 1.0 m)"},
+      {"threshold_arcsec", &V::threshold_arcsec, "stereo threshold: disparity noise SD at zero pedestal (default 30)"},
+      {"pedestal_fraction", &V::pedestal_fraction, "rise of the threshold per unit of pedestal disparity (default 0.05)"},
+      {"fusion_arcmin", &V::fusion_arcmin, "fusional limit: how far the eyes may miss a point and still fuse it (default 20 arcmin)"},
+      {"divergence_limit_deg", &V::divergence_limit_deg, "how far the eyes diverge beyond parallel (default 1 degree)"},
+      {"convergence_limit_deg", &V::convergence_limit_deg, "the largest vergence (default 35 degrees)"},
+  };
+  return kSettings;
 }
 
 std::string observer_json(const ObserverParams& p) {
@@ -47,7 +79,41 @@ std::string observer_json(const ObserverParams& p) {
   j["rt_base_ms"] = p.rt_base_ms;
   j["rt_mean_extra_ms"] = p.rt_mean_extra_ms;
   j["seed"] = p.seed;
+  if (human_limits(p.model)) {
+    nlohmann::ordered_json v;
+    for (const auto& f : vision_settings()) v[std::string(f.name)] = p.vision.*f.field;
+    j["vision"] = v;
+  }
   return j.dump();
+}
+
+Result<ObserverParams> observer_from_json(std::string_view json) {
+  const auto d = nlohmann::json::parse(json, nullptr, false);
+  if (d.is_discarded() || !d.is_object()) return Error{Error::Kind::corrupt, "the observer event is not a JSON object"};
+  ObserverParams p;
+  try {
+    // Events written before the human model name the ideal geometer
+    // "perception" and default to it.
+    const std::string model = d.value("model", std::string("perception"));
+    const auto parsed = parse_observer_model(model);
+    if (!parsed)
+      return Error{Error::Kind::corrupt, "its observer model is '" + model +
+                                             "', not human, triangulation (perception), physical, random or image"};
+    p.model = *parsed;
+    p.bias_m = d.value("bias_m", p.bias_m);
+    p.slope_per_m = d.value("slope_per_m", p.slope_per_m);
+    p.lapse = d.value("lapse", p.lapse);
+    p.criterion_m = d.value("criterion_m", p.criterion_m);
+    p.rt_base_ms = d.value("rt_base_ms", p.rt_base_ms);
+    p.rt_mean_extra_ms = d.value("rt_mean_extra_ms", p.rt_mean_extra_ms);
+    p.seed = d.value("seed", p.seed);
+    if (const auto v = d.find("vision"); v != d.end() && v->is_object())
+      for (const auto& f : vision_settings()) p.vision.*f.field = v->value(std::string(f.name), p.vision.*f.field);
+  } catch (const nlohmann::json::exception& e) {
+    return Error{Error::Kind::corrupt, std::string("the observer event has a field of the wrong type: ") + e.what()};
+  }
+  if (auto ok = check_observer(p); !ok) return Error{Error::Kind::corrupt, "the observer event: " + ok.error().message};
+  return p;
 }
 
 double normal_cdf(double x) { return 0.5 * std::erfc(-x / std::numbers::sqrt2); }
@@ -74,7 +140,7 @@ double cut(std::size_t k, std::size_t n, double criterion_m) {
 
 }  // namespace
 
-std::vector<double> SimulatedObserver::choice_probabilities(double s, std::size_t n) const {
+std::vector<double> SimulatedObserver::choice_probabilities(double s, std::size_t n, double noise_sd_m) const {
   std::vector<double> p(n, 0.0);
   if (n == 0) return p;
   const double guess = 1.0 / static_cast<double>(n);
@@ -86,7 +152,7 @@ std::vector<double> SimulatedObserver::choice_probabilities(double s, std::size_
   double above_prev = 0.0;  // P(L > previous cut); the first option is L > cut 0
   for (std::size_t k = 0; k < n; ++k) {
     const double above =
-        k + 1 < n ? 1.0 - normal_cdf(params_.slope_per_m * (cut(k, n, params_.criterion_m) - mean))
+        k + 1 < n ? 1.0 - normal_cdf((cut(k, n, params_.criterion_m) - mean) / noise_sd_m)
                   : 1.0;
     p[k] = params_.lapse * guess + (1.0 - params_.lapse) * (above - above_prev);
     above_prev = above;
@@ -94,24 +160,24 @@ std::vector<double> SimulatedObserver::choice_probabilities(double s, std::size_
   return p;
 }
 
-std::size_t SimulatedObserver::choose(double s, std::size_t n) {
+std::size_t SimulatedObserver::choose(double s, std::size_t n, double noise_sd_m) {
   if (n == 0) return 0;
   const double lapse_draw = uniform();
   const double option_draw = uniform();
   const double noise = standard_normal(rng_);
   if (params_.model == ObserverModel::random || lapse_draw < params_.lapse)
     return std::min(n - 1, static_cast<std::size_t>(option_draw * static_cast<double>(n)));
-  const double latent = s + params_.bias_m + noise / params_.slope_per_m;
+  const double latent = s + params_.bias_m + noise * noise_sd_m;
   for (std::size_t k = 0; k + 1 < n; ++k)
     if (latent > cut(k, n, params_.criterion_m)) return k;
   return n - 1;
 }
 
-double SimulatedObserver::adjust(const std::function<double(double)>& perceived, double lo,
-                                 double hi) {
+double SimulatedObserver::adjust(const std::function<double(double)>& perceived, double lo, double hi,
+                                 double noise_sd_m) {
   const double lapse_draw = uniform();
   const double where = uniform();
-  const double noise = standard_normal(rng_) / params_.slope_per_m;
+  const double noise = standard_normal(rng_) * noise_sd_m;
   if (params_.model == ObserverModel::random || lapse_draw < params_.lapse)
     return lo + where * (hi - lo);
   auto f = [&](double x) { return perceived(x) + params_.bias_m + noise; };

@@ -15,32 +15,39 @@ io::Signal ObserverKeys::poll(std::vector<io::InputEvent>& out) {
 
 namespace {
 
-double judged_quantity(const SimulatedObserver& observer, const World& world, const protocol::Settings& s,
-                       const Placement& placement, const geometry::Isometry& head) {
-  if (observer.params().model == ObserverModel::physical) return physical_sagitta_m(s);
-  return perceived_sagitta_m(world, s, placement, head);
-}
-
 // The simulated observer in the stimulus of one trial, as the judgement
-// types ask for it.
+// types ask for it. A choice answers the percept judged last (the onset's,
+// or a value a type asked about).
 class ObserverRespondent final : public protocol::Respondent {
  public:
   ObserverRespondent(SimulatedObserver& observer, const World& world, const protocol::Settings& s,
-                     const Placement& placement, const geometry::Isometry& head, std::optional<double> seen_m)
-      : observer_(observer), world_(world), s_(s), placement_(placement), head_(head), seen_m_(seen_m) {}
+                     const Placement& placement, const geometry::Isometry& head, std::optional<Percept> seen)
+      : observer_(observer), world_(world), s_(s), placement_(placement), head_(head), seen_(std::move(seen)) {}
 
-  double judged() override { return seen_m_ ? *seen_m_ : judged_quantity(observer_, world_, s_, placement_, head_); }
+  // The onset's percept.
+  const Percept& onset() {
+    if (!seen_) seen_ = perceive(world_, s_, placement_, head_, observer_.params());
+    return *seen_;
+  }
+
+  double judged() override {
+    last_noise_m_ = onset().noise_sd_m;
+    return onset().sagitta_m;
+  }
 
   double judged_at(const std::string& parameter, double value) override {
     protocol::Settings s2 = s_;
     protocol::set_numeric_setting(s2, parameter, value);
-    return judged_quantity(observer_, world_, s2, place_stimulus(world_, s2, head_), head_);
+    const Percept p = perceive(world_, s2, place_stimulus(world_, s2, head_), head_, observer_.params());
+    last_noise_m_ = p.noise_sd_m;
+    return p.sagitta_m;
   }
 
-  std::size_t choose(double judged, std::size_t n) override { return observer_.choose(judged, n); }
+  std::size_t choose(double judged, std::size_t n) override { return observer_.choose(judged, n, last_noise_m_); }
 
   double settle(const std::string& parameter, double min, double max) override {
-    return observer_.adjust([&](double x) { return judged_at(parameter, x); }, min, max);
+    const double noise = onset().noise_sd_m;
+    return observer_.adjust([&](double x) { return judged_at(parameter, x); }, min, max, noise);
   }
 
  private:
@@ -49,7 +56,8 @@ class ObserverRespondent final : public protocol::Respondent {
   const protocol::Settings& s_;
   const Placement& placement_;
   const geometry::Isometry& head_;
-  std::optional<double> seen_m_;
+  std::optional<Percept> seen_;
+  double last_noise_m_ = 0.0;
 };
 
 }  // namespace
@@ -64,10 +72,12 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
 ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, const protocol::Judgement& j,
                            const protocol::Settings& s, const Placement& placement,
                            const geometry::Isometry& head, std::int64_t onset_ns,
-                           const std::optional<protocol::Adjustment>& adjustment, std::optional<double> seen_m) {
+                           const std::optional<protocol::Adjustment>& adjustment, std::optional<Percept> seen) {
   const std::int64_t rt = observer.response_time_ns();
-  ObserverRespondent who(observer, world, s, placement, head, seen_m);
-  return j.type->plan_answer(j, who, onset_ns + rt, adjustment);
+  ObserverRespondent who(observer, world, s, placement, head, std::move(seen));
+  ObserverAnswer out{j.type->plan_answer(j, who, onset_ns + rt, adjustment), {}};
+  out.percept = who.onset();
+  return out;
 }
 
 }  // namespace curvlab::harness::runner

@@ -9,6 +9,7 @@
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/runner/observer.hpp"
+#include "curvlab/harness/runner/percept.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include <cstdint>
@@ -19,7 +20,12 @@
 namespace curvlab::harness::runner {
 
 using ScheduledKey = protocol::KeyPress;
-using ObserverAnswer = protocol::AnswerPlan;
+
+// What the observer presses for a trial, and the onset's percept behind it.
+struct ObserverAnswer {
+  protocol::AnswerPlan plan;
+  Percept percept;
+};
 
 // The seed of the observer's random stream for one attempt of one trial:
 // from the observer's and the session's seeds, the trial's index and the
@@ -30,9 +36,8 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
 
 // What `observer` presses for a trial whose stimulus came up at `onset_ns`
 // (session clock of the onset frame) with the head at `head`: after its
-// response time, what the judgement's type plans. `seen_m`: the judged
-// quantity as read from the onset images (the image observer's choices);
-// otherwise the perception model's.
+// response time, what the judgement's type plans. `seen`: the percept as
+// read from the onset images (the image observer's); otherwise the model's.
 // The simulated observer's presses as a response source: the session
 // schedules them as it plans each answer, and each reaches the session,
 // stamped with its planned time, in the first frame that begins at or after
@@ -61,6 +66,6 @@ ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, cons
                            const protocol::Settings& s, const Placement& placement,
                            const geometry::Isometry& head, std::int64_t onset_ns,
                            const std::optional<protocol::Adjustment>& adjustment,
-                           std::optional<double> seen_m = std::nullopt);
+                           std::optional<Percept> seen = std::nullopt);
 
 }  // namespace curvlab::harness::runner

@@ -16,25 +16,6 @@ namespace curvlab::harness::runner {
 
 namespace {
 
-// A model this version does not know was written by another program or
-// version, or damaged: the session cannot go on as it began.
-Result<ObserverParams> observer_params(const data::StoredObserver& o) {
-  const auto model = parse_observer_model(o.model);
-  if (!model)
-    return Error{Error::Kind::corrupt,
-                 "its observer model is '" + o.model + "', not perception, physical, random or image"};
-  ObserverParams p;
-  p.model = *model;
-  p.bias_m = o.bias_m;
-  p.slope_per_m = o.slope_per_m;
-  p.lapse = o.lapse;
-  p.criterion_m = o.criterion_m;
-  p.rt_base_ms = o.rt_base_ms;
-  p.rt_mean_extra_ms = o.rt_mean_extra_ms;
-  p.seed = o.seed;
-  return p;
-}
-
 // What a resumed run needs besides the stored session: the trial ids (the
 // stored list checked against the re-expanded design), the frames logged,
 // the first incomplete trial with its attempts and logged aborts, and the
@@ -117,7 +98,7 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
     if (fit) out.calibration = *fit;
   }
   if (prov->observer) {
-    auto observer = observer_params(*prov->observer);
+    auto observer = observer_from_json(prov->observer->json);
     if (!observer)
       return Error{observer.error().kind,
                    db_path + ": session " + std::to_string(session_id) + ": " + observer.error().message};

@@ -817,15 +817,16 @@ class SessionLoop::Impl {
     if (!observer_) return;
     auto answer = plan_answer(*observer_, *world_, *t.judgement, t.settings, a.placement, a.head_at_onset,
                               f.timing.now_ns, a.adjustment, read_onset(t, a));
-    observer_keys_.replace(answer.keys);
-    last_perceived_ = answer.perceived_m;
+    observer_keys_.replace(answer.plan.keys);
+    last_perceived_ = answer.plan.perceived_m;
+    last_account_ = answer.percept.human;
   }
 
   // The image observer's reading of the onset pair (nullopt for the others).
-  std::optional<double> read_onset(const TrialRun& t, const AttemptRun& a) {
+  std::optional<Percept> read_onset(const TrialRun& t, const AttemptRun& a) {
     if (observer_->params().model != ObserverModel::image) return std::nullopt;
     if (!onset_reader_) onset_reader_ = check(OnsetReader::create());
-    return check(onset_reader_->read(*world_, t.settings, a.placement, a.onset_view));
+    return check(onset_reader_->read(*world_, t.settings, a.placement, a.onset_view, observer_->params()));
   }
 
   // Responses count from the onset's display to the end of the window; a
@@ -874,6 +875,7 @@ class SessionLoop::Impl {
     onset.views = stats.views;
     onset.draws = stats.draws;
     if (observer_) onset.perceived_sagitta_m = last_perceived_;
+    if (observer_ && last_account_) onset.percept_json = human_account_json(*last_account_);
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
       // A trial run again (a later attempt, a resumed session, another
       // session into the same folder) gets trial_NNNN_2, …: none is replaced.
@@ -981,6 +983,7 @@ class SessionLoop::Impl {
   geometry::LabFrame lab_;
   std::optional<geometry::LabFrame> last_lab_;
   double last_perceived_ = 0.0;
+  std::optional<HumanAccount> last_account_;  // the human model's, at the last onset
   std::uint64_t completed_ticket_ = 0;
   std::int64_t session_start_ns_ = 0;
   std::vector<std::int64_t> cpu_ns_;

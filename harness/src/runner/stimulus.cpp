@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <numbers>
 
 namespace curvlab::harness::runner {
@@ -158,11 +159,6 @@ std::string view_name(const Settings& s) {
   return std::string(geometry::to_string(preset));
 }
 
-namespace {
-
-// The points a judgement rests on: the stick's ends and middle (in that
-// order: end, middle, end), or the table's edge midpoints followed by its
-// (possibly raised) centre.
 std::vector<Point> judged_points(const World& world, const Settings& s, const Placement& placement) {
   const auto& space = world.space;
   std::vector<Point> points;
@@ -180,17 +176,9 @@ std::vector<Point> judged_points(const World& world, const Settings& s, const Pl
   return points;
 }
 
-}  // namespace
-
-double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
-                           const Isometry& head) {
-  const geometry::ViewPreset preset = perceived_preset(s);
-  if (!geometry::binocular(preset)) return 0.0;
+double perceived_sagitta_with(const World& world, const Settings& s, const Placement& placement,
+                              const std::function<Vec3(const Point&)>& seen) {
   const auto& space = world.space;
-  const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
-  auto seen = [&](const Point& q) {
-    return geometry::perceive_point(space, head, eyes, preset, q).position_m;
-  };
   std::vector<Vec3> p;
   for (const Point& q : judged_points(world, s, placement)) p.push_back(seen(q));
   if (judged(s) == Judged::stick) return geometry::bow_toward_viewer(p[0], p[1], p[2]);
@@ -201,6 +189,16 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
   const Vec3 flat_centre = seen(geometry::origin(space));
   const Vec3 above = seen(geometry::translation_m(space, Vec3(0.0, 0.1, 0.0)).m * geometry::origin(space));
   return geometry::height_above_rim(p, centre, above - flat_centre);
+}
+
+double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
+                           const Isometry& head) {
+  const geometry::ViewPreset preset = perceived_preset(s);
+  if (!geometry::binocular(preset)) return 0.0;
+  const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
+  return perceived_sagitta_with(world, s, placement, [&](const Point& q) {
+    return geometry::perceive_point(world.space, head, eyes, preset, q).position_m;
+  });
 }
 
 SightLineCount diverging_sight_lines(const World& world, const Settings& s, const Placement& placement,

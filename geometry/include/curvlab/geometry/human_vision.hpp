@@ -18,8 +18,10 @@
 //  - noise in disparity: a stereo threshold in arcseconds that rises with
 //    the pedestal, the fixated point's residual disparity when the eyes
 //    cannot verge on it (Blakemore 1970; McKee, Levi & Bowne 1990);
-//  - fusion: a point whose disparity from the fixation exceeds the fusional
-//    limit (Panum's area, wider in the periphery; Ogle 1950) is seen double.
+//  - fusion: the observer looks along the shape, fixating each point in
+//    turn, so a point is seen double only when the eyes cannot verge on it
+//    (beyond the divergence limit or the near point) by more than the
+//    fusional limit of the fovea (Panum's area; Ogle 1950).
 // Everything is in the nose frame (perception.hpp): x right, y up, −z forward.
 #pragma once
 
@@ -41,10 +43,8 @@ struct HumanVision {
   // per unit of pedestal disparity (a Weber fraction).
   double threshold_arcsec = 30.0;
   double pedestal_fraction = 0.05;
-  // Fusional limit at the fovea (arcminutes) and its growth per unit of
-  // eccentricity (a fraction of the eccentricity angle).
+  // Fusional limit at the fovea (arcminutes).
   double fusion_arcmin = 20.0;
-  double fusion_per_eccentricity = 0.07;
   // How far the eyes can diverge beyond parallel, and converge (degrees).
   double divergence_limit_deg = 1.0;
   double convergence_limit_deg = 35.0;
@@ -71,9 +71,9 @@ Fixation fixate(const HumanVision& v, double demand_rad, double ipd_m);
 // the two met (closest_approach's midpoint).
 Vec3 perceive_with(const Fixation& f, const EyeOffsets& eyes, const std::array<SightLine, 2>& lines);
 
-// The fusional limit at an eccentricity (radians from the fixated point's
-// cyclopean direction), and the stereo threshold at a pedestal (radians).
-double fusion_limit_rad(const HumanVision& v, double eccentricity_rad);
+// The part of a vergence demand beyond the eyes' reach (0 within it), and
+// the stereo threshold at a pedestal disparity (radians).
+double beyond_reach_rad(const HumanVision& v, double demand_rad);
 double stereo_threshold_rad(const HumanVision& v, double pedestal_rad);
 // The depth one radian of relative disparity signals at the perceived
 // fixation distance: −d/dγ of (ipd/2)/tan(γ/2) = (ipd/4)/sin²(γ/2).
@@ -84,9 +84,8 @@ double depth_per_disparity_m(const Fixation& f, double ipd_m);
 struct HumanPercept {
   std::vector<Vec3> points_m;  // perceived, in the order given
   Fixation fixation;
-  // Fused unless some point's disparity from the achieved vergence exceeds
-  // the fusional limit at its eccentricity; worst_fusion is the largest
-  // ratio of the two (> 1: seen double).
+  // Fused unless the eyes miss some point by more than the fusional limit
+  // (beyond_reach over fusion_arcmin: worst_fusion, > 1 seen double).
   bool fused = true;
   double worst_fusion = 0.0;
   double threshold_rad = 0.0;          // noise SD of a relative disparity
@@ -94,6 +93,11 @@ struct HumanPercept {
 };
 HumanPercept perceive_human(const HumanVision& v, const EyeOffsets& eyes,
                             const std::vector<std::array<SightLine, 2>>& lines, std::size_t fixated);
+
+// The same for points of the space seen from `nose` in a view preset
+// (sight_lines of each, then perceive_human).
+HumanPercept perceive_human_at(const Space& space, const Isometry& nose, const EyeOffsets& eyes, ViewPreset preset,
+                               const std::vector<Point>& points, std::size_t fixated, const HumanVision& v);
 
 // A horizontal stick straight ahead (as perceive_stick): the human
 // observer's perceived sagitta while fixating its middle.

@@ -129,6 +129,9 @@ struct Onset {
   int views = 0;
   int draws = 0;
   std::optional<double> perceived_sagitta_m;
+  // The human observer's account of its percept (a JSON object: fused,
+  // signal_arcsec, threshold_arcsec, d_prime, perceived_distance_m, …).
+  std::optional<std::string> percept_json;
   std::optional<std::vector<std::string>> images;
 };
 struct TrackingFlagged {

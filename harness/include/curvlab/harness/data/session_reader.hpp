@@ -25,17 +25,10 @@
 namespace curvlab::data {
 
 // The simulated observer's parameters as the session's `observer` event
-// stored them (codebook: events.kind). Defaults are the runner's, for
-// fields an older event lacks.
+// stored them (codebook: events.kind): its JSON, which the runner reads
+// (runner/observer.hpp, observer_from_json).
 struct StoredObserver {
-  std::string model = "perception";  // perception, physical, random or none
-  double bias_m = 0.0;
-  double slope_per_m = 300.0;
-  double lapse = 0.02;
-  double criterion_m = 0.006;
-  double rt_base_ms = 450.0;
-  double rt_mean_extra_ms = 250.0;
-  std::uint64_t seed = 1;
+  std::string json;
 };
 
 // Everything a session was started with, to start it again identically.

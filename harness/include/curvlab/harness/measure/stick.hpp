@@ -15,6 +15,7 @@
 // the model predicts what the pixels carry.
 #pragma once
 
+#include "curvlab/geometry/human_vision.hpp"
 #include "curvlab/geometry/perception.hpp"
 #include "curvlab/geometry/tube.hpp"
 #include "curvlab/harness/result.hpp"
@@ -79,6 +80,9 @@ struct StickEstimate {
   double estimated_bend_m = 0.0;
   double model_bend_m = 0.0;
   bool binocular = true;  // false: one eye showed no stick (no disparity, estimate 0)
+  // With a human observer's limits: its percept of the rings, fixating the
+  // middle one (their perceived points are the features' positions).
+  std::optional<geometry::HumanPercept> human;
   double fit_rms_m = 0.0; // triangulated points against the fitted curve
   std::vector<StickFeature> features;
 };
@@ -134,8 +138,11 @@ glm::dvec2 project_px(const renderer::EyeOffset& eye, std::uint32_t width_px, st
 
 // The estimate from the two images. A plain stick has no features along its
 // length to match between the eyes: that is an error naming the fix (rings).
+// With `vision`, the rings are perceived by the human observer
+// (geometry/human_vision.hpp) instead of met exactly, and the model's
+// values are the human model's.
 Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const renderer::Rgba8Image& right,
-                                    const StickScene& scene);
+                                    const StickScene& scene, const geometry::HumanVision* vision = nullptr);
 
 nlohmann::ordered_json estimate_json(const StickEstimate& e);
 

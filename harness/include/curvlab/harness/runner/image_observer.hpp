@@ -3,11 +3,14 @@
 // offscreen with the trial's eye geometry — the stick as the participant
 // sees it, with the same eyes, projection and pose, against the background
 // (the table and panels left out, so that the stick stands out as a figure) —
-// and reads the stick's sagitta from the two images (harness/measure). The
-// usual response model (observer.hpp) turns that value into an answer.
+// and reads the stick from the two images (harness/measure) with the human
+// observer's limits: the rings' disparities, fixating the middle one, give
+// the perceived sagitta, its noise and whether it fused. The usual response
+// model (observer.hpp) turns that percept into an answer.
 #pragma once
 
 #include "curvlab/harness/result.hpp"
+#include "curvlab/harness/runner/percept.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/renderer/context.hpp"
@@ -32,10 +35,10 @@ struct OnsetView {
 class OnsetReader {
  public:
   static Result<std::unique_ptr<OnsetReader>> create();
-  // The stick's sagitta read from the onset pair; nullopt when the trial
-  // judges the table (the images are read for the stick only).
-  Result<std::optional<double>> read(const World& world, const protocol::Settings& s,
-                                     const Placement& placement, const OnsetView& view);
+  // The stick's percept read from the onset pair by `observer`; nullopt
+  // when the trial judges the table (the images are read for the stick only).
+  Result<std::optional<Percept>> read(const World& world, const protocol::Settings& s, const Placement& placement,
+                                      const OnsetView& view, const ObserverParams& observer);
 
  private:
   explicit OnsetReader(renderer::Context ctx);

@@ -1,17 +1,26 @@
 // `curvlab predict`: what a protocol should find before anyone is tested.
-// The simulated observer (observer.hpp) answers every choice condition of the
-// design; participants differ in bias and slope, drawn from a population;
-// expected response proportions per condition are averaged over them, and
-// the power to detect each factor's effect on the proportion of the first
-// option (e.g. "convex") comes from simulated studies analysed with a
-// paired t-test across participants. Staircase blocks get, per condition
-// and staircase, the stimulus value the up/down rule converges on for the
-// mean observer, and whether it lies inside the staircase's range.
+// The simulated observer (observer.hpp; by default the human model, with its
+// account in arcseconds: the disparity signal, the threshold, d′, fusion and
+// the perceived distance) answers every choice condition of the design;
+// participants differ in bias and in the scale of their noise (slope, and
+// threshold), drawn from a population; expected response proportions per
+// condition are averaged over them. Adaptive blocks (staircases and the
+// like) get, per condition and track, the stimulus value the method
+// converges on for the mean observer, and whether it lies inside its range.
+// Power comes from simulated studies analysed with a paired t-test across
+// participants: on the proportion of the first option (e.g. "convex") for
+// choice trials, and on the value each condition's adaptive tracks settle
+// on (the mean value shown over the second half of its trials, simulated
+// trial by trial through the judgement type) for adaptive ones.
+// Conditions are listed in the design's order: blocks as the protocol lists
+// them, then each factor's levels as declared, factors in the design's
+// order (by name, as `curvlab design` lists them).
 #pragma once
 
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/result.hpp"
 #include "curvlab/harness/runner/observer.hpp"
+#include "curvlab/harness/runner/percept.hpp"
 
 #include <optional>
 #include <string>
@@ -33,14 +42,19 @@ struct PredictOptions {
   std::string factor, level_a, level_b;
 };
 
+
 struct ConditionPrediction {
   std::vector<std::pair<std::string, std::string>> levels;  // factor → level
   std::string judged;                                       // stick or table
   std::int64_t trials_per_participant = 0;
-  double perceived_m = 0.0;  // the perception model's signed sagitta
+  double perceived_m = 0.0;  // the mean observer's signed sagitta
+  double noise_sd_m = 0.0;   // and the SD of its noise
+  // The human model's account (percept.hpp): signal and threshold in
+  // arcseconds, d′, fusion, perceived distance.
+  std::optional<HumanAccount> human;
   // Judged points a tourist sees only along diverging or parallel lines of
-  // sight (stimulus.hpp, diverging_sight_lines): perceived_m is then
-  // ill-conditioned, and a note says so.
+  // sight (stimulus.hpp, diverging_sight_lines): the triangulation model's
+  // perceived_m is then ill-conditioned, and a note says so.
   int diverging_points = 0;
   int judged_points = 0;
   std::vector<std::string> options;
@@ -49,7 +63,10 @@ struct ConditionPrediction {
 
 struct PowerEstimate {
   std::string factor, level_a, level_b;
-  double predicted_difference = 0.0;  // P(first option | a) − P(first option | b)
+  // What is compared: "P(first option)" (choice trials) or the adaptive
+  // tracks' settled value, e.g. "stimulus.stick_sagitta_m".
+  std::string measure;
+  double predicted_difference = 0.0;  // measure at a − measure at b
   double power = 0.0;
   int simulations = 0;
 };

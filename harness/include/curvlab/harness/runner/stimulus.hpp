@@ -17,9 +17,11 @@
 #include "curvlab/renderer/scene.hpp"
 #include "curvlab/renderer/view.hpp"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 namespace curvlab::harness::runner {
 
@@ -73,12 +75,22 @@ renderer::ViewSettings view_settings(const protocol::Settings& s, renderer::Eye 
 // "native", "monocular" (native, one eye) or "custom" (tourist, one eye).
 std::string view_name(const protocol::Settings& s);
 
-// The perceived signed sagitta of the judged object for a viewer whose nose
-// is at `head` (perception.hpp): the stick's bow toward the viewer, or the
+// The points a judgement rests on: the stick's ends and middle (end,
+// middle, end), or the table's edge midpoints followed by its (possibly
+// raised) centre.
+std::vector<geometry::Point> judged_points(const World& world, const protocol::Settings& s,
+                                           const Placement& placement);
+
+// The perceived signed sagitta of the judged object for the ideal geometer
+// whose nose is at `head` (perception.hpp): the stick's bow toward the viewer, or the
 // table top's rise of its centre above the plane of its edge midpoints.
 // One eye: 0 (no disparity, DESIGN.md §5).
 double perceived_sagitta_m(const World& world, const protocol::Settings& s,
                            const Placement& placement, const geometry::Isometry& head);
+// The same sagitta from any map of points of the space to perceived
+// positions in the nose frame (the human observer's, percept.hpp).
+double perceived_sagitta_with(const World& world, const protocol::Settings& s, const Placement& placement,
+                              const std::function<geometry::Vec3(const geometry::Point&)>& seen);
 // How many of the points the judgement rests on (the stick's ends and
 // middle; the table's edge midpoints and centre) a tourist's two lines of
 // sight reach only by diverging or running parallel: in S3 beyond the
