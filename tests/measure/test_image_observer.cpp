@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
 #include <map>
 
@@ -73,11 +74,13 @@ options = [
 ]
 )";
 
-// The judged value logged at each onset, by trial index.
-std::map<std::string, double> judged_values(const std::string& db) {
+// A value logged at each onset (a JSON path into its detail), by trial
+// index; 0 where the onset lacks it.
+std::map<std::string, double> onset_values(const std::string& db, const std::string& path = "$.perceived_sagitta_m") {
   std::map<std::string, double> out;
-  for (const auto& row : query(db, "SELECT t.trial_index, json_extract(e.detail, '$.perceived_sagitta_m') "
-                                   "FROM events e JOIN trials t ON t.trial_id = e.trial_id WHERE e.kind = 'onset'"))
+  for (const auto& row : query(db, "SELECT t.trial_index, IFNULL(json_extract(e.detail, '" + path +
+                                       "'), 0) FROM events e JOIN trials t ON t.trial_id = e.trial_id "
+                                       "WHERE e.kind = 'onset'"))
     out[row[0]] = std::stod(row[1]);
   return out;
 }
@@ -91,7 +94,7 @@ std::map<std::string, std::string> responses(const std::string& db) {
 
 }  // namespace
 
-TEST(ImageObserver, AnswersAsThePerceptionModelDoesFromThePixels) {
+TEST(ImageObserver, AnswersAsTheHumanModelDoesFromThePixels) {
   const auto dir = fresh_dir("image_observer");
   const auto protocol = (dir / "marked.toml").string();
   std::ofstream(protocol) << kMarkedProtocol;
@@ -109,22 +112,31 @@ TEST(ImageObserver, AnswersAsThePerceptionModelDoesFromThePixels) {
   ASSERT_EQ(image.size(), model.size());
   int same = 0;
   for (const auto& [trial, response] : model) same += image.at(trial) == response;
-  // The judged values differ by a millimetre or so against a noise SD of
-  // 3.3 mm: a trial's answer can flip only near a cut.
+  // A trial's answer can flip only near a cut: the two observers' percepts
+  // differ by a small part of the noise. Both log the human model's account
+  // with each onset: the disparity signal the pixels give is the model's
+  // within half the 30-arcsec threshold plus 6 % of the signal in every space
+  // and view (the rings' localisation and the curve's extrapolation to the
+  // ends, as for the ideal geometer's 3 mm on 7 cm; no account with one
+  // eye), and the perceived distance within a centimetre.
   EXPECT_GE(same, 16) << same << " of 18 answers agree";
-  // What each judged, logged with each onset: the pixels give the model's
-  // value within 3 mm in every space and view (0 with one eye).
-  const auto from_model = judged_values(model_db);
-  const auto from_image = judged_values(image_db);
+  const auto from_model = onset_values(model_db);
+  const auto from_image = onset_values(image_db);
   ASSERT_EQ(from_image.size(), 18u);
-  for (const auto& [trial, value] : from_model)
-    EXPECT_NEAR(from_image.at(trial), value, 0.003) << "trial " << trial;
+  const auto signal_model = onset_values(model_db, "$.percept.signal_arcsec");
+  const auto signal_image = onset_values(image_db, "$.percept.signal_arcsec");
+  const auto distance_model = onset_values(model_db, "$.percept.perceived_distance_m");
+  const auto distance_image = onset_values(image_db, "$.percept.perceived_distance_m");
+  for (const auto& [trial, value] : signal_model) {
+    EXPECT_NEAR(signal_image.at(trial), value, 15.0 + 0.06 * std::abs(value)) << "trial " << trial;
+    EXPECT_NEAR(distance_image.at(trial), distance_model.at(trial), 0.01) << "trial " << trial;
+  }
   // The participant's own onset pair, saved by --images with the record of
   // the eyes, reads as the observer's: `curvlab measure stick --trial N`.
   r = run_cli("measure stick --from " + images);
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("--trial N"), std::string::npos) << r.out;
-  r = run_cli("measure stick --from " + images + " --trial 1 --json");
+  r = run_cli("measure stick --from " + images + " --trial 1 --json --observer human");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_NEAR(j["estimated_sagitta_m"].get<double>(), from_image.at("1"), 0.001) << r.out;

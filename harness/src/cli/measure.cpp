@@ -29,6 +29,7 @@ struct MeasureArgs {
   std::string from;
   int trial = -1;
   bool json = false;
+  std::string observer = "triangulation";
 };
 
 struct PairFiles {
@@ -114,7 +115,11 @@ void run_measure_stick(const MeasureArgs& a) {
   const StickScene scene = read_scene(files);
   const auto left = read_image(files.left);
   const auto right = read_image(files.right);
-  const auto estimate = harness::measure::measure_stick(left, right, scene);
+  if (a.observer != "triangulation" && a.observer != "human")
+    throw UsageError("--observer must be triangulation or human, got '" + a.observer + "'");
+  const geometry::HumanVision vision;  // the human model's default limits (docs/runner.md)
+  const auto estimate =
+      harness::measure::measure_stick(left, right, scene, a.observer == "human" ? &vision : nullptr);
   if (!estimate) raise(estimate.error());
   if (a.json) {
     Json j = harness::measure::estimate_json(estimate.value());
@@ -136,6 +141,9 @@ void add_measure_commands(CLI::App& app) {
   stick->add_option("--from", args->from, "a curvlab render output or a run --images folder")->required();
   stick->add_option("--trial", args->trial, "the onset pair trial_NNNN of a run --images folder");
   stick->add_flag("--json", args->json, "one JSON object");
+  stick->add_option("--observer", args->observer,
+                    "triangulation (default: the lines of sight met exactly) or human (the simulated participant's "
+                    "default limits, as run --observer image reads the pair)");
   stick->callback([args] { run_measure_stick(*args); });
 }
 
