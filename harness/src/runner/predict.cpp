@@ -154,6 +154,7 @@ Result<Done> predict_staircases(const protocol::Protocol& p, const protocol::Pla
     sp.staircase = track.track;
     sp.parameter = j.parameter;
     sp.positive = track.positive;
+    sp.rule = track.rule;
     sp.up = track.up;
     sp.down = track.down;
     sp.min = track.min;

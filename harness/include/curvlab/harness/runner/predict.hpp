@@ -65,6 +65,7 @@ struct StaircasePrediction {
   std::string staircase;   // its name
   std::string parameter;   // the setting it varies
   std::string positive;    // the option that counts as positive
+  std::string rule;        // "1-up/1-down", "psi" (protocol::ConvergenceTarget::rule)
   int up = 1, down = 1;
   double min = 0.0, max = 0.0;
   double target_p = 0.5;   // P(positive) the rule converges on
