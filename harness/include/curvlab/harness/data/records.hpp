@@ -102,7 +102,7 @@ struct StaircaseStep {
   std::optional<bool> response_correct;
   bool is_reversal = false;
   std::optional<double> next_intensity;
-  std::optional<StepPosterior> posterior;  // Bayesian methods (psi); nullopt for staircases
+  std::optional<StepPosterior> posterior = std::nullopt;  // Bayesian methods (psi); nullopt for staircases
 };
 
 struct TrialResult {

@@ -112,7 +112,7 @@ struct AdaptiveStep {
   bool positive = false;
   bool reversal = false;    // the answer reversed the track's direction
   double next_value = 0.0;  // the value the track shows next
-  std::optional<PosteriorSummary> posterior;  // Bayesian methods: after this answer
+  std::optional<PosteriorSummary> posterior = std::nullopt;  // Bayesian methods: after this answer
 };
 
 // What an adaptive type keeps for one condition (a block's cell) across its
