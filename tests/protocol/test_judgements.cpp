@@ -46,15 +46,15 @@ constexpr std::int64_t kMs = 1'000'000;
 TEST(Judgements, TheLoaderNamesEveryRegisteredTypeInOrder) {
   std::vector<std::string> names;
   for (const JudgementType* t : judgement_types()) names.emplace_back(t->name());
-  EXPECT_EQ(names, (std::vector<std::string>{"choice", "adjustment", "staircase"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"choice", "adjustment", "staircase", "psi"}));
   for (const auto& name : names) EXPECT_EQ(find_judgement_type(name)->name(), name);
-  EXPECT_EQ(find_judgement_type("psi"), nullptr);
+  EXPECT_EQ(find_judgement_type("quest"), nullptr);
 
   const auto r = load_protocol_text(kHead + "[judgement]\nprompt = \"x\"\n", "t.toml");
   ASSERT_FALSE(r.has_value());
   bool named = false;
   for (const auto& d : r.error().diagnostics)
-    named |= d.message == "missing required type: \"choice\", \"adjustment\" or \"staircase\"";
+    named |= d.message == "missing required type: \"choice\", \"adjustment\", \"staircase\" or \"psi\"";
   EXPECT_TRUE(named) << format_diagnostic(r.error().diagnostics.front());
 }
 

@@ -456,7 +456,7 @@ Json staircase_json(const rn::StaircasePrediction& sp) {
   sj["judged"] = sp.judged;
   sj["staircase"] = sp.staircase;
   sj["parameter"] = sp.parameter;
-  sj["rule"] = std::to_string(sp.up) + "-up/" + std::to_string(sp.down) + "-down";
+  sj["rule"] = sp.rule;
   sj["target_p_" + sp.positive] = sp.target_p;
   sj["range"] = Json::array({sp.min, sp.max});
   sj["converges_on"] = sp.target_value ? Json(*sp.target_value) : Json(nullptr);
@@ -497,7 +497,7 @@ std::string levels_label(const std::vector<std::pair<std::string, std::string>>&
 
 void print_staircase(const rn::StaircasePrediction& sp) {
   const std::string label = sp.block + " " + levels_label(sp.levels);
-  std::printf("  %-40s %-12s %d-up/%d-down %4.1f%% %s: ", label.c_str(), sp.staircase.c_str(), sp.up, sp.down,
+  std::printf("  %-40s %-12s %s %4.1f%% %s: ", label.c_str(), sp.staircase.c_str(), sp.rule.c_str(),
               100.0 * sp.target_p, sp.positive.c_str());
   if (sp.target_value)
     std::printf("%s = %+.4f in [%g, %g]%s\n", sp.parameter.c_str(), *sp.target_value, sp.min, sp.max,
@@ -528,7 +528,8 @@ void print_prediction(const pr::Protocol& p, const rn::Prediction& pred) {
   }
   for (const auto& c : pred.conditions) print_condition(c);
   if (!pred.staircases.empty())
-    std::printf("adaptive tracks: the value each converges on for the mean observer (m-up/n-down target, Levitt 1971)\n");
+    std::printf("adaptive tracks: the value each converges on for the mean observer (m-up/n-down target, Levitt "
+                "1971; psi: the 50 %% point its PSE estimate approaches)\n");
   for (const auto& sp : pred.staircases) print_staircase(sp);
   if (!pred.power.empty()) std::printf("power (level a vs b, paired t across participants, alpha 0.05):\n");
   for (const auto& pe : pred.power)

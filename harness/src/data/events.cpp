@@ -11,7 +11,7 @@ namespace {
 // the order a person expects, and equal events give equal texts.
 using Json = nlohmann::ordered_json;
 
-constexpr std::array<std::pair<EventKind, std::string_view>, 23> kind_names{{
+constexpr std::array<std::pair<EventKind, std::string_view>, 24> kind_names{{
     {EventKind::session_start, "session_start"},
     {EventKind::observer, "observer"},
     {EventKind::resume, "resume"},
@@ -33,6 +33,7 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 23> kind_names{{
     {EventKind::adjustment, "adjustment"},
     {EventKind::onset, "onset"},
     {EventKind::tracking_flagged, "tracking_flagged"},
+    {EventKind::posterior, "posterior"},
     {EventKind::merged_from, "merged_from"},
     {EventKind::session_renumbered, "session_renumbered"},
 }};
@@ -116,6 +117,21 @@ Detail detail(const events::Onset& e) {
 }
 Detail detail(const events::TrackingFlagged& e) {
   return {EventKind::tracking_flagged, Json{{"lost_ms", e.lost_ms}, {"spells", e.spells}, {"attempt", e.attempt}}};
+}
+
+// The lapse keys are null when the method keeps λ fixed.
+Detail detail(const events::Posterior& e) {
+  const StepPosterior& p = e.value;
+  const auto optional = [](const std::optional<double>& v) { return v ? Json(*v) : Json(nullptr); };
+  return {EventKind::posterior, Json{{"staircase", e.staircase},
+                                     {"step_index", e.step_index},
+                                     {"pse_mean", p.pse_mean},
+                                     {"pse_sd", p.pse_sd},
+                                     {"slope_mean", p.slope_mean},
+                                     {"slope_sd", p.slope_sd},
+                                     {"lapse_mean", optional(p.lapse_mean)},
+                                     {"lapse_sd", optional(p.lapse_sd)},
+                                     {"entropy_nats", p.entropy_nats}}};
 }
 
 DataError bad_detail(std::string_view kind, const std::string& what) {

@@ -273,7 +273,7 @@ const std::vector<FixedColumn>& fixed_columns() {
     {"status", "pending, running, completed, skipped or aborted", "",
      "t.status"},
     {"end_reason",
-       "Skipped or aborted trials: why (staircase_finished, operator, tracking_lost, pause, "
+       "Skipped or aborted trials: why (staircase_finished, psi_finished, operator, tracking_lost, pause, "
        "recenter, quit); empty otherwise",
        "",
      "t.end_reason"},
@@ -299,6 +299,32 @@ const std::vector<FixedColumn>& fixed_columns() {
      "st.intensity"},
     {"is_reversal", "Staircase trials: 1 when the response reversed the staircase's direction", "",
      "st.is_reversal"},
+    {"pse_mean",
+       "Bayesian adaptive (psi) trials: posterior mean of the PSE alpha of P(positive | x) = lapse/2 + "
+       "(1 - lapse) Phi(slope (x - alpha)) after this trial's answer",
+       "protocol unit",
+     "json_extract(po.detail, '$.pse_mean')"},
+    {"pse_sd", "Bayesian adaptive (psi) trials: posterior SD of the PSE after this trial's answer", "protocol unit",
+     "json_extract(po.detail, '$.pse_sd')"},
+    {"slope_mean", "Bayesian adaptive (psi) trials: posterior mean of the slope after this trial's answer",
+     "1/protocol unit",
+     "json_extract(po.detail, '$.slope_mean')"},
+    {"slope_sd", "Bayesian adaptive (psi) trials: posterior SD of the slope after this trial's answer",
+     "1/protocol unit",
+     "json_extract(po.detail, '$.slope_sd')"},
+    {"lapse_mean",
+       "Bayesian adaptive (psi) trials that estimate the lapse rate: its posterior mean after this trial's answer; "
+       "empty when the lapse rate is fixed",
+       "",
+     "json_extract(po.detail, '$.lapse_mean')"},
+    {"lapse_sd",
+       "Bayesian adaptive (psi) trials that estimate the lapse rate: its posterior SD after this trial's answer",
+       "",
+     "json_extract(po.detail, '$.lapse_sd')"},
+    {"posterior_entropy",
+       "Bayesian adaptive (psi) trials: entropy of the joint posterior over the grid after this trial's answer",
+       "nat",
+     "json_extract(po.detail, '$.entropy_nats')"},
     {"tracking_lost_ms",
        "Trials completed with tracking lost (tracking.on_loss = \"flag\"): how long the head was "
        "untracked, in spells longer than tracking.loss_ms",
@@ -329,6 +355,8 @@ std::string trial_select() {
          "LEFT JOIN (SELECT trial_id, SUM(json_extract(detail, '$.lost_ms')) AS lost_ms "
          "FROM events WHERE kind = ?2 GROUP BY trial_id) tf "
          "ON tf.trial_id = t.trial_id "
+         // A psi trial's posterior: at most one event per trial (written with its step).
+         "LEFT JOIN (SELECT trial_id, detail FROM events WHERE kind = ?3) po ON po.trial_id = t.trial_id "
          // One pass over the frames: the trial's late frames, and whether its
          // onset frame (displayed at onset_ns) was one of them.
          "LEFT JOIN (SELECT f.trial_id, SUM(f.late) AS late, "
@@ -379,6 +407,7 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
   try {
     Statement s(db.connection(), trial_select());
     s.bind(1, options.session_id).bind_static(2, to_string(EventKind::tracking_flagged));
+    s.bind_static(3, to_string(EventKind::posterior));
     while (s.step()) {
       std::vector<Cell> row;
       for (int c = 0; c < fixed; ++c) row.push_back(s.column_opt_text(c));

@@ -483,6 +483,9 @@ Expected<Done> SessionStore::complete_trial(const TrialResult& r) {
       if (step.response_correct) is.bind(6, *step.response_correct ? 1 : 0); else is.bind_null(6);
       is.bind(7, step.is_reversal ? 1 : 0).bind(8, step.next_intensity);
       is.run();
+      if (step.posterior)
+        insert_event(event_record(session_id, r.trial_id, r.response_ns,
+                                  events::Posterior{step.staircase, step.step_index, *step.posterior}));
     }
     txn.commit();
     return Done{};

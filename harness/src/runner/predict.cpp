@@ -187,6 +187,7 @@ void predict_tracks(Condition& c, const SimulatedObserver& mean_observer, Predic
     sp.staircase = track.track;
     sp.parameter = j.parameter;
     sp.positive = track.positive;
+    sp.rule = track.rule;
     sp.up = track.up;
     sp.down = track.down;
     sp.min = track.min;
@@ -249,6 +250,11 @@ std::string not_predicted_note() {
     (type->forecast() == protocol::Forecast::none ? not_predicted : predicted).emplace_back(type->name());
   return listed(not_predicted) + " blocks are not predicted (" + listed(predicted) + " only)";
 }
+
+// The adaptive pool's size: this many participants per participant of a
+// study, and at least the minimum.
+constexpr int kAdaptivePoolPerParticipant = 3;
+constexpr int kAdaptivePoolMin = 60;
 
 // Participants drawn from the population around the mean observer: bias,
 // and the scale of the noise (slope and stereo threshold together).
@@ -396,13 +402,34 @@ double settled_value(Condition& c, const Participant& who, const ObserverParams&
   return sum / static_cast<double>(shown.size() - from);
 }
 
-double adaptive_difference(const Participant& who, std::vector<Condition>& conditions, const Effect& e,
-                           const ObserverParams& mean, protocol::Engine& rng) {
+// Simulated participants run once through every adaptive condition (an
+// adaptive method can cost a millisecond a trial, so studies draw their
+// participants from this pool rather than simulating each afresh): each
+// row holds one participant's settled value per condition.
+struct AdaptivePool {
+  std::vector<std::vector<double>> settled;
+};
+
+AdaptivePool simulate_pool(Population& population, std::vector<Condition>& conditions, const PredictOptions& o) {
+  AdaptivePool pool;
+  const int size = std::max(kAdaptivePoolMin, kAdaptivePoolPerParticipant * o.participants);
+  for (int k = 0; k < size; ++k) {
+    const Participant who = population.draw();
+    std::vector<double> row;
+    for (auto& c : conditions) row.push_back(settled_value(c, who, o.observer, population.rng()));
+    pool.settled.push_back(std::move(row));
+  }
+  return pool;
+}
+
+// A participant of the pool's settled value at level a minus at b.
+double adaptive_difference(const std::vector<double>& settled, const std::vector<Condition>& conditions,
+                           const Effect& e) {
   LevelSums sums;
-  for (auto& c : conditions) {
-    const auto l = level_of(c.first.levels, e.factor);
+  for (std::size_t i = 0; i < conditions.size(); ++i) {
+    const auto l = level_of(conditions[i].first.levels, e.factor);
     if (l != e.a && l != e.b) continue;
-    sums.add(l == e.a, settled_value(c, who, mean, rng), 1.0);
+    sums.add(l == e.a, settled[i], 1.0);
   }
   return sums.difference();
 }
@@ -449,20 +476,18 @@ Result<std::optional<Effect>> effect_for(const std::map<std::string, std::pair<d
   return std::optional<Effect>{best};
 }
 
-std::vector<double> study(int participants, const std::function<double(const Participant&)>& difference,
-                          Population& population) {
-  std::vector<double> d;
-  for (int k = 0; k < participants; ++k) d.push_back(difference(population.draw()));
-  return d;
-}
-
-PowerEstimate power_of(const Effect& e, std::string measure, const PredictOptions& o, Population& population,
-                       const std::function<double(const Participant&)>& difference) {
+// Simulated studies of o.participants participants, each giving its paired
+// difference (`one_participant` draws a participant and returns theirs).
+PowerEstimate power_of(const Effect& e, std::string measure, const PredictOptions& o,
+                       const std::function<double()>& one_participant) {
   PowerEstimate pe{e.factor, e.a, e.b, std::move(measure), 0.0, 0.0, o.simulations};
   int hits = 0;
   double mean_difference = 0.0;
-  for (int sim = 0; sim < o.simulations; ++sim)
-    if (significant(study(o.participants, difference, population), o.alpha, mean_difference)) ++hits;
+  for (int sim = 0; sim < o.simulations; ++sim) {
+    std::vector<double> d;
+    for (int k = 0; k < o.participants; ++k) d.push_back(one_participant());
+    if (significant(d, o.alpha, mean_difference)) ++hits;
+  }
   pe.power = static_cast<double>(hits) / o.simulations;
   pe.predicted_difference = mean_difference / o.simulations;
   return pe;
@@ -472,7 +497,7 @@ PowerEstimate power_of(const Effect& e, std::string measure, const PredictOption
 // conditions, and on the settled value among the adaptive ones; none when
 // f has fewer than two levels among either (an error when it was asked for).
 Result<Done> estimate_power(Population& population, Prediction& out, Conditions& conditions, const PredictOptions& o,
-                            const std::string& f) {
+                            const std::string& f, std::optional<AdaptivePool>& pool) {
   std::map<std::string, std::pair<double, double>> choice_levels, adaptive_levels;  // label → (sum, count)
   for (const auto& c : out.conditions)
     if (const auto l = level_of(c.levels, f); !l.empty() && !c.proportions.empty()) {
@@ -492,13 +517,16 @@ Result<Done> estimate_power(Population& population, Prediction& out, Conditions&
     return predict_error("--effect: factor \"" + f + "\" has no choice or adaptive trials outside practice at both " +
                          "levels \"" + o.level_a + "\" and \"" + o.level_b + "\"");
   if (const auto& e = choice.value())
-    out.power.push_back(power_of(*e, "P(first option)", o, population, [&](const Participant& who) {
-      return choice_difference(who, out, *e, population.rng());
+    out.power.push_back(power_of(*e, "P(first option)", o, [&] {
+      return choice_difference(population.draw(), out, *e, population.rng());
     }));
   if (const auto& e = adaptive.value()) {
     std::string measure = conditions.adaptive.front().block->judgement.parameter;
-    out.power.push_back(power_of(*e, measure, o, population, [&](const Participant& who) {
-      return adaptive_difference(who, conditions.adaptive, *e, o.observer, population.rng());
+    if (!pool) pool = simulate_pool(population, conditions.adaptive, o);
+    out.power.push_back(power_of(*e, measure, o, [&] {
+      const auto k = static_cast<std::size_t>(protocol::uniform01(population.rng()) *
+                                              static_cast<double>(pool->settled.size()));
+      return adaptive_difference(pool->settled[std::min(k, pool->settled.size() - 1)], conditions.adaptive, *e);
     }));
   }
   return Done{};
@@ -537,8 +565,9 @@ Result<Prediction> predict(const protocol::Protocol& p, const PredictOptions& o)
   if (!o.factor.empty()) factors.push_back(o.factor);
   else
     for (const auto& f : p.factors) factors.push_back(f.name);
+  std::optional<AdaptivePool> pool;
   for (const auto& f : factors)
-    if (auto r = estimate_power(population, out, conditions, o, f); !r) return r.error();
+    if (auto r = estimate_power(population, out, conditions, o, f, pool); !r) return r.error();
   return out;
 }
 

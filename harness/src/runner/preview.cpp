@@ -468,8 +468,8 @@ bool write_predictions(std::ostringstream& o, const Prediction& prediction, cons
     if (!c.tracks.empty() &&
         std::none_of(c.tracks.begin(), c.tracks.end(), [&](const auto& e) { return e.second == sp.staircase; }))
       continue;
-    rows += "<tr><td>" + html(sp.staircase) + " (" + std::to_string(sp.up) + "-up/" + std::to_string(sp.down) +
-            "-down, " + fixed(sp.target_p * 100.0, 1) + " % " + html(sp.positive) + ")</td><td>" +
+    rows += "<tr><td>" + html(sp.staircase) + " (" + html(sp.rule) + ", " + fixed(sp.target_p * 100.0, 1) + " % " +
+            html(sp.positive) + ")</td><td>" +
             (sp.target_value ? html(sp.parameter) + " = " + fixed(*sp.target_value, 4)
                              : "outside [" + num(sp.min) + ", " + num(sp.max) + "]") +
             "</td></tr>\n";

@@ -916,7 +916,8 @@ class SessionLoop::Impl {
       auto& state = *adaptive_for(*t.planned);
       const auto step = state.record(*t.planned, state.positive(a.answer->first));
       r.staircase_step = data::StaircaseStep{staircase_key(p_, *t.planned, step.track), step.step, step.value,
-                                             step.positive, step.reversal, step.next_value};
+                                             step.positive, step.reversal, step.next_value,
+                                             step_posterior(step.posterior)};
     }
     // A staircase's or an adjustment's value is stored with the trial.
     if (!t.judgement->parameter.empty()) r.stimulus_json = shown_stimulus_json(p_, *t.planned, t.settings);

@@ -28,6 +28,12 @@ std::string staircase_key(const Protocol& p, const PlannedTrial& t, const std::s
   return key + track;
 }
 
+std::optional<data::StepPosterior> step_posterior(const std::optional<protocol::PosteriorSummary>& p) {
+  if (!p) return std::nullopt;
+  return data::StepPosterior{p->pse_mean, p->pse_sd,    p->slope_mean,  p->slope_sd,
+                             p->lapse_mean, p->lapse_sd, p->entropy_nats};
+}
+
 data::Pose16 pose16(const geometry::Isometry& iso) {
   data::Pose16 a{};
   for (int c = 0; c < 4; ++c)

@@ -6,10 +6,12 @@
 #include "curvlab/harness/data/events.hpp"
 #include "curvlab/harness/data/records.hpp"
 #include "curvlab/harness/protocol/design.hpp"
+#include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,8 @@ const protocol::Block& block_of(const protocol::Protocol& p, const std::string& 
 // Adaptive tracks (staircases) are named uniquely within a session: the
 // block, the cell when the block has several, and the track's own name.
 std::string staircase_key(const protocol::Protocol& p, const protocol::PlannedTrial& t, const std::string& track);
+// A Bayesian adaptive method's posterior as the store keeps it.
+std::optional<data::StepPosterior> step_posterior(const std::optional<protocol::PosteriorSummary>& p);
 // A 4×4 isometry as 16 numbers, column-major.
 data::Pose16 pose16(const geometry::Isometry& iso);
 // Every block and trial of a design, as the store keeps them.

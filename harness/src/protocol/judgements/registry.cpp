@@ -8,12 +8,14 @@ namespace curvlab::harness::protocol {
 const JudgementType& choice_judgement_type();
 const JudgementType& adjustment_judgement_type();
 const JudgementType& staircase_judgement_type();
+const JudgementType& psi_judgement_type();
 
 const std::vector<const JudgementType*>& judgement_types() {
   static const std::vector<const JudgementType*> types{
       &choice_judgement_type(),
       &adjustment_judgement_type(),
       &staircase_judgement_type(),
+      &psi_judgement_type(),
   };
   return types;
 }

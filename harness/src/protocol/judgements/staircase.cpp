@@ -50,7 +50,7 @@ class StaircaseSet final : public AdaptiveState {
 
   AdaptiveStep record(const PlannedTrial& t, bool positive) override {
     Staircase& s = stairs_.at(staircase_of(t));
-    AdaptiveStep step{s.spec().name, s.trials(), s.value(), positive, false, 0.0};
+    AdaptiveStep step{s.spec().name, s.trials(), s.value(), positive, false, 0.0, std::nullopt};
     const int reversals = s.reversals();
     s.respond(positive);
     step.reversal = s.reversals() > reversals;
@@ -115,7 +115,8 @@ class InterleavedStaircaseJudgement final : public JudgementType {
     const auto* table = table_of(j);
     if (!table) return out;
     for (const auto& s : table->staircases)
-      out.push_back({s.name, table->positive, s.up, s.down, s.min, s.max, staircase_target_probability(s.up, s.down)});
+      out.push_back({s.name, table->positive, std::to_string(s.up) + "-up/" + std::to_string(s.down) + "-down", s.up,
+                     s.down, s.min, s.max, staircase_target_probability(s.up, s.down)});
     return out;
   }
 

@@ -39,6 +39,7 @@ enum class EventKind {
   adjustment,
   onset,
   tracking_flagged,
+  posterior,  // a Bayesian adaptive method's posterior after the trial's answer
   merged_from,
   session_renumbered,
 };
@@ -139,6 +140,12 @@ struct TrackingFlagged {
   std::int64_t spells = 0;
   std::int64_t attempt = 0;
 };
+// Written by the store with the step it follows (SessionStore::complete_trial).
+struct Posterior {
+  std::string staircase;  // the step's staircase_steps.staircase
+  std::int64_t step_index = 0;
+  StepPosterior value;
+};
 
 }  // namespace events
 
@@ -146,7 +153,7 @@ using Event = std::variant<events::SessionStart, events::Observer, events::Resum
                            events::SessionEnd, events::Signal, events::OperatorAction, events::Paused,
                            events::Unpaused, events::TrialAborted, events::TrialRepeated, events::TrialAbandoned,
                            events::TrialSkipped, events::EarlyInput, events::Adjustment, events::Onset,
-                           events::TrackingFlagged>;
+                           events::TrackingFlagged, events::Posterior>;
 
 // The row an event is stored as.
 EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,

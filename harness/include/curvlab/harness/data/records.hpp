@@ -83,6 +83,18 @@ struct PlannedTrial {
   std::string stimulus_json;
 };
 
+// A Bayesian adaptive method's posterior after a step (the psi method:
+// protocol::PosteriorSummary): the marginal means and SDs of the PSE α (the
+// parameter's unit), the slope β (per parameter unit) and, when estimated,
+// the lapse rate λ, and the joint posterior's entropy in nats. Stored as the
+// trial's `posterior` event, in the step's transaction.
+struct StepPosterior {
+  double pse_mean = 0.0, pse_sd = 0.0;
+  double slope_mean = 0.0, slope_sd = 0.0;
+  std::optional<double> lapse_mean, lapse_sd;
+  double entropy_nats = 0.0;
+};
+
 struct StaircaseStep {
   std::string staircase;
   std::int64_t step_index = 0;
@@ -90,6 +102,7 @@ struct StaircaseStep {
   std::optional<bool> response_correct;
   bool is_reversal = false;
   std::optional<double> next_intensity;
+  std::optional<StepPosterior> posterior = std::nullopt;  // Bayesian methods (psi); nullopt for staircases
 };
 
 struct TrialResult {

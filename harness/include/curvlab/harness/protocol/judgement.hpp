@@ -1,6 +1,7 @@
 // Judgement types as one family (DESIGN.md §1, §6): what the participant
 // answers, and everything that depends on it. Each type — n-alternative
-// `choice`, method of `adjustment`, interleaved `staircase` — is one class in
+// `choice`, method of `adjustment`, interleaved `staircase`, Bayesian
+// adaptive `psi` — is one class in
 // one file under harness/src/protocol/judgements/, registered once in
 // judgements/registry.cpp; the loader, the schema generator, the design
 // expander, the runner, `predict` and `preview` ask the type of a judgement
@@ -11,7 +12,8 @@
 // simulated participant makes, the value an adaptive method shows next); the
 // runner keeps the state objects a type hands it. An adaptive method that
 // keeps a posterior per condition and chooses the next stimulus value (psi,
-// QUEST+) is a type whose AdaptiveState holds the posterior.
+// QUEST+) is a type whose AdaptiveState holds the posterior, and reports it
+// with every step (PosteriorSummary).
 //
 // Types are stateless singletons: thread-safe. AdaptiveState objects are
 // owned by one session loop and are not thread-safe.
@@ -89,8 +91,20 @@ struct AnswerPlan {
   double perceived_m = 0.0;    // the judged quantity at onset (logged with the onset)
 };
 
+// What a Bayesian adaptive method believes after an answer, for a
+// psychometric function P(positive | x) = λ/2 + (1 − λ) Φ(β (x − α)): the
+// marginal posterior mean and SD of the PSE α (the parameter's unit), of the
+// slope β (per parameter unit) and, when it is estimated, of the lapse rate
+// λ, and the entropy of the joint posterior over the grid (nats).
+struct PosteriorSummary {
+  double pse_mean = 0.0, pse_sd = 0.0;
+  double slope_mean = 0.0, slope_sd = 0.0;
+  std::optional<double> lapse_mean, lapse_sd;  // nullopt: λ is fixed
+  double entropy_nats = 0.0;
+};
+
 // One answered step of an adaptive method, as the store keeps it
-// (data::StaircaseStep).
+// (data::StaircaseStep, with the posterior as the trial's `posterior` event).
 struct AdaptiveStep {
   std::string track;        // the track's name within its condition (a staircase's name)
   int step = 0;             // steps of the track answered before this one
@@ -98,6 +112,7 @@ struct AdaptiveStep {
   bool positive = false;
   bool reversal = false;    // the answer reversed the track's direction
   double next_value = 0.0;  // the value the track shows next
+  std::optional<PosteriorSummary> posterior = std::nullopt;  // Bayesian methods: after this answer
 };
 
 // What an adaptive type keeps for one condition (a block's cell) across its
@@ -136,7 +151,8 @@ struct AnswerBinding {
 struct ConvergenceTarget {
   std::string track;     // its name
   std::string positive;  // the option value that counts as positive
-  int up = 1, down = 1;  // the up/down rule
+  std::string rule;      // how it converges, as predict and preview print it: "1-up/2-down", "psi"
+  int up = 1, down = 1;  // the up/down rule (staircases)
   double min = 0.0, max = 0.0;
   double target_p = 0.5;
 };

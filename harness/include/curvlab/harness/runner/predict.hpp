@@ -11,7 +11,9 @@
 // participants: on the proportion of the first option (e.g. "convex") for
 // choice trials, and on the value each condition's adaptive tracks settle
 // on (the mean value shown over the second half of its trials, simulated
-// trial by trial through the judgement type) for adaptive ones.
+// trial by trial through the judgement type) for adaptive ones — each study
+// drawing its participants from a pool of 3 per study participant (at
+// least 60), simulated once through every adaptive condition.
 // Conditions are listed in the design's order: blocks as the protocol lists
 // them, then each factor's levels as declared, factors in the design's
 // order (by name, as `curvlab design` lists them).
@@ -82,6 +84,7 @@ struct StaircasePrediction {
   std::string staircase;   // its name
   std::string parameter;   // the setting it varies
   std::string positive;    // the option that counts as positive
+  std::string rule;        // "1-up/1-down", "psi" (protocol::ConvergenceTarget::rule)
   int up = 1, down = 1;
   double min = 0.0, max = 0.0;
   double target_p = 0.5;   // P(positive) the rule converges on
