@@ -99,8 +99,10 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   ok <- !is.na(x) & !is.na(y)
   x <- x[ok]; y <- y[ok]
   res <- data.frame(n = length(y), levels = length(unique(x)), pse_m = NA_real_, pse_se_m = NA_real_,
-                    slope_per_m = NA_real_, slope_se_per_m = NA_real_, lapse = NA_real_,
-                    lapse_se = NA_real_, loglik = NA_real_, method = NA_character_, note = "")
+                    pse_ci_low_m = NA_real_, pse_ci_high_m = NA_real_,
+                    slope_per_m = NA_real_, slope_se_per_m = NA_real_,
+                    slope_ci_low_per_m = NA_real_, slope_ci_high_per_m = NA_real_, lapse = NA_real_,
+                    lapse_se = NA_real_, loglik = NA_real_, method = NA_character_, separated = FALSE, note = "")
   if (length(unique(x)) < 2 || length(unique(y)) < 2) {
     res$note <- "not enough variation in stimulus or response to fit"
     return(res)
@@ -112,9 +114,10 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   # & Firth 2021), and no lapse is fitted.
   separated <- max(x[y == 0]) <= min(x[y == 1]) || max(x[y == 1]) <= min(x[y == 0])
   if (separated) {
-    notes <- c(notes, paste("separation: a threshold on the level predicts every response, so the ML slope is infinite;",
-                            "fitted by the Jeffreys-penalised probit GLM (brglm2), lapse fixed at 0"))
+    notes <- c(notes, paste0("separation: ", threshold_words(x, y), ", so the ML slope is infinite; ",
+                             "fitted by the Jeffreys-penalised probit GLM (brglm2), lapse fixed at 0"))
     lapse <- "none"
+    res$separated <- TRUE
   }
   g <- withCallingHandlers(
     if (separated) stats::glm(y ~ x, family = stats::binomial(link = "probit"), method = brglm2::brglmFit,
@@ -161,8 +164,33 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
     res$loglik <- -opt$value
     res$method <- sprintf("ML with lapse in [0, %.2g], guess rate lapse/%d", lapse_max, k_options)
   }
+  z <- stats::qnorm(0.975)
+  res$pse_ci_low_m <- res$pse_m - z * res$pse_se_m; res$pse_ci_high_m <- res$pse_m + z * res$pse_se_m
+  res$slope_ci_low_per_m <- res$slope_per_m - z * res$slope_se_per_m
+  res$slope_ci_high_per_m <- res$slope_per_m + z * res$slope_se_per_m
+  # A PSE whose uncertainty exceeds the whole range shown (or that is not
+  # finite) is not estimated by these data: near-separation or a flat curve.
+  # It is reported as such, never as a number with an absurd interval.
+  span <- diff(range(x))
+  if (!is.finite(res$pse_m) || !is.finite(res$slope_per_m) ||
+      (is.finite(res$pse_se_m) && res$pse_se_m > span)) {
+    notes <- c(notes, sprintf(paste0("not estimated: PSE %.3g m (SE %.3g m) against a range of %.3g m shown; ",
+                                     "the estimates diverge"), res$pse_m, res$pse_se_m, span))
+    res[c("pse_m", "pse_se_m", "pse_ci_low_m", "pse_ci_high_m", "slope_per_m", "slope_se_per_m",
+          "slope_ci_low_per_m", "slope_ci_high_per_m")] <- NA_real_
+    res$separated <- TRUE
+  }
   res$note <- paste(unique(notes), collapse = "; ")
   res
+}
+
+# What separates one-covariate data, in words: the threshold on the level
+# below which every answer is one way and above which the other.
+threshold_words <- function(x, y) {
+  if (max(x[y == 0]) <= min(x[y == 1]))
+    sprintf("every answer negative at levels <= %.4g m and positive at levels >= %.4g m", max(x[y == 0]), min(x[y == 1]))
+  else
+    sprintf("every answer positive at levels <= %.4g m and negative at levels >= %.4g m", max(x[y == 1]), min(x[y == 0]))
 }
 
 # Psychometric fits per participant × condition (× judged object) wherever the
@@ -174,14 +202,15 @@ psychometric_fits <- function(trials, positive = "convex", lapse = "free", lapse
   if (!nrow(d)) return(data.frame())
   d$k_options <- option_count(d)
   d$condition <- condition_label(d)
+  d$design <- trial_design(d)
   groups <- unique(d[c("participant", "condition")])
   out <- lapply(seq_len(nrow(groups)), function(g) {
     s <- d[d$participant == groups$participant[g] & d$condition == groups$condition[g], ]
     if (length(unique(s$x_m)) < 3) return(NULL)
     f <- fit_psychometric(s$x_m, as.integer(s$response == positive), max(s$k_options),
                           lapse = lapse, lapse_max = lapse_max)
-    cbind(groups[g, , drop = FALSE], design = if (any(!is.na(s$staircase))) "staircase" else "constant stimulus",
-          f)
+    cbind(groups[g, , drop = FALSE], design = paste(sort(unique(s$design)), collapse = "+"),
+          tracks = length(unique(stats::na.omit(s$staircase))), f)
   })
   out <- do.call(rbind, out[!vapply(out, is.null, TRUE)])
   if (is.null(out)) return(data.frame())
@@ -211,21 +240,35 @@ psychometric_bins <- function(trials, positive = "convex", bins = 8L) {
   do.call(rbind, out[!vapply(out, is.null, TRUE)])
 }
 
-# Reversal-mean threshold per staircase (Levitt 1971): mean intensity at the
-# reversals after the first `discard`.
+# Thresholds per adaptive track, the second estimate beside the fitted PSE:
+#   threshold_m  mean intensity at the reversals after the first `discard`
+#                (Levitt 1971), SE = SD/sqrt(n);
+#   final_m      where the track ended: the next intensity it would have shown
+#                after its last step (its last intensity when not stored);
+#   posterior_pse_m  the adaptive method's own posterior PSE after its last
+#                step, when its steps carry one (psi).
 staircase_thresholds <- function(trials, discard = 2L) {
   d <- analysed_trials(trials)
   d <- d[!is.na(d$staircase) & !is.na(d$intensity), , drop = FALSE]
   if (!nrow(d)) return(data.frame())
   d$condition <- condition_label(d)
+  d$design <- trial_design(d)
+  posterior <- posterior_pse_column(d)
   out <- lapply(split(d, paste(d$participant, d$staircase, sep = "\r")), function(s) {
     s <- s[order(if (all(is.na(s$step_index))) s$trial_index else s$step_index), ]
     rev_x <- s$intensity[!is.na(s$is_reversal) & s$is_reversal == 1]
     used <- if (length(rev_x) > discard) rev_x[-seq_len(discard)] else numeric(0)
+    last <- nrow(s)
+    final <- if (!is.na(s$next_intensity[last])) s$next_intensity[last] else s$intensity[last]
+    post <- if (is.na(posterior)) NA_real_ else {
+      v <- as.numeric(s[[posterior]]); v <- v[!is.na(v)]
+      if (length(v)) v[length(v)] else NA_real_
+    }
     data.frame(participant = s$participant[1], condition = s$condition[1], staircase = s$staircase[1],
-               steps = nrow(s), reversals = length(rev_x),
+               method = s$design[1], steps = nrow(s), reversals = length(rev_x),
                threshold_m = if (length(used)) mean(used) else NA_real_,
-               threshold_se_m = if (length(used) > 1) stats::sd(used) / sqrt(length(used)) else NA_real_)
+               threshold_se_m = if (length(used) > 1) stats::sd(used) / sqrt(length(used)) else NA_real_,
+               final_m = final, posterior_pse_m = post)
   })
   out <- do.call(rbind, out)
   rownames(out) <- NULL
