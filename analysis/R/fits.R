@@ -112,7 +112,7 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   # no answer contradicts; the ML slope is then infinite, so the fit is the
   # Jeffreys-penalised probit GLM (brglm2), finite by construction (Kosmidis
   # & Firth 2021), and no lapse is fitted.
-  separated <- max(x[y == 0]) <= min(x[y == 1]) || max(x[y == 1]) <= min(x[y == 0])
+  separated <- threshold_separates(x, y)
   if (separated) {
     notes <- c(notes, paste0("separation: ", threshold_words(x, y), ", so the ML slope is infinite; ",
                              "fitted by the Jeffreys-penalised probit GLM (brglm2), lapse fixed at 0"))
@@ -171,11 +171,18 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   # A PSE whose uncertainty exceeds the whole range shown (or that is not
   # finite) is not estimated by these data: near-separation or a flat curve.
   # It is reported as such, never as a number with an absurd interval.
+  # So is a PSE whose slope is not distinguished from 0 at the 5 % level:
+  # its Fieller interval is then unbounded (Fieller 1954), whatever the
+  # delta method says.
   span <- diff(range(x))
-  if (!is.finite(res$pse_m) || !is.finite(res$slope_per_m) ||
+  flat <- is.finite(res$slope_se_per_m) && abs(res$slope_per_m) < z * res$slope_se_per_m
+  outside <- is.finite(res$pse_m) && (res$pse_m < min(x) || res$pse_m > max(x))
+  if (!is.finite(res$pse_m) || !is.finite(res$slope_per_m) || flat || outside ||
       (is.finite(res$pse_se_m) && res$pse_se_m > span)) {
-    notes <- c(notes, sprintf(paste0("not estimated: PSE %.3g m (SE %.3g m) against a range of %.3g m shown; ",
-                                     "the estimates diverge"), res$pse_m, res$pse_se_m, span))
+    notes <- c(notes, sprintf(paste0("not estimated: PSE %.3g m (SE %.3g m), levels shown %.3g to %.3g m, ",
+                                     "slope %.3g /m (SE %.3g): the PSE lies beyond the levels shown or its ",
+                                     "interval is unbounded"),
+                              res$pse_m, res$pse_se_m, min(x), max(x), res$slope_per_m, res$slope_se_per_m))
     res[c("pse_m", "pse_se_m", "pse_ci_low_m", "pse_ci_high_m", "slope_per_m", "slope_se_per_m",
           "slope_ci_low_per_m", "slope_ci_high_per_m")] <- NA_real_
     res$separated <- TRUE
@@ -184,10 +191,19 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   res
 }
 
+# Whether a threshold on the level separates one-covariate data: every
+# answer one way below it and the other way above (ties allowed: quasi-
+# complete separation). Levels closer than tol_m are the same level (a
+# staircase's arithmetic leaves 1e-18 m where it meant 0).
+threshold_separates <- function(x, y, tol_m = 1e-9) {
+  if (length(unique(y)) < 2) return(FALSE)
+  max(x[y == 0]) <= min(x[y == 1]) + tol_m || max(x[y == 1]) <= min(x[y == 0]) + tol_m
+}
+
 # What separates one-covariate data, in words: the threshold on the level
 # below which every answer is one way and above which the other.
-threshold_words <- function(x, y) {
-  if (max(x[y == 0]) <= min(x[y == 1]))
+threshold_words <- function(x, y, tol_m = 1e-9) {
+  if (max(x[y == 0]) <= min(x[y == 1]) + tol_m)
     sprintf("every answer negative at levels <= %.4g m and positive at levels >= %.4g m", max(x[y == 0]), min(x[y == 1]))
   else
     sprintf("every answer positive at levels <= %.4g m and negative at levels >= %.4g m", max(x[y == 1]), min(x[y == 0]))
@@ -243,8 +259,8 @@ psychometric_bins <- function(trials, positive = "convex", bins = 8L) {
 # Thresholds per adaptive track, the second estimate beside the fitted PSE:
 #   threshold_m  mean intensity at the reversals after the first `discard`
 #                (Levitt 1971), SE = SD/sqrt(n);
-#   final_m      where the track ended: the next intensity it would have shown
-#                after its last step (its last intensity when not stored);
+#   final_m      the intensity of the track's last step (the export has no
+#                next intensity, so database and export give the same);
 #   posterior_pse_m  the adaptive method's own posterior PSE after its last
 #                step, when its steps carry one (psi).
 staircase_thresholds <- function(trials, discard = 2L) {
@@ -259,7 +275,7 @@ staircase_thresholds <- function(trials, discard = 2L) {
     rev_x <- s$intensity[!is.na(s$is_reversal) & s$is_reversal == 1]
     used <- if (length(rev_x) > discard) rev_x[-seq_len(discard)] else numeric(0)
     last <- nrow(s)
-    final <- if (!is.na(s$next_intensity[last])) s$next_intensity[last] else s$intensity[last]
+    final <- s$intensity[last]
     post <- if (is.na(posterior)) NA_real_ else {
       v <- as.numeric(s[[posterior]]); v <- v[!is.na(v)]
       if (length(v)) v[length(v)] else NA_real_

@@ -136,15 +136,32 @@ hierarchical_model <- function(d, positive, lapse = "free", lapse_max = 0.1) {
   }
   if (length(failed))
     result$notes <- c(result$notes, paste("simpler random effects after failed fits:", paste(failed, collapse = " | ")))
+  pooled <- FALSE
+  if (is.null(fit) && separated) {
+    # Under complete separation glmer's iterations diverge even with priors;
+    # the Jeffreys-penalised probit GLM (brglm2), participants pooled and no
+    # lapse, is finite by construction (Kosmidis & Firth 2021).
+    f <- stats::as.formula(paste("y ~", fixed))
+    r <- fit_psychometric_mixed(f, d, bayes = TRUE)
+    if (!is.null(r$fit)) {
+      fit <- r$fit
+      pooled <- TRUE
+      result$lapse <- 0
+      result$formula <- paste(deparse(f, width.cutoff = 500L), collapse = " ")
+      result$notes <- c(result$notes, r$notes)
+    }
+  }
   if (is.null(fit)) {
-    result$methods <- "No hierarchical model could be fitted; the per-participant fits are the estimates to read."
+    result$methods <- c(result$methods, "No hierarchical model could be fitted; the per-participant fits are the estimates to read.")
     return(result)
   }
   lapse_words <- if (lapse == "free")
     sprintf("common lapse rate %.3g (profile likelihood over %s; guess rate lapse/%d)", result$lapse,
             paste(format(lambdas), collapse = ", "), k_options)
   else "no lapse term (--lapse none)"
-  result$method <- if (!random) paste0("probit GLM, maximum likelihood (one participant); ", lapse_words)
+  result$method <- if (pooled) paste0("Jeffreys-penalised probit GLM (brglm2 MPL_Jeffreys), participants pooled, no lapse: ",
+                                      "glmer and bglmer diverge on these separated data; 95% delta-method intervals")
+    else if (!random) paste0("probit GLM, maximum likelihood (one participant); ", lapse_words)
     else if (separated) sprintf(paste0("bglmer (blme), probit: posterior mode with N(0, %g²) priors on every fixed ",
                                        "effect; %s; %s; 95%% intervals by the delta method at the mode"),
                                 hierarchical_prior_sd, result$structure, lapse_words)
@@ -152,12 +169,13 @@ hierarchical_model <- function(d, positive, lapse = "free", lapse_max = 0.1) {
                 "; PSE and slope per condition with 95% delta-method Wald intervals")
   if (separated)
     result$methods <- paste0("The fixed-effects design is separated (", separation_words(sep), "): maximum-likelihood ",
-                             "estimates are infinite, so the model is the posterior mode under weakly informative priors.")
+                             "estimates are infinite, so the model is ",
+                             if (pooled) "penalised (Jeffreys prior) instead." else "the posterior mode under weakly informative priors.")
   beta <- if (inherits(fit, "glm")) stats::coef(fit) else lme4::fixef(fit)
   V <- as.matrix(stats::vcov(fit))
   result$pse <- hierarchical_pse(beta, V, hf, d)
   result$differences <- pse_differences(beta, V, hf, d)
-  if (random) result$random <- random_effects_table(fit, hf$scale)
+  if (random && !pooled) result$random <- random_effects_table(fit, hf$scale)
   result
 }
 
@@ -192,9 +210,7 @@ separating_thresholds <- function(d) {
   out <- character(0)
   for (c in sort(unique(d$condition))) {
     s <- d[d$condition == c, , drop = FALSE]
-    if (length(unique(s$y)) < 2) next
-    if (max(s$x_m[s$y == 0]) <= min(s$x_m[s$y == 1]) || max(s$x_m[s$y == 1]) <= min(s$x_m[s$y == 0]))
-      out <- c(out, paste0(c, ": ", threshold_words(s$x_m, s$y)))
+    if (threshold_separates(s$x_m, s$y)) out <- c(out, paste0(c, ": ", threshold_words(s$x_m, s$y)))
   }
   out
 }
@@ -213,11 +229,14 @@ hierarchical_pse <- function(beta, V, hf, d) {
     x <- d$x_m[d$condition == hf$conditions[i]]
     span <- diff(range(x))
     note <- ""
-    if (!is.finite(pse) || !is.finite(pse_se) || pse_se > span) {
-      note <- sprintf("not estimated: PSE SE %.3g m exceeds the %.3g m range shown (the slope %.3g /m is not distinguished from 0)",
-                      pse_se, span, slope)
+    # The PSE's Fieller interval is bounded only where the slope differs from
+    # 0 at the 5 % level (Fieller 1954); otherwise, or when its SE exceeds the
+    # range shown, the PSE is not estimated by these data.
+    if (!is.finite(pse) || !is.finite(pse_se) || pse_se > span || abs(slope) < z * slope_se) {
+      note <- sprintf(paste0("not estimated: slope %.3g /m (SE %.3g) is not distinguished from 0, or the PSE's SE %.3g m ",
+                             "exceeds the %.3g m range shown; the PSE's interval is unbounded"), slope, slope_se, pse_se, span)
       pse <- pse_se <- NA_real_
-    }
+    } else if (slope < 0) note <- "the curve decreases with the intensity"
     data.frame(condition = hf$conditions[i], n = length(x), participants = length(unique(d$participant[d$condition == hf$conditions[i]])),
                pse_m = pse, pse_se_m = pse_se, pse_ci_low_m = pse - z * pse_se, pse_ci_high_m = pse + z * pse_se,
                slope_per_m = slope, slope_se_per_m = slope_se, slope_ci_low_per_m = slope - z * slope_se,

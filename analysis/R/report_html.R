@@ -226,6 +226,12 @@ adaptive_section_html <- function(hierarchical, estimates, figures) {
            "(and a psi method's posterior PSE) are a second, model-free estimate.</p>"),
     vapply(figures[grepl("psychometric_adaptive", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
     parts,
+    if (nrow(estimates) && any(estimates$tracks_agree %in% FALSE))
+      paste0("<p class=\"note\"><strong>Tracks disagree</strong> in ", sum(estimates$tracks_agree %in% FALSE), " of ",
+             nrow(estimates), " participant &times; condition cells: their staircases settled on intensities further apart ",
+             "than 4 SE of the difference, so the judgement is not one increasing function of the intensity there (two ",
+             "crossing points, or a drift), and a single PSE does not describe the cell. Read the tracks (Staircases) ",
+             "before the fits.</p>") else "",
     html_table(estimates, "Per participant and condition: fitted PSE (95% interval) beside the mean over tracks of the reversal-mean threshold, the final intensity and the posterior PSE (also in adaptive_estimates.csv)"))
 }
 
@@ -238,8 +244,18 @@ adaptive_estimates <- function(fits, thresholds) {
   rows <- lapply(seq_len(nrow(keys)), function(i) {
     th <- thresholds[thresholds$participant == keys$participant[i] & thresholds$condition == keys$condition[i], ]
     f <- fits[fits$participant == keys$participant[i] & fits$condition == keys$condition[i], ]
+    # Tracks of one condition that settle on clearly different intensities
+    # (reversal means further apart than 4 SE of their difference) mean the
+    # judgement is not one monotone function of the intensity there (or it
+    # drifted): one PSE does not describe that condition.
+    ok <- !is.na(th$threshold_m) & !is.na(th$threshold_se_m)
+    disagree <- if (sum(ok) >= 2) {
+      r <- th[ok, ]
+      lo <- which.min(r$threshold_m); hi <- which.max(r$threshold_m)
+      (r$threshold_m[hi] - r$threshold_m[lo]) > 4 * sqrt(r$threshold_se_m[hi]^2 + r$threshold_se_m[lo]^2)
+    } else NA
     data.frame(participant = keys$participant[i], condition = keys$condition[i], method = th$method[1],
-               tracks = nrow(th),
+               tracks = nrow(th), tracks_agree = !disagree,
                fitted_pse_m = if (nrow(f)) f$pse_m[1] else NA_real_,
                fitted_pse_ci_low_m = if (nrow(f)) f$pse_ci_low_m[1] else NA_real_,
                fitted_pse_ci_high_m = if (nrow(f)) f$pse_ci_high_m[1] else NA_real_,
