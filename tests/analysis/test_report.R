@@ -48,8 +48,10 @@ check(file.exists(file.path(out2, "staircases.png")) && png_ok(file.path(out2, "
       "staircase track figure written and not blank")
 check(file.exists(file.path(out2, "staircase_thresholds.csv")), "staircase thresholds table written")
 sm <- utils::read.csv(file.path(out2, "models.csv"))
-check(any(grepl("mixed model", sm$model)) && all(is.finite(sm$ci_low) & is.finite(sm$ci_high)),
-      paste("staircase data: a mixed model with finite CIs, by", paste(unique(sm$method), collapse = " / ")))
+check(nrow(sm) == 0, "staircase data: no space x view choice model (adaptive blocks)")
+pm <- utils::read.csv(file.path(out2, "psychometric_model.csv"))
+check(sum(pm$part == "PSE") == 2 && all(is.finite(pm$ci_low) & is.finite(pm$ci_high)) && all(grepl("glmer", pm$method)),
+      paste("staircase data: a hierarchical psychometric model with finite CIs, by", paste(unique(pm$method), collapse = " / ")))
 
 cat("models.csv: every estimate with a finite CI and a method\n")
 mc <- utils::read.csv(file.path(out, "models.csv"))
