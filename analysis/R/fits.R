@@ -171,11 +171,12 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   # A PSE whose uncertainty exceeds the whole range shown (or that is not
   # finite) is not estimated by these data: near-separation or a flat curve.
   # It is reported as such, never as a number with an absurd interval.
-  # So is a PSE whose slope is not distinguished from 0 at the 5 % level:
-  # its Fieller interval is then unbounded (Fieller 1954), whatever the
-  # delta method says.
+  # So is a PSE taken as the ratio -a/b of the GLM's coefficients whose
+  # slope is not distinguished from 0 at the 5 % level: its Fieller interval
+  # is then unbounded (Fieller 1954), whatever the delta method says. (With
+  # a lapse the PSE is a parameter of its own, with its own Wald interval.)
   span <- diff(range(x))
-  flat <- is.finite(res$slope_se_per_m) && abs(res$slope_per_m) < z * res$slope_se_per_m
+  flat <- lapse == "none" && is.finite(res$slope_se_per_m) && abs(res$slope_per_m) < z * res$slope_se_per_m
   outside <- is.finite(res$pse_m) && (res$pse_m < min(x) || res$pse_m > max(x))
   if (!is.finite(res$pse_m) || !is.finite(res$slope_per_m) || flat || outside ||
       (is.finite(res$pse_se_m) && res$pse_se_m > span)) {
