@@ -123,7 +123,20 @@ if (nzchar(curvlab) && file.exists(curvlab)) {
   check(isTRUE(all.equal(key(fits_csv), key(fits), tolerance = 1e-6, check.attributes = FALSE)),
         "same fits from the CSV export as from the database")
   r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), exp_dir, "--figure", scratch("describe.png")))
-  check(r$status == 0 && any(grepl("Proportion of each judgement", r$out)), "describe.py prints proportions")
+  check(r$status == 0 && any(grepl("^Constant-stimulus blocks .*proportion of each judgement", r$out)) &&
+          !any(grepl("^Adaptive blocks", r$out)), "describe.py prints proportions of the constant-stimulus design")
+  stair_exp <- scratch("export_staircase")
+  unlink(stair_exp, recursive = TRUE)
+  r <- run(curvlab, c("export", "--db", stair, "--format", "csv", "--out", stair_exp))
+  r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), stair_exp, "--figure", scratch("describe_st.png")))
+  check(r$status == 0 && any(grepl("^Adaptive blocks \\(staircase", r$out)) && !any(grepl("proportion of each", r$out)) &&
+          sum(grepl("from-convex|from-concave", r$out)) == 8,
+        "describe.py on staircases: thresholds of the 8 tracks, no proportions")
+  th_py <- r$out[grepl("from-convex|from-concave", r$out)]
+  th_r <- staircase_thresholds(read_curvlab(stair)$trials)
+  first <- th_r[order(th_r$participant, th_r$staircase), ][1, ]
+  check(grepl(sprintf("%.5f", first$threshold_m), th_py[1], fixed = TRUE) && grepl(sprintf("%.5f", first$final_m), th_py[1], fixed = TRUE),
+        sprintf("describe.py and report.R agree on a track's reversal mean %.5f and final step %.5f", first$threshold_m, first$final_m))
   check(png_ok(scratch("describe.png"))$status == 0, "describe.py figure is not blank")
   r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), empty_dir))
   check(r$status == 2, "describe.py: exit 2 without trials.csv")
