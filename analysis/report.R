@@ -92,6 +92,20 @@ main <- function() {
                          lapse_max = opts$lapse_max, discard_reversals = opts$discard_reversals)
   if (!opts$quiet) {
     cat(sprintf("figures: %s\n", paste(basename(result$figures), collapse = ", ")))
+    if (nrow(result$designs))
+      cat(sprintf("design: block %s %s (%d trials)\n", result$designs$block, result$designs$design,
+                  result$designs$trials), sep = "")
+    for (m in result$hierarchical) {
+      if (isTRUE(m$separation$separated))
+        cat(sprintf("separation (psychometric model, %s): %s\n", m$judged, separation_words(m$separation)))
+      for (n in m$notes) cat(sprintf("note (psychometric model, %s): %s\n", m$judged, n))
+      p <- m$pse
+      if (nrow(p))
+        cat(sprintf("PSE %s (%s): %s\n", p$condition, m$judged,
+                    ifelse(is.na(p$pse_m), paste("not estimated;", p$note),
+                           sprintf("%+.2f mm [%+.2f, %+.2f], slope %.0f /m", 1000 * p$pse_m, 1000 * p$pse_ci_low_m,
+                                   1000 * p$pse_ci_high_m, p$slope_per_m))), sep = "")
+    }
     for (m in result$models) {
       if (isTRUE(m$separation$separated))
         cat(sprintf("separation (%s, %s): %s\n", m$outcome, m$judged, separation_words(m$separation)))

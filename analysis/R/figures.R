@@ -165,3 +165,70 @@ save_figure <- function(plot, file, width_in = 9, height_in = 6) {
   print(plot)
   file
 }
+
+# Adaptive blocks (staircase, psi): per condition panel, the answers pooled
+# over participants in equal-count bins of the shown intensity (point area =
+# trials), each participant's fitted curve (thin), the hierarchical model's
+# population curve (thick) and its PSE with the 95 % interval (bar at 50 %).
+figure_adaptive <- function(trials, fits, hierarchical, positive = "convex", bins = 10L) {
+  d <- analysed_trials(trials)
+  d <- d[is_adaptive(trial_design(d)) & !is.na(d$x_m), , drop = FALSE]
+  if (!nrow(d)) return(NULL)
+  d$condition <- condition_label(d)
+  d$y <- as.integer(d$response == positive)
+  k_options <- max(option_count(d))
+  binned <- do.call(rbind, lapply(split(d, d$condition), function(s) {
+    b <- if (length(unique(s$x_m)) <= bins) match(s$x_m, sort(unique(s$x_m)))
+         else as.integer(cut(rank(s$x_m, ties.method = "first"), bins))
+    do.call(rbind, lapply(split(s, b), function(g)
+      data.frame(condition = g$condition[1], x_m = mean(g$x_m), n = nrow(g), p = mean(g$y))))
+  }))
+  grid_for <- function(cond) {
+    r <- range(d$x_m[d$condition == cond])
+    seq(r[1], r[2], length.out = 200)
+  }
+  fits <- if (nrow(fits)) fits[fits$condition %in% unique(d$condition) & !is.na(fits$pse_m) & !is.na(fits$slope_per_m), ]
+          else fits
+  own <- do.call(rbind, lapply(seq_len(nrow(fits)), function(i) {
+    f <- fits[i, ]
+    x <- grid_for(f$condition)
+    data.frame(participant = f$participant, condition = f$condition, x_m = x,
+               p = psychometric_p(x, f$pse_m, f$slope_per_m, f$lapse, k_options))
+  }))
+  pop <- NULL; pse <- NULL
+  for (m in hierarchical) {
+    p <- m$pse
+    if (!nrow(p)) next
+    p <- p[!is.na(p$pse_m), , drop = FALSE]
+    lambda <- if (is.null(m$lapse)) 0 else m$lapse
+    pop <- rbind(pop, do.call(rbind, lapply(seq_len(nrow(p)), function(i) {
+      x <- grid_for(p$condition[i])
+      data.frame(condition = p$condition[i], x_m = x,
+                 p = psychometric_p(x, p$pse_m[i], p$slope_per_m[i], lambda, k_options))
+    })))
+    pse <- rbind(pse, p[c("condition", "pse_m", "pse_ci_low_m", "pse_ci_high_m")])
+  }
+  plot <- ggplot2::ggplot(binned, ggplot2::aes(x = 1000 * x_m, y = p)) +
+    ggplot2::geom_hline(yintercept = 0.5, colour = "grey70", linetype = "dashed") +
+    ggplot2::geom_vline(xintercept = 0, colour = "grey70")
+  if (!is.null(own) && nrow(own))
+    plot <- plot + ggplot2::geom_line(data = own, ggplot2::aes(group = participant, colour = participant),
+                                      linewidth = 0.4, alpha = 0.7)
+  plot <- plot + ggplot2::geom_point(ggplot2::aes(size = n), shape = 21, fill = "grey35", colour = "black", alpha = 0.8)
+  if (!is.null(pop) && nrow(pop))
+    plot <- plot + ggplot2::geom_line(data = pop, linewidth = 1.2, colour = "black")
+  if (!is.null(pse) && nrow(pse))
+    plot <- plot +
+      ggplot2::geom_errorbarh(data = pse, ggplot2::aes(y = 0.5, xmin = 1000 * pse_ci_low_m, xmax = 1000 * pse_ci_high_m),
+                              inherit.aes = FALSE, height = 0.06, colour = "#c62828", linewidth = 0.9) +
+      ggplot2::geom_point(data = pse, ggplot2::aes(x = 1000 * pse_m, y = 0.5), inherit.aes = FALSE,
+                          shape = 23, size = 2.6, fill = "#c62828", colour = "black")
+  plot + ggplot2::facet_wrap(~ condition, scales = "free_x") +
+    ggplot2::scale_size_area(max_size = 5) +
+    ggplot2::scale_y_continuous(limits = c(0, 1)) +
+    ggplot2::labs(x = "shown sagitta (mm, + toward the viewer)", y = paste0("P(", positive, ")"),
+                  title = "Psychometric functions of the adaptive blocks", size = "trials per bin", colour = "participant",
+                  subtitle = paste0("points: all participants' answers in equal-count bins; thin lines: each participant's fit;\n",
+                                    "thick line: hierarchical model; red: population PSE with 95% interval")) +
+    theme_curvlab()
+}

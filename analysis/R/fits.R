@@ -99,8 +99,10 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   ok <- !is.na(x) & !is.na(y)
   x <- x[ok]; y <- y[ok]
   res <- data.frame(n = length(y), levels = length(unique(x)), pse_m = NA_real_, pse_se_m = NA_real_,
-                    slope_per_m = NA_real_, slope_se_per_m = NA_real_, lapse = NA_real_,
-                    lapse_se = NA_real_, loglik = NA_real_, method = NA_character_, note = "")
+                    pse_ci_low_m = NA_real_, pse_ci_high_m = NA_real_,
+                    slope_per_m = NA_real_, slope_se_per_m = NA_real_,
+                    slope_ci_low_per_m = NA_real_, slope_ci_high_per_m = NA_real_, lapse = NA_real_,
+                    lapse_se = NA_real_, loglik = NA_real_, method = NA_character_, separated = FALSE, note = "")
   if (length(unique(x)) < 2 || length(unique(y)) < 2) {
     res$note <- "not enough variation in stimulus or response to fit"
     return(res)
@@ -110,11 +112,12 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
   # no answer contradicts; the ML slope is then infinite, so the fit is the
   # Jeffreys-penalised probit GLM (brglm2), finite by construction (Kosmidis
   # & Firth 2021), and no lapse is fitted.
-  separated <- max(x[y == 0]) <= min(x[y == 1]) || max(x[y == 1]) <= min(x[y == 0])
+  separated <- threshold_separates(x, y)
   if (separated) {
-    notes <- c(notes, paste("separation: a threshold on the level predicts every response, so the ML slope is infinite;",
-                            "fitted by the Jeffreys-penalised probit GLM (brglm2), lapse fixed at 0"))
+    notes <- c(notes, paste0("separation: ", threshold_words(x, y), ", so the ML slope is infinite; ",
+                             "fitted by the Jeffreys-penalised probit GLM (brglm2), lapse fixed at 0"))
     lapse <- "none"
+    res$separated <- TRUE
   }
   g <- withCallingHandlers(
     if (separated) stats::glm(y ~ x, family = stats::binomial(link = "probit"), method = brglm2::brglmFit,
@@ -161,8 +164,50 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
     res$loglik <- -opt$value
     res$method <- sprintf("ML with lapse in [0, %.2g], guess rate lapse/%d", lapse_max, k_options)
   }
+  z <- stats::qnorm(0.975)
+  res$pse_ci_low_m <- res$pse_m - z * res$pse_se_m; res$pse_ci_high_m <- res$pse_m + z * res$pse_se_m
+  res$slope_ci_low_per_m <- res$slope_per_m - z * res$slope_se_per_m
+  res$slope_ci_high_per_m <- res$slope_per_m + z * res$slope_se_per_m
+  # A PSE whose uncertainty exceeds the whole range shown (or that is not
+  # finite) is not estimated by these data: near-separation or a flat curve.
+  # It is reported as such, never as a number with an absurd interval.
+  # So is a PSE taken as the ratio -a/b of the GLM's coefficients whose
+  # slope is not distinguished from 0 at the 5 % level: its Fieller interval
+  # is then unbounded (Fieller 1954), whatever the delta method says. (With
+  # a lapse the PSE is a parameter of its own, with its own Wald interval.)
+  span <- diff(range(x))
+  flat <- lapse == "none" && is.finite(res$slope_se_per_m) && abs(res$slope_per_m) < z * res$slope_se_per_m
+  outside <- is.finite(res$pse_m) && (res$pse_m < min(x) || res$pse_m > max(x))
+  if (!is.finite(res$pse_m) || !is.finite(res$slope_per_m) || flat || outside ||
+      (is.finite(res$pse_se_m) && res$pse_se_m > span)) {
+    notes <- c(notes, sprintf(paste0("not estimated: PSE %.3g m (SE %.3g m), levels shown %.3g to %.3g m, ",
+                                     "slope %.3g /m (SE %.3g): the PSE lies beyond the levels shown or its ",
+                                     "interval is unbounded"),
+                              res$pse_m, res$pse_se_m, min(x), max(x), res$slope_per_m, res$slope_se_per_m))
+    res[c("pse_m", "pse_se_m", "pse_ci_low_m", "pse_ci_high_m", "slope_per_m", "slope_se_per_m",
+          "slope_ci_low_per_m", "slope_ci_high_per_m")] <- NA_real_
+    res$separated <- TRUE
+  }
   res$note <- paste(unique(notes), collapse = "; ")
   res
+}
+
+# Whether a threshold on the level separates one-covariate data: every
+# answer one way below it and the other way above (ties allowed: quasi-
+# complete separation). Levels closer than tol_m are the same level (a
+# staircase's arithmetic leaves 1e-18 m where it meant 0).
+threshold_separates <- function(x, y, tol_m = 1e-9) {
+  if (length(unique(y)) < 2) return(FALSE)
+  max(x[y == 0]) <= min(x[y == 1]) + tol_m || max(x[y == 1]) <= min(x[y == 0]) + tol_m
+}
+
+# What separates one-covariate data, in words: the threshold on the level
+# below which every answer is one way and above which the other.
+threshold_words <- function(x, y, tol_m = 1e-9) {
+  if (max(x[y == 0]) <= min(x[y == 1]) + tol_m)
+    sprintf("every answer negative at levels <= %.4g m and positive at levels >= %.4g m", max(x[y == 0]), min(x[y == 1]))
+  else
+    sprintf("every answer positive at levels <= %.4g m and negative at levels >= %.4g m", max(x[y == 1]), min(x[y == 0]))
 }
 
 # Psychometric fits per participant × condition (× judged object) wherever the
@@ -174,14 +219,15 @@ psychometric_fits <- function(trials, positive = "convex", lapse = "free", lapse
   if (!nrow(d)) return(data.frame())
   d$k_options <- option_count(d)
   d$condition <- condition_label(d)
+  d$design <- trial_design(d)
   groups <- unique(d[c("participant", "condition")])
   out <- lapply(seq_len(nrow(groups)), function(g) {
     s <- d[d$participant == groups$participant[g] & d$condition == groups$condition[g], ]
     if (length(unique(s$x_m)) < 3) return(NULL)
     f <- fit_psychometric(s$x_m, as.integer(s$response == positive), max(s$k_options),
                           lapse = lapse, lapse_max = lapse_max)
-    cbind(groups[g, , drop = FALSE], design = if (any(!is.na(s$staircase))) "staircase" else "constant stimulus",
-          f)
+    cbind(groups[g, , drop = FALSE], design = paste(sort(unique(s$design)), collapse = "+"),
+          tracks = length(unique(stats::na.omit(s$staircase))), f)
   })
   out <- do.call(rbind, out[!vapply(out, is.null, TRUE)])
   if (is.null(out)) return(data.frame())
@@ -211,21 +257,35 @@ psychometric_bins <- function(trials, positive = "convex", bins = 8L) {
   do.call(rbind, out[!vapply(out, is.null, TRUE)])
 }
 
-# Reversal-mean threshold per staircase (Levitt 1971): mean intensity at the
-# reversals after the first `discard`.
+# Thresholds per adaptive track, the second estimate beside the fitted PSE:
+#   threshold_m  mean intensity at the reversals after the first `discard`
+#                (Levitt 1971), SE = SD/sqrt(n);
+#   final_m      the intensity of the track's last step (the export has no
+#                next intensity, so database and export give the same);
+#   posterior_pse_m  the adaptive method's own posterior PSE after its last
+#                step, when its steps carry one (psi).
 staircase_thresholds <- function(trials, discard = 2L) {
   d <- analysed_trials(trials)
   d <- d[!is.na(d$staircase) & !is.na(d$intensity), , drop = FALSE]
   if (!nrow(d)) return(data.frame())
   d$condition <- condition_label(d)
+  d$design <- trial_design(d)
+  posterior <- posterior_pse_column(d)
   out <- lapply(split(d, paste(d$participant, d$staircase, sep = "\r")), function(s) {
     s <- s[order(if (all(is.na(s$step_index))) s$trial_index else s$step_index), ]
     rev_x <- s$intensity[!is.na(s$is_reversal) & s$is_reversal == 1]
     used <- if (length(rev_x) > discard) rev_x[-seq_len(discard)] else numeric(0)
+    last <- nrow(s)
+    final <- s$intensity[last]
+    post <- if (is.na(posterior)) NA_real_ else {
+      v <- as.numeric(s[[posterior]]); v <- v[!is.na(v)]
+      if (length(v)) v[length(v)] else NA_real_
+    }
     data.frame(participant = s$participant[1], condition = s$condition[1], staircase = s$staircase[1],
-               steps = nrow(s), reversals = length(rev_x),
+               method = s$design[1], steps = nrow(s), reversals = length(rev_x),
                threshold_m = if (length(used)) mean(used) else NA_real_,
-               threshold_se_m = if (length(used) > 1) stats::sd(used) / sqrt(length(used)) else NA_real_)
+               threshold_se_m = if (length(used) > 1) stats::sd(used) / sqrt(length(used)) else NA_real_,
+               final_m = final, posterior_pse_m = post)
   })
   out <- do.call(rbind, out)
   rownames(out) <- NULL

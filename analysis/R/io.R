@@ -196,12 +196,19 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     schema_damage(path, paste0("schema version ", curvlab_schema_version, " lacks ", listed))
   }
 
+  # Columns an adaptive method adds to its steps (posterior_* summaries of a
+  # psi method) travel with the trial under their own names.
+  step_extra <- setdiff(names(q("SELECT * FROM staircase_steps LIMIT 0")),
+                        c("step_id", "session_id", "staircase", "step_index", "trial_id", "intensity",
+                          "response_correct", "is_reversal", "next_intensity"))
+  step_extra <- grep("^posterior_", step_extra, value = TRUE)
   raw_trials <- q(paste(
     "SELECT t.trial_id, t.session_id, se.session_uuid, p.pseudonym AS participant, se.session_number,",
     "pr.sha256 AS protocol_sha256, b.block_index, b.name AS block_name, b.is_practice,",
     "t.trial_index, t.trial_in_block, t.status, t.attempt, t.onset_ns, t.response_ns,",
     "t.rt_ns, t.response, t.response_device, t.completed_utc, t.conditions, t.stimulus,",
-    "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct,",
+    "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct, st.next_intensity,",
+    if (length(step_extra)) paste0(paste0("st.", step_extra, collapse = ", "), ",") else "",
     "tf.lost_ms AS tracking_lost_ms",
     "FROM trials t",
     "JOIN sessions se ON se.session_id = t.session_id",
@@ -296,8 +303,10 @@ read_export_dir <- function(dir) {
   if (length(missing))
     input_error(csv, ": missing column(s) ", paste(missing, collapse = ", "),
                 " (expected the curvlab trial CSV, see docs/data.md)")
-  stim_cols <- grep("^stim_", names(trials), value = TRUE)
-  for (col in stim_cols) {
+  # The export names the step's index staircase_step.
+  if ("staircase_step" %in% names(trials) && !"step_index" %in% names(trials))
+    names(trials)[names(trials) == "staircase_step"] <- "step_index"
+  for (col in c(grep("^stim_", names(trials), value = TRUE), grep("^posterior_", names(trials), value = TRUE))) {
     v <- suppressWarnings(as.numeric(trials[[col]]))
     if (all(is.na(v) == is.na(trials[[col]]))) trials[[col]] <- v
   }
@@ -365,12 +374,12 @@ read_bids_motion <- function(dir) {
 normalise_trials <- function(trials) {
   int_cols <- c("session_id", "session_number", "block_index", "is_practice", "trial_index",
                 "trial_in_block", "attempt", "step_index", "is_reversal", "trial_id")
-  num_cols <- c("onset_ns", "response_ns", "rt_ns", "intensity", "tracking_lost_ms")
+  num_cols <- c("onset_ns", "response_ns", "rt_ns", "intensity", "next_intensity", "tracking_lost_ms")
   for (col in intersect(int_cols, names(trials))) trials[[col]] <- as.integer(trials[[col]])
   for (col in intersect(num_cols, names(trials))) trials[[col]] <- as.numeric(trials[[col]])
   for (col in grep("^cond_", names(trials), value = TRUE))
     trials[[col]] <- as.character(trials[[col]])
-  for (col in c("staircase", "step_index", "intensity", "is_reversal", "tracking_lost_ms"))
+  for (col in c("staircase", "step_index", "intensity", "next_intensity", "is_reversal", "tracking_lost_ms"))
     if (!col %in% names(trials)) trials[[col]] <- NA
   if (!"is_practice" %in% names(trials)) trials$is_practice <- 0L
   if (!"cond_judged" %in% names(trials)) trials$cond_judged <- "stick"
@@ -380,6 +389,7 @@ normalise_trials <- function(trials) {
   trials$rt_ms <- trials$rt_ns / 1e6
   trials$participant <- as.character(trials$participant)
   trials$x_m <- stimulus_intensity(trials)
+  trials$design <- trial_design(trials)
   trials
 }
 

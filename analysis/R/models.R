@@ -37,10 +37,14 @@ prior_sd_effects <- 2.5
 # Runs a fit, collecting its warnings and messages as notes.
 with_notes <- function(expr) {
   notes <- character(0)
-  collect <- function(w) { notes <<- c(notes, conditionMessage(w)); invokeRestart(
+  collect <- function(w) { notes <<- c(notes, trimws(conditionMessage(w))); invokeRestart(
     if (inherits(w, "warning")) "muffleWarning" else "muffleMessage") }
   fit <- tryCatch(withCallingHandlers(expr, warning = collect, message = collect),
-                  error = function(e) { notes <<- c(notes, paste("fit failed:", conditionMessage(e))); NULL })
+                  error = function(e) {
+                    # Some lme4 errors embed the whole call with its data: keep the message's first line.
+                    msg <- strsplit(conditionMessage(e), "\n", fixed = TRUE)[[1]][1]
+                    if (nchar(msg) > 300) msg <- paste0(substr(msg, 1, 300), " ...")
+                    notes <<- c(notes, paste("fit failed:", msg)); NULL })
   list(fit = fit, notes = unique(notes))
 }
 
@@ -152,8 +156,26 @@ space_view_model <- function(d, outcome_name, outcome_fun, interaction_test = TR
     result$contrasts <- tryCatch(view_contrasts(br$fit), error = function(e) {
       notes <<- c(notes, paste("per-space contrasts failed:", conditionMessage(e))); data.frame() })
   }
-  result <- add_mixed_model(result, d, make, rhs_fixed, rhs_null, mf$factors, random, isTRUE(sep$separated),
-                            br$fit, interaction_test)
+  # Estimates that blow up (beyond the sane range of a log odds ratio, or
+  # with an interval that does not close) mean the data are separated in
+  # effect even where the linear programme finds no exact separation: the
+  # model is flagged as separated, naming those terms.
+  diverging <- c(diverging_terms(result$fixed), diverging_terms(result$contrasts, label = function(t)
+    paste0(t$space, ": ", t$contrast)))
+  if (length(diverging)) {
+    result$separation$separated <- TRUE
+    result$separation$diverging <- diverging
+  }
+  result <- add_mixed_model(result, d, make, rhs_fixed, rhs_null, mf$factors, random,
+                            isTRUE(result$separation$separated), br$fit, interaction_test)
+  result$fixed <- mask_diverging(result$fixed)
+  result$contrasts <- mask_diverging(result$contrasts)
+  if (!isTRUE(result$mixed_is_fixed)) {
+    blown <- diverging_terms(result$coefficients)
+    if (length(blown))
+      notes <- c(notes, paste("mixed model estimates diverge, not shown:", paste(blown, collapse = ", ")))
+    result$coefficients <- mask_diverging(result$coefficients)
+  }
   result$notes <- unique(c(notes, result$notes))
   result
 }
@@ -164,7 +186,8 @@ add_mixed_model <- function(result, d, make, rhs_fixed, rhs_null, factors, rando
   notes <- character(0)
   if (separated)
     result$methods <- c(result$methods, paste0(
-      "Because of the separation the maximum-likelihood estimates of this model are infinite: no Wald ",
+      "Because of the separation the maximum-likelihood estimates of this model are infinite (or, where ",
+      "the estimates blow up without exact separation, meaninglessly large): no Wald ",
       "statistic of an ML fit is shown; the bias-reduced GLM with profile intervals is reported, and the tests ",
       "are its penalised likelihood-ratio tests."))
   ml <- if (!separated) fit_mixed(make(rhs_fixed), d, bayes = FALSE) else NULL
@@ -214,7 +237,11 @@ mixed_coefficients_glm <- function(fit) {
 
 separation_words <- function(sep) {
   parts <- c(if (length(sep$cells)) paste0("every answer the same in ", paste(sep$cells, collapse = ", ")),
-             if (length(sep$infinite)) paste0("diverging terms: ", paste(sep$infinite, collapse = ", ")))
+             if (length(sep$thresholds)) paste0("a threshold on the intensity separates the answers in ",
+                                                paste(sep$thresholds, collapse = "; ")),
+             if (length(sep$infinite)) paste0("diverging terms: ", paste(sep$infinite, collapse = ", ")),
+             if (length(sep$diverging)) paste0("estimates that blow up (near-separation): ",
+                                               paste(sep$diverging, collapse = ", ")))
   if (length(parts)) paste(parts, collapse = "; ") else "linear-programming check"
 }
 
@@ -266,7 +293,9 @@ models_table <- function(models) {
     part <- function(df, what, method, term = df$term)
       if (!nrow(df)) NULL else data.frame(model = paste(label, what, sep = " | "), term = term,
                                           df[c("estimate", "se", "ci_low", "ci_high", "p")], method = method,
-                                          note = note, row.names = NULL)
+                                          note = if (is.null(df$diverges)) note
+                                                 else ifelse(df$diverges, trimws(paste(note, diverges_note)), note),
+                                          row.names = NULL)
     br_method <- "bias-reduced logistic GLM (brglm2 AS_mean); profile penalised-likelihood CI and LR test"
     rbind(part(m$fixed, "bias-reduced GLM", br_method),
           part(m$contrasts, "view contrasts (log odds ratio)", paste(br_method, "; emmeans contrast"),

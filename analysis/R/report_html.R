@@ -80,25 +80,39 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
   if (!dir.exists(out_dir) || file.access(out_dir, 2) != 0)
     stop(paste0(out_dir, ": cannot write the report here (expected a writable folder)"))
   trials <- data$trials
+  trials$design <- trial_design(trials)
   analysed <- analysed_trials(trials)
   cond_cols <- condition_columns(trials)
   fac <- intersect(c("cond_space", "cond_view", "cond_judged"), names(trials))
 
-  props <- response_proportions(trials, c("participant", cond_cols))
-  props_pooled <- response_proportions(trials, fac)
+  # Each block is analysed by its design (design.R): proportions and the
+  # space × view choice models for constant stimuli only; psychometric
+  # functions for every design, and the hierarchical psychometric model for
+  # adaptive blocks, where proportions depend on the answers themselves.
+  designs <- design_summary(trials)
+  constant <- trials[trials$design == "constant", , drop = FALSE]
+  adaptive_n <- sum(is_adaptive(analysed$design))
+  props <- response_proportions(constant, c("participant", cond_cols))
+  props_pooled <- response_proportions(constant, fac)
   fits <- psychometric_fits(trials, positive, lapse, lapse_max)
   thresholds <- staircase_thresholds(trials, discard_reversals)
-  models <- space_view_models(trials, positive)
+  models <- space_view_models(constant, positive)
+  hierarchical <- psychometric_hierarchical(trials, positive, lapse, lapse_max)
+  estimates <- adaptive_estimates(fits, thresholds)
   truth <- observer_truth(data)
 
   fig <- function(name) file.path(out_dir, name)
   n_panels <- function(k) max(1, ceiling(sqrt(k)))
   figures <- list(
-    list(save_figure(figure_proportions(trials), fig("proportions.png"), 10, 5.5),
+    list(save_figure(figure_proportions(constant), fig("proportions.png"), 10, 5.5),
          "Proportion of each judgement by space (panels) and view (x axis), pooled over participants with 95% Wilson intervals; points are single participants."),
     list(save_figure(figure_psychometric(trials, fits, positive), fig("psychometric.png"), 10,
                      2.5 + 3 * n_panels(length(unique(fits$condition)))),
          paste0("Psychometric functions: proportion of '", positive, "' per shown sagitta (point area = trials) with the fitted probit-with-lapse curve per participant; crosses mark the PSEs.")),
+    list(save_figure(figure_adaptive(trials, fits, hierarchical, positive), fig("psychometric_adaptive.png"), 10,
+                     2.5 + 3 * n_panels(length(unique(condition_label(analysed[is_adaptive(analysed$design), , drop = FALSE]))))),
+         paste0("Adaptive blocks: proportion of '", positive, "' in equal-count bins of the shown sagitta (all participants; point area = trials), ",
+                "each participant's fit (thin lines), the hierarchical model's population curve (thick) and its PSE with the 95% interval (red).")),
     list(save_figure(figure_staircases(trials), fig("staircases.png"), 10,
                      2 + 1.6 * length(unique(stats::na.omit(analysed$participant[!is.na(analysed$staircase)])))),
          "Staircase tracks: shown sagitta against step for every staircase; open circles are reversals."),
@@ -113,6 +127,9 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
   utils::write.csv(props, fig("proportions.csv"), row.names = FALSE)
   utils::write.csv(fits, fig("psychometric_fits.csv"), row.names = FALSE)
   if (nrow(thresholds)) utils::write.csv(thresholds, fig("staircase_thresholds.csv"), row.names = FALSE)
+  hier_table <- hierarchical_table(hierarchical)
+  if (nrow(hier_table)) utils::write.csv(hier_table, fig("psychometric_model.csv"), row.names = FALSE)
+  if (nrow(estimates)) utils::write.csv(estimates, fig("adaptive_estimates.csv"), row.names = FALSE)
 
   s <- data$sessions
   provenance <- provenance_html(s, trials)
@@ -143,22 +160,31 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
            nrow(s), " session(s).</p>"),
     if (data$kind == "export") "<p class=\"note\">Read from an export directory: trials.csv carries no protocol name, software, renderer or seed; run the report on the database for full provenance.</p>" else "",
     "<h2>Sessions and provenance</h2>", provenance,
+    "<h2>Designs</h2>",
+    "<p class=\"method\">The design of each judgement block is read from the data: <strong>adaptive</strong> (staircase, psi) when its trials have staircase steps, the shown intensity then depending on the previous answers; <strong>constant stimuli</strong> otherwise. Proportions of answers and the space &times; view choice models describe constant-stimulus blocks only; adaptive blocks are analysed by psychometric functions of the shown intensity, per participant and condition and in a hierarchical model across participants.</p>",
+    html_table(designs, "Judgement blocks by design (completed, answered, non-practice trials)"),
     "<h2>Judgements</h2>",
+    if (adaptive_n) sprintf("<p class=\"note\">%d trials of adaptive blocks are left out of the proportions: under an adaptive method the share of an answer depends on the answers themselves (a staircase converges on 50%%). Their analysis is under <em>Adaptive blocks</em>.</p>", adaptive_n) else "",
     vapply(figures[grepl("proportions", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
-    html_table(props_pooled, "Proportions pooled over participants (95% Wilson intervals)"),
-    html_table(props, "Proportions per participant and condition (also in proportions.csv)"),
+    if (nrow(constant) && nrow(props)) c(html_table(props_pooled, "Proportions pooled over participants (95% Wilson intervals)"),
+                                         html_table(props, "Proportions per participant and condition (also in proportions.csv)"))
+    else "<p class=\"empty\">(no constant-stimulus blocks)</p>",
     "<h2>Psychometric fits</h2>",
     paste0("<p>Model: P(", html_escape(positive), ") = &lambda;/K + (1 &minus; &lambda;) &Phi;(&beta;(x &minus; PSE)), x the shown signed sagitta in metres, ",
            "K the number of answer options, &lambda; the lapse rate (", if (lapse == "free") sprintf("fitted by maximum likelihood in [0, %g]", lapse_max) else "fixed at 0: probit GLM",
            "). Standard errors from the observed information. Fitted wherever the shown sagitta takes three or more values in a participant &times; condition cell (constant-stimulus levels or staircase steps pooled).</p>"),
     vapply(figures[grepl("psychometric", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
-    html_table(fits, "PSE (m) and slope (1/m) per participant and condition"),
+    html_table(fits, "PSE (m) and slope (1/m) per participant and condition, 95% Wald intervals"),
+    if (length(hierarchical)) adaptive_section_html(hierarchical, estimates, figures) else "",
     if (nrow(thresholds)) c("<h2>Staircases</h2>",
                             vapply(figures[grepl("staircases", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
-                            html_table(thresholds, sprintf("Reversal-mean thresholds (first %d reversals discarded; SE = SD/sqrt(n))", discard_reversals))) else "",
+                            html_table(thresholds, sprintf(paste0("Per track: reversal-mean threshold (first %d reversals discarded; SE = SD/sqrt(n)), ",
+                                                                  "the intensity the track ended on, and the posterior PSE where the method stores one"),
+                                                           discard_reversals))) else "",
     "<h2>Models: space &times; view</h2>",
-    models_intro_html(models),
-    if (length(models)) model_html else "<p class=\"empty\">(no model: no completed trials)</p>",
+    if (length(models)) c(models_intro_html(models), model_html)
+    else if (adaptive_n) "<p class=\"empty\">(no constant-stimulus blocks: the adaptive blocks' conditions are compared by their PSEs under <em>Adaptive blocks</em>, not by a choice model, whose odds ratios would depend on where the adaptive method placed the trials)</p>"
+    else "<p class=\"empty\">(no model: no completed trials)</p>",
     truth_html,
     "<h2>Tracking</h2>",
     vapply(figures[grepl("trajectories", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
@@ -170,7 +196,76 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
   out <- file.path(out_dir, "report.html")
   writeLines(html, out, useBytes = TRUE)
   invisible(list(report = out, models_csv = fig("models.csv"), figures = vapply(figures, `[[`, "", 1), fits = fits, models = models,
-                 proportions = props, thresholds = thresholds))
+                 proportions = props, thresholds = thresholds, hierarchical = hierarchical, designs = designs,
+                 estimates = estimates))
+}
+
+# The adaptive blocks' section: the hierarchical model's PSE and slope per
+# condition, PSE differences, participant variation, the figure, and the
+# per-participant PSE beside the staircase's own estimates.
+adaptive_section_html <- function(hierarchical, estimates, figures) {
+  parts <- vapply(hierarchical, function(m) {
+    sep <- if (isTRUE(m$separation$separated))
+      paste0("<p class=\"note\"><strong>Separation detected</strong>: ", html_escape(separation_words(m$separation)), ".</p>")
+    else "<p>No separation: the maximum-likelihood estimates exist.</p>"
+    paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",
+           "<p><code>", html_escape(m$formula), "</code>, probit; z = (x &minus; ", sprintf("%.4g", m$centre_m),
+           " m) / ", sprintf("%.4g", m$scale_m), " m; ", m$n, " trials, ", m$participants, " participant(s).</p>",
+           sep,
+           paste0("<p class=\"method\">", html_escape(c(m$method, m$methods)), "</p>", collapse = ""),
+           paste0("<p class=\"note\">", html_escape(m$notes), "</p>", collapse = ""),
+           html_table(m$pse, "Population PSE (m) and slope (1/m) per condition, 95% delta-method intervals"),
+           html_table(m$differences, "PSE differences between conditions that differ in one factor (m), delta method"),
+           html_table(m$random, "Participant variation (standard deviations; slope in 1/m)"))
+  }, "")
+  c("<h2>Adaptive blocks: psychometric functions</h2>",
+    paste0("<p class=\"method\">Each participant &times; condition is fitted by the psychometric function above (all tracks of the condition pooled; ",
+           "the lapse rate bounded). Across participants, a hierarchical probit model (lme4::glmer) has one intercept and one slope per condition, ",
+           "and per participant a random intercept and a random slope on the shown intensity, with a common lapse rate chosen by profile likelihood; ",
+           "the population PSE of a condition is where its curve crosses the midpoint, with a delta-method interval. The staircase reversal means ",
+           "(and a psi method's posterior PSE) are a second, model-free estimate.</p>"),
+    vapply(figures[grepl("psychometric_adaptive", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
+    parts,
+    if (nrow(estimates) && any(estimates$tracks_agree %in% FALSE))
+      paste0("<p class=\"note\"><strong>Tracks disagree</strong> in ", sum(estimates$tracks_agree %in% FALSE), " of ",
+             nrow(estimates), " participant &times; condition cells: their staircases settled on intensities further apart ",
+             "than 4 SE of the difference, so the judgement is not one increasing function of the intensity there (two ",
+             "crossing points, or a drift), and a single PSE does not describe the cell. Read the tracks (Staircases) ",
+             "before the fits.</p>") else "",
+    html_table(estimates, "Per participant and condition: fitted PSE (95% interval) beside the mean over tracks of the reversal-mean threshold, the final intensity and the posterior PSE (also in adaptive_estimates.csv)"))
+}
+
+# Fitted PSE per participant × condition beside the adaptive method's own
+# estimates averaged over the condition's tracks.
+adaptive_estimates <- function(fits, thresholds) {
+  if (!nrow(thresholds) || !nrow(fits)) return(data.frame())
+  mean_or_na <- function(v) if (all(is.na(v))) NA_real_ else mean(v, na.rm = TRUE)
+  keys <- unique(thresholds[c("participant", "condition")])
+  rows <- lapply(seq_len(nrow(keys)), function(i) {
+    th <- thresholds[thresholds$participant == keys$participant[i] & thresholds$condition == keys$condition[i], ]
+    f <- fits[fits$participant == keys$participant[i] & fits$condition == keys$condition[i], ]
+    # Tracks of one condition that settle on clearly different intensities
+    # (reversal means further apart than 4 SE of their difference) mean the
+    # judgement is not one monotone function of the intensity there (or it
+    # drifted): one PSE does not describe that condition.
+    ok <- !is.na(th$threshold_m) & !is.na(th$threshold_se_m)
+    disagree <- if (sum(ok) >= 2) {
+      r <- th[ok, ]
+      lo <- which.min(r$threshold_m); hi <- which.max(r$threshold_m)
+      (r$threshold_m[hi] - r$threshold_m[lo]) > 4 * sqrt(r$threshold_se_m[hi]^2 + r$threshold_se_m[lo]^2)
+    } else NA
+    data.frame(participant = keys$participant[i], condition = keys$condition[i], method = th$method[1],
+               tracks = nrow(th), tracks_agree = !disagree,
+               fitted_pse_m = if (nrow(f)) f$pse_m[1] else NA_real_,
+               fitted_pse_ci_low_m = if (nrow(f)) f$pse_ci_low_m[1] else NA_real_,
+               fitted_pse_ci_high_m = if (nrow(f)) f$pse_ci_high_m[1] else NA_real_,
+               reversal_mean_m = mean_or_na(th$threshold_m), final_m = mean_or_na(th$final_m),
+               posterior_pse_m = mean_or_na(th$posterior_pse_m), stringsAsFactors = FALSE)
+  })
+  out <- do.call(rbind, rows)
+  out <- out[order(out$participant, out$condition), , drop = FALSE]
+  rownames(out) <- NULL
+  out
 }
 
 # Provenance per session, sized for a laptop screen: hashes and commits
@@ -222,8 +317,23 @@ model_section_html <- function(m) {
   sep <- if (isTRUE(m$separation$separated))
     paste0("<p class=\"note\"><strong>Separation detected</strong>: ", html_escape(separation_words(m$separation)), ".</p>")
   else "<p>No separation: the maximum-likelihood estimates exist.</p>"
+  # Odds ratios only of estimates that do not diverge (mask_diverging has
+  # already removed those numbers); a diverging row says so instead.
+  show <- function(t) {
+    if (!nrow(t)) return(t)
+    if (!is.null(t$diverges)) {
+      t$note <- ifelse(t$diverges, "diverges: not estimable (separation)", "")
+      t$diverges <- NULL
+    }
+    t
+  }
   contrasts <- m$contrasts
-  if (nrow(contrasts)) contrasts$odds_ratio <- exp(contrasts$estimate)
+  if (nrow(contrasts))
+    contrasts$odds_ratio <- ifelse(is.finite(contrasts$estimate) & abs(contrasts$estimate) <= max_abs_logit,
+                                   exp(contrasts$estimate), NA_real_)
+  contrasts <- show(contrasts)
+  m$fixed <- show(m$fixed)
+  m$coefficients <- show(m$coefficients)
   paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",
          "<p><code>", html_escape(m$formula), "</code>, ", html_escape(m$family), "; ",
          m$n, " trials, ", m$participants, " participant(s)",

@@ -170,3 +170,49 @@ view_contrasts <- function(br) {
   # A contrast that involves a cell with no trials is not estimable.
   out[is.finite(out$estimate) & !is.na(s$estimate), , drop = FALSE]
 }
+
+# ---------------------------------------------------------------------------
+# Estimates that blow up
+
+# A logit-scale estimate is reported only when it is finite, its interval
+# closes on both sides, its SE is below max_logit_se and, for the effects of
+# factors, its magnitude is below max_abs_logit: a log odds ratio of 10 is an
+# odds ratio of 22 000, beyond what a few hundred binary answers can
+# estimate; larger values come from (near-)separation, where the likelihood
+# keeps rising along a direction. The covariate x_std is exempt from the
+# magnitude bound (a steep psychometric function over a wide range of levels
+# legitimately has a large slope per 2 SD), not from the others.
+max_abs_logit <- 10
+max_logit_se <- 10
+diverges_note <- paste0("diverges: not estimable from these data (|estimate| > ", max_abs_logit,
+                        " logit units, SE > ", max_logit_se, ", or an interval that does not close)")
+
+diverging_rows <- function(table) {
+  if (is.null(table) || !nrow(table)) return(logical(0))
+  term <- if (is.null(table$term)) rep("", nrow(table)) else table$term
+  est <- table$estimate
+  ci_ok <- if (all(c("ci_low", "ci_high") %in% names(table)))
+    (is.na(table$ci_low) | is.finite(table$ci_low)) & (is.na(table$ci_high) | is.finite(table$ci_high))
+  else rep(TRUE, nrow(table))
+  !is.finite(est) | !ci_ok | (!is.na(table$se) & table$se > max_logit_se) |
+    (abs(est) > max_abs_logit & term != "x_std")
+}
+
+# Names of the diverging rows with the numbers that gave them away.
+diverging_terms <- function(table, label = function(t) t$term) {
+  bad <- diverging_rows(table)
+  if (!any(bad)) return(character(0))
+  t <- table[bad, , drop = FALSE]
+  sprintf("%s (estimate %.3g, SE %.3g, CI %.3g to %.3g)", label(t), t$estimate, t$se, t$ci_low, t$ci_high)
+}
+
+# The same table with diverging rows' numbers removed (NA) and marked, so
+# that no odds ratio or interval of a diverging estimate is ever printed.
+mask_diverging <- function(table) {
+  if (is.null(table) || !nrow(table)) return(table)
+  bad <- diverging_rows(table)
+  cols <- intersect(c("estimate", "se", "ci_low", "ci_high", "p"), names(table))
+  table[bad, cols] <- NA_real_
+  table$diverges <- bad
+  table
+}

@@ -48,8 +48,10 @@ check(file.exists(file.path(out2, "staircases.png")) && png_ok(file.path(out2, "
       "staircase track figure written and not blank")
 check(file.exists(file.path(out2, "staircase_thresholds.csv")), "staircase thresholds table written")
 sm <- utils::read.csv(file.path(out2, "models.csv"))
-check(any(grepl("mixed model", sm$model)) && all(is.finite(sm$ci_low) & is.finite(sm$ci_high)),
-      paste("staircase data: a mixed model with finite CIs, by", paste(unique(sm$method), collapse = " / ")))
+check(nrow(sm) == 0, "staircase data: no space x view choice model (adaptive blocks)")
+pm <- utils::read.csv(file.path(out2, "psychometric_model.csv"))
+check(sum(pm$part == "PSE") == 2 && all(is.finite(pm$ci_low) & is.finite(pm$ci_high)) && all(grepl("glmer", pm$method)),
+      paste("staircase data: a hierarchical psychometric model with finite CIs, by", paste(unique(pm$method), collapse = " / ")))
 
 cat("models.csv: every estimate with a finite CI and a method\n")
 mc <- utils::read.csv(file.path(out, "models.csv"))
@@ -121,7 +123,20 @@ if (nzchar(curvlab) && file.exists(curvlab)) {
   check(isTRUE(all.equal(key(fits_csv), key(fits), tolerance = 1e-6, check.attributes = FALSE)),
         "same fits from the CSV export as from the database")
   r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), exp_dir, "--figure", scratch("describe.png")))
-  check(r$status == 0 && any(grepl("Proportion of each judgement", r$out)), "describe.py prints proportions")
+  check(r$status == 0 && any(grepl("^Constant-stimulus blocks .*proportion of each judgement", r$out)) &&
+          !any(grepl("^Adaptive blocks", r$out)), "describe.py prints proportions of the constant-stimulus design")
+  stair_exp <- scratch("export_staircase")
+  unlink(stair_exp, recursive = TRUE)
+  r <- run(curvlab, c("export", "--db", stair, "--format", "csv", "--out", stair_exp))
+  r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), stair_exp, "--figure", scratch("describe_st.png")))
+  check(r$status == 0 && any(grepl("^Adaptive blocks \\(staircase", r$out)) && !any(grepl("proportion of each", r$out)) &&
+          sum(grepl("from-convex|from-concave", r$out)) == 8,
+        "describe.py on staircases: thresholds of the 8 tracks, no proportions")
+  th_py <- r$out[grepl("from-convex|from-concave", r$out)]
+  th_r <- staircase_thresholds(read_curvlab(stair)$trials)
+  first <- th_r[order(th_r$participant, th_r$staircase), ][1, ]
+  check(grepl(sprintf("%.5f", first$threshold_m), th_py[1], fixed = TRUE) && grepl(sprintf("%.5f", first$final_m), th_py[1], fixed = TRUE),
+        sprintf("describe.py and report.R agree on a track's reversal mean %.5f and final step %.5f", first$threshold_m, first$final_m))
   check(png_ok(scratch("describe.png"))$status == 0, "describe.py figure is not blank")
   r <- run(python, c(file.path(source_root, "analysis/python/describe.py"), empty_dir))
   check(r$status == 2, "describe.py: exit 2 without trials.csv")
