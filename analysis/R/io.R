@@ -23,6 +23,10 @@ input_error <- function(...) {
 # Reads a database file or an export directory; returns a list with
 #   source (path), kind ("database" | "export"), trials, sessions,
 #   staircase (steps), tracking (may be empty), events (observer rows).
+# The psi method's posterior summaries (its `posterior` event's keys; the
+# trial CSV's columns, entropy_nats there as posterior_entropy).
+posterior_fields <- c("pse_mean", "pse_sd", "slope_mean", "slope_sd", "lapse_mean", "lapse_sd", "entropy_nats")
+
 read_curvlab <- function(path, max_tracking_per_device = 20000L) {
   if (!nzchar(path)) input_error("no input given (expected --db FILE or --export DIR)")
   if (!file.exists(path))
@@ -196,19 +200,21 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     schema_damage(path, paste0("schema version ", curvlab_schema_version, " lacks ", listed))
   }
 
-  # Columns an adaptive method adds to its steps (posterior_* summaries of a
-  # psi method) travel with the trial under their own names.
-  step_extra <- setdiff(names(q("SELECT * FROM staircase_steps LIMIT 0")),
-                        c("step_id", "session_id", "staircase", "step_index", "trial_id", "intensity",
-                          "response_correct", "is_reversal", "next_intensity"))
-  step_extra <- grep("^posterior_", step_extra, value = TRUE)
+  # A Bayesian adaptive (psi) method stores its posterior after each answer
+  # as a `posterior` event of the trial (docs/data.md); its summaries travel
+  # with the trial as posterior_* columns (the last event of a trial).
+  posterior_sql <- paste(
+    "LEFT JOIN (SELECT trial_id,",
+    paste0("json_extract(detail, '$.", posterior_fields, "') AS posterior_", posterior_fields, collapse = ", "),
+    "FROM events WHERE event_id IN (SELECT max(event_id) FROM events WHERE kind = 'posterior'",
+    "GROUP BY trial_id)) po ON po.trial_id = t.trial_id")
   raw_trials <- q(paste(
     "SELECT t.trial_id, t.session_id, se.session_uuid, p.pseudonym AS participant, se.session_number,",
     "pr.sha256 AS protocol_sha256, b.block_index, b.name AS block_name, b.is_practice,",
     "t.trial_index, t.trial_in_block, t.status, t.attempt, t.onset_ns, t.response_ns,",
     "t.rt_ns, t.response, t.response_device, t.completed_utc, t.conditions, t.stimulus,",
     "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct, st.next_intensity,",
-    if (length(step_extra)) paste0(paste0("st.", step_extra, collapse = ", "), ",") else "",
+    paste0(paste0("po.posterior_", posterior_fields, collapse = ", "), ","),
     "tf.lost_ms AS tracking_lost_ms",
     "FROM trials t",
     "JOIN sessions se ON se.session_id = t.session_id",
@@ -216,6 +222,7 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "JOIN protocols pr ON pr.protocol_id = se.protocol_id",
     "JOIN blocks b ON b.block_id = t.block_id",
     "LEFT JOIN staircase_steps st ON st.trial_id = t.trial_id",
+    posterior_sql,
     "LEFT JOIN (SELECT trial_id, sum(json_extract(detail, '$.lost_ms')) AS lost_ms FROM events",
     "   WHERE kind = 'tracking_flagged' GROUP BY trial_id) tf ON tf.trial_id = t.trial_id",
     "ORDER BY t.session_id, t.trial_index"))
@@ -303,9 +310,14 @@ read_export_dir <- function(dir) {
   if (length(missing))
     input_error(csv, ": missing column(s) ", paste(missing, collapse = ", "),
                 " (expected the curvlab trial CSV, see docs/data.md)")
-  # The export names the step's index staircase_step.
+  # The export names the step's index staircase_step, and the psi method's
+  # posterior summaries without the posterior_ prefix.
   if ("staircase_step" %in% names(trials) && !"step_index" %in% names(trials))
     names(trials)[names(trials) == "staircase_step"] <- "step_index"
+  for (f in posterior_fields) {
+    exported <- if (f == "entropy_nats") "posterior_entropy" else f
+    if (exported %in% names(trials)) names(trials)[names(trials) == exported] <- paste0("posterior_", f)
+  }
   for (col in c(grep("^stim_", names(trials), value = TRUE), grep("^posterior_", names(trials), value = TRUE))) {
     v <- suppressWarnings(as.numeric(trials[[col]]))
     if (all(is.na(v) == is.na(trials[[col]]))) trials[[col]] <- v

@@ -48,6 +48,10 @@ def load(path):
         trials = pd.read_csv(csv, dtype=str, keep_default_na=False, na_values=["NA"])
     except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as e:
         fail(f"{csv}: cannot read as CSV ({e})")
+    # The psi method's posterior summaries, under the names the R report uses.
+    trials = trials.rename(columns={c: "posterior_" + c for c in
+                                    ("pse_mean", "pse_sd", "slope_mean", "slope_sd", "lapse_mean", "lapse_sd")}
+                           | {"posterior_entropy": "posterior_entropy_nats"})
     missing = [c for c in ("participant", "status", "response") if c not in trials.columns]
     if missing:
         fail(f"{csv}: missing column(s) {', '.join(missing)} (expected the curvlab trial CSV)")
