@@ -160,20 +160,25 @@ ae <- utils::read.csv(file.path(out2, "adaptive_estimates.csv"))
 check(nrow(ae) == 24 && all(abs(ae$fitted_pse_m - ae$reversal_mean_m) < 0.01, na.rm = TRUE),
       sprintf("fitted PSE and reversal mean agree within 10 mm (largest gap %.2f mm)", 1000 * max(abs(ae$fitted_pse_m - ae$reversal_mean_m), na.rm = TRUE)))
 
-cat("A psi method's posterior PSE is read from its steps\n")
+cat("A psi method's posterior PSE is read from its posterior events\n")
 psi_db <- scratch("psi.sqlite")
 invisible(file.copy(db, psi_db, overwrite = TRUE))
 con <- DBI::dbConnect(RSQLite::SQLite(), psi_db)
-invisible(DBI::dbExecute(con, "ALTER TABLE staircase_steps ADD COLUMN posterior_pse_m REAL"))
-invisible(DBI::dbExecute(con, "UPDATE staircase_steps SET posterior_pse_m = intensity / 2 + step_index * 1e-5"))
+# As the session store writes them (docs/data.md): one `posterior` event per
+# answered step, in the step's trial.
+invisible(DBI::dbExecute(con, paste(
+  "INSERT INTO events (session_id, trial_id, t_ns, kind, detail)",
+  "SELECT session_id, trial_id, 0, 'posterior', json_object('staircase', staircase, 'step_index', step_index,",
+  "'pse_mean', intensity / 2 + step_index * 1e-5, 'pse_sd', 0.001, 'slope_mean', 300, 'slope_sd', 10,",
+  "'lapse_mean', NULL, 'lapse_sd', NULL, 'entropy_nats', 1.5) FROM staircase_steps")))
 DBI::dbDisconnect(con)
 pd <- read_curvlab(psi_db)
 check(all(pd$trials$design == "psi"), "design psi")
 pth <- staircase_thresholds(pd$trials)
 last <- do.call(rbind, lapply(split(pd$trials, paste(pd$trials$participant, pd$trials$staircase)), function(s)
-  s[which.max(s$step_index), c("participant", "staircase", "posterior_pse_m")]))
-mg <- merge(pth, last, by = c("participant", "staircase"), suffixes = c("", ".last"))
-check(nrow(mg) == 48 && all(abs(mg$posterior_pse_m - mg$posterior_pse_m.last) < 1e-12) && all(pth$method == "psi"),
+  s[which.max(s$step_index), c("participant", "staircase", "posterior_pse_mean")]))
+mg <- merge(pth, last, by = c("participant", "staircase"))
+check(nrow(mg) == 48 && all(abs(mg$posterior_pse_m - mg$posterior_pse_mean) < 1e-12) && all(pth$method == "psi"),
       "each track's posterior PSE is its last step's")
 r <- run(rscript, c(report_r, "--db", psi_db, "--out", scratch("report_psi"), "--quiet"))
 check(r$status == 0, "report on psi data: exit 0")
