@@ -114,11 +114,12 @@ TEST(ImageObserver, AnswersAsTheHumanModelDoesFromThePixels) {
   for (const auto& [trial, response] : model) same += image.at(trial) == response;
   // A trial's answer can flip only near a cut: the two observers' percepts
   // differ by a small part of the noise. Both log the human model's account
-  // with each onset: the disparity signal the pixels give is the model's
-  // within half the 30-arcsec threshold plus 6 % of the signal in every space
-  // and view (the rings' localisation and the curve's extrapolation to the
-  // ends, as for the ideal geometer's 3 mm on 7 cm; no account with one
-  // eye), and the perceived distance within a centimetre.
+  // with each onset: the perceived sagitta the pixels give is the model's
+  // within 2 mm and 5 %, and its disparity signal within 30 arcsec (the
+  // threshold) and 7 % in every space and view — the rings' localisation and
+  // the curve's extrapolation to the ends, as the ideal geometer's 3 mm on
+  // 7 cm; no account with one eye — and the perceived distance within a
+  // centimetre.
   EXPECT_GE(same, 16) << same << " of 18 answers agree";
   const auto from_model = onset_values(model_db);
   const auto from_image = onset_values(image_db);
@@ -128,7 +129,9 @@ TEST(ImageObserver, AnswersAsTheHumanModelDoesFromThePixels) {
   const auto distance_model = onset_values(model_db, "$.percept.perceived_distance_m");
   const auto distance_image = onset_values(image_db, "$.percept.perceived_distance_m");
   for (const auto& [trial, value] : signal_model) {
-    EXPECT_NEAR(signal_image.at(trial), value, 15.0 + 0.06 * std::abs(value)) << "trial " << trial;
+    const double s = from_model.at(trial);
+    EXPECT_NEAR(from_image.at(trial), s, 0.002 + 0.05 * std::abs(s)) << "trial " << trial;
+    EXPECT_NEAR(signal_image.at(trial), value, 30.0 + 0.07 * std::abs(value)) << "trial " << trial;
     EXPECT_NEAR(distance_image.at(trial), distance_model.at(trial), 0.01) << "trial " << trial;
   }
   // The participant's own onset pair, saved by --images with the record of

@@ -246,19 +246,21 @@ double depth_to_width(const StickScene& scene, double perceived_m) {
 }
 
 // The curve through the rings' centre-line points (StickCurve) gives the
-// perceived ends and middle; their bow is the estimate. The human observer
-// scales every disparity by its own perceived distance instead of reading
-// depth in the space's ratio to width, so its surface-to-centre step takes
-// the seen radius as it is (with the space's ratio its H3 tourist sagitta
-// missed the model's by 0.9 mm at the proposed study's geometry; without, by
-// 0.3 mm).
+// perceived ends and middle; their bow is the estimate. In a tourist view the
+// human observer scales every disparity by its own perceived distance
+// instead of reading depth in the true optics' ratio to width, so its
+// surface-to-centre step takes the seen radius as it is (with the optics'
+// ratio its H3 tourist sagitta missed the model's by 0.9 mm at the proposed
+// study's geometry; without, by 0.3 mm).
 void fit_stick(const StickScene& scene, StickEstimate& e) {
   const Vec3 cyclops = 0.5 * (scene.rig.eyes[0].position_m + scene.rig.eyes[1].position_m);
   const Vec3 chord = glm::normalize(e.features.back().position_m - e.features.front().position_m);
   std::vector<double> u;
   std::vector<Vec3> p;
   for (auto& f : e.features) {
-    const double stretch = e.human ? 1.0 : depth_to_width(scene, glm::length(f.position_m - cyclops));
+    const double stretch = e.human && geometry::true_optics(scene.preset)
+                               ? 1.0
+                               : depth_to_width(scene, glm::length(f.position_m - cyclops));
     f.position_m = onto_centre_line(f.position_m, cyclops, chord, f.depth_radii * f.radius_seen_m * stretch);
     u.push_back(f.u_m);
     p.push_back(f.position_m);
