@@ -22,7 +22,7 @@ echo "== Running it headless: offscreen Vulkan, simulated participant, SQLite ==
 "$bin" run protocols/demo.toml --participant P01 --db "$out/demo.sqlite" \
   --images "$out/stimuli" --export "$out/export" | grep -v '^exports:'
 echo
-echo "== What the simulated observer should find (perception model, 20 participants) =="
+echo "== What the simulated observer should find (human observer model, 20 participants) =="
 "$bin" predict protocols/demo.toml --participants 20 --simulations 200
 if [ -f analysis/report.R ] && command -v Rscript >/dev/null; then
   echo
