@@ -1,5 +1,7 @@
 # Shared by the analysis tests: loads the analysis scripts and gives a tiny
-# check() that records failures and a finish() that sets the exit status.
+# check() that records failures and a finish() that sets the exit status,
+# the programs the tests run (the curvlab binary when given as the second
+# argument, Rscript, Debian's python3, the report) and run() for them.
 args <- commandArgs(TRUE)
 source_root <- normalizePath(if (length(args) >= 1) args[1] else ".")
 analysis_root <- function() file.path(source_root, "analysis")
@@ -22,3 +24,12 @@ scratch <- function(name) {
   dir.create(dir, showWarnings = FALSE, recursive = TRUE)
   file.path(dir, name)
 }
+curvlab <- if (length(args) >= 2) args[2] else ""
+rscript <- file.path(R.home("bin"), "Rscript")
+python <- "/usr/bin/python3"
+report_r <- file.path(source_root, "analysis", "report.R")
+run <- function(cmd, args) {
+  out <- suppressWarnings(system2(cmd, args, stdout = TRUE, stderr = TRUE))
+  list(status = if (is.null(attr(out, "status"))) 0L else attr(out, "status"), out = out)
+}
+png_ok <- function(files) run(python, c(file.path(source_root, "tests/analysis/check_png.py"), files))

@@ -8,15 +8,6 @@
 # condition's perceived bend), slopes within 3 SE; about 1 % chance of a
 # false failure over the 12 checks.
 source(file.path(commandArgs(TRUE)[1], "tests/analysis/helpers.R"))
-curvlab <- if (length(commandArgs(TRUE)) >= 2) commandArgs(TRUE)[2] else ""
-rscript <- file.path(R.home("bin"), "Rscript")
-python <- "/usr/bin/python3"
-report_r <- file.path(source_root, "analysis", "report.R")
-run <- function(cmd, args) {
-  out <- suppressWarnings(system2(cmd, args, stdout = TRUE, stderr = TRUE))
-  list(status = if (is.null(attr(out, "status"))) 0L else attr(out, "status"), out = out)
-}
-png_ok <- function(files) run(python, c(file.path(source_root, "tests/analysis/check_png.py"), files))
 read_html <- function(dir) paste(readLines(file.path(dir, "report.html"), warn = FALSE), collapse = "\n")
 # Every number in the HTML tables' odds_ratio column, and any infinite cell.
 odds_ratios <- function(html) {

@@ -4,13 +4,6 @@
 # be read and how to recover it — the same message `curvlab export` gives.
 #   Rscript tests/analysis/test_corrupt_input.R SOURCE_ROOT [CURVLAB_BINARY]
 source(file.path(commandArgs(TRUE)[1], "tests/analysis/helpers.R"))
-curvlab <- if (length(commandArgs(TRUE)) >= 2) commandArgs(TRUE)[2] else ""
-rscript <- file.path(R.home("bin"), "Rscript")
-report_r <- file.path(source_root, "analysis", "report.R")
-run <- function(cmd, args) {
-  out <- suppressWarnings(system2(cmd, args, stdout = TRUE, stderr = TRUE))
-  list(status = if (is.null(attr(out, "status"))) 0L else attr(out, "status"), out = out)
-}
 
 whole <- scratch("corrupt_whole.sqlite")
 simulate_curvlab_db(whole, data.frame(participant = "P01", bias_m = 0, slope_per_m = 150, lapse = 0.02),

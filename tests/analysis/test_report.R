@@ -3,15 +3,6 @@
 # directory path (through the real `curvlab export`) and the Python summary.
 #   Rscript tests/analysis/test_report.R SOURCE_ROOT [CURVLAB_BINARY]
 source(file.path(commandArgs(TRUE)[1], "tests/analysis/helpers.R"))
-curvlab <- if (length(commandArgs(TRUE)) >= 2) commandArgs(TRUE)[2] else ""
-rscript <- file.path(R.home("bin"), "Rscript")
-python <- "/usr/bin/python3"
-report_r <- file.path(source_root, "analysis", "report.R")
-run <- function(cmd, args) {
-  out <- suppressWarnings(system2(cmd, args, stdout = TRUE, stderr = TRUE))
-  list(status = if (is.null(attr(out, "status"))) 0L else attr(out, "status"), out = out)
-}
-png_ok <- function(files) run(python, c(file.path(source_root, "tests/analysis/check_png.py"), files))
 
 truth <- data.frame(participant = c("P01", "P02", "P03"), bias_m = c(-0.01, 0, 0.01),
                     slope_per_m = c(100, 150, 200), lapse = 0.02)

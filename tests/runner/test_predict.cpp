@@ -17,6 +17,13 @@ namespace pr = curvlab::harness::protocol;
 
 namespace {
 
+// A shipped protocol, loaded.
+pr::Protocol example(const std::string& name) {
+  auto loaded = pr::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/" + name + ".toml");
+  if (!loaded) ADD_FAILURE() << name << " does not load";
+  return loaded ? std::move(*loaded) : pr::Protocol{};
+}
+
 // The level a staircase prediction's condition sets for a factor.
 std::string level_of_track(const rn::StaircasePrediction& sp, const std::string& factor) {
   for (const auto& [n, l] : sp.levels)
@@ -278,12 +285,10 @@ TEST(Predict, AStaircaseRangeThatMissesTheTargetIsReported) {
 // away (its ends 45° off) moves every PSE toward concave bends, H3's further
 // than S3's.
 TEST(Predict, HumanStaircasesConvergeInsideTheirRangesAndSeparateTheSpaces) {
-  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
-  ASSERT_TRUE(loaded.has_value());
   rn::PredictOptions o;
   o.participants = 8;
   o.simulations = 60;
-  auto r = rn::predict(*loaded, o);
+  auto r = rn::predict(example("stick_pse_staircase"), o);
   ASSERT_TRUE(r.has_value()) << r.error().message;
   const auto& pred = r.value();
   EXPECT_TRUE(pred.notes.empty()) << pred.notes.front();
@@ -310,22 +315,21 @@ TEST(Predict, HumanStaircasesConvergeInsideTheirRangesAndSeparateTheSpaces) {
 // --effect is honoured for adaptive designs, and refused (a usage error)
 // where no trials can answer it.
 TEST(Predict, AnEffectOnStaircasesIsTestedOrRefused) {
-  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
-  ASSERT_TRUE(loaded.has_value());
+  const pr::Protocol protocol = example("stick_pse_staircase");
   rn::PredictOptions o;
   o.participants = 6;
   o.simulations = 20;
   o.factor = "projection";
   o.level_a = "native";
   o.level_b = "tourist";
-  auto r = rn::predict(*loaded, o);
+  auto r = rn::predict(protocol, o);
   ASSERT_TRUE(r.has_value()) << r.error().message;
   ASSERT_EQ(r->power.size(), 1u);
   EXPECT_EQ(r->power[0].factor, "projection");
   EXPECT_EQ(r->power[0].level_a, "native");
   EXPECT_EQ(r->power[0].measure, "stimulus.stick_sagitta_m");
   o.level_b = "sideways";
-  auto refused = rn::predict(*loaded, o);
+  auto refused = rn::predict(protocol, o);
   ASSERT_FALSE(refused.has_value());
   EXPECT_EQ(refused.error().kind, curvlab::harness::Error::Kind::usage);
   EXPECT_NE(refused.error().message.find("\"sideways\""), std::string::npos) << refused.error().message;
