@@ -461,4 +461,78 @@ TEST(XrSession, ALostSessionIsLeftWithoutEndingItAndResumes) {
   fs::remove_all(dir);
 }
 
+// A copy of the demo protocol with `extra` appended (a [tracking] section).
+fs::path protocol_with(const fs::path& dir, const std::string& extra) {
+  const auto path = dir / "protocol.toml";
+  std::ifstream in(kProtocol);
+  std::ostringstream text;
+  text << in.rdbuf() << "\n" << extra << "\n";
+  std::ofstream(path) << text.str();
+  return path;
+}
+
+// The program under a time limit: a session that waits forever for the head
+// is killed (exit 124) instead of hanging the test.
+curvlab::testing::CliResult run_cli_within(int seconds, const std::string& args) {
+  return curvlab::testing::run_shell("timeout " + std::to_string(seconds) + " " + std::string(CURVLAB_BIN) + " " +
+                                     args + " 2>&1");
+}
+
+TEST(XrSession, AHeadWithoutPositionTrackingStopsTheSessionResumably) {
+  // Monado's simulated headset: orientation tracked, position valid but not
+  // tracked. The demo protocol asks for a position-tracked head (the
+  // default): the first trial is lost, the session waits its 10 s for the
+  // head, then stops interrupted with the runtime's flags, and resumes.
+  const auto dir = fresh_dir("orientation_only");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  {
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_HEAD", "orientation_only"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r =
+        run_cli_within(60, "run " + kProtocol + " --participant X04 --backend xr --db " + db.string() + " --quiet");
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("head_requires = \"position\""), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("ORIENTATION_TRACKED | POSITION_VALID | no POSITION_TRACKED"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("curvlab resume --db " + db.string() + " --session 1"), std::string::npos) << r.out;
+    EXPECT_TRUE(RuntimeLog(log_path).problems.empty());
+  }
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "0");
+  const auto aborted = query(db, "SELECT json_extract(detail, '$.reason') FROM events WHERE kind = 'trial_aborted'");
+  ASSERT_EQ(aborted.size(), 1u);
+  EXPECT_EQ(aborted[0][0], "tracking_lost");
+  // The head's samples are stored with their (inferred) positions.
+  EXPECT_EQ(query(db, "SELECT count(*) FROM tracking_samples WHERE device = 'head' AND position_valid = 0")[0][0],
+            "0");
+
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses}, {"CURVLAB_TEST_XR_LOG", log_path.string() + "2"}});
+  const auto r = run_cli_within(60, "resume --db " + db.string() + " --session 1 --backend xr --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  fs::remove_all(dir);
+}
+
+TEST(XrSession, AHeadWithoutPositionTrackingRunsWhereTheProtocolAsksLess) {
+  for (const std::string need : {"orientation", "none"}) {
+    SCOPED_TRACE(need);
+    const auto dir = fresh_dir("head_requires_" + need);
+    const auto db = dir / "xr.db";
+    const auto log_path = dir / "runtime.log";
+    const auto protocol = protocol_with(dir, "[tracking]\nhead_requires = \"" + need + "\"");
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_HEAD", "orientation_only"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli_within(60, "run " + protocol.string() + " --participant X05 --backend xr --db " +
+                                          db.string() + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
+    EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+    EXPECT_EQ(query(db, "SELECT count(*) FROM events WHERE kind = 'trial_aborted'")[0][0], "0");
+    EXPECT_TRUE(RuntimeLog(log_path).problems.empty());
+    fs::remove_all(dir);
+  }
+}
+
 }  // namespace

@@ -125,6 +125,28 @@ bool located(XrSpaceLocationFlags flags) {
   return (flags & want) == want;
 }
 
+// Valid, perhaps inferred: a pose the runtime says can be used. The head's
+// is used so; whether its tracking is good enough for a trial is the
+// protocol's [tracking] head_requires (a headset without positional
+// tracking, or Monado's simulated one, infers the position).
+bool usable(XrSpaceLocationFlags flags) {
+  constexpr XrSpaceLocationFlags want = XR_SPACE_LOCATION_POSITION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_VALID_BIT;
+  return (flags & want) == want;
+}
+
+// The flags by their names in the specification, for messages.
+std::string location_flags_text(XrSpaceLocationFlags flags) {
+  std::string out;
+  for (const auto& [bit, name] : {std::pair{XR_SPACE_LOCATION_ORIENTATION_VALID_BIT, "ORIENTATION_VALID"},
+                                  std::pair{XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT, "ORIENTATION_TRACKED"},
+                                  std::pair{XR_SPACE_LOCATION_POSITION_VALID_BIT, "POSITION_VALID"},
+                                  std::pair{XR_SPACE_LOCATION_POSITION_TRACKED_BIT, "POSITION_TRACKED"}}) {
+    out += out.empty() ? "" : " | ";
+    out += (flags & bit) != 0 ? name : std::string("no ") + name;
+  }
+  return out;
+}
+
 std::string vk_result(VkResult r) { return vk::to_string(static_cast<vk::Result>(r)); }
 
 // The instance extensions curvlab asks for besides XR_KHR_vulkan_enable2,
@@ -378,6 +400,7 @@ class XrBackend final : public InteractiveDisplay {
   [[nodiscard]] DisplayInfo info() const override;
   std::optional<FrameTiming> begin_frame() override;
   geometry::LabFrame poses(const FrameTiming& frame) override;
+  [[nodiscard]] harness::io::HeadTracking head_tracking() const override;
   // Session-state events: pause, resume, quit.
   Signal poll_signal() override;
   // The controllers' buttons.
@@ -460,6 +483,7 @@ class XrBackend final : public InteractiveDisplay {
   bool views_valid_ = false;
   LabPose head_;
   geometry::LabFrame lab_;
+  XrSpaceLocationFlags head_flags_ = 0;  // the head's at the last locate
   std::array<bool, 2> trigger_down_{false, false};
   XrTime last_display_ = 0;  // the previous frame's predicted display time
 };
@@ -844,15 +868,16 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
     auto loc = tagged<XrSpaceLocation>(XR_TYPE_SPACE_LOCATION);
     const XrResult r = xrLocateSpace(space, stage_.get(), t, &loc);
     if (fatal(r)) fail(r, "xrLocateSpace");
-    const bool ok = XR_SUCCEEDED(r) && located(loc.locationFlags);
-    return std::pair{to_lab_pose(loc.pose), ok};
+    return std::pair{to_lab_pose(loc.pose), XR_SUCCEEDED(r) ? loc.locationFlags : XrSpaceLocationFlags{0}};
   };
-  const auto [head, head_ok] = locate(view_.get());
+  const auto [head, head_flags] = locate(view_.get());
   head_ = head;
-  lab_[geometry::Device::head] = to_geometry(head, head_ok);
+  head_flags_ = head_flags;
+  lab_[geometry::Device::head] = to_geometry(head, usable(head_flags));
   for (std::size_t i = 0; i < 2; ++i) {
-    const auto [hand, hand_ok] = locate(grip_[i].get());
-    lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand] = to_geometry(hand, hand_ok);
+    const auto [hand, hand_flags] = locate(grip_[i].get());
+    lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand] =
+        to_geometry(hand, located(hand_flags));
   }
 
   FrameTiming timing;
@@ -880,6 +905,12 @@ void XrBackend::mark_late(FrameTiming& timing) {
 geometry::LabFrame XrBackend::poses(const FrameTiming& frame) {
   (void)frame;  // located in begin_frame at this frame's predicted display time
   return lab_;
+}
+
+harness::io::HeadTracking XrBackend::head_tracking() const {
+  return {(head_flags_ & XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT) != 0,
+          (head_flags_ & XR_SPACE_LOCATION_POSITION_TRACKED_BIT) != 0,
+          location_flags_text(head_flags_) + " (xrLocateSpace of the VIEW space)"};
 }
 
 renderer::StereoRig XrBackend::rig(const FrameTiming& frame, double ipd_m) {

@@ -37,6 +37,10 @@
 //                            or XR_ERROR_INSTANCE_LOST), as a runtime whose
 //                            session or compositor died does; a "fault" line
 //                            in the log
+//   CURVLAB_TEST_XR_HEAD     tracked (default) or orientation_only: the head
+//                            (VIEW space, views) is located with its
+//                            position valid but not tracked, its orientation
+//                            tracked, as Monado's simulated headset reports
 //   CURVLAB_TEST_XR_CAPTURE_DIR   write the left eye of submitted frames here
 //                            as PNG (left_<frame>_<monotonic ns>.png, the
 //                            frame's predicted display time on CLOCK_MONOTONIC)
@@ -1200,6 +1204,11 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace base, XrTime time, XrSpac
                                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
                                            XR_SPACE_LOCATION_POSITION_TRACKED_BIT
                                      : 0;
+  // A head with inferred position (CURVLAB_TEST_XR_HEAD=orientation_only):
+  // any location relative to the VIEW space has an untracked position.
+  const bool view = a->reference == XR_REFERENCE_SPACE_TYPE_VIEW || b->reference == XR_REFERENCE_SPACE_TYPE_VIEW;
+  if (view && a != b && !a->session->instance->script.head_position_tracked)
+    location->locationFlags &= ~XrSpaceLocationFlags{XR_SPACE_LOCATION_POSITION_TRACKED_BIT};
   return XR_SUCCESS;
 }
 
@@ -1235,6 +1244,8 @@ XrResult XRAPI_CALL LocateViews(XrSession h, const XrViewLocateInfo* info, XrVie
   state->viewStateFlags = tb ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
                                    XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
                              : 0;
+  if (!s->instance->script.head_position_tracked)
+    state->viewStateFlags &= ~XrViewStateFlags{XR_VIEW_STATE_POSITION_TRACKED_BIT};
   return XR_SUCCESS;
 }
 

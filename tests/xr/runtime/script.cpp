@@ -190,6 +190,14 @@ std::optional<Script> read_script(std::string& error) {
     f.at_s = *seconds;
     s.fault = f;
   }
+  if (const char* v = env("CURVLAB_TEST_XR_HEAD")) {
+    const std::string mode = v;
+    if (mode != "tracked" && mode != "orientation_only") {
+      error = "CURVLAB_TEST_XR_HEAD: '" + mode + "': expected tracked or orientation_only";
+      return std::nullopt;
+    }
+    s.head_position_tracked = mode == "tracked";
+  }
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_DIR")) s.capture_dir = v;
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_EVERY")) {
     const auto n = number(v);

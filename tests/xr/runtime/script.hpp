@@ -75,6 +75,10 @@ struct Script {
   std::vector<Unfocus> unfocus;
   std::optional<double> exit_at_s;  // request exit (STOPPING) at this time
   std::optional<double> loss_at_s;  // LOSS_PENDING at this time; frame calls fail SESSION_LOST 0.5 s later
+  // CURVLAB_TEST_XR_HEAD=orientation_only: the head's position is valid but
+  // not tracked (inferred), its orientation tracked, as Monado's simulated
+  // headset reports it.
+  bool head_position_tracked = true;
   std::string capture_dir;          // left-eye PNGs of submitted frames
   int capture_every = 1;            // every n-th submitted frame
   std::string log_path;             // what the runtime handed out and saw
