@@ -461,6 +461,70 @@ TEST(XrSession, ALostSessionIsLeftWithoutEndingItAndResumes) {
   fs::remove_all(dir);
 }
 
+TEST(XrSession, ButtonsAreReadFromAFreshSyncWhenFocusReturns) {
+  // The demo's presses with a focus loss in the fifth trial's stimulus
+  // (3.15 s to 3.55 s after focus), X pressed and released while unfocused
+  // (the demo's own, at 3.4 s), and the right trigger pulled at 3.5 s and held
+  // across the return until 3.8 s: neither may answer or count as an input.
+  const auto dir = fresh_dir("refocus");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  {
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses + ",right:trigger@3.5~0.3"},
+                    {"CURVLAB_TEST_XR_UNFOCUS", "3.15+0.4"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli("run " + kProtocol + " --participant X06 --backend xr --db " + db.string() + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  }
+  const RuntimeLog log(log_path);
+  EXPECT_TRUE(log.problems.empty()) << log.problems.front();
+  // Every action-state read while FOCUSED follows an xrSyncActions made
+  // while FOCUSED in the same frame (OpenXR 1.0 §11.5: states are those of
+  // the last sync, which before the focus loss are stale).
+  std::int64_t frame = -1, synced = -2, reads = 0;
+  std::vector<std::string> stale;
+  for (const auto& line : log.lines) {
+    std::istringstream in(line);
+    std::string kind, word;
+    in >> kind;
+    if (kind == "frame") {
+      in >> frame;
+    } else if (kind == "sync_actions") {
+      std::int64_t n = 0;
+      int focused = 0;
+      in >> word >> n >> word >> focused;
+      synced = focused == 1 ? n : -2;
+    } else if (kind == "action_state") {
+      std::string call, action;
+      std::int64_t n = 0;
+      int focused = 0;
+      in >> call >> action >> word >> n >> word >> focused;
+      ++reads;
+      if (focused == 1 && (n != frame || synced != frame)) stale.push_back(line);
+    }
+  }
+  EXPECT_GT(reads, 100);
+  EXPECT_TRUE(stale.empty()) << stale.size() << " reads without a sync in their frame, the first: " << stale.front();
+
+  // The focus loss repeated the fifth trial, and every trial was answered.
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM events WHERE kind = 'trial_aborted'")[0][0], "1");
+  // Every input the session stored (answers and anticipations) is a press
+  // the runtime delivered while focused, at its time: none is a state from
+  // before the focus loss, a press made without focus, or the trigger held
+  // across the return.
+  auto is_press = [&log](std::int64_t t_ns) {
+    return std::any_of(log.presses.begin(), log.presses.end(),
+                       [&](const auto& p) { return std::llabs(p.second - t_ns) <= kSameInstantNs; });
+  };
+  for (const auto& row : query(db, "SELECT response_ns FROM trials"))
+    EXPECT_TRUE(is_press(std::stoll(row[0]))) << "answer at " << row[0] << " is no press";
+  for (const auto& row : query(db, "SELECT json_extract(detail, '$.t_ns'), json_extract(detail, '$.name') "
+                                   "FROM events WHERE kind = 'early_input'"))
+    EXPECT_TRUE(is_press(std::stoll(row[0]))) << "early input " << row[1] << " at " << row[0] << " is no press";
+  fs::remove_all(dir);
+}
+
 // A copy of the demo protocol with `extra` appended (a [tracking] section).
 fs::path protocol_with(const fs::path& dir, const std::string& extra) {
   const auto path = dir / "protocol.toml";

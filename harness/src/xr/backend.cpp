@@ -434,6 +434,9 @@ class XrBackend final : public InteractiveDisplay {
   // it, teardown ignores it).
   [[nodiscard]] XrResult end_frame(bool with_layer);
   std::int64_t to_session_ns(XrTime t);
+  // xrSyncActions for this frame (a failure other than a lost session is
+  // logged; the states then read inactive).
+  void sync_actions();
   void read_buttons(std::vector<InputEvent>& out);
   // Logs a failed action-state query once per call name (it repeats every
   // frame otherwise) and goes on: one unreadable button must not end a session.
@@ -485,6 +488,11 @@ class XrBackend final : public InteractiveDisplay {
   geometry::LabFrame lab_;
   XrSpaceLocationFlags head_flags_ = 0;  // the head's at the last locate
   std::array<bool, 2> trigger_down_{false, false};
+  bool synced_ = false;  // xrSyncActions was called in this frame while FOCUSED
+  // Per action of curvlab_action_set() and hand: active at the last read
+  // (false after a focus loss, so the first read after it is a baseline).
+  std::vector<std::array<bool, 2>> active_ = std::vector<std::array<bool, 2>>(curvlab_action_set().actions.size());
+  XrTime focused_at_ = 0;  // when the session last became FOCUSED (the runtime's event time)
   XrTime last_display_ = 0;  // the previous frame's predicted display time
 };
 
@@ -723,6 +731,11 @@ void XrBackend::on_state(SessionState next) {
     if (const XrResult r = xrEndSession(session_.get()); XR_FAILED(r))
       std::cerr << "curvlab: xr: " << failure_of(r, "xrEndSession").message << '\n';
   }
+  if (u.mode != RunMode::Running && before == RunMode::Running) {
+    // Inactive while unfocused; the return syncs afresh.
+    for (auto& hands : active_) hands = {false, false};
+    synced_ = false;
+  }
   if (u.mode == RunMode::Paused && before == RunMode::Running) signals_.push_back(Signal::pause);
   if (u.mode == RunMode::Running && before == RunMode::Paused) signals_.push_back(Signal::resume);
   if (u.mode == RunMode::Exit) signals_.push_back(Signal::quit);
@@ -737,6 +750,7 @@ bool XrBackend::poll_events() {
     switch (event.type) {
       case XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED: {
         const auto& e = *reinterpret_cast<const XrEventDataSessionStateChanged*>(&event);
+        if (e.state == XR_SESSION_STATE_FOCUSED) focused_at_ = e.time;
         on_state(static_cast<SessionState>(e.state));
         break;
       }
@@ -842,14 +856,8 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   if (to_timespec_ == nullptr && !clock_map_.anchored())
     clock_map_.anchor(t, now + frame_state_.predictedDisplayPeriod);
 
-  if (state_.mode() == RunMode::Running) {
-    XrActiveActionSet active{actions_->handle(), XR_NULL_PATH};
-    auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
-    sync.countActiveActionSets = 1;
-    sync.activeActionSets = &active;
-    if (const XrResult r = xrSyncActions(session, &sync); fatal(r)) fail(r, "xrSyncActions");
-    else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
-  }
+  synced_ = false;
+  if (state_.mode() == RunMode::Running) sync_actions();
 
   // Views and devices where they will be when this frame is seen.
   auto locate_info = tagged<XrViewLocateInfo>(XR_TYPE_VIEW_LOCATE_INFO);
@@ -927,13 +935,32 @@ void XrBackend::report_once(XrResult r, const char* call) {
   std::cerr << "curvlab: xr: " << failure_of(r, call).message << '\n';
 }
 
+void XrBackend::sync_actions() {
+  XrActiveActionSet active{actions_->handle(), XR_NULL_PATH};
+  auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
+  sync.countActiveActionSets = 1;
+  sync.activeActionSets = &active;
+  if (const XrResult r = xrSyncActions(session_.get(), &sync); fatal(r)) fail(r, "xrSyncActions");
+  else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
+  synced_ = true;
+}
+
+// Action states are those of the last xrSyncActions (OpenXR 1.0 §11.5). The
+// frame on which focus returns began unfocused, without a sync: its states
+// would be the ones synced before the focus loss, so it syncs here. An
+// action that was inactive (no focus) gives its first state as a baseline,
+// not an event: a button or trigger held across the focus return is no new
+// press, and nothing that changed before the return is delivered.
 void XrBackend::read_buttons(std::vector<InputEvent>& out) {
+  if (!synced_) sync_actions();
   const XrSession session = session_.get();
   const auto def = curvlab_action_set();
-  for (const auto& a : def.actions) {
+  for (std::size_t k = 0; k < def.actions.size(); ++k) {
+    const auto& a = def.actions[k];
     if (a.type == ActionType::Pose) continue;
     for (const auto& sub : a.subaction_paths) {
       const std::size_t hand = sub == kLeftHand ? 0 : 1;
+      bool& was_active = active_[k][hand];
       auto get = tagged<XrActionStateGetInfo>(XR_TYPE_ACTION_STATE_GET_INFO);
       get.action = actions_->action(a.name);
       get.subactionPath = hand_paths_[hand];
@@ -947,7 +974,10 @@ void XrBackend::read_buttons(std::vector<InputEvent>& out) {
           report_once(r, "xrGetActionStateBoolean");
           continue;
         }
-        if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE) {
+        const bool baseline = !was_active;
+        was_active = st.isActive == XR_TRUE;
+        if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE && !baseline &&
+            st.lastChangeTime >= focused_at_) {
           const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
           out.push_back({t_ns, name, device, st.currentState == XR_TRUE});
           // A continues pages as the trigger does (controller_reach).
@@ -959,10 +989,13 @@ void XrBackend::read_buttons(std::vector<InputEvent>& out) {
           report_once(r, "xrGetActionStateFloat");
           continue;
         }
+        const bool baseline = !was_active;
+        was_active = st.isActive == XR_TRUE;
         if (st.isActive != XR_TRUE) continue;
         const bool was = trigger_down_[hand];
         const bool now = was ? st.currentState > kTriggerRelease : st.currentState > kTriggerPress;
-        if (now == was) continue;
+        if (baseline) trigger_down_[hand] = st.currentState > kTriggerPress;
+        if (baseline || now == was) continue;
         trigger_down_[hand] = now;
         const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
         out.push_back({t_ns, name, device, now});

@@ -49,7 +49,11 @@
 //                            the predicted display time (XrTime and
 //                            CLOCK_MONOTONIC ns) and the head pose at it; one
 //                            "end_frame N layers K" line per xrEndFrame that
-//                            succeeded; "state", "profile", "input", "haptic",
+//                            succeeded; "sync_actions frame N focused F" per
+//                            xrSyncActions and "action_state CALL ACTION frame
+//                            N focused F" per action-state query (N the frame
+//                            of the last xrWaitFrame, F 1 while FOCUSED);
+//                            "state", "profile", "input", "haptic",
 //                            "capture", "violation", "warning" lines
 //   CURVLAB_TEST_XR_SIZE     recommended eye size WxH (default 320x320)
 //   CURVLAB_TEST_XR_LATE     late frames, comma-separated, numbered from 0 in
@@ -1798,6 +1802,7 @@ XrResult XRAPI_CALL SyncActions(XrSession h, const XrActionsSyncInfo* info) {
       }
     }
   }
+  log_line("sync_actions frame " + std::to_string(s->frames_waited - 1) + " focused " + (focused ? "1" : "0"));
   return focused ? XR_SUCCESS : XR_SESSION_NOT_FOCUSED;
 }
 
@@ -1814,6 +1819,8 @@ XrResult action_state(Session* s, const XrActionStateGetInfo* info, XrActionType
   if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "action");
   if (a->set->attached_to != s) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, a->set->name);
   if (a->type != want) return violation(fn, XR_ERROR_ACTION_TYPE_MISMATCH, a->name);
+  log_line(std::string("action_state ") + fn + " " + a->name + " frame " + std::to_string(s->frames_waited - 1) +
+           " focused " + (s->state == XR_SESSION_STATE_FOCUSED ? "1" : "0"));
   if (info->subactionPath == XR_NULL_PATH) {
     Action::State any;
     for (const Action::State& st : a->states) {
