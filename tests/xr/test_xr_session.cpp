@@ -525,6 +525,51 @@ TEST(XrSession, ButtonsAreReadFromAFreshSyncWhenFocusReturns) {
   fs::remove_all(dir);
 }
 
+TEST(XrSession, PausesKeepAnImageInTheHeadset) {
+  // A focus loss (3.15 s to 3.55 s after focus) and the operator's pause and
+  // resume: every frame the runtime shows (VISIBLE or FOCUSED, shouldRender)
+  // ends with a layer, so the participant never sees a black refresh.
+  const auto dir = fresh_dir("pause_layers");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  const auto script = dir / "ops.txt";
+  std::ofstream(script) << "4.7 pause\n5.3 resume\n";
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                  {"CURVLAB_TEST_XR_UNFOCUS", "3.15+0.4"},
+                  {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+  const auto r = run_cli("run " + kProtocol + " --participant X07 --backend xr --db " + db.string() +
+                         " --operator-window off --operator-script " + script.string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM events WHERE kind = 'operator_action' AND "
+                      "json_extract(detail, '$.action') = 'pause'")[0][0],
+            "1");
+  // Both pauses interrupted the session (a trial's attempt, a page or the interval).
+  const int paused = std::stoi(query(db, "SELECT count(*) FROM events WHERE kind IN ('trial_aborted', 'paused')")[0][0]);
+  EXPECT_GE(paused, 2);
+
+  const RuntimeLog log(log_path);
+  EXPECT_TRUE(log.problems.empty()) << log.problems.front();
+  int shown = 0;
+  std::vector<std::string> black;
+  for (const auto& line : log.lines) {
+    std::istringstream in(line);
+    std::string kind, word, state;
+    long long index = 0, layers = 0;
+    int render = 0;
+    in >> kind;
+    if (kind != "end_frame") continue;
+    in >> index >> word >> layers >> word >> state >> word >> render;
+    const bool visible = state == "XR_SESSION_STATE_VISIBLE" || state == "XR_SESSION_STATE_FOCUSED";
+    if (!visible || render != 1) continue;
+    ++shown;
+    if (layers == 0) black.push_back(line);
+  }
+  EXPECT_GT(shown, 300);
+  EXPECT_TRUE(black.empty()) << black.size() << " frames shown without a layer, the first: " << black.front();
+  fs::remove_all(dir);
+}
+
 // A copy of the demo protocol with `extra` appended (a [tracking] section).
 fs::path protocol_with(const fs::path& dir, const std::string& extra) {
   const auto path = dir / "protocol.toml";

@@ -430,9 +430,18 @@ class XrBackend final : public InteractiveDisplay {
   // Marks the backend failed and throws DeviceFailure naming the call.
   [[noreturn]] void fail(XrResult r, const char* call);
   [[noreturn]] void fail(const renderer::VulkanFailure& f);
+  // What a frame ends with: the projection layer just rendered into the
+  // swapchains, the last one again (a frame the runner began but did not
+  // draw: the image before it stays up instead of a black refresh), or none.
+  enum class FrameLayer { fresh, held, none };
   // xrEndFrame; its result is left to the caller (the frame loop fails on
   // it, teardown ignores it).
-  [[nodiscard]] XrResult end_frame(bool with_layer);
+  [[nodiscard]] XrResult end_frame(FrameLayer layer);
+  // For a frame ended without drawing: the last layer where the runtime
+  // shows this frame (shouldRender), none where it does not.
+  [[nodiscard]] FrameLayer undrawn() const {
+    return frame_state_.shouldRender == XR_TRUE ? FrameLayer::held : FrameLayer::none;
+  }
   std::int64_t to_session_ns(XrTime t);
   // xrSyncActions for this frame (a failure other than a lost session is
   // logged; the states then read inactive).
@@ -483,6 +492,9 @@ class XrBackend final : public InteractiveDisplay {
   std::int64_t offset_at_ns_ = -1;  // when it was made (CLOCK_MONOTONIC); -1 none
   std::int64_t frame_index_ = 0;
   std::array<XrView, 2> views_{tagged<XrView>(XR_TYPE_VIEW), tagged<XrView>(XR_TYPE_VIEW)};
+  // The views of the last layer submitted with a fresh image (the pose and
+  // field of view its images were rendered for); nullopt before the first.
+  std::optional<std::array<XrView, 2>> shown_views_;
   bool views_valid_ = false;
   LabPose head_;
   geometry::LabFrame lab_;
@@ -665,7 +677,7 @@ XrBackend::~XrBackend() {
   // failure the runtime may answer with errors, which nothing can act on
   // here (the failure was reported where it happened).
   try {
-    if (frame_begun_) (void)end_frame(false);
+    if (frame_begun_) (void)end_frame(undrawn());
     leave_session();
   } catch (...) {
     // poll_events() throws for a runtime that fails while we leave: leave anyway.
@@ -693,7 +705,7 @@ void XrBackend::leave_session() {
     auto begin_info = tagged<XrFrameBeginInfo>(XR_TYPE_FRAME_BEGIN_INFO);
     if (XR_FAILED(xrBeginFrame(session_.get(), &begin_info))) break;
     frame_begun_ = true;
-    if (XR_FAILED(end_frame(false))) break;
+    if (XR_FAILED(end_frame(undrawn()))) break;
   }
 }
 
@@ -727,7 +739,7 @@ void XrBackend::on_state(SessionState next) {
     if (const XrResult r = xrBeginSession(session_.get(), &info); XR_FAILED(r)) fail(r, "xrBeginSession");
   }
   if (u.end_session) {
-    if (frame_begun_) (void)end_frame(false);  // the session is ending: only xrEndSession counts
+    if (frame_begun_) (void)end_frame(FrameLayer::none);  // the session is ending: only xrEndSession counts
     if (const XrResult r = xrEndSession(session_.get()); XR_FAILED(r))
       std::cerr << "curvlab: xr: " << failure_of(r, "xrEndSession").message << '\n';
   }
@@ -806,12 +818,20 @@ std::int64_t XrBackend::to_session_ns(XrTime t) {
   return clock_map_.to_session(t);
 }
 
-XrResult XrBackend::end_frame(bool with_layer) {
+// A held layer names the same swapchains with the views their images were
+// rendered for: the compositor shows each swapchain's last released image
+// (OpenXR 1.0 §10.5, "Swapchain Image Management"), reprojected to the head
+// of now, so the participant keeps seeing the last frame, world-locked.
+XrResult XrBackend::end_frame(FrameLayer what) {
+  if (what == FrameLayer::fresh) shown_views_ = views_;
+  if (what == FrameLayer::held && !shown_views_) what = FrameLayer::none;
+  const bool with_layer = what != FrameLayer::none;
+  const std::array<XrView, 2>& from = what == FrameLayer::fresh || !shown_views_ ? views_ : *shown_views_;
   std::array<XrCompositionLayerProjectionView, 2> views{};
   for (std::size_t i = 0; i < 2; ++i) {
     views[i] = tagged<XrCompositionLayerProjectionView>(XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW);
-    views[i].pose = views_[i].pose;
-    views[i].fov = views_[i].fov;
+    views[i].pose = from[i].pose;
+    views[i].fov = from[i].fov;
     views[i].subImage.swapchain = swapchains_[i].handle.get();
     views[i].subImage.imageRect = {{0, 0},
                                    {static_cast<std::int32_t>(swapchains_[i].width),
@@ -840,8 +860,10 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
     if (state_.session_running()) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+  // A frame the runner began but did not draw (it paused, aborted or quit
+  // there) ends with the last image held.
   if (frame_begun_)
-    if (const XrResult r = end_frame(false); XR_FAILED(r)) fail(r, "xrEndFrame");
+    if (const XrResult r = end_frame(undrawn()); XR_FAILED(r)) fail(r, "xrEndFrame");
   const XrSession session = session_.get();
   auto wait_info = tagged<XrFrameWaitInfo>(XR_TYPE_FRAME_WAIT_INFO);
   frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
@@ -1035,7 +1057,7 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
   if (!frame_begun_) return stats;
   const bool render = frame_state_.shouldRender == XR_TRUE && views_valid_;
   if (!render) {
-    if (const XrResult r = end_frame(false); XR_FAILED(r)) fail(r, "xrEndFrame");
+    if (const XrResult r = end_frame(undrawn()); XR_FAILED(r)) fail(r, "xrEndFrame");
     return stats;
   }
   std::array<bool, 2> acquired{false, false};
@@ -1084,7 +1106,7 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
     fail(renderer::VulkanFailure(renderer::vk_call_name(e.what()), e.code().value()));
   }
   release_all();
-  if (const XrResult r = end_frame(true); XR_FAILED(r)) fail(r, "xrEndFrame");
+  if (const XrResult r = end_frame(FrameLayer::fresh); XR_FAILED(r)) fail(r, "xrEndFrame");
   return stats;
 }
 

@@ -48,8 +48,9 @@
 //   CURVLAB_TEST_XR_LOG      a text log: one "frame" line per xrWaitFrame with
 //                            the predicted display time (XrTime and
 //                            CLOCK_MONOTONIC ns) and the head pose at it; one
-//                            "end_frame N layers K" line per xrEndFrame that
-//                            succeeded; "sync_actions frame N focused F" per
+//                            "end_frame N layers K state S should_render R"
+//                            line per xrEndFrame that succeeded (S the
+//                            session state then, R the frame's shouldRender); "sync_actions frame N focused F" per
 //                            xrSyncActions and "action_state CALL ACTION frame
 //                            N focused F" per action-state query (N the frame
 //                            of the last xrWaitFrame, F 1 while FOCUSED);
@@ -242,6 +243,8 @@ struct Session {
   std::int64_t last_wake_ns = 0;
   XrTime waited_display = 0;
   XrTime begun_display = 0;
+  bool waited_render = false;  // the shouldRender xrWaitFrame gave the waited frame
+  bool begun_render = false;   // … and the begun one
   std::int64_t frames_waited = 0;
   std::int64_t frames_submitted = 0;
   std::vector<ActionSet*> attached;
@@ -1465,6 +1468,7 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
       !hidden && (s->state == XR_SESSION_STATE_VISIBLE || s->state == XR_SESSION_STATE_FOCUSED) ? XR_TRUE : XR_FALSE;
   s->waited = true;
   s->waited_display = state->predictedDisplayTime;
+  s->waited_render = state->shouldRender == XR_TRUE;
   const Pose head = head_pose(xr_seconds(state->predictedDisplayTime));
   char line[320];
   std::snprintf(line, sizeof line, "frame %lld xr_ns %lld monotonic_ns %lld head %.9f %.9f %.9f %.9f %.9f %.9f %.9f",
@@ -1488,6 +1492,7 @@ XrResult XRAPI_CALL BeginFrame(XrSession h, const XrFrameBeginInfo* info) {
   const bool discarded = s->begun;
   s->begun = true;
   s->begun_display = s->waited_display;
+  s->begun_render = s->waited_render;
   if (discarded) log_line("note xrBeginFrame discarded the frame begun before");
   return discarded ? XR_FRAME_DISCARDED : XR_SUCCESS;
 }
@@ -1566,7 +1571,8 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
         warning(fn, "could not capture " + path);
     }
   }
-  log_line("end_frame " + std::to_string(s->frames_ended++) + " layers " + std::to_string(info->layerCount));
+  log_line("end_frame " + std::to_string(s->frames_ended++) + " layers " + std::to_string(info->layerCount) +
+           " state " + state_name(s->state) + " should_render " + (s->begun_render ? "1" : "0"));
   // The first frame ended: the session is synchronised with the display,
   // visible and focused.
   if (!s->focused_once && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
