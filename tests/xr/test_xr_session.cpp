@@ -583,7 +583,7 @@ fs::path protocol_with(const fs::path& dir, const std::string& extra) {
 // The program under a time limit: a session that waits forever for the head
 // is killed (exit 124) instead of hanging the test.
 curvlab::testing::CliResult run_cli_within(int seconds, const std::string& args) {
-  return curvlab::testing::run_shell("timeout " + std::to_string(seconds) + " " + std::string(CURVLAB_BIN) + " " +
+  return curvlab::testing::run_shell("timeout -k 5 " + std::to_string(seconds) + " " + std::string(CURVLAB_BIN) + " " +
                                      args + " 2>&1");
 }
 
@@ -642,6 +642,75 @@ TEST(XrSession, AHeadWithoutPositionTrackingRunsWhereTheProtocolAsksLess) {
     EXPECT_TRUE(RuntimeLog(log_path).problems.empty());
     fs::remove_all(dir);
   }
+}
+
+TEST(XrSession, TheRuntimeStoppingAndStartingTheSessionAgainPausesTheTrial) {
+  // 3.15 s after focus, in the fifth trial's stimulus, the runtime stops the
+  // session (STOPPING → xrEndSession → IDLE) and makes it READY again 0.6 s
+  // later: the trial in flight is paused and run again, as for a focus loss,
+  // and the session completes.
+  const auto dir = fresh_dir("restart");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                  {"CURVLAB_TEST_XR_RESTART", "3.15+0.6"},
+                  {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+  const auto r = run_cli_within(60, "run " + kProtocol + " --participant X08 --backend xr --db " + db.string() +
+                                        " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const RuntimeLog log(log_path);
+  EXPECT_TRUE(log.problems.empty()) << log.problems.front();
+  const std::vector<std::string> restart = {"XR_SESSION_STATE_VISIBLE", "XR_SESSION_STATE_SYNCHRONIZED",
+                                            "XR_SESSION_STATE_STOPPING", "XR_SESSION_STATE_IDLE",
+                                            "XR_SESSION_STATE_READY",   "XR_SESSION_STATE_SYNCHRONIZED",
+                                            "XR_SESSION_STATE_VISIBLE", "XR_SESSION_STATE_FOCUSED"};
+  EXPECT_NE(std::search(log.states.begin(), log.states.end(), restart.begin(), restart.end()), log.states.end());
+  EXPECT_EQ(std::count_if(log.lines.begin(), log.lines.end(),
+                          [](const std::string& l) { return l.rfind("begin_session", 0) == 0; }),
+            2);
+
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  const auto aborted = query(db, "SELECT trial_id, json_extract(detail, '$.reason') FROM events "
+                                 "WHERE kind = 'trial_aborted'");
+  ASSERT_EQ(aborted.size(), 1u);
+  EXPECT_EQ(aborted[0][1], "pause");
+  EXPECT_EQ(query(db, "SELECT attempt FROM trials WHERE trial_id = " + aborted[0][0])[0][0], "2");
+  // The trial's answer came after the session ran again: the repeated
+  // attempt's onset is after the runtime made it READY.
+  std::int64_t restarted = 0;  // the last READY (monotonic ns), the restart's
+  for (const auto& line : log.lines)
+    if (line.rfind("state XR_SESSION_STATE_READY", 0) == 0) restarted = std::stoll(line.substr(line.rfind(' ') + 1));
+  ASSERT_GT(restarted, 0);
+  EXPECT_GT(std::stoll(query(db, "SELECT onset_ns FROM trials WHERE trial_id = " + aborted[0][0])[0][0]), restarted);
+  fs::remove_all(dir);
+}
+
+TEST(XrSession, TheOperatorCanEndASessionTheRuntimeHasStopped) {
+  // The runtime stops the session 3.15 s after focus and keeps it IDLE for a
+  // minute (a headset put away in standby): the trial in flight is paused at
+  // once, and the operator's end (about 5 s into the session) ends the session,
+  // interrupted and resumable, without waiting for the runtime.
+  const auto dir = fresh_dir("stopped_end");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  const auto script = dir / "ops.txt";
+  std::ofstream(script) << "5 end\n";
+  {
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_RESTART", "3.15+60"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli_within(30, "run " + kProtocol + " --participant X09 --backend xr --db " + db.string() +
+                                          " --operator-window off --operator-script " + script.string() + " --quiet");
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("curvlab resume --db " + db.string() + " --session 1"), std::string::npos) << r.out;
+    EXPECT_TRUE(RuntimeLog(log_path).problems.empty());
+  }
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  const auto aborted = query(db, "SELECT json_extract(detail, '$.reason') FROM events WHERE kind = 'trial_aborted'");
+  ASSERT_GE(aborted.size(), 1u);
+  EXPECT_EQ(aborted[0][0], "pause");
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -451,6 +451,7 @@ class XrBackend final : public InteractiveDisplay {
   // frame otherwise) and goes on: one unreadable button must not end a session.
   void report_once(XrResult r, const char* call);
   void mark_late(FrameTiming& timing);
+  FrameTiming stopped_frame();
   // The steps of create(), in the order of the OpenXR lifecycle; each keeps
   // what it made in the members.
   Result<Done> open(const OptionalExtensions& offered);
@@ -748,8 +749,8 @@ void XrBackend::on_state(SessionState next) {
     for (auto& hands : active_) hands = {false, false};
     synced_ = false;
   }
-  if (u.mode == RunMode::Paused && before == RunMode::Running) signals_.push_back(Signal::pause);
-  if (u.mode == RunMode::Running && before == RunMode::Paused) signals_.push_back(Signal::resume);
+  if (u.pause) signals_.push_back(Signal::pause);
+  if (u.resume) signals_.push_back(Signal::resume);
   if (u.mode == RunMode::Exit) signals_.push_back(Signal::quit);
 }
 
@@ -854,10 +855,13 @@ XrResult XrBackend::end_frame(FrameLayer what) {
 
 std::optional<FrameTiming> XrBackend::begin_frame() {
   // Until the runtime makes the session READY there is no frame loop; wait
-  // for its events (the runner shows nothing meanwhile).
+  // for its events (the runner shows nothing meanwhile). Once the runtime
+  // has stopped a session that ran (STOPPING, then IDLE until it is READY
+  // again), the runner keeps its own loop, paused, on frames without OpenXR.
   for (;;) {
     if (!poll_events()) return std::nullopt;
     if (state_.session_running()) break;
+    if (state_.mode() == RunMode::Stopped) return stopped_frame();
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   // A frame the runner began but did not draw (it paused, aborted or quit
@@ -916,6 +920,30 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   timing.predicted_display_ns = to_session_ns(t);
   timing.period_ns = frame_state_.predictedDisplayPeriod;
   mark_late(timing);
+  return timing;
+}
+
+// A frame of the runner's loop while the runtime has the session stopped:
+// paced at the display's period, nothing located (the head and hands are
+// untracked, the eyes from the IPD), nothing submitted (submit() finds no
+// begun frame), and late, since nothing is shown. The pause it carries
+// (SessionUpdate::pause) stops the trial's clock at the STOPPING, not when
+// the runtime makes the session READY again; the runner stays free to quit.
+FrameTiming XrBackend::stopped_frame() {
+  const std::int64_t period = frame_state_.predictedDisplayPeriod > 0
+                                  ? frame_state_.predictedDisplayPeriod
+                                  : static_cast<std::int64_t>(1e9 / refresh_hz_);
+  std::this_thread::sleep_for(std::chrono::nanoseconds(period));
+  views_valid_ = false;
+  head_flags_ = 0;
+  for (auto& pose : lab_.pose) pose.valid = false;
+  last_display_ = 0;  // the display times after the restart start afresh
+  FrameTiming timing;
+  timing.index = frame_index_++;
+  timing.now_ns = options_.clock->now_ns();
+  timing.predicted_display_ns = timing.now_ns + period;
+  timing.period_ns = period;
+  timing.late = true;
   return timing;
 }
 

@@ -28,6 +28,11 @@
 //   CURVLAB_TEST_XR_EXIT     SECONDS: the runtime asks the application to exit
 //                            (VISIBLE, SYNCHRONIZED, STOPPING; after
 //                            xrEndSession IDLE and EXITING)
+//   CURVLAB_TEST_XR_RESTART  SECONDS+IDLE: the runtime stops the session
+//                            (VISIBLE, SYNCHRONIZED, STOPPING); after
+//                            xrEndSession it is IDLE for IDLE seconds, then
+//                            READY; after xrBeginSession and a frame,
+//                            SYNCHRONIZED, VISIBLE and FOCUSED again
 //   CURVLAB_TEST_XR_LOSS     SECONDS: the session is being lost (LOSS_PENDING,
 //                            from any state; xrWaitFrame and xrEndFrame
 //                            return XR_ERROR_SESSION_LOST half a second later)
@@ -232,6 +237,10 @@ struct Session {
   bool faulted = false;  // the scripted fault (CURVLAB_TEST_XR_FAIL) has happened
   std::int64_t focus_t0_ns = 0;  // CLOCK_MONOTONIC when first FOCUSED
   std::vector<int> unfocus_phase;  // per scripted spell: 0 pending, 1 unfocused, 2 done
+  // CURVLAB_TEST_XR_RESTART: pending, stopping (until xrEndSession), idle
+  // (since idle_since_ns), ready (until the first frame ends), done.
+  enum class Restart { pending, stopping, idle, ready, done } restart = Restart::pending;
+  std::int64_t idle_since_ns = 0;
   VulkanDevice* vk = nullptr;
   VkQueue queue = VK_NULL_HANDLE;
   VkCommandPool pool = VK_NULL_HANDLE;
@@ -384,12 +393,27 @@ void tick(Session& s) {
     queue_state(s, XR_SESSION_STATE_STOPPING);
     return;
   }
+  if (script.restart && s.restart == Session::Restart::pending && t >= script.restart->at_s && s.running &&
+      !s.exit_requested && s.lost_from_ns < 0) {
+    s.restart = Session::Restart::stopping;
+    if (s.state == XR_SESSION_STATE_FOCUSED) queue_state(s, XR_SESSION_STATE_VISIBLE);
+    if (s.state == XR_SESSION_STATE_VISIBLE) queue_state(s, XR_SESSION_STATE_SYNCHRONIZED);
+    queue_state(s, XR_SESSION_STATE_STOPPING);
+    return;
+  }
+  if (s.restart == Session::Restart::idle && !s.exit_requested &&
+      monotonic_ns() - s.idle_since_ns >= static_cast<std::int64_t>(script.restart->idle_s * 1e9)) {
+    s.restart = Session::Restart::ready;
+    queue_state(s, XR_SESSION_STATE_READY);
+    return;
+  }
   if (script.loss_at_s && t >= *script.loss_at_s && s.lost_from_ns < 0) {
     queue_state(s, XR_SESSION_STATE_LOSS_PENDING);
     s.lost_from_ns = monotonic_ns() + 500'000'000;
     return;
   }
   if (s.exit_requested || s.lost_from_ns >= 0) return;
+  if (s.restart != Session::Restart::pending && s.restart != Session::Restart::done) return;
   for (std::size_t i = 0; i < script.unfocus.size(); ++i) {
     const Unfocus& u = script.unfocus[i];
     if (s.unfocus_phase[i] == 0 && t >= u.at_s && s.state == XR_SESSION_STATE_FOCUSED) {
@@ -1036,7 +1060,12 @@ XrResult XRAPI_CALL EndSession(XrSession h) {
   s->waited = s->begun = false;
   log_line("end_session monotonic_ns " + std::to_string(monotonic_ns()));
   queue_state(*s, XR_SESSION_STATE_IDLE);
-  if (s->exit_requested) queue_state(*s, XR_SESSION_STATE_EXITING);
+  if (s->exit_requested) {
+    queue_state(*s, XR_SESSION_STATE_EXITING);
+  } else if (s->restart == Session::Restart::stopping) {
+    s->restart = Session::Restart::idle;
+    s->idle_since_ns = monotonic_ns();
+  }
   return XR_SUCCESS;
 }
 
@@ -1581,6 +1610,14 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
     queue_state(*s, XR_SESSION_STATE_FOCUSED);
     s->focused_once = true;
     s->focus_t0_ns = monotonic_ns();
+  }
+  // Started again after a scripted stop: up to FOCUSED, the script's clock
+  // (seconds after the first focus) running on.
+  if (s->restart == Session::Restart::ready && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
+    queue_state(*s, XR_SESSION_STATE_SYNCHRONIZED);
+    queue_state(*s, XR_SESSION_STATE_VISIBLE);
+    queue_state(*s, XR_SESSION_STATE_FOCUSED);
+    s->restart = Session::Restart::done;
   }
   return XR_SUCCESS;
 }
