@@ -617,13 +617,13 @@ class SessionLoop::Impl {
       if (f.signal == Signal::quit) return Outcome::quit;
       if (paused ? f.signal == Signal::resume : f.head_tracked) break;
       if (!paused && f.timing.now_ns - since_ns >= ms_to_ns(settings_.tracking_loss.head_wait_ms))
-        throw Stop{head_never_came()};
+        throw Stop{head_never_came(reason)};
     }
     if (paused) writer_.journal(data::StatusChange{session_id_, data::SessionStatus::running, false});
     return Outcome::done;
   }
 
-  Error head_never_came() const {
+  Error head_never_came(AbortReason reason) const {
     const auto& policy = settings_.tracking_loss;
     const io::HeadTracking head = station_.poses->head_tracking();
     std::string reported = head.flags;
@@ -633,8 +633,8 @@ class SessionLoop::Impl {
     return Error{Error::Kind::device,
                  "the head was not tracked as [tracking] head_requires = \"" +
                      std::string(to_string(policy.head_requires)) + "\" asks for " + waited +
-                     " after tracking was lost (the trial ended as tracking_lost); the headset reports the head " +
-                     reported +
+                     " after the attempt ended (" + std::string(to_string(reason)) +
+                     "); the headset reports the head " + reported +
                      ". Check the headset's tracking, or for a headset that tracks no position set "
                      "head_requires = \"orientation\""};
   }
