@@ -111,6 +111,22 @@ TEST(TrialState, TrackingLostLongerThanTheThresholdAborts) {
   for (k = 0; k < 10; ++k) EXPECT_FALSE(b.advance(frame(k, k < 5 || k > 7)).abort);
 }
 
+TEST(TrialState, TheHeadMeetsWhatTheProtocolRequires) {
+  using R = pr::HeadRequirement;
+  const curvlab::harness::io::HeadTracking tracked{true, true, ""};
+  const curvlab::harness::io::HeadTracking orientation_only{true, false, "ORIENTATION_TRACKED"};
+  const curvlab::harness::io::HeadTracking inferred{false, false, ""};
+  EXPECT_TRUE(rn::head_meets(R::position, true, tracked));
+  EXPECT_FALSE(rn::head_meets(R::position, true, orientation_only));
+  EXPECT_TRUE(rn::head_meets(R::orientation, true, orientation_only));
+  EXPECT_FALSE(rn::head_meets(R::orientation, true, inferred));
+  // An unusable pose is untracked for both, whatever the flags say.
+  EXPECT_FALSE(rn::head_meets(R::position, false, tracked));
+  EXPECT_FALSE(rn::head_meets(R::orientation, false, tracked));
+  // none: the head never stops a trial.
+  EXPECT_TRUE(rn::head_meets(R::none, false, inferred));
+}
+
 TEST(TrialState, FlagCountsLostSpellsAndTheirTime) {
   pr::TrackingLoss loss;
   loss.loss_ms = 100;

@@ -58,6 +58,7 @@ class RuntimeEnv {
                                          "CURVLAB_TEST_XR_EXIT",          "CURVLAB_TEST_XR_LATE",
                                          "CURVLAB_TEST_XR_CAPTURE_DIR",   "CURVLAB_TEST_XR_CAPTURE_EVERY",
                                          "CURVLAB_TEST_XR_LOG",           "CURVLAB_TEST_XR_SIZE",
+                                         "CURVLAB_TEST_XR_HEAD",          "CURVLAB_TEST_XR_RESTART",
                                          "VK_INSTANCE_LAYERS"};
 };
 

@@ -105,6 +105,38 @@ TEST(SessionState, FullLifecycleWithFocusLossAndResume) {
   EXPECT_FALSE(u.unexpected);
 }
 
+TEST(SessionState, StoppingAndReadyAgainPauseAndResumeTheTrial) {
+  SessionStateMachine m;
+  for (auto s : {SessionState::Idle, SessionState::Ready, SessionState::Synchronized,
+                 SessionState::Visible, SessionState::Focused})
+    m.on_state_changed(s);
+  // The runtime stops the session from FOCUSED (its transitions skipped).
+  auto u = m.on_state_changed(SessionState::Stopping);
+  EXPECT_TRUE(u.unexpected);
+  EXPECT_TRUE(u.pause);
+  EXPECT_TRUE(u.end_session);
+  EXPECT_NE(u.message.find("paused"), std::string::npos);
+  EXPECT_FALSE(m.on_state_changed(SessionState::Idle).pause);
+  u = m.on_state_changed(SessionState::Ready);
+  EXPECT_TRUE(u.begin_session);
+  EXPECT_FALSE(u.resume);
+  m.on_state_changed(SessionState::Synchronized);
+  u = m.on_state_changed(SessionState::Visible);
+  EXPECT_FALSE(u.pause) << "paused already";
+  u = m.on_state_changed(SessionState::Focused);
+  EXPECT_TRUE(u.resume);
+  EXPECT_EQ(u.mode, RunMode::Running);
+  // Down through VISIBLE: one pause, not a second at STOPPING.
+  EXPECT_TRUE(m.on_state_changed(SessionState::Visible).pause);
+  EXPECT_FALSE(m.on_state_changed(SessionState::Synchronized).pause);
+  EXPECT_FALSE(m.on_state_changed(SessionState::Stopping).pause);
+  m.on_state_changed(SessionState::Idle);
+  u = m.on_state_changed(SessionState::Exiting);
+  EXPECT_FALSE(u.pause);
+  EXPECT_FALSE(u.resume);
+  EXPECT_EQ(u.mode, RunMode::Exit);
+}
+
 TEST(SessionState, LossPendingLeavesARunningSessionWithoutEndingIt) {
   SessionStateMachine m;
   for (auto s : {SessionState::Idle, SessionState::Ready, SessionState::Synchronized,

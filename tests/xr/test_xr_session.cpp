@@ -461,4 +461,256 @@ TEST(XrSession, ALostSessionIsLeftWithoutEndingItAndResumes) {
   fs::remove_all(dir);
 }
 
+TEST(XrSession, ButtonsAreReadFromAFreshSyncWhenFocusReturns) {
+  // The demo's presses with a focus loss in the fifth trial's stimulus
+  // (3.15 s to 3.55 s after focus), X pressed and released while unfocused
+  // (the demo's own, at 3.4 s), and the right trigger pulled at 3.5 s and held
+  // across the return until 3.8 s: neither may answer or count as an input.
+  const auto dir = fresh_dir("refocus");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  {
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses + ",right:trigger@3.5~0.3"},
+                    {"CURVLAB_TEST_XR_UNFOCUS", "3.15+0.4"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli("run " + kProtocol + " --participant X06 --backend xr --db " + db.string() + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  }
+  const RuntimeLog log(log_path);
+  EXPECT_TRUE(log.problems.empty()) << log.problems.front();
+  // Every action-state read while FOCUSED follows an xrSyncActions made
+  // while FOCUSED in the same frame (OpenXR 1.0 §11.5: states are those of
+  // the last sync, which before the focus loss are stale).
+  std::int64_t frame = -1, synced = -2, reads = 0;
+  std::vector<std::string> stale;
+  for (const auto& line : log.lines) {
+    std::istringstream in(line);
+    std::string kind, word;
+    in >> kind;
+    if (kind == "frame") {
+      in >> frame;
+    } else if (kind == "sync_actions") {
+      std::int64_t n = 0;
+      int focused = 0;
+      in >> word >> n >> word >> focused;
+      synced = focused == 1 ? n : -2;
+    } else if (kind == "action_state") {
+      std::string call, action;
+      std::int64_t n = 0;
+      int focused = 0;
+      in >> call >> action >> word >> n >> word >> focused;
+      ++reads;
+      if (focused == 1 && (n != frame || synced != frame)) stale.push_back(line);
+    }
+  }
+  EXPECT_GT(reads, 100);
+  EXPECT_TRUE(stale.empty()) << stale.size() << " reads without a sync in their frame, the first: " << stale.front();
+
+  // The focus loss repeated the fifth trial, and every trial was answered.
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM events WHERE kind = 'trial_aborted'")[0][0], "1");
+  // Every input the session stored (answers and anticipations) is a press
+  // the runtime delivered while focused, at its time: none is a state from
+  // before the focus loss, a press made without focus, or the trigger held
+  // across the return.
+  auto is_press = [&log](std::int64_t t_ns) {
+    return std::any_of(log.presses.begin(), log.presses.end(),
+                       [&](const auto& p) { return std::llabs(p.second - t_ns) <= kSameInstantNs; });
+  };
+  for (const auto& row : query(db, "SELECT response_ns FROM trials"))
+    EXPECT_TRUE(is_press(std::stoll(row[0]))) << "answer at " << row[0] << " is no press";
+  for (const auto& row : query(db, "SELECT json_extract(detail, '$.t_ns'), json_extract(detail, '$.name') "
+                                   "FROM events WHERE kind = 'early_input'"))
+    EXPECT_TRUE(is_press(std::stoll(row[0]))) << "early input " << row[1] << " at " << row[0] << " is no press";
+  fs::remove_all(dir);
+}
+
+TEST(XrSession, PausesKeepAnImageInTheHeadset) {
+  // A focus loss (3.15 s to 3.55 s after focus) and the operator's pause and
+  // resume: every frame the runtime shows (VISIBLE or FOCUSED, shouldRender)
+  // ends with a layer, so the participant never sees a black refresh.
+  const auto dir = fresh_dir("pause_layers");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  const auto script = dir / "ops.txt";
+  std::ofstream(script) << "4.7 pause\n5.3 resume\n";
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                  {"CURVLAB_TEST_XR_UNFOCUS", "3.15+0.4"},
+                  {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+  const auto r = run_cli("run " + kProtocol + " --participant X07 --backend xr --db " + db.string() +
+                         " --operator-window off --operator-script " + script.string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM events WHERE kind = 'operator_action' AND "
+                      "json_extract(detail, '$.action') = 'pause'")[0][0],
+            "1");
+  // Both pauses interrupted the session (a trial's attempt, a page or the interval).
+  const int paused = std::stoi(query(db, "SELECT count(*) FROM events WHERE kind IN ('trial_aborted', 'paused')")[0][0]);
+  EXPECT_GE(paused, 2);
+
+  const RuntimeLog log(log_path);
+  EXPECT_TRUE(log.problems.empty()) << log.problems.front();
+  int shown = 0;
+  std::vector<std::string> black;
+  for (const auto& line : log.lines) {
+    std::istringstream in(line);
+    std::string kind, word, state;
+    long long index = 0, layers = 0;
+    int render = 0;
+    in >> kind;
+    if (kind != "end_frame") continue;
+    in >> index >> word >> layers >> word >> state >> word >> render;
+    const bool visible = state == "XR_SESSION_STATE_VISIBLE" || state == "XR_SESSION_STATE_FOCUSED";
+    if (!visible || render != 1) continue;
+    ++shown;
+    if (layers == 0) black.push_back(line);
+  }
+  EXPECT_GT(shown, 300);
+  EXPECT_TRUE(black.empty()) << black.size() << " frames shown without a layer, the first: " << black.front();
+  fs::remove_all(dir);
+}
+
+// A copy of the demo protocol with `extra` appended (a [tracking] section).
+fs::path protocol_with(const fs::path& dir, const std::string& extra) {
+  const auto path = dir / "protocol.toml";
+  std::ifstream in(kProtocol);
+  std::ostringstream text;
+  text << in.rdbuf() << "\n" << extra << "\n";
+  std::ofstream(path) << text.str();
+  return path;
+}
+
+// The program under a time limit: a session that waits forever for the head
+// is killed (exit 124) instead of hanging the test.
+curvlab::testing::CliResult run_cli_within(int seconds, const std::string& args) {
+  return curvlab::testing::run_shell("timeout -k 5 " + std::to_string(seconds) + " " + std::string(CURVLAB_BIN) + " " +
+                                     args + " 2>&1");
+}
+
+TEST(XrSession, AHeadWithoutPositionTrackingStopsTheSessionResumably) {
+  // Monado's simulated headset: orientation tracked, position valid but not
+  // tracked. The demo protocol asks for a position-tracked head (the
+  // default): the first trial is lost, the session waits its 10 s for the
+  // head, then stops interrupted with the runtime's flags, and resumes.
+  const auto dir = fresh_dir("orientation_only");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  {
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_HEAD", "orientation_only"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r =
+        run_cli_within(60, "run " + kProtocol + " --participant X04 --backend xr --db " + db.string() + " --quiet");
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("head_requires = \"position\""), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("ORIENTATION_TRACKED | POSITION_VALID | no POSITION_TRACKED"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("curvlab resume --db " + db.string() + " --session 1"), std::string::npos) << r.out;
+    EXPECT_TRUE(RuntimeLog(log_path).problems.empty());
+  }
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "0");
+  const auto aborted = query(db, "SELECT json_extract(detail, '$.reason') FROM events WHERE kind = 'trial_aborted'");
+  ASSERT_EQ(aborted.size(), 1u);
+  EXPECT_EQ(aborted[0][0], "tracking_lost");
+  // The head's samples are stored with their (inferred) positions.
+  EXPECT_EQ(query(db, "SELECT count(*) FROM tracking_samples WHERE device = 'head' AND position_valid = 0")[0][0],
+            "0");
+
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses}, {"CURVLAB_TEST_XR_LOG", log_path.string() + "2"}});
+  const auto r = run_cli_within(60, "resume --db " + db.string() + " --session 1 --backend xr --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  fs::remove_all(dir);
+}
+
+TEST(XrSession, AHeadWithoutPositionTrackingRunsWhereTheProtocolAsksLess) {
+  for (const std::string need : {"orientation", "none"}) {
+    SCOPED_TRACE(need);
+    const auto dir = fresh_dir("head_requires_" + need);
+    const auto db = dir / "xr.db";
+    const auto log_path = dir / "runtime.log";
+    const auto protocol = protocol_with(dir, "[tracking]\nhead_requires = \"" + need + "\"");
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_HEAD", "orientation_only"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli_within(60, "run " + protocol.string() + " --participant X05 --backend xr --db " +
+                                          db.string() + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
+    EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+    EXPECT_EQ(query(db, "SELECT count(*) FROM events WHERE kind = 'trial_aborted'")[0][0], "0");
+    EXPECT_TRUE(RuntimeLog(log_path).problems.empty());
+    fs::remove_all(dir);
+  }
+}
+
+TEST(XrSession, TheRuntimeStoppingAndStartingTheSessionAgainPausesTheTrial) {
+  // 3.15 s after focus, in the fifth trial's stimulus, the runtime stops the
+  // session (STOPPING → xrEndSession → IDLE) and makes it READY again 0.6 s
+  // later: the trial in flight is paused and run again, as for a focus loss,
+  // and the session completes.
+  const auto dir = fresh_dir("restart");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                  {"CURVLAB_TEST_XR_RESTART", "3.15+0.6"},
+                  {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+  const auto r = run_cli_within(60, "run " + kProtocol + " --participant X08 --backend xr --db " + db.string() +
+                                        " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const RuntimeLog log(log_path);
+  EXPECT_TRUE(log.problems.empty()) << log.problems.front();
+  const std::vector<std::string> restart = {"XR_SESSION_STATE_VISIBLE", "XR_SESSION_STATE_SYNCHRONIZED",
+                                            "XR_SESSION_STATE_STOPPING", "XR_SESSION_STATE_IDLE",
+                                            "XR_SESSION_STATE_READY",   "XR_SESSION_STATE_SYNCHRONIZED",
+                                            "XR_SESSION_STATE_VISIBLE", "XR_SESSION_STATE_FOCUSED"};
+  EXPECT_NE(std::search(log.states.begin(), log.states.end(), restart.begin(), restart.end()), log.states.end());
+  EXPECT_EQ(std::count_if(log.lines.begin(), log.lines.end(),
+                          [](const std::string& l) { return l.rfind("begin_session", 0) == 0; }),
+            2);
+
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0], "8");
+  const auto aborted = query(db, "SELECT trial_id, json_extract(detail, '$.reason') FROM events "
+                                 "WHERE kind = 'trial_aborted'");
+  ASSERT_EQ(aborted.size(), 1u);
+  EXPECT_EQ(aborted[0][1], "pause");
+  EXPECT_EQ(query(db, "SELECT attempt FROM trials WHERE trial_id = " + aborted[0][0])[0][0], "2");
+  // The trial's answer came after the session ran again: the repeated
+  // attempt's onset is after the runtime made it READY.
+  std::int64_t restarted = 0;  // the last READY (monotonic ns), the restart's
+  for (const auto& line : log.lines)
+    if (line.rfind("state XR_SESSION_STATE_READY", 0) == 0) restarted = std::stoll(line.substr(line.rfind(' ') + 1));
+  ASSERT_GT(restarted, 0);
+  EXPECT_GT(std::stoll(query(db, "SELECT onset_ns FROM trials WHERE trial_id = " + aborted[0][0])[0][0]), restarted);
+  fs::remove_all(dir);
+}
+
+TEST(XrSession, TheOperatorCanEndASessionTheRuntimeHasStopped) {
+  // The runtime stops the session 3.15 s after focus and keeps it IDLE for a
+  // minute (a headset put away in standby): the trial in flight is paused at
+  // once, and the operator's end (about 5 s into the session) ends the session,
+  // interrupted and resumable, without waiting for the runtime.
+  const auto dir = fresh_dir("stopped_end");
+  const auto db = dir / "xr.db";
+  const auto log_path = dir / "runtime.log";
+  const auto script = dir / "ops.txt";
+  std::ofstream(script) << "5 end\n";
+  {
+    RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", kPresses},
+                    {"CURVLAB_TEST_XR_RESTART", "3.15+60"},
+                    {"CURVLAB_TEST_XR_LOG", log_path.string()}});
+    const auto r = run_cli_within(30, "run " + kProtocol + " --participant X09 --backend xr --db " + db.string() +
+                                          " --operator-window off --operator-script " + script.string() + " --quiet");
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("curvlab resume --db " + db.string() + " --session 1"), std::string::npos) << r.out;
+    EXPECT_TRUE(RuntimeLog(log_path).problems.empty());
+  }
+  EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  const auto aborted = query(db, "SELECT json_extract(detail, '$.reason') FROM events WHERE kind = 'trial_aborted'");
+  ASSERT_GE(aborted.size(), 1u);
+  EXPECT_EQ(aborted[0][0], "pause");
+  fs::remove_all(dir);
+}
+
 }  // namespace

@@ -29,11 +29,22 @@ std::string_view to_string(OnTrackingLoss o) {
   }
   return "?";
 }
+std::string_view to_string(HeadRequirement r) {
+  switch (r) {
+    case HeadRequirement::position: return "position";
+    case HeadRequirement::orientation: return "orientation";
+    case HeadRequirement::none: return "none";
+  }
+  return "?";
+}
 std::optional<StickAnchor> parse_stick_anchor(std::string_view text) {
   return geometry::parse_name(kStickAnchors, text);
 }
 std::optional<OnTrackingLoss> parse_on_tracking_loss(std::string_view text) {
   return geometry::parse_name(kOnTrackingLosses, text);
+}
+std::optional<HeadRequirement> parse_head_requirement(std::string_view text) {
+  return geometry::parse_name(kHeadRequirements, text);
 }
 
 namespace {
@@ -213,6 +224,14 @@ std::vector<SettingInfo> make_registry() {
           "tracking.on_loss", "tracking lost: repeat the trial, flag it and go on, or mark it aborted"),
       integer<&S::tracking_loss, &TrackingLoss::max_attempts>(
           "tracking.max_attempts", 0, 100, "attempts a trial is given before it is marked aborted (0: no limit)"),
+      enumeration<kHeadRequirements, &S::tracking_loss, &TrackingLoss::head_requires>(
+          "tracking.head_requires",
+          "what the head must be for a trial to count it tracked: position (and orientation) tracked, "
+          "orientation tracked (position valid, possibly inferred), or none"),
+      integer<&S::tracking_loss, &TrackingLoss::head_wait_ms>(
+          "tracking.head_wait_ms", 0, 600000,
+          "how long the session waits for the head after tracking was lost before it stops, interrupted "
+          "and resumable"),
       {"viewing.preset", K::enumeration, 0, 0, geometry::names_of(geometry::kViewPresets),
        "sets projection and eyes: tourist = tourist/both, native = native/both, "
        "monocular = native/dominant",

@@ -299,7 +299,8 @@ class SessionLoop::Impl {
     lab_ = station_.poses->poses(f.timing);
     last_lab_ = lab_;
     if (tracker_) tracker_->update(lab_);
-    f.head_tracked = tracker_ && tracker_->output().tracked[0];
+    f.head_tracked = head_meets(settings_.tracking_loss.head_requires, tracker_ && tracker_->output().tracked[0],
+                                station_.poses->head_tracking());
     f.inputs.clear();
     f.signal = poll_devices(f.inputs);
     take_operator_actions(f);
@@ -600,21 +601,42 @@ class SessionLoop::Impl {
   }
 
   // After an abort: wait for the resume (pause) or for the head (otherwise),
-  // so that one loss does not abort the trials after it as well.
+  // so that one loss does not abort the trials after it as well. The head
+  // is waited for at most [tracking] head_wait_ms: a headset that never
+  // tracks what head_requires asks for stops the session, resumable.
   Outcome wait_until_ready(AbortReason reason, std::optional<std::int64_t> trial_id) {
     const bool paused = reason == AbortReason::pause;
     if (paused) writer_.journal(data::StatusChange{session_id_, data::SessionStatus::paused, false});
     scene_->show(Phase::iti, false);
     const io::Overlay overlay{paused ? Phase::paused : Phase::tracking_lost, "waiting", false};
+    const std::int64_t since_ns = clock_.now_ns();
     for (;;) {
       Frame f;
       if (!begin(f)) return Outcome::quit;
       end(f, overlay, false, trial_id);
       if (f.signal == Signal::quit) return Outcome::quit;
       if (paused ? f.signal == Signal::resume : f.head_tracked) break;
+      if (!paused && f.timing.now_ns - since_ns >= ms_to_ns(settings_.tracking_loss.head_wait_ms))
+        throw Stop{head_never_came(reason)};
     }
     if (paused) writer_.journal(data::StatusChange{session_id_, data::SessionStatus::running, false});
     return Outcome::done;
+  }
+
+  Error head_never_came(AbortReason reason) const {
+    const auto& policy = settings_.tracking_loss;
+    const io::HeadTracking head = station_.poses->head_tracking();
+    std::string reported = head.flags;
+    if (reported.empty()) reported = tracker_ && tracker_->output().tracked[0] ? "tracked" : "not tracked";
+    char waited[32];
+    std::snprintf(waited, sizeof waited, "%.3g s", static_cast<double>(policy.head_wait_ms) * 1e-3);
+    return Error{Error::Kind::device,
+                 "the head was not tracked as [tracking] head_requires = \"" +
+                     std::string(to_string(policy.head_requires)) + "\" asks for " + waited +
+                     " after the attempt ended (" + std::string(to_string(reason)) +
+                     "); the headset reports the head " + reported +
+                     ". Check the headset's tracking, or for a headset that tracks no position set "
+                     "head_requires = \"orientation\""};
   }
 
   // ---- one trial -----------------------------------------------------------

@@ -77,6 +77,15 @@ AfterAbort after_abort(AbortReason reason, std::int64_t attempt, const protocol:
   return AfterAbort::repeat;
 }
 
+bool head_meets(protocol::HeadRequirement need, bool pose_tracked, const io::HeadTracking& head) {
+  switch (need) {
+    case protocol::HeadRequirement::position: return pose_tracked && head.orientation_tracked && head.position_tracked;
+    case protocol::HeadRequirement::orientation: return pose_tracked && head.orientation_tracked;
+    case protocol::HeadRequirement::none: return true;
+  }
+  return pose_tracked;
+}
+
 InputVerdict classify_input(const protocol::Judgement& j, const std::string& name, bool answerable) {
   if (!answerable) return {InputUse::early};
   return j.type->classify(j, name);

@@ -125,6 +125,28 @@ bool located(XrSpaceLocationFlags flags) {
   return (flags & want) == want;
 }
 
+// Valid, perhaps inferred: a pose the runtime says can be used. The head's
+// is used so; whether its tracking is good enough for a trial is the
+// protocol's [tracking] head_requires (a headset without positional
+// tracking, or Monado's simulated one, infers the position).
+bool usable(XrSpaceLocationFlags flags) {
+  constexpr XrSpaceLocationFlags want = XR_SPACE_LOCATION_POSITION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_VALID_BIT;
+  return (flags & want) == want;
+}
+
+// The flags by their names in the specification, for messages.
+std::string location_flags_text(XrSpaceLocationFlags flags) {
+  std::string out;
+  for (const auto& [bit, name] : {std::pair{XR_SPACE_LOCATION_ORIENTATION_VALID_BIT, "ORIENTATION_VALID"},
+                                  std::pair{XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT, "ORIENTATION_TRACKED"},
+                                  std::pair{XR_SPACE_LOCATION_POSITION_VALID_BIT, "POSITION_VALID"},
+                                  std::pair{XR_SPACE_LOCATION_POSITION_TRACKED_BIT, "POSITION_TRACKED"}}) {
+    out += out.empty() ? "" : " | ";
+    out += (flags & bit) != 0 ? name : std::string("no ") + name;
+  }
+  return out;
+}
+
 std::string vk_result(VkResult r) { return vk::to_string(static_cast<vk::Result>(r)); }
 
 // The instance extensions curvlab asks for besides XR_KHR_vulkan_enable2,
@@ -378,6 +400,7 @@ class XrBackend final : public InteractiveDisplay {
   [[nodiscard]] DisplayInfo info() const override;
   std::optional<FrameTiming> begin_frame() override;
   geometry::LabFrame poses(const FrameTiming& frame) override;
+  [[nodiscard]] harness::io::HeadTracking head_tracking() const override;
   // Session-state events: pause, resume, quit.
   Signal poll_signal() override;
   // The controllers' buttons.
@@ -407,15 +430,28 @@ class XrBackend final : public InteractiveDisplay {
   // Marks the backend failed and throws DeviceFailure naming the call.
   [[noreturn]] void fail(XrResult r, const char* call);
   [[noreturn]] void fail(const renderer::VulkanFailure& f);
+  // What a frame ends with: the projection layer just rendered into the
+  // swapchains, the last one again (a frame the runner began but did not
+  // draw: the image before it stays up instead of a black refresh), or none.
+  enum class FrameLayer { fresh, held, none };
   // xrEndFrame; its result is left to the caller (the frame loop fails on
   // it, teardown ignores it).
-  [[nodiscard]] XrResult end_frame(bool with_layer);
+  [[nodiscard]] XrResult end_frame(FrameLayer layer);
+  // For a frame ended without drawing: the last layer where the runtime
+  // shows this frame (shouldRender), none where it does not.
+  [[nodiscard]] FrameLayer undrawn() const {
+    return frame_state_.shouldRender == XR_TRUE ? FrameLayer::held : FrameLayer::none;
+  }
   std::int64_t to_session_ns(XrTime t);
+  // xrSyncActions for this frame (a failure other than a lost session is
+  // logged; the states then read inactive).
+  void sync_actions();
   void read_buttons(std::vector<InputEvent>& out);
   // Logs a failed action-state query once per call name (it repeats every
   // frame otherwise) and goes on: one unreadable button must not end a session.
   void report_once(XrResult r, const char* call);
   void mark_late(FrameTiming& timing);
+  FrameTiming stopped_frame();
   // The steps of create(), in the order of the OpenXR lifecycle; each keeps
   // what it made in the members.
   Result<Done> open(const OptionalExtensions& offered);
@@ -457,10 +493,19 @@ class XrBackend final : public InteractiveDisplay {
   std::int64_t offset_at_ns_ = -1;  // when it was made (CLOCK_MONOTONIC); -1 none
   std::int64_t frame_index_ = 0;
   std::array<XrView, 2> views_{tagged<XrView>(XR_TYPE_VIEW), tagged<XrView>(XR_TYPE_VIEW)};
+  // The views of the last layer submitted with a fresh image (the pose and
+  // field of view its images were rendered for); nullopt before the first.
+  std::optional<std::array<XrView, 2>> shown_views_;
   bool views_valid_ = false;
   LabPose head_;
   geometry::LabFrame lab_;
+  XrSpaceLocationFlags head_flags_ = 0;  // the head's at the last locate
   std::array<bool, 2> trigger_down_{false, false};
+  bool synced_ = false;  // xrSyncActions was called in this frame while FOCUSED
+  // Per action of curvlab_action_set() and hand: active at the last read
+  // (false after a focus loss, so the first read after it is a baseline).
+  std::vector<std::array<bool, 2>> active_ = std::vector<std::array<bool, 2>>(curvlab_action_set().actions.size());
+  XrTime focused_at_ = 0;  // when the session last became FOCUSED (the runtime's event time)
   XrTime last_display_ = 0;  // the previous frame's predicted display time
 };
 
@@ -633,7 +678,7 @@ XrBackend::~XrBackend() {
   // failure the runtime may answer with errors, which nothing can act on
   // here (the failure was reported where it happened).
   try {
-    if (frame_begun_) (void)end_frame(false);
+    if (frame_begun_) (void)end_frame(undrawn());
     leave_session();
   } catch (...) {
     // poll_events() throws for a runtime that fails while we leave: leave anyway.
@@ -661,7 +706,7 @@ void XrBackend::leave_session() {
     auto begin_info = tagged<XrFrameBeginInfo>(XR_TYPE_FRAME_BEGIN_INFO);
     if (XR_FAILED(xrBeginFrame(session_.get(), &begin_info))) break;
     frame_begun_ = true;
-    if (XR_FAILED(end_frame(false))) break;
+    if (XR_FAILED(end_frame(undrawn()))) break;
   }
 }
 
@@ -695,12 +740,17 @@ void XrBackend::on_state(SessionState next) {
     if (const XrResult r = xrBeginSession(session_.get(), &info); XR_FAILED(r)) fail(r, "xrBeginSession");
   }
   if (u.end_session) {
-    if (frame_begun_) (void)end_frame(false);  // the session is ending: only xrEndSession counts
+    if (frame_begun_) (void)end_frame(FrameLayer::none);  // the session is ending: only xrEndSession counts
     if (const XrResult r = xrEndSession(session_.get()); XR_FAILED(r))
       std::cerr << "curvlab: xr: " << failure_of(r, "xrEndSession").message << '\n';
   }
-  if (u.mode == RunMode::Paused && before == RunMode::Running) signals_.push_back(Signal::pause);
-  if (u.mode == RunMode::Running && before == RunMode::Paused) signals_.push_back(Signal::resume);
+  if (u.mode != RunMode::Running && before == RunMode::Running) {
+    // Inactive while unfocused; the return syncs afresh.
+    for (auto& hands : active_) hands = {false, false};
+    synced_ = false;
+  }
+  if (u.pause) signals_.push_back(Signal::pause);
+  if (u.resume) signals_.push_back(Signal::resume);
   if (u.mode == RunMode::Exit) signals_.push_back(Signal::quit);
 }
 
@@ -713,6 +763,7 @@ bool XrBackend::poll_events() {
     switch (event.type) {
       case XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED: {
         const auto& e = *reinterpret_cast<const XrEventDataSessionStateChanged*>(&event);
+        if (e.state == XR_SESSION_STATE_FOCUSED) focused_at_ = e.time;
         on_state(static_cast<SessionState>(e.state));
         break;
       }
@@ -768,12 +819,20 @@ std::int64_t XrBackend::to_session_ns(XrTime t) {
   return clock_map_.to_session(t);
 }
 
-XrResult XrBackend::end_frame(bool with_layer) {
+// A held layer names the same swapchains with the views their images were
+// rendered for: the compositor shows each swapchain's last released image
+// (OpenXR 1.0 §10.5, "Swapchain Image Management"), reprojected to the head
+// of now, so the participant keeps seeing the last frame, world-locked.
+XrResult XrBackend::end_frame(FrameLayer what) {
+  if (what == FrameLayer::fresh) shown_views_ = views_;
+  if (what == FrameLayer::held && !shown_views_) what = FrameLayer::none;
+  const bool with_layer = what != FrameLayer::none;
+  const std::array<XrView, 2>& from = what == FrameLayer::fresh || !shown_views_ ? views_ : *shown_views_;
   std::array<XrCompositionLayerProjectionView, 2> views{};
   for (std::size_t i = 0; i < 2; ++i) {
     views[i] = tagged<XrCompositionLayerProjectionView>(XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW);
-    views[i].pose = views_[i].pose;
-    views[i].fov = views_[i].fov;
+    views[i].pose = from[i].pose;
+    views[i].fov = from[i].fov;
     views[i].subImage.swapchain = swapchains_[i].handle.get();
     views[i].subImage.imageRect = {{0, 0},
                                    {static_cast<std::int32_t>(swapchains_[i].width),
@@ -796,14 +855,19 @@ XrResult XrBackend::end_frame(bool with_layer) {
 
 std::optional<FrameTiming> XrBackend::begin_frame() {
   // Until the runtime makes the session READY there is no frame loop; wait
-  // for its events (the runner shows nothing meanwhile).
+  // for its events (the runner shows nothing meanwhile). Once the runtime
+  // has stopped a session that ran (STOPPING, then IDLE until it is READY
+  // again), the runner keeps its own loop, paused, on frames without OpenXR.
   for (;;) {
     if (!poll_events()) return std::nullopt;
     if (state_.session_running()) break;
+    if (state_.mode() == RunMode::Stopped) return stopped_frame();
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+  // A frame the runner began but did not draw (it paused, aborted or quit
+  // there) ends with the last image held.
   if (frame_begun_)
-    if (const XrResult r = end_frame(false); XR_FAILED(r)) fail(r, "xrEndFrame");
+    if (const XrResult r = end_frame(undrawn()); XR_FAILED(r)) fail(r, "xrEndFrame");
   const XrSession session = session_.get();
   auto wait_info = tagged<XrFrameWaitInfo>(XR_TYPE_FRAME_WAIT_INFO);
   frame_state_ = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
@@ -818,14 +882,8 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   if (to_timespec_ == nullptr && !clock_map_.anchored())
     clock_map_.anchor(t, now + frame_state_.predictedDisplayPeriod);
 
-  if (state_.mode() == RunMode::Running) {
-    XrActiveActionSet active{actions_->handle(), XR_NULL_PATH};
-    auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
-    sync.countActiveActionSets = 1;
-    sync.activeActionSets = &active;
-    if (const XrResult r = xrSyncActions(session, &sync); fatal(r)) fail(r, "xrSyncActions");
-    else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
-  }
+  synced_ = false;
+  if (state_.mode() == RunMode::Running) sync_actions();
 
   // Views and devices where they will be when this frame is seen.
   auto locate_info = tagged<XrViewLocateInfo>(XR_TYPE_VIEW_LOCATE_INFO);
@@ -844,15 +902,16 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
     auto loc = tagged<XrSpaceLocation>(XR_TYPE_SPACE_LOCATION);
     const XrResult r = xrLocateSpace(space, stage_.get(), t, &loc);
     if (fatal(r)) fail(r, "xrLocateSpace");
-    const bool ok = XR_SUCCEEDED(r) && located(loc.locationFlags);
-    return std::pair{to_lab_pose(loc.pose), ok};
+    return std::pair{to_lab_pose(loc.pose), XR_SUCCEEDED(r) ? loc.locationFlags : XrSpaceLocationFlags{0}};
   };
-  const auto [head, head_ok] = locate(view_.get());
+  const auto [head, head_flags] = locate(view_.get());
   head_ = head;
-  lab_[geometry::Device::head] = to_geometry(head, head_ok);
+  head_flags_ = head_flags;
+  lab_[geometry::Device::head] = to_geometry(head, usable(head_flags));
   for (std::size_t i = 0; i < 2; ++i) {
-    const auto [hand, hand_ok] = locate(grip_[i].get());
-    lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand] = to_geometry(hand, hand_ok);
+    const auto [hand, hand_flags] = locate(grip_[i].get());
+    lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand] =
+        to_geometry(hand, located(hand_flags));
   }
 
   FrameTiming timing;
@@ -861,6 +920,30 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   timing.predicted_display_ns = to_session_ns(t);
   timing.period_ns = frame_state_.predictedDisplayPeriod;
   mark_late(timing);
+  return timing;
+}
+
+// A frame of the runner's loop while the runtime has the session stopped:
+// paced at the display's period, nothing located (the head and hands are
+// untracked, the eyes from the IPD), nothing submitted (submit() finds no
+// begun frame), and late, since nothing is shown. The pause it carries
+// (SessionUpdate::pause) stops the trial's clock at the STOPPING, not when
+// the runtime makes the session READY again; the runner stays free to quit.
+FrameTiming XrBackend::stopped_frame() {
+  const std::int64_t period = frame_state_.predictedDisplayPeriod > 0
+                                  ? frame_state_.predictedDisplayPeriod
+                                  : static_cast<std::int64_t>(1e9 / refresh_hz_);
+  std::this_thread::sleep_for(std::chrono::nanoseconds(period));
+  views_valid_ = false;
+  head_flags_ = 0;
+  for (auto& pose : lab_.pose) pose.valid = false;
+  last_display_ = 0;  // the display times after the restart start afresh
+  FrameTiming timing;
+  timing.index = frame_index_++;
+  timing.now_ns = options_.clock->now_ns();
+  timing.predicted_display_ns = timing.now_ns + period;
+  timing.period_ns = period;
+  timing.late = true;
   return timing;
 }
 
@@ -882,6 +965,12 @@ geometry::LabFrame XrBackend::poses(const FrameTiming& frame) {
   return lab_;
 }
 
+harness::io::HeadTracking XrBackend::head_tracking() const {
+  return {(head_flags_ & XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT) != 0,
+          (head_flags_ & XR_SPACE_LOCATION_POSITION_TRACKED_BIT) != 0,
+          location_flags_text(head_flags_) + " (xrLocateSpace of the VIEW space)"};
+}
+
 renderer::StereoRig XrBackend::rig(const FrameTiming& frame, double ipd_m) {
   (void)frame;
   if (!views_valid_) return renderer::StereoRig::from_ipd(ipd_m, renderer::Fov{});
@@ -896,13 +985,32 @@ void XrBackend::report_once(XrResult r, const char* call) {
   std::cerr << "curvlab: xr: " << failure_of(r, call).message << '\n';
 }
 
+void XrBackend::sync_actions() {
+  XrActiveActionSet active{actions_->handle(), XR_NULL_PATH};
+  auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
+  sync.countActiveActionSets = 1;
+  sync.activeActionSets = &active;
+  if (const XrResult r = xrSyncActions(session_.get(), &sync); fatal(r)) fail(r, "xrSyncActions");
+  else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
+  synced_ = true;
+}
+
+// Action states are those of the last xrSyncActions (OpenXR 1.0 §11.5). The
+// frame on which focus returns began unfocused, without a sync: its states
+// would be the ones synced before the focus loss, so it syncs here. An
+// action that was inactive (no focus) gives its first state as a baseline,
+// not an event: a button or trigger held across the focus return is no new
+// press, and nothing that changed before the return is delivered.
 void XrBackend::read_buttons(std::vector<InputEvent>& out) {
+  if (!synced_) sync_actions();
   const XrSession session = session_.get();
   const auto def = curvlab_action_set();
-  for (const auto& a : def.actions) {
+  for (std::size_t k = 0; k < def.actions.size(); ++k) {
+    const auto& a = def.actions[k];
     if (a.type == ActionType::Pose) continue;
     for (const auto& sub : a.subaction_paths) {
       const std::size_t hand = sub == kLeftHand ? 0 : 1;
+      bool& was_active = active_[k][hand];
       auto get = tagged<XrActionStateGetInfo>(XR_TYPE_ACTION_STATE_GET_INFO);
       get.action = actions_->action(a.name);
       get.subactionPath = hand_paths_[hand];
@@ -916,7 +1024,10 @@ void XrBackend::read_buttons(std::vector<InputEvent>& out) {
           report_once(r, "xrGetActionStateBoolean");
           continue;
         }
-        if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE) {
+        const bool baseline = !was_active;
+        was_active = st.isActive == XR_TRUE;
+        if (st.isActive == XR_TRUE && st.changedSinceLastSync == XR_TRUE && !baseline &&
+            st.lastChangeTime >= focused_at_) {
           const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
           out.push_back({t_ns, name, device, st.currentState == XR_TRUE});
           // A continues pages as the trigger does (controller_reach).
@@ -928,10 +1039,13 @@ void XrBackend::read_buttons(std::vector<InputEvent>& out) {
           report_once(r, "xrGetActionStateFloat");
           continue;
         }
+        const bool baseline = !was_active;
+        was_active = st.isActive == XR_TRUE;
         if (st.isActive != XR_TRUE) continue;
         const bool was = trigger_down_[hand];
         const bool now = was ? st.currentState > kTriggerRelease : st.currentState > kTriggerPress;
-        if (now == was) continue;
+        if (baseline) trigger_down_[hand] = st.currentState > kTriggerPress;
+        if (baseline || now == was) continue;
         trigger_down_[hand] = now;
         const std::int64_t t_ns = to_session_ns(st.lastChangeTime);
         out.push_back({t_ns, name, device, now});
@@ -971,7 +1085,7 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
   if (!frame_begun_) return stats;
   const bool render = frame_state_.shouldRender == XR_TRUE && views_valid_;
   if (!render) {
-    if (const XrResult r = end_frame(false); XR_FAILED(r)) fail(r, "xrEndFrame");
+    if (const XrResult r = end_frame(undrawn()); XR_FAILED(r)) fail(r, "xrEndFrame");
     return stats;
   }
   std::array<bool, 2> acquired{false, false};
@@ -1020,7 +1134,7 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
     fail(renderer::VulkanFailure(renderer::vk_call_name(e.what()), e.code().value()));
   }
   release_all();
-  if (const XrResult r = end_frame(true); XR_FAILED(r)) fail(r, "xrEndFrame");
+  if (const XrResult r = end_frame(FrameLayer::fresh); XR_FAILED(r)) fail(r, "xrEndFrame");
   return stats;
 }
 

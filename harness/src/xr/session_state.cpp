@@ -96,6 +96,7 @@ SessionUpdate SessionStateMachine::on_state_changed(SessionState next) {
       running_ = false;
       mode_ = RunMode::Stopped;
       u.message += "the OpenXR runtime is stopping the session";
+      if (previous == RunMode::Running) u.message += "; the trial is paused until it runs again";
       break;
     case SessionState::LossPending:
       // xrEndSession is valid only in STOPPING (OpenXR 1.0, 10.3.4): a
@@ -115,6 +116,18 @@ SessionUpdate SessionStateMachine::on_state_changed(SessionState next) {
                    "be resumed";
       break;
   }
+  // A trial runs only in Running: leaving it for anything but the exit
+  // pauses the trial (the frame loop may stop altogether while the runtime
+  // has the session stopped), and coming back resumes it.
+  if (previous == RunMode::Running && mode_ != RunMode::Running && mode_ != RunMode::Exit) {
+    u.pause = true;
+    paused_ = true;
+  }
+  if (mode_ == RunMode::Running && paused_) {
+    u.resume = true;
+    paused_ = false;
+  }
+  if (mode_ == RunMode::Exit) paused_ = false;
   state_ = next;
   u.mode = mode_;
   return u;

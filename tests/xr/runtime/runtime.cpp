@@ -28,6 +28,11 @@
 //   CURVLAB_TEST_XR_EXIT     SECONDS: the runtime asks the application to exit
 //                            (VISIBLE, SYNCHRONIZED, STOPPING; after
 //                            xrEndSession IDLE and EXITING)
+//   CURVLAB_TEST_XR_RESTART  SECONDS+IDLE: the runtime stops the session
+//                            (VISIBLE, SYNCHRONIZED, STOPPING); after
+//                            xrEndSession it is IDLE for IDLE seconds, then
+//                            READY; after xrBeginSession and a frame,
+//                            SYNCHRONIZED, VISIBLE and FOCUSED again
 //   CURVLAB_TEST_XR_LOSS     SECONDS: the session is being lost (LOSS_PENDING,
 //                            from any state; xrWaitFrame and xrEndFrame
 //                            return XR_ERROR_SESSION_LOST half a second later)
@@ -37,6 +42,10 @@
 //                            or XR_ERROR_INSTANCE_LOST), as a runtime whose
 //                            session or compositor died does; a "fault" line
 //                            in the log
+//   CURVLAB_TEST_XR_HEAD     tracked (default) or orientation_only: the head
+//                            (VIEW space, views) is located with its
+//                            position valid but not tracked, its orientation
+//                            tracked, as Monado's simulated headset reports
 //   CURVLAB_TEST_XR_CAPTURE_DIR   write the left eye of submitted frames here
 //                            as PNG (left_<frame>_<monotonic ns>.png, the
 //                            frame's predicted display time on CLOCK_MONOTONIC)
@@ -44,8 +53,13 @@
 //   CURVLAB_TEST_XR_LOG      a text log: one "frame" line per xrWaitFrame with
 //                            the predicted display time (XrTime and
 //                            CLOCK_MONOTONIC ns) and the head pose at it; one
-//                            "end_frame N layers K" line per xrEndFrame that
-//                            succeeded; "state", "profile", "input", "haptic",
+//                            "end_frame N layers K state S should_render R"
+//                            line per xrEndFrame that succeeded (S the
+//                            session state then, R the frame's shouldRender); "sync_actions frame N focused F" per
+//                            xrSyncActions and "action_state CALL ACTION frame
+//                            N focused F" per action-state query (N the frame
+//                            of the last xrWaitFrame, F 1 while FOCUSED);
+//                            "state", "profile", "input", "haptic",
 //                            "capture", "violation", "warning" lines
 //   CURVLAB_TEST_XR_SIZE     recommended eye size WxH (default 320x320)
 //   CURVLAB_TEST_XR_LATE     late frames, comma-separated, numbered from 0 in
@@ -223,6 +237,10 @@ struct Session {
   bool faulted = false;  // the scripted fault (CURVLAB_TEST_XR_FAIL) has happened
   std::int64_t focus_t0_ns = 0;  // CLOCK_MONOTONIC when first FOCUSED
   std::vector<int> unfocus_phase;  // per scripted spell: 0 pending, 1 unfocused, 2 done
+  // CURVLAB_TEST_XR_RESTART: pending, stopping (until xrEndSession), idle
+  // (since idle_since_ns), ready (until the first frame ends), done.
+  enum class Restart { pending, stopping, idle, ready, done } restart = Restart::pending;
+  std::int64_t idle_since_ns = 0;
   VulkanDevice* vk = nullptr;
   VkQueue queue = VK_NULL_HANDLE;
   VkCommandPool pool = VK_NULL_HANDLE;
@@ -234,6 +252,8 @@ struct Session {
   std::int64_t last_wake_ns = 0;
   XrTime waited_display = 0;
   XrTime begun_display = 0;
+  bool waited_render = false;  // the shouldRender xrWaitFrame gave the waited frame
+  bool begun_render = false;   // … and the begun one
   std::int64_t frames_waited = 0;
   std::int64_t frames_submitted = 0;
   std::vector<ActionSet*> attached;
@@ -373,12 +393,27 @@ void tick(Session& s) {
     queue_state(s, XR_SESSION_STATE_STOPPING);
     return;
   }
+  if (script.restart && s.restart == Session::Restart::pending && t >= script.restart->at_s && s.running &&
+      !s.exit_requested && s.lost_from_ns < 0) {
+    s.restart = Session::Restart::stopping;
+    if (s.state == XR_SESSION_STATE_FOCUSED) queue_state(s, XR_SESSION_STATE_VISIBLE);
+    if (s.state == XR_SESSION_STATE_VISIBLE) queue_state(s, XR_SESSION_STATE_SYNCHRONIZED);
+    queue_state(s, XR_SESSION_STATE_STOPPING);
+    return;
+  }
+  if (s.restart == Session::Restart::idle && !s.exit_requested &&
+      monotonic_ns() - s.idle_since_ns >= static_cast<std::int64_t>(script.restart->idle_s * 1e9)) {
+    s.restart = Session::Restart::ready;
+    queue_state(s, XR_SESSION_STATE_READY);
+    return;
+  }
   if (script.loss_at_s && t >= *script.loss_at_s && s.lost_from_ns < 0) {
     queue_state(s, XR_SESSION_STATE_LOSS_PENDING);
     s.lost_from_ns = monotonic_ns() + 500'000'000;
     return;
   }
   if (s.exit_requested || s.lost_from_ns >= 0) return;
+  if (s.restart != Session::Restart::pending && s.restart != Session::Restart::done) return;
   for (std::size_t i = 0; i < script.unfocus.size(); ++i) {
     const Unfocus& u = script.unfocus[i];
     if (s.unfocus_phase[i] == 0 && t >= u.at_s && s.state == XR_SESSION_STATE_FOCUSED) {
@@ -1025,7 +1060,12 @@ XrResult XRAPI_CALL EndSession(XrSession h) {
   s->waited = s->begun = false;
   log_line("end_session monotonic_ns " + std::to_string(monotonic_ns()));
   queue_state(*s, XR_SESSION_STATE_IDLE);
-  if (s->exit_requested) queue_state(*s, XR_SESSION_STATE_EXITING);
+  if (s->exit_requested) {
+    queue_state(*s, XR_SESSION_STATE_EXITING);
+  } else if (s->restart == Session::Restart::stopping) {
+    s->restart = Session::Restart::idle;
+    s->idle_since_ns = monotonic_ns();
+  }
   return XR_SUCCESS;
 }
 
@@ -1200,6 +1240,11 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace base, XrTime time, XrSpac
                                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
                                            XR_SPACE_LOCATION_POSITION_TRACKED_BIT
                                      : 0;
+  // A head with inferred position (CURVLAB_TEST_XR_HEAD=orientation_only):
+  // any location relative to the VIEW space has an untracked position.
+  const bool view = a->reference == XR_REFERENCE_SPACE_TYPE_VIEW || b->reference == XR_REFERENCE_SPACE_TYPE_VIEW;
+  if (view && a != b && !a->session->instance->script.head_position_tracked)
+    location->locationFlags &= ~XrSpaceLocationFlags{XR_SPACE_LOCATION_POSITION_TRACKED_BIT};
   return XR_SUCCESS;
 }
 
@@ -1235,6 +1280,8 @@ XrResult XRAPI_CALL LocateViews(XrSession h, const XrViewLocateInfo* info, XrVie
   state->viewStateFlags = tb ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
                                    XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
                              : 0;
+  if (!s->instance->script.head_position_tracked)
+    state->viewStateFlags &= ~XrViewStateFlags{XR_VIEW_STATE_POSITION_TRACKED_BIT};
   return XR_SUCCESS;
 }
 
@@ -1450,6 +1497,7 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
       !hidden && (s->state == XR_SESSION_STATE_VISIBLE || s->state == XR_SESSION_STATE_FOCUSED) ? XR_TRUE : XR_FALSE;
   s->waited = true;
   s->waited_display = state->predictedDisplayTime;
+  s->waited_render = state->shouldRender == XR_TRUE;
   const Pose head = head_pose(xr_seconds(state->predictedDisplayTime));
   char line[320];
   std::snprintf(line, sizeof line, "frame %lld xr_ns %lld monotonic_ns %lld head %.9f %.9f %.9f %.9f %.9f %.9f %.9f",
@@ -1473,6 +1521,7 @@ XrResult XRAPI_CALL BeginFrame(XrSession h, const XrFrameBeginInfo* info) {
   const bool discarded = s->begun;
   s->begun = true;
   s->begun_display = s->waited_display;
+  s->begun_render = s->waited_render;
   if (discarded) log_line("note xrBeginFrame discarded the frame begun before");
   return discarded ? XR_FRAME_DISCARDED : XR_SUCCESS;
 }
@@ -1551,7 +1600,8 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
         warning(fn, "could not capture " + path);
     }
   }
-  log_line("end_frame " + std::to_string(s->frames_ended++) + " layers " + std::to_string(info->layerCount));
+  log_line("end_frame " + std::to_string(s->frames_ended++) + " layers " + std::to_string(info->layerCount) +
+           " state " + state_name(s->state) + " should_render " + (s->begun_render ? "1" : "0"));
   // The first frame ended: the session is synchronised with the display,
   // visible and focused.
   if (!s->focused_once && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
@@ -1560,6 +1610,14 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
     queue_state(*s, XR_SESSION_STATE_FOCUSED);
     s->focused_once = true;
     s->focus_t0_ns = monotonic_ns();
+  }
+  // Started again after a scripted stop: up to FOCUSED, the script's clock
+  // (seconds after the first focus) running on.
+  if (s->restart == Session::Restart::ready && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
+    queue_state(*s, XR_SESSION_STATE_SYNCHRONIZED);
+    queue_state(*s, XR_SESSION_STATE_VISIBLE);
+    queue_state(*s, XR_SESSION_STATE_FOCUSED);
+    s->restart = Session::Restart::done;
   }
   return XR_SUCCESS;
 }
@@ -1787,6 +1845,7 @@ XrResult XRAPI_CALL SyncActions(XrSession h, const XrActionsSyncInfo* info) {
       }
     }
   }
+  log_line("sync_actions frame " + std::to_string(s->frames_waited - 1) + " focused " + (focused ? "1" : "0"));
   return focused ? XR_SUCCESS : XR_SESSION_NOT_FOCUSED;
 }
 
@@ -1803,6 +1862,8 @@ XrResult action_state(Session* s, const XrActionStateGetInfo* info, XrActionType
   if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "action");
   if (a->set->attached_to != s) return violation(fn, XR_ERROR_ACTIONSET_NOT_ATTACHED, a->set->name);
   if (a->type != want) return violation(fn, XR_ERROR_ACTION_TYPE_MISMATCH, a->name);
+  log_line(std::string("action_state ") + fn + " " + a->name + " frame " + std::to_string(s->frames_waited - 1) +
+           " focused " + (s->state == XR_SESSION_STATE_FOCUSED ? "1" : "0"));
   if (info->subactionPath == XR_NULL_PATH) {
     Action::State any;
     for (const Action::State& st : a->states) {

@@ -161,6 +161,17 @@ std::optional<Script> read_script(std::string& error) {
     }
     s.exit_at_s = *at;
   }
+  if (const char* v = env("CURVLAB_TEST_XR_RESTART")) {
+    const std::string item = v;
+    const auto plus = item.find('+');
+    const auto at = number(item.substr(0, plus));
+    const auto idle = plus == std::string::npos ? std::nullopt : number(item.substr(plus + 1));
+    if (!at || !idle || *at < 0.0 || *idle < 0.0) {
+      error = "CURVLAB_TEST_XR_RESTART: '" + item + "': expected SECONDS+IDLE_SECONDS, e.g. 3.15+0.5";
+      return std::nullopt;
+    }
+    s.restart = Restart{*at, *idle};
+  }
   if (const char* v = env("CURVLAB_TEST_XR_LOSS")) {
     const auto at = number(v);
     if (!at || *at < 0.0) {
@@ -189,6 +200,14 @@ std::optional<Script> read_script(std::string& error) {
     }
     f.at_s = *seconds;
     s.fault = f;
+  }
+  if (const char* v = env("CURVLAB_TEST_XR_HEAD")) {
+    const std::string mode = v;
+    if (mode != "tracked" && mode != "orientation_only") {
+      error = "CURVLAB_TEST_XR_HEAD: '" + mode + "': expected tracked or orientation_only";
+      return std::nullopt;
+    }
+    s.head_position_tracked = mode == "tracked";
   }
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_DIR")) s.capture_dir = v;
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_EVERY")) {

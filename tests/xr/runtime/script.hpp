@@ -60,6 +60,16 @@ struct Unfocus {
   double for_s = 0.0;
 };
 
+// The runtime stops the session and starts it again: at `at_s` it steps
+// down to STOPPING (through VISIBLE and SYNCHRONIZED); after the
+// application's xrEndSession the session is IDLE for `idle_s`, then READY;
+// once the application has begun it again and ended a frame, SYNCHRONIZED,
+// VISIBLE and FOCUSED follow, as at the start.
+struct Restart {
+  double at_s = 0.0;
+  double idle_s = 0.0;
+};
+
 // A runtime fault: from the first call of `call` at or after `at_s` on,
 // that call returns `result` (a lost session stays lost).
 struct Fault {
@@ -74,7 +84,12 @@ struct Script {
   std::optional<Fault> fault;
   std::vector<Unfocus> unfocus;
   std::optional<double> exit_at_s;  // request exit (STOPPING) at this time
+  std::optional<Restart> restart;   // STOPPING → IDLE → READY at this time
   std::optional<double> loss_at_s;  // LOSS_PENDING at this time; frame calls fail SESSION_LOST 0.5 s later
+  // CURVLAB_TEST_XR_HEAD=orientation_only: the head's position is valid but
+  // not tracked (inferred), its orientation tracked, as Monado's simulated
+  // headset reports it.
+  bool head_position_tracked = true;
   std::string capture_dir;          // left-eye PNGs of submitted frames
   int capture_every = 1;            // every n-th submitted frame
   std::string log_path;             // what the runtime handed out and saw

@@ -8,7 +8,20 @@
 #include "curvlab/geometry/tracking.hpp"
 #include "curvlab/harness/io/frame.hpp"
 
+#include <string>
+
 namespace curvlab::harness::io {
+
+// How the source tracked the head in the last poses() beyond the pose's own
+// `valid` (usable): whether orientation and position are tracked or only
+// inferred, for the protocol's [tracking] head_requires, and the source's
+// own words for it (OpenXR: the XrSpaceLocationFlags set), for the message
+// that stops a session waiting for the head.
+struct HeadTracking {
+  bool orientation_tracked = true;
+  bool position_tracked = true;
+  std::string flags;  // empty: nothing beyond `valid` to report
+};
 
 class PoseSource {
  public:
@@ -20,6 +33,9 @@ class PoseSource {
   // device that is not tracked is marked so in its pose. May throw
   // DeviceFailure.
   virtual geometry::LabFrame poses(const FrameTiming& frame) = 0;
+  // The head's tracking at the last poses(); sources that know only
+  // `valid` report it tracked whenever it is valid.
+  [[nodiscard]] virtual HeadTracking head_tracking() const { return {}; }
 };
 
 }  // namespace curvlab::harness::io

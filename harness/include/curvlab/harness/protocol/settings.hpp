@@ -34,11 +34,20 @@ inline constexpr std::array kStickAnchors{StickAnchor::head, StickAnchor::table}
 // What a trial does when the head has been untracked for `loss_ms`.
 enum class OnTrackingLoss { repeat, flag, abort };
 inline constexpr std::array kOnTrackingLosses{OnTrackingLoss::repeat, OnTrackingLoss::flag, OnTrackingLoss::abort};
+// What a trial needs of the head for it to count as tracked: position and
+// orientation tracked; orientation tracked (a headset without positional
+// tracking, or a simulated one, whose position is valid but inferred); or
+// nothing (the head's tracking never stops a trial).
+enum class HeadRequirement { position, orientation, none };
+inline constexpr std::array kHeadRequirements{HeadRequirement::position, HeadRequirement::orientation,
+                                              HeadRequirement::none};
 
 std::string_view to_string(StickAnchor a);
 std::string_view to_string(OnTrackingLoss o);
+std::string_view to_string(HeadRequirement r);
 std::optional<StickAnchor> parse_stick_anchor(std::string_view text);
 std::optional<OnTrackingLoss> parse_on_tracking_loss(std::string_view text);
+std::optional<HeadRequirement> parse_head_requirement(std::string_view text);
 
 struct SpaceSettings {
   geometry::SpaceKind kind = geometry::SpaceKind::E3;
@@ -54,11 +63,16 @@ struct SpaceSettings {
 // trial goes on and is flagged (flag), or the trial is marked aborted and
 // the session moves on (abort). A recenter or a pause always drops the
 // attempt. `max_attempts` (0: no limit) marks a trial aborted instead of
-// starting it again after that many attempts.
+// starting it again after that many attempts. What counts as tracked is
+// `head_requires`; after a loss the session waits at most `head_wait_ms` for
+// the head, then stops `interrupted` (resumable) with the tracking the
+// pose source reported, instead of waiting for a head that never comes.
 struct TrackingLoss {
   std::int64_t loss_ms = 250;
   OnTrackingLoss on_loss = OnTrackingLoss::repeat;
   std::int64_t max_attempts = 0;
+  HeadRequirement head_requires = HeadRequirement::position;
+  std::int64_t head_wait_ms = 10000;
 };
 
 struct Viewing {

@@ -14,6 +14,7 @@
 // lost spells instead.
 #pragma once
 
+#include "curvlab/harness/io/pose_source.hpp"
 #include "curvlab/harness/io/response_source.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
@@ -90,6 +91,11 @@ class Attempt {
 enum class AfterAbort { repeat, give_up };
 // Whether an aborted attempt (numbered from 1) is run again.
 AfterAbort after_abort(AbortReason reason, std::int64_t attempt, const protocol::TrackingLoss& policy);
+
+// Whether the head counts as tracked for a trial under [tracking]
+// head_requires: `pose_tracked` is the tracker's (the head's pose usable),
+// `head` what the pose source says beyond it.
+bool head_meets(protocol::HeadRequirement need, bool pose_tracked, const io::HeadTracking& head);
 
 // What an input does in the response phase of a trial: an anticipation
 // before the onset reached the display, else what the judgement's type makes

@@ -7,7 +7,9 @@
 // session, e.g. the headset was unplugged: end it and leave). A trial runs
 // only while FOCUSED: in VISIBLE the runtime shows its own overlay and takes
 // the controllers, so losing focus pauses the session with a message, and
-// regaining it resumes.
+// regaining it resumes. A STOPPING that is not an exit (the runtime stops
+// the session and later makes it READY again: STOPPING → IDLE → READY) pauses
+// the same way until FOCUSED comes back.
 #pragma once
 
 #include <string>
@@ -46,6 +48,11 @@ struct SessionUpdate {
   bool begin_session = false;  // call xrBeginSession now
   bool end_session = false;    // call xrEndSession now
   RunMode mode = RunMode::WaitForRuntime;
+  // The trial pauses (focus lost, display hidden, the runtime stopping the
+  // session) or resumes (FOCUSED again after any of them): each pause is
+  // followed by at most one resume, and a resume only follows a pause.
+  bool pause = false;
+  bool resume = false;
   bool lost = false;           // LOSS_PENDING: the session must be recreated
   bool unexpected = false;     // a transition OpenXR's lifecycle does not allow
   std::string message;         // for the experimenter (pause and exit reasons)
@@ -66,6 +73,7 @@ class SessionStateMachine {
   RunMode mode_ = RunMode::WaitForRuntime;
   bool running_ = false;
   bool was_focused_ = false;
+  bool paused_ = false;  // a pause was given and not yet its resume
 };
 
 }  // namespace curvlab::xr
