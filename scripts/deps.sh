@@ -16,6 +16,7 @@ packages=(
   r-cran-brglm2 r-cran-blme r-cran-emmeans r-cran-lpsolve
   openxr-layer-corevalidation libopenxr-utils
   xdotool universal-ctags
+  ninja-build libeigen3-dev libudev-dev libxcb-randr0-dev libxrandr-dev libx11-xcb-dev
   chromium
 )
 

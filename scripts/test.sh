@@ -10,4 +10,7 @@ launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
 cmake --preset ci "${launcher[@]}" >/dev/null
 cmake --build --preset ci -j "$jobs"
+# Monado, the OpenXR runtime the `monado` tests run sessions through, built
+# once into a cache outside the clone (nothing where ../shared is absent).
+bash scripts/monado.sh > /dev/null
 ctest --preset ci -j "$jobs" "$@"
