@@ -15,20 +15,13 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 namespace {
 
+using curvlab::testing::fresh_dir;
 using curvlab::testing::run_cli;
 using namespace curvlab::geometry;
 namespace fs = std::filesystem;
-
-fs::path fresh_dir(const std::string& name) {
-  const auto dir = fs::temp_directory_path() / ("curvlab_lab_calibration_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 // The real table: off the lab origin, turned, smaller than the protocol's.
 PhysicalTableFit truth() {

@@ -41,16 +41,11 @@ std::string level(const rn::ConditionPrediction& c, const std::string& factor) {
 // The proposed study predicted for `participants` over `simulations` studies.
 rn::Prediction predict_proposed_study(int participants, int simulations,
                                       rn::ObserverModel model = rn::ObserverModel::human) {
-  auto loaded = curvlab::harness::protocol::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/proposed_study.toml");
-  if (!loaded) {
-    ADD_FAILURE() << "protocols/proposed_study.toml does not load";
-    return {};
-  }
   rn::PredictOptions o;
   o.participants = participants;
   o.simulations = simulations;
   o.observer.model = model;
-  auto r = rn::predict(*loaded, o);
+  auto r = rn::predict(example("proposed_study"), o);
   if (!r.has_value()) {
     ADD_FAILURE() << r.error().message;
     return {};

@@ -113,9 +113,9 @@ TEST(TrialState, TrackingLostLongerThanTheThresholdAborts) {
 
 TEST(TrialState, TheHeadMeetsWhatTheProtocolRequires) {
   using R = pr::HeadRequirement;
-  const curvlab::harness::io::HeadTracking tracked{true, true, ""};
-  const curvlab::harness::io::HeadTracking orientation_only{true, false, "ORIENTATION_TRACKED"};
-  const curvlab::harness::io::HeadTracking inferred{false, false, ""};
+  const curvlab::harness::io::HeadTracking tracked{true, true};
+  const curvlab::harness::io::HeadTracking orientation_only{true, false};
+  const curvlab::harness::io::HeadTracking inferred{false, false};
   EXPECT_TRUE(rn::head_meets(R::position, true, tracked));
   EXPECT_FALSE(rn::head_meets(R::position, true, orientation_only));
   EXPECT_TRUE(rn::head_meets(R::orientation, true, orientation_only));

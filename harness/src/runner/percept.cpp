@@ -58,7 +58,7 @@ Percept perceive(const World& world, const protocol::Settings& s, const Placemen
   const std::size_t fixated = judged(s) == Judged::stick ? 1 : points.size() - 1;
   const geometry::HumanPercept hp =
       geometry::perceive_human_at(world.space, head, eyes, preset, points, fixated, observer.vision);
-  const double sagitta = perceived_sagitta_with(world, s, placement, [&](const geometry::Point& q) {
+  const double sagitta = perceived_sagitta_with(world, s, hp.points_m, [&](const geometry::Point& q) {
     return geometry::perceive_with(hp.fixation, eyes, geometry::sight_lines(world.space, head, eyes, preset, q));
   });
   return human_percept(hp, sagitta, observer);

@@ -127,7 +127,8 @@ std::vector<std::size_t> order_key(const protocol::Protocol& p, const std::strin
 // P(an answer counted positive) for the percept, from the options' shares.
 double p_positive(const SimulatedObserver& observer, const protocol::Judgement& j,
                   const protocol::AdaptiveState& state, const Percept& percept, double noise_scale) {
-  const auto probs = observer.choice_probabilities(percept.sagitta_m, j.options.size(), percept.noise_sd_m * noise_scale);
+  const auto probs =
+      observer.choice_probabilities(percept.sagitta_m, j.options.size(), percept.noise_sd_m * noise_scale);
   double p = 0.0;
   for (std::size_t k = 0; k < probs.size(); ++k) p += state.positive(j.options[k].value) ? probs[k] : 0.0;
   return p;
@@ -138,7 +139,9 @@ double p_positive(const SimulatedObserver& observer, const protocol::Judgement& 
 void locate_target(Condition& c, const SimulatedObserver& observer, StaircasePrediction& out) {
   const auto& j = c.block->judgement;
   const auto state = j.type->adaptive_state(j);
-  auto g = [&](double x) { return p_positive(observer, j, *state, c.percept(observer.params(), x), 1.0) - out.target_p; };
+  auto g = [&](double x) {
+    return p_positive(observer, j, *state, c.percept(observer.params(), x), 1.0) - out.target_p;
+  };
   constexpr int kSamples = 120;
   double x0 = out.min;
   double g0 = g(x0);
@@ -334,7 +337,8 @@ void expected_proportions(Population& population, Prediction& out) {
   for (int k = 0; k < n; ++k) {
     const Participant who = population.draw();
     for (auto& c : out.conditions) {
-      const auto probs = who.observer.choice_probabilities(c.perceived_m, c.options.size(), c.noise_sd_m * who.noise_scale);
+      const auto probs =
+          who.observer.choice_probabilities(c.perceived_m, c.options.size(), c.noise_sd_m * who.noise_scale);
       for (std::size_t i = 0; i < probs.size(); ++i) c.proportions[i] += probs[i] / n;
     }
   }
@@ -391,7 +395,8 @@ double settled_value(Condition& c, const Participant& who, const ObserverParams&
   for (const auto& t : c.trials) {
     if (state->skip_reason(t)) continue;
     const double x = state->value(t);
-    const bool positive = protocol::uniform01(rng) < p_positive(who.observer, j, *state, c.percept(mean, x), who.noise_scale);
+    const double p = p_positive(who.observer, j, *state, c.percept(mean, x), who.noise_scale);
+    const bool positive = protocol::uniform01(rng) < p;
     state->record(t, positive);
     shown.push_back(x);
   }

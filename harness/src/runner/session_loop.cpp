@@ -625,8 +625,7 @@ class SessionLoop::Impl {
 
   Error head_never_came(AbortReason reason) const {
     const auto& policy = settings_.tracking_loss;
-    const io::HeadTracking head = station_.poses->head_tracking();
-    std::string reported = head.flags;
+    std::string reported = station_.poses->describe_head_tracking();
     if (reported.empty()) reported = tracker_ && tracker_->output().tracked[0] ? "tracked" : "not tracked";
     char waited[32];
     std::snprintf(waited, sizeof waited, "%.3g s", static_cast<double>(policy.head_wait_ms) * 1e-3);

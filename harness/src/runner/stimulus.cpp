@@ -176,11 +176,9 @@ std::vector<Point> judged_points(const World& world, const Settings& s, const Pl
   return points;
 }
 
-double perceived_sagitta_with(const World& world, const Settings& s, const Placement& placement,
+double perceived_sagitta_with(const World& world, const Settings& s, std::vector<Vec3> p,
                               const std::function<Vec3(const Point&)>& seen) {
   const auto& space = world.space;
-  std::vector<Vec3> p;
-  for (const Point& q : judged_points(world, s, placement)) p.push_back(seen(q));
   if (judged(s) == Judged::stick) return geometry::bow_toward_viewer(p[0], p[1], p[2]);
   // The table top: its (possibly raised) centre against the plane of the
   // perceived edge midpoints, oriented by the perceived up.
@@ -196,9 +194,12 @@ double perceived_sagitta_m(const World& world, const Settings& s, const Placemen
   const geometry::ViewPreset preset = perceived_preset(s);
   if (!geometry::binocular(preset)) return 0.0;
   const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
-  return perceived_sagitta_with(world, s, placement, [&](const Point& q) {
+  const auto seen = [&](const Point& q) {
     return geometry::perceive_point(world.space, head, eyes, preset, q).position_m;
-  });
+  };
+  std::vector<Vec3> p;
+  for (const Point& q : judged_points(world, s, placement)) p.push_back(seen(q));
+  return perceived_sagitta_with(world, s, std::move(p), seen);
 }
 
 SightLineCount diverging_sight_lines(const World& world, const Settings& s, const Placement& placement,

@@ -401,6 +401,7 @@ class XrBackend final : public InteractiveDisplay {
   std::optional<FrameTiming> begin_frame() override;
   geometry::LabFrame poses(const FrameTiming& frame) override;
   [[nodiscard]] harness::io::HeadTracking head_tracking() const override;
+  [[nodiscard]] std::string describe_head_tracking() const override;
   // Session-state events: pause, resume, quit.
   Signal poll_signal() override;
   // The controllers' buttons.
@@ -967,8 +968,11 @@ geometry::LabFrame XrBackend::poses(const FrameTiming& frame) {
 
 harness::io::HeadTracking XrBackend::head_tracking() const {
   return {(head_flags_ & XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT) != 0,
-          (head_flags_ & XR_SPACE_LOCATION_POSITION_TRACKED_BIT) != 0,
-          location_flags_text(head_flags_) + " (xrLocateSpace of the VIEW space)"};
+          (head_flags_ & XR_SPACE_LOCATION_POSITION_TRACKED_BIT) != 0};
+}
+
+std::string XrBackend::describe_head_tracking() const {
+  return location_flags_text(head_flags_) + " (xrLocateSpace of the VIEW space)";
 }
 
 renderer::StereoRig XrBackend::rig(const FrameTiming& frame, double ipd_m) {

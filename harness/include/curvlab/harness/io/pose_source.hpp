@@ -14,13 +14,10 @@ namespace curvlab::harness::io {
 
 // How the source tracked the head in the last poses() beyond the pose's own
 // `valid` (usable): whether orientation and position are tracked or only
-// inferred, for the protocol's [tracking] head_requires, and the source's
-// own words for it (OpenXR: the XrSpaceLocationFlags set), for the message
-// that stops a session waiting for the head.
+// inferred, for the protocol's [tracking] head_requires. Read every frame.
 struct HeadTracking {
   bool orientation_tracked = true;
   bool position_tracked = true;
-  std::string flags;  // empty: nothing beyond `valid` to report
 };
 
 class PoseSource {
@@ -36,6 +33,10 @@ class PoseSource {
   // The head's tracking at the last poses(); sources that know only
   // `valid` report it tracked whenever it is valid.
   [[nodiscard]] virtual HeadTracking head_tracking() const { return {}; }
+  // The same in the source's own words (OpenXR: the XrSpaceLocationFlags
+  // set), for the message that stops a session waiting for the head; empty:
+  // nothing beyond `valid` to report. Formatted only when asked.
+  [[nodiscard]] virtual std::string describe_head_tracking() const { return {}; }
 };
 
 }  // namespace curvlab::harness::io

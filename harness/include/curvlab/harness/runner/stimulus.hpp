@@ -87,9 +87,11 @@ std::vector<geometry::Point> judged_points(const World& world, const protocol::S
 // One eye: 0 (no disparity, DESIGN.md §5).
 double perceived_sagitta_m(const World& world, const protocol::Settings& s,
                            const Placement& placement, const geometry::Isometry& head);
-// The same sagitta from any map of points of the space to perceived
-// positions in the nose frame (the human observer's, percept.hpp).
-double perceived_sagitta_with(const World& world, const protocol::Settings& s, const Placement& placement,
+// The same sagitta from the judged points as perceived (judged_points'
+// order) and the map that perceived them, which the table's judgement also
+// asks where its flat centre and its up are seen (the human observer's,
+// percept.hpp, perceives the judged points together).
+double perceived_sagitta_with(const World& world, const protocol::Settings& s, std::vector<geometry::Vec3> judged_seen,
                               const std::function<geometry::Vec3(const geometry::Point&)>& seen);
 // How many of the points the judgement rests on (the stick's ends and
 // middle; the table's edge midpoints and centre) a tourist's two lines of
