@@ -179,7 +179,7 @@ TEST(Actions, BindingsExistInTheirProfilesAndCoverTheActions) {
     EXPECT_TRUE(valid_name(a.name)) << a.name;
     names.insert(a.name);
   }
-  ASSERT_EQ(set.profiles.size(), 2u);
+  ASSERT_EQ(set.profiles.size(), 4u);
   for (const auto& p : set.profiles) {
     const auto offered = profile_input_paths(p.profile);
     ASSERT_FALSE(offered.empty()) << p.profile;
@@ -195,12 +195,16 @@ TEST(Actions, BindingsExistInTheirProfilesAndCoverTheActions) {
           << b.path;
     }
   }
-  // The Touch profile binds every action, both poses for both hands.
-  const auto& touch = set.profiles[1];
-  EXPECT_EQ(touch.profile, "/interaction_profiles/oculus/touch_controller");
-  std::set<std::string> bound;
-  for (const auto& b : touch.bindings) bound.insert(b.action);
-  EXPECT_EQ(bound, names);
+  // The Touch, Index and Vive profiles bind every action, both poses for
+  // both hands.
+  EXPECT_EQ(set.profiles[1].profile, "/interaction_profiles/oculus/touch_controller");
+  EXPECT_EQ(set.profiles[2].profile, "/interaction_profiles/valve/index_controller");
+  EXPECT_EQ(set.profiles[3].profile, "/interaction_profiles/htc/vive_controller");
+  for (std::size_t i = 1; i < set.profiles.size(); ++i) {
+    std::set<std::string> bound;
+    for (const auto& b : set.profiles[i].bindings) bound.insert(b.action);
+    EXPECT_EQ(bound, names) << set.profiles[i].profile;
+  }
 }
 
 // Controller events carry the button names protocols bind (docs/protocols.md,

@@ -5,6 +5,8 @@ namespace curvlab::xr {
 namespace {
 constexpr const char* kSimple = "/interaction_profiles/khr/simple_controller";
 constexpr const char* kTouch = "/interaction_profiles/oculus/touch_controller";
+constexpr const char* kIndex = "/interaction_profiles/valve/index_controller";
+constexpr const char* kVive = "/interaction_profiles/htc/vive_controller";
 
 std::string left(const char* input) { return std::string(kLeftHand) + "/input/" + input; }
 std::string right(const char* input) { return std::string(kRightHand) + "/input/" + input; }
@@ -46,6 +48,32 @@ ActionSetDef curvlab_action_set() {
                            {"button_b", right("b/click")},
                            {"button_x", left("x/click")},
                            {"button_y", left("y/click")}}});
+  // Index controllers have A and B on both hands: the left hand's stand for
+  // X and Y, as on Touch controllers (and as runtimes emulate Touch on Index).
+  set.profiles.push_back({kIndex,
+                          {{"grip_pose", left("grip/pose")},
+                           {"grip_pose", right("grip/pose")},
+                           {"aim_pose", left("aim/pose")},
+                           {"aim_pose", right("aim/pose")},
+                           {"trigger", left("trigger/value")},
+                           {"trigger", right("trigger/value")},
+                           {"button_a", right("a/click")},
+                           {"button_b", right("b/click")},
+                           {"button_x", left("a/click")},
+                           {"button_y", left("b/click")}}});
+  // Vive wands: the trackpad's click is the primary button (A right, X left)
+  // and the menu button the secondary one (B, Y).
+  set.profiles.push_back({kVive,
+                          {{"grip_pose", left("grip/pose")},
+                           {"grip_pose", right("grip/pose")},
+                           {"aim_pose", left("aim/pose")},
+                           {"aim_pose", right("aim/pose")},
+                           {"trigger", left("trigger/value")},
+                           {"trigger", right("trigger/value")},
+                           {"button_a", right("trackpad/click")},
+                           {"button_b", right("menu/click")},
+                           {"button_x", left("trackpad/click")},
+                           {"button_y", left("menu/click")}}});
   return set;
 }
 
@@ -71,6 +99,20 @@ std::vector<std::string> profile_input_paths(const std::string& profile) {
     for (const char* in : {"squeeze/value", "trigger/value", "trigger/touch", "thumbstick/x",
                            "thumbstick/y", "thumbstick/click", "thumbstick/touch",
                            "thumbrest/touch", "grip/pose", "aim/pose"})
+      both(in);
+  } else if (profile == kIndex) {
+    // OpenXR 1.0 §6.4, "Valve Index Controller Profile".
+    for (const char* in : {"system/click", "system/touch", "a/click", "a/touch", "b/click", "b/touch",
+                           "squeeze/value", "squeeze/force", "trigger/click", "trigger/value",
+                           "trigger/touch", "thumbstick/x", "thumbstick/y", "thumbstick/click",
+                           "thumbstick/touch", "trackpad/x", "trackpad/y", "trackpad/force",
+                           "trackpad/touch", "grip/pose", "aim/pose"})
+      both(in);
+  } else if (profile == kVive) {
+    // OpenXR 1.0 §6.4, "HTC Vive Controller Profile".
+    for (const char* in : {"system/click", "squeeze/click", "menu/click", "trigger/click", "trigger/value",
+                           "trackpad/x", "trackpad/y", "trackpad/click", "trackpad/touch", "grip/pose",
+                           "aim/pose"})
       both(in);
   }
   return out;
