@@ -10,6 +10,29 @@ constexpr const char* kVive = "/interaction_profiles/htc/vive_controller";
 
 std::string left(const char* input) { return std::string(kLeftHand) + "/input/" + input; }
 std::string right(const char* input) { return std::string(kRightHand) + "/input/" + input; }
+
+// A profile's bindings: both hands' grip and aim poses, then `controls`.
+ProfileBindings with_poses(const char* profile, std::vector<SuggestedBinding> controls) {
+  ProfileBindings p{profile,
+                    {{"grip_pose", left("grip/pose")},
+                     {"grip_pose", right("grip/pose")},
+                     {"aim_pose", left("aim/pose")},
+                     {"aim_pose", right("aim/pose")}}};
+  p.bindings.insert(p.bindings.end(), controls.begin(), controls.end());
+  return p;
+}
+
+// Both triggers' values, the right hand's inputs for A and B and the left
+// hand's for X and Y.
+std::vector<SuggestedBinding> trigger_and_buttons(const char* a, const char* b, const char* x,
+                                                  const char* y) {
+  return {{"trigger", left("trigger/value")},
+          {"trigger", right("trigger/value")},
+          {"button_a", right(a)},
+          {"button_b", right(b)},
+          {"button_x", left(x)},
+          {"button_y", left(y)}};
+}
 }  // namespace
 
 ActionSetDef curvlab_action_set() {
@@ -28,52 +51,18 @@ ActionSetDef curvlab_action_set() {
   };
   // The simple controller has no face buttons: select is the trigger, and
   // menu stands in for the primary button of each hand (A right, X left).
-  set.profiles.push_back({kSimple,
-                          {{"grip_pose", left("grip/pose")},
-                           {"grip_pose", right("grip/pose")},
-                           {"aim_pose", left("aim/pose")},
-                           {"aim_pose", right("aim/pose")},
-                           {"trigger", left("select/click")},
-                           {"trigger", right("select/click")},
-                           {"button_a", right("menu/click")},
-                           {"button_x", left("menu/click")}}});
-  set.profiles.push_back({kTouch,
-                          {{"grip_pose", left("grip/pose")},
-                           {"grip_pose", right("grip/pose")},
-                           {"aim_pose", left("aim/pose")},
-                           {"aim_pose", right("aim/pose")},
-                           {"trigger", left("trigger/value")},
-                           {"trigger", right("trigger/value")},
-                           {"button_a", right("a/click")},
-                           {"button_b", right("b/click")},
-                           {"button_x", left("x/click")},
-                           {"button_y", left("y/click")}}});
+  set.profiles.push_back(with_poses(kSimple, {{"trigger", left("select/click")},
+                                              {"trigger", right("select/click")},
+                                              {"button_a", right("menu/click")},
+                                              {"button_x", left("menu/click")}}));
+  set.profiles.push_back(with_poses(kTouch, trigger_and_buttons("a/click", "b/click", "x/click", "y/click")));
   // Index controllers have A and B on both hands: the left hand's stand for
   // X and Y, as on Touch controllers (and as runtimes emulate Touch on Index).
-  set.profiles.push_back({kIndex,
-                          {{"grip_pose", left("grip/pose")},
-                           {"grip_pose", right("grip/pose")},
-                           {"aim_pose", left("aim/pose")},
-                           {"aim_pose", right("aim/pose")},
-                           {"trigger", left("trigger/value")},
-                           {"trigger", right("trigger/value")},
-                           {"button_a", right("a/click")},
-                           {"button_b", right("b/click")},
-                           {"button_x", left("a/click")},
-                           {"button_y", left("b/click")}}});
+  set.profiles.push_back(with_poses(kIndex, trigger_and_buttons("a/click", "b/click", "a/click", "b/click")));
   // Vive wands: the trackpad's click is the primary button (A right, X left)
   // and the menu button the secondary one (B, Y).
-  set.profiles.push_back({kVive,
-                          {{"grip_pose", left("grip/pose")},
-                           {"grip_pose", right("grip/pose")},
-                           {"aim_pose", left("aim/pose")},
-                           {"aim_pose", right("aim/pose")},
-                           {"trigger", left("trigger/value")},
-                           {"trigger", right("trigger/value")},
-                           {"button_a", right("trackpad/click")},
-                           {"button_b", right("menu/click")},
-                           {"button_x", left("trackpad/click")},
-                           {"button_y", left("menu/click")}}});
+  set.profiles.push_back(
+      with_poses(kVive, trigger_and_buttons("trackpad/click", "menu/click", "trackpad/click", "menu/click")));
   return set;
 }
 
@@ -92,27 +81,27 @@ std::vector<std::string> profile_input_paths(const std::string& profile) {
   if (profile == kSimple) {
     for (const char* in : {"select/click", "menu/click", "grip/pose", "aim/pose"}) both(in);
   } else if (profile == kTouch) {
-    for (const char* in : {"x/click", "x/touch", "y/click", "y/touch", "menu/click"})
-      out.push_back(left(in));
+    for (const char* in : {"x/click", "x/touch", "y/click", "y/touch", "menu/click"}) out.push_back(left(in));
     for (const char* in : {"a/click", "a/touch", "b/click", "b/touch", "system/click"})
       out.push_back(right(in));
-    for (const char* in : {"squeeze/value", "trigger/value", "trigger/touch", "thumbstick/x",
-                           "thumbstick/y", "thumbstick/click", "thumbstick/touch",
-                           "thumbrest/touch", "grip/pose", "aim/pose"})
+    for (const char* in :
+         {"squeeze/value", "trigger/value", "trigger/touch", "thumbstick/x", "thumbstick/y",
+          "thumbstick/click", "thumbstick/touch", "thumbrest/touch", "grip/pose", "aim/pose"})
       both(in);
   } else if (profile == kIndex) {
     // OpenXR 1.0 §6.4, "Valve Index Controller Profile".
-    for (const char* in : {"system/click", "system/touch", "a/click", "a/touch", "b/click", "b/touch",
-                           "squeeze/value", "squeeze/force", "trigger/click", "trigger/value",
-                           "trigger/touch", "thumbstick/x", "thumbstick/y", "thumbstick/click",
-                           "thumbstick/touch", "trackpad/x", "trackpad/y", "trackpad/force",
-                           "trackpad/touch", "grip/pose", "aim/pose"})
+    for (const char* in :
+         {"system/click",  "system/touch",  "a/click",        "a/touch",          "b/click",
+          "b/touch",       "squeeze/value", "squeeze/force",  "trigger/click",    "trigger/value",
+          "trigger/touch", "thumbstick/x",  "thumbstick/y",   "thumbstick/click", "thumbstick/touch",
+          "trackpad/x",    "trackpad/y",    "trackpad/force", "trackpad/touch",   "grip/pose",
+          "aim/pose"})
       both(in);
   } else if (profile == kVive) {
     // OpenXR 1.0 §6.4, "HTC Vive Controller Profile".
-    for (const char* in : {"system/click", "squeeze/click", "menu/click", "trigger/click", "trigger/value",
-                           "trackpad/x", "trackpad/y", "trackpad/click", "trackpad/touch", "grip/pose",
-                           "aim/pose"})
+    for (const char* in :
+         {"system/click", "squeeze/click", "menu/click", "trigger/click", "trigger/value", "trackpad/x",
+          "trackpad/y", "trackpad/click", "trackpad/touch", "grip/pose", "aim/pose"})
       both(in);
   }
   return out;
