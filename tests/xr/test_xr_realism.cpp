@@ -7,6 +7,7 @@
 // and the display's refresh rate. Each test checks the session database and
 // curvlab's messages against the runtime's log of what it handed out.
 #include "../cli/run_cli.hpp"
+#include "../desktop/xvfb.hpp"
 #include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
@@ -495,6 +496,39 @@ TEST(XrRealism, SwapchainFormatsInTheRuntimesOrderShowTheSameColours) {
     fs::remove_all(run.dir);
     fs::remove_all(captures);
   }
+}
+
+TEST(XrRealism, TheOperatorWindowShowsAUnormHeadsetImageAsTheHeadsetShowsIt) {
+  // The operator window copies the submitted swapchain images. A UNORM
+  // image holds linear values, which the compositor encodes for the
+  // display; copied as they are, the window showed the participant's image
+  // far too dark (the table's cloth, sRGB green about 110, as linear 40).
+  curvlab::test::XServer x;
+  if (!x.available()) GTEST_SKIP() << x.reason();
+  const auto shots = fresh_dir("unorm_shots");
+  const auto ops = shots.parent_path() / ("curvlab_xr_realism_unorm_ops_" + std::to_string(::getpid()) + ".txt");
+  // Notes while the first and fourth trials' stimuli are up: a screenshot each.
+  std::ofstream(ops) << "0.9 note first\n2.7 note fourth\n";
+  const DemoRun r = run_demo("unorm_window", {{"CURVLAB_TEST_XR_FORMATS", "B8G8R8A8_UNORM"}}, kProtocol,
+                             "--operator-script " + ops.string() + " --operator-screenshot " + shots.string());
+  ASSERT_EQ(r.cli.exit_code, 0) << r.cli.out;
+  int best = 0;
+  for (const char* name : {"action_1_note.png", "action_2_note.png"}) {
+    curvlab::renderer::Rgba8Image img;
+    ASSERT_TRUE(curvlab::test::read_png_into((shots / name).string(), img)) << name;
+    int cloth = 0;
+    for (int y = 0; y < std::min(img.height, 430); ++y)  // the eye area (test_xr_operator.cpp)
+      for (int px = 0; px < img.width; ++px) {
+        const auto* p = &img.pixels[static_cast<std::size_t>((y * img.width + px) * 4)];
+        // The cloth (0.10, 0.42, 0.20), lit: green well above red and blue.
+        if (p[1] > 40 && p[1] > p[0] + 25 && p[1] > p[2] + 15) ++cloth;
+      }
+    best = std::max(best, cloth);
+  }
+  EXPECT_GT(best, 5000) << "no table in the operator's copy of the participant's image";
+  fs::remove_all(r.dir);
+  fs::remove_all(shots);
+  fs::remove(ops);
 }
 
 // ---- 7. canted eyes, per-frame IPD and fields of view ------------------------

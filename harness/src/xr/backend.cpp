@@ -26,6 +26,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <deque>
 #include <iostream>
@@ -305,12 +306,16 @@ Result<std::vector<XrViewConfigurationView>> stereo_views(XrInstance xr, XrSyste
 // on the fence and reads the buffer. One copy in flight; `state_` hands the
 // buffer and fence between the two threads (acquire/release): idle → requested
 // (operator) → copying (frame thread) → idle (operator, after reading).
+// A UNORM swapchain holds linear values (the compositor encodes them for the
+// display): the copy is sRGB-encoded on reading, so the window shows what
+// the headset does.
 class XrMirror final : public harness::io::FrameMirror {
  public:
-  XrMirror(const renderer::Context& ctx, vk::Extent2D eye, bool bgra)
+  XrMirror(const renderer::Context& ctx, vk::Extent2D eye, bool bgra, bool linear)
       : ctx_(ctx),
         eye_(eye),
         bgra_(bgra),
+        encode_(encoding(linear)),
         pool_(ctx.device(), {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer,
                              .queueFamilyIndex = ctx.queue_family()}),
         fence_(ctx.device(), vk::FenceCreateInfo{}),
@@ -345,6 +350,8 @@ class XrMirror final : public harness::io::FrameMirror {
                     src + e * row * eye_.height + y * row, row);
     if (bgra_)
       for (std::size_t i = 0; i < out.rgba.size(); i += 4) std::swap(out.rgba[i], out.rgba[i + 2]);
+    for (std::size_t i = 0; i < out.rgba.size(); ++i)
+      if (i % 4 != 3) out.rgba[i] = encode_[out.rgba[i]];
     state_.store(kIdle, std::memory_order_release);
     return true;
   }
@@ -373,10 +380,23 @@ class XrMirror final : public harness::io::FrameMirror {
   }
 
  private:
+  // The bytes shown for each byte read: sRGB-encoded (IEC 61966-2-1) for a
+  // linear image, as they are otherwise.
+  static std::array<std::uint8_t, 256> encoding(bool linear) {
+    std::array<std::uint8_t, 256> lut{};
+    for (int v = 0; v < 256; ++v) {
+      const double l = v / 255.0;
+      const double e = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+      lut[static_cast<std::size_t>(v)] = static_cast<std::uint8_t>(linear ? std::lround(e * 255.0) : v);
+    }
+    return lut;
+  }
+
   static constexpr int kIdle = 0, kRequested = 1, kCopying = 2;
   const renderer::Context& ctx_;
   vk::Extent2D eye_;
   bool bgra_;
+  std::array<std::uint8_t, 256> encode_;
   vk::raii::CommandPool pool_;
   vk::raii::CommandBuffer cb_{nullptr};
   vk::raii::Fence fence_;
@@ -744,7 +764,8 @@ Result<Done> XrBackend::make_renderer() {
   if (options_.mirror) {
     const auto format = static_cast<vk::Format>(swapchain_format_);
     const bool bgra = format == vk::Format::eB8G8R8A8Srgb || format == vk::Format::eB8G8R8A8Unorm;
-    mirror_ = std::make_unique<XrMirror>(c, vk::Extent2D{swapchains_[0].width, swapchains_[0].height}, bgra);
+    const bool linear = format == vk::Format::eR8G8B8A8Unorm || format == vk::Format::eB8G8R8A8Unorm;
+    mirror_ = std::make_unique<XrMirror>(c, vk::Extent2D{swapchains_[0].width, swapchains_[0].height}, bgra, linear);
   }
   return Done{};
 }

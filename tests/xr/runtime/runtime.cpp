@@ -2,8 +2,9 @@
 // Khronos loader loads through XR_RUNTIME_JSON (the manifest is generated in
 // the build folder next to this library), so the real `curvlab run --backend
 // xr` drives a whole session on a machine without a headset. It implements
-// every OpenXR 1.0 core function, XR_KHR_vulkan_enable2 and
-// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it), and
+// every OpenXR 1.0 core function, XR_KHR_vulkan_enable2,
+// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it) and
+// XR_FB_display_refresh_rate, and
 // checks the rules of the OpenXR 1.0 specification that are cheap to check
 // (call order of the frame loop and of swapchain images, session states,
 // action-set attachment, action types and subaction paths, layers
@@ -66,10 +67,56 @@
 //                            xrWaitFrame order: FRAME wakes the application a
 //                            period late, so its predicted display time skips
 //                            one refresh; FRAME! returns shouldRender false
+//   CURVLAB_TEST_XR_TIMING   jitter=MS,miss=P,seed=N (any of them): predicted
+//                            display times within ±MS of the display grid,
+//                            and a wake-up that misses a refresh with
+//                            probability P per frame, both a pure function of
+//                            (N, frame number); a "pacing" line per such frame
+//   CURVLAB_TEST_XR_SWAPCHAIN_WAIT MS/EVERY: every EVERY-th image acquired from
+//                            a swapchain is read by the compositor for MS ms:
+//                            xrWaitSwapchainImage waits for it, or returns
+//                            XR_TIMEOUT_EXPIRED after a shorter timeout; a
+//                            "swapchain_wait" line each time
+//   CURVLAB_TEST_XR_STATES   ready=S,visible=N,focused=N (any of them): READY
+//                            S seconds after xrCreateSession, SYNCHRONIZED
+//                            after the first xrEndFrame, VISIBLE N frames
+//                            later, FOCUSED N frames after that (default: at
+//                            once); the same after a RESTART
+//   CURVLAB_TEST_XR_STAGE_MOVE SECONDS=X,Y,Z[,YAW_DEG][!]: STAGE's origin moves
+//                            to that pose in the previous STAGE, announced
+//                            (REFERENCE_SPACE_CHANGE_PENDING) 0.1 s before;
+//                            the room, head, hands and table stay; ! sends
+//                            poseValid false; a "stage_move" line
+//   CURVLAB_TEST_XR_EVENTS_LOST SECONDS[xCOUNT]: the event queue overflows,
+//                            XrEventDataEventsLost with COUNT (default 1)
+//   CURVLAB_TEST_XR_FORMATS  swapchain formats offered, in this order: names
+//                            among R8G8B8A8_SRGB B8G8R8A8_SRGB R8G8B8A8_UNORM
+//                            B8G8R8A8_UNORM (default all four, sRGB first); a
+//                            "swapchain format F WxH" line per swapchain
+//   CURVLAB_TEST_XR_VIEWS    cant=DEG,ipd=MIN:MAX,fov=F (any of them): eyes
+//                            turned DEG outward (canted displays), an IPD in
+//                            [MIN, MAX] m and fields of view scaled by up to
+//                            ±F, changing every frame; a "views" line per
+//                            display time (each eye: pose relative to the head,
+//                            x y z qx qy qz qw, field of view l r u d)
+//   CURVLAB_TEST_XR_TRACKING partial tracking, DEVICE:MODE@SECONDS+DURATION,
+//                            comma-separated: DEVICE head, left or right; MODE
+//                            inferred (valid, not tracked), orientation_only
+//                            (position not valid) or lost; a pose that is not
+//                            valid is reported far from the true one
+//   CURVLAB_TEST_XR_REFRESH  XR_FB_display_refresh_rate (always offered): the
+//                            rates and the starting one, RATES[@START] in Hz
+//                            (default 90); a request changes the rate at once
+//                            ("refresh_request" and "refresh_rate" lines)
+//   CURVLAB_TEST_XR_REFRESH_CHANGE SECONDS=HZ: the runtime changes the rate
+//                            itself (XrEventDataDisplayRefreshRateChangedFB)
 //
 // XrTime is CLOCK_MONOTONIC minus an epoch taken when the library loads (so
-// the two differ, and xrConvertTimeToTimespecTimeKHR has work to do). Frames
-// are paced in real time at 90 Hz.
+// the two differ, and xrConvertTimeToTimespecTimeKHR has work to do).
+// xrWaitFrame blocks until the next refresh of the display's grid that has
+// not passed (90 Hz, or the rate in force); the predicted display time is a
+// period after it. A second xrWaitFrame before xrBeginFrame, which a runtime
+// blocks until the frame is begun (for ever on one thread), is a violation.
 //
 // Not thread-safe beyond a global lock: one application thread at a time.
 #include "profiles.hpp"
