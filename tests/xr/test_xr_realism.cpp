@@ -318,19 +318,6 @@ TEST(XrRealism, AStageMoveTheRuntimeAnnouncesKeepsTheLabFrameAndIsRecorded) {
   ASSERT_EQ(log.of("stage_move").size(), 1u);
   const std::int64_t change_ns = std::stoll(log.of("stage_move")[0][2]) + log.epoch_ns;
 
-  const auto moved = query(r.db, "SELECT json_extract(detail, '$.change_ns'), json_extract(detail, '$.pose_valid'), "
-                                 "json_extract(detail, '$.kept_lab_frame'), json_extract(detail, '$.origin') "
-                                 "FROM events WHERE kind = 'stage_moved'");
-  ASSERT_EQ(moved.size(), 1u);
-  EXPECT_LE(std::llabs(std::stoll(moved[0][0]) - change_ns), kSameInstantNs);
-  EXPECT_EQ(moved[0][1], "1");
-  EXPECT_EQ(moved[0][2], "1");
-  const auto origin = nlohmann::json::parse(moved[0][3]);
-  ASSERT_EQ(origin.size(), 7u);
-  const double half = 10.0 * M_PI / 180.0;
-  const std::array<double, 7> want{0.3, 0.0, -0.2, 0.0, std::sin(half), 0.0, std::cos(half)};
-  for (std::size_t k = 0; k < 7; ++k) EXPECT_NEAR(origin[k].get<double>(), want[k], 1e-6) << k;
-
   // Head samples before and after the change: the runtime's head (logged in
   // the room's frame with each frame) within float precision.
   std::map<std::int64_t, std::array<double, 7>> heads;  // display time → x y z qx qy qz qw
@@ -357,6 +344,20 @@ TEST(XrRealism, AStageMoveTheRuntimeAnnouncesKeepsTheLabFrameAndIsRecorded) {
   }
   EXPECT_GT(after, 200) << "head samples after the change";
   EXPECT_EQ(far, 0) << "head samples away from the participant's head, of " << samples.size();
+  // The move is in the session's data, with its time and pose.
+  const auto moved = query(r.db, "SELECT json_extract(detail, '$.change_ns'), json_extract(detail, '$.pose_valid'), "
+                                 "json_extract(detail, '$.kept_lab_frame'), json_extract(detail, '$.origin') "
+                                 "FROM events WHERE kind = 'stage_moved'");
+  ASSERT_EQ(moved.size(), 1u) << "the move is not in the session's data";
+  EXPECT_LE(std::llabs(std::stoll(moved[0][0]) - change_ns), kSameInstantNs);
+  EXPECT_EQ(moved[0][1], "1");
+  EXPECT_EQ(moved[0][2], "1");
+  const auto origin = nlohmann::json::parse(moved[0][3]);
+  ASSERT_EQ(origin.size(), 7u);
+  const double half = 10.0 * M_PI / 180.0;
+  const std::array<double, 7> want{0.3, 0.0, -0.2, 0.0, std::sin(half), 0.0, std::cos(half)};
+  for (std::size_t k = 0; k < 7; ++k) EXPECT_NEAR(origin[k].get<double>(), want[k], 1e-6) << k;
+
   // Nothing the participant saw moved: no attempt was dropped for it.
   EXPECT_EQ(one(r.db, "SELECT count(*) FROM events WHERE kind = 'trial_aborted'"), "0");
   EXPECT_EQ(one(r.db, "SELECT count(*) FROM trials WHERE status = 'completed'"), "8");
