@@ -1,7 +1,10 @@
 // What the test runtime's scripted headset does, read from the environment
 // (variables documented at the top of runtime.cpp): where the head and hands
 // are at a given time, which controller inputs are held, when focus is lost
-// and regained, and when the runtime asks the application to exit. Pure
+// and regained, when the runtime asks the application to exit, and how it
+// departs from an ideal headset as real runtimes do (display-time jitter,
+// back-pressure, a slow bring-up, STAGE moves, lost events, format order,
+// changing views, partial tracking, refresh rates). Pure
 // functions of time, so the poses the runtime hands out can be logged and
 // checked against what the application stored.
 #pragma once
