@@ -175,8 +175,8 @@ fs::path protocol_with(const fs::path& dir, const std::string& from, const std::
 
 TEST(XrRealism, JitteredDisplayTimesAndMissedRefreshesAreStoredAsTheRuntimeGaveThem) {
   // The compositor's predictions scatter ±2 ms about the display grid and
-  // one wake-up in twenty misses a refresh (seeded: the same frames every run).
-  const DemoRun r = run_demo("timing", {{"CURVLAB_TEST_XR_TIMING", "jitter=2,miss=0.05,seed=7"}});
+  // one wake-up in ten misses a refresh (seeded: the same frames every run).
+  const DemoRun r = run_demo("timing", {{"CURVLAB_TEST_XR_TIMING", "jitter=2,miss=0.1,seed=7"}});
   ASSERT_EQ(r.cli.exit_code, 0) << r.cli.out;
   const RuntimeLog log(r.log_path);
   EXPECT_TRUE(log.problems().empty()) << joined(log.problems());
@@ -187,15 +187,16 @@ TEST(XrRealism, JitteredDisplayTimesAndMissedRefreshesAreStoredAsTheRuntimeGaveT
     jittered += w[6] != "0" ? 1 : 0;
   }
   const auto scripted_misses = std::count_if(missed.begin(), missed.end(), [](const auto& m) { return m.second; });
-  EXPECT_GT(scripted_misses, 10) << "the pattern misses about one frame in twenty";
-  EXPECT_GT(jittered, 200);
+  // A session has 350 to 480 frames (fewer on a loaded machine).
+  EXPECT_GT(scripted_misses, 15) << "the pattern misses about one frame in ten";
+  EXPECT_GT(jittered, 150);
   EXPECT_EQ(one(r.db, "SELECT count(*) FROM trials WHERE status = 'completed'"), "8");
 
   // Every frame the session stored has a display time the runtime gave, and
   // each refresh the runtime's pattern missed is stored as a dropped frame
   // of a late frame.
   const auto frames = query(r.db, "SELECT predicted_display_ns, dropped_frames, late FROM frames ORDER BY frame_index");
-  ASSERT_GT(frames.size(), 300u);
+  ASSERT_GT(frames.size(), 200u);
   int unknown = 0, misses_stored = 0, misses_lost = 0;
   for (const auto& f : frames) {
     const std::int64_t t = std::stoll(f[0]);
@@ -211,7 +212,7 @@ TEST(XrRealism, JitteredDisplayTimesAndMissedRefreshesAreStoredAsTheRuntimeGaveT
     else ++misses_lost;
   }
   EXPECT_EQ(unknown, 0) << "frames whose display time the runtime never gave";
-  EXPECT_GT(misses_stored, 10);
+  EXPECT_GT(misses_stored, 15);
   EXPECT_EQ(misses_lost, 0) << "missed refreshes stored as frames on time";
   // Onsets are display times the runtime gave, jitter and all.
   for (const auto& o : query(r.db, "SELECT onset_ns FROM trials"))
@@ -222,10 +223,10 @@ TEST(XrRealism, JitteredDisplayTimesAndMissedRefreshesAreStoredAsTheRuntimeGaveT
 // ---- 2. paced xrWaitFrame and swapchain back-pressure ----------------------
 
 TEST(XrRealism, WaitFramePacesTheLoopAndABusySwapchainImageIsWaitedFor) {
-  // Every 250th image of each swapchain is still read by the compositor for
-  // 600 ms: curvlab's bounded wait expires (XR_TIMEOUT_EXPIRED, a success
-  // code), it says so, waits again, and the session completes.
-  const DemoRun r = run_demo("swapchain", {{"CURVLAB_TEST_XR_SWAPCHAIN_WAIT", "600/250"}});
+  // Every 150th image of each swapchain is still read by the compositor for
+  // 400 ms: curvlab's bounded wait (250 ms) expires (XR_TIMEOUT_EXPIRED, a
+  // success code), it says so, waits again, and the session completes.
+  const DemoRun r = run_demo("swapchain", {{"CURVLAB_TEST_XR_SWAPCHAIN_WAIT", "400/150"}});
   ASSERT_EQ(r.cli.exit_code, 0) << r.cli.out;
   EXPECT_NE(r.cli.out.find("the compositor has held a swapchain image"), std::string::npos) << r.cli.out;
   const RuntimeLog log(r.log_path);
@@ -238,7 +239,7 @@ TEST(XrRealism, WaitFramePacesTheLoopAndABusySwapchainImageIsWaitedFor) {
   EXPECT_EQ(one(r.db, "SELECT count(*) FROM trials WHERE status = 'completed'"), "8");
   // xrWaitFrame blocks to the display: successive frames are whole periods
   // apart, never closer (a loop that outran the display would shorten them).
-  ASSERT_GT(log.display_mono_ns.size(), 300u);
+  ASSERT_GT(log.display_mono_ns.size(), 200u);
   for (std::size_t i = 1; i < log.display_mono_ns.size(); ++i) {
     const std::int64_t d = log.display_mono_ns[i] - log.display_mono_ns[i - 1];
     ASSERT_GE(d, kPeriod90Ns - 1) << "frame " << i;
@@ -342,7 +343,7 @@ TEST(XrRealism, AStageMoveTheRuntimeAnnouncesKeepsTheLabFrameAndIsRecorded) {
     }
     if (dp > 1e-4 || std::min(dq, dq_flip) > 1e-4) ++far;
   }
-  EXPECT_GT(after, 200) << "head samples after the change";
+  EXPECT_GT(after, 100) << "head samples after the change";
   EXPECT_EQ(far, 0) << "head samples away from the participant's head, of " << samples.size();
   // The move is in the session's data, with its time and pose.
   const auto moved = query(r.db, "SELECT json_extract(detail, '$.change_ns'), json_extract(detail, '$.pose_valid'), "
@@ -549,7 +550,7 @@ TEST(XrRealism, EveryFrameIsDrawnWithTheViewsOfItsDisplayTime) {
     for (std::size_t k = 0; k < 22; ++k) v[k] = std::stod(w[3 + k]);
     views[std::stoll(w[2]) + log.epoch_ns] = v;
   }
-  ASSERT_GT(views.size(), 300u);
+  ASSERT_GT(views.size(), 200u);
   // Each stored eye geometry is the runtime's for that frame: position
   // relative to the head, rotation (the cant), field of view.
   const auto frames = query(r.db, "SELECT predicted_display_ns, hex(eye_views) FROM frames "
@@ -585,7 +586,7 @@ TEST(XrRealism, EveryFrameIsDrawnWithTheViewsOfItsDisplayTime) {
     wrong += err > 1e-5 ? 1 : 0;
     worst = std::max(worst, err);
   }
-  EXPECT_GT(compared, 300);
+  EXPECT_GT(compared, 200);
   EXPECT_EQ(wrong, 0) << "frames drawn with other views; worst difference " << worst;
   // The onset images the runtime received are the replay of those views,
   // pixel for pixel.
@@ -653,14 +654,14 @@ TEST(XrRealism, PartialTrackingIsStoredAsTheRuntimeReportedIt) {
   // tracking (docs/xr.md); tracked again after the spell.
   for (const char* hand : {"right_hand", "left_hand"}) {
     SCOPED_TRACE(hand);
-    EXPECT_GT(counts[hand].in, 40);
+    EXPECT_GT(counts[hand].in, 30);
     EXPECT_EQ(counts[hand].in_valid, 0);
     EXPECT_GT(counts[hand].out, 100);
     EXPECT_EQ(counts[hand].out_valid, counts[hand].out);
   }
   // The head: an inferred pose is valid (its samples are kept, with the
   // runtime's inferred position) and stops nothing here.
-  EXPECT_GT(counts["head"].in, 20);
+  EXPECT_GT(counts["head"].in, 12);
   EXPECT_EQ(counts["head"].in_valid, counts["head"].in);
   EXPECT_EQ(one(r.db, "SELECT count(*) FROM events WHERE kind = 'trial_aborted'"), "0");
   EXPECT_EQ(one(r.db, "SELECT count(*) FROM trials WHERE status = 'completed'"), "8");
