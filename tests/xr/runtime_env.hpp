@@ -59,6 +59,11 @@ class RuntimeEnv {
                                          "CURVLAB_TEST_XR_CAPTURE_DIR",   "CURVLAB_TEST_XR_CAPTURE_EVERY",
                                          "CURVLAB_TEST_XR_LOG",           "CURVLAB_TEST_XR_SIZE",
                                          "CURVLAB_TEST_XR_HEAD",          "CURVLAB_TEST_XR_RESTART",
+                                         "CURVLAB_TEST_XR_TIMING",        "CURVLAB_TEST_XR_SWAPCHAIN_WAIT",
+                                         "CURVLAB_TEST_XR_STATES",        "CURVLAB_TEST_XR_STAGE_MOVE",
+                                         "CURVLAB_TEST_XR_EVENTS_LOST",   "CURVLAB_TEST_XR_FORMATS",
+                                         "CURVLAB_TEST_XR_VIEWS",         "CURVLAB_TEST_XR_TRACKING",
+                                         "CURVLAB_TEST_XR_REFRESH",       "CURVLAB_TEST_XR_REFRESH_CHANGE",
                                          "VK_INSTANCE_LAYERS"};
 };
 

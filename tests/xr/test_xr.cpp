@@ -105,6 +105,25 @@ TEST(SessionState, FullLifecycleWithFocusLossAndResume) {
   EXPECT_FALSE(u.unexpected);
 }
 
+TEST(SessionState, TheFirstTrialWaitsForTheFirstFocus) {
+  // A runtime that brings the session up over many frames: READY pauses the
+  // runner (nothing is shown before VISIBLE, nothing answered before
+  // FOCUSED), the first FOCUSED resumes it; later READYs give no pause of
+  // their own.
+  SessionStateMachine m;
+  m.on_state_changed(SessionState::Idle);
+  auto u = m.on_state_changed(SessionState::Ready);
+  EXPECT_TRUE(u.begin_session);
+  EXPECT_TRUE(u.pause);
+  EXPECT_TRUE(u.message.empty());
+  EXPECT_FALSE(m.on_state_changed(SessionState::Synchronized).resume);
+  EXPECT_FALSE(m.on_state_changed(SessionState::Visible).resume);
+  u = m.on_state_changed(SessionState::Focused);
+  EXPECT_TRUE(u.resume);
+  EXPECT_FALSE(u.pause);
+  EXPECT_EQ(u.mode, RunMode::Running);
+}
+
 TEST(SessionState, StoppingAndReadyAgainPauseAndResumeTheTrial) {
   SessionStateMachine m;
   for (auto s : {SessionState::Idle, SessionState::Ready, SessionState::Synchronized,

@@ -250,6 +250,10 @@ TEST_F(RuntimeRules, SessionAndFrameLoopOrder) {
   ASSERT_EQ(xrWaitFrame(session_, &wait, &state), XR_SUCCESS);
   EXPECT_EQ((state.predictedDisplayTime - first) % state.predictedDisplayPeriod, 0);
   EXPECT_GT(state.predictedDisplayTime, first);
+  // A second xrWaitFrame before xrBeginFrame: a runtime blocks it until the
+  // frame is begun (forever, on one thread); this one refuses it.
+  auto again = tagged<XrFrameState>(XR_TYPE_FRAME_STATE);
+  EXPECT_EQ(xrWaitFrame(session_, &wait, &again), XR_ERROR_CALL_ORDER_INVALID);
   ASSERT_EQ(xrBeginFrame(session_, &begin), XR_SUCCESS);
   end.displayTime = state.predictedDisplayTime;
   end.environmentBlendMode = XR_ENVIRONMENT_BLEND_MODE_OPAQUE;
@@ -266,7 +270,7 @@ TEST_F(RuntimeRules, SessionAndFrameLoopOrder) {
   ASSERT_EQ(from_ts(instance_, &ts, &back), XR_SUCCESS);
   EXPECT_EQ(back, state.predictedDisplayTime);
   EXPECT_NE(std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec, state.predictedDisplayTime);
-  EXPECT_EQ(violations(), 7);  // with the one in SetUp
+  EXPECT_EQ(violations(), 8);  // with the one in SetUp
 }
 
 TEST_F(RuntimeRules, SwapchainImagesAndLayers) {

@@ -85,6 +85,7 @@ Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
     o.clock = out.clock;
     o.mirror = wants_operator_window(a);
     o.msaa = n.msaa;
+    o.refresh_hz = n.refresh_hz;
     auto made = xr::make_xr_backend(o);
     if (!made) raise(made.error());
     out.interactive = std::move(made).value();

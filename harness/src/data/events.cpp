@@ -11,7 +11,7 @@ namespace {
 // the order a person expects, and equal events give equal texts.
 using Json = nlohmann::ordered_json;
 
-constexpr std::array<std::pair<EventKind, std::string_view>, 24> kind_names{{
+constexpr std::array<std::pair<EventKind, std::string_view>, 27> kind_names{{
     {EventKind::session_start, "session_start"},
     {EventKind::observer, "observer"},
     {EventKind::resume, "resume"},
@@ -33,6 +33,9 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 24> kind_names{{
     {EventKind::adjustment, "adjustment"},
     {EventKind::onset, "onset"},
     {EventKind::tracking_flagged, "tracking_flagged"},
+    {EventKind::events_lost, "events_lost"},
+    {EventKind::stage_moved, "stage_moved"},
+    {EventKind::refresh_rate, "refresh_rate"},
     {EventKind::posterior, "posterior"},
     {EventKind::merged_from, "merged_from"},
     {EventKind::session_renumbered, "session_renumbered"},
@@ -117,6 +120,19 @@ Detail detail(const events::Onset& e) {
 }
 Detail detail(const events::TrackingFlagged& e) {
   return {EventKind::tracking_flagged, Json{{"lost_ms", e.lost_ms}, {"spells", e.spells}, {"attempt", e.attempt}}};
+}
+
+Detail detail(const events::EventsLost& e) { return {EventKind::events_lost, Json{{"lost_events", e.lost_events}}}; }
+Detail detail(const events::StageMoved& e) {
+  Json origin = Json::array();
+  for (const double v : e.origin) origin.push_back(v);
+  return {EventKind::stage_moved, Json{{"change_ns", e.change_ns},
+                                       {"pose_valid", e.pose_valid},
+                                       {"origin", e.pose_valid ? origin : Json(nullptr)},
+                                       {"kept_lab_frame", e.kept_lab_frame}}};
+}
+Detail detail(const events::RefreshRate& e) {
+  return {EventKind::refresh_rate, Json{{"from_hz", e.from_hz}, {"to_hz", e.to_hz}, {"requested", e.requested}}};
 }
 
 // The lapse keys are null when the method keeps λ fixed.

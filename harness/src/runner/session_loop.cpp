@@ -303,6 +303,7 @@ class SessionLoop::Impl {
                                 station_.poses->head_tracking());
     f.inputs.clear();
     f.signal = poll_devices(f.inputs);
+    store_display_reports();
     take_operator_actions(f);
     take_stop_signal(f);
     return true;
@@ -326,6 +327,28 @@ class SessionLoop::Impl {
     const io::Signal s = device_signals_.front();
     device_signals_.pop_front();
     return s;
+  }
+
+  // What the headset's runtime reported since the last frame, as events of
+  // the trial running (if any).
+  void store_display_reports() {
+    reports_.clear();
+    station_.display->take_reports(reports_);
+    const std::optional<std::int64_t> trial_id =
+        current_trial_ ? std::optional<std::int64_t>(trial_ids_[*current_trial_]) : std::nullopt;
+    for (const io::DisplayReport& r : reports_) {
+      switch (r.kind) {
+        case io::DisplayReport::Kind::events_lost:
+          event(trial_id, data::events::EventsLost{r.lost_events});
+          break;
+        case io::DisplayReport::Kind::stage_moved:
+          event(trial_id, data::events::StageMoved{r.change_ns, r.pose_valid, r.origin, r.kept_lab_frame});
+          break;
+        case io::DisplayReport::Kind::refresh_rate:
+          event(trial_id, data::events::RefreshRate{r.from_hz, r.to_hz, r.requested});
+          break;
+      }
+    }
   }
 
   // Ends a frame: draw (or plan), then log the frame and its samples.
@@ -1001,6 +1024,7 @@ class SessionLoop::Impl {
   std::unique_ptr<geometry::Tracker> tracker_;
   std::optional<TrialScene> scene_;
   std::optional<std::size_t> current_trial_;
+  std::vector<io::DisplayReport> reports_;  // this frame's, reused
   std::optional<std::size_t> block_position_;
   geometry::LabFrame lab_;
   std::optional<geometry::LabFrame> last_lab_;

@@ -26,6 +26,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <deque>
 #include <iostream>
@@ -305,12 +306,16 @@ Result<std::vector<XrViewConfigurationView>> stereo_views(XrInstance xr, XrSyste
 // on the fence and reads the buffer. One copy in flight; `state_` hands the
 // buffer and fence between the two threads (acquire/release): idle → requested
 // (operator) → copying (frame thread) → idle (operator, after reading).
+// A UNORM swapchain holds linear values (the compositor encodes them for the
+// display): the copy is sRGB-encoded on reading, so the window shows what
+// the headset does.
 class XrMirror final : public harness::io::FrameMirror {
  public:
-  XrMirror(const renderer::Context& ctx, vk::Extent2D eye, bool bgra)
+  XrMirror(const renderer::Context& ctx, vk::Extent2D eye, bool bgra, bool linear)
       : ctx_(ctx),
         eye_(eye),
         bgra_(bgra),
+        encode_(encoding(linear)),
         pool_(ctx.device(), {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer,
                              .queueFamilyIndex = ctx.queue_family()}),
         fence_(ctx.device(), vk::FenceCreateInfo{}),
@@ -345,6 +350,8 @@ class XrMirror final : public harness::io::FrameMirror {
                     src + e * row * eye_.height + y * row, row);
     if (bgra_)
       for (std::size_t i = 0; i < out.rgba.size(); i += 4) std::swap(out.rgba[i], out.rgba[i + 2]);
+    for (std::size_t i = 0; i < out.rgba.size(); ++i)
+      if (i % 4 != 3) out.rgba[i] = encode_[out.rgba[i]];
     state_.store(kIdle, std::memory_order_release);
     return true;
   }
@@ -373,10 +380,23 @@ class XrMirror final : public harness::io::FrameMirror {
   }
 
  private:
+  // The bytes shown for each byte read: sRGB-encoded (IEC 61966-2-1) for a
+  // linear image, as they are otherwise.
+  static std::array<std::uint8_t, 256> encoding(bool linear) {
+    std::array<std::uint8_t, 256> lut{};
+    for (int v = 0; v < 256; ++v) {
+      const double l = v / 255.0;
+      const double e = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+      lut[static_cast<std::size_t>(v)] = static_cast<std::uint8_t>(linear ? std::lround(e * 255.0) : v);
+    }
+    return lut;
+  }
+
   static constexpr int kIdle = 0, kRequested = 1, kCopying = 2;
   const renderer::Context& ctx_;
   vk::Extent2D eye_;
   bool bgra_;
+  std::array<std::uint8_t, 256> encode_;
   vk::raii::CommandPool pool_;
   vk::raii::CommandBuffer cb_{nullptr};
   vk::raii::Fence fence_;
@@ -412,6 +432,10 @@ class XrBackend final : public InteractiveDisplay {
                               const Overlay& overlay, bool draw) override;
   std::vector<std::string> save_frame(const std::string& stem) override;
   harness::io::FrameMirror* mirror() override { return mirror_.get(); }
+  void take_reports(std::vector<harness::io::DisplayReport>& out) override {
+    out.insert(out.end(), reports_.begin(), reports_.end());
+    reports_.clear();
+  }
 
  private:
   struct EyeSwapchain {
@@ -453,6 +477,19 @@ class XrBackend final : public InteractiveDisplay {
   void report_once(XrResult r, const char* call);
   void mark_late(FrameTiming& timing);
   FrameTiming stopped_frame();
+  // The runtime's events that are not session states.
+  void on_events_lost(const XrEventDataEventsLost& e);
+  void on_stage_change(const XrEventDataReferenceSpaceChangePending& e);
+  void on_refresh_rate_changed(const XrEventDataDisplayRefreshRateChangedFB& e);
+  // Asks the display for the protocol's refresh rate where it offers it
+  // (XR_FB_display_refresh_rate); the rate it then runs at.
+  void request_refresh_rate();
+  // Switches to the STAGE space that keeps the lab frame once the frame's
+  // display time has reached the runtime's change time.
+  void follow_stage_change(XrTime t);
+  // xrWaitSwapchainImage in bounded steps (a runtime's back-pressure), so a
+  // compositor that holds an image is said and, past a limit, a failure.
+  void wait_image(XrSwapchain swapchain);
   // The steps of create(), in the order of the OpenXR lifecycle; each keeps
   // what it made in the members.
   Result<Done> open(const OptionalExtensions& offered);
@@ -508,6 +545,22 @@ class XrBackend final : public InteractiveDisplay {
   std::vector<std::array<bool, 2>> active_ = std::vector<std::array<bool, 2>>(curvlab_action_set().actions.size());
   XrTime focused_at_ = 0;  // when the session last became FOCUSED (the runtime's event time)
   XrTime last_display_ = 0;  // the previous frame's predicted display time
+  std::vector<harness::io::DisplayReport> reports_;  // for the session's data, until taken
+  // STAGE as curvlab uses it: the runtime's STAGE with an offset that keeps
+  // the lab frame where it was before the runtime moved STAGE's origin
+  // (identity until then); a moved space waits in stage_next_ for its change time.
+  XrPosef stage_offset_ = kIdentityPose;
+  SpaceHandle stage_next_;
+  XrPosef stage_next_offset_ = kIdentityPose;
+  XrTime stage_change_at_ = 0;
+  // XR_FB_display_refresh_rate, where enabled.
+  PFN_xrGetDisplayRefreshRateFB get_refresh_ = nullptr;
+  PFN_xrEnumerateDisplayRefreshRatesFB enumerate_refresh_ = nullptr;
+  PFN_xrRequestDisplayRefreshRateFB request_refresh_ = nullptr;
+  float requested_hz_ = 0.0f;  // the rate curvlab asked for; its change event is expected (0: none)
+  bool swapchain_wait_said_ = false;
+  bool focus_wait_ = false;       // READY came, the first focus not yet: a pause held back
+  std::int64_t frames_ended_ = 0;  // xrEndFrame calls
 };
 
 Result<std::unique_ptr<InteractiveDisplay>> XrBackend::create(const XrBackendOptions& options) {
@@ -565,12 +618,54 @@ Result<Done> XrBackend::create_session(bool refresh_rate) {
   session_info.systemId = system_;
   if (const XrResult r = xrCreateSession(instance_.handle(), &session_info, session_.out()); XR_FAILED(r))
     return error(r, "xrCreateSession");
-  if (PFN_xrGetDisplayRefreshRateFB rate_fn = nullptr;
-      refresh_rate && XR_SUCCEEDED(load(instance_.handle(), "xrGetDisplayRefreshRateFB", rate_fn))) {
+  const XrInstance xr = instance_.handle();
+  if (refresh_rate && XR_SUCCEEDED(load(xr, "xrGetDisplayRefreshRateFB", get_refresh_)) &&
+      XR_SUCCEEDED(load(xr, "xrEnumerateDisplayRefreshRatesFB", enumerate_refresh_)) &&
+      XR_SUCCEEDED(load(xr, "xrRequestDisplayRefreshRateFB", request_refresh_))) {
     float hz = 0.0f;
-    if (XR_SUCCEEDED(rate_fn(session_.get(), &hz)) && hz > 0.0f) refresh_hz_ = static_cast<double>(hz);
+    if (XR_SUCCEEDED(get_refresh_(session_.get(), &hz)) && hz > 0.0f) refresh_hz_ = static_cast<double>(hz);
+    request_refresh_rate();
+  } else {
+    get_refresh_ = nullptr;
   }
   return Done{};
+}
+
+// A lab fixes the display rate for its timing: the protocol's rate where the
+// headset offers it; otherwise the headset's own, said.
+void XrBackend::request_refresh_rate() {
+  if (!options_.refresh_hz || request_refresh_ == nullptr) return;
+  const double want = *options_.refresh_hz;
+  if (std::abs(refresh_hz_ - want) < 0.5) return;
+  std::uint32_t n = 0;
+  std::vector<float> rates;
+  if (XR_SUCCEEDED(enumerate_refresh_(session_.get(), 0, &n, nullptr))) {
+    rates.resize(n);
+    if (XR_FAILED(enumerate_refresh_(session_.get(), n, &n, rates.data()))) rates.clear();
+  }
+  const auto offered = std::find_if(rates.begin(), rates.end(),
+                                    [want](float r) { return std::abs(static_cast<double>(r) - want) < 0.5; });
+  if (offered == rates.end()) {
+    std::string list;
+    for (const float r : rates) list += (list.empty() ? "" : ", ") + std::to_string(std::lround(r));
+    std::cerr << "curvlab: xr: the headset does not offer the protocol's " << want << " Hz (it offers " << list
+              << " Hz); frames run at its " << refresh_hz_ << " Hz\n";
+    return;
+  }
+  if (const XrResult r = request_refresh_(session_.get(), *offered); XR_FAILED(r)) {
+    std::cerr << "curvlab: xr: " << failure_of(r, "xrRequestDisplayRefreshRateFB").message << '\n';
+    return;
+  }
+  float now = 0.0f;
+  if (XR_FAILED(get_refresh_(session_.get(), &now)) || now <= 0.0f) now = *offered;
+  harness::io::DisplayReport report;
+  report.kind = harness::io::DisplayReport::Kind::refresh_rate;
+  report.from_hz = refresh_hz_;
+  report.to_hz = now;
+  report.requested = true;
+  reports_.push_back(report);
+  refresh_hz_ = now;
+  requested_hz_ = *offered;
 }
 
 // The STAGE and VIEW reference spaces, and a grip space per hand once the
@@ -669,7 +764,8 @@ Result<Done> XrBackend::make_renderer() {
   if (options_.mirror) {
     const auto format = static_cast<vk::Format>(swapchain_format_);
     const bool bgra = format == vk::Format::eB8G8R8A8Srgb || format == vk::Format::eB8G8R8A8Unorm;
-    mirror_ = std::make_unique<XrMirror>(c, vk::Extent2D{swapchains_[0].width, swapchains_[0].height}, bgra);
+    const bool linear = format == vk::Format::eR8G8B8A8Unorm || format == vk::Format::eB8G8R8A8Unorm;
+    mirror_ = std::make_unique<XrMirror>(c, vk::Extent2D{swapchains_[0].width, swapchains_[0].height}, bgra, linear);
   }
   return Done{};
 }
@@ -750,8 +846,14 @@ void XrBackend::on_state(SessionState next) {
     for (auto& hands : active_) hands = {false, false};
     synced_ = false;
   }
-  if (u.pause) signals_.push_back(Signal::pause);
-  if (u.resume) signals_.push_back(Signal::resume);
+  // The wait for the first focus (the pause READY gives) is the runner's
+  // only once a frame has ended without focus: most runtimes bring
+  // SYNCHRONIZED, VISIBLE and FOCUSED right after the first frame, and then
+  // the first trial runs with no pause at all.
+  if (u.pause && next == SessionState::Ready) focus_wait_ = true;
+  else if (u.pause) signals_.push_back(Signal::pause);
+  if (u.resume && focus_wait_) focus_wait_ = false;
+  else if (u.resume) signals_.push_back(Signal::resume);
   if (u.mode == RunMode::Exit) signals_.push_back(Signal::quit);
 }
 
@@ -772,22 +874,113 @@ bool XrBackend::poll_events() {
         failed_ = true;
         throw DeviceFailure("xrPollEvent", "XR_TYPE_EVENT_DATA_INSTANCE_LOSS_PENDING",
                              "the OpenXR runtime is going away");
-      case XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING: {
-        const auto& e = *reinterpret_cast<const XrEventDataReferenceSpaceChangePending*>(&event);
-        // The play area was recentred or redrawn: the lab frame moved under
-        // the physical table, so the runner must recalibrate or recenter.
-        if (e.referenceSpaceType == XR_REFERENCE_SPACE_TYPE_STAGE) {
-          std::cerr << "curvlab: xr: the runtime moved the STAGE space (recentred or a new play "
-                       "area); check the table calibration\n";
-          signals_.push_back(Signal::recenter);
-        }
+      case XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING:
+        on_stage_change(*reinterpret_cast<const XrEventDataReferenceSpaceChangePending*>(&event));
         break;
-      }
+      case XR_TYPE_EVENT_DATA_EVENTS_LOST:
+        on_events_lost(*reinterpret_cast<const XrEventDataEventsLost*>(&event));
+        break;
+      case XR_TYPE_EVENT_DATA_DISPLAY_REFRESH_RATE_CHANGED_FB:
+        on_refresh_rate_changed(*reinterpret_cast<const XrEventDataDisplayRefreshRateChangedFB*>(&event));
+        break;
       default:
         break;
     }
   }
   return !failed_ && state_.mode() != RunMode::Exit;
+}
+
+// The runtime's queue overflowed and dropped events (OpenXR 1.0 §2.22).
+// Nothing says which; the session states that matter come again with the
+// next change, so the session goes on, and the loss is data.
+void XrBackend::on_events_lost(const XrEventDataEventsLost& e) {
+  std::cerr << "curvlab: xr: the OpenXR runtime dropped " << e.lostEventCount
+            << " event(s) it could not queue; the session goes on (recorded as an events_lost event)\n";
+  harness::io::DisplayReport report;
+  report.kind = harness::io::DisplayReport::Kind::events_lost;
+  report.lost_events = e.lostEventCount;
+  reports_.push_back(report);
+}
+
+// The runtime moves STAGE's origin (a redrawn play area or boundary): from
+// changeTime on its poses are in the new origin. The room and the table did
+// not move, and the table's calibration is in the lab frame (the STAGE
+// before the move), so where the runtime says where the new origin lies,
+// curvlab keeps the lab frame: it locates in a STAGE space offset by the
+// inverse of the move, from the first frame displayed at or after
+// changeTime. Where the runtime does not know the move, the table may have
+// moved under the participant: the attempt is dropped (recenter) and the
+// experimenter told to check the calibration.
+void XrBackend::on_stage_change(const XrEventDataReferenceSpaceChangePending& e) {
+  if (e.referenceSpaceType != XR_REFERENCE_SPACE_TYPE_STAGE) return;
+  harness::io::DisplayReport report;
+  report.kind = harness::io::DisplayReport::Kind::stage_moved;
+  report.change_ns = to_session_ns(e.changeTime);
+  report.pose_valid = e.poseValid == XR_TRUE;
+  const XrPosef& p = e.poseInPreviousSpace;
+  report.origin = {p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y, p.orientation.z,
+                   p.orientation.w};
+  if (report.pose_valid) {
+    // poseInReferenceSpace Q keeps lab coordinates: lab = Q⁻¹ · stage. With
+    // the old stage = P · new stage (P the new origin in the old), the new
+    // space needs Q' = P⁻¹ · Q.
+    const LabPose moved = to_lab_pose(p);
+    const LabPose before = to_lab_pose(stage_next_.get() != XR_NULL_HANDLE ? stage_next_offset_ : stage_offset_);
+    const glm::dquat inv = glm::inverse(glm::normalize(moved.orientation));
+    LabPose offset;
+    offset.orientation = inv * before.orientation;
+    offset.position_m = inv * (before.position_m - moved.position_m);
+    auto info = tagged<XrReferenceSpaceCreateInfo>(XR_TYPE_REFERENCE_SPACE_CREATE_INFO);
+    info.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_STAGE;
+    info.poseInReferenceSpace = to_xr_pose(offset);
+    SpaceHandle next;
+    if (const XrResult r = xrCreateReferenceSpace(session_.get(), &info, next.out()); XR_SUCCEEDED(r)) {
+      stage_next_ = std::move(next);
+      stage_next_offset_ = info.poseInReferenceSpace;
+      stage_change_at_ = e.changeTime;
+      report.kept_lab_frame = true;
+    } else if (fatal(r)) {
+      fail(r, "xrCreateReferenceSpace");
+    }
+  }
+  if (report.kept_lab_frame) {
+    std::cerr << "curvlab: xr: the runtime moved its STAGE origin (a new play area or boundary) by (" << p.position.x
+              << ", " << p.position.y << ", " << p.position.z
+              << ") m; curvlab keeps the lab frame where it was, so the table calibration still holds\n";
+  } else {
+    std::cerr << "curvlab: xr: the runtime moved its STAGE origin (a new play area or boundary) without saying "
+                 "where; the trial is run again: check that the table is where the participant sees it, and "
+                 "calibrate again (curvlab calibrate) if not\n";
+    signals_.push_back(Signal::recenter);
+  }
+  reports_.push_back(report);
+}
+
+void XrBackend::follow_stage_change(XrTime t) {
+  if (stage_next_.get() == XR_NULL_HANDLE || t < stage_change_at_) return;
+  stage_ = std::move(stage_next_);
+  stage_offset_ = stage_next_offset_;
+}
+
+// The display's rate changed. Frames follow the runtime's period at once
+// (each frame's is stored); a change the lab did not ask for is said,
+// recorded, and the protocol's rate asked for again.
+void XrBackend::on_refresh_rate_changed(const XrEventDataDisplayRefreshRateChangedFB& e) {
+  const double to = static_cast<double>(e.toDisplayRefreshRate);
+  if (requested_hz_ > 0.0f && e.toDisplayRefreshRate == requested_hz_ && std::abs(refresh_hz_ - to) < 0.5) {
+    requested_hz_ = 0.0f;  // the change curvlab asked for, already recorded
+    return;
+  }
+  std::cerr << "curvlab: xr: the headset changed its refresh rate from " << e.fromDisplayRefreshRate << " to "
+            << e.toDisplayRefreshRate << " Hz\n";
+  harness::io::DisplayReport report;
+  report.kind = harness::io::DisplayReport::Kind::refresh_rate;
+  report.from_hz = e.fromDisplayRefreshRate;
+  report.to_hz = to;
+  reports_.push_back(report);
+  refresh_hz_ = to;
+  requested_hz_ = 0.0f;
+  request_refresh_rate();
 }
 
 // CLOCK_MONOTONIC → session clock. Reading the two clocks one after the
@@ -851,6 +1044,7 @@ XrResult XrBackend::end_frame(FrameLayer what) {
   info.layerCount = with_layer ? 1 : 0;
   info.layers = with_layer ? &header : nullptr;
   frame_begun_ = false;
+  ++frames_ended_;
   return xrEndFrame(session_.get(), &info);
 }
 
@@ -878,6 +1072,7 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   if (const XrResult r = xrBeginFrame(session, &begin_info); XR_FAILED(r)) fail(r, "xrBeginFrame");
   frame_begun_ = true;
   const XrTime t = frame_state_.predictedDisplayTime;
+  follow_stage_change(t);
   // Without XR_KHR_convert_timespec_time: the first frame's image is taken
   // to appear one period after xrWaitFrame returned (docs/lab.md).
   if (to_timespec_ == nullptr && !clock_map_.anchored())
@@ -1068,6 +1263,10 @@ Signal XrBackend::poll(std::vector<InputEvent>& out) {
 
 Signal XrBackend::poll_signal() {
   if (!failed_) poll_events();
+  if (focus_wait_ && frames_ended_ > 0) {
+    signals_.push_back(Signal::pause);
+    focus_wait_ = false;
+  }
   if (signals_.empty()) return Signal::none;
   // Quit outranks everything still queued.
   if (std::find(signals_.begin(), signals_.end(), Signal::quit) != signals_.end()) {
@@ -1110,11 +1309,14 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
       fail(r, "xrAcquireSwapchainImage");  // the destructor ends the begun frame
     }
     acquired[i] = true;
-    auto wait = tagged<XrSwapchainImageWaitInfo>(XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO);
-    wait.timeout = XR_INFINITE_DURATION;
-    if (const XrResult r = xrWaitSwapchainImage(sc.handle.get(), &wait); XR_FAILED(r)) {
+    try {
+      wait_image(sc.handle.get());
+    } catch (const DeviceFailure&) {
+      // A waited image is released by release_all; one the wait never
+      // got is not (the runtime refuses it): the frame is lost either way.
+      acquired[i] = false;
       release_all();
-      fail(r, "xrWaitSwapchainImage");
+      throw;
     }
     submitted[i] = sc.images[index].image;
     target_->set_image(i == 0 ? renderer::Eye::left : renderer::Eye::right,
@@ -1140,6 +1342,26 @@ renderer::FrameStats XrBackend::submit(const renderer::Scene& scene,
   release_all();
   if (const XrResult r = end_frame(FrameLayer::fresh); XR_FAILED(r)) fail(r, "xrEndFrame");
   return stats;
+}
+
+void XrBackend::wait_image(XrSwapchain swapchain) {
+  // XR_TIMEOUT_EXPIRED is a success code: the image is not yet the
+  // application's (OpenXR 1.0 §10.1, xrWaitSwapchainImage), so it is waited
+  // again, and a wait past kLimit is a failure of the compositor.
+  constexpr XrDuration kStep = 250'000'000, kLimit = 5'000'000'000;
+  auto wait = tagged<XrSwapchainImageWaitInfo>(XR_TYPE_SWAPCHAIN_IMAGE_WAIT_INFO);
+  wait.timeout = kStep;
+  for (XrDuration waited = 0;; waited += kStep) {
+    const XrResult r = xrWaitSwapchainImage(swapchain, &wait);
+    if (XR_FAILED(r)) fail(r, "xrWaitSwapchainImage");
+    if (r != XR_TIMEOUT_EXPIRED) return;
+    if (!swapchain_wait_said_) {
+      std::cerr << "curvlab: xr: the compositor has held a swapchain image for more than " << kStep / 1'000'000
+                << " ms; waiting for it\n";
+      swapchain_wait_said_ = true;
+    }
+    if (waited + kStep >= kLimit) fail(XR_TIMEOUT_EXPIRED, "xrWaitSwapchainImage");
+  }
 }
 
 std::vector<std::string> XrBackend::save_frame(const std::string& stem) {

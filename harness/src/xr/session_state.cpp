@@ -71,6 +71,12 @@ SessionUpdate SessionStateMachine::on_state_changed(SessionState next) {
       u.begin_session = !running_;
       running_ = true;
       mode_ = RunMode::FramesOnly;
+      // The first trial waits for input focus: until then the participant
+      // may see nothing (SYNCHRONIZED) and cannot answer (VISIBLE).
+      if (!was_focused_ && !paused_) {
+        u.pause = true;
+        paused_ = true;
+      }
       break;
     case SessionState::Synchronized:
     case SessionState::Visible:

@@ -2,8 +2,9 @@
 // Khronos loader loads through XR_RUNTIME_JSON (the manifest is generated in
 // the build folder next to this library), so the real `curvlab run --backend
 // xr` drives a whole session on a machine without a headset. It implements
-// every OpenXR 1.0 core function, XR_KHR_vulkan_enable2 and
-// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it), and
+// every OpenXR 1.0 core function, XR_KHR_vulkan_enable2,
+// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it) and
+// XR_FB_display_refresh_rate, and
 // checks the rules of the OpenXR 1.0 specification that are cheap to check
 // (call order of the frame loop and of swapchain images, session states,
 // action-set attachment, action types and subaction paths, layers
@@ -66,10 +67,56 @@
 //                            xrWaitFrame order: FRAME wakes the application a
 //                            period late, so its predicted display time skips
 //                            one refresh; FRAME! returns shouldRender false
+//   CURVLAB_TEST_XR_TIMING   jitter=MS,miss=P,seed=N (any of them): predicted
+//                            display times within ±MS of the display grid,
+//                            and a wake-up that misses a refresh with
+//                            probability P per frame, both a pure function of
+//                            (N, frame number); a "pacing" line per such frame
+//   CURVLAB_TEST_XR_SWAPCHAIN_WAIT MS/EVERY: every EVERY-th image acquired from
+//                            a swapchain is read by the compositor for MS ms:
+//                            xrWaitSwapchainImage waits for it, or returns
+//                            XR_TIMEOUT_EXPIRED after a shorter timeout; a
+//                            "swapchain_wait" line each time
+//   CURVLAB_TEST_XR_STATES   ready=S,visible=N,focused=N (any of them): READY
+//                            S seconds after xrCreateSession, SYNCHRONIZED
+//                            after the first xrEndFrame, VISIBLE N frames
+//                            later, FOCUSED N frames after that (default: at
+//                            once); the same after a RESTART
+//   CURVLAB_TEST_XR_STAGE_MOVE SECONDS=X,Y,Z[,YAW_DEG][!]: STAGE's origin moves
+//                            to that pose in the previous STAGE, announced
+//                            (REFERENCE_SPACE_CHANGE_PENDING) 0.1 s before;
+//                            the room, head, hands and table stay; ! sends
+//                            poseValid false; a "stage_move" line
+//   CURVLAB_TEST_XR_EVENTS_LOST SECONDS[xCOUNT]: the event queue overflows,
+//                            XrEventDataEventsLost with COUNT (default 1)
+//   CURVLAB_TEST_XR_FORMATS  swapchain formats offered, in this order: names
+//                            among R8G8B8A8_SRGB B8G8R8A8_SRGB R8G8B8A8_UNORM
+//                            B8G8R8A8_UNORM (default all four, sRGB first); a
+//                            "swapchain format F WxH" line per swapchain
+//   CURVLAB_TEST_XR_VIEWS    cant=DEG,ipd=MIN:MAX,fov=F (any of them): eyes
+//                            turned DEG outward (canted displays), an IPD in
+//                            [MIN, MAX] m and fields of view scaled by up to
+//                            ±F, changing every frame; a "views" line per
+//                            display time (each eye: pose relative to the head,
+//                            x y z qx qy qz qw, field of view l r u d)
+//   CURVLAB_TEST_XR_TRACKING partial tracking, DEVICE:MODE@SECONDS+DURATION,
+//                            comma-separated: DEVICE head, left or right; MODE
+//                            inferred (valid, not tracked), orientation_only
+//                            (position not valid) or lost; a pose that is not
+//                            valid is reported far from the true one
+//   CURVLAB_TEST_XR_REFRESH  XR_FB_display_refresh_rate (always offered): the
+//                            rates and the starting one, RATES[@START] in Hz
+//                            (default 90); a request changes the rate at once
+//                            ("refresh_request" and "refresh_rate" lines)
+//   CURVLAB_TEST_XR_REFRESH_CHANGE SECONDS=HZ: the runtime changes the rate
+//                            itself (XrEventDataDisplayRefreshRateChangedFB)
 //
 // XrTime is CLOCK_MONOTONIC minus an epoch taken when the library loads (so
-// the two differ, and xrConvertTimeToTimespecTimeKHR has work to do). Frames
-// are paced in real time at 90 Hz.
+// the two differ, and xrConvertTimeToTimespecTimeKHR has work to do).
+// xrWaitFrame blocks until the next refresh of the display's grid that has
+// not passed (90 Hz, or the rate in force); the predicted display time is a
+// period after it. A second xrWaitFrame before xrBeginFrame, which a runtime
+// blocks until the frame is begun (for ever on one thread), is a violation.
 //
 // Not thread-safe beyond a global lock: one application thread at a time.
 #include "profiles.hpp"
@@ -205,6 +252,8 @@ struct Swapchain {
   bool waited = false;                 // the oldest acquired image was waited
   std::uint32_t next = 0;
   std::optional<std::uint32_t> last_released;
+  std::int64_t acquisitions = 0;  // images acquired so far
+  std::int64_t busy_until_ns = 0;  // CURVLAB_TEST_XR_SWAPCHAIN_WAIT: the compositor reads the oldest acquired image until then
 };
 
 struct VulkanDevice {
@@ -241,6 +290,16 @@ struct Session {
   // (since idle_since_ns), ready (until the first frame ends), done.
   enum class Restart { pending, stopping, idle, ready, done } restart = Restart::pending;
   std::int64_t idle_since_ns = 0;
+  // CURVLAB_TEST_XR_STATES: READY at ready_at_ns (0: sent), and the frame
+  // (frames_ended) at which the last step up was taken.
+  std::int64_t ready_at_ns = 0;
+  std::int64_t step_frame = 0;
+  // CURVLAB_TEST_XR_STAGE_MOVE: when STAGE's origin moves (0: not announced).
+  XrTime stage_change = 0;
+  bool events_lost_sent = false;
+  XrTime last_views_logged = 0;
+  bool refresh_changed = false;  // the runtime's own rate change was made
+  float refresh_hz = 90.0f;      // the display's current rate
   VulkanDevice* vk = nullptr;
   VkQueue queue = VK_NULL_HANDLE;
   VkCommandPool pool = VK_NULL_HANDLE;
@@ -265,6 +324,7 @@ struct Session {
 
 struct Instance {
   bool timespec = false;
+  bool refresh_rate = false;  // XR_FB_display_refresh_rate enabled
   bool requirements_queried = false;
   Script script;
   std::deque<XrEventDataBuffer> events;
@@ -381,11 +441,76 @@ void queue_profile_changed(Session& s) {
   s.instance->events.push_back(buffer);
 }
 
-// Runs the script up to now: focus spells and the exit request.
+XrPosef to_xr_pose(const Pose& p);
+
+// The display's refresh rate changes (XR_FB_display_refresh_rate): the frame
+// period from the next xrWaitFrame on, and an event where the application
+// enabled the extension.
+void change_refresh_rate(Session& s, float hz) {
+  if (hz == s.refresh_hz) return;
+  log_line("refresh_rate " + std::to_string(s.refresh_hz) + " " + std::to_string(hz));
+  if (s.instance->refresh_rate) {
+    XrEventDataBuffer buffer{};
+    auto* e = reinterpret_cast<XrEventDataDisplayRefreshRateChangedFB*>(&buffer);
+    e->type = XR_TYPE_EVENT_DATA_DISPLAY_REFRESH_RATE_CHANGED_FB;
+    e->fromDisplayRefreshRate = s.refresh_hz;
+    e->toDisplayRefreshRate = hz;
+    s.instance->events.push_back(buffer);
+  }
+  s.refresh_hz = hz;
+}
+
+// The scripted events that do not change the session's state: STAGE moves,
+// the event queue overflows, the runtime changes the refresh rate.
+void tick_events(Session& s, double t) {
+  const Script& script = s.instance->script;
+  if (script.stage_move && s.stage_change == 0 && t >= script.stage_move->at_s) {
+    // Announced ahead, as runtimes do: poses from changeTime on are in the
+    // new origin (OpenXR 1.0 §12.4, XrEventDataReferenceSpaceChangePending).
+    s.stage_change = to_xr(monotonic_ns() + 100'000'000);
+    XrEventDataBuffer buffer{};
+    auto* e = reinterpret_cast<XrEventDataReferenceSpaceChangePending*>(&buffer);
+    e->type = XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING;
+    e->session = handle_of<XrSession>(&s);
+    e->referenceSpaceType = XR_REFERENCE_SPACE_TYPE_STAGE;
+    e->changeTime = s.stage_change;
+    e->poseValid = script.stage_move->pose_valid ? XR_TRUE : XR_FALSE;
+    e->poseInPreviousSpace = script.stage_move->pose_valid ? to_xr_pose(script.stage_move->origin) : to_xr_pose(Pose{});
+    s.instance->events.push_back(buffer);
+    const Pose& o = script.stage_move->origin;
+    char line[256];
+    std::snprintf(line, sizeof line, "stage_move change_xr_ns %lld pose_valid %d origin %.9f %.9f %.9f %.9f %.9f %.9f %.9f",
+                  static_cast<long long>(s.stage_change), script.stage_move->pose_valid ? 1 : 0, o.position_m.x,
+                  o.position_m.y, o.position_m.z, o.orientation.x, o.orientation.y, o.orientation.z, o.orientation.w);
+    log_line(line);
+  }
+  if (script.events_lost_at_s && !s.events_lost_sent && t >= *script.events_lost_at_s) {
+    // The queue overflowed: the events that did not fit are gone, and the
+    // next one the application polls says how many (OpenXR 1.0 §2.22).
+    s.events_lost_sent = true;
+    XrEventDataBuffer buffer{};
+    auto* e = reinterpret_cast<XrEventDataEventsLost*>(&buffer);
+    e->type = XR_TYPE_EVENT_DATA_EVENTS_LOST;
+    e->lostEventCount = script.events_lost;
+    s.instance->events.push_back(buffer);
+    log_line("events_lost " + std::to_string(script.events_lost));
+  }
+  if (script.refresh.change_at_s && !s.refresh_changed && t >= *script.refresh.change_at_s) {
+    s.refresh_changed = true;
+    change_refresh_rate(s, script.refresh.change_to_hz);
+  }
+}
+
+// Runs the script up to now: READY, focus spells and the exit request.
 void tick(Session& s) {
+  if (s.ready_at_ns > 0 && monotonic_ns() >= s.ready_at_ns && s.state == XR_SESSION_STATE_IDLE) {
+    s.ready_at_ns = 0;
+    queue_state(s, XR_SESSION_STATE_READY);
+  }
   if (!s.focused_once) return;
   const Script& script = s.instance->script;
   const double t = static_cast<double>(monotonic_ns() - s.focus_t0_ns) * 1e-9;
+  tick_events(s, t);
   if (script.exit_at_s && t >= *script.exit_at_s && !s.exit_requested && s.running) {
     s.exit_requested = true;
     if (s.state == XR_SESSION_STATE_FOCUSED) queue_state(s, XR_SESSION_STATE_VISIBLE);
@@ -656,11 +781,13 @@ XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layer, uint
     return violation("xrEnumerateInstanceExtensionProperties", XR_ERROR_API_LAYER_NOT_PRESENT, layer);
   static const std::pair<const char*, uint32_t> offered[] = {
       {XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME, XR_KHR_vulkan_enable2_SPEC_VERSION},
-      {XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME, XR_KHR_convert_timespec_time_SPEC_VERSION}};
-  *count = 2;
+      {XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME, XR_KHR_convert_timespec_time_SPEC_VERSION},
+      {XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME, XR_FB_display_refresh_rate_SPEC_VERSION}};
+  constexpr uint32_t n = sizeof offered / sizeof offered[0];
+  *count = n;
   if (capacity == 0) return XR_SUCCESS;
-  if (capacity < 2) return XR_ERROR_SIZE_INSUFFICIENT;
-  for (std::size_t i = 0; i < 2; ++i) {
+  if (capacity < n) return XR_ERROR_SIZE_INSUFFICIENT;
+  for (std::size_t i = 0; i < n; ++i) {
     if (props[i].type != XR_TYPE_EXTENSION_PROPERTIES)
       return violation("xrEnumerateInstanceExtensionProperties", XR_ERROR_VALIDATION_FAILURE,
                        "XrExtensionProperties without its type");
@@ -690,6 +817,7 @@ XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* info, XrInstance*
   for (uint32_t i = 0; i < info->enabledExtensionCount; ++i) {
     const std::string e = info->enabledExtensionNames[i];
     if (e == XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME) inst->timespec = true;
+    else if (e == XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME) inst->refresh_rate = true;
     else if (e != XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME) return XR_ERROR_EXTENSION_NOT_PRESENT;
   }
   std::string error;
@@ -733,7 +861,8 @@ void destroy_session(Instance& inst) {
   inst.events.erase(std::remove_if(inst.events.begin(), inst.events.end(),
                                    [&s](const XrEventDataBuffer& e) {
                                      return (e.type == XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED ||
-                                             e.type == XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED) &&
+                                             e.type == XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED ||
+                                             e.type == XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING) &&
                                             reinterpret_cast<const XrEventDataSessionStateChanged*>(&e)
                                                     ->session == handle_of<XrSession>(&s);
                                    }),
@@ -1017,8 +1146,14 @@ XrResult XRAPI_CALL CreateSession(XrInstance h, const XrSessionCreateInfo* info,
     return XR_ERROR_RUNTIME_FAILURE;
   inst->session = std::move(s);
   Session& session = *inst->session;
+  session.refresh_hz = inst->script.refresh.start_hz;
   queue_state(session, XR_SESSION_STATE_IDLE);
-  queue_state(session, XR_SESSION_STATE_READY);
+  // READY at once, or as a runtime brings it once the headset is worn and
+  // its compositor is up (CURVLAB_TEST_XR_STATES ready=).
+  if (inst->script.bring_up.ready_s > 0.0)
+    session.ready_at_ns = monotonic_ns() + static_cast<std::int64_t>(inst->script.bring_up.ready_s * 1e9);
+  else
+    queue_state(session, XR_SESSION_STATE_READY);
   *out = handle_of<XrSession>(&session);
   return XR_SUCCESS;
 }
@@ -1198,26 +1333,68 @@ XrResult XRAPI_CALL GetReferenceSpaceBoundsRect(XrSession h, XrReferenceSpaceTyp
   return XR_SUCCESS;
 }
 
-// A space's pose in STAGE at time t, and whether it is tracked.
-std::pair<Pose, bool> stage_pose(const Space& sp, XrTime t) {
+constexpr XrSpaceLocationFlags kAllValid = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT |
+                                           XR_SPACE_LOCATION_POSITION_VALID_BIT |
+                                           XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
+                                           XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
+
+// The location flags of a device (0 head, 1 left hand, 2 right hand) at
+// time t: all set, or as the script's partial tracking has them.
+XrSpaceLocationFlags device_flags(const Session& s, int device, XrTime t) {
+  const Script& script = s.instance->script;
+  XrSpaceLocationFlags flags = kAllValid;
+  // A head with inferred position (CURVLAB_TEST_XR_HEAD=orientation_only).
+  if (device == 0 && !script.head_position_tracked) flags &= ~XrSpaceLocationFlags{XR_SPACE_LOCATION_POSITION_TRACKED_BIT};
+  if (!s.focused_once) return flags;
+  const auto mode = tracking_mode(script, device, static_cast<double>(to_mono(t) - s.focus_t0_ns) * 1e-9);
+  if (!mode) return flags;
+  switch (*mode) {
+    case TrackingMode::inferred:
+      return XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT;
+    case TrackingMode::orientation_only:
+      return XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT;
+    case TrackingMode::lost:
+      return 0;
+  }
+  return flags;
+}
+
+// A space's pose in the room (the first STAGE) at time t, and its location
+// flags. STAGE itself is where the runtime has put its origin at t
+// (CURVLAB_TEST_XR_STAGE_MOVE); the head, hands and table never move with it.
+std::pair<Pose, XrSpaceLocationFlags> stage_pose(const Space& sp, XrTime t) {
   const double ts = xr_seconds(t);
+  const Session& s = *sp.session;
   Pose base;
-  bool tracked = true;
+  XrSpaceLocationFlags flags = kAllValid;
   if (sp.action != nullptr) {
     // Hands are tracked while the application has input focus and the pose
     // action is bound in the active profile.
-    const Session& s = *sp.session;
-    tracked = s.state == XR_SESSION_STATE_FOCUSED && sp.action->set->attached_to == &s;
+    const bool tracked = s.state == XR_SESSION_STATE_FOCUSED && sp.action->set->attached_to == &s;
     const double since_focus_s = static_cast<double>(to_mono(t) - s.focus_t0_ns) * 1e-9;
     base = hand_pose(s.instance->script, sp.hand, ts, s.focused_once ? since_focus_s : -1.0);
+    flags = tracked ? device_flags(s, sp.hand + 1, t) : 0;
   } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_MAX_ENUM) {
-    tracked = false;  // an action space whose action was destroyed
+    flags = 0;  // an action space whose action was destroyed
   } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_VIEW) {
     base = head_pose(ts);
+    flags = device_flags(s, 0, t);
   } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_LOCAL) {
     base = {Quat{}, {0.0, 1.6, 0.85}};
+  } else if (sp.reference == XR_REFERENCE_SPACE_TYPE_STAGE && s.stage_change > 0 && t >= s.stage_change) {
+    base = s.instance->script.stage_move->origin;
   }
-  return {compose(base, sp.offset), tracked};
+  return {compose(base, sp.offset), flags};
+}
+
+// The flags of one space located in another: valid or tracked where both are.
+XrSpaceLocationFlags relative_flags(XrSpaceLocationFlags a, XrSpaceLocationFlags b) {
+  XrSpaceLocationFlags out = a & b;
+  // A pose is not tracked where it is not valid.
+  if ((out & XR_SPACE_LOCATION_POSITION_VALID_BIT) == 0) out &= ~XrSpaceLocationFlags{XR_SPACE_LOCATION_POSITION_TRACKED_BIT};
+  if ((out & XR_SPACE_LOCATION_ORIENTATION_VALID_BIT) == 0)
+    out &= ~XrSpaceLocationFlags{XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT};
+  return out;
 }
 
 XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace base, XrTime time, XrSpaceLocation* location) {
@@ -1230,21 +1407,19 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace base, XrTime time, XrSpac
   if (location == nullptr || location->type != XR_TYPE_SPACE_LOCATION)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped location");
   if (time <= 0) return violation(fn, XR_ERROR_TIME_INVALID, "time " + std::to_string(time));
-  const auto [pa, ta] = stage_pose(*a, time);
-  const auto [pb, tb] = stage_pose(*b, time);
-  location->pose = to_xr_pose(compose(inverse(pb), pa));
+  const auto [pa, fa] = stage_pose(*a, time);
+  const auto [pb, fb] = stage_pose(*b, time);
+  Pose relative = compose(inverse(pb), pa);
+  location->locationFlags = a == b ? kAllValid : relative_flags(fa, fb);
+  // What is not valid is not known: a runtime's numbers there mean nothing,
+  // and these are far from any true pose, so an application that uses them
+  // shows it.
+  if ((location->locationFlags & XR_SPACE_LOCATION_POSITION_VALID_BIT) == 0) relative.position_m = {0.0, -5.0, 0.0};
+  if ((location->locationFlags & XR_SPACE_LOCATION_ORIENTATION_VALID_BIT) == 0) relative.orientation = Quat{};
+  location->pose = to_xr_pose(relative);
   // A chained XrSpaceVelocity must be filled: the scripted poses report none.
   for (auto* n = static_cast<XrBaseOutStructure*>(location->next); n != nullptr; n = n->next)
     if (n->type == XR_TYPE_SPACE_VELOCITY) reinterpret_cast<XrSpaceVelocity*>(n)->velocityFlags = 0;
-  location->locationFlags = ta && tb ? XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
-                                           XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
-                                           XR_SPACE_LOCATION_POSITION_TRACKED_BIT
-                                     : 0;
-  // A head with inferred position (CURVLAB_TEST_XR_HEAD=orientation_only):
-  // any location relative to the VIEW space has an untracked position.
-  const bool view = a->reference == XR_REFERENCE_SPACE_TYPE_VIEW || b->reference == XR_REFERENCE_SPACE_TYPE_VIEW;
-  if (view && a != b && !a->session->instance->script.head_position_tracked)
-    location->locationFlags &= ~XrSpaceLocationFlags{XR_SPACE_LOCATION_POSITION_TRACKED_BIT};
   return XR_SUCCESS;
 }
 
@@ -1266,42 +1441,49 @@ XrResult XRAPI_CALL LocateViews(XrSession h, const XrViewLocateInfo* info, XrVie
   if (capacity == 0) return XR_SUCCESS;
   if (capacity < 2) return XR_ERROR_SIZE_INSUFFICIENT;
   const Pose head = head_pose(xr_seconds(info->displayTime));
-  const auto [pb, tb] = stage_pose(*base, info->displayTime);
+  const auto [pb, fb] = stage_pose(*base, info->displayTime);
   const Pose base_inv = inverse(pb);
+  // The view-state bits have the values of the space-location bits.
+  const XrSpaceLocationFlags flags = relative_flags(device_flags(*s, 0, info->displayTime), fb);
+  std::string line = "views xr_ns " + std::to_string(info->displayTime);
   for (uint32_t i = 0; i < 2; ++i) {
     if (views[i].type != XR_TYPE_VIEW) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped view");
-    const double side = i == 0 ? -1.0 : 1.0;
-    const Pose eye = compose(head, Pose{Quat{}, {side * kIpdM / 2.0, 0.0, 0.0}});
-    views[i].pose = to_xr_pose(compose(base_inv, eye));
-    // Asymmetric, wider on the outer side, like a real headset's lenses.
-    const float outer = 0.87f, inner = 0.72f;
-    views[i].fov = {i == 0 ? -outer : -inner, i == 0 ? inner : outer, 0.80f, -0.88f};
+    const EyeView v = eye_view(s->instance->script, static_cast<int>(i), xr_seconds(info->displayTime));
+    Pose eye = compose(base_inv, compose(head, v.pose));
+    if ((flags & XR_SPACE_LOCATION_POSITION_VALID_BIT) == 0) eye.position_m = {0.0, -5.0, 0.0};
+    views[i].pose = to_xr_pose(eye);
+    views[i].fov = {static_cast<float>(v.fov_rad[0]), static_cast<float>(v.fov_rad[1]),
+                    static_cast<float>(v.fov_rad[2]), static_cast<float>(v.fov_rad[3])};
+    char part[256];
+    std::snprintf(part, sizeof part, " %.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f", v.pose.position_m.x,
+                  v.pose.position_m.y, v.pose.position_m.z, v.pose.orientation.x, v.pose.orientation.y,
+                  v.pose.orientation.z, v.pose.orientation.w, v.fov_rad[0], v.fov_rad[1], v.fov_rad[2], v.fov_rad[3]);
+    line += part;
   }
-  state->viewStateFlags = tb ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
-                                   XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
-                             : 0;
-  if (!s->instance->script.head_position_tracked)
-    state->viewStateFlags &= ~XrViewStateFlags{XR_VIEW_STATE_POSITION_TRACKED_BIT};
+  state->viewStateFlags = flags;
+  // One line per display time: the views relative to the head, left then
+  // right (position, quaternion x y z w, field of view l r u d).
+  if (info->displayTime != s->last_views_logged) {
+    s->last_views_logged = info->displayTime;
+    log_line(line);
+  }
   return XR_SUCCESS;
 }
 
 // ---- swapchains ---------------------------------------------------------------------
 
-const std::vector<std::int64_t>& formats() {
-  // The runtime's preference first, as real runtimes list them: sRGB.
-  static const std::vector<std::int64_t> f = {VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB,
-                                              VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_UNORM};
-  return f;
+// The runtime's preference first, as real runtimes list them: sRGB, or the
+// script's order (CURVLAB_TEST_XR_FORMATS).
+std::vector<std::int64_t> formats(const Session& s) {
+  if (!s.instance->script.formats.empty()) return s.instance->script.formats;
+  return {VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_UNORM};
 }
 
 XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession h, uint32_t capacity, uint32_t* count, int64_t* out) {
   std::lock_guard lock(g_mutex);
-  if (session_of(h) == nullptr) return violation("xrEnumerateSwapchainFormats", XR_ERROR_HANDLE_INVALID, "");
-  *count = static_cast<uint32_t>(formats().size());
-  if (capacity == 0) return XR_SUCCESS;
-  if (capacity < formats().size()) return XR_ERROR_SIZE_INSUFFICIENT;
-  std::copy(formats().begin(), formats().end(), out);
-  return XR_SUCCESS;
+  const Session* s = session_of(h);
+  if (s == nullptr) return violation("xrEnumerateSwapchainFormats", XR_ERROR_HANDLE_INVALID, "");
+  return enumerate<std::int64_t>("xrEnumerateSwapchainFormats", formats(*s), capacity, count, out);
 }
 
 XrResult XRAPI_CALL CreateSwapchain(XrSession h, const XrSwapchainCreateInfo* info, XrSwapchain* out) {
@@ -1311,8 +1493,10 @@ XrResult XRAPI_CALL CreateSwapchain(XrSession h, const XrSwapchainCreateInfo* in
   if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
   if (info == nullptr || info->type != XR_TYPE_SWAPCHAIN_CREATE_INFO)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
-  if (std::find(formats().begin(), formats().end(), info->format) == formats().end())
+  if (const auto offered = formats(*s); std::find(offered.begin(), offered.end(), info->format) == offered.end())
     return violation(fn, XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED, std::to_string(info->format));
+  log_line("swapchain format " + std::to_string(info->format) + " " + std::to_string(info->width) + "x" +
+           std::to_string(info->height));
   if (info->sampleCount != 1 || info->faceCount != 1 || info->arraySize == 0 || info->mipCount != 1 ||
       info->width == 0 || info->height == 0 || info->width > kMaxSwapchainPx || info->height > kMaxSwapchainPx)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "size, samples, faces, layers or mips out of range");
@@ -1428,11 +1612,16 @@ XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain h, const XrSwapchainImageA
   *index = sc->next;
   sc->acquired.push_back(sc->next);
   sc->next = (sc->next + 1) % static_cast<std::uint32_t>(sc->images.size());
+  // Back-pressure (CURVLAB_TEST_XR_SWAPCHAIN_WAIT): the compositor is still
+  // reading this image for a while.
+  const SwapchainStall& stall = sc->session->instance->script.swapchain_stall;
+  if (stall.every > 0 && ++sc->acquisitions % stall.every == 0 && sc->acquired.size() == 1)
+    sc->busy_until_ns = monotonic_ns() + static_cast<std::int64_t>(stall.ms * 1e6);
   return XR_SUCCESS;
 }
 
 XrResult XRAPI_CALL WaitSwapchainImage(XrSwapchain h, const XrSwapchainImageWaitInfo* info) {
-  std::lock_guard lock(g_mutex);
+  std::unique_lock lock(g_mutex);
   Swapchain* sc = swapchain_of(h);
   constexpr const char* fn = "xrWaitSwapchainImage";
   if (sc == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
@@ -1440,7 +1629,27 @@ XrResult XRAPI_CALL WaitSwapchainImage(XrSwapchain h, const XrSwapchainImageWait
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped wait info");
   if (sc->acquired.empty()) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "no image acquired");
   if (sc->waited) return violation(fn, XR_ERROR_CALL_ORDER_INVALID, "an image is already waited and not released");
-  sc->waited = true;  // the images are never busy: the compositor reads on release
+  // The image is free at once, unless the compositor still reads it
+  // (CURVLAB_TEST_XR_SWAPCHAIN_WAIT): then the call waits for it, at most
+  // the application's timeout (XR_TIMEOUT_EXPIRED, the image still acquired
+  // and not waited: the application may wait again).
+  const std::int64_t now = monotonic_ns();
+  const std::int64_t busy_ns = sc->busy_until_ns - now;
+  if (busy_ns > 0) {
+    const bool expires = info->timeout < busy_ns;
+    const std::int64_t until = expires ? now + std::max<XrDuration>(info->timeout, 0) : sc->busy_until_ns;
+    log_line(std::string("swapchain_wait busy_ns ") + std::to_string(busy_ns) + " timeout_ns " +
+             std::to_string(info->timeout) + (expires ? " XR_TIMEOUT_EXPIRED" : " XR_SUCCESS"));
+    lock.unlock();
+    timespec ts{static_cast<time_t>(until / 1'000'000'000), static_cast<long>(until % 1'000'000'000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+    }
+    lock.lock();
+    if (swapchain_of(h) != sc) return XR_ERROR_HANDLE_INVALID;
+    if (expires) return XR_TIMEOUT_EXPIRED;
+  }
+  sc->busy_until_ns = 0;
+  sc->waited = true;
   return XR_SUCCESS;
 }
 
@@ -1469,8 +1678,14 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
       state->type != XR_TYPE_FRAME_STATE)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped wait info or frame state");
   if (!s->running) return violation(fn, XR_ERROR_SESSION_NOT_RUNNING, "");
+  // OpenXR 1.0 §10.4.2: a second xrWaitFrame blocks until the frame the
+  // first one returned is begun; on the application's one frame thread a
+  // real runtime would block forever.
+  if (s->waited)
+    return violation(fn, XR_ERROR_CALL_ORDER_INVALID,
+                     "a second xrWaitFrame before xrBeginFrame (a runtime blocks it until xrBeginFrame)");
   if (const auto r = scripted_fault(*s, fn)) return *r;
-  const auto period = static_cast<std::int64_t>(std::llround(1e9 / s->instance->script.refresh_hz));
+  const auto period = static_cast<std::int64_t>(std::llround(1e9 / static_cast<double>(s->refresh_hz)));
   std::int64_t wake = monotonic_ns();
   if (s->frames_waited > 0) {
     // The next slot on the display's grid that has not passed.
@@ -1478,11 +1693,23 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
     wake = wake <= next ? next : s->last_wake_ns + ((wake - s->last_wake_ns + period - 1) / period) * period;
   }
   const Script& script = s->instance->script;
-  if (script.late_skip.count(s->frames_waited) != 0) wake += period;  // a missed refresh
-  const bool hidden = script.late_hidden.count(s->frames_waited) != 0;
+  const std::int64_t frame = s->frames_waited;
+  // A missed refresh: scripted (CURVLAB_TEST_XR_LATE) or by chance
+  // (CURVLAB_TEST_XR_TIMING miss=).
+  const bool missed = script.late_skip.count(frame) != 0 ||
+                      (frame > 0 && uniform(script.timing.seed, frame, 0) < script.timing.miss);
+  if (missed) wake += period;
+  const bool hidden = script.late_hidden.count(frame) != 0;
   s->last_wake_ns = wake;
   ++s->frames_waited;
-  const std::int64_t display = wake + period;
+  // The compositor's prediction of when the image is lit: a period after
+  // the wake-up, give or take its jitter.
+  const auto jitter_ns = static_cast<std::int64_t>(
+      std::llround((2.0 * uniform(script.timing.seed, frame, 1) - 1.0) * script.timing.jitter_ms * 1e6));
+  const std::int64_t display = wake + period + jitter_ns;
+  if (missed || jitter_ns != 0)
+    log_line("pacing frame " + std::to_string(frame) + " missed " + (missed ? "1" : "0") + " jitter_ns " +
+             std::to_string(jitter_ns));
   // Pace in real time without holding the lock.
   lock.unlock();
   timespec until{static_cast<time_t>(wake / 1'000'000'000), static_cast<long>(wake % 1'000'000'000)};
@@ -1562,6 +1789,34 @@ XrResult check_layer(const Session& s, const XrCompositionLayerBaseHeader* heade
   return XR_SUCCESS;
 }
 
+// After a frame ended in a session on its way up (the first time, or started
+// again after a scripted stop, the script's clock running on): the first
+// frame makes it SYNCHRONIZED, then VISIBLE and FOCUSED follow, at once or
+// the script's numbers of frames later (CURVLAB_TEST_XR_STATES).
+void bring_up(Session& s) {
+  const bool first = !s.focused_once;
+  const bool again = s.restart == Session::Restart::ready;
+  if ((!first && !again) || s.exit_requested || s.lost_from_ns >= 0 || !s.running) return;
+  const BringUp& b = s.instance->script.bring_up;
+  if (s.state == XR_SESSION_STATE_READY) {
+    queue_state(s, XR_SESSION_STATE_SYNCHRONIZED);
+    s.step_frame = s.frames_ended;
+  }
+  if (s.state == XR_SESSION_STATE_SYNCHRONIZED && s.frames_ended - s.step_frame >= b.visible_frames) {
+    queue_state(s, XR_SESSION_STATE_VISIBLE);
+    s.step_frame = s.frames_ended;
+  }
+  if (s.state == XR_SESSION_STATE_VISIBLE && s.frames_ended - s.step_frame >= b.focused_frames) {
+    queue_state(s, XR_SESSION_STATE_FOCUSED);
+    if (first) {
+      s.focused_once = true;
+      s.focus_t0_ns = monotonic_ns();
+    } else {
+      s.restart = Session::Restart::done;
+    }
+  }
+}
+
 XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
   std::lock_guard lock(g_mutex);
   Session* s = session_of(h);
@@ -1602,23 +1857,7 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
   }
   log_line("end_frame " + std::to_string(s->frames_ended++) + " layers " + std::to_string(info->layerCount) +
            " state " + state_name(s->state) + " should_render " + (s->begun_render ? "1" : "0"));
-  // The first frame ended: the session is synchronised with the display,
-  // visible and focused.
-  if (!s->focused_once && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
-    queue_state(*s, XR_SESSION_STATE_SYNCHRONIZED);
-    queue_state(*s, XR_SESSION_STATE_VISIBLE);
-    queue_state(*s, XR_SESSION_STATE_FOCUSED);
-    s->focused_once = true;
-    s->focus_t0_ns = monotonic_ns();
-  }
-  // Started again after a scripted stop: up to FOCUSED, the script's clock
-  // (seconds after the first focus) running on.
-  if (s->restart == Session::Restart::ready && s->state == XR_SESSION_STATE_READY && !s->exit_requested) {
-    queue_state(*s, XR_SESSION_STATE_SYNCHRONIZED);
-    queue_state(*s, XR_SESSION_STATE_VISIBLE);
-    queue_state(*s, XR_SESSION_STATE_FOCUSED);
-    s->restart = Session::Restart::done;
-  }
+  bring_up(*s);
   return XR_SUCCESS;
 }
 
@@ -2077,6 +2316,51 @@ XrResult XRAPI_CALL ConvertTimespecTimeToTime(XrInstance h, const timespec* ts, 
   return XR_SUCCESS;
 }
 
+// ---- XR_FB_display_refresh_rate ---------------------------------------------------------------
+
+// The session of a refresh-rate call, or the specification's error.
+XrResult refresh_session(XrSession h, const char* fn, Session** out) {
+  Session* s = session_of(h);
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (!s->instance->refresh_rate) return violation(fn, XR_ERROR_FUNCTION_UNSUPPORTED, "extension not enabled");
+  *out = s;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL EnumerateDisplayRefreshRates(XrSession h, uint32_t capacity, uint32_t* count, float* rates) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrEnumerateDisplayRefreshRatesFB";
+  Session* s = nullptr;
+  if (const XrResult r = refresh_session(h, fn, &s); XR_FAILED(r)) return r;
+  return enumerate(fn, s->instance->script.refresh.rates, capacity, count, rates);
+}
+
+XrResult XRAPI_CALL GetDisplayRefreshRate(XrSession h, float* rate) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetDisplayRefreshRateFB";
+  Session* s = nullptr;
+  if (const XrResult r = refresh_session(h, fn, &s); XR_FAILED(r)) return r;
+  if (rate == nullptr) return violation(fn, XR_ERROR_VALIDATION_FAILURE, "null rate");
+  *rate = s->refresh_hz;
+  return XR_SUCCESS;
+}
+
+// 0 asks for the runtime's default (its starting rate); another rate must
+// be one it offers. The change is at once: the next frame has its period.
+XrResult XRAPI_CALL RequestDisplayRefreshRate(XrSession h, float rate) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrRequestDisplayRefreshRateFB";
+  Session* s = nullptr;
+  if (const XrResult r = refresh_session(h, fn, &s); XR_FAILED(r)) return r;
+  const Refresh& offered = s->instance->script.refresh;
+  const float hz = rate == 0.0f ? offered.start_hz : rate;
+  if (std::find(offered.rates.begin(), offered.rates.end(), hz) == offered.rates.end())
+    return XR_ERROR_DISPLAY_REFRESH_RATE_UNSUPPORTED_FB;
+  log_line("refresh_request " + std::to_string(rate));
+  change_refresh_rate(*s, hz);
+  return XR_SUCCESS;
+}
+
 // ---- dispatch -------------------------------------------------------------------------------
 
 XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVoidFunction* function);
@@ -2156,6 +2440,9 @@ XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVo
       {"xrGetActionStateFloat", fn_ptr(&GetActionStateFloat)},
       {"xrConvertTimeToTimespecTimeKHR", fn_ptr(&ConvertTimeToTimespecTime)},
       {"xrConvertTimespecTimeToTimeKHR", fn_ptr(&ConvertTimespecTimeToTime)},
+      {"xrEnumerateDisplayRefreshRatesFB", fn_ptr(&EnumerateDisplayRefreshRates)},
+      {"xrGetDisplayRefreshRateFB", fn_ptr(&GetDisplayRefreshRate)},
+      {"xrRequestDisplayRefreshRateFB", fn_ptr(&RequestDisplayRefreshRate)},
   };
   if (const auto it = global.find(n); it != global.end()) {
     *function = it->second;
@@ -2164,7 +2451,11 @@ XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVo
   if (h == XR_NULL_HANDLE) return XR_ERROR_HANDLE_INVALID;
   {
     std::lock_guard lock(g_mutex);
-    if (instance_of(h) == nullptr) return XR_ERROR_HANDLE_INVALID;
+    const Instance* inst = instance_of(h);
+    if (inst == nullptr) return XR_ERROR_HANDLE_INVALID;
+    // An extension's functions only where it was enabled.
+    if (!inst->refresh_rate && n.size() > 2 && n.compare(n.size() - 2, 2, "FB") == 0)
+      return XR_ERROR_FUNCTION_UNSUPPORTED;
   }
   const auto it = table.find(n);
   if (it == table.end()) return XR_ERROR_FUNCTION_UNSUPPORTED;

@@ -1,7 +1,10 @@
 // What the test runtime's scripted headset does, read from the environment
 // (variables documented at the top of runtime.cpp): where the head and hands
 // are at a given time, which controller inputs are held, when focus is lost
-// and regained, and when the runtime asks the application to exit. Pure
+// and regained, when the runtime asks the application to exit, and how it
+// departs from an ideal headset as real runtimes do (display-time jitter,
+// back-pressure, a slow bring-up, STAGE moves, lost events, format order,
+// changing views, partial tracking, refresh rates). Pure
 // functions of time, so the poses the runtime hands out can be logged and
 // checked against what the application stored.
 #pragma once
@@ -78,6 +81,79 @@ struct Fault {
   std::string result;  // XR_ERROR_SESSION_LOST, XR_ERROR_RUNTIME_FAILURE or XR_ERROR_INSTANCE_LOST
 };
 
+// CURVLAB_TEST_XR_TIMING: predicted display times as a compositor's are, a
+// little early or late (uniform within ±jitter_ms of the display grid), and
+// frames whose wake-up misses a refresh (probability `miss` per frame); the
+// pattern is a pure function of (seed, frame number), so a test can repeat it.
+struct Timing {
+  double jitter_ms = 0.0;
+  double miss = 0.0;
+  std::uint64_t seed = 1;
+};
+
+// CURVLAB_TEST_XR_SWAPCHAIN_WAIT: the compositor still reads every `every`-th
+// image acquired from a swapchain for `ms` after it is acquired, so
+// xrWaitSwapchainImage waits (XR_TIMEOUT_EXPIRED when the application's
+// timeout is shorter).
+struct SwapchainStall {
+  double ms = 0.0;
+  int every = 0;  // 0: never
+};
+
+// CURVLAB_TEST_XR_STATES: the session comes up as real runtimes bring it:
+// READY `ready_s` after xrCreateSession, SYNCHRONIZED after the first
+// xrEndFrame, VISIBLE `visible_frames` frames later, FOCUSED
+// `focused_frames` frames after that (the defaults: all at once).
+struct BringUp {
+  double ready_s = 0.0;
+  int visible_frames = 0;
+  int focused_frames = 0;
+};
+
+// CURVLAB_TEST_XR_STAGE_MOVE: at `at_s` (after focus) the runtime announces
+// that STAGE moves (XrEventDataReferenceSpaceChangePending): from 0.1 s
+// later on, STAGE's origin is `origin` (in the previous STAGE); the room,
+// the table, the head and the hands stay where they are.
+struct StageMove {
+  double at_s = 0.0;
+  Pose origin;
+  bool pose_valid = true;  // false: the event says the runtime does not know the move
+};
+
+// CURVLAB_TEST_XR_VIEWS: views that differ from the plain headset: each eye
+// turned outward by `cant_deg` about the head's vertical (canted displays),
+// and, per frame, an IPD between ipd_min_m and ipd_max_m and fields of view
+// scaled by up to ±fov_change, as pure functions of the display time.
+struct Views {
+  double cant_deg = 0.0;
+  double ipd_min_m = 0.0;  // 0: the fixed kIpdM
+  double ipd_max_m = 0.0;
+  double fov_change = 0.0;
+};
+
+// CURVLAB_TEST_XR_TRACKING: a spell of partial tracking of one device.
+enum class TrackingMode {
+  inferred,          // position and orientation valid, neither tracked
+  orientation_only,  // orientation valid and tracked, position not valid
+  lost,              // nothing valid
+};
+struct TrackingSpell {
+  int device = 0;  // 0 head, 1 left hand, 2 right hand
+  TrackingMode mode = TrackingMode::inferred;
+  double at_s = 0.0;  // after focus
+  double for_s = 0.0;
+};
+
+// CURVLAB_TEST_XR_REFRESH and CURVLAB_TEST_XR_REFRESH_CHANGE
+// (XR_FB_display_refresh_rate): the rates the display offers, the one it
+// starts at, and a change the runtime makes itself (`change_at_s` after focus).
+struct Refresh {
+  std::vector<float> rates{90.0f};
+  float start_hz = 90.0f;
+  std::optional<double> change_at_s;
+  float change_to_hz = 0.0f;
+};
+
 struct Script {
   std::vector<Press> presses;
   std::vector<Placement> placements;  // CURVLAB_TEST_XR_HAND, in time order per hand
@@ -93,7 +169,6 @@ struct Script {
   std::string capture_dir;          // left-eye PNGs of submitted frames
   int capture_every = 1;            // every n-th submitted frame
   std::string log_path;             // what the runtime handed out and saw
-  double refresh_hz = 90.0;
   std::uint32_t eye_width_px = 320;
   std::uint32_t eye_height_px = 320;
   // CURVLAB_TEST_XR_LATE: frames (numbered from 0 in xrWaitFrame order) whose
@@ -101,7 +176,36 @@ struct Script {
   // application a refresh later), and frames with shouldRender false.
   std::set<std::int64_t> late_skip;
   std::set<std::int64_t> late_hidden;
+  Timing timing;
+  SwapchainStall swapchain_stall;
+  BringUp bring_up;
+  std::optional<StageMove> stage_move;
+  std::optional<double> events_lost_at_s;  // CURVLAB_TEST_XR_EVENTS_LOST
+  std::uint32_t events_lost = 0;
+  // CURVLAB_TEST_XR_FORMATS: the swapchain formats offered (VkFormat
+  // numbers), in the runtime's order of preference.
+  std::vector<std::int64_t> formats;
+  Views views;
+  std::vector<TrackingSpell> tracking;
+  Refresh refresh;
 };
+
+// A uniform number in [0, 1) from (seed, n, stream): the same triple gives
+// the same number in every run.
+double uniform(std::uint64_t seed, std::int64_t n, int stream);
+
+// The scripted partial tracking of `device` (0 head, 1 left, 2 right)
+// `since_focus_s` after focus; nullopt: tracked as usual.
+std::optional<TrackingMode> tracking_mode(const Script& script, int device, double since_focus_s);
+
+// One eye's view relative to the head at time t_s (seconds on the runtime's
+// clock): pose in the head's frame and field of view (left, right, up,
+// down, radians).
+struct EyeView {
+  Pose pose;
+  double fov_rad[4] = {0.0, 0.0, 0.0, 0.0};
+};
+EyeView eye_view(const Script& script, int eye, double t_s);
 
 // Reads the CURVLAB_TEST_XR_* variables; a malformed one is an error naming
 // the variable and what was expected.

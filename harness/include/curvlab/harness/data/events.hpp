@@ -39,6 +39,9 @@ enum class EventKind {
   adjustment,
   onset,
   tracking_flagged,
+  events_lost,   // the headset's runtime dropped events
+  stage_moved,   // the headset's STAGE origin moved
+  refresh_rate,  // the headset's refresh rate changed
   posterior,  // a Bayesian adaptive method's posterior after the trial's answer
   merged_from,
   session_renumbered,
@@ -140,6 +143,20 @@ struct TrackingFlagged {
   std::int64_t spells = 0;
   std::int64_t attempt = 0;
 };
+struct EventsLost {
+  std::uint32_t lost_events = 0;
+};
+struct StageMoved {
+  std::int64_t change_ns = 0;
+  bool pose_valid = false;
+  std::array<double, 7> origin{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0};  // x y z (m), qx qy qz qw
+  bool kept_lab_frame = false;
+};
+struct RefreshRate {
+  double from_hz = 0.0;
+  double to_hz = 0.0;
+  bool requested = false;
+};
 // Written by the store with the step it follows (SessionStore::complete_trial).
 struct Posterior {
   std::string staircase;  // the step's staircase_steps.staircase
@@ -153,7 +170,8 @@ using Event = std::variant<events::SessionStart, events::Observer, events::Resum
                            events::SessionEnd, events::Signal, events::OperatorAction, events::Paused,
                            events::Unpaused, events::TrialAborted, events::TrialRepeated, events::TrialAbandoned,
                            events::TrialSkipped, events::EarlyInput, events::Adjustment, events::Onset,
-                           events::TrackingFlagged, events::Posterior>;
+                           events::TrackingFlagged, events::EventsLost, events::StageMoved, events::RefreshRate,
+                           events::Posterior>;
 
 // The row an event is stored as.
 EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,

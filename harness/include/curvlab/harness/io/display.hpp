@@ -16,6 +16,7 @@
 #include "curvlab/renderer/frame_stats.hpp"
 #include "curvlab/renderer/plan.hpp"
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -36,6 +37,28 @@ struct DisplayInfo {
   // Samples per pixel the renderer draws with (after clamping to the
   // device); 0: nothing is drawn (no GPU).
   std::uint32_t msaa = 0;
+};
+
+// What a headset's runtime reported that the session keeps as data: its
+// event queue overflowed, its STAGE origin moved, its refresh rate changed.
+// Stored as the events of the same names (data_schema/codebook.md).
+struct DisplayReport {
+  enum class Kind { events_lost, stage_moved, refresh_rate };
+  Kind kind = Kind::events_lost;
+  std::uint32_t lost_events = 0;  // events_lost: how many the runtime dropped
+  // stage_moved: from when (session clock, ns), and the new STAGE origin in
+  // the previous one, x y z (m) and quaternion x y z w, where the runtime
+  // knew it (pose_valid); kept_lab_frame: the lab frame (and with it the
+  // table's calibration) stayed where it was.
+  std::int64_t change_ns = 0;
+  bool pose_valid = false;
+  std::array<double, 7> origin{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0};
+  bool kept_lab_frame = false;
+  // refresh_rate: the display's rate before and after (Hz); requested: the
+  // change was curvlab's (the protocol's [backend] refresh_hz), else the runtime's.
+  double from_hz = 0.0;
+  double to_hz = 0.0;
+  bool requested = false;
 };
 
 // Both eyes of a frame as submitted, side by side (left first), RGBA8, rows
@@ -102,6 +125,9 @@ class Display {
   // the display offers none (headless; desktop, whose window is on the
   // experimenter's desk).
   virtual FrameMirror* mirror() { return nullptr; }
+  // Moves the reports gathered since the last call into `out` (none from
+  // displays without a runtime).
+  virtual void take_reports(std::vector<DisplayReport>& out) { (void)out; }
 };
 
 }  // namespace curvlab::harness::io

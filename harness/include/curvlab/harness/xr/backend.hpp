@@ -21,6 +21,10 @@ struct XrBackendOptions {
   // (Display::mirror()); the swapchains can be copied from either way.
   bool mirror = false;
   std::optional<std::uint32_t> msaa;  // samples per pixel requested (clamped); nullopt: the device's automatic count
+  // The display refresh rate to ask the headset for (the protocol's
+  // [backend] refresh_hz), where the runtime offers XR_FB_display_refresh_rate
+  // and that rate; nullopt: the runtime's rate.
+  std::optional<double> refresh_hz;
 };
 
 // What the controllers of curvlab's action set can press (button names as

@@ -48,9 +48,10 @@ struct SessionUpdate {
   bool begin_session = false;  // call xrBeginSession now
   bool end_session = false;    // call xrEndSession now
   RunMode mode = RunMode::WaitForRuntime;
-  // The trial pauses (focus lost, display hidden, the runtime stopping the
-  // session) or resumes (FOCUSED again after any of them): each pause is
-  // followed by at most one resume, and a resume only follows a pause.
+  // The trial pauses (READY before the first focus, focus lost, display
+  // hidden, the runtime stopping the session) or resumes (FOCUSED after any
+  // of them): each pause is followed by at most one resume, and a resume
+  // only follows a pause.
   bool pause = false;
   bool resume = false;
   bool lost = false;           // LOSS_PENDING: the session must be recreated

@@ -32,6 +32,15 @@ inline LabPose to_lab_pose(const XrPosef& pose) {
                                     pose.orientation.z))};
 }
 
+inline XrPosef to_xr_pose(const LabPose& pose) {
+  XrPosef out{};
+  out.orientation = {static_cast<float>(pose.orientation.x), static_cast<float>(pose.orientation.y),
+                     static_cast<float>(pose.orientation.z), static_cast<float>(pose.orientation.w)};
+  out.position = {static_cast<float>(pose.position_m.x), static_cast<float>(pose.position_m.y),
+                  static_cast<float>(pose.position_m.z)};
+  return out;
+}
+
 inline AsymmetricFov to_fov(const XrFovf& fov) {
   return {fov.angleLeft, fov.angleRight, fov.angleUp, fov.angleDown};
 }
