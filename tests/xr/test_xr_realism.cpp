@@ -8,6 +8,7 @@
 // curvlab's messages against the runtime's log of what it handed out.
 #include "../cli/run_cli.hpp"
 #include "../desktop/xvfb.hpp"
+#include "../runner/session_db.hpp"
 #include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
@@ -15,7 +16,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sqlite3.h>
 
 #include <algorithm>
 #include <array>
@@ -30,6 +30,8 @@
 
 namespace {
 
+using curvlab::testing::fresh_dir;
+using curvlab::testing::query;
 using curvlab::testing::run_cli;
 using curvlab::testing::RuntimeEnv;
 const std::string& kPresses = curvlab::testing::kScriptedPresses;
@@ -41,37 +43,6 @@ const std::string kProtocol = std::string(CURVLAB_SOURCE_DIR) + "/tests/xr/demo_
 // session clock (test_xr_session.cpp): within 50 µs, far below a period.
 constexpr std::int64_t kSameInstantNs = 50'000;
 constexpr std::int64_t kPeriod90Ns = 11'111'111;
-
-fs::path fresh_dir(const std::string& name) {
-  const auto dir = fs::temp_directory_path() / ("curvlab_xr_realism_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-// Rows of a query, NULL as "NULL" (a blob column through hex()).
-std::vector<std::vector<std::string>> query(const fs::path& db_path, const std::string& sql) {
-  std::vector<std::vector<std::string>> rows;
-  sqlite3* db = nullptr;
-  if (sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-    sqlite3_close(db);
-    return rows;
-  }
-  sqlite3_stmt* stmt = nullptr;
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) == SQLITE_OK) {
-    while (sqlite3_step(stmt) == SQLITE_ROW) {
-      std::vector<std::string> row;
-      for (int c = 0; c < sqlite3_column_count(stmt); ++c) {
-        const auto* text = sqlite3_column_text(stmt, c);
-        row.emplace_back(text == nullptr ? "NULL" : reinterpret_cast<const char*>(text));
-      }
-      rows.push_back(std::move(row));
-    }
-  }
-  sqlite3_finalize(stmt);
-  sqlite3_close(db);
-  return rows;
-}
 
 std::string one(const fs::path& db, const std::string& sql) {
   const auto rows = query(db, sql);

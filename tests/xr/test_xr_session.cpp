@@ -4,6 +4,7 @@
 // times, head poses, controller presses, session states) and the images it
 // received; the tests check the session database against that log.
 #include "../cli/run_cli.hpp"
+#include "../runner/session_db.hpp"
 #include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
@@ -11,7 +12,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sqlite3.h>
 
 #include <algorithm>
 #include <cmath>
@@ -25,6 +25,8 @@
 
 namespace {
 
+using curvlab::testing::fresh_dir;
+using curvlab::testing::query;
 using curvlab::testing::run_cli;
 using curvlab::testing::RuntimeEnv;
 const std::string& kPresses = curvlab::testing::kScriptedPresses;
@@ -36,36 +38,6 @@ const std::string kProtocol = std::string(CURVLAB_SOURCE_DIR) + "/tests/xr/demo_
 // session clock (steady_clock, the same clock read a moment later) stay far
 // below one frame period (11.1 ms at 90 Hz): "the same frame" is within 50 µs.
 constexpr std::int64_t kSameInstantNs = 50'000;
-
-fs::path fresh_dir(const std::string& name) {
-  const auto dir = fs::temp_directory_path() / ("curvlab_xr_session_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-std::vector<std::vector<std::string>> query(const fs::path& db_path, const std::string& sql) {
-  std::vector<std::vector<std::string>> rows;
-  sqlite3* db = nullptr;
-  if (sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-    sqlite3_close(db);
-    return rows;
-  }
-  sqlite3_stmt* stmt = nullptr;
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) == SQLITE_OK) {
-    while (sqlite3_step(stmt) == SQLITE_ROW) {
-      std::vector<std::string> row;
-      for (int c = 0; c < sqlite3_column_count(stmt); ++c) {
-        const auto* text = sqlite3_column_text(stmt, c);
-        row.emplace_back(text == nullptr ? "NULL" : reinterpret_cast<const char*>(text));
-      }
-      rows.push_back(std::move(row));
-    }
-  }
-  sqlite3_finalize(stmt);
-  sqlite3_close(db);
-  return rows;
-}
 
 // The runtime's log (runtime.cpp documents its lines).
 struct RuntimeLog {
