@@ -30,6 +30,30 @@ using protocol::PlannedTrial;
 using protocol::Settings;
 using SteadyTime = std::chrono::steady_clock;
 
+// The gaze a pose source located with the frame's poses, as gaze_samples
+// stores it (data_schema/codebook.md).
+data::GazeRay gaze_record(const io::GazeRay& r) {
+  return {r.valid, r.confidence.value_or(-1.0), {r.origin_m.x, r.origin_m.y, r.origin_m.z},
+          {r.direction.x, r.direction.y, r.direction.z}};
+}
+data::GazeSample gaze_record(const io::Gaze& g) {
+  data::GazeSample s;
+  if (g.combined) {
+    s.has_combined = true;
+    s.combined = gaze_record(*g.combined);
+  }
+  if (g.eyes) {
+    s.has_eyes = true;
+    s.eyes = {gaze_record((*g.eyes)[0]), gaze_record((*g.eyes)[1])};
+  }
+  if (g.vergence) {
+    s.has_vergence = true;
+    s.vergence_rad = g.vergence->angle_rad;
+    s.vergence_distance_m = g.vergence->distance_m.value_or(-1.0);
+  }
+  return s;
+}
+
 enum class Outcome { done, quit };
 
 // Ends the run with an error; caught at the top of SessionLoop::run.
@@ -445,7 +469,7 @@ class SessionLoop::Impl {
     status_.cpu_ms = stats.cpu_ms + static_cast<double>(own_ns) * 1e-6;
     status_.gpu_ms = stats.gpu_ms > 0.0 ? stats.gpu_ms : -1.0;
     const auto ws = writer_.stats();
-    status_.logger_drops = ws.dropped_tracking + ws.dropped_frames;
+    status_.logger_drops = ws.dropped_tracking + ws.dropped_frames + ws.dropped_gaze;
     console_->show(status_);
   }
 
@@ -550,6 +574,14 @@ class SessionLoop::Impl {
     fr.has_view_geometry = true;
     fr.view_geometry = record_view_geometry(rig, eye_size_.first, eye_size_.second);
     push([&] { return writer_.push_frame(fr); });
+    if (const auto gaze = station_.poses->gaze()) {
+      data::GazeSample g = gaze_record(*gaze);
+      g.session_id = session_id_;
+      g.trial_id = tid;
+      g.frame_index = frame_index_;
+      g.t_ns = f.timing.predicted_display_ns;
+      push([&] { return writer_.push_gaze(g); });
+    }
   }
 
   // ---- pages and holds: instructions, breaks, the end, pauses ------------

@@ -6,6 +6,7 @@
 // checked against what the application stored.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <set>
@@ -78,6 +79,18 @@ struct Fault {
   std::string result;  // XR_ERROR_SESSION_LOST, XR_ERROR_RUNTIME_FAILURE or XR_ERROR_INSTANCE_LOST
 };
 
+// Scripted eyes (CURVLAB_TEST_XR_GAZE; eyes.hpp reads it and places them).
+struct GazeScript {
+  bool combined = true;  // offer XR_EXT_eye_gaze_interaction
+  bool per_eye = true;   // offer XR_FB_eye_tracking_social
+  // Both eyes fixate this STAGE point; nullopt: they hold `vergence_deg`,
+  // turned symmetrically about the head's forward direction in the plane of
+  // the eyes' axis (positive converging, negative diverging).
+  std::optional<Vec3> fixate_m;
+  double vergence_deg = 0.0;
+  std::array<double, 2> confidence{1.0, 1.0};  // left, right (per-eye gaze)
+};
+
 struct Script {
   std::vector<Press> presses;
   std::vector<Placement> placements;  // CURVLAB_TEST_XR_HAND, in time order per hand
@@ -101,6 +114,8 @@ struct Script {
   // application a refresh later), and frames with shouldRender false.
   std::set<std::int64_t> late_skip;
   std::set<std::int64_t> late_hidden;
+  // CURVLAB_TEST_XR_GAZE (eyes.hpp): nullopt offers no eye tracking.
+  std::optional<GazeScript> gaze;
 };
 
 // Reads the CURVLAB_TEST_XR_* variables; a malformed one is an error naming
