@@ -59,6 +59,7 @@ class RuntimeEnv {
                                          "CURVLAB_TEST_XR_CAPTURE_DIR",   "CURVLAB_TEST_XR_CAPTURE_EVERY",
                                          "CURVLAB_TEST_XR_LOG",           "CURVLAB_TEST_XR_SIZE",
                                          "CURVLAB_TEST_XR_HEAD",          "CURVLAB_TEST_XR_RESTART",
+                                         "CURVLAB_TEST_XR_GAZE",
                                          "VK_INSTANCE_LAYERS"};
 };
 

@@ -927,6 +927,7 @@ class SessionLoop::Impl {
     onset.stick_pose = pose16(a.placement.stick_pose);
     onset.views = stats.views;
     onset.draws = stats.draws;
+    onset.stimulus_ms = t.settings.timeline.stimulus_ms;
     if (observer_) onset.perceived_sagitta_m = last_perceived_;
     if (observer_ && last_account_) onset.percept_json = human_account_json(*last_account_);
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
