@@ -105,14 +105,15 @@ struct Session {
   fs::path dir, db, out;
 };
 
-// One XR session of the demo, answered by the simulated human observer (so
-// the onsets carry the perception model's percept), then exported.
-Session run_session(const std::string& name, const std::map<std::string, std::string>& vars) {
+// One XR session of the demo answered with the controllers
+// (tests/xr/runtime_env.hpp), then exported in every format.
+Session run_session(const std::string& name, std::map<std::string, std::string> vars) {
   Session s{fresh_dir(name), {}, {}};
   s.db = s.dir / "xr.db";
   s.out = s.dir / "export";
+  vars["CURVLAB_TEST_XR_PRESS"] = curvlab::testing::kScriptedPresses;
   RuntimeEnv env(vars);
-  const auto r = run_cli("run " + kProtocol + " --participant G01 --backend xr --observer human --db " + s.db.string());
+  const auto r = run_cli("run " + kProtocol + " --participant G01 --backend xr --db " + s.db.string());
   EXPECT_EQ(r.exit_code, 0) << r.out;
   for (const char* format : {"csv", "bids-motion", "psychds"}) {
     const auto e = run_cli("export --db " + s.db.string() + " --format " + format + " --out " + s.out.string());
@@ -176,7 +177,9 @@ TEST(XrGaze, PerEyeGazeIsStoredWithItsVergenceAndExported) {
 
   // The trial CSV: per trial the mean vergence during the stimulus (90
   // arcmin), the samples in its 300 ms (27 frames at 90 Hz, all valid), and
-  // the model's vergence demand beside it.
+  // beside it the perception model's vergence demand, stored with the onset
+  // where the eyes are tracked (a stick about 1 m ahead: converging, less
+  // than a point 0.3 m away demands).
   const auto csv = read_csv(s.out / "trials.csv");
   ASSERT_EQ(csv.at("status").size(), 8u);
   for (std::size_t i = 0; i < 8; ++i) {
@@ -185,7 +188,9 @@ TEST(XrGaze, PerEyeGazeIsStoredWithItsVergenceAndExported) {
     EXPECT_NEAR(num(csv.at("gaze_vergence_arcmin")[i]), 90.0, kAngleTolRad * 10800.0 / kPi);
     EXPECT_NEAR(num(csv.at("gaze_valid_samples")[i]), 27.0, 1.0);
     EXPECT_EQ(csv.at("gaze_valid_samples")[i], csv.at("gaze_samples")[i]);
-    EXPECT_FALSE(csv.at("vergence_demand_arcmin")[i].empty());
+    ASSERT_NE(csv.at("vergence_demand_arcmin")[i], kMissing);
+    EXPECT_GT(num(csv.at("vergence_demand_arcmin")[i]), 0.0);
+    EXPECT_LT(num(csv.at("vergence_demand_arcmin")[i]), 2.0 * std::atan(0.032 / 0.3) * 10800.0 / kPi);
   }
   // Psych-DS carries the same columns.
   bool psychds_has_it = false;
@@ -250,6 +255,10 @@ TEST(XrGaze, CombinedGazeStoresTheRay) {
 TEST(XrGaze, WithoutEyeTrackingNothingIsLoggedAndTheColumnsAreEmpty) {
   const auto s = run_session("none", {});
   EXPECT_EQ(query(s.db, "SELECT count(*) FROM gaze_samples")[0][0], "0");
+  // Nor is the model's account stored without a simulated observer.
+  EXPECT_EQ(query(s.db, "SELECT count(*) FROM events WHERE kind = 'onset' AND json_extract(detail, '$.percept') "
+                        "IS NOT NULL")[0][0],
+            "0");
   const auto csv = read_csv(s.out / "trials.csv");
   ASSERT_EQ(csv.at("gaze_samples").size(), 8u);
   for (const char* col : {"gaze_samples", "gaze_valid_samples", "gaze_vergence_arcmin"})

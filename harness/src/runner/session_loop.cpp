@@ -867,7 +867,16 @@ class SessionLoop::Impl {
     scene_->place(a.placement, a.head_at_onset);
     a.onset_view = {view_settings(t.settings, dominant_), a.head_at_onset, station_.display->rig(f.timing, ipd()),
                     static_cast<std::uint32_t>(p_.resolution_width), static_cast<std::uint32_t>(p_.resolution_height)};
-    if (!observer_) return;
+    if (!observer_) {
+      // Where the eyes are tracked, the human model's account of the
+      // stimulus is stored with the onset all the same: its vergence demand
+      // is what the measured vergence is compared with (docs/xr.md, "Eye
+      // tracking").
+      last_account_.reset();
+      if (station_.poses->gaze())
+        last_account_ = perceive(*world_, t.settings, a.placement, a.head_at_onset, ObserverParams{}).human;
+      return;
+    }
     auto answer = plan_answer(*observer_, *world_, *t.judgement, t.settings, a.placement, a.head_at_onset,
                               f.timing.now_ns, a.adjustment, read_onset(t, a));
     observer_keys_.replace(answer.plan.keys);
@@ -929,7 +938,7 @@ class SessionLoop::Impl {
     onset.draws = stats.draws;
     onset.stimulus_ms = t.settings.timeline.stimulus_ms;
     if (observer_) onset.perceived_sagitta_m = last_perceived_;
-    if (observer_ && last_account_) onset.percept_json = human_account_json(*last_account_);
+    if (last_account_) onset.percept_json = human_account_json(*last_account_);
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
       // A trial run again (a later attempt, a resumed session, another
       // session into the same folder) gets trial_NNNN_2, …: none is replaced.
