@@ -212,6 +212,27 @@ TEST(XrGaze, PerEyeGazeIsStoredWithItsVergenceAndExported) {
               std::string::npos);
   }
   EXPECT_EQ(bids_errors(s.out / "bids", s.dir), 0);
+
+  // The report plots measured against predicted vergence, per condition.
+  if (!fs::exists("/usr/bin/Rscript")) {
+    fs::remove_all(s.dir);
+    GTEST_SKIP() << "Rscript not installed (apt-get install r-base-core): the report's figure is not checked";
+  }
+  const auto report = s.dir / "report";
+  const auto r = run_shell("/usr/bin/Rscript " + std::string(CURVLAB_SOURCE_DIR) + "/analysis/report.R --db " +
+                           s.db.string() + " --out " + report.string() + " --quiet 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  ASSERT_TRUE(fs::exists(report / "vergence.png")) << r.out;
+  const auto png = run_shell("MPLBACKEND=Agg /usr/bin/python3 " + std::string(CURVLAB_SOURCE_DIR) +
+                             "/tests/analysis/check_png.py " + (report / "vergence.png").string() + " 2>&1");
+  EXPECT_EQ(png.exit_code, 0) << png.out;
+  std::ifstream table(report / "vergence.csv");
+  std::string header, line;
+  std::getline(table, header);
+  EXPECT_NE(header.find("gaze_vergence_arcmin"), std::string::npos) << header;
+  int conditions = 0;
+  while (std::getline(table, line)) ++conditions;
+  EXPECT_EQ(conditions, 4);  // E3 and H3, tourist and native
   fs::remove_all(s.dir);
 }
 
