@@ -1013,10 +1013,11 @@ void XrBackend::report_once(XrResult r, const char* call) {
 }
 
 void XrBackend::sync_actions() {
-  std::vector<XrActiveActionSet> active{{actions_->handle(), XR_NULL_PATH}};
-  if (eyes_->action_set() != XR_NULL_HANDLE) active.push_back({eyes_->action_set(), XR_NULL_PATH});
+  // curvlab's action set, and the eye gaze's where there is one.
+  const std::array<XrActiveActionSet, 2> active{{{actions_->handle(), XR_NULL_PATH},
+                                                 {eyes_->action_set(), XR_NULL_PATH}}};
   auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
-  sync.countActiveActionSets = static_cast<std::uint32_t>(active.size());
+  sync.countActiveActionSets = eyes_->action_set() != XR_NULL_HANDLE ? 2 : 1;
   sync.activeActionSets = active.data();
   if (const XrResult r = xrSyncActions(session_.get(), &sync); fatal(r)) fail(r, "xrSyncActions");
   else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
