@@ -3,7 +3,9 @@
 // the build folder next to this library), so the real `curvlab run --backend
 // xr` drives a whole session on a machine without a headset. It implements
 // every OpenXR 1.0 core function, XR_KHR_vulkan_enable2 and
-// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it), and
+// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it), with
+// scripted eyes also XR_EXT_eye_gaze_interaction and
+// XR_FB_eye_tracking_social (eyes.hpp), and
 // checks the rules of the OpenXR 1.0 specification that are cheap to check
 // (call order of the frame loop and of swapchain images, session states,
 // action-set attachment, action types and subaction paths, layers
