@@ -124,6 +124,19 @@ Session run_session(const std::string& name, std::map<std::string, std::string> 
 
 double num(const std::string& cell) { return std::stod(cell); }
 
+// Per trial (in trial_index order), the frames shown during its stimulus:
+// those of the trial whose predicted display time lies within the 300 ms
+// from its onset (tests/xr/demo_buttons.toml). At 90 Hz that is 27 or 28;
+// fewer where the loop missed refreshes on a busy machine.
+std::vector<std::string> stimulus_frames(const fs::path& db) {
+  std::vector<std::string> out;
+  for (const auto& r : query(db, "SELECT (SELECT count(*) FROM frames f WHERE f.trial_id = t.trial_id AND "
+                                 "f.predicted_display_ns >= t.onset_ns AND f.predicted_display_ns < t.onset_ns + "
+                                 "300000000) FROM trials t ORDER BY t.trial_index"))
+    out.push_back(r[0]);
+  return out;
+}
+
 // The official BIDS validator (as tests/standards/bids_validator.sh runs it):
 // the number of errors it reports, or -1 when it gave no answer.
 int bids_errors(const fs::path& dataset, const fs::path& scratch) {
@@ -176,18 +189,21 @@ TEST(XrGaze, PerEyeGazeIsStoredWithItsVergenceAndExported) {
   }
 
   // The trial CSV: per trial the mean vergence during the stimulus (90
-  // arcmin), the samples in its 300 ms (27 frames at 90 Hz, all valid), and
+  // arcmin), a sample for each frame of its 300 ms, all valid, and
   // beside it the perception model's vergence demand, stored with the onset
   // where the eyes are tracked (a stick about 1 m ahead: converging, less
   // than a point 0.3 m away demands).
   const auto csv = read_csv(s.out / "trials.csv");
   ASSERT_EQ(csv.at("status").size(), 8u);
+  const auto frames = stimulus_frames(s.db);
+  ASSERT_EQ(frames.size(), 8u);
   for (std::size_t i = 0; i < 8; ++i) {
     SCOPED_TRACE("trial " + std::to_string(i));
     ASSERT_EQ(csv.at("status")[i], "completed");
     EXPECT_NEAR(num(csv.at("gaze_vergence_arcmin")[i]), 90.0, kAngleTolRad * 10800.0 / kPi);
-    EXPECT_NEAR(num(csv.at("gaze_valid_samples")[i]), 27.0, 1.0);
-    EXPECT_EQ(csv.at("gaze_valid_samples")[i], csv.at("gaze_samples")[i]);
+    EXPECT_GT(num(frames[i]), 0.0);
+    EXPECT_EQ(csv.at("gaze_samples")[i], frames[i]);
+    EXPECT_EQ(csv.at("gaze_valid_samples")[i], frames[i]);
     ASSERT_NE(csv.at("vergence_demand_arcmin")[i], kMissing);
     EXPECT_GT(num(csv.at("vergence_demand_arcmin")[i]), 0.0);
     EXPECT_LT(num(csv.at("vergence_demand_arcmin")[i]), 2.0 * std::atan(0.032 / 0.3) * 10800.0 / kPi);
@@ -258,9 +274,12 @@ TEST(XrGaze, CombinedGazeStoresTheRay) {
   }
   const auto csv = read_csv(s.out / "trials.csv");
   ASSERT_EQ(csv.at("gaze_vergence_arcmin").size(), 8u);
+  const auto frames = stimulus_frames(s.db);
+  ASSERT_EQ(frames.size(), 8u);
   for (std::size_t i = 0; i < 8; ++i) {
     EXPECT_EQ(csv.at("gaze_vergence_arcmin")[i], kMissing);
-    EXPECT_GT(num(csv.at("gaze_valid_samples")[i]), 20.0);
+    EXPECT_GT(num(frames[i]), 0.0);
+    EXPECT_EQ(csv.at("gaze_valid_samples")[i], frames[i]);
   }
   const auto eye1 = s.out / "bids" / "sub-G01" / "ses-1" / "beh" / "sub-G01_ses-1_task-demo_recording-eye1_physio.json";
   std::ifstream sidecar(eye1);
