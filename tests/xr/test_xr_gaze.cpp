@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <unistd.h>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -101,8 +102,17 @@ std::map<std::string, std::vector<std::string>> read_csv(const fs::path& path) {
   return cols;
 }
 
+// A session's folder, removed when the test is done, passed or failed.
 struct Session {
   fs::path dir, db, out;
+  Session(fs::path d, fs::path b, fs::path o) : dir(std::move(d)), db(std::move(b)), out(std::move(o)) {}
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+  Session(Session&& o) noexcept : dir(std::exchange(o.dir, {})), db(std::move(o.db)), out(std::move(o.out)) {}
+  ~Session() {
+    std::error_code ec;
+    if (!dir.empty()) fs::remove_all(dir, ec);
+  }
 };
 
 // One XR session of the demo answered with the controllers
@@ -231,7 +241,6 @@ TEST(XrGaze, PerEyeGazeIsStoredWithItsVergenceAndExported) {
 
   // The report plots measured against predicted vergence, per condition.
   if (!fs::exists("/usr/bin/Rscript")) {
-    fs::remove_all(s.dir);
     GTEST_SKIP() << "Rscript not installed (apt-get install r-base-core): the report's figure is not checked";
   }
   const auto report = s.dir / "report";
@@ -249,7 +258,6 @@ TEST(XrGaze, PerEyeGazeIsStoredWithItsVergenceAndExported) {
   int conditions = 0;
   while (std::getline(table, line)) ++conditions;
   EXPECT_EQ(conditions, 4);  // E3 and H3, tourist and native
-  fs::remove_all(s.dir);
 }
 
 TEST(XrGaze, CombinedGazeStoresTheRay) {
@@ -289,7 +297,6 @@ TEST(XrGaze, CombinedGazeStoresTheRay) {
   EXPECT_FALSE(fs::exists(s.out / "bids" / "sub-G01" / "ses-1" / "beh" /
                           "sub-G01_ses-1_task-demo_recording-eye2_physio.json"));
   EXPECT_EQ(bids_errors(s.out / "bids", s.dir), 0);
-  fs::remove_all(s.dir);
 }
 
 TEST(XrGaze, WithoutEyeTrackingNothingIsLoggedAndTheColumnsAreEmpty) {
@@ -304,7 +311,6 @@ TEST(XrGaze, WithoutEyeTrackingNothingIsLoggedAndTheColumnsAreEmpty) {
   for (const char* col : {"gaze_samples", "gaze_valid_samples", "gaze_vergence_arcmin"})
     for (const auto& cell : csv.at(col)) EXPECT_EQ(cell, kMissing) << col;
   EXPECT_FALSE(fs::exists(s.out / "bids" / "sub-G01" / "ses-1" / "beh"));
-  fs::remove_all(s.dir);
 }
 
 }  // namespace
