@@ -1,10 +1,10 @@
--- curvlab data schema, version 4 (current). The program embeds this file at
+-- curvlab data schema, version 5 (current). The program embeds this file at
 -- build time and executes it verbatim to create a new database; the codebook
 -- (codebook.md) gives every column its meaning and unit. Times: *_ns are
 -- nanoseconds of the session's monotonic clock, *_utc are ISO 8601 UTC text.
 -- Adding or changing anything here means a new version, a migration in
 -- migrations/, and a codebook entry: no column is ever added at run time.
-PRAGMA user_version = 4;
+PRAGMA user_version = 5;
 
 CREATE TABLE schema_migrations (
   version INTEGER PRIMARY KEY,
@@ -124,6 +124,41 @@ CREATE TABLE tracking_samples (
 ) STRICT;
 
 CREATE INDEX tracking_samples_by_session_time ON tracking_samples (session_id, t_ns);
+
+CREATE TABLE gaze_samples (
+  gaze_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER,
+  frame_index INTEGER NOT NULL,
+  t_ns INTEGER NOT NULL,
+  combined_valid INTEGER CHECK (combined_valid IS NULL OR combined_valid IN (0, 1)),
+  combined_ox_m REAL,
+  combined_oy_m REAL,
+  combined_oz_m REAL,
+  combined_dx REAL,
+  combined_dy REAL,
+  combined_dz REAL,
+  left_valid INTEGER CHECK (left_valid IS NULL OR left_valid IN (0, 1)),
+  left_confidence REAL CHECK (left_confidence IS NULL OR (left_confidence >= 0 AND left_confidence <= 1)),
+  left_ox_m REAL,
+  left_oy_m REAL,
+  left_oz_m REAL,
+  left_dx REAL,
+  left_dy REAL,
+  left_dz REAL,
+  right_valid INTEGER CHECK (right_valid IS NULL OR right_valid IN (0, 1)),
+  right_confidence REAL CHECK (right_confidence IS NULL OR (right_confidence >= 0 AND right_confidence <= 1)),
+  right_ox_m REAL,
+  right_oy_m REAL,
+  right_oz_m REAL,
+  right_dx REAL,
+  right_dy REAL,
+  right_dz REAL,
+  vergence_rad REAL,
+  vergence_distance_m REAL CHECK (vergence_distance_m IS NULL OR vergence_distance_m > 0)
+) STRICT;
+
+CREATE INDEX gaze_samples_by_session_time ON gaze_samples (session_id, t_ns);
 
 CREATE TABLE frames (
   frame_id INTEGER PRIMARY KEY,

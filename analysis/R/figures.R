@@ -158,6 +158,46 @@ figure_rt <- function(trials) {
     theme_curvlab()
 }
 
+# Measured against predicted vergence (docs/xr.md, "Eye tracking"), per
+# space × view condition: each trial's mean vergence measured by the eye
+# tracker during the stimulus (dot) and the vergence demand the perception
+# model computed for its stimulus (the onset's percept; open diamond), joined
+# by a bar, the difference. Positive converging, negative diverging beyond
+# parallel (S3 beyond a quarter circumference). NULL without measured and
+# predicted vergence.
+figure_vergence <- function(trials) {
+  d <- vergence_trials(trials)
+  if (!nrow(d)) return(NULL)
+  # Trials side by side within their condition's slot, centred on it.
+  k <- stats::ave(seq_len(nrow(d)), d$condition, FUN = seq_along)
+  n <- stats::ave(seq_len(nrow(d)), d$condition, FUN = length)
+  d$x <- as.numeric(factor(d$condition)) + 0.6 * (k - (n + 1) / 2) / n
+  ggplot2::ggplot(d, ggplot2::aes(x = x, colour = condition)) +
+    ggplot2::geom_hline(yintercept = 0, colour = "grey60") +
+    ggplot2::geom_segment(ggplot2::aes(xend = x, y = vergence_demand_arcmin, yend = gaze_vergence_arcmin),
+                          linewidth = 2.5, alpha = 0.45) +
+    ggplot2::geom_point(ggplot2::aes(y = vergence_demand_arcmin, shape = "predicted (model)"), size = 4, stroke = 1.3) +
+    ggplot2::geom_point(ggplot2::aes(y = gaze_vergence_arcmin, shape = "measured (eye tracker)"), size = 3) +
+    ggplot2::scale_shape_manual(values = c(`predicted (model)` = 5, `measured (eye tracker)` = 16)) +
+    ggplot2::scale_x_continuous(breaks = seq_along(levels(factor(d$condition))), labels = levels(factor(d$condition))) +
+    ggplot2::labs(x = "space and view", y = "vergence (arcmin)", colour = "condition", shape = NULL,
+                  title = "Vergence: measured against predicted",
+                  subtitle = "per trial; positive converging, negative diverging beyond parallel") +
+    theme_curvlab()
+}
+
+# Completed trials with both a measured and a predicted vergence, labelled
+# by their space × view condition.
+vergence_trials <- function(trials) {
+  if (!all(c("gaze_vergence_arcmin", "vergence_demand_arcmin") %in% names(trials))) return(trials[0, , drop = FALSE])
+  d <- trials[trials$status == "completed" & !is.na(trials$gaze_vergence_arcmin) &
+                !is.na(trials$vergence_demand_arcmin), , drop = FALSE]
+  if (!nrow(d)) return(d)
+  cols <- intersect(c("cond_space", "cond_view"), names(d))
+  d$condition <- if (length(cols)) do.call(paste, c(unname(as.list(d[cols])), sep = " ")) else "all"
+  d
+}
+
 save_figure <- function(plot, file, width_in = 9, height_in = 6) {
   if (is.null(plot)) return(NULL)
   grDevices::png(file, width = width_in, height = height_in, units = "in", res = 110, type = "cairo")

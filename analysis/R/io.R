@@ -1,7 +1,7 @@
 # Reading curvlab data into plain data frames.
 #
 # Two sources give the same trial table:
-#   - a curvlab SQLite file (schema version 4, data_schema/schema.sql), read
+#   - a curvlab SQLite file (schema version 5, data_schema/schema.sql), read
 #     read-only with RSQLite; conditions/stimulus JSON are expanded into
 #     cond_<name> / stim_<name> columns exactly as `curvlab export --format csv`
 #     names them, and staircase steps are joined on trial_id;
@@ -13,7 +13,7 @@
 # names the file and what was expected; report.R turns it into exit code 2.
 
 curvlab_application_id <- 1129729090  # PRAGMA application_id "CVLB"
-curvlab_schema_version <- 4L
+curvlab_schema_version <- 5L
 
 input_error <- function(...) {
   stop(structure(class = c("curvlab_input_error", "error", "condition"),
@@ -215,7 +215,14 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "t.rt_ns, t.response, t.response_device, t.completed_utc, t.conditions, t.stimulus,",
     "st.staircase, st.step_index, st.intensity, st.is_reversal, st.response_correct, st.next_intensity,",
     paste0(paste0("po.posterior_", posterior_fields, collapse = ", "), ","),
-    "tf.lost_ms AS tracking_lost_ms",
+    "tf.lost_ms AS tracking_lost_ms,",
+    # Eye tracking, as the trial CSV summarises it (docs/data.md, "Eye
+    # tracking"): the model's vergence demand from the onset's percept, and
+    # the gaze samples during the stimulus with their mean vergence.
+    "json_extract(op.detail, '$.percept.vergence_demand_arcmin') AS vergence_demand_arcmin,",
+    "CASE WHEN gs.session_id IS NULL THEN NULL ELSE COALESCE(gz.n, 0) END AS gaze_samples,",
+    "CASE WHEN gs.session_id IS NULL THEN NULL ELSE COALESCE(gz.valid, 0) END AS gaze_valid_samples,",
+    "gz.vergence_rad * 10800.0 / 3.141592653589793 AS gaze_vergence_arcmin",
     "FROM trials t",
     "JOIN sessions se ON se.session_id = t.session_id",
     "JOIN participants p ON p.participant_id = se.participant_id",
@@ -225,6 +232,17 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     posterior_sql,
     "LEFT JOIN (SELECT trial_id, sum(json_extract(detail, '$.lost_ms')) AS lost_ms FROM events",
     "   WHERE kind = 'tracking_flagged' GROUP BY trial_id) tf ON tf.trial_id = t.trial_id",
+    "LEFT JOIN (SELECT trial_id, detail FROM events WHERE kind = 'onset') op ON op.trial_id = t.trial_id",
+    "   AND json_extract(op.detail, '$.predicted_display_ns') = t.onset_ns",
+    "LEFT JOIN (SELECT DISTINCT session_id FROM gaze_samples) gs ON gs.session_id = t.session_id",
+    "LEFT JOIN (SELECT g.trial_id, count(*) AS n,",
+    "   sum(CASE WHEN g.left_valid IS NOT NULL THEN g.vergence_rad IS NOT NULL ELSE g.combined_valid = 1 END) AS valid,",
+    "   avg(g.vergence_rad) AS vergence_rad FROM gaze_samples g JOIN trials gt ON gt.trial_id = g.trial_id",
+    "   LEFT JOIN (SELECT trial_id, json_extract(detail, '$.predicted_display_ns') AS at_ns,",
+    "     json_extract(detail, '$.stimulus_ms') AS ms FROM events WHERE kind = 'onset') oe",
+    "     ON oe.trial_id = gt.trial_id AND oe.at_ns = gt.onset_ns",
+    "   WHERE g.t_ns >= gt.onset_ns AND g.t_ns < coalesce(gt.onset_ns + oe.ms * 1000000, gt.response_ns)",
+    "   GROUP BY g.trial_id) gz ON gz.trial_id = t.trial_id",
     "ORDER BY t.session_id, t.trial_index"))
   cond <- expand_json_column(raw_trials$conditions, "cond_", path, "trials.conditions")
   stim <- expand_json_column(raw_trials$stimulus, "stim_", path, "trials.stimulus")
@@ -386,12 +404,14 @@ read_bids_motion <- function(dir) {
 normalise_trials <- function(trials) {
   int_cols <- c("session_id", "session_number", "block_index", "is_practice", "trial_index",
                 "trial_in_block", "attempt", "step_index", "is_reversal", "trial_id")
-  num_cols <- c("onset_ns", "response_ns", "rt_ns", "intensity", "next_intensity", "tracking_lost_ms")
+  num_cols <- c("onset_ns", "response_ns", "rt_ns", "intensity", "next_intensity", "tracking_lost_ms",
+                "vergence_demand_arcmin", "gaze_samples", "gaze_valid_samples", "gaze_vergence_arcmin")
   for (col in intersect(int_cols, names(trials))) trials[[col]] <- as.integer(trials[[col]])
   for (col in intersect(num_cols, names(trials))) trials[[col]] <- as.numeric(trials[[col]])
   for (col in grep("^cond_", names(trials), value = TRUE))
     trials[[col]] <- as.character(trials[[col]])
-  for (col in c("staircase", "step_index", "intensity", "next_intensity", "is_reversal", "tracking_lost_ms"))
+  for (col in c("staircase", "step_index", "intensity", "next_intensity", "is_reversal", "tracking_lost_ms",
+                "vergence_demand_arcmin", "gaze_samples", "gaze_valid_samples", "gaze_vergence_arcmin"))
     if (!col %in% names(trials)) trials[[col]] <- NA
   if (!"is_practice" %in% names(trials)) trials$is_practice <- 0L
   if (!"cond_judged" %in% names(trials)) trials$cond_judged <- "stick"

@@ -120,7 +120,11 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
          paste0("Head and hand positions over the physical table, seen from above (lab x right, forward up the page)",
                 if (isTRUE(data$tracking_stride > 1)) sprintf("; every %d-th sample drawn", data$tracking_stride) else "", ".")),
     list(save_figure(figure_rt(trials), fig("rt.png"), 10, 6),
-         "Response-time distributions per space (columns) and view (rows), stacked by judgement; dashed lines are medians.")
+         "Response-time distributions per space (columns) and view (rows), stacked by judgement; dashed lines are medians."),
+    list(save_figure(figure_vergence(trials), fig("vergence.png"), 9, 6),
+         paste("Vergence per trial and condition: measured by the headset's eye tracker, mean over the trial's stimulus (dots),",
+               "and the vergence the perception model says the stimulus demands (the onset's percept; open diamonds), the bar",
+               "between them their difference. Positive: converging; negative: diverging beyond parallel."))
   )
   figures <- figures[!vapply(figures, function(f) is.null(f[[1]]), TRUE)]
 
@@ -189,6 +193,15 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
     "<h2>Tracking</h2>",
     vapply(figures[grepl("trajectories", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
     if (!any(grepl("trajectories", vapply(figures, `[[`, "", 1)))) "<p class=\"empty\">(no tracking samples in this source)</p>" else "",
+    if (any(grepl("vergence\\.png", vapply(figures, `[[`, "", 1)))) {
+      v <- vergence_trials(trials)
+      agg <- stats::aggregate(cbind(vergence_demand_arcmin, gaze_vergence_arcmin, gaze_valid_samples) ~ condition, v, mean)
+      agg$trials <- as.vector(table(factor(v$condition, agg$condition)))
+      utils::write.csv(agg, fig("vergence.csv"), row.names = FALSE)
+      c("<h2>Eye tracking: vergence</h2>",
+        vapply(figures[grepl("vergence\\.png", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
+        html_table(agg, "Mean predicted and measured vergence (arcmin) and valid samples per condition (also in vergence.csv)"))
+    } else "",
     "<h2>Response times</h2>",
     vapply(figures[grepl("rt\\.png", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""))
   html <- paste0("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>curvlab report</title><style>",

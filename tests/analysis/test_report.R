@@ -20,6 +20,8 @@ check(utils::tail(r$out, 1) == normalizePath(file.path(out, "report.html")), "pr
 html <- paste(readLines(file.path(out, "report.html"), warn = FALSE), collapse = "\n")
 figs <- file.path(out, c("proportions.png", "psychometric.png", "trajectories.png", "rt.png"))
 check(all(file.exists(figs)), "proportions, psychometric, trajectories and RT figures written")
+check(!file.exists(file.path(out, "vergence.png")) && !grepl("Eye tracking", html),
+      "no vergence figure or section without eye tracking")
 check(lengths(regmatches(html, gregexpr("data:image/png;base64,", html))) == 4, "all four figures embedded in the HTML")
 p <- png_ok(figs)
 check(p$status == 0, paste("figures are not blank:", paste(p$out, collapse = " | ")))

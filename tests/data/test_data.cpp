@@ -272,14 +272,37 @@ TEST(Schema, NewerFileIsRefusedAndLeftUntouched) {
   {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec("PRAGMA user_version = 5");
+    db.value().connection().exec("PRAGMA user_version = " + std::to_string(current_schema_version + 1));
   }
   auto db = Database::open(path, OpenMode::create_or_open);
   ASSERT_FALSE(db);
   EXPECT_EQ(db.error().kind, DataError::Kind::newer_schema);
-  EXPECT_NE(db.error().message.find("schema version 5"), std::string::npos);
+  EXPECT_NE(db.error().message.find("schema version " + std::to_string(current_schema_version + 1)),
+            std::string::npos);
   auto c = Connection::open(path, OpenFlags::read_only);
-  EXPECT_EQ(c.query_int("PRAGMA user_version"), 5);
+  EXPECT_EQ(c.query_int("PRAGMA user_version"), current_schema_version + 1);
+}
+
+// A file of version 4 (before gaze_samples) gets the table, as a new file
+// has it, and keeps its sessions.
+TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
+  const auto dir = fresh_dir("migrate4");
+  const auto path = (dir / "v4.db").string();
+  {
+    auto db = Database::open(path, OpenMode::create_or_open);
+    ASSERT_TRUE(db);
+    auto& c = db.value().connection();
+    c.exec("DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; DELETE FROM schema_migrations;"
+           "PRAGMA user_version = 4");
+  }
+  auto db = Database::open(path, OpenMode::open_existing);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(db.value().schema_version(), current_schema_version);
+  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(fresh);
+  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM gaze_samples"), 0);
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 5"), 1);
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {
@@ -411,6 +434,56 @@ TEST(SampleWriter, CommitsEverythingAndCountsDropsWhenFull) {
                                       "events WHERE kind = 'logger_drops'"), 96);
   EXPECT_EQ(db.connection().query_int(
                 "SELECT count(*) FROM tracking_samples WHERE length(virtual_pose) = 128"), 5000);
+}
+
+// Gaze rows: what a headset does not track is NULL, lost tracking is a row
+// with valid 0, a diverging vergence has no distance; a full ring drops and
+// counts gaze samples as it does tracking samples.
+TEST(SampleWriter, StoresGazeWithNullsForWhatIsNotTracked) {
+  const auto dir = fresh_dir("writer_gaze");
+  const auto path = dir / "g.db";
+  std::int64_t session = 0;
+  {
+    auto store = make_store(path);
+    session = make_session(store, "P01");
+  }
+  {
+    SampleWriterConfig cfg;
+    cfg.gaze_capacity = 4;
+    cfg.batch_interval = std::chrono::minutes(1);
+    auto writer = SampleWriter::open(path.string(), cfg).value();
+    GazeSample per_eye;
+    per_eye.session_id = session;
+    per_eye.t_ns = 100;
+    per_eye.has_eyes = true;
+    per_eye.eyes[0] = {true, 0.5, {-0.032, 1.6, 0.0}, {0.0, 0.0, -1.0}};
+    per_eye.eyes[1] = {true, -1.0, {0.032, 1.6, 0.0}, {0.0, 0.0, -1.0}};
+    per_eye.has_vergence = true;
+    per_eye.vergence_rad = -0.01;
+    GazeSample combined;
+    combined.session_id = session;
+    combined.t_ns = 200;
+    combined.has_combined = true;
+    combined.combined = {false, -1.0, {0.0, 1.6, 0.0}, {0.0, 0.0, -1.0}};
+    EXPECT_TRUE(writer->push_gaze(per_eye));
+    EXPECT_TRUE(writer->push_gaze(combined));
+    int accepted = 2;
+    for (int i = 0; i < 10; ++i) accepted += writer->push_gaze(combined) ? 1 : 0;
+    EXPECT_EQ(accepted, 4);
+    ASSERT_TRUE(writer->flush());
+    EXPECT_EQ(writer->stats().dropped_gaze, 8u);
+  }
+  auto db = Database::open(path.string(), OpenMode::open_existing).value();
+  auto& c = db.connection();
+  EXPECT_EQ(c.query_int("SELECT count(*) FROM gaze_samples"), 4);
+  EXPECT_EQ(c.query_int("SELECT count(*) FROM gaze_samples WHERE t_ns = 100 AND combined_valid IS NULL AND "
+                        "combined_dx IS NULL AND left_valid = 1 AND left_confidence = 0.5 AND right_confidence IS NULL "
+                        "AND vergence_rad = -0.01 AND vergence_distance_m IS NULL AND trial_id IS NULL"),
+            1);
+  EXPECT_EQ(c.query_int("SELECT count(*) FROM gaze_samples WHERE t_ns = 200 AND combined_valid = 0 AND "
+                        "combined_oy_m = 1.6 AND left_valid IS NULL AND right_ox_m IS NULL AND vergence_rad IS NULL"),
+            3);
+  EXPECT_EQ(c.query_int("SELECT json_extract(detail, '$.dropped_gaze') FROM events WHERE kind = 'logger_drops'"), 8);
 }
 
 // What resume reads back: provenance with the session_start and observer

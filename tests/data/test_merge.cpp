@@ -153,6 +153,18 @@ const Machines& machines() {
     // Machine B: P03, and another "first session" of P01.
     EXPECT_EQ(run_curvlab(run_args("P03", out.b)).exit_code, 0);
     EXPECT_EQ(run_curvlab(run_args("P01", out.b)).exit_code, 0);
+    // P03's session as a headset with eye tracking would have stored it: a
+    // gaze row for each of its frames (headless sessions record none).
+    {
+      auto c = Connection::open(out.b.string(), OpenFlags::read_write);
+      c.exec("INSERT INTO gaze_samples (session_id, trial_id, frame_index, t_ns, left_valid, left_confidence, "
+             "left_ox_m, left_oy_m, left_oz_m, left_dx, left_dy, left_dz, right_valid, right_confidence, right_ox_m, "
+             "right_oy_m, right_oz_m, right_dx, right_dy, right_dz, vergence_rad, vergence_distance_m) "
+             "SELECT f.session_id, f.trial_id, f.frame_index, f.frame_index * 11111111, 1, 0.9, -0.032, 1.6, 0, "
+             "0.01, 0, -1, f.frame_index % 2, 0.7, 0.032, 1.6, 0, -0.01, 0, -1, 0.02, 3.2 FROM frames f "
+             "JOIN sessions s ON s.session_id = f.session_id JOIN participants p ON "
+             "p.participant_id = s.participant_id WHERE p.pseudonym = 'P03'");
+    }
     return out;
   }();
   return m;
@@ -201,19 +213,20 @@ TEST(MergeCli, TwoMachinesPoolIntoOneStudyKeepingEveryRowAndItsProvenance) {
   EXPECT_NE(r.out.find("total"), std::string::npos) << r.out;
 
   EXPECT_EQ(count(study, "sessions"), 4);
-  for (const char* table : {"trials", "blocks", "staircase_steps", "tracking_samples", "frames"})
+  ASSERT_GT(count(m.b, "gaze_samples"), 0);
+  for (const char* table : {"trials", "blocks", "staircase_steps", "tracking_samples", "frames", "gaze_samples"})
     EXPECT_EQ(count(study, table), count(m.a, table) + count(m.b, table)) << table;
   // Every recorded event, plus one merged_from per session and one renumbering.
   EXPECT_EQ(count(study, "events"), count(m.a, "events") + count(m.b, "events") + 4 + 1);
   EXPECT_EQ(count(study, "protocols"), 1);
   EXPECT_EQ(count(study, "participants"), 3);
-  EXPECT_EQ(scalar(study, "PRAGMA user_version"), "4");
+  EXPECT_EQ(scalar(study, "PRAGMA user_version"), std::to_string(current_schema_version));
   EXPECT_EQ(scalar(study, "PRAGMA integrity_check"), "ok");
   EXPECT_EQ(scalar(study, "SELECT COUNT(*) FROM pragma_foreign_key_check"), "0");
 
   // Every value of every column the schema has (so a column added later is
   // covered too) arrived, ids aside.
-  for (const char* table : {"blocks", "trials", "staircase_steps", "tracking_samples", "frames"}) {
+  for (const char* table : {"blocks", "trials", "staircase_steps", "tracking_samples", "frames", "gaze_samples"}) {
     for (const std::string& column : data_columns(study, table)) {
       auto expected = column_values(m.a, table, column);
       const auto from_b = column_values(m.b, table, column);

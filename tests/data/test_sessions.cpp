@@ -257,13 +257,13 @@ TEST(CliSessions, FilesItCannotReadAreRefusedAsExportRefusesThem) {
   {
     auto db = Database::open(newer, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec("PRAGMA user_version = 5");
+    db.value().connection().exec("PRAGMA user_version = " + std::to_string(current_schema_version + 1));
   }
   const std::vector<std::pair<std::string, std::string>> files = {
       {(dir / "missing.sqlite").string(), "no such file"},
       {random, "not an SQLite database"},
       {foreign, "not a curvlab data file"},
-      {newer, "written with schema version 5 by a newer curvlab"}};
+      {newer, "written with schema version " + std::to_string(current_schema_version + 1) + " by a newer curvlab"}};
   for (const auto& [file, says] : files) {
     const bool existed = fs::exists(file);
     const auto before = existed ? curvlab::testing::read_file(file) : "";

@@ -64,6 +64,7 @@ class RuntimeEnv {
                                          "CURVLAB_TEST_XR_EVENTS_LOST",   "CURVLAB_TEST_XR_FORMATS",
                                          "CURVLAB_TEST_XR_VIEWS",         "CURVLAB_TEST_XR_TRACKING",
                                          "CURVLAB_TEST_XR_REFRESH",       "CURVLAB_TEST_XR_REFRESH_CHANGE",
+                                         "CURVLAB_TEST_XR_GAZE",
                                          "VK_INSTANCE_LAYERS"};
 };
 

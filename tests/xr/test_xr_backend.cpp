@@ -3,6 +3,7 @@
 // conversions it feeds the renderer and the session log.
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/xr/backend.hpp"
+#include "curvlab/harness/xr/gaze.hpp"
 #include "curvlab/harness/xr/stereo.hpp"
 
 #include <vulkan/vulkan_core.h>
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cmath>
 #include <numbers>
 
 namespace {
@@ -114,6 +116,58 @@ TEST(XrClockMap, KeepsTheRuntimesDifferences) {
   EXPECT_EQ(map.to_session(5'000'000'000), 123'456'789);
   EXPECT_EQ(map.to_session(5'011'111'111) - map.to_session(5'000'000'000), 11'111'111);
   EXPECT_EQ(map.to_xr(map.to_session(7'000'000'001)), 7'000'000'001);
+}
+
+// The measured vergence of two gaze rays: read in the head's frame, so a
+// turned and tilted head changes nothing; eyes fixating a point D ahead
+// converge by 2 atan(IPD / 2D) and imply D; eyes turned outward diverge
+// (negative) and imply no distance.
+TEST(XrGaze, VergenceOfTwoRaysIsSignedAndImpliesTheFixationDistance) {
+  const double pi = std::numbers::pi;
+  LabPose head;
+  head.position_m = {0.3, 1.6, 0.4};
+  head.orientation = glm::angleAxis(0.5, glm::dvec3(0, 1, 0)) * glm::angleAxis(-0.44, glm::dvec3(1, 0, 0));
+  const glm::dvec3 right = head.orientation * glm::dvec3(0.032, 0, 0);
+  const glm::dvec3 forward = head.orientation * glm::dvec3(0, 0, -1);
+  auto ray = [](glm::dvec3 o, glm::dvec3 d) {
+    curvlab::harness::io::GazeRay r;
+    r.valid = true;
+    r.origin_m = o;
+    r.direction = glm::normalize(d);
+    return r;
+  };
+  for (const double d_m : {0.4, 1.0, 3.0, 20.0}) {
+    const glm::dvec3 target = head.position_m + d_m * forward;
+    const auto v = vergence_of(head, ray(head.position_m - right, target - (head.position_m - right)),
+                               ray(head.position_m + right, target - (head.position_m + right)));
+    EXPECT_NEAR(v.angle_rad, 2.0 * std::atan(0.032 / d_m), 1e-12) << d_m;
+    ASSERT_TRUE(v.distance_m.has_value());
+    EXPECT_NEAR(*v.distance_m, d_m, 1e-9 * d_m);
+  }
+  // 0.5° beyond parallel: each eye turned 0.25° outward.
+  const double out = 0.25 * pi / 180.0;
+  const glm::dvec3 up = head.orientation * glm::dvec3(0, 1, 0);
+  const auto diverging = vergence_of(head, ray(head.position_m - right, glm::angleAxis(out, up) * forward),
+                                     ray(head.position_m + right, glm::angleAxis(-out, up) * forward));
+  EXPECT_NEAR(diverging.angle_rad, -0.5 * pi / 180.0, 1e-12);
+  EXPECT_FALSE(diverging.distance_m.has_value());
+  const auto parallel = vergence_of(head, ray(head.position_m - right, forward), ray(head.position_m + right, forward));
+  EXPECT_NEAR(parallel.angle_rad, 0.0, 1e-12);
+  EXPECT_FALSE(parallel.distance_m.has_value());
+}
+
+// The ray of a gaze pose runs along the pose's -Z axis from its position.
+TEST(XrGaze, GazeRayRunsAlongThePosesMinusZ) {
+  XrPosef pose{};
+  // 90° about +y: -Z turns to -X.
+  pose.orientation = {0.0f, std::sin(static_cast<float>(std::numbers::pi) / 4.0f), 0.0f,
+                      std::cos(static_cast<float>(std::numbers::pi) / 4.0f)};
+  pose.position = {1.0f, 2.0f, 3.0f};
+  const auto r = gaze_ray(pose, true, 0.5);
+  EXPECT_NEAR(r.direction.x, -1.0, 1e-6);
+  EXPECT_NEAR(r.direction.z, 0.0, 1e-6);
+  EXPECT_EQ(r.origin_m, glm::dvec3(1.0, 2.0, 3.0));
+  EXPECT_EQ(r.confidence, 0.5);
 }
 
 }  // namespace

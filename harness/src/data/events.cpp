@@ -116,6 +116,7 @@ Detail detail(const events::Onset& e) {
   if (e.perceived_sagitta_m) j["perceived_sagitta_m"] = *e.perceived_sagitta_m;
   if (e.percept_json) j["percept"] = Json::parse(*e.percept_json);
   if (e.images) j["images"] = *e.images;
+  if (e.stimulus_ms) j["stimulus_ms"] = *e.stimulus_ms;
   return {EventKind::onset, j};
 }
 Detail detail(const events::TrackingFlagged& e) {

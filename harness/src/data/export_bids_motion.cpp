@@ -2,13 +2,15 @@
 // one clock and rate), written as a header-less *_motion.tsv whose columns
 // are the rows of *_channels.tsv, with a *_motion.json sidecar giving the
 // nominal and the effective sampling rate. Lab poses only: the curved-space
-// pose is not a Cartesian position and stays in the database.
+// pose is not a Cartesian position and stays in the database. Eye tracking
+// (gaze_samples) goes beside it as BIDS eye-tracking physio files.
 #include "export_common.hpp"
 
 #include "curvlab/harness/data/sqlite.hpp"
 #include "curvlab/harness/version.hpp"
 
 #include <nlohmann/json.hpp>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -65,6 +67,10 @@ std::string bids_readme() {
          "orientation as a unit quaternion, validity flags, and the seen-vs-felt coherence error of the "
          "body-coherent tracking). *_motion.json gives the nominal and effective sampling rates, and "
          "*_channels.json the lab reference frame (x right, y up, z back).\n\n"
+         "Sessions run with an eye-tracking headset also have beh/*_recording-eye1_physio.tsv.gz and "
+         "recording-eye2 (BIDS eye tracking, PhysioType eyetrack): each eye's gaze ray in the lab, its "
+         "azimuth and elevation, validity, confidence and the vergence of both eyes; a headset with only a "
+         "combined gaze ray gives one recording, eye1, RecordedEye cyclopean.\n\n"
          "Positions are in the physical lab; the curved-space pose that was rendered is not Cartesian and "
          "stays in the curvlab database, together with the trials, the protocol and its SHA-256.\n";
 }
@@ -260,6 +266,147 @@ std::optional<DataError> write_recording(Database& db, const std::string& root, 
   return std::nullopt;
 }
 
+// ---- eye tracking: BIDS physio (PhysioType eyetrack, BIDS 1.10) ---------
+
+// One eye's (or the combined gaze's) recording (gaze_samples' column
+// prefixes). The BIDS validator takes eye1 and eye2 as the recording labels
+// of eye tracking: with per-eye gaze those are the left and the right eye;
+// a session with only the combined gaze writes it as eye1, its RecordedEye
+// "cyclopean". The combined gaze of a session that also has per-eye gaze
+// stays in the database.
+struct GazeRecording {
+  const char* label;   // recording-<label>
+  const char* prefix;  // gaze_samples columns
+  const char* eye;     // RecordedEye
+  bool per_eye;
+};
+constexpr GazeRecording kGazeRecordings[] = {
+    {"eye1", "left", "left", true}, {"eye2", "right", "right", true}, {"eye1", "combined", "cyclopean", false}};
+
+std::vector<std::pair<std::string, OJson>> gaze_columns(const GazeRecording& r) {
+  const auto col = [](const char* d, const char* units) {
+    OJson j{{"Description", d}};
+    if (units != nullptr) j["Units"] = units;
+    return j;
+  };
+  std::vector<std::pair<std::string, OJson>> c = {
+      {"timestamp", col("Time on the session's monotonic clock (the frame's predicted display time)", "s")},
+      {"x_coordinate", col("Gaze direction's azimuth in the lab, positive to the right of -z", "deg")},
+      {"y_coordinate", col("Gaze direction's elevation in the lab, positive up", "deg")},
+      {"origin_x", col("Gaze ray's origin, lab x (right)", "m")},
+      {"origin_y", col("Gaze ray's origin, lab y (up)", "m")},
+      {"origin_z", col("Gaze ray's origin, lab z (back)", "m")},
+      {"direction_x", col("Gaze ray's unit direction, lab x", nullptr)},
+      {"direction_y", col("Gaze ray's unit direction, lab y", nullptr)},
+      {"direction_z", col("Gaze ray's unit direction, lab z", nullptr)},
+      {"valid", col("1 when the runtime reported the gaze valid, 0 when tracking was lost", nullptr)}};
+  if (r.per_eye) {
+    c.emplace_back("confidence", col("The runtime's confidence in this eye's gaze, 0-1; n/a when not reported", nullptr));
+    c.emplace_back("vergence",
+                   col("Vergence of both eyes' gaze (left eye's yaw toward its ray minus the right eye's, in the plane "
+                       "of the eyes' axis and the head's forward direction): positive converging, negative diverging "
+                       "beyond parallel; n/a unless both eyes are valid",
+                       "deg"));
+  }
+  return c;
+}
+
+std::optional<DataError> write_gzip(const std::string& path, const std::string& text) {
+  gzFile f = gzopen(path.c_str(), "wb");
+  if (f == nullptr) return DataError{DataError::Kind::io, path + ": cannot be written"};
+  const int written = text.empty() ? 0 : gzwrite(f, text.data(), static_cast<unsigned>(text.size()));
+  const int closed = gzclose(f);
+  if ((!text.empty() && written != static_cast<int>(text.size())) || closed != Z_OK)
+    return DataError{DataError::Kind::io, path + ": cannot be written (disk full?)"};
+  return std::nullopt;
+}
+
+// The recording's rows (no header, BIDS physio) and their times.
+Recording read_gaze(Database& db, std::int64_t session_id, const GazeRecording& r) {
+  const std::string p = r.prefix;
+  std::string sql = "SELECT t_ns, " + p + "_valid, " + p + "_ox_m, " + p + "_oy_m, " + p + "_oz_m, " + p + "_dx, " + p +
+                    "_dy, " + p + "_dz, " + (r.per_eye ? p + "_confidence" : std::string("NULL")) +
+                    ", vergence_rad FROM gaze_samples WHERE session_id = ?1 AND " + p +
+                    "_valid IS NOT NULL ORDER BY t_ns, gaze_id";
+  Statement rows(db.connection(), sql);
+  rows.bind(1, session_id);
+  Recording out;
+  constexpr double deg = 180.0 / 3.141592653589793;
+  while (rows.step()) {
+    const std::int64_t t = rows.column_int(0);
+    out.times.push_back(t);
+    const double dx = rows.column_double(5), dy = rows.column_double(6), dz = rows.column_double(7);
+    char ts[40];
+    std::snprintf(ts, sizeof ts, "%.9f", static_cast<double>(t) * 1e-9);
+    out.tsv += ts;
+    for (double v : {std::atan2(dx, -dz) * deg, std::atan2(dy, std::hypot(dx, dz)) * deg, rows.column_double(2),
+                     rows.column_double(3), rows.column_double(4), dx, dy, dz}) {
+      out.tsv += '\t';
+      out.tsv += number(v);
+    }
+    out.tsv += '\t';
+    out.tsv += std::to_string(rows.column_int(1));
+    if (r.per_eye) {
+      for (int c : {8, 9}) {
+        out.tsv += '\t';
+        out.tsv += rows.is_null(c) ? std::string("n/a") : number(rows.column_double(c) * (c == 9 ? deg : 1.0));
+      }
+    }
+    out.tsv += '\n';
+  }
+  return out;
+}
+
+OJson gaze_sidecar(const SessionInfo& s, const GazeRecording& r, const Recording& rec) {
+  const Rates rates = rates_of(rec.times);
+  OJson j;
+  j["TaskName"] = s.protocol_name;
+  j["PhysioType"] = "eyetrack";
+  j["SamplingFrequency"] = rec.times.size() > 1 ? OJson(rates.nominal_hz) : OJson("n/a");
+  j["StartTime"] = 0;
+  OJson names = OJson::array();
+  for (const auto& [name, desc] : gaze_columns(r)) {
+    names.push_back(name);
+    j[name] = desc;
+  }
+  j["Columns"] = names;
+  j["RecordedEye"] = r.eye;
+  j["SampleCoordinateSystem"] = "gaze-in-world";
+  j["SampleCoordinateUnits"] = "deg";
+  j["EnvironmentCoordinates"] = "lab frame of the headset's STAGE space: x right, y up, z back (-z forward)";
+  j["Manufacturer"] = "n/a";
+  j["ManufacturersModelName"] = "n/a";
+  j["SoftwareVersions"] = "curvlab " + std::string(software_version());
+  j["RecordingType"] = "continuous";
+  j["EyeTrackingMethod"] = r.per_eye ? "OpenXR XR_FB_eye_tracking_social (per-eye gaze)"
+                                     : "OpenXR XR_EXT_eye_gaze_interaction (combined gaze)";
+  return j;
+}
+
+// Each gaze recording the session has: _physio.tsv.gz and _physio.json
+// (BIDS 1.10, "Physiological recordings", PhysioType eyetrack).
+std::optional<DataError> write_gaze(Database& db, const std::string& root, const SessionInfo& s,
+                                    const SessionPlace& place, ExportSummary& summary) {
+  bool per_eye = false;
+  for (const GazeRecording& r : kGazeRecordings) {
+    if (!r.per_eye && per_eye) break;
+    const Recording rec = read_gaze(db, s.session_id, r);
+    if (rec.times.empty()) continue;
+    per_eye = per_eye || r.per_eye;
+    // In beh/: the BIDS validator takes eye-tracking physio files there (the
+    // behavioural task's), not beside the motion recordings.
+    if (auto e = make_dir(root + "/" + place.dir + "/beh")) return e;
+    const std::string base = place.dir + "/beh/sub-" + place.sub + "_ses-" + place.ses + "_task-" +
+                             alnum_label(s.protocol_name) + "_recording-" + r.label + "_physio";
+    if (auto e = write_gzip(root + "/" + base + ".tsv.gz", rec.tsv)) return e;
+    if (auto e = write_text(root + "/" + base + ".json", gaze_sidecar(s, r, rec).dump(2) + "\n")) return e;
+    summary.files.push_back("bids/" + base + ".tsv.gz");
+    summary.files.push_back("bids/" + base + ".json");
+    summary.rows += rec.times.size();
+  }
+  return std::nullopt;
+}
+
 // A session's recordings, one per tracked device, and its _scans.tsv.
 std::optional<DataError> write_session(Database& db, const std::string& root, const SessionInfo& s,
                                        const SessionPlace& place, ExportSummary& summary) {
@@ -272,6 +419,7 @@ std::optional<DataError> write_session(Database& db, const std::string& root, co
   std::string scans = "filename\tacq_time\n";
   for (const std::string& device : device_names)
     if (auto e = write_recording(db, root, s, place, device, scans, summary)) return e;
+  if (auto e = write_gaze(db, root, s, place, summary)) return e;
   const std::string scans_name = place.dir + "/sub-" + place.sub + "_ses-" + place.ses + "_scans.tsv";
   if (auto e = write_text(root + "/" + scans_name, scans)) return e;
   summary.files.push_back("bids/" + scans_name);

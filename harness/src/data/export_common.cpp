@@ -340,6 +340,28 @@ const std::vector<FixedColumn>& fixed_columns() {
        "time; empty without an onset",
        "",
      "CASE WHEN t.onset_ns IS NULL THEN NULL ELSE COALESCE(fl.onset_late, 0) END"},
+    {"vergence_demand_arcmin",
+       "The vergence the fixated point of the stimulus demands of the eyes, by the human perception model "
+       "(the onset's percept; positive converging, negative diverging beyond parallel); empty where the "
+       "session stored no percept (no simulated observer)",
+       "arcmin",
+     "json_extract(op.detail, '$.percept.vergence_demand_arcmin')"},
+    {"gaze_samples",
+       "Sessions with eye tracking: gaze samples (one per frame) during the stimulus, from its onset for "
+       "timeline.stimulus_ms; empty without eye tracking",
+       "",
+     "CASE WHEN gs.session_id IS NULL THEN NULL ELSE COALESCE(gz.n, 0) END"},
+    {"gaze_valid_samples",
+       "Sessions with eye tracking: of gaze_samples, those with both eyes' gaze valid (per-eye gaze), or the "
+       "combined gaze valid where only that is tracked; empty without eye tracking",
+       "",
+     "CASE WHEN gs.session_id IS NULL THEN NULL ELSE COALESCE(gz.valid, 0) END"},
+    {"gaze_vergence_arcmin",
+       "Sessions with per-eye gaze: mean measured vergence of the eyes during the stimulus (positive "
+       "converging, negative diverging beyond parallel), over the samples with both eyes valid; compare "
+       "vergence_demand_arcmin; empty without per-eye gaze or without a valid sample",
+       "arcmin",
+     "gz.vergence_rad * 10800.0 / 3.141592653589793"},
   };
   return columns;
 }
@@ -362,6 +384,23 @@ std::string trial_select() {
          "LEFT JOIN (SELECT f.trial_id, SUM(f.late) AS late, "
          "MAX(f.late = 1 AND f.predicted_display_ns = ot.onset_ns) AS onset_late FROM frames f "
          "JOIN trials ot ON ot.trial_id = f.trial_id GROUP BY f.trial_id) fl ON fl.trial_id = t.trial_id "
+         // Gaze during the stimulus: from the onset (the completed attempt's)
+         // for the stimulus_ms its onset event recorded, else up to the
+         // response. Sessions with gaze at all, so that a trial without
+         // samples reads 0 there and empty where no eye was tracked.
+         // The onset of the attempt the trial's onset_ns comes from.
+         "LEFT JOIN (SELECT trial_id, detail FROM events WHERE kind = ?4) op ON op.trial_id = t.trial_id "
+         "AND json_extract(op.detail, '$.predicted_display_ns') = t.onset_ns "
+         "LEFT JOIN (SELECT DISTINCT session_id FROM gaze_samples) gs ON gs.session_id = t.session_id "
+         "LEFT JOIN (SELECT g.trial_id, COUNT(*) AS n, "
+         "SUM(CASE WHEN g.left_valid IS NOT NULL THEN g.vergence_rad IS NOT NULL ELSE g.combined_valid = 1 END) "
+         "AS valid, AVG(g.vergence_rad) AS vergence_rad FROM gaze_samples g "
+         "JOIN trials gt ON gt.trial_id = g.trial_id "
+         "LEFT JOIN (SELECT trial_id, json_extract(detail, '$.predicted_display_ns') AS at_ns, "
+         "json_extract(detail, '$.stimulus_ms') AS ms FROM events WHERE kind = ?4) oe "
+         "ON oe.trial_id = gt.trial_id AND oe.at_ns = gt.onset_ns "
+         "WHERE g.t_ns >= gt.onset_ns AND g.t_ns < COALESCE(gt.onset_ns + oe.ms * 1000000, gt.response_ns) "
+         "GROUP BY g.trial_id) gz ON gz.trial_id = t.trial_id "
          "JOIN sessions se ON se.session_id = t.session_id "
          "JOIN participants p ON p.participant_id = se.participant_id "
          "JOIN protocols pr ON pr.protocol_id = se.protocol_id "
@@ -408,6 +447,7 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
     Statement s(db.connection(), trial_select());
     s.bind(1, options.session_id).bind_static(2, to_string(EventKind::tracking_flagged));
     s.bind_static(3, to_string(EventKind::posterior));
+    s.bind_static(4, to_string(EventKind::onset));
     while (s.step()) {
       std::vector<Cell> row;
       for (int c = 0; c < fixed; ++c) row.push_back(s.column_opt_text(c));

@@ -40,7 +40,7 @@ std::string in_schema(std::string sql, const std::string& schema) {
 // pseudonym). session_number is left out: a merge may renumber. The events
 // a merge writes itself (merged_from, session_renumbered) are provenance of
 // the pooled copy, not something the session recorded, so they are left out.
-constexpr std::array<const char*, 7> digest_queries = {
+constexpr std::array<const char*, 8> digest_queries = {
     "SELECT json_array(s.session_uuid, pr.sha256, p.pseudonym, s.software_version, s.software_commit, "
     "s.backend, s.renderer_device, s.renderer_driver, s.display_refresh_hz, s.seed, s.table_calibration, "
     "s.status, s.started_utc, s.ended_utc) FROM {s}.sessions s "
@@ -66,6 +66,13 @@ constexpr std::array<const char*, 7> digest_queries = {
     "x.eye_height_px, hex(x.eye_views), x.display_period_ns, x.late) FROM {s}.frames x "
     "LEFT JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id "
     "WHERE x.session_id = ?1 ORDER BY x.frame_id",
+    "SELECT json_array(t.trial_index, x.frame_index, x.t_ns, x.combined_valid, x.combined_ox_m, "
+    "x.combined_oy_m, x.combined_oz_m, x.combined_dx, x.combined_dy, x.combined_dz, x.left_valid, "
+    "x.left_confidence, x.left_ox_m, x.left_oy_m, x.left_oz_m, x.left_dx, x.left_dy, x.left_dz, "
+    "x.right_valid, x.right_confidence, x.right_ox_m, x.right_oy_m, x.right_oz_m, x.right_dx, "
+    "x.right_dy, x.right_dz, x.vergence_rad, x.vergence_distance_m) FROM {s}.gaze_samples x LEFT "
+    "JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE "
+    "x.session_id = ?1 ORDER BY x.gaze_id",
     "SELECT json_array(t.trial_index, x.t_ns, x.kind, x.detail) FROM {s}.events x "
     "LEFT JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id "
     "WHERE x.session_id = ?1 AND x.kind NOT IN ('merged_from', 'session_renumbered') ORDER BY x.event_id",
@@ -215,7 +222,7 @@ struct RowCopy {
   std::int64_t MergeInputReport::*counted = nullptr;
 };
 
-constexpr std::array<RowCopy, 6> copy_statements = {{
+constexpr std::array<RowCopy, 7> copy_statements = {{
     {"INSERT INTO main.blocks (session_id, block_index, name, is_practice, settings) SELECT ?2, block_index, "
     "name, is_practice, settings FROM src.blocks WHERE session_id = ?1 ORDER BY block_id", nullptr},
     {"INSERT INTO main.trials (session_id, block_id, trial_index, trial_in_block, conditions, stimulus, status, "
@@ -241,6 +248,17 @@ constexpr std::array<RowCopy, 6> copy_statements = {{
     "x.cpu_time_ns, x.gpu_time_ns, x.dropped_frames, x.views, x.passes, x.draws, x.triangles, x.eye_width_px, "
     "x.eye_height_px, x.eye_views, x.display_period_ns, x.late FROM src.frames x{trial} "
     "WHERE x.session_id = ?1 ORDER BY x.frame_id", &MergeInputReport::frames},
+    {"INSERT INTO main.gaze_samples (session_id, trial_id, frame_index, t_ns, combined_valid, "
+    "combined_ox_m, combined_oy_m, combined_oz_m, combined_dx, combined_dy, combined_dz, "
+    "left_valid, left_confidence, left_ox_m, left_oy_m, left_oz_m, left_dx, left_dy, left_dz, "
+    "right_valid, right_confidence, right_ox_m, right_oy_m, right_oz_m, right_dx, right_dy, "
+    "right_dz, vergence_rad, vergence_distance_m) SELECT ?2, mt.trial_id, x.frame_index, x.t_ns, "
+    "x.combined_valid, x.combined_ox_m, x.combined_oy_m, x.combined_oz_m, x.combined_dx, "
+    "x.combined_dy, x.combined_dz, x.left_valid, x.left_confidence, x.left_ox_m, x.left_oy_m, "
+    "x.left_oz_m, x.left_dx, x.left_dy, x.left_dz, x.right_valid, x.right_confidence, x.right_ox_m, "
+    "x.right_oy_m, x.right_oz_m, x.right_dx, x.right_dy, x.right_dz, x.vergence_rad, "
+    "x.vergence_distance_m FROM src.gaze_samples x{trial} WHERE x.session_id = ?1 ORDER BY "
+    "x.gaze_id", nullptr},
     {"INSERT INTO main.events (session_id, trial_id, t_ns, kind, detail) SELECT ?2, mt.trial_id, x.t_ns, "
     "x.kind, x.detail FROM src.events x{trial} WHERE x.session_id = ?1 ORDER BY x.event_id", nullptr},
 }};

@@ -81,9 +81,16 @@ constexpr const char* insert_frame_sql =
     "cpu_time_ns, gpu_time_ns, dropped_frames, views, passes, draws, triangles, eye_width_px, "
     "eye_height_px, eye_views, display_period_ns, late) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, "
     "?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)";
+constexpr const char* insert_gaze_sql =
+    "INSERT INTO gaze_samples (session_id, trial_id, frame_index, t_ns, combined_valid, combined_ox_m, "
+    "combined_oy_m, combined_oz_m, combined_dx, combined_dy, combined_dz, left_valid, left_confidence, "
+    "left_ox_m, left_oy_m, left_oz_m, left_dx, left_dy, left_dz, right_valid, right_confidence, right_ox_m, "
+    "right_oy_m, right_oz_m, right_dx, right_dy, right_dz, vergence_rad, vergence_distance_m) VALUES (?1, ?2, "
+    "?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, "
+    "?25, ?26, ?27, ?28, ?29)";
 constexpr const char* insert_event_sql =
     "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) VALUES (?1, NULL, ?2, "
-    "'logger_drops', json_object('dropped_tracking', ?3, 'dropped_frames', ?4))";
+    "'logger_drops', json_object('dropped_tracking', ?3, 'dropped_frames', ?4, 'dropped_gaze', ?5))";
 
 }  // namespace
 
@@ -92,21 +99,25 @@ struct SampleWriter::Impl {
       : config(cfg),
         tracking(cfg.tracking_capacity),
         frames(cfg.frame_capacity),
+        gaze(cfg.gaze_capacity),
         store(std::move(s)),
         connection(std::move(c)),
         insert_tracking(connection, insert_tracking_sql),
         insert_frame(connection, insert_frame_sql),
+        insert_gaze(connection, insert_gaze_sql),
         insert_event(connection, insert_event_sql) {
     pending_tracking.reserve(cfg.max_batch);
     pending_frames.reserve(cfg.max_batch);
+    pending_gaze.reserve(cfg.max_batch);
   }
 
   SampleWriterConfig config;
   SpscRing<TrackingSample> tracking;
   SpscRing<FrameRecord> frames;
-  std::atomic<std::uint64_t> pushed_tracking{0}, pushed_frames{0};
-  std::atomic<std::uint64_t> dropped_tracking{0}, dropped_frames{0};
-  std::atomic<std::uint64_t> committed_tracking{0}, committed_frames{0};
+  SpscRing<GazeSample> gaze;
+  std::atomic<std::uint64_t> pushed_tracking{0}, pushed_frames{0}, pushed_gaze{0};
+  std::atomic<std::uint64_t> dropped_tracking{0}, dropped_frames{0}, dropped_gaze{0};
+  std::atomic<std::uint64_t> committed_tracking{0}, committed_frames{0}, committed_gaze{0};
   std::atomic<std::uint64_t> transactions{0}, failed_transactions{0};
   std::atomic<double> writer_cpu_s{0.0};
   std::atomic<bool> is_paused{false};
@@ -130,10 +141,11 @@ struct SampleWriter::Impl {
   SessionStore store;  // its own connection, synchronous = FULL
   std::deque<JournalEntry> journal_pending;
   Connection connection;
-  Statement insert_tracking, insert_frame, insert_event;
+  Statement insert_tracking, insert_frame, insert_gaze, insert_event;
   std::vector<TrackingSample> pending_tracking;
   std::vector<FrameRecord> pending_frames;
-  std::uint64_t logged_drops_tracking = 0, logged_drops_frames = 0;
+  std::vector<GazeSample> pending_gaze;
+  std::uint64_t logged_drops_tracking = 0, logged_drops_frames = 0, logged_drops_gaze = 0;
   std::int64_t last_session_id = 0;
   // (session, eye geometry) of the last frame row that stored one: committed,
   // and within the batch being written.
@@ -194,13 +206,46 @@ struct SampleWriter::Impl {
     }
   }
 
+  // One ray's columns from `first` on: valid, [confidence,] origin, direction;
+  // all NULL where the headset does not track that ray.
+  int bind_ray(int first, bool tracked, const GazeRay& r, bool with_confidence) {
+    auto& st = insert_gaze;
+    const int n = with_confidence ? 8 : 7;
+    if (!tracked) {
+      for (int i = first; i < first + n; ++i) st.bind_null(i);
+      return first + n;
+    }
+    int k = first;
+    st.bind(k++, std::int64_t{r.valid ? 1 : 0});
+    if (with_confidence) {
+      if (r.confidence >= 0.0) st.bind(k++, r.confidence); else st.bind_null(k++);
+    }
+    for (double v : r.origin_m) st.bind(k++, v);
+    for (double v : r.direction) st.bind(k++, v);
+    return k;
+  }
+
+  void bind_gaze(const GazeSample& g) {
+    auto& st = insert_gaze;
+    st.bind(1, g.session_id);
+    if (g.trial_id >= 0) st.bind(2, g.trial_id); else st.bind_null(2);
+    st.bind(3, g.frame_index).bind(4, g.t_ns);
+    int k = bind_ray(5, g.has_combined, g.combined, false);
+    k = bind_ray(k, g.has_eyes, g.eyes[0], true);
+    k = bind_ray(k, g.has_eyes, g.eyes[1], true);
+    if (g.has_vergence) st.bind(k, g.vergence_rad); else st.bind_null(k);
+    if (g.has_vergence && g.vergence_distance_m > 0.0) st.bind(k + 1, g.vergence_distance_m);
+    else st.bind_null(k + 1);
+  }
+
   // Writes the pending batch in one transaction; on failure keeps it.
   bool write_pending() {
     const std::uint64_t dt = dropped_tracking.load(std::memory_order_relaxed);
     const std::uint64_t df = dropped_frames.load(std::memory_order_relaxed);
+    const std::uint64_t dg = dropped_gaze.load(std::memory_order_relaxed);
     const bool log_drops =
-        (dt != logged_drops_tracking || df != logged_drops_frames) && last_session_id > 0;
-    if (pending_tracking.empty() && pending_frames.empty() && !log_drops) return true;
+        (dt != logged_drops_tracking || df != logged_drops_frames || dg != logged_drops_gaze) && last_session_id > 0;
+    if (pending_tracking.empty() && pending_frames.empty() && pending_gaze.empty() && !log_drops) return true;
     // The geometry last stored advances only with a committed batch: a
     // batch that fails is written again from the same starting point.
     batch_views = last_views;
@@ -214,9 +259,14 @@ struct SampleWriter::Impl {
         bind_frame(f);
         insert_frame.run();
       }
+      for (const auto& g : pending_gaze) {
+        bind_gaze(g);
+        insert_gaze.run();
+      }
       if (log_drops) {
         insert_event.bind(1, last_session_id).bind(2, std::int64_t{0});
         insert_event.bind(3, static_cast<std::int64_t>(dt)).bind(4, static_cast<std::int64_t>(df));
+        insert_event.bind(5, static_cast<std::int64_t>(dg));
         insert_event.run();
       }
       txn.commit();
@@ -228,12 +278,15 @@ struct SampleWriter::Impl {
     if (log_drops) {
       logged_drops_tracking = dt;
       logged_drops_frames = df;
+      logged_drops_gaze = dg;
     }
     transactions.fetch_add(1, std::memory_order_relaxed);
     committed_tracking.fetch_add(pending_tracking.size(), std::memory_order_relaxed);
     committed_frames.fetch_add(pending_frames.size(), std::memory_order_relaxed);
+    committed_gaze.fetch_add(pending_gaze.size(), std::memory_order_relaxed);
     pending_tracking.clear();
     pending_frames.clear();
+    pending_gaze.clear();
     is_paused.store(false, std::memory_order_release);
     return true;
   }
@@ -326,13 +379,15 @@ struct SampleWriter::Impl {
       // flush ticket read above covers everything pushed before it.
       bool ok = true;
       for (;;) {
-        if (pending_tracking.empty() && pending_frames.empty()) {
+        if (pending_tracking.empty() && pending_frames.empty() && pending_gaze.empty()) {
           tracking.pop_into(pending_tracking, config.max_batch);
           frames.pop_into(pending_frames, config.max_batch);
+          gaze.pop_into(pending_gaze, config.max_batch);
           if (!pending_tracking.empty()) last_session_id = pending_tracking.back().session_id;
           else if (!pending_frames.empty()) last_session_id = pending_frames.back().session_id;
+          else if (!pending_gaze.empty()) last_session_id = pending_gaze.back().session_id;
         }
-        const bool had_work = !pending_tracking.empty() || !pending_frames.empty();
+        const bool had_work = !pending_tracking.empty() || !pending_frames.empty() || !pending_gaze.empty();
         ok = write_pending();
         if (!ok || !had_work) break;
       }
@@ -404,6 +459,15 @@ bool SampleWriter::push_frame(const FrameRecord& frame) noexcept {
   return false;
 }
 
+bool SampleWriter::push_gaze(const GazeSample& sample) noexcept {
+  if (impl_->gaze.try_push(sample)) {
+    impl_->pushed_gaze.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+  impl_->dropped_gaze.fetch_add(1, std::memory_order_relaxed);
+  return false;
+}
+
 Expected<Done> SampleWriter::flush(std::chrono::milliseconds timeout) {
   std::unique_lock lock(impl_->mutex);
   const std::uint64_t ticket = ++impl_->flush_requested;
@@ -454,6 +518,9 @@ SampleWriterStats SampleWriter::stats() const {
   s.dropped_frames = impl_->dropped_frames.load();
   s.committed_tracking = impl_->committed_tracking.load();
   s.committed_frames = impl_->committed_frames.load();
+  s.pushed_gaze = impl_->pushed_gaze.load();
+  s.dropped_gaze = impl_->dropped_gaze.load();
+  s.committed_gaze = impl_->committed_gaze.load();
   s.transactions = impl_->transactions.load();
   s.failed_transactions = impl_->failed_transactions.load();
   s.writer_cpu_s = impl_->writer_cpu_s.load();

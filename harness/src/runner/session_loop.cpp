@@ -30,6 +30,30 @@ using protocol::PlannedTrial;
 using protocol::Settings;
 using SteadyTime = std::chrono::steady_clock;
 
+// The gaze a pose source located with the frame's poses, as gaze_samples
+// stores it (data_schema/codebook.md).
+data::GazeRay gaze_record(const io::GazeRay& r) {
+  return {r.valid, r.confidence.value_or(-1.0), {r.origin_m.x, r.origin_m.y, r.origin_m.z},
+          {r.direction.x, r.direction.y, r.direction.z}};
+}
+data::GazeSample gaze_record(const io::Gaze& g) {
+  data::GazeSample s;
+  if (g.combined) {
+    s.has_combined = true;
+    s.combined = gaze_record(*g.combined);
+  }
+  if (g.eyes) {
+    s.has_eyes = true;
+    s.eyes = {gaze_record((*g.eyes)[0]), gaze_record((*g.eyes)[1])};
+  }
+  if (g.vergence) {
+    s.has_vergence = true;
+    s.vergence_rad = g.vergence->angle_rad;
+    s.vergence_distance_m = g.vergence->distance_m.value_or(-1.0);
+  }
+  return s;
+}
+
 enum class Outcome { done, quit };
 
 // Ends the run with an error; caught at the top of SessionLoop::run.
@@ -468,7 +492,7 @@ class SessionLoop::Impl {
     status_.cpu_ms = stats.cpu_ms + static_cast<double>(own_ns) * 1e-6;
     status_.gpu_ms = stats.gpu_ms > 0.0 ? stats.gpu_ms : -1.0;
     const auto ws = writer_.stats();
-    status_.logger_drops = ws.dropped_tracking + ws.dropped_frames;
+    status_.logger_drops = ws.dropped_tracking + ws.dropped_frames + ws.dropped_gaze;
     console_->show(status_);
   }
 
@@ -573,6 +597,14 @@ class SessionLoop::Impl {
     fr.has_view_geometry = true;
     fr.view_geometry = record_view_geometry(rig, eye_size_.first, eye_size_.second);
     push([&] { return writer_.push_frame(fr); });
+    if (const auto gaze = station_.poses->gaze()) {
+      data::GazeSample g = gaze_record(*gaze);
+      g.session_id = session_id_;
+      g.trial_id = tid;
+      g.frame_index = frame_index_;
+      g.t_ns = f.timing.predicted_display_ns;
+      push([&] { return writer_.push_gaze(g); });
+    }
   }
 
   // ---- pages and holds: instructions, breaks, the end, pauses ------------
@@ -858,7 +890,16 @@ class SessionLoop::Impl {
     scene_->place(a.placement, a.head_at_onset);
     a.onset_view = {view_settings(t.settings, dominant_), a.head_at_onset, station_.display->rig(f.timing, ipd()),
                     static_cast<std::uint32_t>(p_.resolution_width), static_cast<std::uint32_t>(p_.resolution_height)};
-    if (!observer_) return;
+    if (!observer_) {
+      // Where the eyes are tracked, the human model's account of the
+      // stimulus is stored with the onset all the same: its vergence demand
+      // is what the measured vergence is compared with (docs/xr.md, "Eye
+      // tracking").
+      last_account_.reset();
+      if (station_.poses->gaze())
+        last_account_ = perceive(*world_, t.settings, a.placement, a.head_at_onset, ObserverParams{}).human;
+      return;
+    }
     auto answer = plan_answer(*observer_, *world_, *t.judgement, t.settings, a.placement, a.head_at_onset,
                               f.timing.now_ns, a.adjustment, read_onset(t, a));
     observer_keys_.replace(answer.plan.keys);
@@ -918,8 +959,9 @@ class SessionLoop::Impl {
     onset.stick_pose = pose16(a.placement.stick_pose);
     onset.views = stats.views;
     onset.draws = stats.draws;
+    onset.stimulus_ms = t.settings.timeline.stimulus_ms;
     if (observer_) onset.perceived_sagitta_m = last_perceived_;
-    if (observer_ && last_account_) onset.percept_json = human_account_json(*last_account_);
+    if (last_account_) onset.percept_json = human_account_json(*last_account_);
     if (!options_.images_dir.empty() && options_.drawing != FrameDrawing::none) {
       // A trial run again (a later attempt, a resumed session, another
       // session into the same folder) gets trial_NNNN_2, …: none is replaced.

@@ -8,6 +8,7 @@
 #include "curvlab/harness/xr/backend.hpp"
 
 #include "curvlab/harness/xr/actions.hpp"
+#include "curvlab/harness/xr/gaze.hpp"
 #include "curvlab/harness/xr/instance.hpp"
 #include "curvlab/harness/xr/session_state.hpp"
 #include "curvlab/harness/xr/stereo.hpp"
@@ -157,11 +158,13 @@ struct OptionalExtensions {
   // XR_FB_display_refresh_rate: the display's refresh rate before the first
   // frame, for the session's provenance (Meta, Pico and Monado offer it).
   bool refresh = false;
+  GazeExtensions gaze;  // eye tracking (xr/gaze.hpp)
 
   [[nodiscard]] std::vector<std::string> names() const {
     std::vector<std::string> out;
     if (timespec) out.emplace_back(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
     if (refresh) out.emplace_back(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
+    for (auto& n : gaze.names()) out.push_back(std::move(n));
     return out;
   }
 };
@@ -176,7 +179,8 @@ Result<OptionalExtensions> offered_extensions() {
   if (!has(XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME))
     return error(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
   return OptionalExtensions{.timespec = has(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME),
-                            .refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME)};
+                            .refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME),
+                            .gaze = gaze_extensions_in(names)};
 }
 
 // XR_KHR_vulkan_enable2's functions, for one instance and system.
@@ -422,6 +426,7 @@ class XrBackend final : public InteractiveDisplay {
   geometry::LabFrame poses(const FrameTiming& frame) override;
   [[nodiscard]] harness::io::HeadTracking head_tracking() const override;
   [[nodiscard]] std::string describe_head_tracking() const override;
+  [[nodiscard]] std::optional<harness::io::Gaze> gaze() const override { return gaze_; }
   // Session-state events: pause, resume, quit.
   Signal poll_signal() override;
   // The controllers' buttons.
@@ -510,6 +515,8 @@ class XrBackend final : public InteractiveDisplay {
   SpaceHandle view_;
   std::array<SpaceHandle, 2> grip_;  // left, right
   std::array<XrPath, 2> hand_paths_{XR_NULL_PATH, XR_NULL_PATH};
+  // Destroyed before the spaces and the session it was started on.
+  std::optional<EyeTracking> eyes_;
   std::array<EyeSwapchain, 2> swapchains_;
   std::int64_t swapchain_format_ = 0;
   std::unique_ptr<renderer::Renderer> renderer_;
@@ -537,6 +544,7 @@ class XrBackend final : public InteractiveDisplay {
   bool views_valid_ = false;
   LabPose head_;
   geometry::LabFrame lab_;
+  std::optional<harness::io::Gaze> gaze_;  // located with lab_; nullopt without eye tracking
   XrSpaceLocationFlags head_flags_ = 0;  // the head's at the last locate
   std::array<bool, 2> trigger_down_{false, false};
   bool synced_ = false;  // xrSyncActions was called in this frame while FOCUSED
@@ -585,6 +593,11 @@ Result<Done> XrBackend::open(const OptionalExtensions& offered) {
   auto vulkan = load_vulkan_enable2(xr, system_);
   if (!vulkan) return vulkan.error();
   if (auto r = check_vulkan_version(vulkan.value()); !r) return r;
+  // Before the session: the combined gaze's action set and binding must be
+  // suggested before the attach.
+  auto eyes = EyeTracking::create(instance_, system_, offered.gaze);
+  if (!eyes) return eyes.error();
+  eyes_.emplace(std::move(eyes).value());
   if (auto r = make_context(vulkan.value()); !r) return r;
   if (auto r = create_session(offered.refresh); !r) return r;
   if (auto r = make_spaces(); !r) return r;
@@ -684,12 +697,15 @@ Result<Done> XrBackend::make_spaces() {
   if (const XrResult r = xrCreateReferenceSpace(session, &space_info, view_.out()); XR_FAILED(r))
     return error(r, "xrCreateReferenceSpace");
 
-  const XrActionSet action_set = actions_->handle();
+  // Attached once, all together: curvlab's and the eye gaze's.
+  std::vector<XrActionSet> action_sets{actions_->handle()};
+  if (eyes_->action_set() != XR_NULL_HANDLE) action_sets.push_back(eyes_->action_set());
   auto attach = tagged<XrSessionActionSetsAttachInfo>(XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO);
-  attach.countActionSets = 1;
-  attach.actionSets = &action_set;
+  attach.countActionSets = static_cast<std::uint32_t>(action_sets.size());
+  attach.actionSets = action_sets.data();
   if (const XrResult r = xrAttachSessionActionSets(session, &attach); XR_FAILED(r))
     return error(r, "xrAttachSessionActionSets");
+  if (auto r = eyes_->start(session); !r) return r;
   for (std::size_t i = 0; i < 2; ++i) {
     if (const XrResult r = xrStringToPath(instance_.handle(), i == 0 ? kLeftHand : kRightHand, &hand_paths_[i]);
         XR_FAILED(r))
@@ -1109,6 +1125,12 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
     lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand] =
         to_geometry(hand, located(hand_flags));
   }
+  gaze_.reset();
+  if (eyes_->any()) {
+    auto found = eyes_->locate(stage_.get(), t, head);
+    if (found.fatal != XR_SUCCESS) fail(found.fatal, found.call);
+    gaze_ = std::move(found.gaze);
+  }
 
   FrameTiming timing;
   timing.index = frame_index_++;
@@ -1133,6 +1155,7 @@ FrameTiming XrBackend::stopped_frame() {
   views_valid_ = false;
   head_flags_ = 0;
   for (auto& pose : lab_.pose) pose.valid = false;
+  gaze_.reset();
   last_display_ = 0;  // the display times after the restart start afresh
   FrameTiming timing;
   timing.index = frame_index_++;
@@ -1185,10 +1208,12 @@ void XrBackend::report_once(XrResult r, const char* call) {
 }
 
 void XrBackend::sync_actions() {
-  XrActiveActionSet active{actions_->handle(), XR_NULL_PATH};
+  // curvlab's action set, and the eye gaze's where there is one.
+  const std::array<XrActiveActionSet, 2> active{{{actions_->handle(), XR_NULL_PATH},
+                                                 {eyes_->action_set(), XR_NULL_PATH}}};
   auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
-  sync.countActiveActionSets = 1;
-  sync.activeActionSets = &active;
+  sync.countActiveActionSets = eyes_->action_set() != XR_NULL_HANDLE ? 2 : 1;
+  sync.activeActionSets = active.data();
   if (const XrResult r = xrSyncActions(session_.get(), &sync); fatal(r)) fail(r, "xrSyncActions");
   else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
   synced_ = true;

@@ -4,7 +4,8 @@
 // xr` drives a whole session on a machine without a headset. It implements
 // every OpenXR 1.0 core function, XR_KHR_vulkan_enable2,
 // XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it) and
-// XR_FB_display_refresh_rate, and
+// XR_FB_display_refresh_rate, with scripted eyes also
+// XR_EXT_eye_gaze_interaction and XR_FB_eye_tracking_social (eyes.hpp), and
 // checks the rules of the OpenXR 1.0 specification that are cheap to check
 // (call order of the frame loop and of swapchain images, session states,
 // action-set attachment, action types and subaction paths, layers
@@ -110,6 +111,16 @@
 //                            ("refresh_request" and "refresh_rate" lines)
 //   CURVLAB_TEST_XR_REFRESH_CHANGE SECONDS=HZ: the runtime changes the rate
 //                            itself (XrEventDataDisplayRefreshRateChangedFB)
+//   CURVLAB_TEST_XR_GAZE     eye tracking, KIND:TARGET[:LEFT,RIGHT] (eyes.hpp):
+//                            KIND both, per_eye (XR_FB_eye_tracking_social)
+//                            or combined (XR_EXT_eye_gaze_interaction) says
+//                            which extensions are offered; TARGET
+//                            fixate=X,Y,Z (both eyes on that STAGE point) or
+//                            vergence=DEGREES (held about the head's forward
+//                            direction, negative diverging); LEFT,RIGHT the
+//                            per-eye confidences (default 1). The eyes are
+//                            tracked while FOCUSED. Unset: neither extension
+//                            is offered
 //
 // XrTime is CLOCK_MONOTONIC minus an epoch taken when the library loads (so
 // the two differ, and xrConvertTimeToTimespecTimeKHR has work to do).
@@ -119,6 +130,7 @@
 // blocks until the frame is begun (for ever on one thread), is a violation.
 //
 // Not thread-safe beyond a global lock: one application thread at a time.
+#include "eyes.hpp"
 #include "profiles.hpp"
 #include "script.hpp"
 
@@ -132,6 +144,8 @@
 #include <openxr/openxr.h>
 #include <openxr/openxr_platform.h>
 #include <openxr/openxr_reflection.h>
+
+#include "curvlab/harness/xr/fb_eye_tracking_social.hpp"
 
 #include <stb_image_write.h>
 
@@ -322,9 +336,16 @@ struct Session {
   std::set<Swapchain*> swapchains;
 };
 
+struct EyeTracker {
+  Session* session = nullptr;
+};
+
 struct Instance {
   bool timespec = false;
   bool refresh_rate = false;  // XR_FB_display_refresh_rate enabled
+  bool eye_gaze = false;      // XR_EXT_eye_gaze_interaction enabled
+  bool eye_tracking = false;  // XR_FB_eye_tracking_social enabled
+  std::map<EyeTracker*, std::unique_ptr<EyeTracker>> eye_trackers;
   bool requirements_queried = false;
   Script script;
   std::deque<XrEventDataBuffer> events;
@@ -774,16 +795,31 @@ XrResult enumerate_string(const char* fn, const std::string& text, uint32_t capa
   return enumerate(fn, std::vector<char>(text.c_str(), text.c_str() + text.size() + 1), capacity, count, out);
 }
 
+// The eye-tracking extensions CURVLAB_TEST_XR_GAZE offers (none when unset
+// or malformed; xrCreateInstance reports a malformed value).
+std::vector<const char*> offered_eye_extensions() {
+  std::string error;
+  const auto gaze = read_gaze_script(error);
+  std::vector<const char*> out;
+  if (gaze && gaze->combined) out.push_back(XR_EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME);
+  if (gaze && gaze->per_eye) out.push_back(XR_FB_EYE_TRACKING_SOCIAL_EXTENSION_NAME);
+  return out;
+}
+
 XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layer, uint32_t capacity, uint32_t* count,
                                                        XrExtensionProperties* props) {
   std::lock_guard lock(g_mutex);
   if (layer != nullptr && *layer != '\0')
     return violation("xrEnumerateInstanceExtensionProperties", XR_ERROR_API_LAYER_NOT_PRESENT, layer);
-  static const std::pair<const char*, uint32_t> offered[] = {
+  std::vector<std::pair<const char*, uint32_t>> offered = {
       {XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME, XR_KHR_vulkan_enable2_SPEC_VERSION},
       {XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME, XR_KHR_convert_timespec_time_SPEC_VERSION},
       {XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME, XR_FB_display_refresh_rate_SPEC_VERSION}};
-  constexpr uint32_t n = sizeof offered / sizeof offered[0];
+  for (const auto& name : offered_eye_extensions())
+    offered.emplace_back(name, name == std::string(XR_EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME)
+                                   ? XR_EXT_eye_gaze_interaction_SPEC_VERSION
+                                   : XR_FB_eye_tracking_social_SPEC_VERSION);
+  const auto n = static_cast<uint32_t>(offered.size());
   *count = n;
   if (capacity == 0) return XR_SUCCESS;
   if (capacity < n) return XR_ERROR_SIZE_INSUFFICIENT;
@@ -816,8 +852,12 @@ XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* info, XrInstance*
   auto inst = std::make_unique<Instance>();
   for (uint32_t i = 0; i < info->enabledExtensionCount; ++i) {
     const std::string e = info->enabledExtensionNames[i];
+    const auto eyes = offered_eye_extensions();
+    const bool offered_eyes = std::find(eyes.begin(), eyes.end(), e) != eyes.end();
     if (e == XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME) inst->timespec = true;
     else if (e == XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME) inst->refresh_rate = true;
+    else if (offered_eyes && e == XR_EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME) inst->eye_gaze = true;
+    else if (offered_eyes && e == XR_FB_EYE_TRACKING_SOCIAL_EXTENSION_NAME) inst->eye_tracking = true;
     else if (e != XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME) return XR_ERROR_EXTENSION_NOT_PRESENT;
   }
   std::string error;
@@ -852,6 +892,7 @@ void destroy_session(Instance& inst) {
     inst.swapchains.erase(sc);
   }
   for (Space* sp : s.spaces) inst.spaces.erase(sp);
+  std::erase_if(inst.eye_trackers, [&s](const auto& t) { return t.second->session == &s; });
   for (auto& set : inst.sets)
     if (set->attached_to == &s) set->attached_to = nullptr;
   const VulkanDevice& vk = *s.vk;
@@ -947,6 +988,14 @@ XrResult XRAPI_CALL GetSystemProperties(XrInstance h, XrSystemId system, XrSyste
   props->graphicsProperties.maxLayerCount = kMaxLayers;
   props->trackingProperties.orientationTracking = XR_TRUE;
   props->trackingProperties.positionTracking = XR_TRUE;
+  // The eye-tracking extensions' properties, where they are enabled.
+  const Instance* inst = instance_of(h);
+  for (auto* n = static_cast<XrBaseOutStructure*>(props->next); n != nullptr; n = n->next) {
+    if (n->type == XR_TYPE_SYSTEM_EYE_GAZE_INTERACTION_PROPERTIES_EXT && inst->eye_gaze)
+      reinterpret_cast<XrSystemEyeGazeInteractionPropertiesEXT*>(n)->supportsEyeGazeInteraction = XR_TRUE;
+    if (n->type == XR_TYPE_SYSTEM_EYE_TRACKING_PROPERTIES_FB && inst->eye_tracking)
+      reinterpret_cast<XrSystemEyeTrackingPropertiesFB*>(n)->supportsEyeTracking = XR_TRUE;
+  }
   return XR_SUCCESS;
 }
 
@@ -1333,6 +1382,14 @@ XrResult XRAPI_CALL GetReferenceSpaceBoundsRect(XrSession h, XrReferenceSpaceTyp
   return XR_SUCCESS;
 }
 
+// Whether `a` is bound to the eye gaze pose (XR_EXT_eye_gaze_interaction).
+bool gaze_action(const Instance& inst, const Action* a) {
+  if (!inst.eye_gaze) return false;
+  const auto it = inst.suggested.find(kEyeGazeProfile);
+  if (it == inst.suggested.end()) return false;
+  return std::any_of(it->second.begin(), it->second.end(), [a](const auto& b) { return b.first == a; });
+}
+
 constexpr XrSpaceLocationFlags kAllValid = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT |
                                            XR_SPACE_LOCATION_POSITION_VALID_BIT |
                                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
@@ -1367,7 +1424,12 @@ std::pair<Pose, XrSpaceLocationFlags> stage_pose(const Space& sp, XrTime t) {
   const Session& s = *sp.session;
   Pose base;
   XrSpaceLocationFlags flags = kAllValid;
-  if (sp.action != nullptr) {
+  if (sp.action != nullptr && gaze_action(*s.instance, sp.action)) {
+    // The combined gaze, tracked while the application has input focus.
+    const bool tracked = s.state == XR_SESSION_STATE_FOCUSED && sp.action->set->attached_to == &s;
+    base = combined_gaze_pose(*s.instance->script.gaze, head_pose(ts));
+    flags = tracked ? kAllValid : 0;
+  } else if (sp.action != nullptr) {
     // Hands are tracked while the application has input focus and the pose
     // action is bound in the active profile.
     const bool tracked = s.state == XR_SESSION_STATE_FOCUSED && sp.action->set->attached_to == &s;
@@ -1989,7 +2051,8 @@ XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance h, const XrInte
   if (s == nullptr || s->type != XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING || s->countSuggestedBindings == 0)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped or empty suggestion");
   const std::string profile = path_text(*inst, s->interactionProfile);
-  if (!known_profile(profile))
+  const bool eye_profile = inst->eye_gaze && profile == kEyeGazeProfile;  // XR_EXT_eye_gaze_interaction
+  if (!known_profile(profile) && !eye_profile)
     return violation(fn, XR_ERROR_PATH_UNSUPPORTED, "unknown profile '" + profile + "'");
   std::vector<std::pair<Action*, std::string>> bindings;
   for (uint32_t i = 0; i < s->countSuggestedBindings; ++i) {
@@ -1997,7 +2060,7 @@ XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance h, const XrInte
     if (a == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "binding " + std::to_string(i) + ": action");
     if (a->set->attached_to != nullptr) return violation(fn, XR_ERROR_ACTIONSETS_ALREADY_ATTACHED, a->set->name);
     const std::string path = path_text(*inst, s->suggestedBindings[i].binding);
-    if (!profile_has(profile, path))
+    if (eye_profile ? path != kEyeGazePose : !profile_has(profile, path))
       return violation(fn, XR_ERROR_PATH_UNSUPPORTED, profile + " has no input '" + path + "'");
     const bool pose_input = (path.size() > 5 && path.compare(path.size() - 5, 5, "/pose") == 0) ||
                             profile_has(profile, path + "/pose");
@@ -2363,6 +2426,64 @@ XrResult XRAPI_CALL RequestDisplayRefreshRate(XrSession h, float rate) {
 
 // ---- dispatch -------------------------------------------------------------------------------
 
+// ---- XR_FB_eye_tracking_social ------------------------------------------------------
+
+XrResult XRAPI_CALL CreateEyeTracker(XrSession h, const XrEyeTrackerCreateInfoFB* info, XrEyeTrackerFB* out) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrCreateEyeTrackerFB";
+  Session* s = session_of(h);
+  if (s == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (!s->instance->eye_tracking) return violation(fn, XR_ERROR_FUNCTION_UNSUPPORTED, "extension not enabled");
+  if (info == nullptr || info->type != XR_TYPE_EYE_TRACKER_CREATE_INFO_FB || out == nullptr)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped create info");
+  auto t = std::make_unique<EyeTracker>();
+  t->session = s;
+  EyeTracker* raw = t.get();
+  s->instance->eye_trackers.emplace(raw, std::move(t));
+  *out = handle_of<XrEyeTrackerFB>(raw);
+  return XR_SUCCESS;
+}
+
+EyeTracker* eye_tracker_of(XrEyeTrackerFB h) {
+  if (!g_instance) return nullptr;
+  const auto it = g_instance->eye_trackers.find(reinterpret_cast<EyeTracker*>(h));
+  return it == g_instance->eye_trackers.end() ? nullptr : it->second.get();
+}
+
+XrResult XRAPI_CALL DestroyEyeTracker(XrEyeTrackerFB h) {
+  std::lock_guard lock(g_mutex);
+  if (eye_tracker_of(h) == nullptr) return violation("xrDestroyEyeTrackerFB", XR_ERROR_HANDLE_INVALID, "");
+  g_instance->eye_trackers.erase(reinterpret_cast<EyeTracker*>(h));
+  return XR_SUCCESS;
+}
+
+// Both eyes where the script puts them, relative to the base space; valid
+// while FOCUSED.
+XrResult XRAPI_CALL GetEyeGazes(XrEyeTrackerFB h, const XrEyeGazesInfoFB* info, XrEyeGazesFB* gazes) {
+  std::lock_guard lock(g_mutex);
+  constexpr const char* fn = "xrGetEyeGazesFB";
+  const EyeTracker* t = eye_tracker_of(h);
+  if (t == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (info == nullptr || info->type != XR_TYPE_EYE_GAZES_INFO_FB || gazes == nullptr ||
+      gazes->type != XR_TYPE_EYE_GAZES_FB)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "untyped gazes info or gazes");
+  const Space* base = space_of(info->baseSpace);
+  if (base == nullptr || base->session != t->session) return violation(fn, XR_ERROR_HANDLE_INVALID, "base space");
+  if (info->time <= 0) return violation(fn, XR_ERROR_TIME_INVALID, std::to_string(info->time));
+  const Session& s = *t->session;
+  const GazeScript& script = *s.instance->script.gaze;
+  const auto [pb, fb] = stage_pose(*base, info->time);
+  const auto eyes = eye_gaze_poses(script, head_pose(xr_seconds(info->time)));
+  const bool tracked = (fb & XR_SPACE_LOCATION_POSITION_VALID_BIT) != 0 && s.state == XR_SESSION_STATE_FOCUSED;
+  for (std::size_t i = 0; i < 2; ++i) {
+    gazes->gaze[i].isValid = tracked ? XR_TRUE : XR_FALSE;
+    gazes->gaze[i].gazePose = to_xr_pose(compose(inverse(pb), eyes[i]));
+    gazes->gaze[i].gazeConfidence = tracked ? static_cast<float>(script.confidence[i]) : 0.0f;
+  }
+  gazes->time = info->time;
+  return XR_SUCCESS;
+}
+
 XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVoidFunction* function);
 
 template <class F>
@@ -2456,6 +2577,18 @@ XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVo
     // An extension's functions only where it was enabled.
     if (!inst->refresh_rate && n.size() > 2 && n.compare(n.size() - 2, 2, "FB") == 0)
       return XR_ERROR_FUNCTION_UNSUPPORTED;
+  }
+  static const std::map<std::string, PFN_xrVoidFunction> eye_tracking = {
+      {"xrCreateEyeTrackerFB", fn_ptr(&CreateEyeTracker)},
+      {"xrDestroyEyeTrackerFB", fn_ptr(&DestroyEyeTracker)},
+      {"xrGetEyeGazesFB", fn_ptr(&GetEyeGazes)},
+  };
+  if (const auto e = eye_tracking.find(n); e != eye_tracking.end()) {
+    std::lock_guard lock(g_mutex);
+    const Instance* inst = instance_of(h);
+    if (inst == nullptr || !inst->eye_tracking) return XR_ERROR_FUNCTION_UNSUPPORTED;
+    *function = e->second;
+    return XR_SUCCESS;
   }
   const auto it = table.find(n);
   if (it == table.end()) return XR_ERROR_FUNCTION_UNSUPPORTED;

@@ -1,5 +1,7 @@
 #include "script.hpp"
 
+#include "eyes.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -520,6 +522,8 @@ std::optional<Script> read_script(std::string& error) {
     s.eye_width_px = static_cast<std::uint32_t>(*w);
     s.eye_height_px = static_cast<std::uint32_t>(*h);
   }
+  s.gaze = read_gaze_script(error);
+  if (!error.empty()) return std::nullopt;
   return s;
 }
 

@@ -9,6 +9,7 @@
 // checked against what the application stored.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <set>
@@ -154,6 +155,18 @@ struct Refresh {
   float change_to_hz = 0.0f;
 };
 
+// Scripted eyes (CURVLAB_TEST_XR_GAZE; eyes.hpp reads it and places them).
+struct GazeScript {
+  bool combined = true;  // offer XR_EXT_eye_gaze_interaction
+  bool per_eye = true;   // offer XR_FB_eye_tracking_social
+  // Both eyes fixate this STAGE point; nullopt: they hold `vergence_deg`,
+  // turned symmetrically about the head's forward direction in the plane of
+  // the eyes' axis (positive converging, negative diverging).
+  std::optional<Vec3> fixate_m;
+  double vergence_deg = 0.0;
+  std::array<double, 2> confidence{1.0, 1.0};  // left, right (per-eye gaze)
+};
+
 struct Script {
   std::vector<Press> presses;
   std::vector<Placement> placements;  // CURVLAB_TEST_XR_HAND, in time order per hand
@@ -188,6 +201,8 @@ struct Script {
   Views views;
   std::vector<TrackingSpell> tracking;
   Refresh refresh;
+  // CURVLAB_TEST_XR_GAZE (eyes.hpp): nullopt offers no eye tracking.
+  std::optional<GazeScript> gaze;
 };
 
 // A uniform number in [0, 1) from (seed, n, stream): the same triple gives

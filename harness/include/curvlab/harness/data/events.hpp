@@ -137,6 +137,9 @@ struct Onset {
   // signal_arcsec, threshold_arcsec, d_prime, perceived_distance_m, …).
   std::optional<std::string> percept_json;
   std::optional<std::vector<std::string>> images;
+  // How long the stimulus phase lasts from this onset (timeline.stimulus_ms):
+  // the window the exports summarise gaze over.
+  std::optional<std::int64_t> stimulus_ms;
 };
 struct TrackingFlagged {
   double lost_ms = 0.0;

@@ -152,6 +152,35 @@ struct TrackingSample {
   TrackingState state{};
 };
 
+// One gaze ray in the lab (STAGE) frame: where it starts (metres) and its
+// unit direction. Lost tracking is data: `valid` false keeps the row.
+struct GazeRay {
+  bool valid = false;
+  double confidence = -1.0;  // 0–1 as the runtime reports it; negative: none reported
+  std::array<double, 3> origin_m{};
+  std::array<double, 3> direction{0.0, 0.0, -1.0};
+};
+
+// The participant's gaze at one frame's predicted display time (gaze_samples):
+// the combined gaze ray (XR_EXT_eye_gaze_interaction) and each eye's
+// (XR_FB_eye_tracking_social), where the headset tracks them, and the
+// vergence of the two eyes. Trivially copyable so the ring buffer can hold it.
+struct GazeSample {
+  std::int64_t session_id = 0;
+  std::int64_t trial_id = -1;  // -1: between trials (stored as NULL)
+  std::int64_t frame_index = 0;
+  std::int64_t t_ns = 0;
+  bool has_combined = false;  // false: no combined gaze tracked (columns NULL)
+  GazeRay combined{};
+  bool has_eyes = false;  // false: no per-eye gaze tracked (columns NULL)
+  std::array<GazeRay, 2> eyes{};  // left, right
+  // Signed (positive converging, negative diverging beyond parallel); only
+  // with both eyes valid.
+  bool has_vergence = false;
+  double vergence_rad = 0.0;
+  double vergence_distance_m = -1.0;  // where the eyes' lines meet; <= 0: they do not (NULL)
+};
+
 // One eye as the renderer placed it, relative to the head (nose) pose in lab
 // metres: OpenXR's view pose minus the head pose, or ±IPD/2 along the head's
 // x axis (DESIGN.md §4, "Eye model"). Plain arrays so the record stays

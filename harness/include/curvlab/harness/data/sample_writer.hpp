@@ -1,4 +1,4 @@
-// The asynchronous half of the logger: tracking samples and frame records go
+// The asynchronous half of the logger: tracking samples, frame records and gaze samples go
 // from the frame loop into bounded lock-free rings, and a writer thread with
 // its own connection commits them in batched transactions (DESIGN.md §7).
 //
@@ -21,7 +21,7 @@
 // entry is on disk. A failed entry is kept (with the ones after it) and
 // retried like a failed batch; wait_durable() reports the failure.
 //
-// Thread-safety: push_tracking(), push_frame() and journal() must be called
+// Thread-safety: push_tracking(), push_frame(), push_gaze() and journal() must be called
 // from one producer thread (the frame loop). flush(), wait_durable(),
 // durable(), stats(), paused() and last_error() may be called from any thread. The writer thread is owned by
 // this object; the destructor writes what is left (bounded by
@@ -45,6 +45,8 @@ struct SampleWriterConfig {
   std::size_t tracking_capacity = 1u << 15;
   // 4096 frames ≈ 45 s at 90 Hz.
   std::size_t frame_capacity = 1u << 12;
+  // 4096 gaze samples ≈ 45 s at 90 Hz (one per frame; about 1.2 MiB).
+  std::size_t gaze_capacity = 1u << 12;
   // Most records one transaction takes from each ring.
   std::size_t max_batch = 8192;
   // How often the writer wakes to drain the rings when not asked to flush.
@@ -61,6 +63,9 @@ struct SampleWriterStats {
   std::uint64_t dropped_frames = 0;
   std::uint64_t committed_tracking = 0;
   std::uint64_t committed_frames = 0;
+  std::uint64_t pushed_gaze = 0;
+  std::uint64_t dropped_gaze = 0;
+  std::uint64_t committed_gaze = 0;
   std::uint64_t transactions = 0;
   std::uint64_t failed_transactions = 0;
   std::uint64_t journalled = 0;  // events and trial-state changes queued
@@ -80,6 +85,7 @@ class SampleWriter {
   // Producer side: never blocks; false when the record was dropped.
   bool push_tracking(const TrackingSample& sample) noexcept;
   bool push_frame(const FrameRecord& frame) noexcept;
+  bool push_gaze(const GazeSample& sample) noexcept;
 
   // Queues an event or trial-state change; never blocks on the disk. The
   // returned ticket is durable once the writer has applied the entry.

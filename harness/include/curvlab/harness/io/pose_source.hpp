@@ -7,7 +7,9 @@
 
 #include "curvlab/geometry/tracking.hpp"
 #include "curvlab/harness/io/frame.hpp"
+#include "curvlab/harness/io/gaze.hpp"
 
+#include <optional>
 #include <string>
 
 namespace curvlab::harness::io {
@@ -37,6 +39,9 @@ class PoseSource {
   // set), for the message that stops a session waiting for the head; empty:
   // nothing beyond `valid` to report. Formatted only when asked.
   [[nodiscard]] virtual std::string describe_head_tracking() const { return {}; }
+  // The participant's gaze located with the last poses() (the same
+  // predicted display time); nullopt: the source tracks no eyes.
+  [[nodiscard]] virtual std::optional<Gaze> gaze() const { return std::nullopt; }
 };
 
 }  // namespace curvlab::harness::io
