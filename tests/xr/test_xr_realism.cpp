@@ -598,12 +598,13 @@ TEST(XrRealism, PartialTrackingIsStoredAsTheRuntimeReportedIt) {
     return s >= from_s + 0.02 && s < from_s + for_s - 0.02;  // clear of the edges' frames
   };
   struct Count {
-    int in = 0, in_valid = 0, out = 0, out_valid = 0;
+    int in = 0, in_valid = 0, in_oriented = 0, out = 0, out_valid = 0;
   };
   std::map<std::string, Count> counts;
   const std::map<std::string, std::pair<double, double>> spells = {
       {"right_hand", {1.5, 1.0}}, {"left_hand", {2.0, 1.0}}, {"head", {3.5, 0.4}}};
-  for (const auto& s : query(r.db, "SELECT device, t_ns, position_valid, lab_py_m FROM tracking_samples "
+  for (const auto& s : query(r.db, "SELECT device, t_ns, position_valid, lab_py_m, orientation_valid "
+                                   "FROM tracking_samples "
                                    "WHERE t_ns > " + std::to_string(focus + 100'000'000))) {
     const auto& [from, length] = spells.at(s[0]);
     const std::int64_t t = std::stoll(s[1]);
@@ -612,6 +613,7 @@ TEST(XrRealism, PartialTrackingIsStoredAsTheRuntimeReportedIt) {
     if (in_spell(t, from, length)) {
       ++c.in;
       c.in_valid += valid ? 1 : 0;
+      c.in_oriented += s[4] == "1" ? 1 : 0;
       // Never the runtime's meaningless numbers for a position it did not know.
       if (valid) {
         EXPECT_GT(std::stod(s[3]), 0.5) << s[0] << " at " << t;
@@ -630,6 +632,10 @@ TEST(XrRealism, PartialTrackingIsStoredAsTheRuntimeReportedIt) {
     EXPECT_GT(counts[hand].out, 100);
     EXPECT_EQ(counts[hand].out_valid, counts[hand].out);
   }
+  // The right hand kept its tracked orientation (a 3-DoF spell); the left
+  // one's was only inferred.
+  EXPECT_EQ(counts["right_hand"].in_oriented, counts["right_hand"].in);
+  EXPECT_EQ(counts["left_hand"].in_oriented, 0);
   // The head: an inferred pose is valid (its samples are kept, with the
   // runtime's inferred position) and stops nothing here.
   EXPECT_GT(counts["head"].in, 12);

@@ -549,7 +549,8 @@ class SessionLoop::Impl {
     s.frame_index = frame_index_;
     s.t_ns = f.timing.predicted_display_ns;
     s.device = devices[d];
-    s.position_valid = s.orientation_valid = pose.valid;
+    s.position_valid = pose.valid;
+    s.orientation_valid = pose.valid || pose.orientation_valid;
     s.lab_position_m = {pose.position_m.x, pose.position_m.y, pose.position_m.z};
     s.lab_orientation_xyzw = {pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w};
     s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)];

@@ -127,6 +127,13 @@ bool located(XrSpaceLocationFlags flags) {
   return (flags & want) == want;
 }
 
+// The orientation alone valid and tracked, as a 3-DoF device or one that
+// lost its position reports it.
+bool orientation_located(XrSpaceLocationFlags flags) {
+  constexpr XrSpaceLocationFlags want = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT;
+  return (flags & want) == want;
+}
+
 // Valid, perhaps inferred: a pose the runtime says can be used. The head's
 // is used so; whether its tracking is good enough for a trial is the
 // protocol's [tracking] head_requires (a headset without positional
@@ -1122,8 +1129,9 @@ std::optional<FrameTiming> XrBackend::begin_frame() {
   lab_[geometry::Device::head] = to_geometry(head, usable(head_flags));
   for (std::size_t i = 0; i < 2; ++i) {
     const auto [hand, hand_flags] = locate(grip_[i].get());
-    lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand] =
-        to_geometry(hand, located(hand_flags));
+    auto& pose = lab_[i == 0 ? geometry::Device::left_hand : geometry::Device::right_hand];
+    pose = to_geometry(hand, located(hand_flags));
+    pose.orientation_valid = orientation_located(hand_flags);
   }
   gaze_.reset();
   if (eyes_->any()) {

@@ -42,7 +42,10 @@ using Quat = glm::dquat;
 struct LabPose {
   Vec3 position_m{0.0};
   Quat orientation{1.0, 0.0, 0.0, 0.0};  // glm order: w, x, y, z
-  bool valid = true;
+  bool valid = true;  // position and orientation tracked
+  // The orientation alone is tracked where `valid` is false: a controller
+  // or headset that lost its position but not its orientation (3-DoF).
+  bool orientation_valid = false;
 };
 
 enum class Device : int { head = 0, left_hand = 1, right_hand = 2 };
