@@ -18,7 +18,8 @@
 #include <iostream>
 #include <random>
 #include <sstream>
-#include <unistd.h>
+#include "curvlab/harness/platform/files.hpp"
+#include "curvlab/harness/platform/terminal.hpp"
 
 namespace curvlab::cli {
 namespace {
@@ -212,7 +213,7 @@ void run_preview(const PreviewArgs& a) {
   rq.out_dir = a.out;
   rq.size = size;
   rq.software = a.software;
-  const bool tty = isatty(STDERR_FILENO) != 0;
+  const bool tty = platform::stderr_is_terminal();
   rq.progress = [tty](std::size_t done, std::size_t total, const std::string& what) {
     constexpr int kWidth = 30;
     const int filled = total ? static_cast<int>(kWidth * done / total) : kWidth;
