@@ -194,7 +194,8 @@ out=$root/build/windows
 start=$(date +%s)
 cmake -S "$root" -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
   -DCURVLAB_WINDOWS_DEPS="$prefix" -DCURVLAB_WERROR=ON -DCURVLAB_BUILD_BENCH=OFF "${launcher[@]}" >/dev/null
-cmake --build "$out" -j"$jobs" >&2
+cmake --build "$out" -j"$jobs" --target curvlab >&2
+cmake --build "$out" -j"$jobs" >&2   # the unit tests built for Windows
 log "curvlab built in $(( $(date +%s) - start )) s"
 
 # --- 4. the zip --------------------------------------------------------------

@@ -169,7 +169,7 @@ void run_new(const NewArgs& a) {
   fs::create_directories(a.dir, ec);
   if (ec) throw RuntimeFailure("cannot create " + a.dir + ": " + ec.message());
   // O_EXCL semantics: another process may have created the file meanwhile.
-  std::FILE* f = std::fopen(target.c_str(), "wx");
+  std::FILE* f = platform::create_new_file(target.string());
   if (!f) throw UsageError(target.string() + " already exists or cannot be created; nothing was written");
   const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
   if (std::fclose(f) != 0 || !ok) {

@@ -68,6 +68,8 @@ int exchange_paths(const std::string& a, const std::string& b) {
   return ::renameat2(AT_FDCWD, a.c_str(), AT_FDCWD, b.c_str(), RENAME_EXCHANGE) == 0 ? 0 : errno;
 }
 
+std::FILE* create_new_file(const std::string& path) { return std::fopen(path.c_str(), "wx"); }
+
 std::string beside_executable(const std::string& relative) {
   std::error_code ec;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);

@@ -134,6 +134,20 @@ int rename_replacing(const std::string& from, const std::string& to) {
 
 int exchange_paths(const std::string&, const std::string&) { return ENOSYS; }
 
+std::FILE* create_new_file(const std::string& path) {
+  HANDLE h = ::CreateFileW(wide(path).c_str(), GENERIC_WRITE, FILE_SHARE_READ, nullptr, CREATE_NEW,
+                           FILE_ATTRIBUTE_NORMAL, nullptr);
+  if (h == INVALID_HANDLE_VALUE) return nullptr;
+  const int fd = ::_open_osfhandle(reinterpret_cast<intptr_t>(h), _O_WRONLY | _O_BINARY);
+  if (fd < 0) {
+    ::CloseHandle(h);
+    return nullptr;
+  }
+  std::FILE* f = ::_fdopen(fd, "wb");
+  if (f == nullptr) ::_close(fd);
+  return f;
+}
+
 std::string beside_executable(const std::string& relative) {
   std::wstring exe(32768, L'\0');
   exe.resize(::GetModuleFileNameW(nullptr, exe.data(), static_cast<DWORD>(exe.size())));

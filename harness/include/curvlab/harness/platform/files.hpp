@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <string>
 
@@ -26,6 +27,10 @@ int rename_replacing(const std::string& from, const std::string& to);
 // Exchanges two paths in one step; 0 on success, else an errno value
 // (EINVAL or ENOSYS where the file system or platform cannot).
 int exchange_paths(const std::string& a, const std::string& b);
+
+// Creates `path` for writing (binary) only if it does not exist yet, in one
+// step (O_EXCL); nullptr when it exists or cannot be made.
+std::FILE* create_new_file(const std::string& path);
 
 // `relative` resolved against the folder of the running executable (UTF-8).
 std::string beside_executable(const std::string& relative);

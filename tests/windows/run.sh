@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# The `windows` ctest label (tests/windows/CMakeLists.txt): the Windows build
+# of scripts/build_windows.sh run under Wine and compared with the Linux
+# build. Exit 77 (skipped) where ../shared/third_party is absent.
+#
+#   run.sh CASE SOURCE_DIR LINUX_CURVLAB WINDOWS_BUILD_DIR WORK_DIR
+#
+# Cases: prefix (makes the Wine prefix the others use), unit-NAME (a gtest
+# binary), cli, session, render.
+set -euo pipefail
+case_name=$1 src=$2 linux=$3 wbuild=$4 work=$5
+
+third_party=$(cd "$src/.." && pwd)/shared/third_party
+if [ ! -d "$third_party" ]; then
+  echo "SKIP: $third_party is not here: no Windows build to test (scripts/build_windows.sh)"
+  exit 77
+fi
+exe=$wbuild/bin/curvlab.exe
+if [ ! -f "$exe" ]; then
+  echo "$exe is missing: run bash scripts/build_windows.sh (scripts/test.sh does)" >&2
+  exit 1
+fi
+
+export CURVLAB_WINEPREFIX=$work/wineprefix
+wine=("$src/tests/windows/wine.sh" "$wbuild")
+compare=(/usr/bin/python3 "$src/tests/windows/compare.py")
+# Windows console programs write CRLF to a pipe; JSON does not care.
+win() { "${wine[@]}" "$exe" "$@"; }
+# Vulkan through winevulkan on lavapipe needs an X display (docs/windows.md).
+win_x() { xvfb-run -a "${wine[@]}" "$exe" "$@"; }
+
+out=$work/$case_name
+rm -rf "$out"
+mkdir -p "$out"
+cd "$out"
+
+case $case_name in
+  prefix)
+    rm -rf "$CURVLAB_WINEPREFIX"
+    WINEPREFIX=$CURVLAB_WINEPREFIX WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" /usr/lib/wine/wine64 wineboot -i
+    "${wine[@]}" cmd /c echo wine ready
+    ;;
+
+  unit-*)
+    name=${case_name#unit-}
+    test_exe=$wbuild/tests/$name/${name}_tests.exe
+    filter=${CURVLAB_WINDOWS_GTEST_FILTER:-*}
+    (cd "$src" && "${wine[@]}" "$test_exe" --gtest_filter="$filter" --gtest_brief=1)
+    ;;
+
+  cli)
+    # Every command that needs no GPU, on every example protocol and the
+    # geometry of every space: the same JSON as the Linux build.
+    commands=()
+    for space in S3 E3 H3; do
+      commands+=("inspect table --space $space --edge-m 0.9 --json"
+                 "inspect holonomy --space $space --theta-rad 0.3 --json"
+                 "inspect map --space $space --radius-m 2 --point 0.3,0.2,-0.5,1.9 --json"
+                 "inspect vergence --space $space --radius-m 2 --distance-m 1.5 --json"
+                 "inspect stick --space $space --radius-m 2 --length-m 1 --distance-m 1.2 --view native --bend-m 0.01 --json")
+    done
+    for p in "$src"/protocols/*.toml; do
+      rel=protocols/$(basename "$p")
+      commands+=("validate $rel --json" "design $rel --participant 3 --json"
+                 "predict $rel --participants 4 --simulations 20 --json")
+    done
+    n=0
+    failed=0
+    for c in "${commands[@]}"; do
+      n=$((n + 1))
+      # shellcheck disable=SC2086
+      (cd "$src" && "$linux" $c > "$out/$n.linux.json")
+      # shellcheck disable=SC2086
+      (cd "$src" && win $c > "$out/$n.windows.json") || { echo "windows: curvlab $c failed" >&2; failed=1; continue; }
+      "${compare[@]}" json "$out/$n.linux.json" "$out/$n.windows.json" || { echo "differs: curvlab $c" >&2; failed=1; }
+    done
+    echo "$n commands compared"
+    exit $failed
+    ;;
+
+  *)
+    echo "unknown case $case_name" >&2
+    exit 2
+    ;;
+esac
