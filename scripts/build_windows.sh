@@ -167,6 +167,7 @@ EOF
   local gcc_dir
   gcc_dir=$(dirname "$($triple-g++-posix -print-libgcc-file-name)")
   cp "$gcc_dir/libstdc++-6.dll" "$gcc_dir/libgcc_s_seh-1.dll" "$prefix/bin/"
+  cp "$gcc_dir/libquadmath-0.dll" "$prefix/bin/"  # the geometry tests' __float128 oracle
   cp /usr/$triple/lib/libwinpthread-1.dll "$prefix/bin/"
   cp /usr/$triple/lib/zlib1.dll "$prefix/bin/" 2>/dev/null || true
 }
@@ -195,7 +196,7 @@ start=$(date +%s)
 cmake -S "$root" -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
   -DCURVLAB_WINDOWS_DEPS="$prefix" -DCURVLAB_WERROR=ON -DCURVLAB_BUILD_BENCH=OFF "${launcher[@]}" >/dev/null
 cmake --build "$out" -j"$jobs" --target curvlab >&2
-cmake --build "$out" -j"$jobs" >&2   # the unit tests built for Windows
+cmake --build "$out" -j"$jobs" --target curvlab_windows_tests >&2  # run under Wine by tests/windows
 log "curvlab built in $(( $(date +%s) - start )) s"
 
 # --- 4. the zip --------------------------------------------------------------
@@ -205,10 +206,12 @@ stage=$out/package/$name
 rm -rf "$out/package"
 mkdir -p "$stage"
 cp "$out/bin/curvlab.exe" "$stage/"
-for dll in libstdc++-6.dll libgcc_s_seh-1.dll libwinpthread-1.dll libsqlite3-0.dll glfw3.dll; do
+for dll in libstdc++-6.dll libgcc_s_seh-1.dll libwinpthread-1.dll zlib1.dll libsqlite3-0.dll libnettle-8.dll \
+           glfw3.dll libhidapi.dll libopenxr_loader.dll; do
   cp "$prefix/bin/$dll" "$stage/"
 done
-cp "$prefix"/bin/libnettle-*.dll "$prefix"/bin/libhidapi*.dll "$prefix"/bin/openxr_loader*.dll "$stage/" 2>/dev/null || true
+# Debug symbols are not shipped (libstdc++ alone carries 20 MB of them).
+$triple-strip --strip-unneeded "$stage"/*.exe "$stage"/*.dll
 cp -r protocols analysis data_schema "$stage/"
 mkdir -p "$stage/fonts"
 cp /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf "$stage/fonts/"

@@ -100,13 +100,14 @@ LockFile LockFile::open(const std::string& path, Mode mode) {
 }
 
 LockFile::LockFile(LockFile&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), error_(std::exchange(other.error_, 0)) {}
+    : fd_(std::exchange(other.fd_, -1)), error_(std::exchange(other.error_, 0)), own_(std::move(other.own_)) {}
 
 LockFile& LockFile::operator=(LockFile&& other) noexcept {
   if (this != &other) {
     close();
     fd_ = std::exchange(other.fd_, -1);
     error_ = std::exchange(other.error_, 0);
+    own_ = std::move(other.own_);
   }
   return *this;
 }
@@ -116,16 +117,20 @@ LockFile::~LockFile() { close(); }
 void LockFile::close() noexcept {
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
+  own_.clear();
 }
 
 bool LockFile::try_lock(std::int64_t byte, bool exclusive) {
   struct flock f = range(exclusive ? F_WRLCK : F_RDLCK, byte);
-  return ::fcntl(fd_, F_OFD_SETLK, &f) == 0;
+  if (::fcntl(fd_, F_OFD_SETLK, &f) != 0) return false;
+  own_[byte] = exclusive;
+  return true;
 }
 
 void LockFile::unlock(std::int64_t byte) {
   struct flock f = range(F_UNLCK, byte);
   (void)::fcntl(fd_, F_OFD_SETLK, &f);
+  own_.erase(byte);
 }
 
 bool LockFile::held_elsewhere(std::int64_t byte, bool exclusive) {

@@ -180,13 +180,14 @@ LockFile LockFile::open(const std::string& path, Mode mode) {
 }
 
 LockFile::LockFile(LockFile&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), error_(std::exchange(other.error_, 0)) {}
+    : fd_(std::exchange(other.fd_, -1)), error_(std::exchange(other.error_, 0)), own_(std::move(other.own_)) {}
 
 LockFile& LockFile::operator=(LockFile&& other) noexcept {
   if (this != &other) {
     close();
     fd_ = std::exchange(other.fd_, -1);
     error_ = std::exchange(other.error_, 0);
+    own_ = std::move(other.own_);
   }
   return *this;
 }
@@ -196,22 +197,36 @@ LockFile::~LockFile() { close(); }
 void LockFile::close() noexcept {
   if (fd_ >= 0) ::_close(fd_);
   fd_ = -1;
+  own_.clear();
 }
 
 bool LockFile::try_lock(std::int64_t byte, bool exclusive) {
+  // POSIX replaces a lock this open holds by the new kind; Windows would
+  // stack a second lock (or refuse an exclusive one), so the old one goes
+  // first: a conversion that fails leaves this open holding none.
+  if (const auto held = own_.find(byte); held != own_.end()) {
+    if (held->second == exclusive) return true;
+    unlock(byte);
+  }
   OVERLAPPED o = at_offset(byte);
   const DWORD flags = LOCKFILE_FAIL_IMMEDIATELY | (exclusive ? LOCKFILE_EXCLUSIVE_LOCK : 0);
-  return ::LockFileEx(handle_of(fd_), flags, 0, 1, 0, &o) != 0;
+  if (::LockFileEx(handle_of(fd_), flags, 0, 1, 0, &o) == 0) return false;
+  own_[byte] = exclusive;
+  return true;
 }
 
 void LockFile::unlock(std::int64_t byte) {
+  if (own_.erase(byte) == 0) return;
   OVERLAPPED o = at_offset(byte);
   (void)::UnlockFileEx(handle_of(fd_), 0, 1, 0, &o);
 }
 
 bool LockFile::held_elsewhere(std::int64_t byte, bool exclusive) {
   // Windows has no F_GETLK: probe with a lock of the same kind and give it
-  // back at once.
+  // back at once. A byte this open holds exclusively no other can hold;
+  // one it holds shared conflicts only with exclusive probes, which cannot
+  // be made through this open.
+  if (const auto held = own_.find(byte); held != own_.end()) return false;
   if (!try_lock(byte, exclusive)) return true;
   unlock(byte);
   return false;

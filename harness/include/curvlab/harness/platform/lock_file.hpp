@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 
 namespace curvlab::platform {
@@ -41,6 +42,8 @@ class LockFile {
   bool try_lock(std::int64_t byte, bool exclusive);
   void unlock(std::int64_t byte);
   // Whether another open holds a lock that conflicts with one of this kind.
+  // (On Windows, where this open holds the byte shared, another shared
+  // holder is not seen.)
   bool held_elsewhere(std::int64_t byte, bool exclusive);
 
   // Whether `path` still names the file this is open on (a lock on a file
@@ -56,6 +59,9 @@ class LockFile {
  private:
   int fd_ = -1;
   int error_ = 0;
+  // The bytes this open holds, and whether exclusively: Windows has no
+  // F_GETLK and must tell its own locks from others' (windows.cpp).
+  std::map<std::int64_t, bool> own_;
 };
 
 // Sets `bytes` of disk aside in a file at `path` (a help, not a condition:
