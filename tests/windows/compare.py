@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """Compares what the Windows build wrote with what the Linux build wrote.
 
-  compare.py json LINUX WINDOWS [--tol 1e-12]        numbers equal to a relative 1e-12
-  compare.py csv LINUX WINDOWS --ignore COL,COL,...  cells equal but in the named columns
+  compare.py json LINUX WINDOWS [--tol 1e-12] [--ignore KEY,...]  numbers equal to a relative 1e-12
+  compare.py csv LINUX WINDOWS --ignore COL,COL,...  cells equal (numbers to 1e-12) but in the named columns
   compare.py png LINUX WINDOWS [--tol 0]             pixels (RGBA) differ by at most tol
 
 Exit 0 when equal, 1 with the first differences on stderr.
@@ -25,7 +25,7 @@ def fail(lines):
     return 1
 
 
-def json_diffs(a, b, tol, where="$"):
+def json_diffs(a, b, tol, where="$", ignore=frozenset()):
     if isinstance(a, bool) or isinstance(b, bool):
         return [] if a == b else [f"{where}: {a!r} != {b!r}"]
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
@@ -38,15 +38,15 @@ def json_diffs(a, b, tol, where="$"):
     if isinstance(a, dict):
         out = [f"{where}: key {k!r} only in {'Linux' if k in a else 'Windows'}" for k in sorted(set(a) ^ set(b))]
         for k in a:
-            if k in b:
-                out += json_diffs(a[k], b[k], tol, f"{where}.{k}")
+            if k in b and k not in ignore:
+                out += json_diffs(a[k], b[k], tol, f"{where}.{k}", ignore)
         return out
     if isinstance(a, list):
         if len(a) != len(b):
             return [f"{where}: {len(a)} items != {len(b)} items"]
         out = []
         for i, (x, y) in enumerate(zip(a, b)):
-            out += json_diffs(x, y, tol, f"{where}[{i}]")
+            out += json_diffs(x, y, tol, f"{where}[{i}]", ignore)
         return out
     return [] if a == b else [f"{where}: {a!r} != {b!r}"]
 
@@ -59,7 +59,18 @@ def read_text(path):
 
 def compare_json(args):
     a, b = json.loads(read_text(args.linux)), json.loads(read_text(args.windows))
-    return fail(json_diffs(a, b, args.tol)) if json_diffs(a, b, args.tol) else 0
+    diffs = json_diffs(a, b, args.tol, ignore=frozenset(filter(None, (args.ignore or "").split(","))))
+    return fail(diffs) if diffs else 0
+
+
+def numbers_close(x, y, tol):
+    """Both cells numbers equal to a relative tol (libm rounding differs by
+    platform in the last bit)."""
+    try:
+        a, b = float(x), float(y)
+    except ValueError:
+        return False
+    return abs(a - b) <= tol * max(1.0, abs(a), abs(b))
 
 
 def compare_csv(args):
@@ -79,7 +90,7 @@ def compare_csv(args):
     out = []
     for r, (x, y) in enumerate(zip(la[1:], lb[1:]), start=2):
         for c, name in enumerate(header):
-            if name not in ignore and x[c] != y[c]:
+            if name not in ignore and x[c] != y[c] and not numbers_close(x[c], y[c], args.tol):
                 out.append(f"row {r} {name}: {x[c]!r} != {y[c]!r}")
     return fail(out) if out else 0
 
@@ -145,7 +156,7 @@ def main():
     p.add_argument("--ignore")
     args = p.parse_args()
     if args.tol is None:
-        args.tol = 1e-12 if args.kind == "json" else 0
+        args.tol = 0 if args.kind == "png" else 1e-12
     return {"json": compare_json, "csv": compare_csv, "png": compare_png}[args.kind](args)
 
 

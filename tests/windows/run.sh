@@ -6,7 +6,7 @@
 #   run.sh CASE SOURCE_DIR LINUX_CURVLAB WINDOWS_BUILD_DIR WORK_DIR
 #
 # Cases: prefix (makes the Wine prefix the others use), unit-NAME (a gtest
-# binary), cli, session, render.
+# binary), cli, session, render, resume.
 set -euo pipefail
 case_name=$1 src=$2 linux=$3 wbuild=$4 work=$5
 
@@ -15,8 +15,10 @@ if [ ! -d "$third_party" ]; then
   echo "SKIP: $third_party is not here: no Windows build to test (scripts/build_windows.sh)"
   exit 77
 fi
-exe=$wbuild/bin/curvlab.exe
+# The unpacked zip: what a lab gets, DLLs and fonts included.
+exe=$(ls "$wbuild"/package/curvlab-*-win64/curvlab.exe 2>/dev/null | head -1)
 if [ ! -f "$exe" ]; then
+  exe=$wbuild/package/curvlab-VERSION-win64/curvlab.exe
   echo "$exe is missing: run bash scripts/build_windows.sh (scripts/test.sh does)" >&2
   exit 1
 fi
@@ -98,6 +100,42 @@ case $case_name in
       fi
     done
     echo "$n commands compared"
+    exit $failed
+    ;;
+
+  session)
+    # A whole headless session of the demo protocol with the simulated
+    # observer, rendered on lavapipe, then exported: the same trials as the
+    # Linux build's for the same participant. The session's UUID and the
+    # wall-clock completion times are the only cells that may differ.
+    (cd "$src" && "$linux" run protocols/demo.toml --participant P07 --db "$out/linux.sqlite" --quiet --json > linux.json)
+    (cd "$src" && win_x run protocols/demo.toml --participant P07 --db "$out/windows.sqlite" --quiet --json > windows.json)
+    "$linux" export --db "$out/linux.sqlite" --out "$out/linux" --format csv > /dev/null
+    win export --db "$out/windows.sqlite" --out "$out/windows" --format csv > /dev/null
+    "${compare[@]}" csv linux/trials.csv windows/trials.csv --ignore session_uuid,completed_utc
+    echo "trials.csv: $(($(wc -l < windows/trials.csv) - 1)) trials equal"
+    ;;
+
+  render)
+    # One stereo frame of each scene in each space, drawn by lavapipe
+    # through winevulkan, against the Linux build's PNGs: the same pixels
+    # (tolerance 0; set CURVLAB_WINDOWS_PNG_TOL to allow more).
+    failed=0
+    for space in S3 E3 H3; do
+      for scene in stick table billiards; do
+        for build in linux windows; do
+          args=(render --space $space --view tourist --scene $scene --size 512x512 --out "$out/$build-$space-$scene" --json)
+          if [ $build = linux ]; then "$linux" "${args[@]}" > "$out/$build-$space-$scene.json"
+          else win_x "${args[@]}" > "$out/$build-$space-$scene.json"; fi
+        done
+        for eye in left right; do
+          "${compare[@]}" png --tol "${CURVLAB_WINDOWS_PNG_TOL:-0}" "linux-$space-$scene/$eye.png" \
+            "windows-$space-$scene/$eye.png" || { echo "differs: $space $scene $eye" >&2; failed=1; }
+        done
+        "${compare[@]}" json --ignore cpu_ms,gpu_ms,frame_ms "linux-$space-$scene.json" "windows-$space-$scene.json" ||
+          { echo "differs: $space $scene plan" >&2; failed=1; }
+      done
+    done
     exit $failed
     ;;
 
