@@ -3,6 +3,7 @@
 
   compare.py json LINUX WINDOWS [--tol 1e-12] [--ignore KEY,...]  numbers equal to a relative 1e-12
   compare.py csv LINUX WINDOWS --ignore COL,COL,...  cells equal (numbers to 1e-12) but in the named columns
+  compare.py rows FIRST SECOND [--only COL=V,...]    every (such) row of FIRST is in SECOND
   compare.py png LINUX WINDOWS [--tol 0]             pixels (RGBA) differ by at most tol
 
 Exit 0 when equal, 1 with the first differences on stderr.
@@ -95,6 +96,26 @@ def compare_csv(args):
     return fail(out) if out else 0
 
 
+def compare_rows(args):
+    """Every row of the first CSV appears, the same, in the second."""
+    ignore = set(filter(None, (args.ignore or "").split(",")))
+    with open(args.linux, newline="") as f:
+        la = list(csv.reader(f))
+    with open(args.windows, newline="") as f:
+        lb = list(csv.reader(f))
+    if la[0] != lb[0]:
+        return fail(["headers differ"])
+    keep = [c for c, name in enumerate(la[0]) if name not in ignore]
+    only = {}
+    for cond in filter(None, (args.only or "").split(",")):
+        name, value = cond.split("=", 1)
+        only[la[0].index(name)] = value
+    later = {tuple(r[c] for c in keep) for r in lb[1:]}
+    lost = [f"row {i}: {r}" for i, r in enumerate(la[1:], start=2)
+            if all(r[c] == v for c, v in only.items()) and tuple(r[c] for c in keep) not in later]
+    return fail(["rows missing or changed in " + args.windows] + lost) if lost else 0
+
+
 def read_png(path):
     """RGBA8 pixels of a non-interlaced 8-bit RGBA PNG (what curvlab writes)."""
     with open(path, "rb") as f:
@@ -149,15 +170,16 @@ def compare_png(args):
 
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("kind", choices=["json", "csv", "png"])
+    p.add_argument("kind", choices=["json", "csv", "rows", "png"])
     p.add_argument("linux")
     p.add_argument("windows")
     p.add_argument("--tol", type=float)
     p.add_argument("--ignore")
+    p.add_argument("--only", help="rows: only the rows of FIRST with COL=VALUE")
     args = p.parse_args()
     if args.tol is None:
         args.tol = 0 if args.kind == "png" else 1e-12
-    return {"json": compare_json, "csv": compare_csv, "png": compare_png}[args.kind](args)
+    return {"json": compare_json, "csv": compare_csv, "rows": compare_rows, "png": compare_png}[args.kind](args)
 
 
 if __name__ == "__main__":

@@ -67,6 +67,8 @@ case $case_name in
                  "inspect vergence --space $space --radius-m 2 --distance-m 1.5 --json"
                  "inspect stick --space $space --radius-m 2 --length-m 1 --distance-m 1.2 --view native --bend-m 0.01 --json")
     done
+    # A path that begins with a slash is a path, not a Windows-style /option.
+    commands+=("validate $src/protocols/demo.toml --json")
     for p in "$src"/protocols/*.toml; do
       rel=protocols/$(basename "$p")
       commands+=("validate $rel --json" "design $rel --participant 3 --json"
@@ -108,8 +110,8 @@ case $case_name in
     # observer, rendered on lavapipe, then exported: the same trials as the
     # Linux build's for the same participant. The session's UUID and the
     # wall-clock completion times are the only cells that may differ.
-    (cd "$src" && "$linux" run protocols/demo.toml --participant P07 --db "$out/linux.sqlite" --quiet --json > linux.json)
-    (cd "$src" && win_x run protocols/demo.toml --participant P07 --db "$out/windows.sqlite" --quiet --json > windows.json)
+    (cd "$src" && "$linux" run protocols/demo.toml --participant P07 --db "$out/linux.sqlite" --quiet --json > "$out/linux.json")
+    (cd "$src" && win_x run protocols/demo.toml --participant P07 --db "$out/windows.sqlite" --quiet --json > "$out/windows.json")
     "$linux" export --db "$out/linux.sqlite" --out "$out/linux" --format csv > /dev/null
     win export --db "$out/windows.sqlite" --out "$out/windows" --format csv > /dev/null
     "${compare[@]}" csv linux/trials.csv windows/trials.csv --ignore session_uuid,completed_utc
@@ -137,6 +139,46 @@ case $case_name in
       done
     done
     exit $failed
+    ;;
+
+  resume)
+    # Durability with Windows file semantics: a realtime session is ended
+    # by TerminateProcess (taskkill /F, Windows' kill -9) after its third
+    # trial; the trials it completed are in the file, its lock is free at
+    # once, and `curvlab resume` completes it. The result equals the Linux
+    # build's uninterrupted session but for provenance, the realtime clock
+    # (onset_ns, response_ns, rt_ns) and the attempt that was cut short
+    # (attempt, and the response its new random stream gave).
+    (cd "$src" && xvfb-run -a "${wine[@]}" "$exe" run protocols/demo.toml --participant P05 --db "$out/w.sqlite" \
+       --pace realtime --progress json > "$out/run.out" 2> "$out/run.err") &
+    runner=$!
+    for _ in $(seq 1 240); do
+      done_trials=$(grep -c '"status":"completed"' run.out 2>/dev/null || true)
+      [ "${done_trials:-0}" -ge 3 ] && break
+      kill -0 $runner 2>/dev/null || break
+      sleep 0.25
+    done
+    "${wine[@]}" taskkill /F /IM curvlab.exe
+    wait $runner || true
+    win sessions --db w.sqlite --json > killed.json
+    /usr/bin/python3 - killed.json <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))[0]
+assert s["status"] == "interrupted", s
+assert s["writer"] is None, f"the killed writer still holds the session: {s['writer']}"
+assert 3 <= s["trials_completed"] < s["trials_planned"], s
+print(f"killed after {s['trials_completed']} of {s['trials_planned']} trials; the session is free")
+PY
+    win export --db w.sqlite --out killed --format csv > /dev/null
+    (cd "$src" && xvfb-run -a "${wine[@]}" "$exe" resume --db "$out/w.sqlite" --session 1 --quiet --json > "$out/resumed.json")
+    grep -q '"trials_completed": 8' resumed.json || { cat resumed.json >&2; exit 1; }
+    win export --db w.sqlite --out resumed --format csv > /dev/null
+    "${compare[@]}" rows --only status=completed killed/trials.csv resumed/trials.csv
+    (cd "$src" && "$linux" run protocols/demo.toml --participant P05 --db "$out/linux.sqlite" --quiet > /dev/null)
+    "$linux" export --db "$out/linux.sqlite" --out linux --format csv > /dev/null
+    "${compare[@]}" csv linux/trials.csv resumed/trials.csv \
+      --ignore session_uuid,completed_utc,onset_ns,response_ns,rt_ns,attempt,response
+    echo "resumed: 8 trials, the killed run's trials kept as they were"
     ;;
 
   *)
