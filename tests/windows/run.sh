@@ -6,7 +6,7 @@
 #   run.sh CASE SOURCE_DIR LINUX_CURVLAB WINDOWS_BUILD_DIR WORK_DIR
 #
 # Cases: prefix (makes the Wine prefix the others use), unit-NAME (a gtest
-# binary), cli, session, render, resume.
+# binary), cli, session, render, resume, xr.
 set -euo pipefail
 case_name=$1 src=$2 linux=$3 wbuild=$4 work=$5
 
@@ -179,6 +179,48 @@ PY
     "${compare[@]}" csv linux/trials.csv resumed/trials.csv \
       --ignore session_uuid,completed_utc,onset_ns,response_ns,rt_ns,attempt,response
     echo "resumed: 8 trials, the killed run's trials kept as they were"
+    ;;
+
+  xr)
+    # The scripted OpenXR test runtime (tests/xr/runtime) built as a Windows
+    # DLL, registered as the active runtime the way SteamVR registers itself
+    # (the loader ignores XR_RUNTIME_JSON in an elevated process, and Wine's
+    # are), then xr-check and a whole --backend xr session of the buttons
+    # demo through the Khronos loader built for Windows.
+    cp "$wbuild/tests/windows/xr_runtime/libcurvlab_test_xr_runtime.dll" .
+    printf '{\n  "file_format_version": "1.0.0",\n  "runtime": {\n    "name": "curvlab test runtime",\n    "library_path": ".\\\\libcurvlab_test_xr_runtime.dll"\n  }\n}\n' > runtime.json
+    manifest=$("${wine[@]}" winepath -w "$out/runtime.json" | tr -d '\r')
+    key='HKLM\SOFTWARE\Khronos\OpenXR\1'
+    "${wine[@]}" reg add "$key" /v ActiveRuntime /t REG_SZ /d "$manifest" /f > /dev/null
+    trap '"${wine[@]}" reg delete "$key" /v ActiveRuntime /f > /dev/null 2>&1 || true' EXIT
+    win_x xr-check --json > check.json
+    /usr/bin/python3 - check.json <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["ok"] is True and d["runtime"] == "curvlab test runtime 0.1.0", d
+assert d["system"] == "curvlab scripted headset" and d["position_tracking"] is True, d
+PY
+    log_win=$("${wine[@]}" winepath -w "$out/runtime.log" | tr -d '\r')
+    (cd "$src" && CURVLAB_TEST_XR_PRESS="right:a@1.0/1.8,left:x@1.6/1.8,right:trigger@2.2/1.8" \
+       CURVLAB_TEST_XR_LOG="$log_win" win_x run tests/xr/demo_buttons.toml --participant X01 --backend xr \
+       --db "$out/xr.sqlite" --json > "$out/run.json")
+    win sessions --db xr.sqlite --json > sessions.json
+    /usr/bin/python3 - run.json sessions.json runtime.log <<'PY'
+import json, sys
+run = json.load(open(sys.argv[1]))
+assert run["status"] == "completed" and run["trials_completed"] == 8, run
+assert json.load(open(sys.argv[2]))[0]["backend"] == "xr"
+lines = open(sys.argv[3]).read().splitlines()
+problems = [l for l in lines if l.startswith(("violation", "warning"))]
+assert not problems, "the runtime saw broken rules:\n" + "\n".join(problems[:5])
+states = [l.split()[1] for l in lines if l.startswith("state ")]
+assert states[:5] == ["XR_SESSION_STATE_IDLE", "XR_SESSION_STATE_READY", "XR_SESSION_STATE_SYNCHRONIZED",
+                      "XR_SESSION_STATE_VISIBLE", "XR_SESSION_STATE_FOCUSED"], states
+assert states[-1] == "XR_SESSION_STATE_EXITING", states
+frames = sum(1 for l in lines if l.startswith("frame "))
+assert frames > 100, frames
+print(f"xr session through the Windows loader: 8 trials, {frames} frames, {len(states)} state changes")
+PY
     ;;
 
   *)
