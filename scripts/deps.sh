@@ -18,6 +18,8 @@ packages=(
   xdotool universal-ctags
   ninja-build libeigen3-dev libudev-dev libxcb-randr0-dev libxrandr-dev libx11-xcb-dev
   chromium
+  # the Windows cross-build and its tests under Wine (scripts/build_windows.sh)
+  g++-mingw-w64-x86-64-posix gcc-mingw-w64-x86-64-posix libz-mingw-w64-dev wine64 zip tcl m4
 )
 
 missing=()

@@ -13,4 +13,8 @@ cmake --build --preset ci -j "$jobs"
 # Monado, the OpenXR runtime the `monado` tests run sessions through, built
 # once into a cache outside the clone (nothing where ../shared is absent).
 bash scripts/monado.sh > /dev/null
+# The Windows cross-build the `windows` tests run under Wine: dependencies
+# cached outside the clone, curvlab into build/windows (nothing where
+# ../shared is absent; the tests then skip).
+bash scripts/build_windows.sh > /dev/null
 ctest --preset ci -j "$jobs" "$@"

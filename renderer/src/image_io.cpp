@@ -1,6 +1,10 @@
 #include "curvlab/renderer/image_io.hpp"
 
+#ifdef CURVLAB_PNG_WITH_ZLIB
+#include <zlib.h>
+#else
 #include <png.h>
+#endif
 #include <stb_image.h>
 
 #include <algorithm>
@@ -20,6 +24,57 @@ struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
 
+#ifdef CURVLAB_PNG_WITH_ZLIB
+// Windows builds: the same PNG as the libpng branch below (8-bit RGBA, no
+// interlace, sRGB + gAMA + cHRM chunks; PNG specification 11.3.3.5), each
+// row with filter type 0, the whole deflated by zlib. The pixels equal the
+// libpng file's; the compressed bytes may differ.
+void put_u32(std::string& out, std::uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<char>((v >> shift) & 0xffu));
+}
+
+void put_chunk(std::string& out, const char* type, const std::string& data) {
+  put_u32(out, static_cast<std::uint32_t>(data.size()));
+  const std::size_t start = out.size();
+  out.append(type, 4);
+  out += data;
+  const auto crc = crc32(0, reinterpret_cast<const Bytef*>(out.data() + start), static_cast<uInt>(out.size() - start));
+  put_u32(out, static_cast<std::uint32_t>(crc));
+}
+
+bool encode(std::FILE* file, const Rgba8Image& image) {
+  const auto w = static_cast<std::size_t>(image.width), h = static_cast<std::size_t>(image.height);
+  std::string raw;
+  raw.reserve(h * (1 + w * 4));
+  for (std::size_t y = 0; y < h; ++y) {
+    raw.push_back('\0');
+    raw.append(reinterpret_cast<const char*>(image.pixels.data() + y * w * 4), w * 4);
+  }
+  uLongf packed_size = compressBound(static_cast<uLong>(raw.size()));
+  std::string packed(packed_size, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size, reinterpret_cast<const Bytef*>(raw.data()),
+                static_cast<uLong>(raw.size()), Z_DEFAULT_COMPRESSION) != Z_OK)
+    return false;
+  packed.resize(packed_size);
+
+  std::string png("\x89PNG\r\n\x1a\n", 8);
+  std::string ihdr;
+  put_u32(ihdr, static_cast<std::uint32_t>(w));
+  put_u32(ihdr, static_cast<std::uint32_t>(h));
+  ihdr += std::string("\x08\x06\x00\x00\x00", 5);  // 8 bits, RGBA, deflate, adaptive filters, no interlace
+  put_chunk(png, "IHDR", ihdr);
+  put_chunk(png, "sRGB", std::string(1, '\0'));  // perceptual intent
+  std::string gama;
+  put_u32(gama, 45455);
+  put_chunk(png, "gAMA", gama);
+  std::string chrm;
+  for (const std::uint32_t v : {31270u, 32900u, 64000u, 33000u, 30000u, 60000u, 15000u, 6000u}) put_u32(chrm, v);
+  put_chunk(png, "cHRM", chrm);
+  put_chunk(png, "IDAT", packed);
+  put_chunk(png, "IEND", "");
+  return std::fwrite(png.data(), 1, png.size(), file) == png.size();
+}
+#else
 // libpng reports errors by longjmp to the setjmp in encode(); no C++ object
 // with a destructor may live between the two.
 bool encode(std::FILE* file, const Rgba8Image& image) {
@@ -45,6 +100,7 @@ bool encode(std::FILE* file, const Rgba8Image& image) {
   png_destroy_write_struct(&png, &info);
   return true;
 }
+#endif
 
 }  // namespace
 

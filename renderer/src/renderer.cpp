@@ -781,9 +781,11 @@ void Renderer::Impl::submit(FrameRecording& rec) {
   slot.pending = false;
   if (!timestamps) return;
   std::array<std::uint64_t, 2> ts{};
+  // Through the device's dispatcher, as every other call: Windows builds
+  // have no Vulkan import library (vulkan-1.dll is loaded at run time).
   const vk::Result res = (*ctx.device()).getQueryPoolResults(
       *slot.queries, 0, 2, sizeof(ts), ts.data(), sizeof(std::uint64_t),
-      vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
+      vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait, *ctx.device().getDispatcher());
   if (res == vk::Result::eSuccess)
     rec.stats.gpu_ms = static_cast<double>(ts[1] - ts[0]) * ctx.timestamp_period_ns() * 1e-6;
 }

@@ -2,6 +2,14 @@
 
 #include <stb_truetype.h>
 
+#ifdef _WIN32
+#ifndef NOMINMAX
+#define NOMINMAX
+#endif
+#include <windows.h>
+#include <filesystem>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -33,12 +41,25 @@ std::vector<int> decode_utf8(const std::string& s) {
   return out;
 }
 
+#ifdef _WIN32
+// A relative font path that is not found from the working folder is looked
+// up beside the executable, where the Windows zip keeps fonts/.
+std::filesystem::path beside_executable(const std::string& relative) {
+  std::wstring exe(32768, L'\0');
+  exe.resize(GetModuleFileNameW(nullptr, exe.data(), static_cast<DWORD>(exe.size())));
+  return std::filesystem::path(exe).parent_path() / std::filesystem::u8path(relative);
+}
+#endif
+
 }  // namespace
 
 std::variant<CoverageBitmap, RenderError> render_text(const std::string& text, int width,
                                                     int height, double max_line_px,
                                                     const std::string& font_path) {
   std::ifstream in(font_path, std::ios::binary);
+#ifdef _WIN32
+  if (!in && std::filesystem::path(font_path).is_relative()) in.open(beside_executable(font_path), std::ios::binary);
+#endif
   if (!in)
     return RenderError{RenderError::Kind::font,
                        "cannot open font " + font_path + " (apt-get install fonts-dejavu-core)"};

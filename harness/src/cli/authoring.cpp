@@ -18,7 +18,8 @@
 #include <iostream>
 #include <random>
 #include <sstream>
-#include <unistd.h>
+#include "curvlab/harness/platform/files.hpp"
+#include "curvlab/harness/platform/terminal.hpp"
 
 namespace curvlab::cli {
 namespace {
@@ -168,7 +169,7 @@ void run_new(const NewArgs& a) {
   fs::create_directories(a.dir, ec);
   if (ec) throw RuntimeFailure("cannot create " + a.dir + ": " + ec.message());
   // O_EXCL semantics: another process may have created the file meanwhile.
-  std::FILE* f = std::fopen(target.c_str(), "wx");
+  std::FILE* f = platform::create_new_file(target.string());
   if (!f) throw UsageError(target.string() + " already exists or cannot be created; nothing was written");
   const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
   if (std::fclose(f) != 0 || !ok) {
@@ -212,7 +213,7 @@ void run_preview(const PreviewArgs& a) {
   rq.out_dir = a.out;
   rq.size = size;
   rq.software = a.software;
-  const bool tty = isatty(STDERR_FILENO) != 0;
+  const bool tty = platform::stderr_is_terminal();
   rq.progress = [tty](std::size_t done, std::size_t total, const std::string& what) {
     constexpr int kWidth = 30;
     const int filled = total ? static_cast<int>(kWidth * done / total) : kWidth;

@@ -15,7 +15,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <memory>
-#include <unistd.h>
+#include "curvlab/harness/platform/process.hpp"
 
 namespace curvlab::cli {
 namespace {
@@ -34,7 +34,7 @@ struct ExportArgs {
 class PooledInputs {
  public:
   explicit PooledInputs(const std::vector<std::string>& inputs)
-      : path_((fs::temp_directory_path() / ("curvlab-export-" + std::to_string(::getpid()) + ".sqlite")).string()) {
+      : path_((fs::temp_directory_path() / ("curvlab-export-" + std::to_string(platform::process_id()) + ".sqlite")).string()) {
     // An export killed while pooling leaves its copy behind.
     data::remove_stale_staging(fs::temp_directory_path().string(), "curvlab-export-");
     data::remove_database_files(path_);

@@ -13,6 +13,10 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string(curvlab::software_version()) + " (" +
                                         std::string(curvlab::git_commit()) + ")");
   app.require_subcommand(1);
+  // CLI11 reads /x as an option on Windows by default; curvlab's options
+  // are --x everywhere, and a positional path may begin with a slash.
+  // Subcommands take this setting when they are added, below.
+  app.allow_windows_style_options(false);
   curvlab::cli::add_inspect_commands(app);
   curvlab::cli::add_devices_commands(app);
   curvlab::cli::add_export_commands(app);

@@ -9,6 +9,7 @@
 #include "curvlab/harness/data/export.hpp"
 #include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/desktop/desktop.hpp"
+#include "curvlab/harness/platform/signals.hpp"
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/devices/responses.hpp"
 #include "curvlab/harness/operator/operator_window.hpp"
@@ -259,7 +260,7 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
     std::cerr << "session " << s.session_id << " stopped before the end; continue it with: curvlab resume --db "
               << s.db_path << " --session " << s.session_id << '\n';
     if (const int sig = stop_signal_received(); sig != 0)
-      throw RuntimeFailure("session interrupted by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")",
+      throw RuntimeFailure("session interrupted by signal " + std::to_string(sig) + " (" + platform::signal_name(sig) + ")",
                            128 + sig);
     throw RuntimeFailure("session interrupted");
   }

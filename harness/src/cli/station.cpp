@@ -5,7 +5,8 @@
 #include "curvlab/harness/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 
-#include <csignal>
+#include "curvlab/harness/platform/signals.hpp"
+
 #include <filesystem>
 #include <cstdlib>
 #include <tuple>
@@ -14,12 +15,6 @@ namespace curvlab::cli {
 namespace {
 
 namespace rn = curvlab::harness::runner;
-
-// The signal that asked a frame loop to stop (0: none). A handler may only
-// set a lock-free atomic.
-std::atomic<int> stop_signal{0};
-
-extern "C" void on_stop_signal(int sig) { stop_signal.store(sig, std::memory_order_relaxed); }
 
 bool display_present() {
   const char* x = std::getenv("DISPLAY");
@@ -136,16 +131,10 @@ std::vector<devices::MappingFile> response_mappings(const BackendArgs& a) {
   return out;
 }
 
-const std::atomic<int>& catch_stop_signals() {
-  struct sigaction sa {};
-  sa.sa_handler = on_stop_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND | SA_RESTART;
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
-  return stop_signal;
-}
+// The signal that asked a frame loop to stop (0: none): platform/signals.hpp.
+const std::atomic<int>& catch_stop_signals() { return platform::catch_stop_signals(); }
 
-int stop_signal_received() { return stop_signal.load(); }
+int stop_signal_received() { return platform::stop_signal_received(); }
 
 BackendArgs with_protocol_responses(BackendArgs a, const harness::protocol::Protocol& p) {
   if (a.backend != "desktop" && a.backend != "xr") return a;

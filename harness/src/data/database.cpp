@@ -1,8 +1,8 @@
 #include "curvlab/harness/data/database.hpp"
 
+#include "curvlab/harness/platform/files.hpp"
+
 #include <sqlite3.h>
-#include <sys/statvfs.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -31,20 +31,18 @@ std::optional<DataError> check_writable_location(const std::string& path) {
     return DataError{DataError::Kind::io,
                      path + ": folder " + dir.string() + " does not exist (create it first)"};
   }
-  if (::access(dir.c_str(), W_OK) != 0) {
+  if (!platform::writable(dir.string())) {
     return DataError{DataError::Kind::read_only,
                      path + ": folder " + dir.string() +
                          " is not writable (the WAL journal needs a writable folder)"};
   }
-  if (fs::exists(file, ec) && ::access(file.c_str(), W_OK) != 0) {
+  if (fs::exists(file, ec) && !platform::writable(file.string())) {
     return DataError{DataError::Kind::read_only, path + ": file is read-only"};
   }
-  struct statvfs st {};
-  if (::statvfs(dir.c_str(), &st) == 0) {
-    const std::uint64_t free_bytes = std::uint64_t{st.f_bavail} * std::uint64_t{st.f_frsize};
-    if (free_bytes < min_free_bytes_to_start) {
+  if (const auto free_bytes = platform::free_bytes(dir.string())) {
+    if (*free_bytes < min_free_bytes_to_start) {
       return DataError{DataError::Kind::disk_full,
-                       path + ": only " + std::to_string(free_bytes >> 20) +
+                       path + ": only " + std::to_string(*free_bytes >> 20) +
                            " MiB free; a session needs at least " +
                            std::to_string(min_free_bytes_to_start >> 20) + " MiB"};
     }

@@ -4,6 +4,8 @@
 #include "curvlab/harness/data/session_list.hpp"
 #include "curvlab/harness/data/sqlite.hpp"
 #include "curvlab/harness/data/staging.hpp"
+#include "curvlab/harness/platform/files.hpp"
+#include "curvlab/harness/platform/process.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -11,12 +13,11 @@
 #include <cctype>
 #include <cerrno>
 #include <cstdio>
-#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <system_error>
-#include <unistd.h>
+
 
 namespace curvlab::data::exporting {
 
@@ -62,24 +63,25 @@ class StagedPath {
 // removed, or, on a file system that cannot exchange, moved `aside` first.
 std::optional<DataError> put_in_place(const fs::path& staged, const fs::path& target, const fs::path& aside) {
   std::error_code ec;
-  if (::rename(staged.c_str(), target.c_str()) == 0) return std::nullopt;
-  if (errno == ENOTEMPTY || errno == EEXIST) {
-    if (::renameat2(AT_FDCWD, staged.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) == 0) {
+  int err = platform::rename_replacing(staged.string(), target.string());
+  if (err == 0) return std::nullopt;
+  if (err == ENOTEMPTY || err == EEXIST) {
+    err = platform::exchange_paths(staged.string(), target.string());
+    if (err == 0) {
       fs::remove_all(staged, ec);  // the old content, now under the staged name
       return std::nullopt;
     }
-    if ((errno == EINVAL || errno == ENOSYS) && ::rename(target.c_str(), aside.c_str()) == 0) {
-      if (::rename(staged.c_str(), target.c_str()) == 0) {
+    if ((err == EINVAL || err == ENOSYS) && platform::rename_replacing(target.string(), aside.string()) == 0) {
+      err = platform::rename_replacing(staged.string(), target.string());
+      if (err == 0) {
         fs::remove_all(aside, ec);
         return std::nullopt;
       }
-      const int failed = errno;
-      ::rename(aside.c_str(), target.c_str());
-      errno = failed;
+      (void)platform::rename_replacing(aside.string(), target.string());
     }
   }
   return DataError{DataError::Kind::io, "cannot put " + staged.string() + " in place of " + target.string() + ": " +
-                                            std::generic_category().message(errno)};
+                                            std::generic_category().message(err)};
 }
 
 }  // namespace
@@ -90,7 +92,7 @@ Expected<ExportSummary> write_staged(const std::string& out_dir, const std::stri
   const bool out_existed = fs::exists(out_dir, ec);
   if (auto e = make_dir(out_dir)) return *e;
   for (const char* kind : {".partial-", ".replaced-"}) remove_stale_staging(out_dir, name + kind);
-  const std::string pid = std::to_string(::getpid());
+  const std::string pid = std::to_string(platform::process_id());
   const fs::path target = fs::path(out_dir) / name;
   const bool target_existed = fs::exists(fs::symlink_status(target, ec));
   StagedPath staged(fs::path(out_dir) / (name + ".partial-" + pid), out_dir, !out_existed);

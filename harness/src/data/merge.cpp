@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
-#include <unistd.h>
+#include "curvlab/harness/platform/process.hpp"
 
 #include <algorithm>
 #include <array>
@@ -469,7 +469,7 @@ Expected<MergeReport> merge_databases(const MergeOptions& opts) {
   // A merge killed before it renamed its work leaves OUT.merging-PID behind.
   const fs::path out(opts.out_path);
   remove_stale_staging(out.parent_path().string(), out.filename().string() + ".merging-");
-  TempOutput tmp(opts.out_path + ".merging-" + std::to_string(::getpid()));
+  TempOutput tmp(opts.out_path + ".merging-" + std::to_string(platform::process_id()));
   if (existed)
     if (auto ok = copy_existing_output(opts.out_path, tmp.path()); !ok) return ok.error();
   MergeReport report;

@@ -4,7 +4,7 @@
 
 #include <sqlite3.h>
 
-#include <unistd.h>
+#include "curvlab/harness/platform/files.hpp"
 
 #include <cstring>
 #include <filesystem>
@@ -55,7 +55,7 @@ bool needs_immutable_open(const std::string& path) {
   std::error_code ec;
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   if (dir.empty()) dir = ".";
-  if (::access(dir.c_str(), W_OK) == 0 || std::filesystem::exists(path + "-shm", ec)) return false;
+  if (platform::writable(dir.string()) || std::filesystem::exists(path + "-shm", ec)) return false;
   return !std::filesystem::exists(path + "-wal", ec) || std::filesystem::file_size(path + "-wal", ec) == 0;
 }
 

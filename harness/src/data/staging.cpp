@@ -4,13 +4,14 @@
 #include <charconv>
 #include <filesystem>
 #include <limits>
-#include <signal.h>
+
+#include "curvlab/harness/platform/process.hpp"
 
 namespace curvlab::data {
 
 namespace fs = std::filesystem;
 
-bool process_alive(pid_t pid) { return pid > 0 && !(::kill(pid, 0) != 0 && errno == ESRCH); }
+bool process_alive(pid_t pid) { return platform::process_alive(pid); }
 
 std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix) {
   return remove_numbered(dir, prefix, [](std::int64_t pid) {

@@ -2,15 +2,11 @@
 
 #include "curvlab/harness/data/staging.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#include "curvlab/harness/platform/lock_file.hpp"
+#include "curvlab/harness/platform/process.hpp"
 
-#include <array>
 #include <cerrno>
-#include <chrono>
 #include <cstring>
-#include <ctime>
 #include <filesystem>
 #include <sstream>
 #include <utility>
@@ -18,81 +14,34 @@
 namespace curvlab::data {
 namespace {
 
-constexpr off_t file_byte = 0;
-constexpr off_t slots_at = 1 << 16;  // holder slots from here on (the lock bytes below never hold data)
-constexpr std::size_t slot_bytes = 128;
+using platform::LockFile;
 
-off_t session_byte(std::int64_t session_id) { return 1 + static_cast<off_t>(session_id); }
-off_t slot_of(std::int64_t session_id) { return slots_at + static_cast<off_t>(session_id) * slot_bytes; }
+constexpr std::int64_t file_byte = 0;
+constexpr std::int64_t slots_at = 1 << 16;  // holder slots from here on (the lock bytes below never hold data)
+constexpr std::int64_t slot_bytes = 128;
+
+std::int64_t session_byte(std::int64_t session_id) { return 1 + session_id; }
+std::int64_t slot_of(std::int64_t session_id) { return slots_at + session_id * slot_bytes; }
 
 std::string lock_path(const std::string& db_path) { return db_path + ".lock"; }
 std::string reserve_path(const std::string& db_path, std::int64_t session_id) {
   return db_path + ".reserve-" + std::to_string(session_id);
 }
-constexpr off_t reserve_bytes = 1 << 20;
+constexpr std::int64_t reserve_bytes = 1 << 20;
 
-// Sets disk space aside for the end of a session; without space to spare
-// the session still runs (the reserve is a help, not a condition).
-void make_reserve(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) return;
-  if (::posix_fallocate(fd, 0, reserve_bytes) != 0) (void)::ftruncate(fd, 0);
-  ::close(fd);
-}
-
-struct flock range(short type, off_t start) {
-  struct flock f {};
-  f.l_type = type;
-  f.l_whence = SEEK_SET;
-  f.l_start = start;
-  f.l_len = 1;
-  return f;
-}
-
-// Non-blocking; false when another open file description holds a
-// conflicting lock.
-bool try_lock(int fd, short type, off_t start) {
-  struct flock f = range(type, start);
-  return ::fcntl(fd, F_OFD_SETLK, &f) == 0;
-}
-
-void unlock(int fd, off_t start) {
-  struct flock f = range(F_UNLCK, start);
-  (void)::fcntl(fd, F_OFD_SETLK, &f);
-}
-
-bool held_by_other(int fd, short type, off_t start) {
-  struct flock f = range(type, start);
-  if (::fcntl(fd, F_OFD_GETLK, &f) != 0) return false;
-  return f.l_type != F_UNLCK;
-}
-
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  std::array<char, 32> text{};
-  std::strftime(text.data(), text.size(), "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return text.data();
-}
-
-void write_slot(int fd, std::int64_t session_id) {
-  std::array<char, 64> host{};
-  if (::gethostname(host.data(), host.size() - 1) != 0) host[0] = '\0';
-  std::string text = std::to_string(::getpid()) + ' ' + host.data() + ' ' + utc_now();
+void write_slot(LockFile& file, std::int64_t session_id) {
+  std::string text = std::to_string(platform::process_id()) + ' ' + platform::host_name() + ' ' +
+                     platform::utc_now_iso8601();
   text.resize(slot_bytes, '\0');
-  (void)!::pwrite(fd, text.data(), text.size(), slot_of(session_id));
+  file.write_at(text, slot_of(session_id));
 }
 
-void clear_slot(int fd, std::int64_t session_id) {
-  const std::string zeros(slot_bytes, '\0');
-  (void)!::pwrite(fd, zeros.data(), zeros.size(), slot_of(session_id));
+void clear_slot(LockFile& file, std::int64_t session_id) {
+  file.write_at(std::string(slot_bytes, '\0'), slot_of(session_id));
 }
 
-LockHolder read_slot(int fd, std::int64_t session_id) {
-  std::string text(slot_bytes, '\0');
-  const ssize_t got = ::pread(fd, text.data(), text.size(), slot_of(session_id));
-  text.resize(got > 0 ? static_cast<std::size_t>(got) : 0);
+LockHolder read_slot(const LockFile& file, std::int64_t session_id) {
+  std::string text = file.read_at(slot_bytes, slot_of(session_id));
   text = text.substr(0, text.find('\0'));
   LockHolder h;
   std::istringstream in(text);
@@ -108,15 +57,15 @@ std::string describe(const LockHolder& h) {
   return out;
 }
 
-// Opens DB.lock and takes `type` on the file byte. A lock taken on a lock
-// file that a releasing process unlinked meanwhile is worthless, so the
-// descriptor must still name the path's file once the lock is held.
-Expected<int> open_locked(const std::string& db_path, short type, std::string& refused) {
+// Opens DB.lock and takes the file byte (shared or exclusive). A lock
+// taken on a lock file that a releasing process unlinked meanwhile is
+// worthless, so the file must still be the path's once the lock is held.
+Expected<LockFile> open_locked(const std::string& db_path, bool exclusive, std::string& refused) {
   const std::string path = lock_path(db_path);
   for (int attempt = 0; attempt < 16; ++attempt) {
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-    if (fd < 0) {
-      const int err = errno;
+    LockFile file = LockFile::open(path, LockFile::Mode::create_read_write);
+    if (!file.is_open()) {
+      const int err = file.error();
       const auto kind = err == EACCES || err == EROFS || err == EPERM ? DataError::Kind::read_only
                                                                       : DataError::Kind::io;
       return DataError{kind, db_path + ": cannot create its lock file " + path + ": " + std::strerror(err) +
@@ -124,34 +73,30 @@ Expected<int> open_locked(const std::string& db_path, short type, std::string& r
                                       ? " (the folder is not writable; a session needs a writable folder)"
                                       : "")};
     }
-    if (!try_lock(fd, type, file_byte)) {
+    if (!file.try_lock(file_byte, exclusive)) {
       refused = path;
-      return fd;  // the caller names the holder, then closes
+      return file;  // the caller names the holder, then closes
     }
-    struct stat by_fd {}, by_path {};
-    if (::fstat(fd, &by_fd) == 0 && ::stat(path.c_str(), &by_path) == 0 && by_fd.st_ino == by_path.st_ino &&
-        by_fd.st_dev == by_path.st_dev)
-      return fd;
-    ::close(fd);
+    if (file.still_named(path)) return file;
   }
   return DataError{DataError::Kind::busy, db_path + ": its lock file " + path + " keeps being replaced"};
 }
 
 // The first session whose writer is alive, from the slots in use.
-std::optional<std::pair<std::int64_t, LockHolder>> live_session(int fd) {
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || st.st_size <= slots_at) return std::nullopt;
-  const auto slots = static_cast<std::int64_t>((st.st_size - slots_at) / static_cast<off_t>(slot_bytes));
+std::optional<std::pair<std::int64_t, LockHolder>> live_session(LockFile& file) {
+  const std::int64_t size = file.size();
+  if (size <= slots_at) return std::nullopt;
+  const std::int64_t slots = (size - slots_at) / slot_bytes;
   for (std::int64_t id = 1; id < slots; ++id)
-    if (held_by_other(fd, F_WRLCK, session_byte(id))) return std::pair{id, read_slot(fd, id)};
+    if (file.held_elsewhere(session_byte(id), true)) return std::pair{id, read_slot(file, id)};
   return std::nullopt;
 }
 
 // Reserves left by writers that died (kill -9) for sessions no one holds.
-void remove_stale_reserves(int fd, const std::string& db_path) {
+void remove_stale_reserves(LockFile& file, const std::string& db_path) {
   const std::filesystem::path db(db_path);
-  remove_numbered(db.parent_path().string(), db.filename().string() + ".reserve-", [fd](std::int64_t session_id) {
-    return session_id > 0 && !held_by_other(fd, F_WRLCK, session_byte(session_id));
+  remove_numbered(db.parent_path().string(), db.filename().string() + ".reserve-", [&file](std::int64_t session_id) {
+    return session_id > 0 && !file.held_elsewhere(session_byte(session_id), true);
   });
 }
 
@@ -165,33 +110,31 @@ std::string session_in_use_message(const std::string& db_path, std::int64_t sess
 
 Expected<WriterLock> WriterLock::for_sessions(const std::string& db_path) {
   std::string refused;
-  auto fd = open_locked(db_path, F_RDLCK, refused);
-  if (!fd) return fd.error();
+  auto file = open_locked(db_path, false, refused);
+  if (!file) return file.error();
   if (!refused.empty()) {
-    const LockHolder h = read_slot(*fd, 0);
-    ::close(*fd);
+    const LockHolder h = read_slot(*file, 0);
     return DataError{DataError::Kind::in_use, db_path + ": the whole file is being replaced by " + describe(h) +
                                                   " (curvlab merge --out); nothing was changed. Try again when it "
                                                   "has finished"};
   }
-  remove_stale_reserves(*fd, db_path);
-  return WriterLock(*fd, db_path);
+  remove_stale_reserves(*file, db_path);
+  return WriterLock(std::move(file).value(), db_path);
 }
 
 Expected<WriterLock> WriterLock::for_replacing(const std::string& db_path) {
   std::string refused;
-  auto fd = open_locked(db_path, F_WRLCK, refused);
-  if (!fd) return fd.error();
+  auto file = open_locked(db_path, true, refused);
+  if (!file) return file.error();
   if (!refused.empty()) {
-    const auto live = live_session(*fd);
-    const LockHolder other = live ? live->second : read_slot(*fd, 0);
-    ::close(*fd);
+    const auto live = live_session(*file);
+    const LockHolder other = live ? live->second : read_slot(*file, 0);
     if (live) return DataError{DataError::Kind::in_use, session_in_use_message(db_path, live->first, live->second)};
     return DataError{DataError::Kind::in_use, db_path + ": the file is in use by " + describe(other) +
                                                   "; nothing was changed. Try again when it has finished"};
   }
-  write_slot(*fd, 0);
-  WriterLock lock(*fd, db_path);
+  write_slot(*file, 0);
+  WriterLock lock(std::move(file).value(), db_path);
   lock.replacing_ = true;
   return lock;
 }
@@ -204,33 +147,34 @@ Expected<WriterLock> WriterLock::for_session(const std::string& db_path, std::in
 }
 
 Expected<Done> WriterLock::claim(std::int64_t session_id) {
-  if (!try_lock(fd_, F_WRLCK, session_byte(session_id)))
-    return DataError{DataError::Kind::in_use, session_in_use_message(db_path_, session_id, read_slot(fd_, session_id))};
-  write_slot(fd_, session_id);
+  if (!file_.try_lock(session_byte(session_id), true))
+    return DataError{DataError::Kind::in_use, session_in_use_message(db_path_, session_id, read_slot(file_, session_id))};
+  write_slot(file_, session_id);
   session_ = session_id;
-  make_reserve(reserve_path(db_path_, session_id));
+  // Sets disk space aside for the end of a session; without space to spare
+  // the session still runs (the reserve is a help, not a condition).
+  platform::reserve_file(reserve_path(db_path_, session_id), reserve_bytes);
   return Done{};
 }
 
 bool WriterLock::free_reserve() noexcept {
-  if (fd_ < 0 || !session_) return false;
-  return ::unlink(reserve_path(db_path_, *session_).c_str()) == 0;
+  if (!file_.is_open() || !session_) return false;
+  std::error_code ec;
+  return std::filesystem::remove(reserve_path(db_path_, *session_), ec);
 }
 
 std::optional<LockHolder> WriterLock::session_writer(const std::string& db_path, std::int64_t session_id) {
-  // O_RDONLY and no O_CREAT: probing never creates a file; closing this
-  // descriptor releases no lock, since OFD locks belong to their own
-  // open file description.
-  const int fd = ::open(lock_path(db_path).c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return std::nullopt;
+  // Read-only: probing never creates a file; closing it releases no lock
+  // but its own, since locks belong to the open that took them.
+  LockFile file = LockFile::open(lock_path(db_path), LockFile::Mode::read_only);
+  if (!file.is_open()) return std::nullopt;
   std::optional<LockHolder> out;
-  if (held_by_other(fd, F_WRLCK, session_byte(session_id))) out = read_slot(fd, session_id);
-  ::close(fd);
+  if (file.held_elsewhere(session_byte(session_id), true)) out = read_slot(file, session_id);
   return out;
 }
 
 WriterLock::WriterLock(WriterLock&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)),
+    : file_(std::move(other.file_)),
       db_path_(std::move(other.db_path_)),
       session_(std::exchange(other.session_, std::nullopt)),
       replacing_(std::exchange(other.replacing_, false)) {}
@@ -238,7 +182,7 @@ WriterLock::WriterLock(WriterLock&& other) noexcept
 WriterLock& WriterLock::operator=(WriterLock&& other) noexcept {
   if (this != &other) {
     release();
-    fd_ = std::exchange(other.fd_, -1);
+    file_ = std::move(other.file_);
     db_path_ = std::move(other.db_path_);
     session_ = std::exchange(other.session_, std::nullopt);
     replacing_ = std::exchange(other.replacing_, false);
@@ -249,18 +193,20 @@ WriterLock& WriterLock::operator=(WriterLock&& other) noexcept {
 WriterLock::~WriterLock() { release(); }
 
 void WriterLock::release() noexcept {
-  if (fd_ < 0) return;
+  if (!file_.is_open()) return;
+  std::error_code ec;
   if (session_) {
-    ::unlink(reserve_path(db_path_, *session_).c_str());
-    clear_slot(fd_, *session_);
-    unlock(fd_, session_byte(*session_));
+    std::filesystem::remove(reserve_path(db_path_, *session_), ec);
+    clear_slot(file_, *session_);
+    file_.unlock(session_byte(*session_));
   }
-  if (replacing_) clear_slot(fd_, 0);
+  if (replacing_) clear_slot(file_, 0);
   // The last holder removes the lock file; later lockers find the path's
-  // new file (open_locked checks the inode after locking).
-  if (try_lock(fd_, F_WRLCK, file_byte)) ::unlink(lock_path(db_path_).c_str());
-  ::close(fd_);
-  fd_ = -1;
+  // new file (open_locked checks it after locking). Not on Windows, where
+  // an open file cannot be unlinked (platform/lock_file.hpp).
+  if (LockFile::unlink_when_free && file_.try_lock(file_byte, true))
+    std::filesystem::remove(lock_path(db_path_), ec);
+  file_.close();
 }
 
 }  // namespace curvlab::data

@@ -5,6 +5,7 @@
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/platform/process.hpp"
 #include "curvlab/harness/version.hpp"
 #include "curvlab/renderer/context.hpp"
 #include "curvlab/renderer/image_io.hpp"
@@ -530,7 +531,7 @@ Result<std::string> write_atomically(const fs::path& dir, const std::string& tex
 // The Vulkan device the sheet is drawn on. Mesa keeps a shader cache under
 // the home folder; the sheet writes only under its own folder.
 Result<renderer::Context> sheet_context(bool software) {
-  ::setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
+  platform::set_env_default("MESA_SHADER_CACHE_DISABLE", "true");
   return from_renderer(renderer::Context::create(
       {.device = software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
        .validation = false}));

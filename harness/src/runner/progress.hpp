@@ -13,7 +13,8 @@
 #include <cstdio>
 #include <string>
 #include <string_view>
-#include <unistd.h>
+
+#include "curvlab/harness/platform/terminal.hpp"
 
 namespace curvlab::harness::runner {
 
@@ -31,7 +32,7 @@ class Progress {
   // `on`: report on stderr (not --quiet, not --json); `json`: the JSON
   // stream on stdout instead.
   Progress(bool on, bool json, std::chrono::milliseconds line_every)
-      : mode_(json || !on ? Mode::none : isatty(STDERR_FILENO) != 0 ? Mode::bar : Mode::lines),
+      : mode_(json || !on ? Mode::none : platform::stderr_is_terminal() ? Mode::bar : Mode::lines),
         json_(json),
         line_every_(line_every),
         next_line_(start_ + line_every) {}

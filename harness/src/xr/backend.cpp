@@ -237,6 +237,17 @@ renderer::RenderError runtime_failure(std::string message) {
   return {renderer::RenderError::Kind::device, std::move(message)};
 }
 
+// The loader's entry point the runtime makes Vulkan objects through. On
+// Windows vulkan-1.dll is loaded at run time (no import library).
+PFN_vkGetInstanceProcAddr vulkan_entry_point() {
+#ifdef _WIN32
+  static const vk::DynamicLoader loader;
+  return loader.getProcAddress<PFN_vkGetInstanceProcAddr>("vkGetInstanceProcAddr");
+#else
+  return &vkGetInstanceProcAddr;
+#endif
+}
+
 // The hooks through which the runtime makes the Vulkan objects from the
 // renderer's create-infos.
 renderer::ContextEmbedding runtime_made_vulkan(const VulkanEnable2& fns) {
@@ -245,7 +256,7 @@ renderer::ContextEmbedding runtime_made_vulkan(const VulkanEnable2& fns) {
       -> std::variant<VkInstance, renderer::RenderError> {
     auto ci = tagged<XrVulkanInstanceCreateInfoKHR>(XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR);
     ci.systemId = fns.system;
-    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
+    ci.pfnGetInstanceProcAddr = vulkan_entry_point();
     ci.vulkanCreateInfo = &info;
     VkInstance instance = VK_NULL_HANDLE;
     VkResult vr = VK_SUCCESS;
@@ -269,7 +280,7 @@ renderer::ContextEmbedding runtime_made_vulkan(const VulkanEnable2& fns) {
       -> std::variant<VkDevice, renderer::RenderError> {
     auto ci = tagged<XrVulkanDeviceCreateInfoKHR>(XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR);
     ci.systemId = fns.system;
-    ci.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
+    ci.pfnGetInstanceProcAddr = vulkan_entry_point();
     ci.vulkanPhysicalDevice = physical;
     ci.vulkanCreateInfo = &info;
     VkDevice device = VK_NULL_HANDLE;

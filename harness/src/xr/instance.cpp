@@ -23,6 +23,15 @@ std::string hint(XrResult result) {
     case XR_ERROR_RUNTIME_UNAVAILABLE:
     case XR_ERROR_RUNTIME_FAILURE:
     case XR_ERROR_INSTANCE_LOST:
+#ifdef _WIN32
+      // Where the Windows loader looks (docs/windows.md).
+      return "no OpenXR runtime is installed and active. Install and start one: SteamVR (start "
+             "it and make it the OpenXR runtime in its settings), Meta Quest Link, or the headset "
+             "vendor's runtime; it registers itself in the registry under "
+             "HKEY_LOCAL_MACHINE\\SOFTWARE\\Khronos\\OpenXR\\1\\ActiveRuntime (XR_RUNTIME_JSON "
+             "chooses one explicitly, except from an elevated, administrator console). For "
+             "piloting without a headset use --backend desktop";
+#else
       return "no OpenXR runtime is installed and active. Install and start one: Monado "
              "(not packaged in Debian 12: build it or use a distribution that packages it, then "
              "run `monado-service`), SteamVR (start it and "
@@ -31,6 +40,7 @@ std::string hint(XrResult result) {
              "~/.config/openxr/1/active_runtime.json); to choose one explicitly, set "
              "XR_RUNTIME_JSON=/path/to/its/manifest.json. For piloting without a headset use "
              "--backend desktop";
+#endif
     case XR_ERROR_FORM_FACTOR_UNAVAILABLE:
       return "the runtime is running but no headset is available: connect the headset, "
              "switch it on and put it on once to wake it, then retry";

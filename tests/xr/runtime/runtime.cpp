@@ -136,6 +136,9 @@
 
 #include <time.h>
 
+#include <chrono>
+#include <thread>
+
 #define VK_NO_PROTOTYPES
 #include <vulkan/vulkan.h>
 #define XR_NO_PROTOTYPES
@@ -1774,9 +1777,16 @@ XrResult XRAPI_CALL WaitFrame(XrSession h, const XrFrameWaitInfo* info, XrFrameS
              std::to_string(jitter_ns));
   // Pace in real time without holding the lock.
   lock.unlock();
+#ifdef _WIN32
+  // winpthreads' clock_nanosleep fails for absolute CLOCK_MONOTONIC times
+  // (the loop below would spin): sleep what is left, until nothing is.
+  for (std::int64_t left = wake - monotonic_ns(); left > 0; left = wake - monotonic_ns())
+    std::this_thread::sleep_for(std::chrono::nanoseconds(left));
+#else
   timespec until{static_cast<time_t>(wake / 1'000'000'000), static_cast<long>(wake % 1'000'000'000)};
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) != 0) {
   }
+#endif
   lock.lock();
   if (session_of(h) != s) return XR_ERROR_SESSION_LOST;
   tick(*s);

@@ -14,8 +14,8 @@
 
 namespace curvlab::data {
 
-// True while a process with this id exists: kill(pid, 0) does not fail with
-// ESRCH (another user's process, EPERM, counts as living).
+// True while a process with this id exists (another user's process counts
+// as living; platform/process.hpp).
 bool process_alive(pid_t pid);
 
 // Removes, files and folders alike, the entries directly in `dir` named

@@ -1,6 +1,6 @@
 // One live writer per session (DESIGN.md §7; docs/data.md, "Sharing the
-// file"). A data file DB has a companion lock file DB.lock holding
-// open-file-description record locks (fcntl F_OFD_SETLK):
+// file"). A data file DB has a companion lock file DB.lock holding one-byte
+// record locks (platform/lock_file.hpp: fcntl F_OFD_SETLK, LockFileEx):
 // - byte 0: shared by every process writing a session into DB, exclusive
 //   for a command that replaces the whole file (merge --out);
 // - byte 1 + N: exclusive for the process writing session N;
@@ -16,11 +16,15 @@
 // never touched. Locks on a network share hold only as far as the share
 // passes fcntl locks on (NFS with lockd does; many SMB setups do not).
 //
-// Ownership: a WriterLock owns its descriptor and locks; move-only. Not
+// On Windows DB.lock stays when the last holder releases it (an open file
+// cannot be unlinked there).
+//
+// Ownership: a WriterLock owns its lock file and locks; move-only. Not
 // thread-safe; one thread at a time.
 #pragma once
 
 #include "curvlab/harness/data/error.hpp"
+#include "curvlab/harness/platform/lock_file.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -65,10 +69,10 @@ class WriterLock {
   ~WriterLock();
 
  private:
-  WriterLock(int fd, std::string db_path) : fd_(fd), db_path_(std::move(db_path)) {}
+  WriterLock(platform::LockFile file, std::string db_path) : file_(std::move(file)), db_path_(std::move(db_path)) {}
   void release() noexcept;
 
-  int fd_ = -1;
+  platform::LockFile file_;
   std::string db_path_;
   std::optional<std::int64_t> session_;  // the claimed session
   bool replacing_ = false;
