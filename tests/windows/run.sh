@@ -6,7 +6,7 @@
 #   run.sh CASE SOURCE_DIR LINUX_CURVLAB WINDOWS_BUILD_DIR WORK_DIR
 #
 # Cases: prefix (makes the Wine prefix the others use), unit-NAME (a gtest
-# binary), cli, session, render, resume, xr.
+# binary), cli, session, render, resume, desktop, xr.
 set -euo pipefail
 case_name=$1 src=$2 linux=$3 wbuild=$4 work=$5
 
@@ -179,6 +179,34 @@ PY
     "${compare[@]}" csv linux/trials.csv resumed/trials.csv \
       --ignore session_uuid,completed_utc,onset_ns,response_ns,rt_ns,attempt,response
     echo "resumed: 8 trials, the killed run's trials kept as they were"
+    ;;
+
+  desktop)
+    # The desktop pilot: a GLFW window with a Win32 Vulkan surface under
+    # Xvfb, answered from a key script, on both builds. Every onset
+    # screenshot (both eyes and the window) is the Linux build's pixels, and
+    # the trials agree but for provenance and the realtime clock.
+    { printf 'space 100\n'; for _ in 1 2 3 4 5 6 7 8; do echo "2 100"; done; printf 'space 100\nspace 100\n'; } > keys.txt
+    for build in linux windows; do
+      args=(run protocols/demo.toml --participant T1 --db "$out/$build.sqlite" --backend desktop --software
+            --window-size 256x256 --key-script "$out/keys.txt" --screenshot "$out/$build-shots" --quiet --json)
+      if [ $build = linux ]; then (cd "$src" && xvfb-run -a "$linux" "${args[@]}" > "$out/$build.json")
+      else (cd "$src" && win_x "${args[@]}" > "$out/$build.json"); fi
+      grep -q '"trials_completed": 8' "$out/$build.json" || { echo "$build: $(cat "$out/$build.json")" >&2; exit 1; }
+    done
+    failed=0
+    shots=0
+    for f in linux-shots/*.png; do
+      shots=$((shots + 1))
+      "${compare[@]}" png "$f" "windows-shots/$(basename "$f")" > /dev/null || { echo "differs: $f" >&2; failed=1; }
+    done
+    [ "$shots" -ge 24 ] || { echo "only $shots screenshots" >&2; failed=1; }
+    "$linux" export --db linux.sqlite --out linux --format csv > /dev/null
+    win export --db windows.sqlite --out windows --format csv > /dev/null
+    "${compare[@]}" csv linux/trials.csv windows/trials.csv \
+      --ignore session_uuid,completed_utc,onset_ns,response_ns,rt_ns || failed=1
+    echo "desktop: 8 trials, $shots screenshots equal"
+    exit $failed
     ;;
 
   xr)

@@ -18,7 +18,6 @@
 #include <map>
 #include <system_error>
 
-
 namespace curvlab::data::exporting {
 
 namespace fs = std::filesystem;
