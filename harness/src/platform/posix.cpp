@@ -99,21 +99,6 @@ LockFile LockFile::open(const std::string& path, Mode mode) {
   return f;
 }
 
-LockFile::LockFile(LockFile&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), error_(std::exchange(other.error_, 0)), own_(std::move(other.own_)) {}
-
-LockFile& LockFile::operator=(LockFile&& other) noexcept {
-  if (this != &other) {
-    close();
-    fd_ = std::exchange(other.fd_, -1);
-    error_ = std::exchange(other.error_, 0);
-    own_ = std::move(other.own_);
-  }
-  return *this;
-}
-
-LockFile::~LockFile() { close(); }
-
 void LockFile::close() noexcept {
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;

@@ -9,20 +9,12 @@
 namespace curvlab::test_runtime {
 namespace {
 
-std::optional<double> number(const std::string& text) {
-  if (text.empty()) return std::nullopt;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() + text.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
 std::optional<std::vector<double>> numbers(const std::string& text, std::size_t n) {
   std::vector<double> out;
   std::stringstream in(text);
   std::string item;
   while (std::getline(in, item, ',')) {
-    const auto v = number(item);
+    const auto v = parse_number(item);
     if (!v) return std::nullopt;
     out.push_back(*v);
   }
@@ -75,7 +67,7 @@ std::optional<GazeScript> read_gaze_script(std::string& error) {
     if (!p) return bad();
     g.fixate_m = Vec3{(*p)[0], (*p)[1], (*p)[2]};
   } else if (parts[1].rfind("vergence=", 0) == 0) {
-    const auto d = number(parts[1].substr(9));
+    const auto d = parse_number(parts[1].substr(9));
     if (!d || std::abs(*d) >= 90.0) return bad();
     g.vergence_deg = *d;
   } else {

@@ -41,14 +41,6 @@ Quat axis_angle(const Vec3& axis, double angle_rad) {
   return {axis.x * s, axis.y * s, axis.z * s, std::cos(angle_rad / 2.0)};
 }
 
-std::optional<double> number(const std::string& text) {
-  if (text.empty()) return std::nullopt;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() + text.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
 std::vector<std::string> split(const std::string& text, char sep) {
   std::vector<std::string> out;
   std::stringstream in(text);
@@ -78,18 +70,18 @@ std::optional<Press> parse_press(const std::string& item) {
   if (!known) return std::nullopt;
   std::string rest = item.substr(at + 1);
   if (const auto tilde = rest.find('~'); tilde != std::string::npos) {
-    const auto hold = number(rest.substr(tilde + 1));
+    const auto hold = parse_number(rest.substr(tilde + 1));
     if (!hold || *hold <= 0.0) return std::nullopt;
     p.hold_s = *hold;
     rest = rest.substr(0, tilde);
   }
   if (const auto slash = rest.find('/'); slash != std::string::npos) {
-    const auto every = number(rest.substr(slash + 1));
+    const auto every = parse_number(rest.substr(slash + 1));
     if (!every || *every <= p.hold_s) return std::nullopt;
     p.every_s = *every;
     rest = rest.substr(0, slash);
   }
-  const auto start = number(rest);
+  const auto start = parse_number(rest);
   if (!start || *start < 0.0) return std::nullopt;
   p.at_s = *start;
   return p;
@@ -104,13 +96,13 @@ std::optional<Placement> parse_placement(const std::string& item) {
   const std::string hand = item.substr(0, at);
   if (hand != "left" && hand != "right") return std::nullopt;
   p.hand = hand == "left" ? 0 : 1;
-  const auto start = number(item.substr(at + 1, eq - at - 1));
+  const auto start = parse_number(item.substr(at + 1, eq - at - 1));
   const auto xyz = split(item.substr(eq + 1), ',');
   if (!start || *start < 0.0 || xyz.size() != 3) return std::nullopt;
   p.at_s = *start;
   double* out[3] = {&p.position_m.x, &p.position_m.y, &p.position_m.z};
   for (std::size_t i = 0; i < 3; ++i) {
-    const auto v = number(xyz[i]);
+    const auto v = parse_number(xyz[i]);
     if (!v || std::abs(*v) > 10.0) return std::nullopt;
     *out[i] = *v;
   }
@@ -133,7 +125,7 @@ bool parse_timing(const std::string& text, Timing& t) {
   const auto kv = pairs(text);
   if (!kv || kv->empty()) return false;
   for (const auto& [k, v] : *kv) {
-    const auto n = number(v);
+    const auto n = parse_number(v);
     if (!n) return false;
     if (k == "jitter" && *n >= 0.0 && *n <= 4.0) t.jitter_ms = *n;
     else if (k == "miss" && *n >= 0.0 && *n <= 0.5) t.miss = *n;
@@ -148,7 +140,7 @@ bool parse_bring_up(const std::string& text, BringUp& b) {
   const auto kv = pairs(text);
   if (!kv || kv->empty()) return false;
   for (const auto& [k, v] : *kv) {
-    const auto n = number(v);
+    const auto n = parse_number(v);
     if (!n || *n < 0.0) return false;
     if (k == "ready" && *n <= 60.0) b.ready_s = *n;
     else if ((k == "visible" || k == "focused") && *n == std::floor(*n) && *n <= 10000.0)
@@ -167,13 +159,13 @@ std::optional<StageMove> parse_stage_move(std::string text) {
   }
   const auto eq = text.find('=');
   if (eq == std::string::npos) return std::nullopt;
-  const auto at = number(text.substr(0, eq));
+  const auto at = parse_number(text.substr(0, eq));
   const auto parts = split(text.substr(eq + 1), ',');
   if (!at || *at < 0.0 || (parts.size() != 3 && parts.size() != 4)) return std::nullopt;
   m.at_s = *at;
   double v[4] = {0.0, 0.0, 0.0, 0.0};
   for (std::size_t i = 0; i < parts.size(); ++i) {
-    const auto n = number(parts[i]);
+    const auto n = parse_number(parts[i]);
     if (!n || std::abs(*n) > (i < 3 ? 10.0 : 180.0)) return std::nullopt;
     v[i] = *n;
   }
@@ -188,14 +180,14 @@ bool parse_views(const std::string& text, Views& w) {
   for (const auto& [k, v] : *kv) {
     if (k == "ipd") {
       const auto colon = v.find(':');
-      const auto lo = number(v.substr(0, colon));
-      const auto hi = colon == std::string::npos ? std::nullopt : number(v.substr(colon + 1));
+      const auto lo = parse_number(v.substr(0, colon));
+      const auto hi = colon == std::string::npos ? std::nullopt : parse_number(v.substr(colon + 1));
       if (!lo || !hi || *lo < 0.04 || *hi > 0.08 || *lo > *hi) return false;
       w.ipd_min_m = *lo;
       w.ipd_max_m = *hi;
       continue;
     }
-    const auto n = number(v);
+    const auto n = parse_number(v);
     if (!n) return false;
     if (k == "cant" && *n >= 0.0 && *n <= 30.0) w.cant_deg = *n;
     else if (k == "fov" && *n >= 0.0 && *n <= 0.2) w.fov_change = *n;
@@ -222,8 +214,8 @@ std::optional<TrackingSpell> parse_tracking(const std::string& item) {
   else if (mode == "orientation_only") s.mode = TrackingMode::orientation_only;
   else if (mode == "lost") s.mode = TrackingMode::lost;
   else return std::nullopt;
-  const auto start = number(item.substr(at + 1, plus - at - 1));
-  const auto length = number(item.substr(plus + 1));
+  const auto start = parse_number(item.substr(at + 1, plus - at - 1));
+  const auto length = parse_number(item.substr(plus + 1));
   if (!start || !length || *start < 0.0 || *length <= 0.0) return std::nullopt;
   s.at_s = *start;
   s.for_s = *length;
@@ -235,7 +227,7 @@ bool parse_refresh(const std::string& text, Refresh& r) {
   const auto at = text.find('@');
   r.rates.clear();
   for (const auto& item : split(text.substr(0, at), ',')) {
-    const auto n = number(item);
+    const auto n = parse_number(item);
     if (!n || *n < 30.0 || *n > 240.0) return false;
     r.rates.push_back(static_cast<float>(*n));
   }
@@ -243,7 +235,7 @@ bool parse_refresh(const std::string& text, Refresh& r) {
   std::sort(r.rates.begin(), r.rates.end());
   r.start_hz = r.rates.front();
   if (at != std::string::npos) {
-    const auto n = number(text.substr(at + 1));
+    const auto n = parse_number(text.substr(at + 1));
     if (!n || std::find(r.rates.begin(), r.rates.end(), static_cast<float>(*n)) == r.rates.end()) return false;
     r.start_hz = static_cast<float>(*n);
   }
@@ -258,6 +250,14 @@ const std::vector<std::pair<std::string, std::int64_t>>& format_names() {
 }
 
 }  // namespace
+
+std::optional<double> parse_number(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
 
 double uniform(std::uint64_t seed, std::int64_t n, int stream) {
   // splitmix64 (Steele, Lea and Flood 2014) of the three, mixed.
@@ -323,8 +323,8 @@ std::optional<Script> read_script(std::string& error) {
   if (const char* v = env("CURVLAB_TEST_XR_UNFOCUS")) {
     for (const auto& item : split(v, ',')) {
       const auto plus = item.find('+');
-      const auto at = number(item.substr(0, plus));
-      const auto len = plus == std::string::npos ? std::nullopt : number(item.substr(plus + 1));
+      const auto at = parse_number(item.substr(0, plus));
+      const auto len = plus == std::string::npos ? std::nullopt : parse_number(item.substr(plus + 1));
       if (!at || !len || *at < 0.0 || *len <= 0.0) {
         error = "CURVLAB_TEST_XR_UNFOCUS: '" + item + "': expected SECONDS+DURATION, e.g. 4.2+0.5";
         return std::nullopt;
@@ -333,7 +333,7 @@ std::optional<Script> read_script(std::string& error) {
     }
   }
   if (const char* v = env("CURVLAB_TEST_XR_EXIT")) {
-    const auto at = number(v);
+    const auto at = parse_number(v);
     if (!at || *at < 0.0) {
       error = std::string("CURVLAB_TEST_XR_EXIT: '") + v + "': expected seconds after focus";
       return std::nullopt;
@@ -343,8 +343,8 @@ std::optional<Script> read_script(std::string& error) {
   if (const char* v = env("CURVLAB_TEST_XR_RESTART")) {
     const std::string item = v;
     const auto plus = item.find('+');
-    const auto at = number(item.substr(0, plus));
-    const auto idle = plus == std::string::npos ? std::nullopt : number(item.substr(plus + 1));
+    const auto at = parse_number(item.substr(0, plus));
+    const auto idle = plus == std::string::npos ? std::nullopt : parse_number(item.substr(plus + 1));
     if (!at || !idle || *at < 0.0 || *idle < 0.0) {
       error = "CURVLAB_TEST_XR_RESTART: '" + item + "': expected SECONDS+IDLE_SECONDS, e.g. 3.15+0.5";
       return std::nullopt;
@@ -352,7 +352,7 @@ std::optional<Script> read_script(std::string& error) {
     s.restart = Restart{*at, *idle};
   }
   if (const char* v = env("CURVLAB_TEST_XR_LOSS")) {
-    const auto at = number(v);
+    const auto at = parse_number(v);
     if (!at || *at < 0.0) {
       error = std::string("CURVLAB_TEST_XR_LOSS: '") + v + "': expected seconds after focus";
       return std::nullopt;
@@ -367,7 +367,7 @@ std::optional<Script> read_script(std::string& error) {
     f.call = text.substr(0, at);
     const auto seconds = at == std::string::npos || colon == std::string::npos
                              ? std::nullopt
-                             : number(text.substr(at + 1, colon - at - 1));
+                             : parse_number(text.substr(at + 1, colon - at - 1));
     f.result = colon == std::string::npos ? "" : text.substr(colon + 1);
     if ((f.call != "xrWaitFrame" && f.call != "xrEndFrame") || !seconds || *seconds < 0.0 ||
         (f.result != "XR_ERROR_SESSION_LOST" && f.result != "XR_ERROR_RUNTIME_FAILURE" &&
@@ -390,7 +390,7 @@ std::optional<Script> read_script(std::string& error) {
   }
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_DIR")) s.capture_dir = v;
   if (const char* v = env("CURVLAB_TEST_XR_CAPTURE_EVERY")) {
-    const auto n = number(v);
+    const auto n = parse_number(v);
     if (!n || *n < 1.0 || *n != std::floor(*n)) {
       error = std::string("CURVLAB_TEST_XR_CAPTURE_EVERY: '") + v + "': expected a whole number ≥ 1";
       return std::nullopt;
@@ -400,7 +400,7 @@ std::optional<Script> read_script(std::string& error) {
   if (const char* v = env("CURVLAB_TEST_XR_LATE")) {
     for (const auto& item : split(v, ',')) {
       const bool hidden = !item.empty() && item.back() == '!';
-      const auto n = number(hidden ? item.substr(0, item.size() - 1) : item);
+      const auto n = parse_number(hidden ? item.substr(0, item.size() - 1) : item);
       if (!n || *n < 0.0 || *n != std::floor(*n)) {
         error = "CURVLAB_TEST_XR_LATE: '" + item +
                 "': expected FRAME (its display time skips a period) or FRAME! (shouldRender false), "
@@ -418,8 +418,8 @@ std::optional<Script> read_script(std::string& error) {
   if (const char* v = env("CURVLAB_TEST_XR_SWAPCHAIN_WAIT")) {
     const std::string text = v;
     const auto slash = text.find('/');
-    const auto ms = number(text.substr(0, slash));
-    const auto every = slash == std::string::npos ? std::nullopt : number(text.substr(slash + 1));
+    const auto ms = parse_number(text.substr(0, slash));
+    const auto every = slash == std::string::npos ? std::nullopt : parse_number(text.substr(slash + 1));
     if (!ms || !every || *ms <= 0.0 || *ms > 5000.0 || *every < 1.0 || *every != std::floor(*every)) {
       error = "CURVLAB_TEST_XR_SWAPCHAIN_WAIT: '" + text +
               "': expected MS/EVERY (every EVERY-th image acquired is busy for MS milliseconds), e.g. 40/50";
@@ -445,8 +445,8 @@ std::optional<Script> read_script(std::string& error) {
   if (const char* v = env("CURVLAB_TEST_XR_EVENTS_LOST")) {
     const std::string text = v;
     const auto x = text.find('x');
-    const auto at = number(text.substr(0, x));
-    const auto count = x == std::string::npos ? std::optional<double>(1.0) : number(text.substr(x + 1));
+    const auto at = parse_number(text.substr(0, x));
+    const auto count = x == std::string::npos ? std::optional<double>(1.0) : parse_number(text.substr(x + 1));
     if (!at || !count || *at < 0.0 || *count < 1.0 || *count > 1000.0 || *count != std::floor(*count)) {
       error = "CURVLAB_TEST_XR_EVENTS_LOST: '" + text + "': expected SECONDS[xCOUNT], e.g. 2.5x3";
       return std::nullopt;
@@ -497,8 +497,8 @@ std::optional<Script> read_script(std::string& error) {
   if (const char* v = env("CURVLAB_TEST_XR_REFRESH_CHANGE")) {
     const std::string text = v;
     const auto eq = text.find('=');
-    const auto at = number(text.substr(0, eq));
-    const auto hz = eq == std::string::npos ? std::nullopt : number(text.substr(eq + 1));
+    const auto at = parse_number(text.substr(0, eq));
+    const auto hz = eq == std::string::npos ? std::nullopt : parse_number(text.substr(eq + 1));
     const auto& rates = s.refresh.rates;
     if (!at || !hz || *at < 0.0 ||
         std::find(rates.begin(), rates.end(), static_cast<float>(*hz)) == rates.end()) {
@@ -513,8 +513,8 @@ std::optional<Script> read_script(std::string& error) {
   if (const char* v = env("CURVLAB_TEST_XR_SIZE")) {
     const std::string text = v;
     const auto x = text.find('x');
-    const auto w = number(text.substr(0, x));
-    const auto h = x == std::string::npos ? std::nullopt : number(text.substr(x + 1));
+    const auto w = parse_number(text.substr(0, x));
+    const auto h = x == std::string::npos ? std::nullopt : parse_number(text.substr(x + 1));
     if (!w || !h || *w < 16.0 || *h < 16.0 || *w > 4096.0 || *h > 4096.0) {
       error = "CURVLAB_TEST_XR_SIZE: '" + text + "': expected WxH between 16 and 4096, e.g. 320x320";
       return std::nullopt;

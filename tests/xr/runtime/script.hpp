@@ -222,6 +222,9 @@ struct EyeView {
 };
 EyeView eye_view(const Script& script, int eye, double t_s);
 
+// A whole string as a finite number, or nullopt.
+std::optional<double> parse_number(const std::string& text);
+
 // Reads the CURVLAB_TEST_XR_* variables; a malformed one is an error naming
 // the variable and what was expected.
 std::optional<Script> read_script(std::string& error);
