@@ -60,9 +60,12 @@ std::variant<CoverageBitmap, RenderError> render_text(const std::string& text, i
 #ifdef _WIN32
   if (!in && std::filesystem::path(font_path).is_relative()) in.open(beside_executable(font_path), std::ios::binary);
 #endif
-  if (!in)
-    return RenderError{RenderError::Kind::font,
-                       "cannot open font " + font_path + " (apt-get install fonts-dejavu-core)"};
+#ifdef _WIN32
+  constexpr const char* kHowToGetFont = " (it ships in the zip's fonts folder, beside curvlab.exe)";
+#else
+  constexpr const char* kHowToGetFont = " (apt-get install fonts-dejavu-core)";
+#endif
+  if (!in) return RenderError{RenderError::Kind::font, "cannot open font " + font_path + kHowToGetFont};
   const std::vector<unsigned char> font_data((std::istreambuf_iterator<char>(in)),
                                              std::istreambuf_iterator<char>());
   stbtt_fontinfo font;
