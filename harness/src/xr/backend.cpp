@@ -21,6 +21,10 @@
 #include <vulkan/vulkan.h>
 #define XR_USE_GRAPHICS_API_VULKAN
 #define XR_USE_TIMESPEC
+#ifdef _WIN32
+#include <windows.h>
+#define XR_USE_PLATFORM_WIN32
+#endif
 #include <openxr/openxr_platform.h>
 
 #include <algorithm>
@@ -112,11 +116,31 @@ XrResult load(XrInstance instance, const char* name, F& fn) {
   return xrGetInstanceProcAddr(instance, name, reinterpret_cast<PFN_xrVoidFunction*>(&fn));
 }
 
+#ifdef _WIN32
+// A QueryPerformanceCounter reading in nanoseconds, without overflow.
+std::int64_t counter_ns(std::int64_t counter) {
+  static const std::int64_t frequency = [] {
+    LARGE_INTEGER f;
+    QueryPerformanceFrequency(&f);
+    return static_cast<std::int64_t>(f.QuadPart);
+  }();
+  return counter / frequency * 1'000'000'000 + counter % frequency * 1'000'000'000 / frequency;
+}
+
+// On Windows the performance counter, the clock
+// XR_KHR_win32_convert_performance_counter_time converts to.
+std::int64_t monotonic_now_ns() {
+  LARGE_INTEGER c;
+  QueryPerformanceCounter(&c);
+  return counter_ns(c.QuadPart);
+}
+#else
 std::int64_t monotonic_now_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
+#endif
 
 bool located(XrSpaceLocationFlags flags) {
   // Valid and tracked: an inferred (untracked) pose counts as lost tracking,
@@ -162,6 +186,9 @@ std::string vk_result(VkResult r) { return vk::to_string(static_cast<vk::Result>
 // where the runtime offers them.
 struct OptionalExtensions {
   bool timespec = false;  // XR_KHR_convert_timespec_time
+  // XR_KHR_win32_convert_performance_counter_time, what Windows runtimes
+  // (SteamVR, Meta, WMR) offer instead; used where timespec is not offered.
+  bool win32_time = false;
   // XR_FB_display_refresh_rate: the display's refresh rate before the first
   // frame, for the session's provenance (Meta, Pico and Monado offer it).
   bool refresh = false;
@@ -170,6 +197,9 @@ struct OptionalExtensions {
   [[nodiscard]] std::vector<std::string> names() const {
     std::vector<std::string> out;
     if (timespec) out.emplace_back(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
+#ifdef _WIN32
+    if (win32_time && !timespec) out.emplace_back(XR_KHR_WIN32_CONVERT_PERFORMANCE_COUNTER_TIME_EXTENSION_NAME);
+#endif
     if (refresh) out.emplace_back(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME);
     for (auto& n : gaze.names()) out.push_back(std::move(n));
     return out;
@@ -185,7 +215,13 @@ Result<OptionalExtensions> offered_extensions() {
   auto has = [&names](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
   if (!has(XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME))
     return error(XR_ERROR_EXTENSION_NOT_PRESENT, "xrEnumerateInstanceExtensionProperties");
+#ifdef _WIN32
+  const bool win32_time = has(XR_KHR_WIN32_CONVERT_PERFORMANCE_COUNTER_TIME_EXTENSION_NAME);
+#else
+  const bool win32_time = false;
+#endif
   return OptionalExtensions{.timespec = has(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME),
+                            .win32_time = win32_time,
                             .refresh = has(XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME),
                             .gaze = gaze_extensions_in(names)};
 }
@@ -543,6 +579,9 @@ class XrBackend final : public InteractiveDisplay {
 
   SessionStateMachine state_;
   PFN_xrConvertTimeToTimespecTimeKHR to_timespec_ = nullptr;
+#ifdef _WIN32
+  PFN_xrConvertTimeToWin32PerformanceCounterKHR to_counter_ = nullptr;
+#endif
   XrClockMap clock_map_;
   std::deque<Signal> signals_;
   bool failed_ = false;
@@ -605,6 +644,11 @@ Result<Done> XrBackend::open(const OptionalExtensions& offered) {
   const XrInstance xr = instance_.handle();
   if (offered.timespec && XR_FAILED(load(xr, "xrConvertTimeToTimespecTimeKHR", to_timespec_)))
     to_timespec_ = nullptr;
+#ifdef _WIN32
+  if (!offered.timespec && offered.win32_time &&
+      XR_FAILED(load(xr, "xrConvertTimeToWin32PerformanceCounterKHR", to_counter_)))
+    to_counter_ = nullptr;
+#endif
   auto system = instance_.hmd_system();
   if (!system) return system.error();
   system_ = system.value();
@@ -1044,6 +1088,13 @@ std::int64_t XrBackend::to_session_ns(XrTime t) {
     if (XR_SUCCEEDED(to_timespec_(instance_.handle(), t, &ts)))
       return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec + monotonic_to_session();
   }
+#ifdef _WIN32
+  if (to_counter_ != nullptr) {
+    LARGE_INTEGER counter;
+    if (XR_SUCCEEDED(to_counter_(instance_.handle(), t, &counter)))
+      return counter_ns(counter.QuadPart) + monotonic_to_session();
+  }
+#endif
   return clock_map_.to_session(t);
 }
 

@@ -3,8 +3,9 @@
 // the build folder next to this library), so the real `curvlab run --backend
 // xr` drives a whole session on a machine without a headset. It implements
 // every OpenXR 1.0 core function, XR_KHR_vulkan_enable2,
-// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it) and
-// XR_FB_display_refresh_rate, with scripted eyes also
+// XR_KHR_convert_timespec_time (Khronos' hello_xr runs through it; built
+// for Windows XR_KHR_win32_convert_performance_counter_time instead, as
+// Windows runtimes offer) and XR_FB_display_refresh_rate, with scripted eyes also
 // XR_EXT_eye_gaze_interaction and XR_FB_eye_tracking_social (eyes.hpp), and
 // checks the rules of the OpenXR 1.0 specification that are cheap to check
 // (call order of the frame loop and of swapchain images, session states,
@@ -144,6 +145,10 @@
 #define XR_NO_PROTOTYPES
 #define XR_USE_GRAPHICS_API_VULKAN
 #define XR_USE_TIMESPEC
+#ifdef _WIN32
+#include <windows.h>
+#define XR_USE_PLATFORM_WIN32
+#endif
 #include <openxr/openxr.h>
 #include <openxr/openxr_platform.h>
 #include <openxr/openxr_reflection.h>
@@ -345,6 +350,7 @@ struct EyeTracker {
 
 struct Instance {
   bool timespec = false;
+  bool win32_time = false;  // XR_KHR_win32_convert_performance_counter_time (Windows)
   bool refresh_rate = false;  // XR_FB_display_refresh_rate enabled
   bool eye_gaze = false;      // XR_EXT_eye_gaze_interaction enabled
   bool eye_tracking = false;  // XR_FB_eye_tracking_social enabled
@@ -814,9 +820,16 @@ XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layer, uint
   std::lock_guard lock(g_mutex);
   if (layer != nullptr && *layer != '\0')
     return violation("xrEnumerateInstanceExtensionProperties", XR_ERROR_API_LAYER_NOT_PRESENT, layer);
+  // Time conversion as the platform's runtimes offer it: Windows runtimes
+  // convert to the performance counter, not to timespec.
   std::vector<std::pair<const char*, uint32_t>> offered = {
       {XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME, XR_KHR_vulkan_enable2_SPEC_VERSION},
+#ifdef _WIN32
+      {XR_KHR_WIN32_CONVERT_PERFORMANCE_COUNTER_TIME_EXTENSION_NAME,
+       XR_KHR_win32_convert_performance_counter_time_SPEC_VERSION},
+#else
       {XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME, XR_KHR_convert_timespec_time_SPEC_VERSION},
+#endif
       {XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME, XR_FB_display_refresh_rate_SPEC_VERSION}};
   for (const auto& name : offered_eye_extensions())
     offered.emplace_back(name, name == std::string(XR_EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME)
@@ -857,7 +870,11 @@ XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* info, XrInstance*
     const std::string e = info->enabledExtensionNames[i];
     const auto eyes = offered_eye_extensions();
     const bool offered_eyes = std::find(eyes.begin(), eyes.end(), e) != eyes.end();
+#ifdef _WIN32
+    if (e == XR_KHR_WIN32_CONVERT_PERFORMANCE_COUNTER_TIME_EXTENSION_NAME) inst->win32_time = true;
+#else
     if (e == XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME) inst->timespec = true;
+#endif
     else if (e == XR_FB_DISPLAY_REFRESH_RATE_EXTENSION_NAME) inst->refresh_rate = true;
     else if (offered_eyes && e == XR_EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME) inst->eye_gaze = true;
     else if (offered_eyes && e == XR_FB_EYE_TRACKING_SOCIAL_EXTENSION_NAME) inst->eye_tracking = true;
@@ -2389,6 +2406,42 @@ XrResult XRAPI_CALL ConvertTimespecTimeToTime(XrInstance h, const timespec* ts, 
   return XR_SUCCESS;
 }
 
+#ifdef _WIN32
+// ---- XR_KHR_win32_convert_performance_counter_time ----------------------------------------------
+
+// CLOCK_MONOTONIC of winpthreads is the performance counter in nanoseconds.
+std::int64_t counter_frequency() {
+  LARGE_INTEGER f;
+  QueryPerformanceFrequency(&f);
+  return static_cast<std::int64_t>(f.QuadPart);
+}
+
+XrResult XRAPI_CALL ConvertTimeToCounter(XrInstance h, XrTime time, LARGE_INTEGER* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrConvertTimeToWin32PerformanceCounterKHR";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (!inst->win32_time) return violation(fn, XR_ERROR_FUNCTION_UNSUPPORTED, "extension not enabled");
+  if (time <= 0) return violation(fn, XR_ERROR_TIME_INVALID, std::to_string(time));
+  const std::int64_t mono = to_mono(time), f = counter_frequency();
+  out->QuadPart = mono / 1'000'000'000 * f + mono % 1'000'000'000 * f / 1'000'000'000;
+  return XR_SUCCESS;
+}
+
+XrResult XRAPI_CALL ConvertCounterToTime(XrInstance h, const LARGE_INTEGER* counter, XrTime* out) {
+  std::lock_guard lock(g_mutex);
+  Instance* inst = instance_of(h);
+  constexpr const char* fn = "xrConvertWin32PerformanceCounterToTimeKHR";
+  if (inst == nullptr) return violation(fn, XR_ERROR_HANDLE_INVALID, "");
+  if (!inst->win32_time) return violation(fn, XR_ERROR_FUNCTION_UNSUPPORTED, "extension not enabled");
+  const std::int64_t c = counter->QuadPart, f = counter_frequency();
+  const XrTime t = to_xr(c / f * 1'000'000'000 + c % f * 1'000'000'000 / f);
+  if (t <= 0) return violation(fn, XR_ERROR_TIME_INVALID, "before the runtime's epoch");
+  *out = t;
+  return XR_SUCCESS;
+}
+#endif
+
 // ---- XR_FB_display_refresh_rate ---------------------------------------------------------------
 
 // The session of a refresh-rate call, or the specification's error.
@@ -2570,6 +2623,10 @@ XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance h, const char* name, PFN_xrVo
       {"xrGetActionStateBoolean", fn_ptr(&GetActionStateBoolean)},
       {"xrGetActionStateFloat", fn_ptr(&GetActionStateFloat)},
       {"xrConvertTimeToTimespecTimeKHR", fn_ptr(&ConvertTimeToTimespecTime)},
+#ifdef _WIN32
+      {"xrConvertTimeToWin32PerformanceCounterKHR", fn_ptr(&ConvertTimeToCounter)},
+      {"xrConvertWin32PerformanceCounterToTimeKHR", fn_ptr(&ConvertCounterToTime)},
+#endif
       {"xrConvertTimespecTimeToTimeKHR", fn_ptr(&ConvertTimespecTimeToTime)},
       {"xrEnumerateDisplayRefreshRatesFB", fn_ptr(&EnumerateDisplayRefreshRates)},
       {"xrGetDisplayRefreshRateFB", fn_ptr(&GetDisplayRefreshRate)},
