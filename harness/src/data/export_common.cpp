@@ -249,8 +249,9 @@ struct FixedColumn {
   const char* sql;
 };
 
-const std::vector<FixedColumn>& fixed_columns() {
-  static const std::vector<FixedColumn> columns{
+// Who, which session and protocol, where in the session.
+std::vector<FixedColumn> identity_columns() {
+  return {
     {"session_id", "Database id of the session (local to the file; session_uuid identifies it across files)", "",
      "t.session_id"},
     {"session_uuid", "The session's identity across files and machines (RFC 9562 UUID)", "",
@@ -271,6 +272,12 @@ const std::vector<FixedColumn>& fixed_columns() {
      "t.trial_index"},
     {"trial_in_block", "Trial position in its block, from 0", "",
      "t.trial_in_block"},
+  };
+}
+
+// How the trial ended and what was answered, when.
+std::vector<FixedColumn> outcome_columns() {
+  return {
     {"status", "pending, running, completed, skipped or aborted", "",
      "t.status"},
     {"end_reason",
@@ -292,6 +299,12 @@ const std::vector<FixedColumn>& fixed_columns() {
      "t.response_device"},
     {"completed_utc", "Wall-clock time the trial was committed (UTC, ISO 8601)", "",
      "t.completed_utc"},
+  };
+}
+
+// Staircase steps and the psi method's posterior after each answer.
+std::vector<FixedColumn> adaptive_columns() {
+  return {
     {"staircase", "Staircase trials: the staircase (block:name) the trial stepped", "",
      "st.staircase"},
     {"staircase_step", "Staircase trials: the step's index in its staircase, from 0", "",
@@ -326,6 +339,12 @@ const std::vector<FixedColumn>& fixed_columns() {
        "Bayesian adaptive (psi) trials: entropy of the joint posterior over the grid after this trial's answer",
        "nat",
      "json_extract(po.detail, '$.entropy_nats')"},
+  };
+}
+
+// Lost tracking and late frames during the trial.
+std::vector<FixedColumn> frame_columns() {
+  return {
     {"tracking_lost_ms",
        "Trials completed with tracking lost (tracking.on_loss = \"flag\"): how long the head was "
        "untracked, in spells longer than tracking.loss_ms",
@@ -341,6 +360,12 @@ const std::vector<FixedColumn>& fixed_columns() {
        "time; empty without an onset",
        "",
      "CASE WHEN t.onset_ns IS NULL THEN NULL ELSE COALESCE(fl.onset_late, 0) END"},
+  };
+}
+
+// The model's vergence demand and, with eye tracking, the measured gaze.
+std::vector<FixedColumn> gaze_columns() {
+  return {
     {"vergence_demand_arcmin",
        "The vergence the fixated point of the stimulus demands of the eyes, by the human perception model "
        "(the onset's percept; positive converging, negative diverging beyond parallel); empty where the "
@@ -364,6 +389,17 @@ const std::vector<FixedColumn>& fixed_columns() {
        "arcmin",
      "gz.vergence_rad * 10800.0 / 3.141592653589793"},
   };
+}
+
+const std::vector<FixedColumn>& fixed_columns() {
+  static const std::vector<FixedColumn> columns = [] {
+    std::vector<FixedColumn> all;
+    for (auto part : {identity_columns, outcome_columns, adaptive_columns, frame_columns, gaze_columns}) {
+      auto more = part();
+      all.insert(all.end(), more.begin(), more.end());
+    }
+    return all;
+  }();
   return columns;
 }
 

@@ -358,6 +358,7 @@ class SessionLoop::Impl {
   void store_display_reports() {
     reports_.clear();
     station_.display->take_reports(reports_);
+    if (reports_.empty()) return;  // nearly every frame
     const std::optional<std::int64_t> trial_id =
         current_trial_ ? std::optional<std::int64_t>(trial_ids_[*current_trial_]) : std::nullopt;
     for (const io::DisplayReport& r : reports_) {

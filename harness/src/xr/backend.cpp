@@ -60,13 +60,6 @@ constexpr XrPosef kIdentityPose{{0.0f, 0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f}};
 constexpr float kTriggerPress = 0.75f;
 constexpr float kTriggerRelease = 0.25f;
 
-template <class T>
-T tagged(XrStructureType type) {
-  T value{};
-  value.type = type;
-  return value;
-}
-
 // Owns one OpenXR child handle. Move-only; destroyed by the destructor.
 template <class H, XrResult (*Destroy)(H)>
 class Handle {
@@ -103,18 +96,6 @@ using SwapchainHandle = Handle<XrSwapchain, xrDestroySwapchain>;
 
 // A factory failure (kind device or api, instance.hpp).
 Error error(XrResult r, const char* call) { return failure_of(r, call); }
-
-// Results after which the session cannot go on, whichever call returned
-// them; other failures of per-frame queries (a button, a pose) are logged or
-// taken as lost tracking, and the session continues.
-bool fatal(XrResult r) {
-  return r == XR_ERROR_SESSION_LOST || r == XR_ERROR_INSTANCE_LOST || r == XR_ERROR_RUNTIME_FAILURE;
-}
-
-template <class F>
-XrResult load(XrInstance instance, const char* name, F& fn) {
-  return xrGetInstanceProcAddr(instance, name, reinterpret_cast<PFN_xrVoidFunction*>(&fn));
-}
 
 #ifdef _WIN32
 // A QueryPerformanceCounter reading in nanoseconds, without overflow.

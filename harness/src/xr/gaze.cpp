@@ -18,22 +18,6 @@ using harness::Result;
 
 namespace {
 
-template <class T>
-T tagged(XrStructureType type) {
-  T value{};
-  value.type = type;
-  return value;
-}
-
-template <class F>
-XrResult load(XrInstance instance, const char* name, F& fn) {
-  return xrGetInstanceProcAddr(instance, name, reinterpret_cast<PFN_xrVoidFunction*>(&fn));
-}
-
-bool fatal(XrResult r) {
-  return r == XR_ERROR_SESSION_LOST || r == XR_ERROR_INSTANCE_LOST || r == XR_ERROR_RUNTIME_FAILURE;
-}
-
 // The combined gaze: one pose action without subaction paths, bound to the
 // eye gaze interaction profile's only input (XR_EXT_eye_gaze_interaction).
 ActionSetDef gaze_action_set() {

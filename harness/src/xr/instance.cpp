@@ -10,14 +10,6 @@ namespace {
 
 constexpr const char* kVulkanEnable2 = "XR_KHR_vulkan_enable2";
 
-// A zeroed OpenXR input/output struct with its type tag set.
-template <class T>
-T tagged(XrStructureType type) {
-  T value{};
-  value.type = type;
-  return value;
-}
-
 std::string hint(XrResult result) {
   switch (result) {
     case XR_ERROR_RUNTIME_UNAVAILABLE:

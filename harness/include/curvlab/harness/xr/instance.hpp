@@ -99,6 +99,27 @@ class ActionSet {
 // what to do (the same wording as every other failure here).
 harness::Error failure_of(XrResult result, const char* call);
 
+// A zeroed OpenXR input/output struct with its type tag set.
+template <class T>
+T tagged(XrStructureType type) {
+  T value{};
+  value.type = type;
+  return value;
+}
+
+// Results after which the session cannot go on, whichever call returned
+// them; other failures of per-frame queries (a button, a pose) are logged or
+// taken as lost tracking, and the session continues.
+inline bool fatal(XrResult r) {
+  return r == XR_ERROR_SESSION_LOST || r == XR_ERROR_INSTANCE_LOST || r == XR_ERROR_RUNTIME_FAILURE;
+}
+
+// An extension's function, through the loader.
+template <class F>
+XrResult load(XrInstance instance, const char* name, F& fn) {
+  return xrGetInstanceProcAddr(instance, name, reinterpret_cast<PFN_xrVoidFunction*>(&fn));
+}
+
 // The instance extensions the loader and runtime offer; this is where a
 // missing runtime first shows (XR_ERROR_RUNTIME_UNAVAILABLE).
 harness::Result<std::vector<std::string>> available_extensions();
