@@ -22,7 +22,7 @@ std::string utc_now_sql() { return "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')"; }
 
 // Checks made before a session starts, so that a read-only folder or a full
 // disk is reported up front rather than as a failure in the middle of trials.
-std::optional<DataError> check_writable_location(const std::string& path) {
+std::optional<DataError> check_writable_location(const std::string& path, const SpaceNeeded& needed) {
   const fs::path file(path);
   fs::path dir = file.parent_path();
   if (dir.empty()) dir = ".";
@@ -40,11 +40,10 @@ std::optional<DataError> check_writable_location(const std::string& path) {
     return DataError{DataError::Kind::read_only, path + ": file is read-only"};
   }
   if (const auto free_bytes = platform::free_bytes(dir.string())) {
-    if (*free_bytes < min_free_bytes_to_start) {
+    if (*free_bytes < needed.bytes) {
       return DataError{DataError::Kind::disk_full,
-                       path + ": only " + std::to_string(*free_bytes >> 20) +
-                           " MiB free; a session needs at least " +
-                           std::to_string(min_free_bytes_to_start >> 20) + " MiB"};
+                       path + ": only " + std::to_string(*free_bytes >> 20) + " MiB free; " + needed.what +
+                           " needs at least " + std::to_string((needed.bytes + (1u << 20) - 1) >> 20) + " MiB"};
     }
   }
   return std::nullopt;
@@ -372,8 +371,8 @@ Expected<Database> Database::checked(Connection c, const std::string& path, Open
   // upgrade open the file again (open_existing) and need not read it all.
   if (!empty && mode == OpenMode::create_or_open)
     if (auto ok = check_pages(c, path); !ok) return ok.error();
+  configure_connection(c, true);  // first: switching to WAL waits out other openers
   c.exec("PRAGMA journal_mode = WAL");
-  configure_connection(c, true);
   if (empty) {
     create_schema(c);
     return Database(std::move(c));
@@ -386,7 +385,7 @@ Expected<Database> Database::checked(Connection c, const std::string& path, Open
   return Database(std::move(c));
 }
 
-Expected<Database> Database::open(const std::string& path, OpenMode mode) {
+Expected<Database> Database::open(const std::string& path, OpenMode mode, const SpaceNeeded& needed) {
   if (path.empty()) return DataError{DataError::Kind::io, "no database path given"};
   std::error_code ec;
   const bool exists = std::filesystem::exists(path, ec);
@@ -396,7 +395,7 @@ Expected<Database> Database::open(const std::string& path, OpenMode mode) {
     return DataError{DataError::Kind::io, path + ": is a folder, expected a database file"};
   if (auto checked = check_data_file(path); !checked) return checked.error();
   if (mode == OpenMode::create_or_open) {
-    if (auto problem = check_writable_location(path)) return *problem;
+    if (auto problem = check_writable_location(path, needed)) return *problem;
   }
   try {
     const OpenFlags flags = mode == OpenMode::create_or_open ? OpenFlags::read_write_create

@@ -90,7 +90,7 @@ Expected<ExportSummary> write_staged(const std::string& out_dir, const std::stri
   std::error_code ec;
   const bool out_existed = fs::exists(out_dir, ec);
   if (auto e = make_dir(out_dir)) return *e;
-  for (const char* kind : {".partial-", ".replaced-"}) remove_stale_staging(out_dir, name + kind);
+  for (const char* kind : {".partial-", ".replaced-"}) remove_stale_staging(out_dir, name + kind, folder ? StagingKind::folder : StagingKind::file);
   const std::string pid = std::to_string(platform::process_id());
   const fs::path target = fs::path(out_dir) / name;
   const bool target_existed = fs::exists(fs::symlink_status(target, ec));

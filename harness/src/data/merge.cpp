@@ -360,6 +360,32 @@ Expected<Done> merge_attached(Connection& c, const std::string& input, const Mer
   return Done{};
 }
 
+// A full disk while merging is the output's disk, not the input's; nothing
+// is resumed: the merge is all or nothing.
+DataError output_disk_full(const std::string& work, const std::string& input, const std::string& out) {
+  return DataError{DataError::Kind::disk_full,
+                   out + ": the disk is full (the merge's work file " + work + " could not grow while adding " +
+                       input + "); nothing was changed. Free space on the disk holding " + out +
+                       " and merge again"};
+}
+
+// An input whose session a live process is writing would be copied in the
+// middle of that session (and later refused as a conflict when merged
+// whole).
+Expected<Done> check_not_live(const std::string& input) {
+  const auto writer = WriterLock::file_writer(input);
+  if (!writer) return Done{};
+  const std::string who = writer->second.pid > 0 ? "process " + std::to_string(writer->second.pid) +
+                                                       (writer->second.host.empty() ? "" : " on " + writer->second.host)
+                                                 : "another process";
+  const std::string what = writer->first > 0 ? "session " + std::to_string(writer->first) + " is being written by "
+                                             : "the file is being replaced by ";
+  return DataError{DataError::Kind::in_use,
+                   input + ": " + what + who + "; merging it now would copy that session half-done, so nothing "
+                   "was merged. Merge it when the session has ended (a session whose process died can be merged "
+                   "at once)"};
+}
+
 Expected<Done> merge_one(Database& work, const std::string& input, const MergeOptions& opts,
                          MergeReport& report) {
   if (auto ok = check_current_file(input, "input"); !ok) return ok.error();
@@ -377,7 +403,8 @@ Expected<Done> merge_one(Database& work, const std::string& input, const MergeOp
     merged = merge_attached(c, input, opts, report);
     if (merged) txn.commit();
   } catch (const SqliteFailure& f) {
-    merged = to_data_error(f, input);
+    merged = (f.code & 0xff) == SQLITE_FULL ? output_disk_full(work.path(), input, opts.out_path)
+                                            : to_data_error(f, input);
   }
   try {
     c.exec("DETACH DATABASE src");
@@ -436,13 +463,27 @@ Expected<Done> check_inputs(const MergeOptions& opts) {
       return DataError{DataError::Kind::not_found, input + ": no such database file"};
     if (fs::exists(opts.out_path, ec) && fs::equivalent(input, opts.out_path, ec))
       return DataError{DataError::Kind::usage, input + ": is the output file itself; give it only as --out"};
+    if (auto ok = check_not_live(input); !ok) return ok.error();
   }
   return Done{};
 }
 
 // Merges every input into the temporary copy; true when anything was added.
+// The work file grows to about the output plus every input.
+SpaceNeeded space_for(const MergeOptions& opts) {
+  std::error_code ec;
+  std::uint64_t bytes = 1u << 20;
+  for (const std::string& input : opts.inputs) {
+    const auto size = fs::file_size(input, ec);
+    if (!ec) bytes += size;
+    const auto wal = fs::file_size(input + "-wal", ec);
+    if (!ec) bytes += wal;
+  }
+  return {bytes, "merging these files"};
+}
+
 Expected<bool> merge_into(const std::string& tmp, bool existed, const MergeOptions& opts, MergeReport& report) {
-  auto work = Database::open(tmp, existed ? OpenMode::open_existing : OpenMode::create_or_open);
+  auto work = Database::open(tmp, existed ? OpenMode::open_existing : OpenMode::create_or_open, space_for(opts));
   if (!work) return work.error();
   Connection& c = work.value().connection();
   const std::int64_t before = sqlite3_total_changes64(c.get());
@@ -465,10 +506,10 @@ Expected<MergeReport> merge_databases(const MergeOptions& opts) {
   auto lock = WriterLock::for_replacing(opts.out_path);
   if (!lock) return lock.error();
   std::error_code ec;
-  const bool existed = fs::exists(opts.out_path, ec);
+  const bool existed = !lock->created_file();
   // A merge killed before it renamed its work leaves OUT.merging-PID behind.
   const fs::path out(opts.out_path);
-  remove_stale_staging(out.parent_path().string(), out.filename().string() + ".merging-");
+  remove_stale_staging(out.parent_path().string(), out.filename().string() + ".merging-", StagingKind::file);
   TempOutput tmp(opts.out_path + ".merging-" + std::to_string(platform::process_id()));
   if (existed)
     if (auto ok = copy_existing_output(opts.out_path, tmp.path()); !ok) return ok.error();

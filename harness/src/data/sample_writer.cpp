@@ -88,6 +88,9 @@ constexpr const char* insert_gaze_sql =
     "right_oy_m, right_oz_m, right_dx, right_dy, right_dz, vergence_rad, vergence_distance_m) VALUES (?1, ?2, "
     "?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, "
     "?25, ?26, ?27, ?28, ?29)";
+constexpr const char* insert_wait_sql =
+    "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) VALUES (?1, NULL, 0, "
+    "'logger_waited', json_object('waited_ms', ?2, 'reason', ?3))";
 constexpr const char* insert_event_sql =
     "INSERT INTO events (session_id, trial_id, t_ns, kind, detail) VALUES (?1, NULL, ?2, "
     "'logger_drops', json_object('dropped_tracking', ?3, 'dropped_frames', ?4, 'dropped_gaze', ?5))";
@@ -105,7 +108,8 @@ struct SampleWriter::Impl {
         insert_tracking(connection, insert_tracking_sql),
         insert_frame(connection, insert_frame_sql),
         insert_gaze(connection, insert_gaze_sql),
-        insert_event(connection, insert_event_sql) {
+        insert_event(connection, insert_event_sql),
+        insert_wait(connection, insert_wait_sql) {
     pending_tracking.reserve(cfg.max_batch);
     pending_frames.reserve(cfg.max_batch);
     pending_gaze.reserve(cfg.max_batch);
@@ -121,6 +125,7 @@ struct SampleWriter::Impl {
   std::atomic<std::uint64_t> transactions{0}, failed_transactions{0};
   std::atomic<double> writer_cpu_s{0.0};
   std::atomic<bool> is_paused{false};
+  std::atomic<std::int64_t> lock_wait_started_ns{0};  // steady clock; 0 while not waiting
 
   // Guards the fields below and the wake-ups; never held during disk I/O.
   mutable std::mutex mutex;
@@ -141,7 +146,12 @@ struct SampleWriter::Impl {
   SessionStore store;  // its own connection, synchronous = FULL
   std::deque<JournalEntry> journal_pending;
   Connection connection;
-  Statement insert_tracking, insert_frame, insert_gaze, insert_event;
+  Statement insert_tracking, insert_frame, insert_gaze, insert_event, insert_wait;
+  // Since when the writer has found the file locked by another program (a
+  // reader's checkpoint, another program's write transaction); the wait
+  // to store as a logger_waited event once it has ended.
+  std::optional<std::chrono::steady_clock::time_point> locked_since;
+  std::optional<std::pair<std::int64_t, std::string>> wait_to_log;  // ms, reason
   std::vector<TrackingSample> pending_tracking;
   std::vector<FrameRecord> pending_frames;
   std::vector<GazeSample> pending_gaze;
@@ -245,7 +255,9 @@ struct SampleWriter::Impl {
     const std::uint64_t dg = dropped_gaze.load(std::memory_order_relaxed);
     const bool log_drops =
         (dt != logged_drops_tracking || df != logged_drops_frames || dg != logged_drops_gaze) && last_session_id > 0;
-    if (pending_tracking.empty() && pending_frames.empty() && pending_gaze.empty() && !log_drops) return true;
+    const bool log_wait = wait_to_log && last_session_id > 0;
+    if (pending_tracking.empty() && pending_frames.empty() && pending_gaze.empty() && !log_drops && !log_wait)
+      return true;
     // The geometry last stored advances only with a committed batch: a
     // batch that fails is written again from the same starting point.
     batch_views = last_views;
@@ -269,11 +281,17 @@ struct SampleWriter::Impl {
         insert_event.bind(5, static_cast<std::int64_t>(dg));
         insert_event.run();
       }
+      if (log_wait) {
+        insert_wait.bind(1, last_session_id).bind(2, wait_to_log->first).bind(3, wait_to_log->second);
+        insert_wait.run();
+      }
       txn.commit();
     } catch (const SqliteFailure& failure) {
       note_failure(to_data_error(failure, connection.path()), "tracking/frame logging paused");
       return false;
     }
+    note_success();
+    if (log_wait) wait_to_log.reset();
     last_views = batch_views;
     if (log_drops) {
       logged_drops_tracking = dt;
@@ -291,9 +309,21 @@ struct SampleWriter::Impl {
     return true;
   }
 
+  // A lock held by another program (busy) is waited out for up to
+  // config.lock_patience: the writer keeps what it holds and retries, the
+  // rings absorb the meantime, and nobody waiting on it is told of a
+  // failure. Anything else, or a longer wait, is a failure.
   void note_failure(const DataError& e, const char* what) {
     failed_transactions.fetch_add(1, std::memory_order_relaxed);
     is_paused.store(true, std::memory_order_release);
+    if (e.kind == DataError::Kind::busy) {
+      const auto now = std::chrono::steady_clock::now();
+      if (!locked_since) {
+        locked_since = now;
+        lock_wait_started_ns.store(now.time_since_epoch().count(), std::memory_order_relaxed);
+      }
+      if (now - *locked_since < config.lock_patience) return;
+    }
     {
       std::lock_guard lock(mutex);
       error = std::string(what) + ": " + e.message;
@@ -301,6 +331,16 @@ struct SampleWriter::Impl {
       ++failure_count;
     }
     progress.notify_all();
+  }
+
+  // Ends a wait for another program's lock, keeping how long it lasted.
+  void note_success() {
+    if (!locked_since) return;
+    const auto waited = std::chrono::steady_clock::now() - *locked_since;
+    wait_to_log = std::pair{std::chrono::duration_cast<std::chrono::milliseconds>(waited).count(),
+                            std::string("another program held the file's lock")};
+    locked_since.reset();
+    lock_wait_started_ns.store(0, std::memory_order_relaxed);
   }
 
   // One journal entry, or a run of consecutive events in one transaction;
@@ -348,6 +388,7 @@ struct SampleWriter::Impl {
         note_failure(applied.error(), "event and trial logging paused");
         return false;
       }
+      note_success();
       for (std::size_t i = 0; i < applied.value(); ++i) journal_pending.pop_front();
       {
         std::lock_guard lock(mutex);
@@ -401,6 +442,8 @@ struct SampleWriter::Impl {
       if (stopping && (ok || shutdown_deadline_passed())) return;
     }
   }
+
+  std::chrono::milliseconds wait_limit(std::chrono::milliseconds timeout) const;
 
   std::chrono::steady_clock::time_point stop_time{};
   bool shutdown_deadline_passed() const {
@@ -468,7 +511,15 @@ bool SampleWriter::push_gaze(const GazeSample& sample) noexcept {
   return false;
 }
 
+std::chrono::milliseconds SampleWriter::Impl::wait_limit(std::chrono::milliseconds timeout) const {
+  // By default a waiter outlasts the writer's own patience with another
+  // program's lock, plus one SQLite busy timeout.
+  if (timeout.count() > 0) return timeout;
+  return config.lock_patience + std::chrono::seconds(10);
+}
+
 Expected<Done> SampleWriter::flush(std::chrono::milliseconds timeout) {
+  timeout = impl_->wait_limit(timeout);
   std::unique_lock lock(impl_->mutex);
   const std::uint64_t ticket = ++impl_->flush_requested;
   const std::uint64_t failures_before = impl_->failure_count;
@@ -495,6 +546,7 @@ bool SampleWriter::durable(std::uint64_t ticket) const {
 }
 
 Expected<Done> SampleWriter::wait_durable(std::uint64_t ticket, std::chrono::milliseconds timeout) {
+  timeout = impl_->wait_limit(timeout);
   std::unique_lock lock(impl_->mutex);
   if (impl_->journal_done >= ticket) return Done{};
   ++impl_->flush_requested;  // wakes the writer now rather than at its next interval
@@ -533,6 +585,13 @@ SampleWriterStats SampleWriter::stats() const {
 }
 
 bool SampleWriter::paused() const { return impl_->is_paused.load(); }
+
+double SampleWriter::lock_wait_s() const {
+  const std::int64_t since = impl_->lock_wait_started_ns.load(std::memory_order_relaxed);
+  if (since == 0) return 0.0;
+  const std::int64_t now = std::chrono::steady_clock::now().time_since_epoch().count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::duration(now - since)).count();
+}
 
 std::string SampleWriter::last_error() const {
   std::lock_guard lock(impl_->mutex);

@@ -4,7 +4,9 @@
 #include <charconv>
 #include <filesystem>
 #include <limits>
+#include <string_view>
 
+#include "curvlab/harness/platform/lock_file.hpp"
 #include "curvlab/harness/platform/process.hpp"
 
 namespace curvlab::data {
@@ -13,13 +15,29 @@ namespace fs = std::filesystem;
 
 bool process_alive(pid_t pid) { return platform::process_alive(pid); }
 
-std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix) {
-  return remove_numbered(dir, prefix, [](std::int64_t pid) {
+std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix, StagingKind kind) {
+  return remove_numbered(dir, prefix, kind, [](std::int64_t pid) {
     return pid > 0 && pid <= std::numeric_limits<pid_t>::max() && !process_alive(static_cast<pid_t>(pid));
   });
 }
 
-std::size_t remove_numbered(const std::string& dir, const std::string& prefix,
+namespace {
+
+bool known_rest(std::string_view rest, StagingKind kind) {
+  if (kind == StagingKind::file && rest.starts_with(".sqlite")) rest.remove_prefix(7);
+  if (rest.empty()) return true;
+  return kind == StagingKind::file && (rest == "-wal" || rest == "-shm" || rest == "-journal");
+}
+
+bool is_kind(const fs::directory_entry& entry, StagingKind kind) {
+  std::error_code ec;
+  const auto status = entry.symlink_status(ec);  // a link is never followed, nor removed
+  return !ec && (kind == StagingKind::file ? fs::is_regular_file(status) : fs::is_directory(status));
+}
+
+}  // namespace
+
+std::size_t remove_numbered(const std::string& dir, const std::string& prefix, StagingKind kind,
                             const std::function<bool(std::int64_t number)>& stale) {
   std::error_code ec;
   std::size_t removed = 0;
@@ -31,10 +49,12 @@ std::size_t remove_numbered(const std::string& dir, const std::string& prefix,
     const char* last = name.data() + name.size();
     std::int64_t number = 0;
     const auto [end, err] = std::from_chars(first, last, number);
-    if (err != std::errc() || end == first || (end != last && *end != '.' && *end != '-')) continue;
-    if (!stale(number)) continue;
+    if (err != std::errc() || end == first || !known_rest(std::string_view(end, last), kind)) continue;
+    if (!is_kind(entry, kind) || !stale(number)) continue;
     std::error_code remove_ec;
-    if (fs::remove_all(entry.path(), remove_ec) > 0 && !remove_ec) ++removed;
+    const bool gone = kind == StagingKind::file ? platform::remove_regular_file(entry.path().string())
+                                                : fs::remove_all(entry.path(), remove_ec) > 0 && !remove_ec;
+    if (gone) ++removed;
   }
   return removed;
 }

@@ -20,6 +20,8 @@
 #include <ctime>
 #include <filesystem>
 #include <limits>
+#include <mutex>
+#include <vector>
 #include <utility>
 
 namespace curvlab::platform {
@@ -89,19 +91,105 @@ struct flock range(short type, std::int64_t start) {
   f.l_len = 1;
   return f;
 }
+
+// Data-file descriptors given back by close(): never closed before the
+// process exits (lock_file.hpp), reused by the next open of the same file.
+struct KeptDescriptor {
+  int fd;
+  bool writable;
+};
+std::mutex kept_mutex;
+std::vector<KeptDescriptor> kept;
+
+bool same_file(const struct stat& a, const struct stat& b) { return a.st_dev == b.st_dev && a.st_ino == b.st_ino; }
+
+int take_kept(const std::string& path, bool writable) {
+  struct stat by_path {};
+  if (::stat(path.c_str(), &by_path) != 0) return -1;
+  std::lock_guard lock(kept_mutex);
+  for (auto it = kept.begin(); it != kept.end(); ++it) {
+    struct stat by_fd {};
+    if ((writable && !it->writable) || ::fstat(it->fd, &by_fd) != 0 || !same_file(by_fd, by_path)) continue;
+    const int fd = it->fd;
+    kept.erase(it);
+    return fd;
+  }
+  return -1;
+}
+
+void keep(int fd) {
+  const bool writable = (::fcntl(fd, F_GETFL) & O_ACCMODE) == O_RDWR;
+  // Gives back every lock of this open, and only its own: an open-file-
+  // description unlock never touches SQLite's classic locks.
+  struct flock all = range(F_UNLCK, 0);
+  all.l_len = 0;
+  (void)::fcntl(fd, F_OFD_SETLK, &all);
+  std::lock_guard lock(kept_mutex);
+  kept.push_back({fd, writable});
+}
+
+Unsafe check_companion(const struct stat& st) {
+  if (S_ISLNK(st.st_mode)) return Unsafe::link;
+  if (!S_ISREG(st.st_mode)) return Unsafe::not_regular;
+  if (st.st_nlink != 1) return Unsafe::several_names;
+  if (st.st_uid != ::geteuid()) return Unsafe::other_owner;
+  return Unsafe::none;
+}
+
+int open_database(const std::string& path, bool writable) {
+  const int fd = take_kept(path, writable);
+  if (fd >= 0) return fd;
+  return writable ? ::open(path.c_str(), O_RDWR | O_CREAT | O_NONBLOCK | O_CLOEXEC, 0666)
+                  : ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+}
+
 }  // namespace
 
 LockFile LockFile::open(const std::string& path, Mode mode) {
   LockFile f;
-  f.fd_ = mode == Mode::read_only ? ::open(path.c_str(), O_RDONLY | O_CLOEXEC)
-                                  : ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-  if (f.fd_ < 0) f.error_ = errno;
+  const bool database = mode == Mode::database || mode == Mode::database_read_only;
+  const bool writable = mode == Mode::database || mode == Mode::create_read_write;
+  if (database) {
+    f.fd_ = open_database(path, writable);
+  } else {
+    // A companion is looked at before it is opened, so that a hard link to
+    // another file is never opened at all, and again after (its name may
+    // have been replaced in between).
+    struct stat before {};
+    if (::lstat(path.c_str(), &before) == 0) f.unsafe_ = check_companion(before);
+    if (f.unsafe_ != Unsafe::none) return f;
+    f.fd_ = writable ? ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644)
+                     : ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  }
+  if (f.fd_ < 0) {
+    f.error_ = errno;
+    if (!database && f.error_ == ELOOP) f.unsafe_ = Unsafe::link;
+    if (!database && f.error_ == EISDIR) f.unsafe_ = Unsafe::not_regular;
+    return f;
+  }
+  struct stat st {};
+  (void)::fstat(f.fd_, &st);
+  const Unsafe found = database ? (S_ISREG(st.st_mode) ? Unsafe::none : Unsafe::not_regular) : check_companion(st);
+  if (found != Unsafe::none) {
+    // Kept, not closed: a planted name may reach a file this process has
+    // open in SQLite.
+    if (S_ISREG(st.st_mode)) keep(f.fd_);
+    else ::close(f.fd_);
+    f.fd_ = -1;
+    f.unsafe_ = found;
+    return f;
+  }
+  f.keep_open_ = database;
   return f;
 }
 
 void LockFile::close() noexcept {
-  if (fd_ >= 0) ::close(fd_);
+  if (fd_ >= 0) {
+    if (keep_open_) keep(fd_);
+    else ::close(fd_);
+  }
   fd_ = -1;
+  keep_open_ = false;
   own_.clear();
 }
 
@@ -147,11 +235,17 @@ std::string LockFile::read_at(std::size_t n, std::int64_t at) const {
   return text;
 }
 
-void reserve_file(const std::string& path, std::int64_t bytes) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) return;
+bool reserve_file(const std::string& path, std::int64_t bytes) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) return false;
   if (::posix_fallocate(fd, 0, static_cast<off_t>(bytes)) != 0) (void)::ftruncate(fd, 0);
   ::close(fd);
+  return true;
+}
+
+bool remove_regular_file(const std::string& path) {
+  struct stat st {};
+  return ::lstat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::unlink(path.c_str()) == 0;
 }
 
 // --- signals -----------------------------------------------------------------

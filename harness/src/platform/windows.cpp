@@ -160,15 +160,39 @@ std::string beside_executable(const std::string& relative) {
 
 const bool LockFile::unlink_when_free = false;
 
+namespace {
+
+// Why a companion opened without following reparse points is not one
+// curvlab may write (the owner is not checked on Windows).
+Unsafe check_companion(HANDLE h) {
+  BY_HANDLE_FILE_INFORMATION info{};
+  if (::GetFileInformationByHandle(h, &info) == 0) return Unsafe::not_regular;
+  if ((info.dwFileAttributes & FILE_ATTRIBUTE_REPARSE_POINT) != 0) return Unsafe::link;
+  if ((info.dwFileAttributes & FILE_ATTRIBUTE_DIRECTORY) != 0) return Unsafe::not_regular;
+  if (info.nNumberOfLinks > 1) return Unsafe::several_names;
+  return Unsafe::none;
+}
+
+}  // namespace
+
 LockFile LockFile::open(const std::string& path, Mode mode) {
   LockFile f;
-  const bool rw = mode == Mode::create_read_write;
+  const bool database = mode == Mode::database || mode == Mode::database_read_only;
+  const bool rw = mode == Mode::create_read_write || mode == Mode::database;
+  const DWORD flags = FILE_ATTRIBUTE_NORMAL | (database ? 0 : FILE_FLAG_OPEN_REPARSE_POINT);
   HANDLE h = ::CreateFileW(wide(path).c_str(), rw ? GENERIC_READ | GENERIC_WRITE : GENERIC_READ,
                            FILE_SHARE_READ | FILE_SHARE_WRITE | FILE_SHARE_DELETE, nullptr,
-                           rw ? OPEN_ALWAYS : OPEN_EXISTING, FILE_ATTRIBUTE_NORMAL, nullptr);
+                           rw ? OPEN_ALWAYS : OPEN_EXISTING, flags, nullptr);
   if (h == INVALID_HANDLE_VALUE) {
     f.error_ = errno_of(::GetLastError());
     return f;
+  }
+  if (!database) {
+    f.unsafe_ = check_companion(h);
+    if (f.unsafe_ != Unsafe::none) {
+      ::CloseHandle(h);
+      return f;
+    }
   }
   // A C runtime descriptor owns the handle from here on (closed by _close).
   f.fd_ = ::_open_osfhandle(reinterpret_cast<intptr_t>(h), rw ? _O_RDWR : _O_RDONLY);
@@ -217,9 +241,17 @@ bool LockFile::held_elsewhere(std::int64_t byte, bool exclusive) {
   return false;
 }
 
-bool LockFile::still_named(const std::string&) const {
-  // Lock files are never removed on Windows (see the header).
-  return true;
+bool LockFile::still_named(const std::string& path) const {
+  HANDLE h = ::CreateFileW(wide(path).c_str(), 0, FILE_SHARE_READ | FILE_SHARE_WRITE | FILE_SHARE_DELETE, nullptr,
+                           OPEN_EXISTING, FILE_ATTRIBUTE_NORMAL, nullptr);
+  if (h == INVALID_HANDLE_VALUE) return false;
+  BY_HANDLE_FILE_INFORMATION by_path{}, by_fd{};
+  const bool same = ::GetFileInformationByHandle(h, &by_path) != 0 &&
+                    ::GetFileInformationByHandle(handle_of(fd_), &by_fd) != 0 &&
+                    by_path.dwVolumeSerialNumber == by_fd.dwVolumeSerialNumber &&
+                    by_path.nFileIndexHigh == by_fd.nFileIndexHigh && by_path.nFileIndexLow == by_fd.nFileIndexLow;
+  ::CloseHandle(h);
+  return same;
 }
 
 std::int64_t LockFile::size() const {
@@ -243,10 +275,10 @@ std::string LockFile::read_at(std::size_t n, std::int64_t at) const {
   return text;
 }
 
-void reserve_file(const std::string& path, std::int64_t bytes) {
+bool reserve_file(const std::string& path, std::int64_t bytes) {
   HANDLE h = ::CreateFileW(wide(path).c_str(), GENERIC_WRITE, FILE_SHARE_READ | FILE_SHARE_DELETE, nullptr,
-                           OPEN_ALWAYS, FILE_ATTRIBUTE_NORMAL, nullptr);
-  if (h == INVALID_HANDLE_VALUE) return;
+                           CREATE_NEW, FILE_ATTRIBUTE_NORMAL | FILE_FLAG_OPEN_REPARSE_POINT, nullptr);
+  if (h == INVALID_HANDLE_VALUE) return false;
   LARGE_INTEGER end{};
   end.QuadPart = bytes;
   // Extending the end allocates the clusters on NTFS; without space the
@@ -257,6 +289,15 @@ void reserve_file(const std::string& path, std::int64_t bytes) {
     (void)::SetEndOfFile(h);
   }
   ::CloseHandle(h);
+  return true;
+}
+
+bool remove_regular_file(const std::string& path) {
+  const DWORD attributes = ::GetFileAttributesW(wide(path).c_str());
+  if (attributes == INVALID_FILE_ATTRIBUTES ||
+      (attributes & (FILE_ATTRIBUTE_DIRECTORY | FILE_ATTRIBUTE_REPARSE_POINT)) != 0)
+    return false;
+  return ::DeleteFileW(wide(path).c_str()) != 0;
 }
 
 // --- signals -----------------------------------------------------------------

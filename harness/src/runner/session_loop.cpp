@@ -494,6 +494,7 @@ class SessionLoop::Impl {
     status_.gpu_ms = stats.gpu_ms > 0.0 ? stats.gpu_ms : -1.0;
     const auto ws = writer_.stats();
     status_.logger_drops = ws.dropped_tracking + ws.dropped_frames + ws.dropped_gaze;
+    status_.logger_lock_wait_s = writer_.lock_wait_s();
     console_->show(status_);
   }
 
@@ -1031,7 +1032,10 @@ class SessionLoop::Impl {
       phase_left_ns_ = std::max<std::int64_t>(0, iti_end - g.timing.now_ns);
       end(g, io::Overlay{Phase::iti, t.line, false}, false, std::nullopt);
       if (g.signal == Signal::quit) return Outcome::quit;
-      if (g.timing.now_ns >= iti_end) break;
+      // While another program holds the file's lock the inter-trial
+      // interval lasts until the trial is on disk: frames go on, nothing
+      // waits on the disk (data/sample_writer.hpp).
+      if (g.timing.now_ns >= iti_end && (writer_.durable(completed_ticket_) || writer_.lock_wait_s() == 0.0)) break;
     }
     check(writer_.wait_durable(completed_ticket_));
     return Outcome::done;

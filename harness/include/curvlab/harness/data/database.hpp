@@ -21,6 +21,12 @@ inline constexpr std::int64_t curvlab_application_id = 0x43564C42;
 // session fails with disk_full instead of failing mid-session.
 inline constexpr std::uint64_t min_free_bytes_to_start = 64ull << 20;
 
+// The free space a create_or_open asks for, and what for (in its message).
+struct SpaceNeeded {
+  std::uint64_t bytes = min_free_bytes_to_start;
+  std::string what = "a session";
+};
+
 // The embedded SQL texts (generated from data_schema/ at build time).
 std::string_view schema_sql();
 // The migration that brings version `to - 1` to `to`; empty when none exists.
@@ -39,7 +45,7 @@ enum class OpenMode {
 // Move-only; not thread-safe (one thread at a time).
 class Database {
  public:
-  static Expected<Database> open(const std::string& path, OpenMode mode);
+  static Expected<Database> open(const std::string& path, OpenMode mode, const SpaceNeeded& needed = {});
 
   Connection& connection() { return connection_; }
   const std::string& path() const { return connection_.path(); }

@@ -21,6 +21,15 @@
 // entry is on disk. A failed entry is kept (with the ones after it) and
 // retried like a failed batch; wait_durable() reports the failure.
 //
+// Readers cannot end a session: when another program holds the file's lock
+// (a reader's PRAGMA wal_checkpoint(TRUNCATE) waiting on a long SELECT, a
+// write transaction left open in DB Browser), SQLite answers busy. The
+// writer then waits it out — keeps its batch and journal, retries every
+// retry interval, shows lock_wait_s() to the operator — for up to
+// lock_patience before it reports a failure, and stores the wait as a
+// "logger_waited" event once it is over. Waiters (flush(), wait_durable())
+// by default wait longer than that patience.
+//
 // Thread-safety: push_tracking(), push_frame(), push_gaze() and journal() must be called
 // from one producer thread (the frame loop). flush(), wait_durable(),
 // durable(), stats(), paused() and last_error() may be called from any thread. The writer thread is owned by
@@ -54,6 +63,9 @@ struct SampleWriterConfig {
   // How long the writer waits before retrying a failed batch.
   std::chrono::milliseconds retry_interval{500};
   std::chrono::milliseconds shutdown_timeout{5000};
+  // How long another program may hold the file's lock before the writer
+  // gives up (the session then ends interrupted, resumable).
+  std::chrono::milliseconds lock_patience{120'000};
 };
 
 struct SampleWriterStats {
@@ -94,16 +106,19 @@ class SampleWriter {
   // Blocks until the entry with `ticket` (and every one before it) is on
   // disk, or returns the writer's error, or a busy error after `timeout`.
   // Call it between trials, never inside a frame.
-  Expected<Done> wait_durable(std::uint64_t ticket,
-                              std::chrono::milliseconds timeout = std::chrono::seconds(10));
+  // A zero timeout: lock_patience plus 10 s.
+  Expected<Done> wait_durable(std::uint64_t ticket, std::chrono::milliseconds timeout = {});
 
   // Blocks until every record pushed before the call is committed (call it at
   // a trial's end, not inside the frame loop), or returns the writer's error
   // when it is paused, or a busy error after `timeout`.
-  Expected<Done> flush(std::chrono::milliseconds timeout = std::chrono::seconds(10));
+  Expected<Done> flush(std::chrono::milliseconds timeout = {});
 
   SampleWriterStats stats() const;
   bool paused() const;
+  // Seconds the writer has been waiting for another program's lock on the
+  // file; 0 when it is not waiting.
+  double lock_wait_s() const;
   std::string last_error() const;
 
   struct Impl;

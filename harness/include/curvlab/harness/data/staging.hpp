@@ -18,18 +18,23 @@ namespace curvlab::data {
 // as living; platform/process.hpp).
 bool process_alive(pid_t pid);
 
-// Removes, files and folders alike, the entries directly in `dir` named
-// `prefix` + PID + rest, where PID is a process that no longer exists and
-// rest is empty or begins with '.' or '-' (SQLite's -wal, -shm and -journal
-// companions). Living processes' entries and other names are left alone, as
-// is anything that cannot be removed (no worse than before). Returns how
-// many entries were removed.
-std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix);
+// What a kind of work in progress is: a file (with SQLite's companions) or a
+// folder (an export's part).
+enum class StagingKind { file, folder };
+
+// Removes the entries directly in `dir` named `prefix` + PID + rest, where
+// PID is a process that no longer exists and rest is empty or, for files,
+// one of SQLite's companions (-wal, -shm, -journal), and that are of `kind`:
+// a regular file, or a folder (never through a link). Living processes'
+// entries, other names and other kinds are left alone, as is anything that
+// cannot be removed (no worse than before). Returns how many entries were
+// removed.
+std::size_t remove_stale_staging(const std::string& dir, const std::string& prefix, StagingKind kind);
 
 // The same scan with another test of staleness: removes the entries named
 // `prefix` + N + rest for which stale(N) is true (the session reserves of
 // writer_lock.cpp, whose N is a session no live process holds).
-std::size_t remove_numbered(const std::string& dir, const std::string& prefix,
+std::size_t remove_numbered(const std::string& dir, const std::string& prefix, StagingKind kind,
                             const std::function<bool(std::int64_t number)>& stale);
 
 }  // namespace curvlab::data

@@ -87,6 +87,7 @@ struct OperatorStatus {
   double cpu_ms = 0.0;
   double gpu_ms = -1.0;  // -1: not measured
   std::uint64_t logger_drops = 0;
+  double logger_lock_wait_s = 0.0;  // how long another program has held the file's lock (0: not waiting)
   bool paused = false;
   bool ended = false;  // the session is over; last status
 };
