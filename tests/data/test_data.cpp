@@ -439,6 +439,52 @@ TEST(SampleWriter, CommitsEverythingAndCountsDropsWhenFull) {
 // Gaze rows: what a headset does not track is NULL, lost tracking is a row
 // with valid 0, a diverging vergence has no distance; a full ring drops and
 // counts gaze samples as it does tracking samples.
+// Another program's write transaction (DB Browser with unsaved edits) makes
+// the writer wait, not fail: what is journalled meanwhile reaches the file
+// once the lock is free, with the wait stored; past its patience it fails.
+TEST(SampleWriter, WaitsOutAnotherProgramsLockWithinItsPatienceThenFails) {
+  const auto dir = fresh_dir("patience");
+  const auto path = dir / "p.db";
+  std::int64_t session = 0;
+  {
+    auto store = make_store(path);
+    session = make_session(store, "P01");
+  }
+  for (const auto patience : {std::chrono::milliseconds(60'000), std::chrono::milliseconds(200)}) {
+    SampleWriterConfig cfg;
+    cfg.lock_patience = patience;
+    cfg.retry_interval = std::chrono::milliseconds(50);
+    auto writer = SampleWriter::open(path.string(), cfg).value();
+    Connection other = Connection::open(path.string(), OpenFlags::read_write);
+    sqlite3_busy_timeout(other.get(), 0);
+    other.exec("BEGIN IMMEDIATE");
+    TrackingSample s;
+    s.session_id = session;
+    ASSERT_TRUE(writer->push_tracking(s));
+    const auto ticket = writer->journal(StatusChange{session, SessionStatus::interrupted, false});
+    // The writer's busy timeout is 5 s: hold the lock past one attempt.
+    const auto waited = writer->wait_durable(ticket, std::chrono::milliseconds(patience.count() > 1000 ? 7000 : 12000));
+    EXPECT_FALSE(waited) << "the lock is still held";
+    if (patience.count() > 1000) {
+      EXPECT_EQ(waited.error().kind, DataError::Kind::busy);
+      EXPECT_NE(waited.error().message.find("timed out"), std::string::npos) << "a wait, not a failure";
+      EXPECT_GT(writer->lock_wait_s(), 0.0);
+      other.exec("ROLLBACK");
+      EXPECT_TRUE(writer->wait_durable(ticket));
+      EXPECT_TRUE(writer->flush());
+      EXPECT_EQ(writer->lock_wait_s(), 0.0);
+    } else {
+      EXPECT_NE(waited.error().message.find("paused"), std::string::npos) << "past its patience it fails";
+      other.exec("ROLLBACK");
+    }
+  }
+  auto db = Database::open(path.string(), OpenMode::read_only).value();
+  EXPECT_EQ(db.connection().query_int("SELECT count(*) FROM events WHERE kind = 'logger_waited' AND "
+                                      "json_extract(detail, '$.waited_ms') >= 5000"),
+            2);
+  EXPECT_EQ(db.connection().query_int("SELECT count(*) FROM tracking_samples"), 2);
+}
+
 TEST(SampleWriter, StoresGazeWithNullsForWhatIsNotTracked) {
   const auto dir = fresh_dir("writer_gaze");
   const auto path = dir / "g.db";

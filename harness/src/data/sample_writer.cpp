@@ -151,6 +151,7 @@ struct SampleWriter::Impl {
   // reader's checkpoint, another program's write transaction); the wait
   // to store as a logger_waited event once it has ended.
   std::optional<std::chrono::steady_clock::time_point> locked_since;
+  std::chrono::steady_clock::time_point attempt_started;  // of the write being tried
   std::optional<std::pair<std::int64_t, std::string>> wait_to_log;  // ms, reason
   std::vector<TrackingSample> pending_tracking;
   std::vector<FrameRecord> pending_frames;
@@ -261,6 +262,7 @@ struct SampleWriter::Impl {
     // The geometry last stored advances only with a committed batch: a
     // batch that fails is written again from the same starting point.
     batch_views = last_views;
+    attempt_started = std::chrono::steady_clock::now();
     try {
       Transaction txn(connection);
       for (const auto& s : pending_tracking) {
@@ -319,8 +321,8 @@ struct SampleWriter::Impl {
     if (e.kind == DataError::Kind::busy) {
       const auto now = std::chrono::steady_clock::now();
       if (!locked_since) {
-        locked_since = now;
-        lock_wait_started_ns.store(now.time_since_epoch().count(), std::memory_order_relaxed);
+        locked_since = attempt_started;
+        lock_wait_started_ns.store(attempt_started.time_since_epoch().count(), std::memory_order_relaxed);
       }
       if (now - *locked_since < config.lock_patience) return;
     }
@@ -383,6 +385,7 @@ struct SampleWriter::Impl {
   // stays at the front to be retried.
   bool apply_journal() {
     while (!journal_pending.empty()) {
+      attempt_started = std::chrono::steady_clock::now();
       auto applied = apply_front();
       if (!applied) {
         note_failure(applied.error(), "event and trial logging paused");

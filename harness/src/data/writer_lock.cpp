@@ -5,6 +5,7 @@
 #include "curvlab/harness/platform/lock_file.hpp"
 #include "curvlab/harness/platform/process.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -150,10 +151,12 @@ Expected<Done> wait_for_setup(LockFile& data, const std::string& db_path) {
   return Done{};
 }
 
-// The first session whose writer is alive, from the slots in use.
+// The first session whose writer is alive: the sessions with slots, and at
+// least the first 4096 (DB.lock beside another name of the file, a hard
+// link, has no slots for them).
 std::optional<std::pair<std::int64_t, LockHolder>> live_session(LockFile& data, const LockFile& holders) {
   const std::int64_t size = holders.is_open() ? holders.size() : 0;
-  const std::int64_t slots = size > slots_at ? (size - slots_at) / slot_bytes : 0;
+  const std::int64_t slots = std::max<std::int64_t>(size > slots_at ? (size - slots_at) / slot_bytes : 0, 4096);
   for (std::int64_t id = 1; id < slots; ++id)
     if (data.held_elsewhere(session_byte(id), true)) return std::pair{id, read_slot(holders, id)};
   return std::nullopt;
@@ -169,6 +172,15 @@ void remove_stale_reserves(LockFile& data, const std::string& beside) {
                   });
 }
 
+// Refuses a companion already there that curvlab may not write (a link,
+// another's file), before DB itself is made or opened.
+Expected<Done> check_companions(const std::string& db_path) {
+  const std::string path = holders_path(beside_of(db_path));
+  const LockFile existing = LockFile::open(path, LockFile::Mode::read_only);
+  if (existing.unsafe() != platform::Unsafe::none) return unsafe_companion(db_path, path, existing.unsafe());
+  return Done{};
+}
+
 }  // namespace
 
 std::string session_in_use_message(const std::string& db_path, std::int64_t session_id, const LockHolder& holder) {
@@ -178,6 +190,7 @@ std::string session_in_use_message(const std::string& db_path, std::int64_t sess
 }
 
 Expected<WriterLock> WriterLock::for_sessions(const std::string& db_path) {
+  if (auto ok = check_companions(db_path); !ok) return ok.error();
   bool refused = false;
   auto data = open_locked(db_path, false, refused);
   if (!data) return data.error();
@@ -198,6 +211,7 @@ Expected<WriterLock> WriterLock::for_sessions(const std::string& db_path) {
 }
 
 Expected<WriterLock> WriterLock::for_replacing(const std::string& db_path) {
+  if (auto ok = check_companions(db_path); !ok) return ok.error();
   std::error_code ec;
   const bool existed = fs::exists(db_path, ec);
   bool refused = false;
