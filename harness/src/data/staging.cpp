@@ -23,10 +23,24 @@ std::size_t remove_stale_staging(const std::string& dir, const std::string& pref
 
 namespace {
 
+bool strip(std::string_view& rest, std::string_view part) {
+  if (!rest.starts_with(part)) return false;
+  rest.remove_prefix(part.size());
+  return true;
+}
+
+// What may follow a work file's number: curvlab's own names only —
+// [.sqlite][.merging-N][-wal | -shm | -journal | .lock] (a pooled export's
+// copy, the merge into it, SQLite's companions and curvlab's lock file).
 bool known_rest(std::string_view rest, StagingKind kind) {
-  if (kind == StagingKind::file && rest.starts_with(".sqlite")) rest.remove_prefix(7);
-  if (rest.empty()) return true;
-  return kind == StagingKind::file && (rest == "-wal" || rest == "-shm" || rest == "-journal");
+  if (kind == StagingKind::folder) return rest.empty();
+  strip(rest, ".sqlite");
+  if (strip(rest, ".merging-")) {
+    const std::size_t digits = rest.find_first_not_of("0123456789");
+    if (digits == 0) return false;
+    rest.remove_prefix(digits == std::string_view::npos ? rest.size() : digits);
+  }
+  return rest.empty() || rest == "-wal" || rest == "-shm" || rest == "-journal" || rest == ".lock";
 }
 
 bool is_kind(const fs::directory_entry& entry, StagingKind kind) {

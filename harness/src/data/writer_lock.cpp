@@ -310,6 +310,12 @@ WriterLock& WriterLock::operator=(WriterLock&& other) noexcept {
 
 WriterLock::~WriterLock() { release(); }
 
+bool WriterLock::unused_now() const {
+  // After a replacer's rename: the path's new file, if no writer has it yet.
+  LockFile now = LockFile::open(db_path_, LockFile::Mode::database_read_only);
+  return now.is_open() && !now.held_elsewhere(file_byte, true) && now.still_named(db_path_);
+}
+
 void WriterLock::release() noexcept {
   if (!data_.is_open()) return;
   if (session_) {
@@ -321,9 +327,9 @@ void WriterLock::release() noexcept {
   const bool ours = data_.still_named(db_path_);
   // An empty file made only to hold the path while nothing replaced it.
   if (created_ && ours && data_.size() == 0) platform::remove_regular_file(db_path_);
-  // The last holder of a file still at its path removes DB.lock; later
-  // holders make it anew. Not on Windows (platform/lock_file.hpp).
-  if (LockFile::unlink_when_free && ours && holders_.is_open() && data_.try_lock(file_byte, true))
+  // The last holder of the file at the path removes DB.lock; later holders
+  // make it anew. Not on Windows (platform/lock_file.hpp).
+  if (LockFile::unlink_when_free && holders_.is_open() && (ours ? data_.try_lock(file_byte, true) : unused_now()))
     platform::remove_regular_file(holders_path(beside_));
   holders_.close();
   data_.close();

@@ -24,7 +24,8 @@ enum class StagingKind { file, folder };
 
 // Removes the entries directly in `dir` named `prefix` + PID + rest, where
 // PID is a process that no longer exists and rest is empty or, for files,
-// one of SQLite's companions (-wal, -shm, -journal), and that are of `kind`:
+// one of curvlab's own endings ([.sqlite][.merging-N] then nothing, -wal,
+// -shm, -journal or .lock), and that are of `kind`:
 // a regular file, or a folder (never through a link). Living processes'
 // entries, other names and other kinds are left alone, as is anything that
 // cannot be removed (no worse than before). Returns how many entries were

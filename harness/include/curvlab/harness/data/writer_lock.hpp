@@ -98,6 +98,7 @@ class WriterLock {
   WriterLock(platform::LockFile data, platform::LockFile holders, std::string db_path, std::string beside)
       : data_(std::move(data)), holders_(std::move(holders)), db_path_(std::move(db_path)), beside_(std::move(beside)) {}
   void release() noexcept;
+  bool unused_now() const;
 
   platform::LockFile data_;     // the open of DB that holds the locks
   platform::LockFile holders_;  // DB.lock
