@@ -129,8 +129,7 @@ void run_validate(const std::string& file, bool as_json, const BackendArgs& devi
   for (const auto& b : d.blocks) {
     std::cout << "  block " << b.name << (b.practice ? " (practice)" : "") << ": " << b.trial_count
               << " trials";
-    const auto& src = *std::find_if(p.blocks.begin(), p.blocks.end(),
-                                    [&](const pr::Block& x) { return x.name == b.name; });
+    const auto& src = p.blocks.at(b.protocol_block);
     std::cout << ", " << src.judgement.type->name();
     if (src.judgement.type->stops_early()) std::cout << " (at most)";
     std::cout << '\n';

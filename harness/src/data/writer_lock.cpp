@@ -247,13 +247,14 @@ Expected<Done> WriterLock::claim(std::int64_t session_id) {
                      session_in_use_message(db_path_, session_id, read_slot(holders_, session_id))};
   write_slot(holders_, session_id);
   session_ = session_id;
+  end_setup();
   // Sets disk space aside for the end of a session; without space to spare
   // the session still runs (the reserve is a help, not a condition).
   reserve_made_ = platform::reserve_file(reserve_path(beside_, session_id), reserve_bytes);
   return Done{};
 }
 
-void WriterLock::setup_done() noexcept {
+void WriterLock::end_setup() noexcept {
   if (!setting_up_) return;
   data_.unlock(setup_byte);
   setting_up_ = false;
@@ -318,6 +319,7 @@ bool WriterLock::unused_now() const {
 
 void WriterLock::release() noexcept {
   if (!data_.is_open()) return;
+  end_setup();
   if (session_) {
     if (reserve_made_) platform::remove_regular_file(reserve_path(beside_, *session_));
     if (holders_.is_open()) clear_slot(holders_, *session_);

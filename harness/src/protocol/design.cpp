@@ -90,6 +90,7 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
 
     PlannedBlock pb;
     pb.name = b.name;
+    pb.protocol_block = order[pos];
     pb.practice = b.practice;
     pb.first_trial = d.trials.size();
     pb.trial_count = slots.size();
@@ -101,6 +102,7 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
       PlannedTrial t;
       t.index = d.trials.size();
       t.block_position = pos;
+      t.protocol_block = order[pos];
       t.block = b.name;
       t.practice = b.practice;
       t.trial_in_block = k;

@@ -107,12 +107,10 @@ struct Condition {
 };
 
 // Sort key: block order, then each factor's level order (the protocol's).
-std::vector<std::size_t> order_key(const protocol::Protocol& p, const std::string& block,
+std::vector<std::size_t> order_key(const protocol::Protocol& p, std::size_t protocol_block,
                                    const std::vector<std::pair<std::string, std::string>>& levels) {
   std::vector<std::size_t> key;
-  std::size_t b = 0;
-  while (b < p.blocks.size() && p.blocks[b].name != block) ++b;
-  key.push_back(b);
+  key.push_back(protocol_block);
   for (const auto& f : p.factors) {
     std::size_t index = f.levels.size();
     for (const auto& [name, label] : levels)
@@ -304,15 +302,13 @@ Result<Conditions> collect_conditions(const protocol::Protocol& p, Prediction& o
       skipped_other = true;
       continue;
     }
-    auto key = order_key(p, t.block, t.levels);
+    auto key = order_key(p, t.protocol_block, t.levels);
     key.push_back(judged(t.settings) == Judged::stick ? 0 : 1);
     auto& into = forecast == protocol::Forecast::convergence ? adaptive : choice;
     auto it = into.find(key);
     if (it == into.end()) {
       Condition c;
-      for (const auto& b : p.blocks)
-        if (b.name == t.block) c.block = &b;
-      if (c.block == nullptr) continue;
+      c.block = &p.blocks.at(t.protocol_block);
       c.first = t;
       c.judged = judged(t.settings) == Judged::stick ? "stick" : "table";
       auto made = make_world(t.settings);

@@ -142,10 +142,8 @@ std::string read_bytes(const std::string& path) {
   return ss.str();
 }
 
-const protocol::Block* find_block(const protocol::Protocol& p, const std::string& name) {
-  for (const auto& b : p.blocks)
-    if (b.name == name) return &b;
-  return nullptr;
+const protocol::Block* block_at(const protocol::Protocol& p, std::size_t protocol_block) {
+  return protocol_block < p.blocks.size() ? &p.blocks[protocol_block] : nullptr;
 }
 
 std::string levels_text(const std::vector<std::pair<std::string, std::string>>& levels) {
@@ -169,7 +167,7 @@ struct Onset {
 
 Onset onset_of(const protocol::Protocol& p, const protocol::PlannedTrial& t) {
   Onset out{t.settings, t.derived, ""};
-  const protocol::Block* block = find_block(p, t.block);
+  const protocol::Block* block = block_at(p, t.protocol_block);
   if (!block) return out;
   const auto& j = block->judgement;
   const auto value = j.type->onset_value(j, t);
@@ -185,7 +183,7 @@ Onset onset_of(const protocol::Protocol& p, const protocol::PlannedTrial& t) {
 // What the judgement's type tells apart within a cell (a staircase).
 std::vector<std::pair<std::string, std::string>> tracks_of(const protocol::Protocol& p,
                                                            const protocol::PlannedTrial& t) {
-  const protocol::Block* block = find_block(p, t.block);
+  const protocol::Block* block = block_at(p, t.protocol_block);
   if (!block) return {};
   return block->judgement.type->conditions(block->judgement, t);
 }
@@ -285,7 +283,7 @@ Result<Rendered> render_condition(const protocol::Protocol& p, const protocol::P
                                   SheetRenderer& out_to) {
   const Settings s = onset_of(p, t).settings;
   Rendered out;
-  const protocol::Block* block = find_block(p, t.block);
+  const protocol::Block* block = block_at(p, t.protocol_block);
   auto made = make_world(s);
   if (!made) return made.error();
   const World world = std::move(made).value();
@@ -352,7 +350,7 @@ void write_blocks(std::ostringstream& o, const protocol::Protocol& p, const prot
        "response / ITI)</th><th>breaks</th></tr>\n";
   for (std::size_t i = 0; i < design.blocks.size(); ++i) {
     const auto& pb = design.blocks[i];
-    const protocol::Block* b = find_block(p, pb.name);
+    const protocol::Block* b = block_at(p, pb.protocol_block);
     std::string timeline = "—";
     if (pb.trial_count > 0) {
       const auto& tl = design.trials[pb.first_trial].settings.timeline;
@@ -383,7 +381,7 @@ void write_texts(std::ostringstream& o, const protocol::Protocol& p, const proto
   if (!p.instructions_start.empty())
     o << "<tr><td>before the first block</td><td>" << texts(p.instructions_start) << "</td></tr>\n";
   for (const auto& pb : design.blocks) {
-    const protocol::Block* b = find_block(p, pb.name);
+    const protocol::Block* b = block_at(p, pb.protocol_block);
     if (!pb.instructions.empty())
       o << "<tr><td>before block " << html(pb.name) << "</td><td>" << texts(pb.instructions) << "</td></tr>\n";
     if (b && !b->judgement.prompt.empty())
@@ -428,7 +426,7 @@ std::string judgement_tables(const protocol::Judgement& j) {
 void write_responses(std::ostringstream& o, const protocol::Protocol& p, const protocol::Design& design) {
   std::vector<std::pair<std::vector<std::string>, std::string>> entries;  // blocks, tables
   for (const auto& pb : design.blocks) {
-    const protocol::Block* b = find_block(p, pb.name);
+    const protocol::Block* b = block_at(p, pb.protocol_block);
     if (!b) continue;
     const std::string tables = judgement_tables(b->judgement);
     const std::string name = pb.name + (pb.practice ? " (practice)" : "");

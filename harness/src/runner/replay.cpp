@@ -64,8 +64,7 @@ Result<Done> read_trial_settings(const data::SessionProvenance& prov, const Repl
                                   "] for session " + std::to_string(rq.session_id)};
   const auto& planned = design.trials[static_cast<std::size_t>(rq.trial_index)];
   out.settings = planned.settings;
-  for (const auto& b : out.protocol.blocks)
-    if (b.name == planned.block) out.block = b;
+  out.block = out.protocol.blocks.at(planned.protocol_block);
   if (planned.adjustment_start && out.block) {
     protocol::set_numeric_setting(out.settings, out.block->judgement.parameter, *planned.adjustment_start);
     out.adjustment_value = *planned.adjustment_start;

@@ -127,7 +127,6 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   const data::events::Resume resumed{point->first, station.display->info().name};
   if (auto r = store.record_event(data::event_record(session_id, std::nullopt, clock.now_ns(), resumed)); !r)
     return r.error();
-  lock->setup_done();
   auto writer = data::SampleWriter::open(db_path);
   if (!writer) return writer.error();
 

@@ -96,7 +96,6 @@ RunResult run_session(const protocol::Protocol& p, const std::string& protocol_t
   const auto calibration = options.calibration.value_or(nominal_calibration(p.session_settings()));
   auto created = create(store, p, protocol_text, options, station.display->info(), design, calibration, clock, *lock);
   if (!created) return created.error();
-  lock->setup_done();
   auto writer = data::SampleWriter::open(db_path);
   if (!writer) return writer.error();
 

@@ -193,7 +193,7 @@ class SessionLoop::Impl {
   Outcome take_break(std::size_t i, std::size_t first) {
     const PlannedTrial& t = design_.trials[i];
     if (!t.break_before || i == first) return Outcome::done;
-    const auto& b = block_of(p_, t.block);
+    const auto& b = block_of(p_, t);
     return pages({b.break_text.empty() ? std::string("Break") : b.break_text}, Phase::break_page,
                  b.break_min_ms * 1'000'000, trial_ids_[i]);
   }
@@ -256,7 +256,7 @@ class SessionLoop::Impl {
     const auto key = std::pair{t.block_position, t.cell};
     auto it = adaptive_.find(key);
     if (it == adaptive_.end()) {
-      const auto& j = block_of(p_, t.block).judgement;
+      const auto& j = block_of(p_, t).judgement;
       it = adaptive_.emplace(key, j.type->adaptive_state(j)).first;
     }
     return it->second.get();
@@ -287,7 +287,7 @@ class SessionLoop::Impl {
     world_ = world;
     settings_ = s;
     std::string prompt;
-    if (current_trial_) prompt = block_of(p_, design_.trials[*current_trial_].block).judgement.prompt;
+    if (current_trial_) prompt = block_of(p_, design_.trials[*current_trial_]).judgement.prompt;
     auto built = TrialScene::build(*world_, settings_, prompt, font());
     if (!built) throw Stop{built.error()};
     scene_.emplace(std::move(built).value());
@@ -729,7 +729,7 @@ class SessionLoop::Impl {
     t.index = i;
     t.id = trial_ids_[i];
     t.planned = &design_.trials[i];
-    t.judgement = &block_of(p_, t.planned->block).judgement;
+    t.judgement = &block_of(p_, *t.planned).judgement;
     t.settings = t.planned->settings;
     t.line = trial_line(*t.planned);
     if (const auto* state = adaptive_for(*t.planned)) {

@@ -13,16 +13,15 @@ namespace curvlab::harness::runner {
 using protocol::PlannedTrial;
 using protocol::Protocol;
 
-const protocol::Block& block_of(const Protocol& p, const std::string& name) {
-  for (const auto& b : p.blocks)
-    if (b.name == name) return b;
-  std::fprintf(stderr, "curvlab: planned trial names block '%s', which protocol %s lacks\n", name.c_str(),
-               p.file.c_str());
+const protocol::Block& block_of(const Protocol& p, const PlannedTrial& t) {
+  if (t.protocol_block < p.blocks.size()) return p.blocks[t.protocol_block];
+  std::fprintf(stderr, "curvlab: planned trial %zu is of block %zu, which protocol %s lacks\n", t.index,
+               t.protocol_block, p.file.c_str());
   std::abort();
 }
 
 std::string staircase_key(const Protocol& p, const PlannedTrial& t, const std::string& track) {
-  const auto& b = block_of(p, t.block);
+  const auto& b = block_of(p, t);
   std::string key = t.block + ":";
   if (protocol::block_cells(p, b).size() > 1) key += "cell" + std::to_string(t.cell) + ":";
   return key + track;
@@ -70,7 +69,7 @@ std::string conditions_json(const Protocol& p, const PlannedTrial& t) {
   add("projection", std::string(renderer::to_string(s.viewing.projection)));
   add("eyes", std::string(renderer::to_string(s.viewing.eyes)));
   add("judged", judged(s) == Judged::stick ? "stick" : "table");
-  const auto& judgement = block_of(p, t.block).judgement;
+  const auto& judgement = block_of(p, t).judgement;
   for (const auto& [name, value] : judgement.type->conditions(judgement, t)) add(name.c_str(), value);
   return j.dump();
 }
@@ -85,7 +84,7 @@ std::string stimulus_record(const Protocol& p, const PlannedTrial& t, const prot
                             const protocol::Derived& d, bool shown) {
   Json j = protocol::settings_json(s, d, protocol::SettingsRecord::stimulus);
   if (t.adjustment_start) j["adjustment_start"] = *t.adjustment_start;
-  const std::string& parameter = block_of(p, t.block).judgement.parameter;
+  const std::string& parameter = block_of(p, t).judgement.parameter;
   if (!parameter.empty()) {
     const auto value = shown ? protocol::numeric_setting(s, parameter) : std::nullopt;
     j[protocol::stimulus_key(parameter)] = value ? Json(*value) : Json(nullptr);

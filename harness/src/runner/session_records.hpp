@@ -21,7 +21,7 @@ using Json = nlohmann::ordered_json;
 
 // The block a planned trial belongs to. Its name comes from the design of
 // the same protocol, so a miss is a broken contract: it aborts.
-const protocol::Block& block_of(const protocol::Protocol& p, const std::string& name);
+const protocol::Block& block_of(const protocol::Protocol& p, const protocol::PlannedTrial& t);
 // Adaptive tracks (staircases) are named uniquely within a session: the
 // block, the cell when the block has several, and the track's own name.
 std::string staircase_key(const protocol::Protocol& p, const protocol::PlannedTrial& t, const std::string& track);

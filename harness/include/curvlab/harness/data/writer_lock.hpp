@@ -54,8 +54,8 @@ struct LockHolder {
 
 class WriterLock {
  public:
-  // The shared hold of DB by a session writer, in set-up until setup_done()
-  // (DB is made, empty, when missing). Refused (in_use) while a command
+  // The shared hold of DB by a session writer, in set-up until it claims a
+  // session (DB is made, empty, when missing). Refused (in_use) while a command
   // replaces the file; read_only or io when DB or its companions cannot be
   // made, bad_input when a companion is a link or another's file.
   static Expected<WriterLock> for_sessions(const std::string& db_path);
@@ -64,16 +64,14 @@ class WriterLock {
   // A missing DB is made empty (created_file()) so that no session can start
   // there meanwhile, and removed again on release when nothing replaced it.
   static Expected<WriterLock> for_replacing(const std::string& db_path);
-  // A shared hold plus session `session_id`, in set-up until setup_done():
-  // refused (in_use) while a live process writes that session.
+  // A shared hold plus session `session_id`: refused (in_use) while a live
+  // process writes that session.
   static Expected<WriterLock> for_session(const std::string& db_path, std::int64_t session_id);
 
   // Adds session `session_id` to a shared hold (a new session, inside the
-  // transaction that creates it, so no other process can see it unlocked).
+  // transaction that creates it, so no other process can see it unlocked),
+  // and ends the set-up: the next writer may start.
   Expected<Done> claim(std::int64_t session_id);
-
-  // Lets the next writer of this file start (its session and schema exist).
-  void setup_done() noexcept;
 
   // Whether for_replacing made the file.
   [[nodiscard]] bool created_file() const { return created_; }
@@ -99,6 +97,7 @@ class WriterLock {
       : data_(std::move(data)), holders_(std::move(holders)), db_path_(std::move(db_path)), beside_(std::move(beside)) {}
   void release() noexcept;
   bool unused_now() const;
+  void end_setup() noexcept;
 
   platform::LockFile data_;     // the open of DB that holds the locks
   platform::LockFile holders_;  // DB.lock

@@ -31,7 +31,8 @@ struct DesignSlot {
 struct PlannedTrial {
   std::size_t index = 0;           // 0-based in the session
   std::size_t block_position = 0;  // 0-based position of the block in the run order
-  std::string block;
+  std::size_t protocol_block = 0;  // its block's index in Protocol::blocks (the file's order)
+  std::string block;               // its block's name, for people and exports; never looked up
   bool practice = false;
   std::size_t trial_in_block = 0;
   int repetition = 0;  // 0-based
@@ -47,6 +48,7 @@ struct PlannedTrial {
 
 struct PlannedBlock {
   std::string name;
+  std::size_t protocol_block = 0;  // index in Protocol::blocks
   bool practice = false;
   std::size_t first_trial = 0;
   std::size_t trial_count = 0;  // the maximum where the judgement stops early
