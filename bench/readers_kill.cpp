@@ -87,19 +87,36 @@ void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms
   curvlab::data::remove_database_files(db);
   fs::remove(link);
   fs::create_symlink(fs::path("..") / "real" / name, link);
+  // The last round's output must not answer for this one's first trial.
+  fs::remove(dir / "run.out");
+  fs::remove(dir / "run.err");
   sh::Child run = sh::spawn(bin,
                             {"run", std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml", "--participant", "P01",
                              "--db", link.string(), "--render", "none", "--pace", "realtime", "--progress", "json"},
                             dir / "run.out", dir / "run.err");
   if (!sh::wait_for_lines(run.out, "\"status\":\"completed\"", 1, std::chrono::seconds(60))) return;
   const auto stop_at = std::chrono::steady_clock::now() + std::chrono::milliseconds(kill_after_ms);
-  const std::string merge = bin + " merge --out " + db + " " + (dir / "other.sqlite").string() + " >/dev/null 2>&1";
-  if (std::system(merge.c_str()) == 0) ++t.merges_accepted;
+  const std::string merge =
+      bin + " merge --out " + db + " " + (dir / "other.sqlite").string() + " > " + (dir / "merge.out").string() + " 2>&1";
+  if (std::system(merge.c_str()) == 0) {
+    ++t.merges_accepted;
+    std::fprintf(stderr, "\n%s round %d: merge --out onto the live file was accepted: %s\n", bin.c_str(), k,
+                 curvlab::testing::read_file(dir / "merge.out").c_str());
+  }
   for (int r = 0; std::chrono::steady_clock::now() < stop_at && run.running(); ++r, ++t.reads) {
     if (r % 4 == 3) hard_read(db, r / 4);
     else sh::read_once(bin, db, dir, r);
   }
-  if (!run.running()) ++t.ended_by_reader;
+  if (!run.running()) {
+    // Ended on its own: by a reader when it failed, else it simply finished.
+    const int status = run.wait();
+    if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
+      ++t.ended_by_reader;
+      const std::string err = curvlab::testing::read_file(dir / "run.err");
+      std::fprintf(stderr, "\n%s round %d: the session ended: %s\n", bin.c_str(), k,
+                   err.substr(err.size() > 300 ? err.size() - 300 : 0).c_str());
+    }
+  }
   run.kill9();
   const std::int64_t reported = sh::count_lines(run.out, "\"status\":\"completed\"");
   const std::int64_t stored = stored_completed(db);
