@@ -89,6 +89,16 @@ inline Child spawn(const std::string& program, const std::vector<std::string>& a
   return c;
 }
 
+// A realtime session of `protocol` in the background, its output in
+// DIR/PARTICIPANT.out and .err (one JSON line per trial on stdout).
+inline Child start_realtime_session(const std::string& curvlab, const std::string& protocol, const fs::path& dir,
+                                    const std::string& db, const std::string& participant) {
+  return spawn(curvlab,
+               {"run", protocol, "--participant", participant, "--db", db, "--render", "none", "--pace", "realtime",
+                "--progress", "json"},
+               dir / (participant + ".out"), dir / (participant + ".err"));
+}
+
 // Waits until `file` has `count` lines containing `needle`.
 inline bool wait_for_lines(const fs::path& file, const std::string& needle, std::int64_t count,
                            std::chrono::seconds timeout) {

@@ -436,9 +436,6 @@ TEST(SampleWriter, CommitsEverythingAndCountsDropsWhenFull) {
                 "SELECT count(*) FROM tracking_samples WHERE length(virtual_pose) = 128"), 5000);
 }
 
-// Gaze rows: what a headset does not track is NULL, lost tracking is a row
-// with valid 0, a diverging vergence has no distance; a full ring drops and
-// counts gaze samples as it does tracking samples.
 // Another program's write transaction (DB Browser with unsaved edits) makes
 // the writer wait, not fail: what is journalled meanwhile reaches the file
 // once the lock is free, with the wait stored; past its patience it fails.
@@ -485,6 +482,9 @@ TEST(SampleWriter, WaitsOutAnotherProgramsLockWithinItsPatienceThenFails) {
   EXPECT_EQ(db.connection().query_int("SELECT count(*) FROM tracking_samples"), 2);
 }
 
+// Gaze rows: what a headset does not track is NULL, lost tracking is a row
+// with valid 0, a diverging vergence has no distance; a full ring drops and
+// counts gaze samples as it does tracking samples.
 TEST(SampleWriter, StoresGazeWithNullsForWhatIsNotTracked) {
   const auto dir = fresh_dir("writer_gaze");
   const auto path = dir / "g.db";

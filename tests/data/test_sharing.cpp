@@ -29,15 +29,10 @@ namespace {
 
 fs::path fresh_dir(const std::string& name) { return curvlab::testing::fresh_test_dir("sharing", name); }
 
-
 const std::string demo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml";
 
-// A realtime session of the demo protocol in the background.
 sh::Child start_session(const fs::path& dir, const std::string& db, const std::string& participant = "P01") {
-  return sh::spawn(CURVLAB_BIN,
-                   {"run", demo, "--participant", participant, "--db", db, "--render", "none", "--pace", "realtime",
-                    "--progress", "json"},
-                   dir / (participant + ".out"), dir / (participant + ".err"));
+  return sh::start_realtime_session(CURVLAB_BIN, demo, dir, db, participant);
 }
 
 std::int64_t stored_completed(const std::string& db) {

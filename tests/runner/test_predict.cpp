@@ -98,14 +98,17 @@ TEST(Predict, TheProposedStudyFollowsTheHumanModel) {
   EXPECT_EQ(checked, 9);
   // A catch-trial bend of 2 cm at 1 m in E3: about 300 arcsec of relative
   // disparity, ten thresholds.
+  int catch_trials = 0;
   for (const auto& c : pred.conditions)
     if (c.judged == "stick" && level(c, "space") == "E3" && level(c, "view") == "tourist" &&
         level(c, "stick_bend") == "0.02") {
+      ++catch_trials;
       ASSERT_TRUE(c.human.has_value());
       EXPECT_NEAR(c.human->signal_arcsec, 0.063 * 0.02 / 1.0 * 206264.8, 40.0);
       EXPECT_NEAR(c.human->threshold_arcsec, 30.0, 1e-9);
       EXPECT_GT(c.proportions[0], 0.95);
     }
+  EXPECT_EQ(catch_trials, 1) << "the E3 tourist catch-trial condition was not predicted";
   bool view_power = false;
   for (const auto& pe : pred.power) {
     EXPECT_GE(pe.power, 0.0);

@@ -33,6 +33,10 @@ rn::HeadlessOptions headless_options(const BackendArgs& a, const StationNeeds& n
   o.software = a.software;
   o.msaa = n.msaa;
   o.start_ns = n.start_ns;
+  // A session that draws nothing needs no Vulkan device: a dry run with the
+  // simulated participant works on any machine (the image observer draws
+  // with a device of its own).
+  o.no_gpu = a.render == "none" && a.images.empty();
   return o;
 }
 
