@@ -5,9 +5,11 @@
 // program holding a write transaction open for 2 s take turns on the file,
 // tries `merge --out` onto the file's real path, kills the session at a
 // random instant and compares the trials it reported completed with the
-// trials stored; then checks the file's integrity. A session that ends on
+// trials stored; then checks the file's integrity. A session that fails on
 // its own before the kill was ended by a reader. Usage:
-//   bench_readers_kill [ROUNDS] [CURVLAB ...]
+//   bench_readers_kill [ROUNDS] [--no-merge] [CURVLAB ...]
+// (--no-merge leaves the merge out, to see what the readers alone do to an
+// older build whose merge would replace the file under its session).
 // Several executables (an older build beside this one) are measured in the
 // same run, round for round on the same kill instants.
 #include "curvlab/harness/data/database.hpp"
@@ -76,6 +78,8 @@ std::int64_t stored_completed(const std::string& db) {
   }
 }
 
+bool with_merge = true;
+
 void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms, Tally& t) {
   std::string name = "r";  // appended step by step: GCC 12's -Wrestrict misfires on "r" + to_string(k)
   name += std::to_string(k);
@@ -98,7 +102,7 @@ void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms
   const auto stop_at = std::chrono::steady_clock::now() + std::chrono::milliseconds(kill_after_ms);
   const std::string merge =
       bin + " merge --out " + db + " " + (dir / "other.sqlite").string() + " > " + (dir / "merge.out").string() + " 2>&1";
-  if (std::system(merge.c_str()) == 0) {
+  if (with_merge && std::system(merge.c_str()) == 0) {
     ++t.merges_accepted;
     std::fprintf(stderr, "\n%s round %d: merge --out onto the live file was accepted: %s\n", bin.c_str(), k,
                  curvlab::testing::read_file(dir / "merge.out").c_str());
@@ -137,7 +141,10 @@ void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms
 int main(int argc, char** argv) {
   const int rounds = argc > 1 ? std::atoi(argv[1]) : 50;
   std::vector<std::string> bins;
-  for (int i = 2; i < argc; ++i) bins.emplace_back(argv[i]);
+  for (int i = 2; i < argc; ++i) {
+    if (std::string(argv[i]) == "--no-merge") with_merge = false;
+    else bins.emplace_back(argv[i]);
+  }
   if (bins.empty()) bins.push_back((fs::path(argv[0]).parent_path() / "curvlab").string());
   const fs::path dir = fs::temp_directory_path() / ("curvlab_bench_readers_" + std::to_string(::getpid()));
   fs::create_directories(dir);
