@@ -292,8 +292,8 @@ std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& pa
   if (!in) throw UsageError(path + ": cannot read the calibration file");
   std::stringstream text;
   text << in.rdbuf();
-  auto fit = rn::parse_calibration_json(text.str());
-  if (!fit) throw UsageError(path + ": " + fit.error().message);
+  auto fit = rn::parse_calibration_json(text.str(), path);
+  if (!fit) throw UsageError(fit.error().message);
   return *fit;
 }
 
