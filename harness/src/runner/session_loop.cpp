@@ -4,6 +4,7 @@
 #include "progress.hpp"
 #include "session_records.hpp"
 
+#include "curvlab/harness/lab_volume.hpp"
 #include "curvlab/harness/numbered_files.hpp"
 #include "curvlab/harness/protocol/adjustment.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
@@ -15,6 +16,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <csignal>
+#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <exception>
@@ -321,6 +324,9 @@ class SessionLoop::Impl {
     f.started = SteadyTime::now();
     f.timing = *timing;
     lab_ = station_.poses->poses(f.timing);
+    // A pose no lab can hold (NaN, inf, 1e308 m) is lost tracking, stored as
+    // such, and never reaches the tracker (lab_volume.hpp).
+    for (auto& pose : lab_.pose) pose = possible_pose(pose);
     last_lab_ = lab_;
     if (tracker_) tracker_->update(lab_);
     f.head_tracked = head_meets(settings_.tracking_loss.head_requires, tracker_ && tracker_->output().tracked[0],
@@ -555,17 +561,22 @@ class SessionLoop::Impl {
     s.orientation_valid = pose.valid || pose.orientation_valid;
     s.lab_position_m = {pose.position_m.x, pose.position_m.y, pose.position_m.z};
     s.lab_orientation_xyzw = {pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w};
-    s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)];
     const auto& m = out.pose[static_cast<std::size_t>(d)].m;
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) s.virtual_pose[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
+    const bool finite = std::all_of(s.virtual_pose.begin(), s.virtual_pose.end(), [](double v) { return std::isfinite(v); });
+    s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)] && finite;
+    if (!finite) s.position_valid = s.orientation_valid = false;  // placed nowhere: not tracked
     s.has_state = true;
     s.state.physical_edge = out.state.physical_edge;
     s.state.virtual_edge = out.state.virtual_edge;
     s.state.laps = out.state.physical_laps;
     s.state.anchor_fraction = out.state.anchor_fraction;
     if (d > 0) {
+      // A hand not measured (it or the head not tracked) has no coherence
+      // error (NULL), never an error of 0.
       const auto& c = out.coherence[static_cast<std::size_t>(d - 1)];
+      s.state.coherence_measured = c.measured && finite && std::isfinite(c.error_m) && std::isfinite(c.error_rad);
       s.state.coherence_error_m = c.error_m;
       s.state.coherence_error_rad = c.error_rad;
     }
