@@ -259,6 +259,9 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
   if (s.status != data::SessionStatus::completed) {
     std::cerr << "session " << s.session_id << " stopped before the end; continue it with: curvlab resume --db "
               << s.db_path << " --session " << s.session_id << '\n';
+    if (s.output_lost)
+      throw RuntimeFailure("session interrupted: standard output was closed (the program reading --progress json "
+                           "exited)");
     if (const int sig = stop_signal_received(); sig != 0)
       throw RuntimeFailure("session interrupted by signal " + std::to_string(sig) + " (" + platform::signal_name(sig) + ")",
                            128 + sig);

@@ -16,8 +16,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <exception>
@@ -71,6 +71,14 @@ std::string trial_line(const PlannedTrial& t) {
 }
 
 constexpr std::int64_t ms_to_ns(std::int64_t v) { return v * 1'000'000; }
+
+// The signal event stored when stdout's reader has gone: SIGPIPE's number
+// (13 on Linux; Windows has no SIGPIPE, so its number is used there too).
+#ifdef SIGPIPE
+constexpr int kBrokenPipe = SIGPIPE;
+#else
+constexpr int kBrokenPipe = 13;
+#endif
 
 // The event a page is logged as; pages are shown only in these three phases.
 data::EventKind page_event(Phase phase) {
@@ -427,10 +435,14 @@ class SessionLoop::Impl {
 
   // A SIGINT, SIGTERM or SIGHUP ends the session as the operator's end does:
   // interrupted, flushed, resumable.
+  // So does standard output closed under --progress json (its reader
+  // gone), stored as the signal a broken pipe would have sent.
   void take_stop_signal(Frame& f) {
-    if (options_.stop_signal == nullptr) return;
-    const int sig = options_.stop_signal->load(std::memory_order_relaxed);
+    const int sig = output_lost_ ? kBrokenPipe
+                    : options_.stop_signal != nullptr ? options_.stop_signal->load(std::memory_order_relaxed)
+                                                      : 0;
     if (sig == 0) return;
+    summary_.output_lost = output_lost_;
     if (!stop_logged_) {
       event(std::nullopt, data::events::Signal{sig});
       stop_logged_ = true;
@@ -532,7 +544,7 @@ class SessionLoop::Impl {
     }
     line["frames_late"] = late_trial_;
     line["elapsed_s"] = static_cast<double>(clock_.now_ns() - session_start_ns_) * 1e-9;
-    progress_.line(line.dump());
+    if (!progress_.line(line.dump())) output_lost_ = true;
   }
 
   // Hands a record to the logger. Fast runs wait for the writer rather than
@@ -1098,6 +1110,7 @@ class SessionLoop::Impl {
   std::deque<Signal> operator_signals_;  // not yet handed to the loop
   std::deque<io::Signal> device_signals_;  // raised, not yet handed to the loop
   bool stop_logged_ = false;
+  bool output_lost_ = false;  // a --progress json line could not be written
   OperatorStatus status_;
   std::int64_t phase_left_ns_ = -1;  // for the next status; set before end()
   std::array<std::int64_t, 3> lost_since_{-1, -1, -1};
