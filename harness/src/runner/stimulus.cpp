@@ -122,8 +122,9 @@ std::optional<std::string> calibration_out_of_range(const geometry::PhysicalTabl
 }  // namespace
 
 Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text, const std::string& file) {
-  const auto bad = [&](const std::string& key, std::string m) {
-    const std::size_t line = key.empty() ? 0 : line_of_key(text, key);
+  // `line`: the place when no member names it (0: none known).
+  const auto bad = [&](const std::string& key, std::string m, std::size_t line = 0) {
+    if (!key.empty()) line = line_of_key(text, key);
     // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on
     // `":" + std::to_string(…)`.
     std::string where;
@@ -135,10 +136,18 @@ Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& tex
     if (!key.empty()) where.append(key).append(": ");
     return Error{Error::Kind::bad_input, where + std::move(m)};
   };
-  if (const auto fault = find_invalid_utf8(text)) return bad("", utf8_fault_text(*fault));
-  const auto j = nlohmann::json::parse(text, nullptr, false);
-  if (j.is_discarded() || !j.is_object())
-    return bad("", "expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
+  if (const auto fault = find_invalid_utf8(text)) return bad("", utf8_fault_text(*fault), fault->line);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // A syntax error, or a number beyond a double's range (1e400).
+    // e.byte: the 1-based position of the last byte read.
+    const auto end = text.begin() + static_cast<std::ptrdiff_t>(std::min(e.byte > 0 ? e.byte - 1 : 0, text.size()));
+    return bad("", "not valid JSON here (a syntax error, or a number too large for a double)",
+               1 + static_cast<std::size_t>(std::count(text.begin(), end, '\n')));
+  }
+  if (!j.is_object()) return bad("", "expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
   geometry::PhysicalTableFit fit;
   try {
     fit.centre_m = {j.at("centre_x_m").get<double>(), j.at("centre_z_m").get<double>()};
