@@ -75,12 +75,16 @@ std::string calibration_json(const geometry::PhysicalTableFit& fit) {
 
 namespace {
 
+// The 1-based line of the byte at `at`.
+std::size_t line_at(const std::string& text, std::size_t at) {
+  return 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+}
+
 // The 1-based line of the first `"key"` in a JSON text, 0 when absent: the
 // line a message about that member names.
 std::size_t line_of_key(const std::string& text, const std::string& key) {
   const auto at = text.find('"' + key + '"');
-  if (at == std::string::npos) return 0;
-  return 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+  return at == std::string::npos ? 0 : line_at(text, at);
 }
 
 // A member's allowed range (inclusive unless `open`) and how a message says it.
@@ -136,16 +140,22 @@ Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& tex
     if (!key.empty()) where.append(key).append(": ");
     return Error{Error::Kind::bad_input, where + std::move(m)};
   };
-  if (const auto fault = find_invalid_utf8(text)) return bad("", utf8_fault_text(*fault), fault->line);
+  if (const auto fault = find_invalid_utf8(text)) return bad("", "the calibration file is " + utf8_fault_text(*fault), fault->line);
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
-    // A syntax error, or a number beyond a double's range (1e400).
     // e.byte: the 1-based position of the last byte read.
-    const auto end = text.begin() + static_cast<std::ptrdiff_t>(std::min(e.byte > 0 ? e.byte - 1 : 0, text.size()));
-    return bad("", "not valid JSON here (a syntax error, or a number too large for a double)",
-               1 + static_cast<std::size_t>(std::count(text.begin(), end, '\n')));
+    const auto at = std::min(e.byte > 0 ? e.byte - 1 : 0, text.size());
+    return bad("", "not valid JSON here (a syntax error)", line_at(text, at));
+  } catch (const nlohmann::json::out_of_range& e) {
+    // "number overflow parsing '1e400'": the number names the place.
+    const std::string what = e.what();
+    const auto open = what.find('\'');
+    const auto close = what.rfind('\'');
+    const auto at = open < close ? text.find(what.substr(open + 1, close - open - 1)) : std::string::npos;
+    return bad("", "not valid JSON here (a number too large for a double)",
+               at == std::string::npos ? 0 : line_at(text, at));
   }
   if (!j.is_object()) return bad("", "expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
   geometry::PhysicalTableFit fit;
