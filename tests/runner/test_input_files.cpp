@@ -183,8 +183,9 @@ TEST(InputFiles, ATouchOrCalibrationOutsideTheLabVolumeIsRefused) {
   EXPECT_FALSE(fs::exists(dir / "s.sqlite"));
 
   // JSON has no NaN or infinity; a number beyond a double's range does not parse.
-  const auto huge = write(dir / "huge.json", "{\n  \"centre_x_m\": 0.0,\n  \"centre_z_m\": 1e400,\n"
-                                             "  \"yaw_rad\": 0.0,\n  \"edge_m\": 1.0,\n  \"height_m\": 0.75\n}\n");
+  const auto huge = write(dir / "huge.json",
+                          "{\n  \"centre_x_m\": 0.0,\n  \"centre_z_m\": 1e400,\n"
+                          "  \"yaw_rad\": 0.0,\n  \"edge_m\": 1.0,\n  \"height_m\": 0.75\n}\n");
   const auto h = run_cli(run_demo(dir / "s.sqlite", "P01", "--calibration " + huge));
   EXPECT_EQ(h.exit_code, 2) << h.out;
   EXPECT_NE(h.out.find(huge + ":3: not valid JSON here"), std::string::npos) << h.out;

@@ -96,7 +96,8 @@ std::vector<geometry::Vec3> read_touches_csv(const std::string& path) {
     if (fields.size() != 3)
       throw UsageError(where + "expected 3 values x_m,y_m,z_m (metres), got " + std::to_string(fields.size()));
     geometry::Vec3 p{0.0};
-    for (std::size_t i = 0; i < 3; ++i) p[static_cast<glm::length_t>(i)] = touch_coordinate(where, kColumns[i], fields[i]);
+    for (std::size_t i = 0; i < 3; ++i)
+      p[static_cast<glm::length_t>(i)] = touch_coordinate(where, kColumns[i], fields[i]);
     touches.push_back(p);
   }
   return touches;

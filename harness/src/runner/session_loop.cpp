@@ -576,7 +576,8 @@ class SessionLoop::Impl {
     const auto& m = out.pose[static_cast<std::size_t>(d)].m;
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) s.virtual_pose[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
-    const bool finite = std::all_of(s.virtual_pose.begin(), s.virtual_pose.end(), [](double v) { return std::isfinite(v); });
+    const bool finite =
+        std::all_of(s.virtual_pose.begin(), s.virtual_pose.end(), [](double v) { return std::isfinite(v); });
     s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)] && finite;
     if (!finite) s.position_valid = s.orientation_valid = false;  // placed nowhere: not tracked
     s.has_state = true;

@@ -140,7 +140,8 @@ Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& tex
     if (!key.empty()) where.append(key).append(": ");
     return Error{Error::Kind::bad_input, where + std::move(m)};
   };
-  if (const auto fault = find_invalid_utf8(text)) return bad("", "the calibration file is " + utf8_fault_text(*fault), fault->line);
+  if (const auto fault = find_invalid_utf8(text))
+    return bad("", "the calibration file is " + utf8_fault_text(*fault), fault->line);
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);

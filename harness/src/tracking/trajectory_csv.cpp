@@ -99,7 +99,8 @@ class Reader {
     if (auto e = number(line, f, field, out)) return e;
     if (within_lab(*out)) return std::nullopt;
     return error(line, f.column, field,
-                 "expected a lab coordinate in metres within ±100 (the lab volume), got '" + std::string(f.text) + "'");
+                 "expected a lab coordinate in metres within ±100 (the lab volume), got '" + std::string(f.text) +
+                     "'");
   }
 
  private:
@@ -134,8 +135,8 @@ std::optional<Error> parse_table_line(const Reader& r, std::size_t line_no,
                          "' (expected centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
     const Field value{token.substr(eq + 1), pos + eq + 2};
     const std::string field = "physical_table " + key;
-    if (auto e = key == "yaw_rad" ? r.number(line_no, value, field, target) : r.lab_metres(line_no, value, field, target))
-      return e;
+    auto e = key == "yaw_rad" ? r.number(line_no, value, field, target) : r.lab_metres(line_no, value, field, target);
+    if (e) return e;
     if (key == "edge_m" && !(table->edge_m > 0.0))
       return r.error(line_no, pos + eq + 2, "physical_table edge_m",
                      "expected a positive number of metres");

@@ -17,7 +17,9 @@ namespace curvlab::harness {
 inline constexpr double kLabBound_m = 100.0;
 
 // A lab coordinate (metres) that is finite and within the lab volume.
-inline bool within_lab(double coordinate_m) { return std::isfinite(coordinate_m) && std::abs(coordinate_m) <= kLabBound_m; }
+inline bool within_lab(double coordinate_m) {
+  return std::isfinite(coordinate_m) && std::abs(coordinate_m) <= kLabBound_m;
+}
 
 // A pose source's pose as the session may use it: a position that is not
 // finite or lies outside the lab volume is lost (valid false, the position at
