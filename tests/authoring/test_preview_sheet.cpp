@@ -265,4 +265,32 @@ TEST_F(PreviewSheet, ListsEachStaircaseWithItsStartStepsAndRules) {
   EXPECT_EQ(row(responses, "parameter"), "stimulus.stick_sagitta_m");
 }
 
+// The sheet names the protocol by its file name: given the absolute path of
+// a protocol in a home folder, it showed /home/<name>/… (a folder can name
+// a person; docs/data.md, "Privacy").
+TEST(PreviewPrivacy, NoFolderOfTheProtocolIsWrittenIntoTheSheet) {
+  const fs::path dir = fs::temp_directory_path() / ("curvlab-preview-privacy-" + std::to_string(::getpid()));
+  const fs::path home = dir / "home" / "jane-doe" / "study";
+  fs::remove_all(dir);
+  fs::create_directories(home);
+  std::ofstream(home / "check.toml") << kProtocol;
+  ASSERT_TRUE((home / "check.toml").is_absolute());
+  const std::string cmd = std::string(CURVLAB_CLI) + " preview '" + (home / "check.toml").string() + "' --out '" +
+                          (dir / "sheet").string() + "' --software --size 64x48 >'" + (dir / "log").string() +
+                          "' 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "see " << dir / "log";
+  std::ifstream in(dir / "sheet" / "index.html");
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::string sheet = text.str();
+  ASSERT_FALSE(sheet.empty());
+  EXPECT_NE(sheet.find("<td>protocol file</td><td><code>check.toml</code>"), std::string::npos);
+  EXPECT_EQ(sheet.find("jane-doe"), std::string::npos);
+  EXPECT_EQ(sheet.find(dir.string()), std::string::npos);
+  EXPECT_EQ(sheet.find(fs::temp_directory_path().string()), std::string::npos);
+  EXPECT_EQ(sheet.find("/home/"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 }  // namespace

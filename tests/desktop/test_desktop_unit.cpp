@@ -31,6 +31,16 @@ TEST(KeyScript, ParsesKeysDelaysAndComments) {
   EXPECT_EQ(keys[2].delay_ns, 0);
 }
 
+// A script saved in Latin-1 (Windows Notepad's é is 0xE9) is refused at load
+// with its line, byte and column, before a session starts.
+TEST(KeyScript, TextThatIsNotUtf8IsRefusedWithItsLineAndByte) {
+  auto parsed = parse_key_script("space\n# Ren\xE9's pilot\n2 150\n", "keys.txt");
+  ASSERT_FALSE(parsed);
+  EXPECT_EQ(parsed.error().message,
+            "keys.txt:2: the key script is not UTF-8 (byte 0xE9 at column 6); save the file as UTF-8");
+  EXPECT_TRUE(parse_key_script("space\n# Ren\xC3\xA9's pilot\n2 150\n", "keys.txt"));
+}
+
 TEST(KeyScript, BadLinesNameFileLineAndWhatWasExpected) {
   for (const char* bad : {"1\n2 soon\n", "1\n2 -5\n", "1\n2 10 3\n", "1\n2 1.5\n"}) {
     auto parsed = parse_key_script(bad, "keys.txt");
@@ -69,15 +79,20 @@ TEST(KeyScript, HandLinesPlaceAHand) {
 // A binary file given as --key-script: the message shows the bytes it could
 // not read as escapes, so the terminal is not sent control sequences.
 TEST(KeyScript, UnprintableBytesInAMessageAreEscaped) {
-  const char raw[] = "\x7f" "ELF\x02\x01 \x01\x00\xff\x1b[2J\x07 x\n";
-  const std::string binary(raw, sizeof raw - 1);
-  auto parsed = parse_key_script(binary, "a.out");
-  ASSERT_FALSE(parsed);
-  const auto& message = parsed.error().message;
-  EXPECT_NE(message.find("'\\x01\\x00\\xff\\x1b[2J\\x07'"), std::string::npos) << message;
-  for (char c : message) {
-    const auto byte = static_cast<unsigned char>(c);
-    EXPECT_TRUE(byte >= 0x20 && byte < 0x7f) << "raw byte " << static_cast<int>(byte) << " in: " << message;
+  // Control bytes are UTF-8: the word is shown escaped. A byte that is not
+  // UTF-8 (0xFF) stops the file before, named by its value.
+  const char raw[] = "\x7f" "ELF\x02\x01 \x01\x00\x1b[2J\x07 x\n";
+  const char not_utf8[] = "\x7f" "ELF\x02\x01 \x01\x00\xff\x1b[2J\x07 x\n";
+  for (const auto& [text, expected] : {std::pair{std::string(raw, sizeof raw - 1), "'\\x01\\x00\\x1b[2J\\x07'"},
+                                       std::pair{std::string(not_utf8, sizeof not_utf8 - 1), "(byte 0xFF at column 10)"}}) {
+    auto parsed = parse_key_script(text, "a.out");
+    ASSERT_FALSE(parsed);
+    const auto& message = parsed.error().message;
+    EXPECT_NE(message.find(expected), std::string::npos) << message;
+    for (char c : message) {
+      const auto byte = static_cast<unsigned char>(c);
+      EXPECT_TRUE(byte >= 0x20 && byte < 0x7f) << "raw byte " << static_cast<int>(byte) << " in: " << message;
+    }
   }
 }
 

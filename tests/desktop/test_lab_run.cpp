@@ -44,6 +44,23 @@ int count_trials(const std::string& db_path, const std::string& status) {
   return n;
 }
 
+// A key script saved in Latin-1 is refused before a window opens or a
+// session is written: exit 2 naming its line and byte.
+TEST(LabRun, AKeyScriptThatIsNotUtf8IsRefusedBeforeTheSession) {
+  const auto dir = fresh_dir("latin1_keys");
+  std::ofstream(dir / "keys.txt", std::ios::binary) << "# Ren\xE9's pilot\nspace 100\n";
+  const auto db = dir / "pilot.db";
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/demo.toml --participant T1 --db " +
+                         db.string() + " --backend desktop --software --window-size 256x256 --key-script " +
+                         (dir / "keys.txt").string());
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find((dir / "keys.txt").string() +
+                       ":1: the key script is not UTF-8 (byte 0xE9 at column 6); save the file as UTF-8"),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
 TEST(LabRun, DesktopPilotOfTheDemoCompletesWithScriptedKeys) {
   curvlab::test::XServer x;
   if (!x.available()) GTEST_SKIP() << "no X display: " << x.reason();

@@ -34,6 +34,8 @@ class ScriptedDevices final : public harness::io::Display,
   ScriptedDevices(rn::HeadlessDisplay& display, rn::TrajectoryPoses& poses) : display_(display), poses_(poses) {}
 
   std::function<bool(std::int64_t t_ns)> head_valid = [](std::int64_t) { return true; };
+  // Changes the poses as a faulty runtime would (NaN, 1e308 m); none by default.
+  std::function<void(std::int64_t t_ns, geometry::LabFrame&)> alter_poses;
   std::function<harness::io::Signal(const harness::io::FrameTiming&, const std::string& phase,
                                     std::vector<harness::io::InputEvent>&)>
       inputs;
@@ -53,6 +55,7 @@ class ScriptedDevices final : public harness::io::Display,
   geometry::LabFrame poses(const harness::io::FrameTiming& frame) override {
     auto p = poses_.poses(frame);
     p[geometry::Device::head].valid = head_valid(frame.now_ns);
+    if (alter_poses) alter_poses(frame.now_ns, p);
     return p;
   }
   [[nodiscard]] harness::io::Reach reach() const override { return reach_as; }

@@ -6,8 +6,10 @@
 // reads.
 #include "calibrate.hpp"
 
+#include "curvlab/harness/lab_volume.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/utf8.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -58,6 +60,19 @@ std::vector<std::string> split_commas(const std::string& line) {
 
 constexpr std::array<const char*, 3> kColumns = {"x_m", "y_m", "z_m"};
 
+// One touch's coordinate: a number of metres within the lab volume
+// (lab_volume.hpp). `where` is "FILE:LINE: ".
+double touch_coordinate(const std::string& where, const char* column, const std::string& f) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(f.data(), f.data() + f.size(), v);
+  if (f.empty() || ec != std::errc() || end != f.data() + f.size() || !std::isfinite(v))
+    throw UsageError(where + column + ": expected a number in metres, got '" + f + "'");
+  if (!harness::within_lab(v))
+    throw UsageError(where + column + ": expected a lab coordinate in metres within ±100 (the lab volume), got '" +
+                     f + "'");
+  return v;
+}
+
 // Touches in touch order from `x_m,y_m,z_m` rows (metres, the lab's STAGE
 // frame), after an optional header of exactly those names; blank lines are
 // skipped. A bad row is a UsageError naming file, line and field.
@@ -68,6 +83,8 @@ std::vector<geometry::Vec3> read_touches_csv(const std::string& path) {
   std::string line;
   bool first = true;
   for (int number = 1; std::getline(in, line); ++number) {
+    if (const auto fault = harness::find_invalid_utf8(line, static_cast<std::size_t>(number)))
+      throw UsageError(harness::utf8_fault_message(path, "the touches file", *fault));
     if (trim(line).empty()) continue;
     const auto fields = split_commas(trim(line));
     const std::string where = path + ":" + std::to_string(number) + ": ";
@@ -79,14 +96,8 @@ std::vector<geometry::Vec3> read_touches_csv(const std::string& path) {
     if (fields.size() != 3)
       throw UsageError(where + "expected 3 values x_m,y_m,z_m (metres), got " + std::to_string(fields.size()));
     geometry::Vec3 p{0.0};
-    for (std::size_t i = 0; i < 3; ++i) {
-      const std::string& f = fields[i];
-      double v = 0.0;
-      const auto [end, ec] = std::from_chars(f.data(), f.data() + f.size(), v);
-      if (f.empty() || ec != std::errc() || end != f.data() + f.size() || !std::isfinite(v))
-        throw UsageError(where + kColumns[i] + ": expected a number in metres, got '" + f + "'");
-      p[static_cast<glm::length_t>(i)] = v;
-    }
+    for (std::size_t i = 0; i < 3; ++i)
+      p[static_cast<glm::length_t>(i)] = touch_coordinate(where, kColumns[i], fields[i]);
     touches.push_back(p);
   }
   return touches;

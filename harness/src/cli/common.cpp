@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <charconv>
+#include <csignal>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -136,6 +137,12 @@ void add_space_option(CLI::App* cmd, geometry::SpaceKind* kind) {
          "space: S3, E3 or H3")
       ->required()
       ->check(CLI::IsMember({"S3", "E3", "H3", "s3", "e3", "h3"}));
+}
+
+void ignore_broken_pipes() {
+#ifdef SIGPIPE
+  std::signal(SIGPIPE, SIG_IGN);
+#endif
 }
 
 }  // namespace curvlab::cli

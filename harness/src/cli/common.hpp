@@ -46,6 +46,12 @@ void check_db_argument(const std::string& path);
 // Prints `doc` as indented JSON, or as aligned "key: value" lines.
 void print_result(const Json& doc, bool as_json);
 
+// Called first in main: a write to a pipe whose reader has gone fails with
+// EPIPE instead of killing the process with SIGPIPE, so a session whose
+// --progress json reader exits ends interrupted and resumable instead of
+// being left stored as running (POSIX; Windows has no SIGPIPE).
+void ignore_broken_pipes();
+
 // Parses "x,y,z,w" (or any count) into doubles; throws UsageError naming the
 // option on failure.
 std::vector<double> parse_number_list(const std::string& text, const std::string& option,

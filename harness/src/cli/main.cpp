@@ -9,6 +9,7 @@
 #include <iostream>
 
 int main(int argc, char** argv) {
+  curvlab::cli::ignore_broken_pipes();
   CLI::App app{"curvlab — perception experiments in S3, E3 and H3"};
   app.set_version_flag("--version", std::string(curvlab::software_version()) + " (" +
                                         std::string(curvlab::git_commit()) + ")");

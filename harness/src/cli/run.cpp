@@ -259,6 +259,9 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
   if (s.status != data::SessionStatus::completed) {
     std::cerr << "session " << s.session_id << " stopped before the end; continue it with: curvlab resume --db "
               << s.db_path << " --session " << s.session_id << '\n';
+    if (s.output_lost)
+      throw RuntimeFailure("session interrupted: standard output was closed (the program reading --progress json "
+                           "exited)");
     if (const int sig = stop_signal_received(); sig != 0)
       throw RuntimeFailure("session interrupted by signal " + std::to_string(sig) + " (" + platform::signal_name(sig) + ")",
                            128 + sig);
@@ -266,12 +269,29 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
   }
 }
 
+// The largest participant number a pseudonym's trailing digits may give:
+// nine digits. A longer number is refused rather than folded onto another
+// participant's seed and counterbalancing row.
+constexpr std::uint64_t kMaxPseudonymNumber = 999'999'999;
+
+// The participant number of a pseudonym: its trailing number (P07 → 7), 1
+// when it has none (docs/runner.md, `curvlab run`). A trailing number
+// of 0 or above kMaxPseudonymNumber is a UsageError naming --participant.
 std::uint64_t number_from_pseudonym(const std::string& id) {
   std::size_t end = id.size();
   std::size_t begin = end;
   while (begin > 0 && std::isdigit(static_cast<unsigned char>(id[begin - 1]))) --begin;
-  if (begin == end || end - begin > 9) return 1;
-  return std::stoull(id.substr(begin, end - begin));
+  if (begin == end) return 1;
+  const std::string digits = id.substr(begin, end - begin);
+  const std::size_t significant = digits.find_first_not_of('0');
+  if (significant == std::string::npos)
+    throw UsageError("--participant " + id + ": its trailing number " + digits +
+                     " is 0; participant numbers start at 1 (or give --participant-number N)");
+  if (digits.size() - significant > 9)
+    throw UsageError("--participant " + id + ": its trailing number " + digits + " is larger than " +
+                     std::to_string(kMaxPseudonymNumber) +
+                     ", the largest participant number a pseudonym gives; pass --participant-number N explicitly");
+  return std::stoull(digits.substr(significant));
 }
 
 struct RunArgs {
@@ -292,8 +312,8 @@ std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& pa
   if (!in) throw UsageError(path + ": cannot read the calibration file");
   std::stringstream text;
   text << in.rdbuf();
-  auto fit = rn::parse_calibration_json(text.str());
-  if (!fit) throw UsageError(path + ": " + fit.error().message);
+  auto fit = rn::parse_calibration_json(text.str(), path);
+  if (!fit) throw UsageError(fit.error().message);
   return *fit;
 }
 
@@ -325,7 +345,7 @@ void run_command(const RunArgs& a) {
   const pr::Protocol p = load_protocol_or_usage(a.protocol, &text);
   rn::RunOptions o = drawing_options(a.backend);
   o.participant = a.participant;
-  o.participant_number = a.participant_number.value_or(number_from_pseudonym(a.participant));
+  o.participant_number = a.participant_number ? *a.participant_number : number_from_pseudonym(a.participant);
   if (o.participant_number < 1) throw UsageError("--participant-number must be at least 1");
   o.ipd_m = a.ipd_m;
   if (a.ipd_m && !(*a.ipd_m > 0.04 && *a.ipd_m < 0.09)) throw UsageError("--ipd-m must lie in (0.04, 0.09) m");

@@ -140,7 +140,8 @@ struct SampleWriter::Impl {
     if (s.has_state) {
       st.bind(16, std::int64_t{s.state.physical_edge}).bind(17, std::int64_t{s.state.virtual_edge});
       st.bind(18, s.state.laps).bind(19, s.state.anchor_fraction);
-      st.bind(20, s.state.coherence_error_m).bind(21, s.state.coherence_error_rad);
+      if (s.state.coherence_measured) st.bind(20, s.state.coherence_error_m).bind(21, s.state.coherence_error_rad);
+      else st.bind_null(20).bind_null(21);
     } else {
       for (int i = 16; i <= 21; ++i) st.bind_null(i);
     }

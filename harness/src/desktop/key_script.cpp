@@ -1,5 +1,7 @@
 #include "key_script.hpp"
 
+#include "curvlab/harness/utf8.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -55,6 +57,8 @@ std::optional<glm::dvec3> hand_position(std::istringstream& words) {
 
 Result<std::vector<ScriptedKey>> parse_key_script(const std::string& text,
                                                                          const std::string& origin) {
+  if (const auto fault = harness::find_invalid_utf8(text))
+    return Error{Error::Kind::bad_input, harness::utf8_fault_message(origin, "the key script", *fault)};
   std::vector<ScriptedKey> keys;
   std::istringstream in(text);
   std::string line;

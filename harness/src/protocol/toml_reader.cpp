@@ -2,6 +2,8 @@
 // reader (toml_reader.hpp).
 #include "toml_reader.hpp"
 
+#include "curvlab/harness/utf8.hpp"
+
 #include <cmath>
 
 namespace curvlab::harness::toml_reader {
@@ -209,6 +211,11 @@ std::string type_name(const toml::node& node) {
 }
 
 std::variant<toml::table, SyntaxProblem> parse(std::string_view text, const std::string& file) {
+  // toml++ refuses bytes that are not UTF-8 too ("Encountered invalid utf-8
+  // sequence", a column early); this names the byte and what to do about it,
+  // as every other text file's reader does (curvlab/harness/utf8.hpp).
+  if (const auto fault = find_invalid_utf8(text))
+    return SyntaxProblem{{static_cast<int>(fault->line), static_cast<int>(fault->column)}, utf8_fault_text(*fault)};
   if (auto hazard = find_toml33_hazard(text)) return *std::move(hazard);
   try {
     return toml::parse(text, file);

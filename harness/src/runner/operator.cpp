@@ -1,5 +1,7 @@
 #include "curvlab/harness/runner/operator.hpp"
 
+#include "curvlab/harness/utf8.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -135,6 +137,10 @@ std::optional<OperatorActionKind> parse_operator_action(std::string_view name) {
 }
 
 Result<std::vector<OperatorAction>> parse_operator_script(std::string_view text, const std::string& name) {
+  // A note is stored as text; a Latin-1 byte would end the session at that
+  // note instead of here.
+  if (const auto fault = find_invalid_utf8(text))
+    return Error{Error::Kind::bad_input, utf8_fault_message(name, "the operator script", *fault)};
   std::vector<OperatorAction> actions;
   std::size_t line_no = 0;
   std::size_t start = 0;

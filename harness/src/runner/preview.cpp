@@ -327,7 +327,8 @@ void write_header(std::ostringstream& o, const protocol::Protocol& p, const Prev
   o << "<h1>" << html(p.meta.name) << " <span class=\"small\">" << html(p.meta.version) << "</span></h1>\n";
   if (!p.meta.description.empty()) o << "<p>" << html(p.meta.description) << "</p>\n";
   o << "<table class=\"meta\">\n"
-    << "<tr><td>protocol file</td><td><code>" << html(rq.protocol_path) << "</code></td></tr>\n"
+    << "<tr><td>protocol file</td><td><code>" << html(fs::path(rq.protocol_path).filename().string())
+    << "</code></td></tr>\n"
     << "<tr><td>protocol SHA-256</td><td><code id=\"sha256\">" << curvlab::data::sha256_hex(rq.protocol_text)
     << "</code></td></tr>\n"
     << "<tr><td>software</td><td>curvlab " << html(std::string(software_version())) << " ("

@@ -75,12 +75,14 @@ class Progress {
     std::fflush(stderr);
   }
 
-  // One trial's JSON object (already serialised, without newlines).
-  void line(const std::string& json_object) const {
-    if (!json_) return;
-    std::fputs(json_object.c_str(), stdout);
-    std::fputc('\n', stdout);
-    std::fflush(stdout);
+  // One trial's JSON object (already serialised, without newlines). false:
+  // it could not be written — the reader of stdout has gone (a pipe into
+  // `head -3` closed, EPIPE; the CLI ignores SIGPIPE) or the disk behind a
+  // redirection is full — and the session should end as on a stop signal.
+  [[nodiscard]] bool line(const std::string& json_object) const {
+    if (!json_) return true;
+    const bool written = std::fputs(json_object.c_str(), stdout) >= 0 && std::fputc('\n', stdout) != EOF;
+    return std::fflush(stdout) == 0 && written;
   }
 
  private:

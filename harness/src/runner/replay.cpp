@@ -14,6 +14,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -97,11 +99,23 @@ Result<Done> read_shown_value(data::Database& db, StoredFrame& out) {
 Result<Done> read_head(data::Database& db, const ReplayRequest& rq, StoredFrame& out) {
   auto head = data::read_head_at_frame(db, rq.session_id, out.frame_index);
   if (!head) return head.error();
-  if (!*head || (*head)->trial_id != out.trial_id) {
+  const bool in_trial = *head && (*head)->trial_id == out.trial_id;
+  // A head pose that is not finite (stored by curvlab before such poses were
+  // stored as lost) would draw a black frame: refused like a lost one.
+  const bool drawable = in_trial && std::all_of((*head)->virtual_pose.begin(), (*head)->virtual_pose.end(),
+                                                [](double v) { return std::isfinite(v); });
+  if (!drawable) {
     auto span = data::read_trial_frame_span(db, out.trial_id);
     if (!span) return span.error();
     const std::string frames = *span ? std::to_string((*span)->first) + ".." + std::to_string((*span)->last)
                                      : std::string("none logged");
+    const bool within = *span && out.frame_index >= (*span)->first && out.frame_index <= (*span)->last;
+    if (in_trial || within)
+      return Error{Kind::bad_input, "frame " + std::to_string(out.frame_index) + " of trial " +
+                                        std::to_string(rq.trial_index) +
+                                        " has no valid head pose (tracking was lost or the pose source gave a pose "
+                                        "that is not finite), so there is no view to draw; replay another of its "
+                                        "frames (" + frames + ")"};
     return Error{Kind::not_found, "frame " + std::to_string(out.frame_index) + " has no logged head pose of trial " +
                                       std::to_string(rq.trial_index) + " (its frames: " + frames + ")"};
   }

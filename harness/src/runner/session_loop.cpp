@@ -4,6 +4,7 @@
 #include "progress.hpp"
 #include "session_records.hpp"
 
+#include "curvlab/harness/lab_volume.hpp"
 #include "curvlab/harness/numbered_files.hpp"
 #include "curvlab/harness/protocol/adjustment.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
@@ -15,6 +16,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <exception>
@@ -68,6 +71,14 @@ std::string trial_line(const PlannedTrial& t) {
 }
 
 constexpr std::int64_t ms_to_ns(std::int64_t v) { return v * 1'000'000; }
+
+// The signal event stored when stdout's reader has gone: SIGPIPE's number
+// (13 on Linux; Windows has no SIGPIPE, so its number is used there too).
+#ifdef SIGPIPE
+constexpr int kBrokenPipe = SIGPIPE;
+#else
+constexpr int kBrokenPipe = 13;
+#endif
 
 // The event a page is logged as; pages are shown only in these three phases.
 data::EventKind page_event(Phase phase) {
@@ -321,6 +332,9 @@ class SessionLoop::Impl {
     f.started = SteadyTime::now();
     f.timing = *timing;
     lab_ = station_.poses->poses(f.timing);
+    // A pose no lab can hold (NaN, inf, 1e308 m) is lost tracking, stored as
+    // such, and never reaches the tracker (lab_volume.hpp).
+    for (auto& pose : lab_.pose) pose = possible_pose(pose);
     last_lab_ = lab_;
     if (tracker_) tracker_->update(lab_);
     f.head_tracked = head_meets(settings_.tracking_loss.head_requires, tracker_ && tracker_->output().tracked[0],
@@ -421,10 +435,14 @@ class SessionLoop::Impl {
 
   // A SIGINT, SIGTERM or SIGHUP ends the session as the operator's end does:
   // interrupted, flushed, resumable.
+  // So does standard output closed under --progress json (its reader
+  // gone), stored as the signal a broken pipe would have sent.
   void take_stop_signal(Frame& f) {
-    if (options_.stop_signal == nullptr) return;
-    const int sig = options_.stop_signal->load(std::memory_order_relaxed);
+    const int sig = output_lost_ ? kBrokenPipe
+                    : options_.stop_signal != nullptr ? options_.stop_signal->load(std::memory_order_relaxed)
+                                                      : 0;
     if (sig == 0) return;
+    summary_.output_lost = output_lost_;
     if (!stop_logged_) {
       event(std::nullopt, data::events::Signal{sig});
       stop_logged_ = true;
@@ -526,7 +544,7 @@ class SessionLoop::Impl {
     }
     line["frames_late"] = late_trial_;
     line["elapsed_s"] = static_cast<double>(clock_.now_ns() - session_start_ns_) * 1e-9;
-    progress_.line(line.dump());
+    if (!progress_.line(line.dump())) output_lost_ = true;
   }
 
   // Hands a record to the logger. Fast runs wait for the writer rather than
@@ -555,17 +573,23 @@ class SessionLoop::Impl {
     s.orientation_valid = pose.valid || pose.orientation_valid;
     s.lab_position_m = {pose.position_m.x, pose.position_m.y, pose.position_m.z};
     s.lab_orientation_xyzw = {pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w};
-    s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)];
     const auto& m = out.pose[static_cast<std::size_t>(d)].m;
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) s.virtual_pose[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
+    const bool finite =
+        std::all_of(s.virtual_pose.begin(), s.virtual_pose.end(), [](double v) { return std::isfinite(v); });
+    s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)] && finite;
+    if (!finite) s.position_valid = s.orientation_valid = false;  // placed nowhere: not tracked
     s.has_state = true;
     s.state.physical_edge = out.state.physical_edge;
     s.state.virtual_edge = out.state.virtual_edge;
     s.state.laps = out.state.physical_laps;
     s.state.anchor_fraction = out.state.anchor_fraction;
     if (d > 0) {
+      // A hand not measured (it or the head not tracked) has no coherence
+      // error (NULL), never an error of 0.
       const auto& c = out.coherence[static_cast<std::size_t>(d - 1)];
+      s.state.coherence_measured = c.measured && finite && std::isfinite(c.error_m) && std::isfinite(c.error_rad);
       s.state.coherence_error_m = c.error_m;
       s.state.coherence_error_rad = c.error_rad;
     }
@@ -1087,6 +1111,7 @@ class SessionLoop::Impl {
   std::deque<Signal> operator_signals_;  // not yet handed to the loop
   std::deque<io::Signal> device_signals_;  // raised, not yet handed to the loop
   bool stop_logged_ = false;
+  bool output_lost_ = false;  // a --progress json line could not be written
   OperatorStatus status_;
   std::int64_t phase_left_ns_ = -1;  // for the next status; set before end()
   std::array<std::int64_t, 3> lost_since_{-1, -1, -1};

@@ -1,9 +1,11 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 
 #include "curvlab/geometry/maps.hpp"
+#include "curvlab/harness/lab_volume.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/headless.hpp"
+#include "curvlab/harness/utf8.hpp"
 #include "curvlab/renderer/mesh.hpp"
 
 #include <nlohmann/json.hpp>
@@ -71,11 +73,92 @@ std::string calibration_json(const geometry::PhysicalTableFit& fit) {
   return j.dump();
 }
 
-Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text) {
-  const auto bad = [](std::string m) { return Error{Error::Kind::bad_input, std::move(m)}; };
-  const auto j = nlohmann::json::parse(text, nullptr, false);
-  if (j.is_discarded() || !j.is_object())
-    return bad("expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
+namespace {
+
+// The 1-based line of the byte at `at`.
+std::size_t line_at(const std::string& text, std::size_t at) {
+  return 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+}
+
+// The 1-based line of the first `"key"` in a JSON text, 0 when absent: the
+// line a message about that member names.
+std::size_t line_of_key(const std::string& text, const std::string& key) {
+  const auto at = text.find('"' + key + '"');
+  return at == std::string::npos ? 0 : line_at(text, at);
+}
+
+// A member's allowed range (inclusive unless `open`) and how a message says it.
+struct CalibrationRange {
+  const char* key;
+  double lo;
+  double hi;
+  bool open;
+  const char* expected;
+};
+
+constexpr CalibrationRange kCalibrationRanges[] = {
+    {"centre_x_m", -kLabBound_m, kLabBound_m, false, "metres within ±100 (the lab volume)"},
+    {"centre_z_m", -kLabBound_m, kLabBound_m, false, "metres within ±100 (the lab volume)"},
+    {"yaw_rad", -2.0 * std::numbers::pi, 2.0 * std::numbers::pi, false, "radians within ±2π"},
+    {"edge_m", 0.2, 5.0, true, "metres in (0.2, 5)"},
+    {"height_m", 0.3, 1.5, true, "metres in (0.3, 1.5)"},
+    {"rms_residual_m", 0.0, kLabBound_m, false, "metres in [0, 100]"},
+    {"max_residual_m", 0.0, kLabBound_m, false, "metres in [0, 100]"},
+    {"residuals_m", 0.0, kLabBound_m, false, "metres in [0, 100]"},
+};
+
+bool in_range(const CalibrationRange& r, double v) {
+  return std::isfinite(v) && (r.open ? v > r.lo && v < r.hi : v >= r.lo && v <= r.hi);
+}
+
+// The first member of the calibration outside its range, as a message.
+std::optional<std::string> calibration_out_of_range(const geometry::PhysicalTableFit& fit) {
+  const double values[] = {fit.centre_m.x, fit.centre_m.y, fit.yaw_rad, fit.edge_m, fit.height_m,
+                           fit.rms_residual_m, fit.max_residual_m};
+  for (std::size_t k = 0; k < std::size(values); ++k)
+    if (!in_range(kCalibrationRanges[k], values[k])) return std::string(kCalibrationRanges[k].key);
+  for (int c = 0; c < std::clamp(fit.corners_used, 0, 4); ++c)
+    if (!in_range(kCalibrationRanges[std::size(values)], fit.corner_residual_m[static_cast<std::size_t>(c)]))
+      return std::string("residuals_m");
+  return std::nullopt;
+}
+
+}  // namespace
+
+Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text, const std::string& file) {
+  // `line`: the place when no member names it (0: none known).
+  const auto bad = [&](const std::string& key, std::string m, std::size_t line = 0) {
+    if (!key.empty()) line = line_of_key(text, key);
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on
+    // `":" + std::to_string(…)`.
+    std::string where;
+    if (!file.empty()) {
+      where = file;
+      if (line > 0) where.append(":").append(std::to_string(line));
+      where += ": ";
+    }
+    if (!key.empty()) where.append(key).append(": ");
+    return Error{Error::Kind::bad_input, where + std::move(m)};
+  };
+  if (const auto fault = find_invalid_utf8(text))
+    return bad("", "the calibration file is " + utf8_fault_text(*fault), fault->line);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // e.byte: the 1-based position of the last byte read.
+    const auto at = std::min(e.byte > 0 ? e.byte - 1 : 0, text.size());
+    return bad("", "not valid JSON here (a syntax error)", line_at(text, at));
+  } catch (const nlohmann::json::out_of_range& e) {
+    // "number overflow parsing '1e400'": the number names the place.
+    const std::string what = e.what();
+    const auto open = what.find('\'');
+    const auto close = what.rfind('\'');
+    const auto at = open < close ? text.find(what.substr(open + 1, close - open - 1)) : std::string::npos;
+    return bad("", "not valid JSON here (a number too large for a double)",
+               at == std::string::npos ? 0 : line_at(text, at));
+  }
+  if (!j.is_object()) return bad("", "expected a JSON object with centre_x_m, centre_z_m, yaw_rad, edge_m, height_m");
   geometry::PhysicalTableFit fit;
   try {
     fit.centre_m = {j.at("centre_x_m").get<double>(), j.at("centre_z_m").get<double>()};
@@ -87,13 +170,18 @@ Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& tex
     fit.corners_used = j.value("corners_used", 0);
     const auto residuals = j.value("residuals_m", std::vector<double>{});
     if (residuals.size() > 4 || fit.corners_used < 0 || fit.corners_used > 4)
-      return bad("corners_used must lie in 0 … 4, with at most one residual each in residuals_m");
+      return bad("corners_used", "must lie in 0 … 4, with at most one residual each in residuals_m");
     std::copy(residuals.begin(), residuals.end(), fit.corner_residual_m.begin());
   } catch (const nlohmann::json::exception& e) {
-    return bad(std::string(e.what()) + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
+    return bad("", std::string(e.what()) + " (expected numbers centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
   }
-  if (!(fit.edge_m > 0.2 && fit.edge_m < 5.0 && fit.height_m > 0.3 && fit.height_m < 1.5))
-    return bad("edge_m must lie in (0.2, 5) m and height_m in (0.3, 1.5) m");
+  if (const auto key = calibration_out_of_range(fit)) {
+    for (const auto& r : kCalibrationRanges)
+      if (*key == r.key) {
+        const auto& v = j.at(r.key);
+        return bad(*key, std::string("expected ") + r.expected + ", got " + v.dump());
+      }
+  }
   return fit;
 }
 

@@ -1,5 +1,8 @@
 #include "curvlab/harness/trajectory_csv.hpp"
 
+#include "curvlab/harness/lab_volume.hpp"
+#include "curvlab/harness/utf8.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -91,6 +94,15 @@ class Reader {
     return std::nullopt;
   }
 
+  // A number that is also a lab coordinate (lab_volume.hpp).
+  std::optional<Error> lab_metres(std::size_t line, const Field& f, const std::string& field, double* out) const {
+    if (auto e = number(line, f, field, out)) return e;
+    if (within_lab(*out)) return std::nullopt;
+    return error(line, f.column, field,
+                 "expected a lab coordinate in metres within ±100 (the lab volume), got '" + std::string(f.text) +
+                     "'");
+  }
+
  private:
   std::string name_;
 };
@@ -121,9 +133,10 @@ std::optional<Error> parse_table_line(const Reader& r, std::size_t line_no,
       return r.error(line_no, pos + 1, "physical_table",
                      "unknown key '" + key +
                          "' (expected centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
-    if (auto e = r.number(line_no, {token.substr(eq + 1), pos + eq + 2}, "physical_table " + key,
-                          target))
-      return e;
+    const Field value{token.substr(eq + 1), pos + eq + 2};
+    const std::string field = "physical_table " + key;
+    auto e = key == "yaw_rad" ? r.number(line_no, value, field, target) : r.lab_metres(line_no, value, field, target);
+    if (e) return e;
     if (key == "edge_m" && !(table->edge_m > 0.0))
       return r.error(line_no, pos + eq + 2, "physical_table edge_m",
                      "expected a positive number of metres");
@@ -189,8 +202,11 @@ std::optional<Error> read_pose(const Reader& r, std::size_t line_no, const std::
     return std::nullopt;
   }
   double v[7] = {0, 0, 0, 1, 0, 0, 0};
-  for (std::size_t k = 0; k < 7; ++k)
-    if (auto e = r.number(line_no, fields[base + 1 + k], std::string(header[base + 1 + k].text), &v[k])) return e;
+  for (std::size_t k = 0; k < 7; ++k) {
+    const Field& f = fields[base + 1 + k];
+    const std::string field(header[base + 1 + k].text);
+    if (auto e = k < 3 ? r.lab_metres(line_no, f, field, &v[k]) : r.number(line_no, f, field, &v[k])) return e;
+  }
   pose.position_m = geometry::Vec3(v[0], v[1], v[2]);
   pose.orientation = geometry::Quat(v[3], v[4], v[5], v[6]);
   const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
@@ -242,6 +258,8 @@ Result<TrajectoryFile> parse_trajectory_csv(std::istream& in, const std::string&
   const std::vector<Field> header_fields = split(trajectory_csv_header());
   while (std::getline(in, line)) {
     ++line_no;
+    if (const auto fault = find_invalid_utf8(line, line_no))
+      return Error{Error::Kind::bad_input, utf8_fault_message(name, "the trajectory file", *fault)};
     std::string_view view(line);
     if (!view.empty() && view.back() == '\r') view.remove_suffix(1);
     if (view.find_first_not_of(" \t") == std::string_view::npos) continue;

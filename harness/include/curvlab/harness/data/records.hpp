@@ -133,6 +133,7 @@ struct TrackingState {
   double anchor_fraction = 0.0;
   double coherence_error_m = 0.0;
   double coherence_error_rad = 0.0;
+  bool coherence_measured = true;  // false: both coherence errors stored as NULL
 };
 
 // One device at one instant. Trivially copyable so the ring buffer can hold it.

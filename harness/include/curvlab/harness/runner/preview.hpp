@@ -51,7 +51,7 @@ struct PreviewCondition {
 std::vector<PreviewCondition> preview_conditions(const protocol::Protocol& p, const protocol::Design& design);
 
 struct PreviewRequest {
-  std::string protocol_path;  // shown on the sheet
+  std::string protocol_path;  // its file name is shown on the sheet (never a folder: one can name a person)
   std::string protocol_text;  // fingerprinted (SHA-256)
   std::uint64_t participant = 1;
   std::string out_dir;

@@ -87,6 +87,9 @@ struct SessionSummary {
   double frame_cpu_median_ms = 0.0;  // runner work per frame, GPU excluded
   double frame_cpu_p95_ms = 0.0;
   std::vector<std::string> images;
+  // Ended because a --progress json line could not be written to stdout (its
+  // reader gone): interrupted, resumable, like a stop signal.
+  bool output_lost = false;
 };
 
 // A failure's kind decides the exit code (result.hpp: bad input 2, run-time 1).

@@ -44,9 +44,11 @@ geometry::PhysicalTable physical_table(const protocol::Settings& s,
 geometry::PhysicalTableFit nominal_calibration(const protocol::Settings& s);
 
 // The calibration as stored with a session (sessions.table_calibration), and
-// back; parsing names what is missing or out of range.
+// back; parsing names what is missing or out of range (a non-finite value, a
+// centre outside the lab volume of lab_volume.hpp), after `FILE:LINE: ` when
+// the text is a file's.
 std::string calibration_json(const geometry::PhysicalTableFit& fit);
-Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text);
+Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text, const std::string& file = "");
 
 enum class Judged { stick, table };
 Judged judged(const protocol::Settings& s);
