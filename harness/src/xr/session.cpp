@@ -296,16 +296,15 @@ Result<Done> Session::attach(const std::vector<XrActionSet>& sets) {
   attach.actionSets = sets.data();
   if (const XrResult r = xrAttachSessionActionSets(session_.get(), &attach); XR_FAILED(r))
     return failure_of(r, "xrAttachSessionActionSets");
-  action_sets_ = sets;
+  active_sets_.clear();
+  for (const XrActionSet set : sets) active_sets_.push_back({set, XR_NULL_PATH});
   return Done{};
 }
 
 void Session::sync_actions() {
-  std::vector<XrActiveActionSet> active;
-  for (const XrActionSet set : action_sets_) active.push_back({set, XR_NULL_PATH});
   auto sync = tagged<XrActionsSyncInfo>(XR_TYPE_ACTIONS_SYNC_INFO);
-  sync.countActiveActionSets = static_cast<std::uint32_t>(active.size());
-  sync.activeActionSets = active.data();
+  sync.countActiveActionSets = static_cast<std::uint32_t>(active_sets_.size());
+  sync.activeActionSets = active_sets_.data();
   if (const XrResult r = xrSyncActions(session_.get(), &sync); fatal(r)) fail(r, "xrSyncActions");
   else if (XR_FAILED(r)) std::cerr << "curvlab: xr: " << failure_of(r, "xrSyncActions").message << '\n';
   synced_ = true;

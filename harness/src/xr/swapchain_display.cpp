@@ -226,9 +226,10 @@ FrameTiming SwapchainDisplay::stopped_frame() {
 void SwapchainDisplay::mark_late(FrameTiming& timing) {
   const XrTime t = session_.frame().predictedDisplayTime;
   const XrDuration period = session_.frame().predictedDisplayPeriod;
-  if (last_display_ != 0 && period > 0 && t > last_display_)
-    timing.skipped_periods = static_cast<std::int32_t>(
-        std::max<std::int64_t>(0, std::llround(static_cast<double>(t - last_display_) / static_cast<double>(period)) - 1));
+  if (last_display_ != 0 && period > 0 && t > last_display_) {
+    const double periods = static_cast<double>(t - last_display_) / static_cast<double>(period);
+    timing.skipped_periods = static_cast<std::int32_t>(std::max<std::int64_t>(0, std::llround(periods) - 1));
+  }
   last_display_ = t;
   timing.late = timing.skipped_periods > 0 || session_.frame().shouldRender != XR_TRUE;
 }

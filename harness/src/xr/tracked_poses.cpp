@@ -26,7 +26,8 @@ bool located(XrSpaceLocationFlags flags) {
 // The orientation alone valid and tracked, as a 3-DoF device or one that
 // lost its position reports it.
 bool orientation_located(XrSpaceLocationFlags flags) {
-  constexpr XrSpaceLocationFlags want = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT;
+  constexpr XrSpaceLocationFlags want =
+      XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT;
   return (flags & want) == want;
 }
 

@@ -162,7 +162,7 @@ class Session {
   bool refresh_extension_ = false;
   GazeExtensions gaze_;
   std::vector<SessionPart*> parts_;
-  std::vector<XrActionSet> action_sets_;
+  std::vector<XrActiveActionSet> active_sets_;  // every attached set, synced together
 
   SessionStateMachine state_;
   std::deque<harness::io::Signal> signals_;
