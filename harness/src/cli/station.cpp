@@ -3,7 +3,10 @@
 #include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/trajectory_csv.hpp"
-#include "curvlab/harness/xr/backend.hpp"
+#include "curvlab/harness/xr/controllers.hpp"
+#include "curvlab/harness/xr/session.hpp"
+#include "curvlab/harness/xr/swapchain_display.hpp"
+#include "curvlab/harness/xr/tracked_poses.hpp"
 
 #include "curvlab/harness/platform/signals.hpp"
 
@@ -56,6 +59,34 @@ void open_headless(Devices& out, const BackendArgs& a, const StationNeeds& n) {
   out.station = out.headless.station();
 }
 
+// The headset, composed of its parts as hello_xr composes its plugins, in
+// the order of the OpenXR lifecycle: the session (instance, system, the
+// Vulkan device the runtime makes, xrCreateSession), the controllers' action
+// set, the tracked poses (reference spaces; the action sets attached; the
+// grip spaces and eye trackers), then the swapchain display (refresh rate,
+// swapchains, renderer). The display, the poses and the controllers are the
+// station's display, pose source and first response source.
+void open_headset(Devices& out, const BackendArgs& a, const StationNeeds& n) {
+  const bool mirror = wants_operator_window(a);
+  auto session = xr::Session::create({.application_name = "curvlab", .clock = out.clock});
+  if (!session) raise(session.error());
+  out.xr_session = std::move(session).value();
+  auto controllers = xr::Controllers::create(*out.xr_session);
+  if (!controllers) raise(controllers.error());
+  out.xr_controllers = std::move(controllers).value();
+  auto poses = xr::TrackedPoses::create(*out.xr_session, *out.xr_controllers);
+  if (!poses) raise(poses.error());
+  out.xr_poses = std::move(poses).value();
+  auto display = xr::SwapchainDisplay::create(
+      *out.xr_session, *out.xr_poses,
+      {.mirror = mirror, .msaa = n.msaa, .refresh_hz = n.refresh_hz});
+  if (!display) raise(display.error());
+  out.xr_display = std::move(display).value();
+  out.station.display = out.xr_display.get();
+  out.station.poses = out.xr_poses.get();
+  out.station.responses.push_back(out.xr_controllers.get());
+}
+
 Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
   Devices out;
   if (a.backend == "headless") {
@@ -79,19 +110,12 @@ Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
     auto made = desktop::make_desktop_backend(o);
     if (!made) raise(made.error());
     out.interactive = std::move(made).value();
+    out.use(*out.interactive);
   } else if (a.backend == "xr") {
-    xr::XrBackendOptions o;
-    o.clock = out.clock;
-    o.mirror = wants_operator_window(a);
-    o.msaa = n.msaa;
-    o.refresh_hz = n.refresh_hz;
-    auto made = xr::make_xr_backend(o);
-    if (!made) raise(made.error());
-    out.interactive = std::move(made).value();
+    open_headset(out, a, n);
   } else {
     throw UsageError("--backend must be headless, desktop or xr, got '" + a.backend + "'");
   }
-  out.use(*out.interactive);
   return out;
 }
 
@@ -112,6 +136,11 @@ void open_responses(Devices& out, const BackendArgs& a) {
 }
 
 }  // namespace
+
+Devices::Devices() = default;
+Devices::Devices(Devices&&) noexcept = default;
+Devices& Devices::operator=(Devices&&) noexcept = default;
+Devices::~Devices() = default;
 
 // Whether the run opens the operator window; a bad value is a usage error.
 bool wants_operator_window(const BackendArgs& a) {

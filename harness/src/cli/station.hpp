@@ -21,6 +21,13 @@
 #include <string>
 #include <vector>
 
+namespace curvlab::xr {
+class Session;
+class Controllers;
+class TrackedPoses;
+class SwapchainDisplay;
+}  // namespace curvlab::xr
+
 namespace curvlab::cli {
 
 struct BackendArgs {
@@ -50,14 +57,27 @@ struct BackendArgs {
 // The session's devices (io/station.hpp), made before anything is written:
 // a display that cannot start (no window system, no OpenXR runtime) leaves
 // no trace. The one place where a display, a pose source and response
-// sources are put together: the headset and the desktop window are all three
-// at once; headless is an offscreen display with poses from a trajectory,
-// answered by the simulated observer (RunOptions::observer).
+// sources are put together: the desktop window is all three at once; the
+// headset is composed of its parts (its session, swapchain display, tracked
+// poses and controllers, xr/*.hpp); headless is an offscreen display with
+// poses from a trajectory, answered by the simulated observer
+// (RunOptions::observer).
 struct Devices {
-  std::unique_ptr<harness::io::InteractiveDisplay> interactive;  // desktop, xr
+  Devices();
+  Devices(Devices&&) noexcept;
+  Devices& operator=(Devices&&) noexcept;
+  ~Devices();
+
+  std::unique_ptr<harness::io::InteractiveDisplay> interactive;  // desktop
   harness::runner::HeadlessDevices headless;
   std::unique_ptr<devices::SteadyClock> steady;
   const devices::Clock* clock = nullptr;
+  // The headset's parts (--backend xr). Each borrows the ones before it and
+  // all read the clock, so they are destroyed in reverse order before it.
+  std::unique_ptr<xr::Session> xr_session;
+  std::unique_ptr<xr::Controllers> xr_controllers;
+  std::unique_ptr<xr::TrackedPoses> xr_poses;
+  std::unique_ptr<xr::SwapchainDisplay> xr_display;
   std::vector<std::unique_ptr<devices::HidResponses>> hid;
   harness::io::Station station;
 

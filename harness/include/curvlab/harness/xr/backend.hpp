@@ -1,12 +1,16 @@
-// The OpenXR backend (DESIGN.md §6): XR_KHR_vulkan_enable2, a STAGE reference
-// space, one swapchain per eye, poses located at the predicted display time,
-// controllers through action sets, session-state handling. Without a runtime
-// the factory returns the OpenXR result by name and what to install.
+// The headset as one object (DESIGN.md §6): the OpenXR session
+// (xr/session.hpp), the swapchain display (xr/swapchain_display.hpp), the
+// tracked poses (xr/tracked_poses.hpp) and the controllers
+// (xr/controllers.hpp) behind one InteractiveDisplay, for programs that drive
+// the headset without a station (bench/operator_cost.cpp). The CLI composes
+// the same parts itself (harness/src/cli/station.cpp). Without a runtime the
+// factory returns the OpenXR result by name and what to install.
 #pragma once
 
 #include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/io/station.hpp"
 #include "curvlab/harness/result.hpp"
+#include "curvlab/harness/xr/controllers.hpp"
 
 #include <memory>
 #include <optional>
@@ -26,10 +30,6 @@ struct XrBackendOptions {
   // and that rate; nullopt: the runtime's rate.
   std::optional<double> refresh_hz;
 };
-
-// What the controllers of curvlab's action set can press (button names as
-// protocols write them); pages continue on a trigger or A.
-harness::io::Reach controller_reach();
 
 // No runtime or no headset: an Error of kind `device` naming the OpenXR
 // result and what to install; another failing call: `api`. Once running, a
