@@ -2,7 +2,8 @@
 // round starts a realtime demo session through a symbolic link to the data
 // file, lets curvlab export, the sqlite3 shell, Python's sqlite3, a reader
 // that asks for a TRUNCATE checkpoint under an unfinished SELECT, and a
-// program holding a write transaction open for 2 s take turns on the file,
+// program holding a write transaction open for 2 s take turns on the file
+// (every second read one of the last two),
 // tries `merge --out` onto the file's real path, kills the session at a
 // random instant and compares the trials it reported completed with the
 // trials stored; then checks the file's integrity. A session that fails on
@@ -19,6 +20,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 
@@ -108,9 +110,11 @@ void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms
                  curvlab::testing::read_file(dir / "merge.out").c_str());
   }
   for (int r = 0; std::chrono::steady_clock::now() < stop_at && run.running(); ++r, ++t.reads) {
-    if (r % 4 == 3) hard_read(db, r / 4);
+    if (r % 2 == 1) hard_read(db, r / 2);
     else sh::read_once(bin, db, dir, r);
   }
+  // A writer that a reader made give up needs a moment to end its session.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   if (!run.running()) {
     // Ended on its own: by a reader when it failed, else it simply finished.
     const int status = run.wait();
