@@ -1,13 +1,14 @@
 // Readers during a session, then kill -9: the way a lab lost trials. Each
 // round starts a realtime demo session through a symbolic link to the data
-// file, lets curvlab export, the sqlite3 shell, Python's sqlite3, a reader
-// that asks for a TRUNCATE checkpoint under an unfinished SELECT, and a
-// program holding a write transaction open for 2 s take turns on the file
-// (every second read one of the last two),
-// tries `merge --out` onto the file's real path, kills the session at a
-// random instant and compares the trials it reported completed with the
-// trials stored; then checks the file's integrity. A session that fails on
-// its own before the kill was ended by a reader. Usage:
+// file; curvlab export, the sqlite3 shell and Python's sqlite3 take turns on
+// the file with two harder readers (every second read): one that asks for a
+// TRUNCATE checkpoint under an unfinished SELECT, and one that holds a write
+// transaction open for 6 s (longer than SQLite's 5 s busy timeout, as DB
+// Browser does with unsaved edits). The round tries `merge --out` onto the
+// file's real path, kills the session at a random instant, compares the
+// trials it reported completed with the trials stored, and checks the file's
+// integrity. A session that fails on its own before the kill was ended by a
+// reader. Usage:
 //   bench_readers_kill [ROUNDS] [--no-merge] [CURVLAB ...]
 // (--no-merge leaves the merge out, to see what the readers alone do to an
 // older build whose merge would replace the file under its session).
@@ -43,7 +44,7 @@ struct Tally {
 };
 
 // The readers a lab's tools add to the bench's usual three: a checkpoint
-// under an unfinished SELECT, a write transaction held open.
+// under an unfinished SELECT, a write transaction held open for 6 s.
 void hard_read(const fs::path& db, int turn) {
   const std::string checkpoint =
       "import sqlite3, sys\n"
@@ -55,7 +56,7 @@ void hard_read(const fs::path& db, int turn) {
   const std::string hold =
       "import sqlite3, sys, time\n"
       "c = sqlite3.connect(sys.argv[1], timeout=5, isolation_level=None)\n"
-      "c.execute('BEGIN IMMEDIATE'); time.sleep(2); c.execute('ROLLBACK')\n";
+      "c.execute('BEGIN IMMEDIATE'); time.sleep(6); c.execute('ROLLBACK')\n";
   const std::string cmd = "/usr/bin/python3 -c \"" + (turn % 2 == 0 ? checkpoint : hold) + "\" " + db.string() +
                           " >/dev/null 2>&1";
   (void)!std::system(cmd.c_str());
