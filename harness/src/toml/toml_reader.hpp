@@ -5,9 +5,9 @@
 // the message itself (the protocol collects every problem, the mapping file
 // stops at the first), so their messages stay as users know them.
 //
-// Internal to curvlab_protocol and curvlab_devices (library curvlab_toml):
-// it exposes toml++ types, so it is not a public header. Thread-safe (no
-// shared state).
+// Internal to curvlab_protocol and curvlab_devices (library curvlab_toml, a
+// folder of its own below both): it exposes toml++ types, so it is not a
+// public header. Thread-safe (no shared state).
 #pragma once
 
 #include <toml++/toml.h>
