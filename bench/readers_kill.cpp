@@ -111,7 +111,7 @@ void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms
                  curvlab::testing::read_file(dir / "merge.out").c_str());
   }
   for (int r = 0; std::chrono::steady_clock::now() < stop_at && run.running(); ++r, ++t.reads) {
-    if (r % 2 == 1) hard_read(db, r / 2);
+    if (r % 2 == 1) hard_read(db, k + r / 2);  // rounds alternate which hard reader comes first
     else sh::read_once(bin, db, dir, r);
   }
   // A writer that a reader made give up needs a moment to end its session.
