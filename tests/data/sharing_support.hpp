@@ -40,9 +40,9 @@ struct Child {
   pid_t pid = -1;
   fs::path out, err;
   bool reaped = false;
+  int status = 0;  // the wait status, once reaped
 
   int wait() {
-    int status = 0;
     if (!reaped) ::waitpid(pid, &status, 0);
     reaped = true;
     return status;
@@ -57,12 +57,13 @@ struct Child {
   }
   bool running() {
     if (reaped) return false;
-    int status = 0;
     if (::waitpid(pid, &status, WNOHANG) == pid) reaped = true;
     return !reaped;
   }
   Child() = default;
-  Child(Child&& o) noexcept : pid(o.pid), out(o.out), err(o.err), reaped(o.reaped) { o.reaped = true; }
+  Child(Child&& o) noexcept : pid(o.pid), out(o.out), err(o.err), reaped(o.reaped), status(o.status) {
+    o.reaped = true;
+  }
   Child& operator=(Child&&) = delete;
   ~Child() {
     if (!reaped && pid > 0) kill9();
