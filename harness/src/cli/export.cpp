@@ -36,7 +36,7 @@ class PooledInputs {
   explicit PooledInputs(const std::vector<std::string>& inputs)
       : path_((fs::temp_directory_path() / ("curvlab-export-" + std::to_string(platform::process_id()) + ".sqlite")).string()) {
     // An export killed while pooling leaves its copy behind.
-    data::remove_stale_staging(fs::temp_directory_path().string(), "curvlab-export-", data::StagingKind::file);
+    data::remove_stale_staging(fs::temp_directory_path().string(), "curvlab-export-", data::StagingKind::database);
     data::remove_database_files(path_);
     auto merged = data::merge_databases({path_, inputs, true});
     if (!merged) raise(merged.error());

@@ -1,6 +1,7 @@
 #include "station.hpp"
 
 #include "curvlab/harness/desktop/desktop.hpp"
+#include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/trajectory_csv.hpp"
 #include "curvlab/harness/xr/controllers.hpp"
@@ -39,7 +40,7 @@ rn::HeadlessOptions headless_options(const BackendArgs& a, const StationNeeds& n
   // A session that draws nothing needs no Vulkan device: a dry run with the
   // simulated participant works on any machine (the image observer draws
   // with a device of its own).
-  o.no_gpu = a.render == "none" && a.images.empty();
+  o.no_gpu = rn::parse_frame_drawing(a.render) == rn::FrameDrawing::none && a.images.empty();
   return o;
 }
 

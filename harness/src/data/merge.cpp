@@ -375,15 +375,12 @@ DataError output_disk_full(const std::string& work, const std::string& input, co
 Expected<Done> check_not_live(const std::string& input) {
   const auto writer = WriterLock::file_writer(input);
   if (!writer) return Done{};
-  const std::string who = writer->second.pid > 0 ? "process " + std::to_string(writer->second.pid) +
-                                                       (writer->second.host.empty() ? "" : " on " + writer->second.host)
-                                                 : "another process";
   const std::string what = writer->first > 0 ? "session " + std::to_string(writer->first) + " is being written by "
                                              : "the file is being replaced by ";
   return DataError{DataError::Kind::in_use,
-                   input + ": " + what + who + "; merging it now would copy that session half-done, so nothing "
-                   "was merged. Merge it when the session has ended (a session whose process died can be merged "
-                   "at once)"};
+                   input + ": " + what + describe(writer->second) + "; merging it now would copy that session "
+                   "half-done, so nothing was merged. Merge it when the session has ended (a session whose process "
+                   "died can be merged at once)"};
 }
 
 Expected<Done> merge_one(Database& work, const std::string& input, const MergeOptions& opts,
@@ -509,7 +506,7 @@ Expected<MergeReport> merge_databases(const MergeOptions& opts) {
   const bool existed = !lock->created_file();
   // A merge killed before it renamed its work leaves OUT.merging-PID behind.
   const fs::path out(opts.out_path);
-  remove_stale_staging(out.parent_path().string(), out.filename().string() + ".merging-", StagingKind::file);
+  remove_stale_staging(out.parent_path().string(), out.filename().string() + ".merging-", StagingKind::database);
   TempOutput tmp(opts.out_path + ".merging-" + std::to_string(platform::process_id()));
   if (existed)
     if (auto ok = copy_existing_output(opts.out_path, tmp.path()); !ok) return ok.error();

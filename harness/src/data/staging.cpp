@@ -33,7 +33,7 @@ bool strip(std::string_view& rest, std::string_view part) {
 // [.sqlite][.merging-N][-wal | -shm | -journal | .lock] (a pooled export's
 // copy, the merge into it, SQLite's companions and curvlab's lock file).
 bool known_rest(std::string_view rest, StagingKind kind) {
-  if (kind == StagingKind::folder) return rest.empty();
+  if (kind != StagingKind::database) return rest.empty();
   strip(rest, ".sqlite");
   if (strip(rest, ".merging-")) {
     const std::size_t digits = rest.find_first_not_of("0123456789");
@@ -46,7 +46,7 @@ bool known_rest(std::string_view rest, StagingKind kind) {
 bool is_kind(const fs::directory_entry& entry, StagingKind kind) {
   std::error_code ec;
   const auto status = entry.symlink_status(ec);  // a link is never followed, nor removed
-  return !ec && (kind == StagingKind::file ? fs::is_regular_file(status) : fs::is_directory(status));
+  return !ec && (kind == StagingKind::folder ? fs::is_directory(status) : fs::is_regular_file(status));
 }
 
 }  // namespace
@@ -66,8 +66,8 @@ std::size_t remove_numbered(const std::string& dir, const std::string& prefix, S
     if (err != std::errc() || end == first || !known_rest(std::string_view(end, last), kind)) continue;
     if (!is_kind(entry, kind) || !stale(number)) continue;
     std::error_code remove_ec;
-    const bool gone = kind == StagingKind::file ? platform::remove_regular_file(entry.path().string())
-                                                : fs::remove_all(entry.path(), remove_ec) > 0 && !remove_ec;
+    const bool gone = kind == StagingKind::folder ? fs::remove_all(entry.path(), remove_ec) > 0 && !remove_ec
+                                                  : platform::remove_regular_file(entry.path().string());
     if (gone) ++removed;
   }
   return removed;

@@ -74,14 +74,6 @@ LockHolder read_slot(const std::string& beside, std::int64_t session_id) {
   return read_slot(LockFile::open(holders_path(beside), LockFile::Mode::read_only), session_id);
 }
 
-std::string describe(const LockHolder& h) {
-  if (h.pid <= 0) return "another process";
-  std::string out = "process " + std::to_string(h.pid);
-  if (!h.host.empty()) out += " on " + h.host;
-  if (!h.since_utc.empty()) out += " (since " + h.since_utc + ")";
-  return out;
-}
-
 DataError open_failure(const std::string& db_path, const std::string& what, int err) {
   const auto kind =
       err == EACCES || err == EROFS || err == EPERM ? DataError::Kind::read_only : DataError::Kind::io;
@@ -182,6 +174,14 @@ Expected<Done> check_companions(const std::string& db_path) {
 }
 
 }  // namespace
+
+std::string describe(const LockHolder& h) {
+  if (h.pid <= 0) return "another process";
+  std::string out = "process " + std::to_string(h.pid);
+  if (!h.host.empty()) out += " on " + h.host;
+  if (!h.since_utc.empty()) out += " (since " + h.since_utc + ")";
+  return out;
+}
 
 std::string session_in_use_message(const std::string& db_path, std::int64_t session_id, const LockHolder& holder) {
   return db_path + ": session " + std::to_string(session_id) + " is being written by " + describe(holder) +

@@ -18,15 +18,17 @@ namespace curvlab::data {
 // as living; platform/process.hpp).
 bool process_alive(pid_t pid);
 
-// What a kind of work in progress is: a file (with SQLite's companions) or a
-// folder (an export's part).
-enum class StagingKind { file, folder };
+// What a kind of work in progress is: a database (merge's OUT.merging-PID,
+// a pooled export's copy), which may have SQLite's and curvlab's companions
+// beside it; a plain file (a CSV export's part, a session's disk reserve);
+// or a folder (a BIDS or Psych-DS export's part).
+enum class StagingKind { database, file, folder };
 
 // Removes the entries directly in `dir` named `prefix` + PID + rest, where
-// PID is a process that no longer exists and rest is empty or, for files,
+// PID is a process that no longer exists, rest is empty or, for a database,
 // one of curvlab's own endings ([.sqlite][.merging-N] then nothing, -wal,
-// -shm, -journal or .lock), and that are of `kind`:
-// a regular file, or a folder (never through a link). Living processes'
+// -shm, -journal or .lock), and the entry is of `kind`: a regular file, or a
+// folder (never through a link). Living processes'
 // entries, other names and other kinds are left alone, as is anything that
 // cannot be removed (no worse than before). Returns how many entries were
 // removed.

@@ -110,6 +110,9 @@ class WriterLock {
   bool created_ = false;
 };
 
+// "process P on HOST (since T)", or "another process" when the slot is empty.
+std::string describe(const LockHolder& holder);
+
 // The message for a session a live process writes.
 std::string session_in_use_message(const std::string& db_path, std::int64_t session_id, const LockHolder& holder);
 
