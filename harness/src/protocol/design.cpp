@@ -90,6 +90,7 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
 
     PlannedBlock pb;
     pb.name = b.name;
+    pb.kind = b.kind;
     pb.protocol_block = order[pos];
     pb.practice = b.practice;
     pb.first_trial = d.trials.size();

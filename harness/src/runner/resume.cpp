@@ -1,6 +1,7 @@
 #include "curvlab/harness/runner/session.hpp"
 
 #include "session_loop.hpp"
+#include "simulated_participant.hpp"
 #include "session_records.hpp"
 
 #include "curvlab/harness/data/database.hpp"
@@ -20,7 +21,7 @@ namespace {
 // stored list checked against the re-expanded design), the frames logged,
 // the first incomplete trial with its attempts and logged aborts, and the
 // staircases' committed answers.
-struct ResumePoint {
+struct StoredProgress {
   std::vector<std::int64_t> trial_ids;
   std::int64_t frame_offset = 0;
   std::size_t first = 0;
@@ -48,9 +49,9 @@ Result<std::vector<std::int64_t>> checked_trial_ids(data::SessionStore& store, c
   return ids;
 }
 
-Result<ResumePoint> read_resume_point(data::SessionStore& store, const std::string& db_path, std::int64_t session_id,
+Result<StoredProgress> read_resume_point(data::SessionStore& store, const std::string& db_path, std::int64_t session_id,
                                       const protocol::Protocol& p, const protocol::Design& design) {
-  ResumePoint rp;
+  StoredProgress rp;
   auto ids = checked_trial_ids(store, db_path, session_id, p, design);
   if (!ids) return ids.error();
   rp.trial_ids = std::move(ids).value();
@@ -142,7 +143,9 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   setup.first_trial_attempts = point->attempts;
   setup.first_trial_aborts = point->aborts;
   setup.staircase_history = std::move(point->staircase_history);
-  auto result = SessionLoop(std::move(setup)).run(point->first, false);
+  const auto participant = SimulatedParticipant::seat(setup);
+  const ResumePoint from = resume_point(setup.design, point->first);
+  auto result = SessionLoop(std::move(setup)).run(from, false);
   if (result) result->db_path = db_path;
   return result;
 }

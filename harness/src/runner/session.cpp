@@ -1,6 +1,7 @@
 #include "curvlab/harness/runner/session.hpp"
 
 #include "session_loop.hpp"
+#include "simulated_participant.hpp"
 #include "session_records.hpp"
 
 #include "curvlab/harness/data/database.hpp"
@@ -104,7 +105,8 @@ RunResult run_session(const protocol::Protocol& p, const std::string& protocol_t
   auto setup = SessionSetup::of(p, std::move(design), store, *writer.value(), station, clock, std::move(o),
                                 created->session_id, std::move(created->trial_ids));
   setup.lock = &lock.value();
-  auto result = SessionLoop(std::move(setup)).run(0, true);
+  const auto participant = SimulatedParticipant::seat(setup);
+  auto result = SessionLoop(std::move(setup)).run(ResumePoint{}, true);
   if (result) result->db_path = db_path;
   return result;
 }

@@ -21,6 +21,13 @@
 
 namespace curvlab::harness::runner {
 
+class TrialWatcher;
+
+// Ends the run with an error; caught at the top of SessionLoop::run.
+struct Stop {
+  Error error;
+};
+
 struct SessionSetup {
   const protocol::Protocol* protocol = nullptr;
   protocol::Design design;
@@ -40,6 +47,9 @@ struct SessionSetup {
   std::vector<std::pair<std::int64_t, bool>> staircase_history;
   // The session's writer lock; its disk reserve is freed when the disk fills.
   data::WriterLock* lock = nullptr;
+  // Told what a participant sees (trial_watcher.hpp): a simulated
+  // participant, seated with the station's sources.
+  std::vector<TrialWatcher*> watchers;
 
   // What every run sets; a resumed run adds where it continues.
   static SessionSetup of(const protocol::Protocol& p, protocol::Design design, data::SessionStore& store,
@@ -59,6 +69,16 @@ struct SessionSetup {
   }
 };
 
+// Where a run starts: a block (its place in the design's run order) and a
+// position within it, as its kind counts (a trial, for trials blocks).
+// {design.blocks.size(), 0}: after the last block (the closing pages).
+struct ResumePoint {
+  std::size_t block = 0;
+  std::size_t position = 0;
+};
+// The point of the design's trial `first_trial` (the first not yet ended).
+ResumePoint resume_point(const protocol::Design& d, std::size_t first_trial);
+
 class SessionLoop {
  public:
   explicit SessionLoop(SessionSetup setup);
@@ -66,10 +86,10 @@ class SessionLoop {
   SessionLoop(const SessionLoop&) = delete;
   SessionLoop& operator=(const SessionLoop&) = delete;
 
-  // Runs from trial `first`; `start_pages`: show the opening instructions.
-  // Ends the session completed or interrupted; a failure leaves it
-  // interrupted and resumable, with every completed trial kept.
-  RunResult run(std::size_t first, bool start_pages);
+  // Runs from `from`; `start_pages`: show the opening instructions. Ends
+  // the session completed or interrupted; a failure leaves it interrupted
+  // and resumable, with every completed trial kept.
+  RunResult run(ResumePoint from, bool start_pages);
 
  private:
   class Impl;

@@ -48,6 +48,7 @@ struct PlannedTrial {
 
 struct PlannedBlock {
   std::string name;
+  std::string kind = "trials";     // Block::kind
   std::size_t protocol_block = 0;  // index in Protocol::blocks
   bool practice = false;
   std::size_t first_trial = 0;

@@ -77,6 +77,9 @@ std::string_view to_string(BlockOrder o);
 
 struct Block {
   std::string name;
+  // What the block's frames show (the runner's block kinds): "trials", a
+  // list of judged trials.
+  std::string kind = "trials";
   bool practice = false;
   int repetitions = 1;
   RandomizeMode randomize = RandomizeMode::shuffle;

@@ -1,0 +1,168 @@
+// The room every block kind runs its frames in (DESIGN.md §6): the session's
+// devices, its world, tracker and scene, its logger, and the frame itself —
+//   poses → tracking → input (begin) … scene → submit → log (end)
+// — with the pages and holds every kind shows between its own frames
+// (session_pages.cpp). What the operator sees and does lives in its own room
+// (operator_room.hpp); the session level (session_loop.cpp) walks the blocks;
+// each block kind (block_kind.hpp) decides what its frames show.
+//
+// Owned and used by the frame thread. Not copyable.
+#pragma once
+
+#include "operator_room.hpp"
+#include "progress.hpp"
+#include "session_loop.hpp"
+#include "trial_watcher.hpp"
+
+#include "curvlab/harness/protocol/judgement.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/trial_state.hpp"
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace curvlab::harness::runner {
+
+enum class Outcome { done, quit };
+
+constexpr std::int64_t ms_to_ns(std::int64_t v) { return v * 1'000'000; }
+
+// One frame between begin() and end().
+struct Frame {
+  io::FrameTiming timing;
+  std::vector<io::InputEvent> inputs;
+  Signal signal = Signal::none;
+  bool head_tracked = false;
+  std::chrono::steady_clock::time_point started;
+
+  [[nodiscard]] FrameFacts facts() const {
+    return {timing.now_ns, timing.predicted_display_ns, head_tracked, signal};
+  }
+};
+
+class SessionFrames {
+ public:
+  explicit SessionFrames(SessionSetup& s);
+  SessionFrames(const SessionFrames&) = delete;
+  SessionFrames& operator=(const SessionFrames&) = delete;
+
+  // ---- frames ----
+  // Begins a frame: timing, poses, tracking, input, the operator's actions
+  // and stop signals. false: the display has ended the session.
+  bool begin(Frame& f);
+  // Ends a frame: draw (or plan), then log the frame and its samples.
+  renderer::FrameStats end(Frame& f, const io::Overlay& overlay, bool onset, std::optional<std::int64_t> trial_id);
+
+  // ---- pages and holds (session_pages.cpp) ----
+  // Pages of text, each shown until continued (after min_ns).
+  Outcome pages(const std::vector<std::string>& texts, Phase phase, std::int64_t min_ns,
+                std::optional<std::int64_t> trial_id);
+  // A pause outside a trial's attempt: the session waits for the resume.
+  Outcome hold(Phase phase, std::optional<std::int64_t> trial_id);
+  // After an abort: wait for the resume (pause) or for the head (otherwise).
+  Outcome wait_until_ready(AbortReason reason, std::optional<std::int64_t> trial_id);
+
+  // ---- the world and what is drawn ----
+  // World, tracker and scene for these settings (the tracker is kept while
+  // the world stays the same, so the edge correspondence carries over);
+  // `prompt`: the question the scene's panel shows.
+  void prepare(const protocol::Settings& s, const std::string& prompt);
+  [[nodiscard]] const World& world() const { return *world_; }
+  [[nodiscard]] TrialScene& scene() { return *scene_; }
+  [[nodiscard]] geometry::Isometry head() const;
+  [[nodiscard]] double ipd() const { return options_.ipd_m.value_or(settings_.viewing.ipd_m); }
+  [[nodiscard]] renderer::Eye dominant() const { return dominant_; }
+  [[nodiscard]] std::int64_t frame_index() const { return frame_index_; }
+
+  // ---- records ----
+  void event(std::optional<std::int64_t> trial_id, const data::Event& e);
+  template <class T>
+  T check(Result<T> r) {
+    if (!r) throw Stop{r.error()};
+    return std::move(r).value();
+  }
+  // The adaptive state of the trial's condition (block and cell); null when
+  // its judgement type is not adaptive.
+  protocol::AdaptiveState* adaptive_for(const protocol::PlannedTrial& t);
+  // A trial ended (completed, skipped, aborted): the progress report, the
+  // --progress json line.
+  void report_trial(std::size_t i, data::TrialStatus status, const std::string& reason);
+  void update_progress() { progress_.update(progress_point()); }
+  // The trial running, for the events the frame stores and the status.
+  void set_current_trial(std::optional<std::size_t> i);
+  [[nodiscard]] std::optional<std::int64_t> current_trial_id() const;
+
+  // What the whole loop shares, read and written by the block kinds.
+  const protocol::Protocol& protocol;
+  const protocol::Design design;
+  data::SessionStore& store;
+  data::SampleWriter& writer;
+  data::WriterLock* const lock;
+  const io::Station station;
+  const devices::Clock& clock;
+  const RunOptions& options() const { return options_; }
+  const std::int64_t session_id;
+  const std::vector<std::int64_t> trial_ids;
+  const std::vector<TrialWatcher*> watchers;
+  SessionSummary summary;
+  OperatorRoom room;
+  std::int64_t session_start_ns = 0;
+  // The trial a resumed run starts with may have attempts stored already,
+  // some of them ended in a logged abort (the observer's streams count
+  // those); taken by the first trial the run starts.
+  struct {
+    std::int64_t attempts = 0;
+    std::int64_t aborts = 0;
+    bool taken = false;
+  } resumed_trial;
+  std::vector<std::int64_t> cpu_ns;  // the runner's own time per frame
+
+ private:
+  struct ProgressPoint progress_point() const;
+  Signal poll_devices(std::vector<io::InputEvent>& inputs);
+  void store_display_reports();
+  void take_stop_signal(Frame& f);
+  data::TrackingSample sample(const Frame& f, std::int64_t trial_id, int d) const;
+  void log_frame(const Frame& f, const renderer::FrameStats& stats, std::optional<std::int64_t> trial_id,
+                 const renderer::StereoRig& rig);
+  template <class Push>
+  void push(Push&& try_push);
+  void restore_adaptive(const std::vector<std::pair<std::int64_t, bool>>& history);
+  Outcome page(const std::string& text, std::size_t k, Phase phase, std::int64_t min_ns,
+               std::optional<std::int64_t> trial_id);
+  Error head_never_came(AbortReason reason) const;
+  std::string font() const;
+
+  RunOptions options_;
+  std::int64_t frame_index_;
+  Progress progress_;
+  std::vector<std::string> continues_;  // inputs that turn pages
+  std::string continue_line_;           // under every page
+  renderer::Eye dominant_ = renderer::Eye::right;
+  std::pair<std::uint32_t, std::uint32_t> eye_size_;  // each eye's image as the display draws it
+  // Adaptive types' state per (block position, cell); null for the others.
+  std::map<std::pair<std::size_t, std::size_t>, std::unique_ptr<protocol::AdaptiveState>> adaptive_;
+  std::optional<World> world_;
+  protocol::Settings settings_;
+  std::unique_ptr<geometry::Tracker> tracker_;
+  std::optional<TrialScene> scene_;
+  std::optional<std::size_t> current_trial_;
+  std::vector<io::DisplayReport> reports_;  // this frame's, reused
+  geometry::LabFrame lab_;
+  std::optional<geometry::LabFrame> last_lab_;
+  std::deque<io::Signal> device_signals_;  // raised, not yet handed to the loop
+  bool stop_logged_ = false;
+  bool output_lost_ = false;  // a --progress json line could not be written
+  std::int64_t trials_reported_ = 0;  // ended in this run
+ public:
+  std::int64_t first_reported = 0;  // ended before it (a resumed run)
+};
+
+}  // namespace curvlab::harness::runner

@@ -1,0 +1,37 @@
+// The simulated participant (DESIGN.md §5) wired into a session as a
+// response source and a trial watcher: at each onset its observer model
+// (or, for --observer image, its reading of the onset images) plans what it
+// presses and when, and its presses reach the session as a person's do.
+#pragma once
+
+#include "observer_keys.hpp"
+#include "session_loop.hpp"
+#include "trial_watcher.hpp"
+
+#include <memory>
+#include <optional>
+
+namespace curvlab::harness::runner {
+
+class SimulatedParticipant final : public io::ResponseSource, public TrialWatcher {
+ public:
+  SimulatedParticipant(const ObserverParams& params, std::uint64_t session_seed, const devices::Clock& clock);
+  // One for the setup's observer option (none without one), added to its
+  // station's response sources and to its watchers.
+  static std::unique_ptr<SimulatedParticipant> seat(SessionSetup& setup);
+
+  io::Signal poll(std::vector<io::InputEvent>& out) override { return keys_.poll(out); }
+  [[nodiscard]] io::Reach reach() const override { return keys_.reach(); }
+  void page_shown(std::int64_t shown_ns, std::int64_t min_ns) override;
+  void attempt_begins(std::size_t trial_index, std::int64_t draw) override;
+  std::optional<OnsetNote> onset(const OnsetFacts& facts) override;
+
+ private:
+  ObserverParams params_;
+  std::uint64_t session_seed_;
+  ObserverKeys keys_;
+  std::optional<SimulatedObserver> observer_;  // this attempt's stream
+  std::unique_ptr<OnsetReader> onset_reader_;  // --observer image only
+};
+
+}  // namespace curvlab::harness::runner
