@@ -69,16 +69,6 @@ struct SessionSetup {
   }
 };
 
-// Where a run starts: a block (its place in the design's run order) and a
-// position within it, as its kind counts (a trial, for trials blocks).
-// {design.blocks.size(), 0}: after the last block (the closing pages).
-struct ResumePoint {
-  std::size_t block = 0;
-  std::size_t position = 0;
-};
-// The point of the design's trial `first_trial` (the first not yet ended).
-ResumePoint resume_point(const protocol::Design& d, std::size_t first_trial);
-
 class SessionLoop {
  public:
   explicit SessionLoop(SessionSetup setup);
