@@ -1,7 +1,7 @@
 // The OpenXR backend up to the hardware boundary: the factory's failure
 // without a runtime (DESIGN.md §9: XR_ERROR_RUNTIME_UNAVAILABLE), and the pure
 // conversions it feeds the renderer and the session log.
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 #include "curvlab/harness/xr/gaze.hpp"
 #include "curvlab/harness/xr/stereo.hpp"
@@ -25,7 +25,7 @@ TEST(XrBackend, WithoutARuntimeNamesTheResultAndTheFixAndWritesNothing) {
   std::filesystem::create_directories(dir);
   const auto old = std::filesystem::current_path();
   std::filesystem::current_path(dir);
-  curvlab::devices::SteadyClock clock;
+  curvlab::harness::io::SteadyClock clock;
   XrBackendOptions options;
   options.clock = &clock;
   auto made = make_xr_backend(options);

@@ -10,7 +10,7 @@
 #include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/platform/signals.hpp"
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/devices/responses.hpp"
 #include "curvlab/harness/operator/operator_window.hpp"
 #include "curvlab/harness/protocol/loader.hpp"

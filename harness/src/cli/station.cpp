@@ -94,7 +94,7 @@ Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
     open_headless(out, a, n);
     return out;
   }
-  out.steady = std::make_unique<devices::SteadyClock>();
+  out.steady = std::make_unique<harness::io::SteadyClock>();
   out.clock = out.steady.get();
   if (a.backend == "desktop") {
     desktop::DesktopOptions o;
