@@ -24,7 +24,7 @@
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
-#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/tracking/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 
 #include <CLI/CLI.hpp>

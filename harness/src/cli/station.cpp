@@ -3,7 +3,7 @@
 #include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
-#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/tracking/trajectory_csv.hpp"
 #include "curvlab/harness/xr/controllers.hpp"
 #include "curvlab/harness/xr/session.hpp"
 #include "curvlab/harness/xr/swapchain_display.hpp"
