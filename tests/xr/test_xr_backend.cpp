@@ -53,14 +53,14 @@ TEST(XrBackend, WithoutAClockIsRefused) {
 // back in the head's frame whatever the head's pose.
 TEST(StereoRig, EyeOffsetsAreRelativeToTheHead) {
   const double deg = std::numbers::pi / 180.0;
-  LabPose head;
+  StagePose head;
   head.position_m = {0.3, 1.6, -0.2};
   head.orientation = glm::angleAxis(30 * deg, glm::dvec3(0, 1, 0)) *
                      glm::angleAxis(-10 * deg, glm::dvec3(1, 0, 0));
   const std::array<glm::dvec3, 2> local{glm::dvec3(-0.032, 0.0, -0.002), glm::dvec3(0.032, 0.0, -0.002)};
   const std::array<glm::dquat, 2> toe{glm::angleAxis(-1 * deg, glm::dvec3(0, 1, 0)),
                                       glm::angleAxis(1 * deg, glm::dvec3(0, 1, 0))};
-  std::array<LabPose, 2> eyes;
+  std::array<StagePose, 2> eyes;
   for (std::size_t i = 0; i < 2; ++i) {
     eyes[i].position_m = head.position_m + head.orientation * local[i];
     eyes[i].orientation = head.orientation * toe[i];
@@ -85,7 +85,7 @@ TEST(StereoRig, EyeOffsetsAreRelativeToTheHead) {
 }
 
 TEST(StereoRig, GeometryPoseKeepsValidity) {
-  LabPose p;
+  StagePose p;
   p.position_m = {1, 2, 3};
   const auto lost = to_geometry(p, false);
   EXPECT_FALSE(lost.valid);
@@ -124,7 +124,7 @@ TEST(XrClockMap, KeepsTheRuntimesDifferences) {
 // (negative) and imply no distance.
 TEST(XrGaze, VergenceOfTwoRaysIsSignedAndImpliesTheFixationDistance) {
   const double pi = std::numbers::pi;
-  LabPose head;
+  StagePose head;
   head.position_m = {0.3, 1.6, 0.4};
   head.orientation = glm::angleAxis(0.5, glm::dvec3(0, 1, 0)) * glm::angleAxis(-0.44, glm::dvec3(1, 0, 0));
   const glm::dvec3 right = head.orientation * glm::dvec3(0.032, 0, 0);
