@@ -12,7 +12,7 @@
 //   xvfb-run -a build/ci/bin/bench_operator_cost [frames_per_round] [rounds]
 #include "curvlab/harness/operator/operator_window.hpp"
 
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 #include "curvlab/renderer/scene.hpp"
 
@@ -36,7 +36,7 @@ double quantile(std::vector<double> v, double q) {
 
 // One round: a fresh backend (and window), `frames` frames after 30 to settle.
 bool round(bool window, int frames, const renderer::StimulusScene& s, std::vector<double>& cpu_ms) {
-  devices::SteadyClock clock;
+  harness::io::SteadyClock clock;
   xr::XrBackendOptions o;
   o.clock = &clock;
   o.mirror = window;

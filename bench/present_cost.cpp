@@ -7,7 +7,7 @@
 //   xvfb-run -a build/dev/bin/bench_present_cost [frames]
 #include "desktop_backend.hpp"
 
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/scene.hpp"
 
@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const auto& s = std::get<renderer::StimulusScene>(made);
-  devices::SteadyClock clock;
+  harness::io::SteadyClock clock;
 
   std::printf("H3 billiards, native view, lavapipe, window under Xvfb; %d frames each, "
               "median ms per frame\n\n",

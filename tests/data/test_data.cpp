@@ -921,8 +921,8 @@ TEST(Events, KindsKeepTheirStoredNamesAndReadBack) {
   EXPECT_EQ(kind_of(events::Page{EventKind::instructions, 0, "a"}), "instructions");
   EXPECT_EQ(kind_of(events::Page{EventKind::break_page, 0, "a"}), "break");
   EXPECT_EQ(kind_of(events::Page{EventKind::done, 0, "a"}), "done");
-  EXPECT_EQ(kind_of(events::OperatorAction{"note", "window", 5, std::string("x")}), "operator_note");
-  EXPECT_EQ(kind_of(events::OperatorAction{"pause", "window", 5, std::nullopt}), "operator_action");
+  EXPECT_EQ(kind_of(events::OperatorActionEvent{"note", "window", 5, std::string("x")}), "operator_note");
+  EXPECT_EQ(kind_of(events::OperatorActionEvent{"pause", "window", 5, std::nullopt}), "operator_action");
   EXPECT_EQ(kind_of(events::SessionEnd{SessionStatus::interrupted}), "session_end");
   EXPECT_EQ(event_record(1, std::nullopt, 0, events::SessionEnd{SessionStatus::interrupted}).detail_json,
             R"({"status":"interrupted"})");

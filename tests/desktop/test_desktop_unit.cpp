@@ -204,7 +204,7 @@ TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
   // This process never opens a window, so GLFW initialises here, without X.
   unsetenv("DISPLAY");
   unsetenv("WAYLAND_DISPLAY");
-  curvlab::devices::SteadyClock clock;
+  curvlab::harness::io::SteadyClock clock;
   curvlab::desktop::DesktopOptions options;
   options.clock = &clock;
   auto made = curvlab::desktop::make_desktop_backend(options);
@@ -219,7 +219,7 @@ TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
 }
 
 TEST(DesktopBackend, BadOptionsAreRefusedBeforeAnyWindow) {
-  curvlab::devices::SteadyClock clock;
+  curvlab::harness::io::SteadyClock clock;
   curvlab::desktop::DesktopOptions options;
   auto no_clock = curvlab::desktop::make_desktop_backend(options);
   ASSERT_FALSE(no_clock.has_value());

@@ -8,7 +8,7 @@
 
 #include "../faults/fault_env.hpp"
 
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/renderer/image_io.hpp"
 #include "curvlab/renderer/scene.hpp"
 
@@ -108,7 +108,7 @@ class DesktopWindow : public ::testing::Test {
     }
     return std::move(made).value();
   }
-  devices::SteadyClock clock_;
+  harness::io::SteadyClock clock_;
 };
 
 TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {

@@ -34,7 +34,7 @@ class RecordedSource final : public ReportSource {
 };
 
 // Each reading advances by 1 ms, so timestamps are known exactly.
-class StepClock final : public Clock {
+class StepClock final : public curvlab::harness::io::Clock {
  public:
   std::int64_t now_ns() const override { return (++t_) * 1'000'000; }
  private:
@@ -89,7 +89,7 @@ class SilentSource final : public ReportSource {
 
 TEST(DeviceReader, DestructorStopsAReaderThatIsStillReading) {
   EventQueue queue;
-  SteadyClock clock;
+  curvlab::harness::io::SteadyClock clock;
   {
     DeviceReader reader(std::make_unique<SilentSource>(), DeviceMapping{}, clock, queue, 1);
     EXPECT_FALSE(reader.finished());

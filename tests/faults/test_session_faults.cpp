@@ -102,7 +102,7 @@ int count(const std::string& db, const std::string& sql) { return std::stoi(quer
 // Runs the demo on `station` (whose display fails part-way) and checks what
 // the fault left: an error naming `api_result`, the session interrupted, the
 // trials completed so far kept. Then resumes it with healthy devices.
-void fault_then_resume(const std::string& db, const harness::io::Station& station, const devices::Clock& clock,
+void fault_then_resume(const std::string& db, const harness::io::Station& station, const harness::io::Clock& clock,
                        rn::FrameDrawing drawing, const std::string& api_result, bool gpu_resume) {
   const Demo d = demo();
   std::optional<rn::RunResult> result;

@@ -55,7 +55,7 @@ TEST(HidSession, ARecordedButtonBoxAnswersEveryTrialOnTheSessionClock) {
   auto made = rn::HeadlessDevices::create(ho, rn::standing_at(rn::nominal_calibration(p.session_settings())));
   ASSERT_TRUE(made.has_value()) << made.error().message;
   auto& headless = made.value();
-  const devices::Clock& clock = headless.clock();
+  const harness::io::Clock& clock = headless.clock();
 
   // Byte 0, bit 0 is hid_1 (convex): pressed for 40 ms every 450 ms from 0.3 s on, for
   // 20 s — through every response window of the four trials.

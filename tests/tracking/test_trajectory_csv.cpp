@@ -1,6 +1,6 @@
 // Trajectory CSV: lossless round trip, and errors that name file, line,
 // column and field.
-#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/tracking/trajectory_csv.hpp"
 
 #include <gtest/gtest.h>
 

@@ -246,7 +246,7 @@ TEST(Views, QuaternionOrderAndFov) {
   XrPosef pose{};
   pose.orientation = {0.0f, h, 0.0f, h};  // x, y, z, w
   pose.position = {0.1f, 1.6f, -0.2f};
-  const LabPose lab = to_lab_pose(pose);
+  const StagePose lab = to_stage_pose(pose);
   const glm::dvec3 forward = lab.orientation * glm::dvec3(0.0, 0.0, -1.0);
   EXPECT_NEAR(forward.x, -1.0, 1e-6);
   EXPECT_NEAR(forward.z, 0.0, 1e-6);

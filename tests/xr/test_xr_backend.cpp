@@ -1,7 +1,7 @@
 // The OpenXR backend up to the hardware boundary: the factory's failure
 // without a runtime (DESIGN.md §9: XR_ERROR_RUNTIME_UNAVAILABLE), and the pure
 // conversions it feeds the renderer and the session log.
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 #include "curvlab/harness/xr/gaze.hpp"
 #include "curvlab/harness/xr/stereo.hpp"
@@ -25,7 +25,7 @@ TEST(XrBackend, WithoutARuntimeNamesTheResultAndTheFixAndWritesNothing) {
   std::filesystem::create_directories(dir);
   const auto old = std::filesystem::current_path();
   std::filesystem::current_path(dir);
-  curvlab::devices::SteadyClock clock;
+  curvlab::harness::io::SteadyClock clock;
   XrBackendOptions options;
   options.clock = &clock;
   auto made = make_xr_backend(options);
@@ -53,14 +53,14 @@ TEST(XrBackend, WithoutAClockIsRefused) {
 // back in the head's frame whatever the head's pose.
 TEST(StereoRig, EyeOffsetsAreRelativeToTheHead) {
   const double deg = std::numbers::pi / 180.0;
-  LabPose head;
+  StagePose head;
   head.position_m = {0.3, 1.6, -0.2};
   head.orientation = glm::angleAxis(30 * deg, glm::dvec3(0, 1, 0)) *
                      glm::angleAxis(-10 * deg, glm::dvec3(1, 0, 0));
   const std::array<glm::dvec3, 2> local{glm::dvec3(-0.032, 0.0, -0.002), glm::dvec3(0.032, 0.0, -0.002)};
   const std::array<glm::dquat, 2> toe{glm::angleAxis(-1 * deg, glm::dvec3(0, 1, 0)),
                                       glm::angleAxis(1 * deg, glm::dvec3(0, 1, 0))};
-  std::array<LabPose, 2> eyes;
+  std::array<StagePose, 2> eyes;
   for (std::size_t i = 0; i < 2; ++i) {
     eyes[i].position_m = head.position_m + head.orientation * local[i];
     eyes[i].orientation = head.orientation * toe[i];
@@ -85,7 +85,7 @@ TEST(StereoRig, EyeOffsetsAreRelativeToTheHead) {
 }
 
 TEST(StereoRig, GeometryPoseKeepsValidity) {
-  LabPose p;
+  StagePose p;
   p.position_m = {1, 2, 3};
   const auto lost = to_geometry(p, false);
   EXPECT_FALSE(lost.valid);
@@ -124,7 +124,7 @@ TEST(XrClockMap, KeepsTheRuntimesDifferences) {
 // (negative) and imply no distance.
 TEST(XrGaze, VergenceOfTwoRaysIsSignedAndImpliesTheFixationDistance) {
   const double pi = std::numbers::pi;
-  LabPose head;
+  StagePose head;
   head.position_m = {0.3, 1.6, 0.4};
   head.orientation = glm::angleAxis(0.5, glm::dvec3(0, 1, 0)) * glm::angleAxis(-0.44, glm::dvec3(1, 0, 0));
   const glm::dvec3 right = head.orientation * glm::dvec3(0.032, 0, 0);

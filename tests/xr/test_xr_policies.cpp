@@ -19,7 +19,7 @@ using namespace curvlab::xr;
 constexpr double kTol = 1e-5;  // m; XrPosef holds floats
 
 XrPosef pose(double x, double y, double z, double yaw_deg) {
-  LabPose p;
+  StagePose p;
   p.position_m = {x, y, z};
   p.orientation = glm::angleAxis(yaw_deg * std::numbers::pi / 180.0, glm::dvec3(0, 1, 0));
   return to_xr_pose(p);
@@ -28,12 +28,12 @@ XrPosef pose(double x, double y, double z, double yaw_deg) {
 // Where a point with coordinates `x` in a space lies in its reference space
 // (a pose maps the space's coordinates into the reference's).
 glm::dvec3 apply(const XrPosef& p, const glm::dvec3& x) {
-  const LabPose l = to_lab_pose(p);
+  const StagePose l = to_stage_pose(p);
   return l.orientation * x + l.position_m;
 }
 
 glm::dvec3 apply_inverse(const XrPosef& p, const glm::dvec3& x) {
-  const LabPose l = to_lab_pose(p);
+  const StagePose l = to_stage_pose(p);
   return glm::inverse(l.orientation) * (x - l.position_m);
 }
 

@@ -85,7 +85,9 @@ void add_render_commands(CLI::App& app);
 void add_measure_commands(CLI::App& app);  // measure stick
 void add_protocol_commands(CLI::App& app);
 void add_authoring_commands(CLI::App& app);  // schema, new, preview
-void add_run_commands(CLI::App& app);
+void add_run_commands(CLI::App& app);  // run, resume, then predict and replay:
+void add_predict_command(CLI::App& app);
+void add_replay_command(CLI::App& app);
 void add_calibrate_commands(CLI::App& app);  // calibrate: the physical table
 // Reads and loads a protocol file, or prints every diagnostic and throws a
 // UsageError (exit 2). `text`, when given, receives the text that was loaded

@@ -1,8 +1,9 @@
-// `curvlab run | resume | predict | replay`: sessions of a protocol with a
-// participant (or the simulated observer), their continuation after a crash,
-// predictions before a study, and re-rendering of what was seen.
+// `curvlab run | resume`: sessions of a protocol with a participant (or the
+// simulated observer) and their continuation after a crash; `predict`
+// (predict.cpp) and `replay` (replay.cpp) are registered after them.
 #include "common.hpp"
 #include "calibrate.hpp"
+#include "observer_args.hpp"
 #include "station.hpp"
 
 #include "curvlab/harness/data/database.hpp"
@@ -10,8 +11,8 @@
 #include "curvlab/harness/data/writer_lock.hpp"
 #include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/platform/signals.hpp"
-#include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/devices/responses.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/operator/operator_window.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/random.hpp"
@@ -23,7 +24,7 @@
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
-#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/tracking/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
 
 #include <CLI/CLI.hpp>
@@ -49,55 +50,6 @@ namespace pr = curvlab::harness::protocol;
 // SIGINT (Ctrl-C), SIGTERM and SIGHUP (a closed terminal) end a session
 // interrupted and flushed, with the resume command printed (station.hpp).
 void watch_stop_signals(rn::RunOptions& o) { o.stop_signal = &catch_stop_signals(); }
-
-struct ObserverArgs {
-  std::string model = "human";
-  geometry::HumanVision vision;
-  double bias_m = 0.0;
-  double slope_per_m = 300.0;
-  double lapse = 0.02;
-  double criterion_m = 0.006;
-  std::optional<std::uint64_t> seed;
-};
-
-void add_observer_options(CLI::App* cmd, ObserverArgs& o) {
-  cmd->add_option("--observer", o.model,
-                  "who answers in headless runs: human (default: human limits), triangulation (the ideal "
-                  "geometer; 'perception' is its former name), physical (null model), random, image (the human "
-                  "model reading the stick from the rendered onset pair), or none");
-  cmd->add_option("--observer-bias-m", o.bias_m, "simulated observer: bias added to the perceived sagitta (m)");
-  cmd->add_option("--observer-slope-per-m", o.slope_per_m,
-                  "simulated observer: 1 / noise SD in metres (triangulation and physical; the human model's without "
-                  "disparity; default 300 /m)");
-  for (const auto& setting : rn::vision_settings()) {
-    std::string flag = "--observer-" + std::string(setting.name);
-    std::replace(flag.begin(), flag.end(), '_', '-');
-    cmd->add_option(flag, o.vision.*setting.field, "human observer: " + std::string(setting.help));
-  }
-  cmd->add_option("--observer-lapse", o.lapse, "simulated observer: lapse rate (default 0.02)");
-  cmd->add_option("--observer-criterion-m", o.criterion_m,
-                  "simulated observer: half-width of the 'straight' band (default 0.006 m)");
-  cmd->add_option_function<std::uint64_t>("--observer-seed", [&o](std::uint64_t s) { o.seed = s; },
-                                          "simulated observer's seed (default: from the session's seed)");
-}
-
-std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::uint64_t default_seed) {
-  if (a.model == "none") return std::nullopt;
-  const auto model = rn::parse_observer_model(a.model);
-  if (!model)
-    throw UsageError("--observer must be human, triangulation, physical, random, image or none, got '" + a.model +
-                     "'");
-  rn::ObserverParams p;
-  p.model = *model;
-  p.vision = a.vision;
-  p.bias_m = a.bias_m;
-  p.slope_per_m = a.slope_per_m;
-  p.lapse = a.lapse;
-  p.criterion_m = a.criterion_m;
-  p.seed = a.seed.value_or(default_seed);
-  if (auto ok = rn::check_observer(p); !ok) throw UsageError("--observer-*: " + ok.error().message);
-  return p;
-}
 
 void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--backend", b.backend, "headless (default), desktop or xr");
@@ -420,183 +372,6 @@ void resume_command(const ResumeArgs& a) {
   report(result, a.backend, devices.station.display->info().msaa);
 }
 
-struct PredictArgs {
-  std::string protocol;
-  int participants = 20;
-  int simulations = 400;
-  std::string effect;
-  ObserverArgs observer;
-  double bias_sd_m = 0.004;
-  bool json = false;
-};
-
-// --effect FACTOR:LEVEL_A,LEVEL_B: the effect whose power is estimated.
-void set_effect(const std::string& effect, const pr::Protocol& p, rn::PredictOptions& o) {
-  const auto colon = effect.find(':');
-  const auto comma = effect.find(',', colon == std::string::npos ? 0 : colon);
-  if (colon == std::string::npos || comma == std::string::npos)
-    throw UsageError("--effect expects FACTOR:LEVEL_A,LEVEL_B (e.g. view:native,tourist), got '" + effect + "'");
-  o.factor = effect.substr(0, colon);
-  o.level_a = effect.substr(colon + 1, comma - colon - 1);
-  o.level_b = effect.substr(comma + 1);
-  if (!p.find_factor(o.factor)) throw UsageError("--effect: the protocol has no factor \"" + o.factor + "\"");
-}
-
-rn::PredictOptions predict_options(const PredictArgs& a, const pr::Protocol& p) {
-  rn::PredictOptions o;
-  o.participants = a.participants;
-  o.simulations = a.simulations;
-  o.bias_sd_m = a.bias_sd_m;
-  if (!(a.bias_sd_m >= 0.0 && a.bias_sd_m < 1.0)) throw UsageError("--bias-sd-m must lie in [0, 1) m");
-  auto obs = observer_params(a.observer, a.observer.seed.value_or(1));
-  if (!obs) throw UsageError("predict needs a simulated observer (--observer none makes no sense here)");
-  o.observer = *obs;
-  if (!a.effect.empty()) set_effect(a.effect, p, o);
-  return o;
-}
-
-Json condition_json(const rn::ConditionPrediction& c) {
-  Json cj;
-  for (const auto& [f, l] : c.levels) cj[f] = l;
-  cj["judged"] = c.judged;
-  cj["trials_per_participant"] = c.trials_per_participant;
-  cj["perceived_sagitta_m"] = c.perceived_m;
-  cj["noise_sd_m"] = c.noise_sd_m;
-  if (c.human) cj["human"] = Json::parse(rn::human_account_json(*c.human));
-  cj["diverging_sight_lines"] = c.diverging_points;
-  Json props;
-  for (std::size_t k = 0; k < c.options.size(); ++k) props[c.options[k]] = c.proportions[k];
-  cj["proportions"] = props;
-  return cj;
-}
-
-Json staircase_json(const rn::StaircasePrediction& sp) {
-  Json sj;
-  sj["block"] = sp.block;
-  for (const auto& [f, l] : sp.levels) sj[f] = l;
-  sj["judged"] = sp.judged;
-  sj["staircase"] = sp.staircase;
-  sj["parameter"] = sp.parameter;
-  sj["rule"] = sp.rule;
-  sj["target_p_" + sp.positive] = sp.target_p;
-  sj["range"] = Json::array({sp.min, sp.max});
-  sj["converges_on"] = sp.target_value ? Json(*sp.target_value) : Json(nullptr);
-  sj["p_at_min"] = sp.p_at_min;
-  sj["p_at_max"] = sp.p_at_max;
-  sj["crossings"] = sp.crossings;
-  return sj;
-}
-
-Json prediction_json(const pr::Protocol& p, const rn::PredictOptions& o, const rn::Prediction& pred) {
-  Json doc;
-  doc["protocol"] = p.meta.name;
-  doc["participants"] = pred.participants;
-  doc["observer"] = Json::parse(rn::observer_json(o.observer));
-  doc["bias_sd_m"] = o.bias_sd_m;
-  Json conds = Json::array();
-  for (const auto& c : pred.conditions) conds.push_back(condition_json(c));
-  doc["conditions"] = conds;
-  Json power = Json::array();
-  for (const auto& pe : pred.power)
-    power.push_back({{"factor", pe.factor}, {"level_a", pe.level_a}, {"level_b", pe.level_b},
-                     {"measure", pe.measure}, {"predicted_difference", pe.predicted_difference}, {"power", pe.power},
-                     {"simulations", pe.simulations}, {"test", "paired t, two-sided, alpha 0.05"}});
-  doc["power"] = power;
-  Json stairs = Json::array();
-  for (const auto& sp : pred.staircases) stairs.push_back(staircase_json(sp));
-  doc["staircases"] = stairs;
-  doc["notes"] = pred.notes;
-  return doc;
-}
-
-// "factor=level factor=level " for a condition's label.
-std::string levels_label(const std::vector<std::pair<std::string, std::string>>& levels) {
-  std::string label;
-  for (const auto& [f, l] : levels) label += f + "=" + l + " ";
-  return label;
-}
-
-void print_staircase(const rn::StaircasePrediction& sp) {
-  const std::string label = sp.block + " " + levels_label(sp.levels);
-  std::printf("  %-40s %-12s %s %4.1f%% %s: ", label.c_str(), sp.staircase.c_str(), sp.rule.c_str(),
-              100.0 * sp.target_p, sp.positive.c_str());
-  if (sp.target_value)
-    std::printf("%s = %+.4f in [%g, %g]%s\n", sp.parameter.c_str(), *sp.target_value, sp.min, sp.max,
-                sp.crossings > 1 ? " (not monotone: more than one crossing)" : "");
-  else
-    std::printf("outside [%g, %g]\n", sp.min, sp.max);
-}
-
-void print_condition(const rn::ConditionPrediction& c) {
-  std::printf("  %-52s %-5s %+8.4f", levels_label(c.levels).c_str(), c.judged.c_str(), c.perceived_m);
-  if (c.human)
-    std::printf(" %+8.0f %6.0f %+7.2f %-5s %5.2f", c.human->signal_arcsec, c.human->threshold_arcsec, c.human->d_prime,
-                c.human->fused ? "yes" : "no", c.human->perceived_distance_m);
-  for (std::size_t k = 0; k < c.options.size(); ++k) std::printf(" %s %.2f", c.options[k].c_str(), c.proportions[k]);
-  std::printf("\n");
-}
-
-void print_prediction(const pr::Protocol& p, const rn::Prediction& pred) {
-  if (!pred.conditions.empty()) {
-    std::printf("%s: expected response proportions, %d participants\n", p.meta.name.c_str(), pred.participants);
-    const bool human = pred.conditions.front().human.has_value();
-    std::printf("  %-52s %-5s %8s", "condition", "", "s (m)");
-    if (human) std::printf(" %8s %6s %7s %-5s %5s", "signal\"", "thr\"", "d'", "fused", "D' m");
-    std::printf(" proportions\n");
-    if (human)
-      std::printf("  (s: perceived sagitta; signal: the disparity it amounts to at the perceived distance D'; thr: "
-                  "stereo threshold; arcseconds)\n");
-  }
-  for (const auto& c : pred.conditions) print_condition(c);
-  if (!pred.staircases.empty())
-    std::printf("adaptive tracks: the value each converges on for the mean observer (m-up/n-down target, Levitt "
-                "1971; psi: the 50 %% point its PSE estimate approaches)\n");
-  for (const auto& sp : pred.staircases) print_staircase(sp);
-  if (!pred.power.empty()) std::printf("power (level a vs b, paired t across participants, alpha 0.05):\n");
-  for (const auto& pe : pred.power)
-    std::printf("  %-12s %s vs %s: %s difference %+.4g, power %.2f (%d simulated studies)\n", pe.factor.c_str(),
-                pe.level_a.c_str(), pe.level_b.c_str(), pe.measure.c_str(), pe.predicted_difference, pe.power,
-                pe.simulations);
-  for (const auto& n : pred.notes) std::printf("note: %s\n", n.c_str());
-}
-
-void predict_command(const PredictArgs& a) {
-  const pr::Protocol p = load_protocol_or_usage(a.protocol);
-  const rn::PredictOptions o = predict_options(a, p);
-  auto r = rn::predict(p, o);
-  if (!r) raise(r.error());
-  const auto& pred = r.value();
-  const Json doc = prediction_json(p, o, pred);
-  if (a.json) {
-    print_result(doc, true);
-    return;
-  }
-  print_prediction(p, pred);
-}
-
-struct ReplayArgs {
-  rn::ReplayRequest request;
-  std::optional<std::int64_t> frame;
-  bool json = false;
-};
-
-void replay_command(ReplayArgs a) {
-  a.request.frame_index = a.frame;
-  check_db_argument(a.request.db_path);
-  auto r = rn::replay_frame(a.request);
-  if (!r) {
-    if (curvlab::harness::exit_code(r.error()) == 2) throw UsageError(r.error().message);
-    throw RuntimeFailure(r.error().message);
-  }
-  const auto& res = r.value();
-  Json doc;
-  doc["frame_index"] = res.frame_index;
-  doc["phase"] = res.phase;
-  doc["device"] = res.device;
-  doc["files"] = res.files;
-  print_result(doc, a.json);
-}
-
 }  // namespace
 
 void add_run_commands(CLI::App& app) {
@@ -628,28 +403,8 @@ void add_run_commands(CLI::App& app) {
     resume_command(*res);
   });
 
-  auto pa = std::make_shared<PredictArgs>();
-  auto* p = app.add_subcommand("predict", "expected response proportions and power from the simulated observer");
-  p->add_option("protocol", pa->protocol, "protocol file (TOML)")->required();
-  p->add_option("--participants", pa->participants, "participants per simulated study (default 20)");
-  p->add_option("--simulations", pa->simulations, "simulated studies for the power (default 400)");
-  p->add_option("--effect", pa->effect, "the effect to test, FACTOR:LEVEL_A,LEVEL_B (default: every factor)");
-  p->add_option("--bias-sd-m", pa->bias_sd_m, "between-participant SD of the bias (default 0.004 m)");
-  add_observer_options(p, pa->observer);
-  p->add_flag("--json", pa->json, "print JSON");
-  p->callback([pa] { predict_command(*pa); });
-
-  auto ra = std::make_shared<ReplayArgs>();
-  auto* rp = app.add_subcommand("replay", "re-render one frame of a stored trial from the logged poses");
-  rp->add_option("--db", ra->request.db_path, "SQLite file")->required();
-  rp->add_option("--session", ra->request.session_id, "session id")->required();
-  rp->add_option("--trial", ra->request.trial_index, "trial index in the session (from 0)")->required();
-  rp->add_option_function<std::int64_t>("--frame", [ra](std::int64_t f) { ra->frame = f; },
-                                        "frame index (default: the stimulus onset)");
-  rp->add_option("--out", ra->request.out_dir, "output folder")->required();
-  rp->add_flag("--software", ra->request.software, "use lavapipe even with a GPU");
-  rp->add_flag("--json", ra->json, "print JSON");
-  rp->callback([ra] { replay_command(*ra); });
+  add_predict_command(app);
+  add_replay_command(app);
 }
 
 }  // namespace curvlab::cli

@@ -3,7 +3,7 @@
 #include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
-#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/tracking/trajectory_csv.hpp"
 #include "curvlab/harness/xr/controllers.hpp"
 #include "curvlab/harness/xr/session.hpp"
 #include "curvlab/harness/xr/swapchain_display.hpp"
@@ -94,7 +94,7 @@ Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
     open_headless(out, a, n);
     return out;
   }
-  out.steady = std::make_unique<devices::SteadyClock>();
+  out.steady = std::make_unique<harness::io::SteadyClock>();
   out.clock = out.steady.get();
   if (a.backend == "desktop") {
     desktop::DesktopOptions o;

@@ -8,9 +8,9 @@
 #include "common.hpp"
 
 #include "curvlab/geometry/calibration.hpp"
-#include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/devices/mapping.hpp"
 #include "curvlab/harness/devices/responses.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/io/station.hpp"
 #include "curvlab/harness/runner/headless.hpp"
 
@@ -70,8 +70,8 @@ struct Devices {
 
   std::unique_ptr<harness::io::InteractiveDisplay> interactive;  // desktop
   harness::runner::HeadlessDevices headless;
-  std::unique_ptr<devices::SteadyClock> steady;
-  const devices::Clock* clock = nullptr;
+  std::unique_ptr<harness::io::SteadyClock> steady;
+  const harness::io::Clock* clock = nullptr;
   // The headset's parts (--backend xr). Each borrows the ones before it and
   // all read the clock, so they are destroyed in reverse order before it.
   std::unique_ptr<xr::Session> xr_session;

@@ -8,7 +8,7 @@
 #include "curvlab/geometry/table.hpp"
 #include "curvlab/geometry/tracking.hpp"
 #include "curvlab/geometry/trajectory.hpp"
-#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/tracking/trajectory_csv.hpp"
 
 #include <CLI/CLI.hpp>
 

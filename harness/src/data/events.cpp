@@ -80,7 +80,7 @@ Detail detail(const events::BlockStart& e) {
 Detail detail(const events::Page& e) { return {e.kind, Json{{"page", e.page}, {"text", e.text}}}; }
 Detail detail(const events::SessionEnd& e) { return {EventKind::session_end, Json{{"status", to_string(e.status)}}}; }
 Detail detail(const events::Signal& e) { return {EventKind::signal, Json{{"signal", e.signal}}}; }
-Detail detail(const events::OperatorAction& e) {
+Detail detail(const events::OperatorActionEvent& e) {
   Json j{{"action", e.action}, {"source", e.source}, {"t_ns", e.t_ns}};
   if (e.text) j["text"] = *e.text;
   return {e.text ? EventKind::operator_note : EventKind::operator_action, j};
@@ -102,7 +102,7 @@ Detail detail(const events::TrialSkipped& e) {
 Detail detail(const events::EarlyInput& e) {
   return {EventKind::early_input, Json{{"name", e.name}, {"device", e.device}, {"t_ns", e.t_ns}}};
 }
-Detail detail(const events::Adjustment& e) {
+Detail detail(const events::AdjustmentEvent& e) {
   return {EventKind::adjustment, Json{{"value", e.value}, {"frame_index", e.frame_index}}};
 }
 Detail detail(const events::Onset& e) {

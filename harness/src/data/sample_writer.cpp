@@ -179,7 +179,7 @@ struct SampleWriter::Impl {
 
   // One ray's columns from `first` on: valid, [confidence,] origin, direction;
   // all NULL where the headset does not track that ray.
-  int bind_ray(int first, bool tracked, const GazeRay& r, bool with_confidence) {
+  int bind_ray(int first, bool tracked, const GazeRayRecord& r, bool with_confidence) {
     auto& st = insert_gaze;
     const int n = with_confidence ? 8 : 7;
     if (!tracked) {

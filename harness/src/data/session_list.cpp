@@ -39,8 +39,8 @@ std::string latest(const std::string& started, const std::optional<std::string>&
   return out;
 }
 
-Expected<SessionSummary> summary_from(const Statement& s, const std::string& path) {
-  SessionSummary out;
+Expected<SessionListEntry> summary_from(const Statement& s, const std::string& path) {
+  SessionListEntry out;
   out.session_id = s.column_int(0);
   out.session_uuid = s.column_opt_text(1).value_or("");
   out.session_number = s.column_int(2);
@@ -62,7 +62,7 @@ Expected<SessionSummary> summary_from(const Statement& s, const std::string& pat
 }
 
 // The summaries of every session, or of one.
-Expected<std::vector<SessionSummary>> read_summaries(Database& db, std::optional<std::int64_t> session_id) {
+Expected<std::vector<SessionListEntry>> read_summaries(Database& db, std::optional<std::int64_t> session_id) {
   try {
     Statement s(db.connection(), summary_sql);
     s.bind(1, session_id)
@@ -70,7 +70,7 @@ Expected<std::vector<SessionSummary>> read_summaries(Database& db, std::optional
         .bind_static(3, to_string(TrialStatus::skipped))
         .bind_static(4, to_string(TrialStatus::aborted))
         .bind_static(5, to_string(EventKind::session_start));
-    std::vector<SessionSummary> out;
+    std::vector<SessionListEntry> out;
     while (s.step()) {
       auto summary = summary_from(s, db.path());
       if (!summary) return summary.error();
@@ -84,7 +84,7 @@ Expected<std::vector<SessionSummary>> read_summaries(Database& db, std::optional
 
 bool stored_open(SessionStatus s) { return s == SessionStatus::running || s == SessionStatus::paused; }
 
-ListedSession listed(SessionSummary summary, std::optional<LockHolder> writer) {
+ListedSession listed(SessionListEntry summary, std::optional<LockHolder> writer) {
   ListedSession out;
   out.status = listed_status(summary.stored_status, writer.has_value());
   out.ended_without_closing = !writer && stored_open(summary.stored_status);

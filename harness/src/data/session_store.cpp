@@ -412,13 +412,13 @@ Expected<StartedSession> SessionStore::start_session(
   });
 }
 
-Expected<std::optional<PlannedTrial>> SessionStore::next_incomplete_trial(std::int64_t session_id) {
-  return guarded(db_, [&]() -> std::optional<PlannedTrial> {
+Expected<std::optional<PlannedTrialRecord>> SessionStore::next_incomplete_trial(std::int64_t session_id) {
+  return guarded(db_, [&]() -> std::optional<PlannedTrialRecord> {
     auto& s = stmts_->next_trial;
     s.bind(1, session_id);
-    std::optional<PlannedTrial> out;
+    std::optional<PlannedTrialRecord> out;
     if (s.step()) {
-      PlannedTrial t;
+      PlannedTrialRecord t;
       t.trial_id = s.column_int(0);
       t.block_id = s.column_int(1);
       t.block_index = s.column_int(2);

@@ -29,7 +29,7 @@ std::optional<DeviceEvent> EventQueue::pop_wait(std::chrono::milliseconds timeou
 }
 
 DeviceReader::DeviceReader(std::unique_ptr<ReportSource> source, DeviceMapping mapping,
-                           const Clock& clock, EventQueue& queue, int poll_ms)
+                           const harness::io::Clock& clock, EventQueue& queue, int poll_ms)
     : source_(std::move(source)),
       parser_(std::move(mapping)),
       clock_(clock),

@@ -34,7 +34,7 @@ harness::io::Reach mapping_reach(const MappingFile& file) {
   return r;
 }
 
-harness::Result<std::unique_ptr<HidResponses>> HidResponses::open(const MappingFile& file, const Clock& clock) {
+harness::Result<std::unique_ptr<HidResponses>> HidResponses::open(const MappingFile& file, const harness::io::Clock& clock) {
   auto library = HidLibrary::open();
   if (!library) return library.error();
   const auto connected = library->enumerate();
@@ -55,7 +55,7 @@ harness::Result<std::unique_ptr<HidResponses>> HidResponses::open(const MappingF
 }
 
 std::unique_ptr<HidResponses> HidResponses::read(
-    std::vector<std::pair<std::unique_ptr<ReportSource>, DeviceMapping>> sources, const Clock& clock) {
+    std::vector<std::pair<std::unique_ptr<ReportSource>, DeviceMapping>> sources, const harness::io::Clock& clock) {
   std::unique_ptr<HidResponses> out(new HidResponses());
   for (auto& [source, mapping] : sources) {
     out->names_.emplace_back(source->label(), "hid:" + mapping.name);

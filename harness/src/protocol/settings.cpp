@@ -277,8 +277,8 @@ std::vector<SettingInfo> make_registry() {
                                                        "signed convexity of the table top at its centre; + bulges up"),
       integer<&S::stimulus, &Stimulus::balls>("stimulus.balls", 0, 16, "number of balls on the table"),
       number<&S::stimulus, &Stimulus::ball_radius_m>("stimulus.ball_radius_m", 0.005, 0.2, "ball radius"),
-      number<&S::table, &PhysicalTable::edge_m>("table.edge_m", 0.2, 5.0, "physical table edge length"),
-      number<&S::table, &PhysicalTable::height_m>("table.height_m", 0.3, 1.5,
+      number<&S::table, &TableSettings::edge_m>("table.edge_m", 0.2, 5.0, "physical table edge length"),
+      number<&S::table, &TableSettings::height_m>("table.height_m", 0.3, 1.5,
                                                   "physical table top height above the floor"),
   };
 }

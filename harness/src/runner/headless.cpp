@@ -50,7 +50,7 @@ LabFrame standing_pose(const geometry::PhysicalTableFit& table, double eye_heigh
 struct HeadlessDisplay::Impl {
   HeadlessOptions options;
   SimulatedClock sim_clock;
-  devices::SteadyClock steady;
+  io::SteadyClock steady;
   std::int64_t period_ns = 0;
   std::int64_t index = 0;
   std::int64_t first_ns = 0;
@@ -60,7 +60,7 @@ struct HeadlessDisplay::Impl {
   bool drawn = false;
 
   explicit Impl(const HeadlessOptions& o) : options(o), sim_clock(o.start_ns) {}
-  const devices::Clock& clock() const {
+  const io::Clock& clock() const {
     if (options.pace == Pace::fast) return sim_clock;
     return steady;
   }
@@ -100,7 +100,7 @@ HeadlessDisplay::~HeadlessDisplay() {
   if (impl_ && impl_->ctx) impl_->ctx->wait_idle_noexcept();
 }
 
-const devices::Clock& HeadlessDisplay::clock() const { return impl_->clock(); }
+const io::Clock& HeadlessDisplay::clock() const { return impl_->clock(); }
 
 io::DisplayInfo HeadlessDisplay::info() const {
   io::DisplayInfo i;

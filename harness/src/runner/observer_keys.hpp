@@ -3,7 +3,7 @@
 // an input when its time has come, exactly as a participant's presses arrive.
 #pragma once
 
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/io/response_source.hpp"
 #include "curvlab/harness/protocol/adjustment.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
@@ -44,7 +44,7 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
 // that time.
 class ObserverKeys final : public io::ResponseSource {
  public:
-  explicit ObserverKeys(const devices::Clock& clock) : clock_(clock) {}
+  explicit ObserverKeys(const io::Clock& clock) : clock_(clock) {}
   void press(ScheduledKey key) { due_.push_back(std::move(key)); }
   void replace(const std::vector<ScheduledKey>& keys) { due_.assign(keys.begin(), keys.end()); }
   void clear() { due_.clear(); }
@@ -58,7 +58,7 @@ class ObserverKeys final : public io::ResponseSource {
   }
 
  private:
-  const devices::Clock& clock_;
+  const io::Clock& clock_;
   std::deque<ScheduledKey> due_;  // in time order
 };
 

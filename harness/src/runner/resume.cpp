@@ -111,7 +111,7 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
 
 RunResult resume_session(const std::string& db_path, std::int64_t session_id, const StoredSession& stored,
                          const protocol::Protocol& p, const RunOptions& options, const io::Station& station,
-                         const devices::Clock& clock) {
+                         const io::Clock& clock) {
   auto lock = data::WriterLock::for_session(db_path, session_id);
   if (!lock) return lock.error();
   if (stored.status == data::SessionStatus::completed)

@@ -66,7 +66,7 @@ data::SessionRecord session_record(std::int64_t protocol_id, std::int64_t partic
 Result<data::StartedSession> create(
     data::SessionStore& store, const protocol::Protocol& p, const std::string& protocol_text,
     const RunOptions& options, const io::DisplayInfo& info, const protocol::Design& design,
-    const geometry::PhysicalTableFit& calibration, const devices::Clock& clock, data::WriterLock& lock) {
+    const geometry::PhysicalTableFit& calibration, const io::Clock& clock, data::WriterLock& lock) {
   auto protocol_id = store.add_protocol(p.meta.name, protocol_text, p.file);
   if (!protocol_id) return protocol_id.error();
   auto participant_id = store.add_participant({options.participant, options.ipd_m, options.dominant_eye});
@@ -86,7 +86,7 @@ Result<data::StartedSession> create(
 }  // namespace
 
 RunResult run_session(const protocol::Protocol& p, const std::string& protocol_text, const std::string& db_path,
-                      const RunOptions& options, const io::Station& station, const devices::Clock& clock) {
+                      const RunOptions& options, const io::Station& station, const io::Clock& clock) {
   protocol::Design design = protocol::expand_design(p, options.participant_number);
   if (auto ok = check_options(p, options, design); !ok) return ok.error();
   auto lock = data::WriterLock::for_sessions(db_path);

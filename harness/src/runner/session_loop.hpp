@@ -19,6 +19,19 @@
 #include <optional>
 #include <vector>
 
+// session_loop.cpp still spells the session clock and three stored records
+// by their former names.
+namespace curvlab::devices {
+using Clock = harness::io::Clock;
+}  // namespace curvlab::devices
+namespace curvlab::data {
+using GazeRay = GazeRayRecord;
+namespace events {
+using OperatorAction = OperatorActionEvent;
+using Adjustment = AdjustmentEvent;
+}  // namespace events
+}  // namespace curvlab::data
+
 namespace curvlab::harness::runner {
 
 class TrialWatcher;
@@ -34,7 +47,7 @@ struct SessionSetup {
   data::SessionStore* store = nullptr;  // reads only while the loop runs
   data::SampleWriter* writer = nullptr;
   io::Station station;
-  const devices::Clock* clock = nullptr;
+  const io::Clock* clock = nullptr;
   RunOptions options;
   std::int64_t session_id = 0;
   std::vector<std::int64_t> trial_ids;  // in the design's order
@@ -53,7 +66,7 @@ struct SessionSetup {
 
   // What every run sets; a resumed run adds where it continues.
   static SessionSetup of(const protocol::Protocol& p, protocol::Design design, data::SessionStore& store,
-                         data::SampleWriter& writer, const io::Station& station, const devices::Clock& clock,
+                         data::SampleWriter& writer, const io::Station& station, const io::Clock& clock,
                          RunOptions options, std::int64_t session_id, std::vector<std::int64_t> trial_ids) {
     SessionSetup s;
     s.protocol = &p;

@@ -1,4 +1,4 @@
-#include "curvlab/harness/trajectory_csv.hpp"
+#include "curvlab/harness/tracking/trajectory_csv.hpp"
 
 #include "curvlab/harness/lab_volume.hpp"
 #include "curvlab/harness/utf8.hpp"

@@ -44,7 +44,7 @@ GazeExtensions gaze_extensions_in(const std::vector<std::string>& offered) {
 }
 
 io::GazeRay gaze_ray(const XrPosef& pose, bool valid, std::optional<double> confidence) {
-  const LabPose p = to_lab_pose(pose);
+  const StagePose p = to_stage_pose(pose);
   io::GazeRay ray;
   ray.valid = valid;
   ray.confidence = confidence;
@@ -53,7 +53,7 @@ io::GazeRay gaze_ray(const XrPosef& pose, bool valid, std::optional<double> conf
   return ray;
 }
 
-io::Vergence vergence_of(const LabPose& head, const io::GazeRay& left, const io::GazeRay& right) {
+io::Vergence vergence_of(const StagePose& head, const io::GazeRay& left, const io::GazeRay& right) {
   // Into the head's frame, where geometry's eyes and sight lines live
   // (x right, −z forward).
   const glm::dquat to_head = glm::conjugate(head.orientation);
@@ -163,7 +163,7 @@ Result<Done> EyeTracking::start(XrSession session) {
   return Done{};
 }
 
-EyeTracking::Located EyeTracking::locate(XrSpace stage, XrTime time, const LabPose& head) const {
+EyeTracking::Located EyeTracking::locate(XrSpace stage, XrTime time, const StagePose& head) const {
   const State& s = *state_;
   Located out;
   if (s.gaze_space != XR_NULL_HANDLE) {

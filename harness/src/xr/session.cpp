@@ -95,7 +95,7 @@ struct Session::Extensions {
   }
 };
 
-Session::Session(Instance instance, const devices::Clock& clock) : instance_(std::move(instance)), clock_(&clock) {}
+Session::Session(Instance instance, const harness::io::Clock& clock) : instance_(std::move(instance)), clock_(&clock) {}
 
 Result<std::unique_ptr<Session>> Session::create(const SessionOptions& options) {
   if (options.clock == nullptr)

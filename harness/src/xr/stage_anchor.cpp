@@ -9,10 +9,10 @@ std::optional<XrPosef> StageAnchor::offset_after(bool pose_valid, const XrPosef&
   // poseInReferenceSpace Q keeps lab coordinates: lab = Q⁻¹ · stage. With
   // the old stage = P · new stage (P the new origin in the old), the new
   // space needs Q' = P⁻¹ · Q.
-  const LabPose p = to_lab_pose(moved);
-  const LabPose before = to_lab_pose(pending_ ? *pending_ : current_);
+  const StagePose p = to_stage_pose(moved);
+  const StagePose before = to_stage_pose(pending_ ? *pending_ : current_);
   const glm::dquat inv = glm::inverse(glm::normalize(p.orientation));
-  LabPose offset;
+  StagePose offset;
   offset.orientation = inv * before.orientation;
   offset.position_m = inv * (before.position_m - p.position_m);
   return to_xr_pose(offset);

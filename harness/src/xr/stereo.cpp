@@ -16,7 +16,7 @@ constexpr std::int64_t kB8G8R8A8Srgb = 50;
 
 }  // namespace
 
-renderer::StereoRig rig_from_views(const LabPose& head, const std::array<LabPose, 2>& eyes,
+renderer::StereoRig rig_from_views(const StagePose& head, const std::array<StagePose, 2>& eyes,
                                    const std::array<AsymmetricFov, 2>& fovs) {
   renderer::StereoRig rig;
   const glm::dquat head_inv = glm::inverse(glm::normalize(head.orientation));
@@ -29,7 +29,7 @@ renderer::StereoRig rig_from_views(const LabPose& head, const std::array<LabPose
   return rig;
 }
 
-geometry::LabPose to_geometry(const LabPose& pose, bool valid) {
+geometry::LabPose to_geometry(const StagePose& pose, bool valid) {
   geometry::LabPose p;
   p.position_m = pose.position_m;
   p.orientation = pose.orientation;

@@ -237,7 +237,7 @@ void SwapchainDisplay::mark_late(FrameTiming& timing) {
 renderer::StereoRig SwapchainDisplay::rig(const FrameTiming& frame, double ipd_m) {
   (void)frame;
   if (!views_valid_) return renderer::StereoRig::from_ipd(ipd_m, renderer::Fov{});
-  return rig_from_views(poses_.head(), {to_lab_pose(views_[0].pose), to_lab_pose(views_[1].pose)},
+  return rig_from_views(poses_.head(), {to_stage_pose(views_[0].pose), to_stage_pose(views_[1].pose)},
                         {to_fov(views_[0].fov), to_fov(views_[1].fov)});
 }
 

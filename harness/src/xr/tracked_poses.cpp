@@ -156,11 +156,11 @@ void TrackedPoses::follow_stage_change(XrTime display_time) {
   anchor_.follow();
 }
 
-std::pair<LabPose, XrSpaceLocationFlags> TrackedPoses::locate_space(XrSpace space, XrTime t) {
+std::pair<StagePose, XrSpaceLocationFlags> TrackedPoses::locate_space(XrSpace space, XrTime t) {
   auto loc = tagged<XrSpaceLocation>(XR_TYPE_SPACE_LOCATION);
   const XrResult r = xrLocateSpace(space, stage_.get(), t, &loc);
   if (fatal(r)) session_.fail(r, "xrLocateSpace");
-  return {to_lab_pose(loc.pose), XR_SUCCEEDED(r) ? loc.locationFlags : XrSpaceLocationFlags{0}};
+  return {to_stage_pose(loc.pose), XR_SUCCEEDED(r) ? loc.locationFlags : XrSpaceLocationFlags{0}};
 }
 
 void TrackedPoses::locate(XrTime t) {

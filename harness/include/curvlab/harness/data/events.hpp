@@ -87,7 +87,7 @@ struct SessionEnd {
 struct Signal {
   int signal = 0;
 };
-struct OperatorAction {
+struct OperatorActionEvent {
   std::string action;
   std::string source;
   std::int64_t t_ns = 0;
@@ -120,7 +120,7 @@ struct EarlyInput {
   std::string device;
   std::int64_t t_ns = 0;
 };
-struct Adjustment {
+struct AdjustmentEvent {
   double value = 0.0;
   std::int64_t frame_index = 0;
 };
@@ -170,9 +170,9 @@ struct Posterior {
 }  // namespace events
 
 using Event = std::variant<events::SessionStart, events::Observer, events::Resume, events::BlockStart, events::Page,
-                           events::SessionEnd, events::Signal, events::OperatorAction, events::Paused,
+                           events::SessionEnd, events::Signal, events::OperatorActionEvent, events::Paused,
                            events::Unpaused, events::TrialAborted, events::TrialRepeated, events::TrialAbandoned,
-                           events::TrialSkipped, events::EarlyInput, events::Adjustment, events::Onset,
+                           events::TrialSkipped, events::EarlyInput, events::AdjustmentEvent, events::Onset,
                            events::TrackingFlagged, events::EventsLost, events::StageMoved, events::RefreshRate,
                            events::Posterior>;
 

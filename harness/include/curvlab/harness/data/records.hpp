@@ -72,7 +72,7 @@ struct BlockPlan {
   std::vector<TrialPlan> trials;
 };
 
-struct PlannedTrial {
+struct PlannedTrialRecord {
   std::int64_t trial_id = 0;
   std::int64_t block_id = 0;
   std::int64_t block_index = 0;
@@ -126,7 +126,7 @@ struct EventRecord {
 };
 
 // Body-coherent tracking state of one device (DESIGN.md §3).
-struct TrackingState {
+struct TrackingStateRecord {
   std::int32_t physical_edge = -1;
   std::int32_t virtual_edge = -1;
   double laps = 0.0;
@@ -150,12 +150,12 @@ struct TrackingSample {
   std::array<double, 3> lab_position_m{};
   std::array<double, 4> lab_orientation_xyzw{0.0, 0.0, 0.0, 1.0};
   std::array<double, 16> virtual_pose{};  // column-major 4x4 isometry
-  TrackingState state{};
+  TrackingStateRecord state{};
 };
 
 // One gaze ray in the lab (STAGE) frame: where it starts (metres) and its
 // unit direction. Lost tracking is data: `valid` false keeps the row.
-struct GazeRay {
+struct GazeRayRecord {
   bool valid = false;
   double confidence = -1.0;  // 0–1 as the runtime reports it; negative: none reported
   std::array<double, 3> origin_m{};
@@ -172,9 +172,9 @@ struct GazeSample {
   std::int64_t frame_index = 0;
   std::int64_t t_ns = 0;
   bool has_combined = false;  // false: no combined gaze tracked (columns NULL)
-  GazeRay combined{};
+  GazeRayRecord combined{};
   bool has_eyes = false;  // false: no per-eye gaze tracked (columns NULL)
-  std::array<GazeRay, 2> eyes{};  // left, right
+  std::array<GazeRayRecord, 2> eyes{};  // left, right
   // Signed (positive converging, negative diverging beyond parallel); only
   // with both eyes valid.
   bool has_vergence = false;

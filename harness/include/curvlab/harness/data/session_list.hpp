@@ -27,7 +27,7 @@ struct TrialCounts {
 };
 
 // One row of the sessions table with what the file says about it.
-struct SessionSummary {
+struct SessionListEntry {
   std::int64_t session_id = 0;
   std::string session_uuid;  // empty when the row has none
   std::int64_t session_number = 0;
@@ -54,7 +54,7 @@ struct SessionSummary {
 SessionStatus listed_status(SessionStatus stored, bool writer_alive);
 
 struct ListedSession {
-  SessionSummary summary;
+  SessionListEntry summary;
   SessionStatus status = SessionStatus::running;  // listed_status()
   std::optional<LockHolder> writer;               // the live process writing it, if any
   // Stored running or paused, but no process writes it.

@@ -59,7 +59,7 @@ class SessionStore {
                                                  const std::vector<BlockPlan>& blocks);
   // The first trial (by trial_index) that is pending or was started but not
   // completed — where a resumed session continues. nullopt: all done.
-  Expected<std::optional<PlannedTrial>> next_incomplete_trial(std::int64_t session_id);
+  Expected<std::optional<PlannedTrialRecord>> next_incomplete_trial(std::int64_t session_id);
   // Marks the trial running and counts the attempt; returns the attempt number.
   Expected<std::int64_t> begin_trial(std::int64_t trial_id);
   // Commits the response (and its staircase step) in one transaction.

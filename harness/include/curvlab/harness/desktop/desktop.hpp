@@ -4,7 +4,7 @@
 // screenshots. Needs a display (X11 or Wayland; Xvfb works).
 #pragma once
 
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/io/station.hpp"
 #include "curvlab/harness/result.hpp"
 
@@ -34,7 +34,7 @@ struct DesktopOptions {
   bool vsync = true;
   std::optional<std::uint32_t> msaa;  // samples per pixel requested (clamped); nullopt: the device's automatic count
   bool validation = false;  // Khronos validation layer on (tests); messages go to stderr
-  const devices::Clock* clock = nullptr;  // the session's; required
+  const harness::io::Clock* clock = nullptr;  // the session's; required
 };
 
 // What the window's keyboard can press: every key; pages continue on space.

@@ -4,9 +4,9 @@
 // with a message instead of waiting forever for a button.
 #pragma once
 
-#include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/devices/hid.hpp"
 #include "curvlab/harness/devices/report_parser.hpp"
+#include "curvlab/harness/io/clock.hpp"
 
 #include <atomic>
 #include <condition_variable>
@@ -46,7 +46,7 @@ class EventQueue {
 // holds `this`. The queue and clock are borrowed and must outlive the reader.
 class DeviceReader {
  public:
-  DeviceReader(std::unique_ptr<ReportSource> source, DeviceMapping mapping, const Clock& clock,
+  DeviceReader(std::unique_ptr<ReportSource> source, DeviceMapping mapping, const harness::io::Clock& clock,
                EventQueue& queue, int poll_ms = 50);
   DeviceReader(const DeviceReader&) = delete;
   DeviceReader& operator=(const DeviceReader&) = delete;
@@ -59,7 +59,7 @@ class DeviceReader {
   void run();
   std::unique_ptr<ReportSource> source_;
   ReportParser parser_;
-  const Clock& clock_;
+  const harness::io::Clock& clock_;
   EventQueue& queue_;
   int poll_ms_;
   std::atomic<bool> stop_{false};

@@ -6,9 +6,9 @@
 // device pauses the session with a message for the experimenter.
 #pragma once
 
-#include "curvlab/harness/devices/clock.hpp"
 #include "curvlab/harness/devices/mapping.hpp"
 #include "curvlab/harness/devices/reader.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/io/response_source.hpp"
 #include "curvlab/harness/result.hpp"
 
@@ -27,11 +27,11 @@ class HidResponses final : public harness::io::ResponseSource {
   // For every [[device]] of `file`, opens the first connected HID device it
   // matches. One that matches none, or cannot be opened: an Error of kind
   // `device` naming the mapping entry, the file and what is connected.
-  static harness::Result<std::unique_ptr<HidResponses>> open(const MappingFile& file, const Clock& clock);
+  static harness::Result<std::unique_ptr<HidResponses>> open(const MappingFile& file, const harness::io::Clock& clock);
   // Reads the given sources (an open device, or a recorded report stream)
   // through their mappings.
   static std::unique_ptr<HidResponses> read(std::vector<std::pair<std::unique_ptr<ReportSource>, DeviceMapping>> sources,
-                                            const Clock& clock);
+                                            const harness::io::Clock& clock);
   HidResponses(const HidResponses&) = delete;
   HidResponses& operator=(const HidResponses&) = delete;
   // Stops and joins every reader thread.
@@ -65,7 +65,7 @@ class RecordedReports final : public ReportSource {
     std::int64_t t_ns = 0;  // session clock
     std::vector<std::uint8_t> bytes;
   };
-  RecordedReports(std::vector<Report> reports, const Clock& clock, std::string label)
+  RecordedReports(std::vector<Report> reports, const harness::io::Clock& clock, std::string label)
       : reports_(std::move(reports)), clock_(clock), label_(std::move(label)) {}
   harness::Result<std::size_t> read(std::span<std::uint8_t> buffer, int timeout_ms) override;
   [[nodiscard]] std::string label() const override { return label_; }
@@ -73,7 +73,7 @@ class RecordedReports final : public ReportSource {
  private:
   std::vector<Report> reports_;  // in time order
   std::size_t next_ = 0;
-  const Clock& clock_;
+  const harness::io::Clock& clock_;
   std::string label_;
 };
 

@@ -117,7 +117,7 @@ struct Stimulus {
   double ball_radius_m = 0.028575;  // 57.15 mm balls (paper, "VR needs explicit units")
 };
 
-struct PhysicalTable {
+struct TableSettings {
   double edge_m = 1.0;
   double height_m = 0.76;
 };
@@ -129,7 +129,7 @@ struct Settings {
   Viewing viewing;
   Timeline timeline;
   Stimulus stimulus;
-  PhysicalTable table;
+  TableSettings table;
 };
 
 // A value as written in the protocol (TOML integers stay integers).

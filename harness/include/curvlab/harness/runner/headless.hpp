@@ -7,7 +7,7 @@
 
 #include "curvlab/geometry/calibration.hpp"
 #include "curvlab/geometry/trajectory.hpp"
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/io/display.hpp"
 #include "curvlab/harness/io/pose_source.hpp"
 #include "curvlab/harness/io/station.hpp"
@@ -21,7 +21,7 @@
 namespace curvlab::harness::runner {
 
 // Simulated time: advanced by the headless display frame by frame.
-class SimulatedClock final : public devices::Clock {
+class SimulatedClock final : public io::Clock {
  public:
   explicit SimulatedClock(std::int64_t start_ns = 0) : now_(start_ns) {}
   [[nodiscard]] std::int64_t now_ns() const override { return now_.load(std::memory_order_acquire); }
@@ -60,7 +60,7 @@ class HeadlessDisplay final : public io::Display {
   ~HeadlessDisplay() override;
 
   // The clock the session must use: simulated (fast) or steady (real time).
-  [[nodiscard]] const devices::Clock& clock() const;
+  [[nodiscard]] const io::Clock& clock() const;
   // The session clock when the first frame begins: where a trajectory
   // (TrajectoryPoses) starts.
   [[nodiscard]] std::int64_t first_ns() const;
@@ -119,7 +119,7 @@ struct HeadlessDevices {
 
   static Result<HeadlessDevices> create(const HeadlessOptions& display, TrajectoryOptions trajectory);
   [[nodiscard]] io::Station station() const { return {display.get(), poses.get(), {}}; }
-  [[nodiscard]] const devices::Clock& clock() const { return display->clock(); }
+  [[nodiscard]] const io::Clock& clock() const { return display->clock(); }
 };
 
 // The default standing pose with sway at time t (also used by tests).

@@ -24,7 +24,7 @@
 
 #include "curvlab/geometry/calibration.hpp"
 #include "curvlab/harness/data/records.hpp"
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/result.hpp"
@@ -108,7 +108,7 @@ using RunResult = Result<SessionSummary>;
 // Starts a new session of `protocol` (loaded from `protocol_text`).
 RunResult run_session(const protocol::Protocol& protocol, const std::string& protocol_text,
                       const std::string& db_path, const RunOptions& options, const io::Station& station,
-                      const devices::Clock& clock);
+                      const io::Clock& clock);
 
 // What a session needs from the database before a backend is opened: its
 // protocol (text and parsed), participant number and state.
@@ -133,7 +133,7 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
 RunResult resume_session(const std::string& db_path, std::int64_t session_id,
                          const StoredSession& stored, const protocol::Protocol& protocol,
                          const RunOptions& options, const io::Station& station,
-                         const devices::Clock& clock);
+                         const io::Clock& clock);
 
 // The stored conditions and stimulus of a planned trial (trials.conditions
 // and trials.stimulus; data_schema/codebook.md). The parameter of a

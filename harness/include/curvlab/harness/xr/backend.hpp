@@ -7,7 +7,7 @@
 // factory returns the OpenXR result by name and what to install.
 #pragma once
 
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/io/station.hpp"
 #include "curvlab/harness/result.hpp"
 #include "curvlab/harness/xr/controllers.hpp"
@@ -20,7 +20,7 @@ namespace curvlab::xr {
 
 struct XrBackendOptions {
   std::string application_name = "curvlab";
-  const devices::Clock* clock = nullptr;  // the session's; required
+  const harness::io::Clock* clock = nullptr;  // the session's; required
   // Offer copies of the submitted images for the operator window
   // (Display::mirror()); the swapchains can be copied from either way.
   bool mirror = false;

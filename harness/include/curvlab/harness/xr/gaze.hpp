@@ -46,7 +46,7 @@ io::GazeRay gaze_ray(const XrPosef& pose, bool valid, std::optional<double> conf
 // eyes' axis and the head's forward direction; positive converging. The
 // distance is where symmetric lines with that vergence meet, from the
 // midpoint of the eyes: IPD / (2 tan(angle / 2)), none at or beyond parallel.
-io::Vergence vergence_of(const LabPose& head, const io::GazeRay& left, const io::GazeRay& right);
+io::Vergence vergence_of(const StagePose& head, const io::GazeRay& left, const io::GazeRay& right);
 
 // The eye trackers of one session. Made after the instance (the combined
 // gaze's action set and its suggested binding must precede the attach),
@@ -83,7 +83,7 @@ class EyeTracking {
     XrResult fatal = XR_SUCCESS;  // XR_ERROR_SESSION_LOST & co.; the call in `call`
     const char* call = "";
   };
-  Located locate(XrSpace stage, XrTime time, const LabPose& head) const;
+  Located locate(XrSpace stage, XrTime time, const StagePose& head) const;
 
  private:
   struct State;

@@ -17,7 +17,7 @@
 // XrInstance. Used on the frame thread only; not thread-safe.
 #pragma once
 
-#include "curvlab/harness/devices/clock.hpp"
+#include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/io/display.hpp"
 #include "curvlab/harness/io/phase.hpp"
 #include "curvlab/harness/result.hpp"
@@ -47,7 +47,7 @@ inline constexpr XrPosef kIdentityPose{{0.0f, 0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.
 
 struct SessionOptions {
   std::string application_name = "curvlab";
-  const devices::Clock* clock = nullptr;  // the session's; required
+  const harness::io::Clock* clock = nullptr;  // the session's; required
 };
 
 // A part of the headset that hears the runtime's events other than session
@@ -147,7 +147,7 @@ class Session {
   [[nodiscard]] std::int64_t now_ns() const { return clock_->now_ns(); }
 
  private:
-  Session(Instance instance, const devices::Clock& clock);
+  Session(Instance instance, const harness::io::Clock& clock);
   struct Extensions;
   harness::Result<harness::Done> open(const Extensions& offered);
   void on_state(SessionState next);
@@ -155,7 +155,7 @@ class Session {
   std::int64_t monotonic_to_session();
 
   Instance instance_;
-  const devices::Clock* clock_;
+  const harness::io::Clock* clock_;
   XrSystemId system_ = XR_NULL_SYSTEM_ID;
   std::unique_ptr<renderer::Context> context_;
   SessionHandle session_;

@@ -19,11 +19,11 @@ namespace curvlab::xr {
 // between the eyes), from poses all located in the same space at the same
 // time. Holds for any head orientation: offsets are expressed in the head's
 // frame, so the rig turns with the head.
-renderer::StereoRig rig_from_views(const LabPose& head, const std::array<LabPose, 2>& eyes,
+renderer::StereoRig rig_from_views(const StagePose& head, const std::array<StagePose, 2>& eyes,
                                    const std::array<AsymmetricFov, 2>& fovs);
 
 // A lab pose in geometry's type (the tracker's input).
-geometry::LabPose to_geometry(const LabPose& pose, bool valid);
+geometry::LabPose to_geometry(const StagePose& pose, bool valid);
 
 // VkFormat values (as OpenXR's xrEnumerateSwapchainFormats returns them) in
 // curvlab's order of preference: sRGB first, as the OpenXR specification

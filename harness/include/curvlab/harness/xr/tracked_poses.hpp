@@ -48,7 +48,7 @@ class TrackedPoses final : public harness::io::PoseSource, private SessionPart {
   // STAGE as curvlab uses it (views and layers are in it too).
   [[nodiscard]] XrSpace stage() const { return stage_.get(); }
   // The head at the last locate (the VIEW space in STAGE).
-  [[nodiscard]] const LabPose& head() const { return head_; }
+  [[nodiscard]] const StagePose& head() const { return head_; }
 
   // --- io::PoseSource ---
   // Located in locate() at this frame's predicted display time.
@@ -63,7 +63,7 @@ class TrackedPoses final : public harness::io::PoseSource, private SessionPart {
   void on_event(const XrEventDataBuffer& event) override;
   void on_stage_change(const XrEventDataReferenceSpaceChangePending& e);
   // The space's pose in STAGE at `t` and its flags (0 where it failed).
-  std::pair<LabPose, XrSpaceLocationFlags> locate_space(XrSpace space, XrTime t);
+  std::pair<StagePose, XrSpaceLocationFlags> locate_space(XrSpace space, XrTime t);
 
   Session& session_;
   SpaceHandle stage_;
@@ -77,7 +77,7 @@ class TrackedPoses final : public harness::io::PoseSource, private SessionPart {
   // Destroyed before the spaces and the session it was started on.
   std::optional<EyeTracking> eyes_;
 
-  LabPose head_;
+  StagePose head_;
   XrSpaceLocationFlags head_flags_ = 0;  // the head's at the last locate
   geometry::LabFrame lab_;
   std::optional<harness::io::Gaze> gaze_;  // located with lab_; nullopt without eye tracking

@@ -10,7 +10,10 @@
 
 namespace curvlab::xr {
 
-struct LabPose {
+// A pose as the runtime reports it in STAGE space, before curvlab adds what
+// it knows of tracking (geometry::LabPose, with its validity flags; see
+// to_geometry in stereo.hpp).
+struct StagePose {
   glm::dvec3 position_m{0.0};
   glm::dquat orientation{1.0, 0.0, 0.0, 0.0};  // glm order: w, x, y, z
 };
@@ -26,13 +29,13 @@ struct AsymmetricFov {
 
 // XrQuaternionf stores x, y, z, w; glm::dquat's constructor takes w first —
 // the conversion is the one place that order is handled.
-inline LabPose to_lab_pose(const XrPosef& pose) {
+inline StagePose to_stage_pose(const XrPosef& pose) {
   return {glm::dvec3(pose.position.x, pose.position.y, pose.position.z),
           glm::normalize(glm::dquat(pose.orientation.w, pose.orientation.x, pose.orientation.y,
                                     pose.orientation.z))};
 }
 
-inline XrPosef to_xr_pose(const LabPose& pose) {
+inline XrPosef to_xr_pose(const StagePose& pose) {
   XrPosef out{};
   out.orientation = {static_cast<float>(pose.orientation.x), static_cast<float>(pose.orientation.y),
                      static_cast<float>(pose.orientation.z), static_cast<float>(pose.orientation.w)};

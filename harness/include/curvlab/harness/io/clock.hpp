@@ -8,7 +8,7 @@
 #include <chrono>
 #include <cstdint>
 
-namespace curvlab::devices {
+namespace curvlab::harness::io {
 
 // Thread-safety: now_ns() may be called from any thread concurrently.
 class Clock {
@@ -27,4 +27,4 @@ class SteadyClock final : public Clock {
   }
 };
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::io
