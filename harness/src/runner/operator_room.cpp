@@ -25,7 +25,7 @@ void OperatorRoom::take(std::int64_t elapsed_ns, std::int64_t now_ns, io::Signal
   actions_.clear();
   console_->take(elapsed_ns, actions_);
   for (const auto& a : actions_) {
-    data::events::OperatorAction action{std::string(to_string(a.kind)), a.source, now_ns, std::nullopt};
+    data::events::OperatorActionEvent action{std::string(to_string(a.kind)), a.source, now_ns, std::nullopt};
     if (a.kind == OperatorActionKind::note) action.text = a.text;
     log(action);
     if (const auto s = operator_signal(a.kind)) signals_.push_back(*s);

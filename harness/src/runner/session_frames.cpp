@@ -27,7 +27,7 @@ constexpr int kBrokenPipe = 13;
 
 // The gaze a pose source located with the frame's poses, as gaze_samples
 // stores it (data_schema/codebook.md).
-data::GazeRay gaze_record(const io::GazeRay& r) {
+data::GazeRayRecord gaze_record(const io::GazeRay& r) {
   return {r.valid, r.confidence.value_or(-1.0), {r.origin_m.x, r.origin_m.y, r.origin_m.z},
           {r.direction.x, r.direction.y, r.direction.z}};
 }

@@ -106,7 +106,7 @@ class SessionFrames {
   data::SampleWriter& writer;
   data::WriterLock* const lock;
   const io::Station station;
-  const devices::Clock& clock;
+  const io::Clock& clock;
   const RunOptions& options() const { return options_; }
   const std::int64_t session_id;
   const std::vector<std::int64_t> trial_ids;

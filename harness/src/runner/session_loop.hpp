@@ -19,19 +19,6 @@
 #include <optional>
 #include <vector>
 
-// session_loop.cpp still spells the session clock and three stored records
-// by their former names.
-namespace curvlab::devices {
-using Clock = harness::io::Clock;
-}  // namespace curvlab::devices
-namespace curvlab::data {
-using GazeRay = GazeRayRecord;
-namespace events {
-using OperatorAction = OperatorActionEvent;
-using Adjustment = AdjustmentEvent;
-}  // namespace events
-}  // namespace curvlab::data
-
 namespace curvlab::harness::runner {
 
 class TrialWatcher;

@@ -3,7 +3,7 @@
 namespace curvlab::harness::runner {
 
 SimulatedParticipant::SimulatedParticipant(const ObserverParams& params, std::uint64_t session_seed,
-                                           const devices::Clock& clock)
+                                           const io::Clock& clock)
     : params_(params), session_seed_(session_seed), keys_(clock) {}
 
 std::unique_ptr<SimulatedParticipant> SimulatedParticipant::seat(SessionSetup& setup) {

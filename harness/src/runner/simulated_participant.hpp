@@ -15,7 +15,7 @@ namespace curvlab::harness::runner {
 
 class SimulatedParticipant final : public io::ResponseSource, public TrialWatcher {
  public:
-  SimulatedParticipant(const ObserverParams& params, std::uint64_t session_seed, const devices::Clock& clock);
+  SimulatedParticipant(const ObserverParams& params, std::uint64_t session_seed, const io::Clock& clock);
   // One for the setup's observer option (none without one), added to its
   // station's response sources and to its watchers.
   static std::unique_ptr<SimulatedParticipant> seat(SessionSetup& setup);

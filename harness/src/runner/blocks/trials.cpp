@@ -303,7 +303,7 @@ class TrialsBlock {
           protocol::set_numeric_setting(t.settings, t.judgement->parameter, a.adjustment->value());
           a.placement = place_stimulus(f_.world(), t.settings, a.head_at_onset);
           f_.scene().set_stimulus(t.settings, a.placement);
-          f_.event(t.id, data::events::Adjustment{a.adjustment->value(), f_.frame_index()});
+          f_.event(t.id, data::events::AdjustmentEvent{a.adjustment->value(), f_.frame_index()});
           break;
         case InputUse::confirm: {
           a.adjustment->confirm();
