@@ -653,7 +653,7 @@ class SessionLoop::Impl {
     if (auto shown = scene_->set_page(shown_text, head()); !shown) throw Stop{shown.error()};
     scene_->show(phase, false);
     Page state(f.timing.now_ns, min_ns, continues_);
-    if (observer_params()) observer_keys_.press({f.timing.now_ns + min_ns + 300'000'000, "space"});
+    if (observer_params()) observer_keys_.press_continue(f.timing.now_ns + min_ns + 300'000'000);
     event(trial_id, data::events::Page{page_event(phase), k, shown_text});
     const io::Overlay overlay{phase, shown_text, true};
     for (;;) {
@@ -946,11 +946,11 @@ class SessionLoop::Impl {
   void take_inputs(TrialRun& t, AttemptRun& a, Attempt& state, const Frame& f) {
     for (const auto& in : f.inputs) {
       if (!in.pressed || a.answer) continue;
-      const auto verdict = classify_input(*t.judgement, in.name, state.answerable(in.t_ns));
+      const auto verdict = classify_input(*t.judgement, in, state.answerable(in.t_ns));
       switch (verdict.use) {
         case InputUse::ignored: break;
         case InputUse::early:
-          event(t.id, data::events::EarlyInput{in.name, in.device, in.t_ns});
+          event(t.id, data::events::EarlyInput{in.control.name, io::to_string(in.source), in.t_ns});
           break;
         case InputUse::choose:
           a.answer = std::pair{t.judgement->options[verdict.option].value, in};
@@ -1019,7 +1019,7 @@ class SessionLoop::Impl {
     if (a.answer) {
       r.response = a.answer->first;
       r.response_ns = a.answer->second.t_ns;
-      r.response_device = a.answer->second.device;
+      r.response_device = io::to_string(a.answer->second.source);
     } else {
       r.response = "timeout";
       r.response_ns = clock_.now_ns();
