@@ -5,10 +5,11 @@
 // (desktop/desktop.hpp, key_input), HID devices through their mapping file
 // (devices/responses.hpp, response_input), the headset's controllers
 // (xr/actions.hpp, controller_input), the simulated observer
-// (runner/observer_keys.hpp) — so the runner branches on intents and never on
-// a key, button or device name. An answer is the one exception: which control
-// answers is the protocol's to say (an option's `keys` and `buttons`), so it
-// is found by answer_index() through the bindings of the judgement on screen.
+// (harness/src/runner/observer_keys.hpp) — so the runner branches on intents
+// and never on a key, button or device name. An answer is the one exception:
+// which control answers is the protocol's to say (an option's `keys` and
+// `buttons`), so it is found by answer_index() through the bindings of the
+// judgement on screen.
 //
 // Strings appear only at the edge: to_string(SourceId) is what the database
 // stores as a trial's response_device and in early_input events
