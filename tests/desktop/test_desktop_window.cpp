@@ -123,7 +123,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   const auto opened = open(options);
   ASSERT_NE(opened, nullptr);
   auto& backend = *opened;
-  EXPECT_EQ(backend.info().name, "desktop");
+  EXPECT_EQ(backend.info().backend, curvlab::data::Backend::desktop);
   EXPECT_NE(backend.info().renderer_device.find("llvmpipe"), std::string::npos);
 
   auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3,
@@ -145,7 +145,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
     events.clear();
     EXPECT_EQ(backend.poll(events), Signal::none);
     for (const auto& e : events)
-      if (e.device == "script") answer = e;
+      if (to_string(e.source) == "script") answer = e;
     renderer::FrameDescription f;
     f.space = s.space;
     f.settings = renderer::ViewSettings::preset(renderer::ViewPreset::tourist);
@@ -159,7 +159,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
     EXPECT_EQ(stats.views, 2);
   }
   ASSERT_TRUE(answer.has_value()) << "the scripted key never arrived";
-  EXPECT_EQ(answer->name, "2");
+  EXPECT_EQ(answer->control.name, "2");
   EXPECT_TRUE(answer->pressed);
   EXPECT_GE(frames, 5);  // armed only once the response phase waited for input
   EXPECT_EQ(backend.scripted_keys_pressed(), 1u);
@@ -308,8 +308,8 @@ TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
   for (int i = 0; i < 50 && events.size() < 6; ++i) ASSERT_TRUE(frame(events));
   std::vector<std::string> pressed;
   for (const auto& e : events) {
-    EXPECT_EQ(e.device, "keyboard");
-    if (e.pressed) pressed.push_back(e.name);
+    EXPECT_EQ(to_string(e.source), "keyboard");
+    if (e.pressed) pressed.push_back(e.control.name);
   }
   EXPECT_EQ(pressed, (std::vector<std::string>{"1", "left", "space"}));
   EXPECT_EQ(events.size(), 6u);  // and their releases
@@ -324,7 +324,7 @@ TEST_F(DesktopWindow, RealKeysArriveAndEscapeQuits) {
   ASSERT_TRUE(signal.has_value());
   EXPECT_EQ(*signal, Signal::quit);
   ASSERT_FALSE(events.empty());
-  EXPECT_EQ(events.front().name, "escape");
+  EXPECT_EQ(events.front().control.name, "escape");
   EXPECT_FALSE(backend.begin_frame().has_value()) << "the session ends after Escape";
 }
 

@@ -1,7 +1,10 @@
 // The table calibration's steps without a display: which input does what in
 // each stage, touches collected and fitted, a refused set redone, and the
 // panel text the participant reads.
+#include "curvlab/harness/desktop/desktop.hpp"
+#include "curvlab/harness/devices/responses.hpp"
 #include "curvlab/harness/runner/calibration.hpp"
+#include "curvlab/harness/xr/actions.hpp"
 
 #include <gtest/gtest.h>
 
@@ -27,8 +30,16 @@ PhysicalTableFit table() {
 
 Vec3 corner(int j) { return curvlab::geometry::physical_table_corner(table(), j); }
 
-curvlab::harness::io::InputEvent press(std::string name, std::string device) {
-  return {0, std::move(name), std::move(device), true};
+// An input as the source stored as `device` gives it: a controller
+// ("xr:left", "xr:right"), a HID device ("hid:NAME"), the key script
+// ("script") or the keyboard.
+curvlab::harness::io::InputEvent press(std::string name, std::string device, bool pressed = true) {
+  namespace io = curvlab::harness::io;
+  if (device.rfind("xr:", 0) == 0)
+    return curvlab::xr::controller_input(0, device == "xr:left", std::move(name), pressed);
+  if (device.rfind("hid:", 0) == 0) return curvlab::devices::response_input(0, device.substr(4), std::move(name), pressed);
+  return curvlab::desktop::key_input(0, std::move(name), pressed,
+                                     device == "script" ? io::SourceKind::script : io::SourceKind::keyboard);
 }
 
 TEST(CalibrationSteps, ControllerAndKeyboardInputsMeanTheSameSteps) {
@@ -51,7 +62,46 @@ TEST(CalibrationSteps, ControllerAndKeyboardInputsMeanTheSameSteps) {
   EXPECT_FALSE(cmd("left_trigger", "xr:left", Stage::touching));
   EXPECT_FALSE(cmd("continue", "xr:right", Stage::touching));
   EXPECT_FALSE(cmd("right_trigger", "xr:right", Stage::fitted));  // a second pull does not keep a fit unseen
-  EXPECT_FALSE(rn::calibration_command({0, "space", "keyboard", false}, Stage::touching));  // a release
+  EXPECT_FALSE(rn::calibration_command(press("space", "keyboard", false), Stage::touching));  // a release
+}
+
+// What a source means by a control, not its name, gives the command: the
+// same name from another kind of source means nothing to the calibration.
+TEST(CalibrationSteps, OnlyTheSourcesThatCalibrateGiveCommands) {
+  const auto cmd = [](const char* name, const char* device, Stage stage) {
+    return rn::calibration_command(press(name, device), stage);
+  };
+  EXPECT_EQ(cmd("r", "script", Stage::refused), Command::redo);
+  EXPECT_EQ(cmd("b", "xr:left", Stage::refused), Command::redo);
+  EXPECT_FALSE(cmd("right_trigger", "keyboard", Stage::touching));
+  EXPECT_FALSE(cmd("space", "xr:right", Stage::touching));
+  EXPECT_FALSE(cmd("enter", "hid:box", Stage::fitted));
+  EXPECT_FALSE(cmd("continue", "hid:box", Stage::touching));
+  for (const char* device : {"keyboard", "script", "xr:left", "xr:right", "hid:box"})
+    EXPECT_EQ(curvlab::harness::io::to_string(press("a", device).source), device);
+}
+
+// The text names the controls of the sources at hand that can calibrate.
+TEST(CalibrationSteps, TheControlsAtHandAreThoseThatCanTouch) {
+  namespace io = curvlab::harness::io;
+  const auto keyboard = curvlab::desktop::keyboard_reach();
+  io::Reach observer;
+  observer.kind = io::SourceKind::observer;
+  observer.simulated = true;
+  io::Reach box;
+  box.kind = io::SourceKind::hid;
+  box.buttons = {"right_trigger", "continue"};
+  box.intents = {io::Intent::continue_page};
+  const auto only_keys = rn::calibration_controls({keyboard, observer, box});
+  EXPECT_TRUE(only_keys.keyboard);
+  EXPECT_FALSE(only_keys.controller);
+  io::Reach controllers;
+  controllers.kind = io::SourceKind::xr_controller;
+  controllers.intents = curvlab::xr::controller_intents("right_trigger");
+  const auto both = rn::calibration_controls({controllers, keyboard});
+  EXPECT_TRUE(both.keyboard);
+  EXPECT_TRUE(both.controller);
+  EXPECT_FALSE(rn::calibration_controls({box}).controller);
 }
 
 TEST(CalibrationSteps, FourTouchesAreFittedAndAcceptedWithTheirResiduals) {

@@ -5,6 +5,7 @@
 #include "in_process.hpp"
 
 #include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/data/export.hpp"
 
 namespace {
@@ -49,10 +50,10 @@ TEST(Interruptions, PressesBeforeTheDisplayedOnsetAreAnticipationsNotAnswers) {
       if (phase == "fixation") {
         // Includes the frame in which the runner decides onset: stamped at
         // the frame's start, before its predicted display time.
-        in.push_back({t.now_ns, "1", "keyboard", true});
+        in.push_back(curvlab::desktop::key_input(t.now_ns, "1", true));
         answered = false;
       } else if ((phase == "stimulus" || phase == "response") && !answered) {
-        in.push_back({t.predicted_display_ns, "2", "keyboard", true});
+        in.push_back(curvlab::desktop::key_input(t.predicted_display_ns, "2", true));
         answered = true;
       }
       return rn::Signal::none;

@@ -77,8 +77,8 @@ class ScreenFollower {
     // A screen that names no key would hold a page for ever: give up.
     if (!unreadable_.empty()) return io::Signal::quit;
     if (key_.empty() || now_ns < next_ns_) return io::Signal::none;
-    out.push_back({now_ns, key_, "keyboard", true});
-    out.push_back({now_ns, key_, "keyboard", false});
+    out.push_back(desktop::key_input(now_ns, key_, true));
+    out.push_back(desktop::key_input(now_ns, key_, false));
     next_ns_ = now_ns + 1'000'000'000;
     return ++presses_ > 600 ? io::Signal::quit : io::Signal::none;  // ten minutes on one screen: not listening
   }

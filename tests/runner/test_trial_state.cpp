@@ -1,7 +1,10 @@
 // The trial state machine driven frame by frame with made-up facts: no
 // backend, no clock, no database.
+#include "curvlab/harness/desktop/desktop.hpp"
+#include "curvlab/harness/devices/responses.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
+#include "curvlab/harness/xr/actions.hpp"
 
 #include <gtest/gtest.h>
 
@@ -32,6 +35,21 @@ struct Press {
   std::string name;
   bool pressed = true;
 };
+
+// One frame's presses as their sources give them: a button box's continue
+// button for "continue", keys of the keyboard for the others.
+std::vector<curvlab::harness::io::InputEvent> inputs(const std::vector<Press>& presses) {
+  std::vector<curvlab::harness::io::InputEvent> out;
+  for (const auto& p : presses)
+    out.push_back(p.name == "continue" ? curvlab::devices::response_input(0, "box", p.name, p.pressed)
+                                       : curvlab::desktop::key_input(0, p.name, p.pressed));
+  return out;
+}
+
+curvlab::harness::io::InputEvent key(const char* name) { return curvlab::desktop::key_input(0, name, true); }
+curvlab::harness::io::InputEvent button(const char* name) {
+  return curvlab::xr::controller_input(0, false, name, true);
+}
 
 }  // namespace
 
@@ -168,36 +186,36 @@ TEST(TrialState, InputsAreChoicesAdjustmentsOrAnticipations) {
   pr::Judgement choice;
   choice.type = pr::find_judgement_type("choice");
   choice.options = {{"convex", "", {"1"}, {"x"}}, {"straight", "", {"2"}, {}}, {"concave", "", {"3"}, {"b"}}};
-  EXPECT_EQ(rn::classify_input(choice, "1", false).use, rn::InputUse::early);
-  EXPECT_EQ(rn::classify_input(choice, "9", true).use, rn::InputUse::ignored);
-  const auto by_button = rn::classify_input(choice, "b", true);
+  EXPECT_EQ(rn::classify_input(choice, key("1"), false).use, rn::InputUse::early);
+  EXPECT_EQ(rn::classify_input(choice, key("9"), true).use, rn::InputUse::ignored);
+  const auto by_button = rn::classify_input(choice, button("b"), true);
   EXPECT_EQ(by_button.use, rn::InputUse::choose);
   EXPECT_EQ(by_button.option, 2u);
-  EXPECT_EQ(rn::classify_input(choice, "2", true).option, 1u);
+  EXPECT_EQ(rn::classify_input(choice, key("2"), true).option, 1u);
 
   pr::AdjustmentSpec spec;
   spec.keys_increase = {"up"};
   spec.keys_decrease = {"down"};
   spec.buttons_confirm = {"a"};
   const pr::Judgement adjust = pr::adjustment_judgement(spec, "stimulus.stick_sagitta_m");
-  EXPECT_EQ(rn::classify_input(adjust, "up", true).use, rn::InputUse::increase);
-  EXPECT_EQ(rn::classify_input(adjust, "down", true).use, rn::InputUse::decrease);
-  EXPECT_EQ(rn::classify_input(adjust, "a", true).use, rn::InputUse::confirm);
-  EXPECT_EQ(rn::classify_input(adjust, "up", false).use, rn::InputUse::early);
+  EXPECT_EQ(rn::classify_input(adjust, key("up"), true).use, rn::InputUse::increase);
+  EXPECT_EQ(rn::classify_input(adjust, key("down"), true).use, rn::InputUse::decrease);
+  EXPECT_EQ(rn::classify_input(adjust, button("a"), true).use, rn::InputUse::confirm);
+  EXPECT_EQ(rn::classify_input(adjust, key("up"), false).use, rn::InputUse::early);
 }
 
 TEST(TrialState, PagesIgnoreHeldKeysAndWaitTheirMinimumTime) {
   const std::vector<std::string> none;
   rn::Page page(0, 1000 * kMs, none);
-  const std::vector<Press> space{{"space"}};
+  const auto space = inputs({{"space"}});
   EXPECT_FALSE(page.frame(2000 * kMs, space));  // first frame: a key held from before
   EXPECT_TRUE(page.frame(2000 * kMs, space));
   rn::Page early(0, 1000 * kMs, none);
-  early.frame(0, std::vector<Press>{});
+  early.frame(0, inputs({}));
   EXPECT_FALSE(early.frame(500 * kMs, space));  // too soon
-  EXPECT_FALSE(early.frame(1500 * kMs, std::vector<Press>{{"space", false}}));  // a release
-  EXPECT_FALSE(early.frame(1500 * kMs, std::vector<Press>{{"x"}}));
-  EXPECT_TRUE(early.frame(1500 * kMs, std::vector<Press>{{"continue"}}));
+  EXPECT_FALSE(early.frame(1500 * kMs, inputs({{"space", false}})));  // a release
+  EXPECT_FALSE(early.frame(1500 * kMs, inputs({{"x"}})));
+  EXPECT_TRUE(early.frame(1500 * kMs, inputs({{"continue"}})));
   early.restart();  // after a pause: the next frame's keys were held through it
   EXPECT_FALSE(early.frame(1600 * kMs, space));
   EXPECT_TRUE(early.frame(1700 * kMs, space));
@@ -244,9 +262,9 @@ TEST(TrialState, PagesAlsoContinueOnEveryAnswerTheProtocolBinds) {
   const auto continues = rn::page_continues(demo);
   EXPECT_EQ(continues, (std::vector<std::string>{"1", "2", "3"}));
   rn::Page page(0, 0, continues);
-  page.frame(0, std::vector<Press>{});
-  EXPECT_FALSE(page.frame(kMs, std::vector<Press>{{"q"}}));
-  EXPECT_TRUE(page.frame(2 * kMs, std::vector<Press>{{"2"}}));
+  page.frame(0, inputs({}));
+  EXPECT_FALSE(page.frame(kMs, inputs({{"q"}})));
+  EXPECT_TRUE(page.frame(2 * kMs, inputs({{"2"}})));
 }
 
 TEST(TrialState, TheContinueLineSaysWhatTheDevicesAtHandCanDo) {

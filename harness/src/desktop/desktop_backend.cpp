@@ -258,7 +258,7 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
 }
 
 DisplayInfo DesktopBackend::info() const {
-  return {"desktop", context_->device_name(), context_->driver_info(), refresh_hz_, options_.eye_width_px,
+  return {data::Backend::desktop, context_->device_name(), context_->driver_info(), refresh_hz_, options_.eye_width_px,
           options_.eye_height_px, renderer_ ? renderer_->msaa() : 0};
 }
 
@@ -310,7 +310,7 @@ void DesktopBackend::on_key(int key, int action, int mods) {
   const bool pressed = action == GLFW_PRESS;
   const std::string name = key_name(key);
   if (!name.empty())
-    pending_.push_back({options_.clock->now_ns(), name, "keyboard", pressed});
+    pending_.push_back(key_input(options_.clock->now_ns(), name, pressed));
   if (!pressed) return;
   if (key == GLFW_KEY_ESCAPE) {
     glfwSetWindowShouldClose(window_.get(), GLFW_TRUE);
@@ -351,7 +351,7 @@ Signal DesktopBackend::poll(std::vector<InputEvent>& out) {
   if (script_) {
     if (auto key = script_->due(options_.clock->now_ns())) {
       if (key->hand_m) body_.place_hand(key->left_hand ? Hand::left : Hand::right, *key->hand_m);
-      else out.push_back({options_.clock->now_ns(), key->name, "script", true});
+      else out.push_back(key_input(options_.clock->now_ns(), key->name, true, harness::io::SourceKind::script));
     }
   }
   while (!pending_.empty()) {
@@ -502,9 +502,31 @@ std::vector<std::string> DesktopBackend::save_frame(const std::string& stem) {
 
 harness::io::Reach keyboard_reach() {
   harness::io::Reach r;
+  r.kind = harness::io::SourceKind::keyboard;
+  for (const char* key : {"space", "enter", "f", "r"}) r.intents |= key_intents(key);
   r.every_key = true;
   r.continue_phrase = "press space";
   return r;
+}
+
+harness::io::Intents key_intents(const std::string& key) {
+  using harness::io::Intent;
+  if (key == "space") return {Intent::continue_page, Intent::calibration_touch};
+  if (key == "enter") return {Intent::continue_page, Intent::calibration_accept};
+  if (key == "return") return {Intent::continue_page};
+  if (key == "f") return {Intent::calibration_fit_three};
+  if (key == "r") return {Intent::calibration_redo};
+  return {};
+}
+
+InputEvent key_input(std::int64_t t_ns, std::string key, bool pressed, harness::io::SourceKind source) {
+  InputEvent in;
+  in.t_ns = t_ns;
+  in.source = {source, ""};
+  in.intents = key_intents(key);
+  in.control = {harness::io::ControlKind::key, std::move(key)};
+  in.pressed = pressed;
+  return in;
 }
 
 Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_desktop_backend(const DesktopOptions& options) {

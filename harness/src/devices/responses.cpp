@@ -19,17 +19,37 @@ std::string connected_list(const std::vector<HidDeviceInfo>& devices) {
 }
 
 void add_reach(harness::io::Reach& r, const DeviceMapping& mapping) {
+  r.kind = harness::io::SourceKind::hid;
   for (const auto& b : mapping.bindings) {
     r.buttons.push_back(b.response);
-    if (b.response == "continue" && r.continue_phrase.empty())
+    const harness::io::Intents intents = response_intents(b.response);
+    r.intents |= intents;
+    if (intents.has(harness::io::Intent::continue_page) && r.continue_phrase.empty())
       r.continue_phrase = "press the continue button of " + mapping.name;
   }
 }
 
 }  // namespace
 
+harness::io::Intents response_intents(const std::string& response) {
+  if (response == "continue") return {harness::io::Intent::continue_page};
+  return {};
+}
+
+harness::io::InputEvent response_input(std::int64_t t_ns, const std::string& device, std::string response,
+                                       bool pressed) {
+  harness::io::InputEvent in;
+  in.t_ns = t_ns;
+  in.source = {harness::io::SourceKind::hid, device};
+  in.intents = response_intents(response);
+  in.control = {harness::io::ControlKind::button, std::move(response)};
+  in.pressed = pressed;
+  return in;
+}
+
 harness::io::Reach mapping_reach(const MappingFile& file) {
   harness::io::Reach r;
+  r.kind = harness::io::SourceKind::hid;
   for (const auto& m : file.devices) add_reach(r, m);
   return r;
 }
@@ -58,7 +78,7 @@ std::unique_ptr<HidResponses> HidResponses::read(
     std::vector<std::pair<std::unique_ptr<ReportSource>, DeviceMapping>> sources, const harness::io::Clock& clock) {
   std::unique_ptr<HidResponses> out(new HidResponses());
   for (auto& [source, mapping] : sources) {
-    out->names_.emplace_back(source->label(), "hid:" + mapping.name);
+    out->names_.emplace_back(source->label(), mapping.name);
     add_reach(out->reach_, mapping);
     out->readers_.push_back(std::make_unique<DeviceReader>(std::move(source), std::move(mapping), clock, out->queue_));
   }
@@ -77,8 +97,8 @@ harness::io::Signal HidResponses::poll(std::vector<harness::io::InputEvent>& out
       continue;
     }
     const auto name = std::find_if(names_.begin(), names_.end(), [&](const auto& n) { return n.first == e->device; });
-    out.push_back({e->t_ns, e->response.response, name != names_.end() ? name->second : "hid:" + e->device,
-                   e->response.edge == ResponseEvent::Edge::Down});
+    out.push_back(response_input(e->t_ns, name != names_.end() ? name->second : e->device, e->response.response,
+                                 e->response.edge == ResponseEvent::Edge::Down));
   }
   return signal;
 }

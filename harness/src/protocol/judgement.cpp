@@ -6,10 +6,10 @@
 
 namespace curvlab::harness::protocol {
 
-std::string first_input(const std::vector<std::string>& keys, const std::vector<std::string>& buttons) {
-  if (!keys.empty()) return keys.front();
-  if (!buttons.empty()) return buttons.front();
-  return {};
+KeyPress first_input(std::int64_t t_ns, const std::vector<std::string>& keys, const std::vector<std::string>& buttons) {
+  if (!keys.empty()) return {t_ns, keys.front(), false};
+  if (!buttons.empty()) return {t_ns, buttons.front(), true};
+  return {t_ns, {}, false};
 }
 
 bool binds(const std::vector<std::string>& keys, const std::vector<std::string>& buttons, const std::string& input) {
@@ -52,13 +52,14 @@ std::optional<Adjustment> JudgementType::adjustment(const Judgement&, const Plan
 
 std::vector<AnswerBinding> JudgementType::answer_bindings(const Judgement& j) const {
   std::vector<AnswerBinding> out;
-  for (const auto& o : j.options) out.push_back({o.value, o.keys, o.buttons});
+  for (std::size_t k = 0; k < j.options.size(); ++k)
+    out.push_back({j.options[k].value, j.options[k].keys, j.options[k].buttons, InputVerdict{InputUse::choose, k}});
   return out;
 }
 
 InputVerdict JudgementType::classify(const Judgement& j, const std::string& input) const {
-  for (std::size_t k = 0; k < j.options.size(); ++k)
-    if (binds(j.options[k].keys, j.options[k].buttons, input)) return {InputUse::choose, k};
+  for (const auto& a : answer_bindings(j))
+    if (binds(a.keys, a.buttons, input)) return a.verdict;
   return {};
 }
 
@@ -67,8 +68,9 @@ AnswerPlan JudgementType::plan_answer(const Judgement& j, Respondent& who, std::
   AnswerPlan out;
   out.perceived_m = who.judged();
   const auto& option = j.options.at(who.choose(out.perceived_m, j.options.size()));
-  const std::string key = first_input(option.keys, option.buttons);
-  out.keys.push_back({t_ns, key.empty() ? option.value : key});
+  KeyPress press = first_input(t_ns, option.keys, option.buttons);
+  if (press.name.empty()) press.name = option.value;
+  out.keys.push_back(std::move(press));
   return out;
 }
 

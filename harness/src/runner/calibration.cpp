@@ -25,9 +25,6 @@ namespace {
 
 constexpr std::array<const char*, 4> kCornerNames = {"front-left", "front-right", "back-right", "back-left"};
 
-bool from_controller(const io::InputEvent& in) { return in.device.rfind("xr:", 0) == 0; }
-bool from_keyboard(const io::InputEvent& in) { return in.device == "keyboard" || in.device == "script"; }
-
 std::string mm(double metres) {
   char text[32];
   std::snprintf(text, sizeof text, "%.1f", metres * 1000.0);
@@ -136,21 +133,18 @@ std::string_view to_string(CalibrationStage stage) {
 
 std::optional<CalibrationCommand> calibration_command(const io::InputEvent& in, CalibrationStage stage) {
   if (!in.pressed) return std::nullopt;
-  const bool xr = from_controller(in);
-  const bool key = from_keyboard(in);
-  const bool touch = (xr && in.name == "right_trigger") || (key && in.name == "space");
-  const auto b_or = [&](const char* k) { return (xr && in.name == "b") || (key && in.name == k); };
+  const auto means = [&](io::Intent i) { return in.intents.has(i); };
   switch (stage) {
     case CalibrationStage::touching:
-      if (touch) return CalibrationCommand::touch;
-      if (b_or("f")) return CalibrationCommand::fit_three;
+      if (means(io::Intent::calibration_touch)) return CalibrationCommand::touch;
+      if (means(io::Intent::calibration_fit_three)) return CalibrationCommand::fit_three;
       return std::nullopt;
     case CalibrationStage::fitted:
-      if ((xr && in.name == "a") || (key && in.name == "enter")) return CalibrationCommand::accept;
-      if (b_or("r")) return CalibrationCommand::redo;
+      if (means(io::Intent::calibration_accept)) return CalibrationCommand::accept;
+      if (means(io::Intent::calibration_redo)) return CalibrationCommand::redo;
       return std::nullopt;
     case CalibrationStage::refused:
-      if (touch || b_or("r")) return CalibrationCommand::redo;
+      if (means(io::Intent::calibration_touch) || means(io::Intent::calibration_redo)) return CalibrationCommand::redo;
       return std::nullopt;
     case CalibrationStage::accepted: return std::nullopt;
   }
@@ -160,9 +154,9 @@ std::optional<CalibrationCommand> calibration_command(const io::InputEvent& in, 
 CalibrationControls calibration_controls(const std::vector<io::Reach>& sources) {
   CalibrationControls c;
   for (const auto& r : sources) {
-    if (r.simulated) continue;
-    c.controller = c.controller || r.gives_button("right_trigger");
-    c.keyboard = c.keyboard || r.every_key;
+    if (r.simulated || !r.intents.has(io::Intent::calibration_touch)) continue;
+    c.controller = c.controller || r.kind == io::SourceKind::xr_controller;
+    c.keyboard = c.keyboard || r.kind == io::SourceKind::keyboard || r.kind == io::SourceKind::script;
   }
   return c;
 }

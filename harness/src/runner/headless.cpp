@@ -104,7 +104,7 @@ const io::Clock& HeadlessDisplay::clock() const { return impl_->clock(); }
 
 io::DisplayInfo HeadlessDisplay::info() const {
   io::DisplayInfo i;
-  i.name = "headless";
+  i.backend = data::Backend::headless;
   i.refresh_hz = impl_->options.refresh_hz;
   i.eye_width_px = impl_->options.width_px;
   i.eye_height_px = impl_->options.height_px;

@@ -4,10 +4,35 @@
 
 namespace curvlab::harness::runner {
 
+namespace {
+
+io::InputEvent observer_press(std::int64_t t_ns, io::Control control, io::Intents intents) {
+  io::InputEvent in;
+  in.t_ns = t_ns;
+  in.source = {io::SourceKind::observer, ""};
+  in.control = std::move(control);
+  in.intents = intents;
+  return in;
+}
+
+}  // namespace
+
+// The press is named after what it does: nothing stores a page's press.
+void ObserverKeys::press_continue(std::int64_t t_ns) {
+  const io::Intent go = io::Intent::continue_page;
+  due_.push_back(observer_press(t_ns, {io::ControlKind::key, std::string(io::to_string(go))}, {go}));
+}
+
+void ObserverKeys::replace(const std::vector<ScheduledKey>& keys) {
+  due_.clear();
+  for (const auto& k : keys)
+    due_.push_back(observer_press(k.t_ns, {k.button ? io::ControlKind::button : io::ControlKind::key, k.name}, {}));
+}
+
 io::Signal ObserverKeys::poll(std::vector<io::InputEvent>& out) {
   const std::int64_t now = clock_.now_ns();
   while (!due_.empty() && due_.front().t_ns <= now) {
-    out.push_back({due_.front().t_ns, due_.front().name, "observer", true});
+    out.push_back(std::move(due_.front()));
     due_.pop_front();
   }
   return io::Signal::none;

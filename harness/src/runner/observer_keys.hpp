@@ -41,17 +41,22 @@ std::uint64_t attempt_seed(std::uint64_t observer_seed, std::uint64_t session_se
 // The simulated observer's presses as a response source: the session
 // schedules them as it plans each answer, and each reaches the session,
 // stamped with its planned time, in the first frame that begins at or after
-// that time.
+// that time. Its answers press the key or button the plan names (a control
+// the protocol binds); a page is continued by a press that means just that.
 class ObserverKeys final : public io::ResponseSource {
  public:
   explicit ObserverKeys(const io::Clock& clock) : clock_(clock) {}
-  void press(ScheduledKey key) { due_.push_back(std::move(key)); }
-  void replace(const std::vector<ScheduledKey>& keys) { due_.assign(keys.begin(), keys.end()); }
+  // Continues the page on screen at `t_ns`.
+  void press_continue(std::int64_t t_ns);
+  // The presses of an answer plan, instead of any still due.
+  void replace(const std::vector<ScheduledKey>& keys);
   void clear() { due_.clear(); }
   io::Signal poll(std::vector<io::InputEvent>& out) override;
   // Presses what each answer plan asks; pages continue on space.
   [[nodiscard]] io::Reach reach() const override {
     io::Reach r;
+    r.kind = io::SourceKind::observer;
+    r.intents = {io::Intent::continue_page};
     r.simulated = true;
     r.continue_phrase = "press space";
     return r;
@@ -59,7 +64,7 @@ class ObserverKeys final : public io::ResponseSource {
 
  private:
   const io::Clock& clock_;
-  std::deque<ScheduledKey> due_;  // in time order
+  std::deque<io::InputEvent> due_;  // in time order
 };
 
 ObserverAnswer plan_answer(SimulatedObserver& observer, const World& world, const protocol::Judgement& j,

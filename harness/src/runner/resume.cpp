@@ -125,7 +125,7 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   auto point = read_resume_point(store, db_path, session_id, p, design);
   if (!point) return point.error();
   if (auto r = store.set_session_status(session_id, data::SessionStatus::running); !r) return r.error();
-  const data::events::Resume resumed{point->first, station.display->info().name};
+  const data::events::Resume resumed{point->first, data::to_string(station.display->info().backend)};
   if (auto r = store.record_event(data::event_record(session_id, std::nullopt, clock.now_ns(), resumed)); !r)
     return r.error();
   auto writer = data::SampleWriter::open(db_path);

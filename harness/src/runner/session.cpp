@@ -11,9 +11,6 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/version.hpp"
 
-#include <cstdio>
-#include <cstdlib>
-
 namespace curvlab::harness::runner {
 
 std::optional<FrameDrawing> parse_frame_drawing(std::string_view text) {
@@ -24,14 +21,6 @@ std::optional<FrameDrawing> parse_frame_drawing(std::string_view text) {
 }
 
 namespace {
-
-// Every backend names itself "headless", "desktop" or "xr" (DisplayInfo):
-// another name is a broken contract.
-data::Backend backend_kind(const std::string& name) {
-  if (const auto kind = data::parse_backend(name)) return *kind;
-  std::fprintf(stderr, "curvlab: a backend named '%s', not headless, desktop or xr\n", name.c_str());
-  std::abort();
-}
 
 Result<Done> check_options(const protocol::Protocol& p, const RunOptions& options, const protocol::Design& design) {
   if (auto ok = data::check_pseudonym(options.participant); !ok)
@@ -51,7 +40,7 @@ data::SessionRecord session_record(std::int64_t protocol_id, std::int64_t partic
   rec.participant_id = participant_id;
   rec.software_version = std::string(software_version());
   rec.software_commit = std::string(git_commit());
-  rec.backend = backend_kind(info.name);
+  rec.backend = info.backend;
   rec.renderer_device = info.renderer_device;
   rec.renderer_driver = info.renderer_driver;
   rec.display_refresh_hz = info.refresh_hz;
@@ -71,7 +60,7 @@ Result<data::StartedSession> create(
   if (!protocol_id) return protocol_id.error();
   auto participant_id = store.add_participant({options.participant, options.ipd_m, options.dominant_eye});
   if (!participant_id) return participant_id.error();
-  data::events::SessionStart start{options.participant_number, design.seed, design.protocol_seed, info.name,
+  data::events::SessionStart start{options.participant_number, design.seed, design.protocol_seed, data::to_string(info.backend),
                                    info.msaa, design.trials.size(), std::nullopt};
   if (design.counterbalance_row) start.counterbalance_row = *design.counterbalance_row;
   std::vector<data::EventRecord> events{data::event_record(0, std::nullopt, clock.now_ns(), start)};

@@ -15,9 +15,9 @@ std::unique_ptr<SimulatedParticipant> SimulatedParticipant::seat(SessionSetup& s
   return participant;
 }
 
-// Pages continue on space, 300 ms after they may be.
+// Pages are continued 300 ms after they may be.
 void SimulatedParticipant::page_shown(std::int64_t shown_ns, std::int64_t min_ns) {
-  keys_.press({shown_ns + min_ns + 300'000'000, "space"});
+  keys_.press_continue(shown_ns + min_ns + 300'000'000);
 }
 
 // Each attempt draws from its own stream (attempt_seed), so a resumed

@@ -86,9 +86,11 @@ bool head_meets(protocol::HeadRequirement need, bool pose_tracked, const io::Hea
   return pose_tracked;
 }
 
-InputVerdict classify_input(const protocol::Judgement& j, const std::string& name, bool answerable) {
+InputVerdict classify_input(const protocol::Judgement& j, const io::InputEvent& in, bool answerable) {
   if (!answerable) return {InputUse::early};
-  return j.type->classify(j, name);
+  const auto answers = j.type->answer_bindings(j);
+  const auto k = io::answer_index(answers, in.control);
+  return k ? answers[*k].verdict : InputVerdict{};
 }
 
 namespace {
@@ -164,9 +166,9 @@ std::optional<std::string> unreachable_answer(const std::vector<io::Reach>& sour
   return out;
 }
 
-bool Page::is_continue(const std::string& name) const {
-  return name == "space" || name == "enter" || name == "return" || name == "continue" ||
-         std::find(continues_.begin(), continues_.end(), name) != continues_.end();
+bool Page::is_continue(const io::InputEvent& in) const {
+  return in.intents.has(io::Intent::continue_page) ||
+         std::find(continues_.begin(), continues_.end(), in.control.name) != continues_.end();
 }
 
 }  // namespace curvlab::harness::runner

@@ -72,6 +72,25 @@ std::string protocol_button(const std::string& action, bool left_hand) {
   return action;
 }
 
+harness::io::Intents controller_intents(const std::string& button) {
+  using harness::io::Intent;
+  if (button == "right_trigger") return {Intent::continue_page, Intent::calibration_touch};
+  if (button == "left_trigger") return {Intent::continue_page};
+  if (button == "a") return {Intent::continue_page, Intent::calibration_accept};
+  if (button == "b") return {Intent::calibration_fit_three, Intent::calibration_redo};
+  return {};
+}
+
+harness::io::InputEvent controller_input(std::int64_t t_ns, bool left_hand, std::string button, bool pressed) {
+  harness::io::InputEvent in;
+  in.t_ns = t_ns;
+  in.source = {harness::io::SourceKind::xr_controller, left_hand ? "left" : "right"};
+  in.intents = controller_intents(button);
+  in.control = {harness::io::ControlKind::button, std::move(button)};
+  in.pressed = pressed;
+  return in;
+}
+
 std::vector<std::string> profile_input_paths(const std::string& profile) {
   std::vector<std::string> out;
   auto both = [&out](const char* input) {

@@ -69,7 +69,8 @@ void Controllers::read_buttons(std::vector<InputEvent>& out) {
 }
 
 // Events carry the protocol's button names (docs/protocols.md, "Key and
-// button names"), which is what judgement options bind.
+// button names"), which is what judgement options bind, and what the button
+// means whatever is on screen (controller_intents): one event per change.
 void Controllers::read_boolean(std::size_t k, std::size_t hand, const XrActionStateGetInfo& get,
                                std::vector<InputEvent>& out) {
   auto st = tagged<XrActionStateBoolean>(XR_TYPE_ACTION_STATE_BOOLEAN);
@@ -83,12 +84,8 @@ void Controllers::read_boolean(std::size_t k, std::size_t hand, const XrActionSt
   if (st.isActive != XR_TRUE || st.changedSinceLastSync != XR_TRUE || baseline ||
       st.lastChangeTime < session_.focused_at())
     return;
-  const std::string device = hand == 0 ? "xr:left" : "xr:right";
-  const std::string name = protocol_button(def_.actions[k].name, hand == 0);
-  const std::int64_t t_ns = session_.to_session_ns(st.lastChangeTime);
-  out.push_back({t_ns, name, device, st.currentState == XR_TRUE});
-  // A continues pages as the trigger does (controller_reach).
-  if (name == "a") out.push_back({t_ns, "continue", device, st.currentState == XR_TRUE});
+  out.push_back(controller_input(session_.to_session_ns(st.lastChangeTime), hand == 0,
+                                 protocol_button(def_.actions[k].name, hand == 0), st.currentState == XR_TRUE));
 }
 
 void Controllers::read_trigger(std::size_t k, std::size_t hand, const XrActionStateGetInfo& get,
@@ -104,21 +101,20 @@ void Controllers::read_trigger(std::size_t k, std::size_t hand, const XrActionSt
   if (st.isActive != XR_TRUE) return;
   const auto pressed = triggers_[hand].update(st.currentState, baseline);
   if (!pressed) return;
-  const std::string device = hand == 0 ? "xr:left" : "xr:right";
-  const std::string name = protocol_button(def_.actions[k].name, hand == 0);
-  const std::int64_t t_ns = session_.to_session_ns(st.lastChangeTime);
-  out.push_back({t_ns, name, device, *pressed});
-  // The trigger also advances instruction pages and breaks, which
-  // follow a button named "continue" (io/frame.hpp, Overlay).
-  out.push_back({t_ns, "continue", device, *pressed});
+  out.push_back(controller_input(session_.to_session_ns(st.lastChangeTime), hand == 0,
+                                 protocol_button(def_.actions[k].name, hand == 0), *pressed));
 }
 
 harness::io::Reach controller_reach() {
   harness::io::Reach r;
   for (const auto& a : curvlab_action_set().actions) {
     if (a.type == ActionType::Pose) continue;
-    for (const auto& path : a.subaction_paths) r.buttons.push_back(protocol_button(a.name, path == kLeftHand));
+    for (const auto& path : a.subaction_paths) {
+      r.buttons.push_back(protocol_button(a.name, path == kLeftHand));
+      r.intents |= controller_intents(r.buttons.back());
+    }
   }
+  r.kind = harness::io::SourceKind::xr_controller;
   r.continue_phrase = "pull a trigger or press A";
   return r;
 }

@@ -101,7 +101,7 @@ harness::io::DisplayInfo SwapchainDisplay::info() const {
   // reported rate (XR_FB_display_refresh_rate) or 90 Hz, the common rate.
   const double period = static_cast<double>(session_.frame().predictedDisplayPeriod);
   const renderer::Context& c = session_.context();
-  return {"xr", c.device_name(), c.driver_info(), period > 0.0 ? 1e9 / period : refresh_.current_hz(),
+  return {data::Backend::xr, c.device_name(), c.driver_info(), period > 0.0 ? 1e9 / period : refresh_.current_hz(),
           swapchains_->width(), swapchains_->height(), renderer_ ? renderer_->msaa() : 0};
 }
 

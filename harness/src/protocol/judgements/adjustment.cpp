@@ -55,17 +55,9 @@ class MethodOfAdjustment final : public JudgementType {
 
   [[nodiscard]] std::vector<AnswerBinding> answer_bindings(const Judgement& j) const override {
     const AdjustmentSpec& a = *spec_of(j);
-    return {{"decrease", a.keys_decrease, a.buttons_decrease},
-            {"increase", a.keys_increase, a.buttons_increase},
-            {"confirm", a.keys_confirm, a.buttons_confirm}};
-  }
-  [[nodiscard]] InputVerdict classify(const Judgement& j, const std::string& input) const override {
-    const auto* a = spec_of(j);
-    if (!a) return {};
-    if (binds(a->keys_increase, a->buttons_increase, input)) return {InputUse::increase};
-    if (binds(a->keys_decrease, a->buttons_decrease, input)) return {InputUse::decrease};
-    if (binds(a->keys_confirm, a->buttons_confirm, input)) return {InputUse::confirm};
-    return {};
+    return {{"decrease", a.keys_decrease, a.buttons_decrease, InputVerdict{InputUse::decrease, 0}},
+            {"increase", a.keys_increase, a.buttons_increase, InputVerdict{InputUse::increase, 0}},
+            {"confirm", a.keys_confirm, a.buttons_confirm, InputVerdict{InputUse::confirm, 0}}};
   }
 
   [[nodiscard]] AnswerPlan plan_answer(const Judgement& j, Respondent& who, std::int64_t t_ns,
@@ -175,16 +167,18 @@ AnswerPlan MethodOfAdjustment::plan_answer(const Judgement& j, Respondent& who, 
   const double target = who.settle(j.parameter, a.min, a.max);
   AnswerPlan out;
   out.perceived_m = who.judged_at(j.parameter, start);
-  const std::string up = first_input(a.keys_increase, a.buttons_increase);
-  const std::string down = first_input(a.keys_decrease, a.buttons_decrease);
+  const KeyPress up = first_input(0, a.keys_increase, a.buttons_increase);
+  const KeyPress down = first_input(0, a.keys_decrease, a.buttons_decrease);
   double v = start;
   for (int presses = 0; std::abs(target - v) > a.step / 2.0 && presses < 400; ++presses) {
     const bool inc = target > v;
-    out.keys.push_back({t_ns, inc ? up : down});
+    KeyPress press = inc ? up : down;
+    press.t_ns = t_ns;
+    out.keys.push_back(std::move(press));
     v = std::clamp(v + (inc ? a.step : -a.step), a.min, a.max);
     t_ns += kPressGapNs;
   }
-  out.keys.push_back({t_ns + kConfirmGapNs, first_input(a.keys_confirm, a.buttons_confirm)});
+  out.keys.push_back(first_input(t_ns + kConfirmGapNs, a.keys_confirm, a.buttons_confirm));
   return out;
 }
 

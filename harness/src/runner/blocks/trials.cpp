@@ -289,10 +289,10 @@ class TrialsBlock {
   void take_inputs(TrialRun& t, AttemptRun& a, Attempt& state, const Frame& f) {
     for (const auto& in : f.inputs) {
       if (!in.pressed || a.answer) continue;
-      const auto verdict = classify_input(*t.judgement, in.name, state.answerable(in.t_ns));
+      const auto verdict = classify_input(*t.judgement, in, state.answerable(in.t_ns));
       switch (verdict.use) {
         case InputUse::ignored: break;
-        case InputUse::early: f_.event(t.id, data::events::EarlyInput{in.name, in.device, in.t_ns}); break;
+        case InputUse::early: f_.event(t.id, data::events::EarlyInput{in.control.name, io::to_string(in.source), in.t_ns}); break;
         case InputUse::choose:
           a.answer = std::pair{t.judgement->options[verdict.option].value, in};
           state.answered();
@@ -364,7 +364,7 @@ class TrialsBlock {
     if (a.answer) {
       r.response = a.answer->first;
       r.response_ns = a.answer->second.t_ns;
-      r.response_device = a.answer->second.device;
+      r.response_device = io::to_string(a.answer->second.source);
     } else {
       r.response = "timeout";
       r.response_ns = f_.clock.now_ns();

@@ -40,6 +40,17 @@ struct DesktopOptions {
 // What the window's keyboard can press: every key; pages continue on space.
 harness::io::Reach keyboard_reach();
 
+// What a key means to a session, whoever types it (the window's keyboard,
+// its key script): space, enter and return continue a page; in the table
+// calibration space touches, F fits three corners, Enter keeps the fit and
+// R touches again. Other keys mean nothing by themselves (they answer
+// through the protocol's `keys`).
+harness::io::Intents key_intents(const std::string& key);
+// A key's press or release as an input of the keyboard (or, with
+// `source` script, of the key script).
+harness::io::InputEvent key_input(std::int64_t t_ns, std::string key, bool pressed,
+                                  harness::io::SourceKind source = harness::io::SourceKind::keyboard);
+
 // The key legend the window's banner shows for what is on screen: on a page
 // "space: continue"; during a trial the question, each answer with its keys
 // ("1 convex · 2 straight · 3 concave"; an answer bound to no key says so)

@@ -22,6 +22,15 @@ namespace curvlab::devices {
 // What the devices of a mapping file can press: each binding's response name.
 harness::io::Reach mapping_reach(const MappingFile& file);
 
+// What a mapping's response means to a session by its name: a response
+// named "continue" continues a page; the others mean nothing by themselves
+// (they answer through the protocol's `buttons`).
+harness::io::Intents response_intents(const std::string& response);
+// A response of the device named `device` in its mapping file as an input
+// (device "hid:<device>"): a button, pressed or released.
+harness::io::InputEvent response_input(std::int64_t t_ns, const std::string& device, std::string response,
+                                       bool pressed);
+
 class HidResponses final : public harness::io::ResponseSource {
  public:
   // For every [[device]] of `file`, opens the first connected HID device it
@@ -37,7 +46,8 @@ class HidResponses final : public harness::io::ResponseSource {
   // Stops and joins every reader thread.
   ~HidResponses() override;
 
-  // Presses and releases since the last call ("hid:LABEL" as the device);
+  // Presses and releases since the last call (each device by its mapping's
+  // name, or its label when it has none);
   // pause when a device went away (its message on stderr and in message()).
   harness::io::Signal poll(std::vector<harness::io::InputEvent>& out) override;
   // The mappings' response names; pages continue on a binding named
@@ -50,7 +60,7 @@ class HidResponses final : public harness::io::ResponseSource {
   HidResponses() = default;
   EventQueue queue_;  // first: the readers push into it until they are joined
   std::vector<std::unique_ptr<DeviceReader>> readers_;
-  std::vector<std::pair<std::string, std::string>> names_;  // source label → "hid:" + mapping name
+  std::vector<std::pair<std::string, std::string>> names_;  // source label → mapping name
   std::string message_;
   harness::io::Reach reach_;
 };

@@ -12,6 +12,7 @@
 // Vulkan or OpenXR call throws DeviceFailure (frame.hpp).
 #pragma once
 
+#include "curvlab/harness/data/records.hpp"
 #include "curvlab/harness/io/frame.hpp"
 #include "curvlab/renderer/frame_stats.hpp"
 #include "curvlab/renderer/plan.hpp"
@@ -26,7 +27,7 @@ namespace curvlab::harness::io {
 
 // Provenance the session stores (DESIGN.md §7).
 struct DisplayInfo {
-  std::string name;  // "headless", "desktop" or "xr"
+  data::Backend backend = data::Backend::headless;  // which of the three displays
   std::string renderer_device;
   std::string renderer_driver;
   double refresh_hz = 90.0;

@@ -4,6 +4,7 @@
 // session runs. Free of Vulkan, OpenXR and GLFW.
 #pragma once
 
+#include "curvlab/harness/io/input.hpp"
 #include "curvlab/harness/io/phase.hpp"
 
 #include <cstdint>
@@ -45,17 +46,6 @@ struct FrameTiming {
   bool late = false;
 };
 
-// One discrete input: a key (GLFW-style lower-case names: "1", "left",
-// "space", "escape"), a HID or controller button (names from the mapping
-// file or the XR action set), or a simulated observer's key press. The runner
-// maps names to responses through the protocol's judgement options.
-struct InputEvent {
-  std::int64_t t_ns = 0;  // session clock
-  std::string name;
-  std::string device;  // "keyboard", "hid:<name>", "xr:left", "observer", …
-  bool pressed = true;
-};
-
 // One answer of the judgement on screen and the inputs that give it.
 struct AnswerInputs {
   std::string answer;  // an option's value, or "decrease", "increase", "confirm"
@@ -64,9 +54,9 @@ struct AnswerInputs {
 };
 
 // What the runner shows besides the scene (for desktop windows and logs).
-// Instruction pages and breaks advance on the key "space" or "enter", or a
-// button named "continue"; responses come from the keys and buttons of the
-// judgement's options.
+// Instruction pages and breaks advance on an input whose source means
+// "continue" by it (Intent::continue_page, input.hpp); responses come from
+// the keys and buttons of the judgement's options.
 struct Overlay {
   Overlay() = default;
   Overlay(Phase p, std::string line, bool waiting) : phase(p), text(std::move(line)), waiting_for_input(waiting) {}

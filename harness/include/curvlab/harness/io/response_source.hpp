@@ -1,8 +1,9 @@
 // Where a participant's answers come from (DESIGN.md §6): the desktop
 // window's keyboard, the headset's controllers, HID devices through their
 // mapping files (devices/responses.hpp), and the simulated observer. Each
-// source timestamps its inputs on the session clock; the runner maps their
-// names to responses through the judgement's options.
+// source timestamps its inputs on the session clock and says what each means
+// (input.hpp: its intents); the runner finds the answer a control gives
+// through the judgement's options (answer_index).
 #pragma once
 
 #include "curvlab/harness/io/frame.hpp"
@@ -17,6 +18,11 @@ namespace curvlab::harness::io {
 // from it, and a protocol whose answers no source of the session can give is
 // refused before anything is written.
 struct Reach {
+  SourceKind kind = SourceKind::keyboard;
+  // Every intent one of its controls has (a page's continue, the table
+  // calibration's steps): the participant is told only of steps a source
+  // at hand can take.
+  Intents intents;
   bool every_key = false;            // a keyboard: every key name
   std::vector<std::string> buttons;  // the button names it gives
   bool simulated = false;            // presses whatever the judgement asks (the simulated observer)

@@ -77,13 +77,15 @@ class Respondent {
 struct KeyPress {
   std::int64_t t_ns = 0;
   std::string name;
+  bool button = false;  // the name is one of an answer's `buttons`, else of its `keys`
 };
 
 // Whether `input` is one of `keys` or `buttons`.
 bool binds(const std::vector<std::string>& keys, const std::vector<std::string>& buttons, const std::string& input);
-// What a simulated participant presses for an answer bound to `keys` and
-// `buttons`: the first key, else the first button, else "".
-std::string first_input(const std::vector<std::string>& keys, const std::vector<std::string>& buttons);
+// What a simulated participant presses at `t_ns` for an answer bound to
+// `keys` and `buttons`: the first key, else the first button, else a key
+// named "".
+KeyPress first_input(std::int64_t t_ns, const std::vector<std::string>& keys, const std::vector<std::string>& buttons);
 
 // What a simulated participant presses for one trial.
 struct AnswerPlan {
@@ -145,6 +147,7 @@ struct AnswerBinding {
   std::string answer;  // the option's value, or "decrease", "increase", "confirm"
   std::vector<std::string> keys;
   std::vector<std::string> buttons;
+  InputVerdict verdict;  // what giving it does: choose the option, or step or confirm the value
 };
 
 // One adaptive track of a condition and the P(positive) it settles on.
@@ -215,8 +218,9 @@ class JudgementType {
   // Every answer a participant must be able to give, with its inputs (the
   // CLI refuses devices that cannot give one; pages continue on any of them).
   [[nodiscard]] virtual std::vector<AnswerBinding> answer_bindings(const Judgement& j) const;
-  // What an input that may answer does (never `early`).
-  [[nodiscard]] virtual InputVerdict classify(const Judgement& j, const std::string& input) const;
+  // What an input named `input` that may answer does (never `early`): the
+  // verdict of the first answer binding (above) whose keys or buttons name it.
+  [[nodiscard]] InputVerdict classify(const Judgement& j, const std::string& input) const;
   // What a simulated participant presses, from `t_ns` on; `adjustment` is
   // the attempt's, for types answered by adjusting.
   [[nodiscard]] virtual AnswerPlan plan_answer(const Judgement& j, Respondent& who, std::int64_t t_ns,

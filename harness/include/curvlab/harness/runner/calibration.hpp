@@ -44,17 +44,17 @@ enum class CalibrationStage {
 };
 std::string_view to_string(CalibrationStage stage);
 
-// The command an input gives in a stage, if any. The headset's controllers
-// (devices "xr:…"): the right trigger touches, B fits three corners or
-// touches again, A accepts. The keyboard (devices "keyboard" and "script"):
-// space touches, F fits three corners, Enter accepts, R touches again. In
-// the refused stage a touch input also starts again (without taking a
-// touch). Releases give nothing.
+// The command an input gives in a stage, if any, from what its source means
+// by it (io::Intent: the headset's right trigger touches, B fits three
+// corners or touches again, A accepts; the keyboard's space touches, F fits
+// three corners, Enter accepts, R touches again). In the refused stage a
+// touch input also starts again (without taking a touch). Releases give
+// nothing.
 std::optional<CalibrationCommand> calibration_command(const io::InputEvent& input, CalibrationStage stage);
 
 // Which of those controls the devices at hand have (from their reach: a
-// source that gives the right trigger has the controllers, one that gives
-// every key the keyboard), so the text names only what can be pressed.
+// controller or a keyboard that can touch), so the text names only what can
+// be pressed.
 struct CalibrationControls {
   bool controller = false;
   bool keyboard = false;

@@ -98,19 +98,21 @@ AfterAbort after_abort(AbortReason reason, std::int64_t attempt, const protocol:
 bool head_meets(protocol::HeadRequirement need, bool pose_tracked, const io::HeadTracking& head);
 
 // What an input does in the response phase of a trial: an anticipation
-// before the onset reached the display, else what the judgement's type makes
-// of it (judgement.hpp).
+// before the onset reached the display, else what the answer it gives does
+// (its key through the judgement's answer keys, its button through their
+// buttons: io::answer_index; judgement.hpp), or nothing.
 using protocol::InputUse;
 using protocol::InputVerdict;
-InputVerdict classify_input(const protocol::Judgement& judgement, const std::string& name,
-                            bool answerable);
+InputVerdict classify_input(const protocol::Judgement& judgement, const io::InputEvent& input, bool answerable);
 
-// An instruction, break or closing page: it advances on "continue" (space,
-// enter, return or a button named continue) once `min_ns` has passed,
-// ignoring a key held from before the page (or from before a pause).
+// An instruction, break or closing page: it advances on an input its source
+// means as "continue" (io::Intent::continue_page: the keyboard's space,
+// enter or return, a controller's trigger or A, a HID button named
+// continue) once `min_ns` has passed, ignoring a key held from before the
+// page (or from before a pause).
 // Every input bound to an answer of any of the protocol's judgements: pages
-// continue on these too, so a participant who knows how to answer knows how
-// to go on.
+// continue on these too (a control of that name, key or button), so a
+// participant who knows how to answer knows how to go on.
 std::vector<std::string> page_continues(const protocol::Protocol& p);
 
 // The line under every page telling the participant how to go on, from what
@@ -125,22 +127,21 @@ std::optional<std::string> unreachable_answer(const std::vector<io::Reach>& sour
 
 class Page {
  public:
-  // `continues`: the inputs that turn the page besides space, enter and
-  // "continue" (the protocol's answer bindings; page_continues()).
+  // `continues`: the controls that turn the page besides those whose source
+  // means them to (the protocol's answer bindings; page_continues()).
   Page(std::int64_t shown_ns, std::int64_t min_ns, const std::vector<std::string>& continues)
       : shown_ns_(shown_ns), min_ns_(min_ns), continues_(continues) {}
   // One frame's presses; true when the page is done after this frame.
-  template <class Inputs>
-  bool frame(std::int64_t now_ns, const Inputs& inputs) {
+  bool frame(std::int64_t now_ns, const std::vector<io::InputEvent>& inputs) {
     bool go = false;
     for (const auto& in : inputs)
-      if (!fresh_ && in.pressed && is_continue(in.name) && now_ns - shown_ns_ >= min_ns_) go = true;
+      if (!fresh_ && in.pressed && is_continue(in) && now_ns - shown_ns_ >= min_ns_) go = true;
     fresh_ = false;
     return go;
   }
   // After a pause: keys pressed before it do not count.
   void restart() { fresh_ = true; }
-  [[nodiscard]] bool is_continue(const std::string& name) const;
+  [[nodiscard]] bool is_continue(const io::InputEvent& input) const;
 
  private:
   std::int64_t shown_ns_;

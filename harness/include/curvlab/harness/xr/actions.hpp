@@ -6,6 +6,9 @@
 // them.
 #pragma once
 
+#include "curvlab/harness/io/input.hpp"
+
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -49,6 +52,14 @@ ActionSetDef curvlab_action_set();
 // button_a → "a", …, the trigger → "left_trigger" / "right_trigger".
 // Other actions keep their own name.
 std::string protocol_button(const std::string& action, bool left_hand);
+
+// What a controller's button (a protocol_button name) means to a session:
+// either trigger or A continues a page; in the table calibration the right
+// trigger touches, B fits three corners or touches again, A keeps the fit.
+harness::io::Intents controller_intents(const std::string& button);
+// A button's press or release as an input of the controller in that hand
+// (device "xr:left" / "xr:right"): one event, with every intent it has.
+harness::io::InputEvent controller_input(std::int64_t t_ns, bool left_hand, std::string button, bool pressed);
 
 // Input paths each profile offers (from the OpenXR specification's
 // interaction-profile tables), to check the bindings against.

@@ -2,8 +2,9 @@
 // curvlab's action set (actions.hpp) with its suggested bindings, attached to
 // the session with the eye gaze's (tracked_poses.hpp), and the presses read
 // from it each frame while the session is FOCUSED. Events carry the
-// protocol's button names (a, b, x, y, left_trigger, right_trigger); the
-// trigger and A also continue pages ("continue").
+// protocol's button names (a, b, x, y, left_trigger, right_trigger) and
+// their intents (actions.hpp, controller_intents): a trigger or A continues
+// a page with the same one event that may answer.
 //
 // Action states are those of the last xrSyncActions (OpenXR 1.0 §11.5). An
 // action that was inactive (no focus) gives its first state as a baseline,
