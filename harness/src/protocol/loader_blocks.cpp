@@ -161,12 +161,13 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
       error(pos_of(e), bp, "expected a table, found " + type_name(e));
       continue;
     }
-    check_keys(*t, bp, {"name", "practice", "repetitions", "randomize", "levels", "instructions",
+    check_keys(*t, bp, {"name", "kind", "practice", "repetitions", "randomize", "levels", "instructions",
                         "break_every_trials", "break_text", "break_min_ms", "space", "tracking",
                         "viewing", "timeline", "stimulus", "table", "judgement"});
     Block b;
     b.pos = pos_of(*t);
     b.name = get_string(*t, "name", bp, true).value_or("");
+    b.kind = get_enum(*t, "kind", bp, block_kind_names()).value_or(block_kind_names().front());
     if (t->contains("name") && t->get("name")->is_string()) {
       if (!is_identifier(b.name))
         error(pos_of(*t->get("name")), bp + ".name", "block names are lower-case identifiers (a-z, 0-9, _ and -)");

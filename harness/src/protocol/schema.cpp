@@ -192,6 +192,8 @@ Json block_schema() {
   Json props = {
       {"name", {{"type", "string"}, {"pattern", kIdentifierPattern},
                 {"description", "unique; a lower-case identifier"}}},
+      {"kind", with_default(enum_field(block_kind_names(), "what the block's frames show: trials, judged trials"),
+                            block_kind_names().front())},
       {"practice", with_default(Json{{"type", "boolean"},
                                      {"description", "practice blocks run first, in file order, and are "
                                                      "not counterbalanced"}},

@@ -94,6 +94,9 @@ struct Block {
   SourcePos pos;
 };
 
+// The block kinds a protocol may name, "trials" first (the default).
+const std::vector<std::string>& block_kind_names();
+
 // The [calibration] section: the physical table calibrated by touching its
 // corners with the participant's devices as the session's first step
 // (runner/calibration.hpp; docs/devices.md, "Physical-table calibration").
