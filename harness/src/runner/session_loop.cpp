@@ -400,6 +400,7 @@ class SessionLoop::Impl {
     desc.width_px = static_cast<std::uint32_t>(p_.resolution_width);
     desc.height_px = static_cast<std::uint32_t>(p_.resolution_height);
     const bool draw = options_.drawing == FrameDrawing::all || (options_.drawing == FrameDrawing::onset && onset);
+    if (tracker_) scene_->update(f.timing.predicted_display_ns, tracker_->output());
     const auto before_submit = SteadyTime::now();
     const renderer::FrameStats stats = station_.display->submit(scene_->scene(), desc, overlay, draw);
     const auto after_submit = SteadyTime::now();
