@@ -170,9 +170,12 @@ TEST_F(VulkanTest, UnchangedHeadlessFrameIsNotRenderedAgain) {
   EXPECT_EQ(second.passes, 0);
   EXPECT_EQ(second.draws, 0);
   EXPECT_EQ(target.image(Eye::left).pixels, before.pixels);
-  // Moving the cue ball is a change: drawn again, and the image differs.
-  s.scene.edit(16).pose = s.scene.objects()[16].pose *
-                          geometry::translation_m(s.space, geometry::Vec3(0.1, 0.0, -0.1));
+  // Moving the cue ball (the first ball) is a change: drawn again, and the
+  // image differs.
+  std::size_t cue = 0;
+  while (s.scene.objects().at(cue).name != "ball") ++cue;
+  s.scene.edit(cue).pose = s.scene.objects()[cue].pose *
+                           geometry::translation_m(s.space, geometry::Vec3(0.1, 0.0, -0.1));
   const FrameStats third = renderer.render(s.scene, f, target);
   EXPECT_FALSE(third.reused);
   EXPECT_GT(third.draws, 0);
