@@ -10,6 +10,7 @@
 // off and on so drift hits both. Needs a display: run under `xvfb-run -a`.
 //
 //   xvfb-run -a build/ci/bin/bench_operator_cost [frames_per_round] [rounds]
+#include "bench_scenes.hpp"
 #include "curvlab/harness/operator/operator_window.hpp"
 
 #include "curvlab/harness/io/clock.hpp"
@@ -35,7 +36,7 @@ double quantile(std::vector<double> v, double q) {
 }
 
 // One round: a fresh backend (and window), `frames` frames after 30 to settle.
-bool round(bool window, int frames, const renderer::StimulusScene& s, std::vector<double>& cpu_ms) {
+bool round(bool window, int frames, const bench::StimulusScene& s, std::vector<double>& cpu_ms) {
   harness::io::SteadyClock clock;
   xr::XrBackendOptions o;
   o.clock = &clock;
@@ -95,12 +96,7 @@ int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::max(30, std::atoi(argv[1])) : 450;
   const int rounds = argc > 2 ? std::max(1, std::atoi(argv[2])) : 2;
   if (std::getenv("XR_RUNTIME_JSON") == nullptr) setenv("XR_RUNTIME_JSON", CURVLAB_TEST_XR_RUNTIME_JSON, 1);
-  auto made = renderer::make_stimulus_scene(geometry::SpaceKind::H3, renderer::SceneKind::billiards, {});
-  if (auto* e = std::get_if<renderer::RenderError>(&made)) {
-    std::fprintf(stderr, "%s\n", e->message.c_str());
-    return 1;
-  }
-  const auto& s = std::get<renderer::StimulusScene>(made);
+  const auto s = bench::scene_of(geometry::SpaceKind::H3, bench::SceneKind::billiards);
   std::vector<double> off, on;
   for (int r = 0; r < rounds; ++r)
     if (!round(false, frames, s, off) || !round(true, frames, s, on)) return 1;

@@ -6,6 +6,7 @@
 //
 //   xvfb-run -a build/dev/bin/bench_present_cost [frames]
 #include "desktop_backend.hpp"
+#include "bench_scenes.hpp"
 
 #include "curvlab/harness/io/clock.hpp"
 #include "curvlab/renderer/offscreen.hpp"
@@ -29,7 +30,7 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-renderer::FrameDescription describe(const renderer::StimulusScene& s, std::uint32_t size,
+renderer::FrameDescription describe(const bench::StimulusScene& s, std::uint32_t size,
                                     int frame) {
   renderer::FrameDescription f;
   f.space = s.space;
@@ -46,12 +47,7 @@ renderer::FrameDescription describe(const renderer::StimulusScene& s, std::uint3
 
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::max(5, std::atoi(argv[1])) : 40;
-  auto made = renderer::make_stimulus_scene(geometry::SpaceKind::H3, renderer::SceneKind::billiards, {});
-  if (auto* e = std::get_if<renderer::RenderError>(&made)) {
-    std::fprintf(stderr, "%s\n", e->message.c_str());
-    return 1;
-  }
-  const auto& s = std::get<renderer::StimulusScene>(made);
+  const auto s = bench::scene_of(geometry::SpaceKind::H3, bench::SceneKind::billiards);
   harness::io::SteadyClock clock;
 
   std::printf("H3 billiards, native view, lavapipe, window under Xvfb; %d frames each, "

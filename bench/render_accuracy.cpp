@@ -15,6 +15,7 @@
 #include "curvlab/renderer/renderer.hpp"
 #include "curvlab/renderer/shader.hpp"
 
+#include "bench_scenes.hpp"
 #include "render_precision.hpp"
 
 #include "curvlab/geometry/maps.hpp"
@@ -43,14 +44,10 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-StimulusScene make(SpaceKind kind, SceneKind scene) {
-  auto made = make_stimulus_scene(kind, scene, {});
-  if (auto* e = std::get_if<RenderError>(&made)) {
-    std::fprintf(stderr, "scene: %s\n", e->message.c_str());
-    std::exit(1);
-  }
-  return std::get<StimulusScene>(std::move(made));
-}
+using bench::SceneKind;
+using bench::StimulusScene;
+
+StimulusScene make(SpaceKind kind, SceneKind scene) { return bench::scene_of(kind, scene); }
 
 FrameDescription frame_for(const StimulusScene& s, ViewSettings settings, std::uint32_t px) {
   FrameDescription f;

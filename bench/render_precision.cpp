@@ -18,6 +18,7 @@
 // pixels get wrong. A constant bias of an estimator (the cap's shading, the
 // silhouette of a cylinder) cancels in the motion.
 #include "render_precision.hpp"
+#include "bench_scenes.hpp"
 
 #include "curvlab/geometry/isometry.hpp"
 #include "curvlab/geometry/tube.hpp"
@@ -96,7 +97,7 @@ struct Luma {
 // first pose), all weighted alike. The same rows are read in every frame: the
 // tube's ends and joints are seen along curves (each end's rim, each joint's
 // circle), so a row entering or leaving the set would move the average.
-constexpr double kStickRadiusM = 0.0125;  // the stick scene's (StimulusOptions)
+constexpr double kStickRadiusM = 0.012;  // the protocol's (stimulus.stick_radius_m)
 
 std::vector<int> inner_rows(double y_px, double distance_m) {
   const double half_px = kStickRadiusM * (kPx / 2.0) / std::tan(kFovRad / 2.0) / distance_m;
@@ -161,11 +162,7 @@ struct Residuals {
   }
 };
 
-StimulusScene stick_scene(double sagitta_m) {
-  StimulusOptions o;
-  o.stick_sagitta_m = sagitta_m;
-  return std::get<StimulusScene>(make_stimulus_scene(geometry::SpaceKind::E3, SceneKind::stick, o));
-}
+StimulusScene stick_scene(double sagitta_m) { return scene_of(geometry::SpaceKind::E3, SceneKind::stick, sagitta_m); }
 
 FrameDescription frame_of(const StimulusScene& s, const Isometry& head) {
   FrameDescription f;
@@ -179,7 +176,7 @@ FrameDescription frame_of(const StimulusScene& s, const Isometry& head) {
 }
 
 geometry::Point stick_point(const Space& space, double sagitta_m, double u_m) {
-  const geometry::BentStick stick{1.0, sagitta_m, 0.0125};
+  const geometry::BentStick stick{1.0, sagitta_m, kStickRadiusM};
   return geometry::translation_m(space, kStickAt).m * stick.centre_point(space, Isometry::identity(), u_m);
 }
 
@@ -322,7 +319,7 @@ SweepResiduals sweep(const Context& ctx, std::uint32_t msaa) {
 // Median frame time of the billiards scene (E3, native, both eyes, 1024²)
 // per sample count, frames interleaved so machine load affects all alike.
 std::vector<double> frame_times(const Context& ctx, const std::vector<std::uint32_t>& counts, int frames) {
-  const StimulusScene s = std::get<StimulusScene>(make_stimulus_scene(geometry::SpaceKind::E3, SceneKind::billiards, {}));
+  const StimulusScene s = scene_of(geometry::SpaceKind::E3, SceneKind::billiards);
   std::vector<std::unique_ptr<Renderer>> renderers;
   std::vector<std::unique_ptr<OffscreenTarget>> targets;
   for (const auto n : counts) {

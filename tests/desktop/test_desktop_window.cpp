@@ -4,6 +4,7 @@
 // that shows it. Vulkan on lavapipe with the validation layer on.
 #include "desktop_backend.hpp"
 #include "xvfb.hpp"
+#include "../renderer/stimulus_fixtures.hpp"
 #include "../support/png_files.hpp"
 
 #include "../faults/fault_env.hpp"
@@ -73,7 +74,7 @@ bool wood(int r, int g, int b) { return r > 40 && r > g + 10 && g > b + 5 && r <
 
 // One frame of a stimulus scene, as the runner submits it; false: the
 // window gave no frame.
-bool show_stimulus_frame(desktop::DesktopBackend& backend, const renderer::StimulusScene& s) {
+bool show_stimulus_frame(desktop::DesktopBackend& backend, const renderer::fixtures::StimulusScene& s) {
   auto timing = backend.begin_frame();
   if (!timing) return false;
   renderer::FrameDescription f;
@@ -126,10 +127,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   EXPECT_EQ(backend.info().backend, curvlab::data::Backend::desktop);
   EXPECT_NE(backend.info().renderer_device.find("llvmpipe"), std::string::npos);
 
-  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3,
-                                                renderer::SceneKind::billiards, {});
-  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
-  auto& s = std::get<renderer::StimulusScene>(stimulus);
+  const auto s = renderer::fixtures::make(geometry::SpaceKind::E3, renderer::fixtures::SceneKind::billiards);
 
   // fixation → stimulus (onset screenshot) → response until the scripted key.
   std::vector<InputEvent> events;
@@ -175,7 +173,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   ASSERT_EQ(left.width, 320);
   ASSERT_EQ(left.height, 320);
   // The head looks at the table centre: cloth fills the middle of the image,
-  // the cue lies toward the participant, below the centre.
+  // the cue lies across the table toward the participant, below the centre.
   const int centre_cloth = count_pixels(left, 0.35, 0.35, 0.65, 0.65, cloth);
   EXPECT_GT(centre_cloth, 0.6 * (0.3 * 320) * (0.3 * 320)) << "cloth pixels in the centre";
   EXPECT_GT(count_pixels(left, 0.3, 0.5, 0.7, 1.0, wood), 100) << "cue pixels below the centre";
@@ -212,9 +210,7 @@ TEST_F(DesktopWindow, SideBySideEyesAreSeparatedByAGap) {
   const auto opened = open(options);
   ASSERT_NE(opened, nullptr);
   auto& backend = *opened;
-  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3, renderer::SceneKind::stick, {});
-  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
-  auto& s = std::get<renderer::StimulusScene>(stimulus);
+  const auto s = renderer::fixtures::make(geometry::SpaceKind::E3, renderer::fixtures::SceneKind::stick);
   for (int i = 0; i < 3; ++i) {
     ASSERT_TRUE(show_stimulus_frame(backend, s));
   }
@@ -244,9 +240,7 @@ TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
   const auto opened = open(options);
   ASSERT_NE(opened, nullptr);
   auto& backend = *opened;
-  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::H3, renderer::SceneKind::stick, {});
-  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
-  auto& s = std::get<renderer::StimulusScene>(stimulus);
+  const auto s = renderer::fixtures::make(geometry::SpaceKind::H3, renderer::fixtures::SceneKind::stick);
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE(show_stimulus_frame(backend, s));
   }
@@ -339,9 +333,7 @@ TEST_F(DesktopWindow, DeviceLossWhilePresentingThrowsDeviceFailureAndTeardownEnd
   options.vsync = false;
   auto backend = open(options);
   ASSERT_NE(backend, nullptr);
-  auto stimulus = renderer::make_stimulus_scene(geometry::SpaceKind::E3, renderer::SceneKind::stick, {});
-  ASSERT_TRUE(std::holds_alternative<renderer::StimulusScene>(stimulus));
-  auto& s = std::get<renderer::StimulusScene>(stimulus);
+  const auto s = renderer::fixtures::make(geometry::SpaceKind::E3, renderer::fixtures::SceneKind::stick);
   std::optional<harness::io::DeviceFailure> failure;
   int frames = 0;
   for (; frames < 20 && !failure; ++frames) {

@@ -5,6 +5,7 @@
 // runner::DeviceFailure naming the call and its result; the backend is
 // then destroyed without throwing or terminating, pending frames included.
 #include "fault_env.hpp"
+#include "../renderer/stimulus_fixtures.hpp"
 
 #include "curvlab/harness/runner/headless.hpp"
 #include "curvlab/renderer/scene.hpp"
@@ -33,9 +34,7 @@ std::unique_ptr<rn::HeadlessDisplay> small_headless() {
 // Draws frames (the head moving, so none is skipped as unchanged) until the
 // backend throws; returns the failure and how many frames were drawn before.
 std::pair<std::optional<harness::io::DeviceFailure>, int> draw_until_failure(rn::HeadlessDisplay& backend, int frames) {
-  auto made = renderer::make_stimulus_scene(geometry::SpaceKind::E3, renderer::SceneKind::stick, {});
-  EXPECT_TRUE(std::holds_alternative<renderer::StimulusScene>(made));
-  auto& s = std::get<renderer::StimulusScene>(made);
+  const auto s = renderer::fixtures::make(geometry::SpaceKind::E3, renderer::fixtures::SceneKind::stick);
   for (int i = 0; i < frames; ++i) {
     const auto timing = backend.begin_frame();
     renderer::FrameDescription f;

@@ -60,7 +60,7 @@ TEST(MeasureStick, RecoversTheShownBendInEuclideanTouristViews) {
 }
 
 TEST(MeasureStick, ReadsTheCurvedSpacesIllusionsFromThePixels) {
-  // H3 at the radius of the 0.9 m right-angled pentagon (0.85 m); S3 at
+  // H3 at the radius of the 1 m right-angled pentagon (0.94 m); S3 at
   // 1 m (at the triangle's 0.57 m the stick reaches past the equator and its
   // native image is wider than the field of view).
   const auto h3 = measure(render_stick("h3", "H3", "native", 0.0));

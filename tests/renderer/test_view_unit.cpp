@@ -23,6 +23,10 @@ using namespace curvlab;
 using namespace curvlab::renderer;
 using curvlab::renderer::fixtures::frame_for;
 using curvlab::renderer::fixtures::make;
+using curvlab::renderer::fixtures::make_from;
+using curvlab::renderer::fixtures::SceneKind;
+using curvlab::renderer::fixtures::settings_in;
+using curvlab::renderer::fixtures::StimulusScene;
 using geometry::SpaceKind;
 
 namespace {
@@ -177,8 +181,12 @@ TEST(Plan, BackHemisphereOnlyInS3AndOnlyWhenVisible) {
     EXPECT_FALSE(plan_frame(away.scene, f).back_hemisphere);
   }
   // The stick scene in S3: the stick is ahead, its antipodal image behind
-  // the viewer and out of view, so no back pass is planned.
-  const StimulusScene stick = make(SpaceKind::S3, SceneKind::stick);
+  // the viewer and out of view, so no back pass is planned for it. (The
+  // prompt panel, 1.5 m ahead and past the equator ρπ/2 = 1 m, has a bound
+  // too large for the plan to rule its antipodal image out: it is hidden.)
+  StimulusScene stick = make(SpaceKind::S3, SceneKind::stick);
+  for (std::size_t i = 0; i < stick.scene.objects().size(); ++i)
+    if (stick.scene.objects()[i].name != "cue stick") stick.scene.edit(i).visible = false;
   EXPECT_FALSE(plan_frame(stick.scene, frame_for(stick, ViewPreset::tourist)).back_hemisphere);
 }
 
@@ -218,7 +226,7 @@ TEST(Table, CornersCloseWithRightAngles) {
       const auto t2 = tangent(edges[i].b, next.b);
       const long double c = gform(t1, t2) / std::sqrt(gform(t1, t1) * gform(t2, t2));
       EXPECT_NEAR(double(c), 0.0, 1e-9) << geometry::to_string(kind) << " corner " << i;
-      // Edge length 0.9 m (the physical edge) unless E3 (free, 0.9 m here too).
+      // Edge length: the protocol's physical edge (table.edge_m, 1 m), in E3 too.
       const auto& a = edges[i].a;
       const auto& b = edges[i].b;
       const long double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, dw = a.w - b.w;
@@ -226,7 +234,7 @@ TEST(Table, CornersCloseWithRightAngles) {
       const long double len = kind == SpaceKind::S3 ? 2 * rho * std::asin(chord / (2 * rho))
                               : kind == SpaceKind::H3 ? 2 * rho * std::asinh(chord / (2 * rho))
                                                       : chord;
-      EXPECT_NEAR(double(len), 0.9, 1e-9);
+      EXPECT_NEAR(double(len), settings_in(kind).table.edge_m, 1e-9);
     }
   }
 }
@@ -270,23 +278,23 @@ TEST(Text, RendersInkIntoThePanel) {
   EXPECT_NE(std::get<RenderError>(missing).message.find("/nonexistent/font.ttf"), std::string::npos);
 }
 
-// Options that give no table, and a prompt font that cannot be read, come
-// back as RenderErrors of their own kinds (the harness tells a person to fix
-// the protocol for one and the installation for the other).
-TEST(StimulusScene, ImpossibleOptionsAndAMissingFontAreRenderErrorsOfTheirKind) {
-  StimulusOptions no_table;
-  no_table.table_edge_m = -1.0;
-  const auto impossible = make_stimulus_scene(geometry::SpaceKind::H3, SceneKind::table, no_table);
-  ASSERT_TRUE(std::holds_alternative<RenderError>(impossible));
-  EXPECT_EQ(std::get<RenderError>(impossible).kind, RenderError::Kind::stimulus);
-  EXPECT_NE(std::get<RenderError>(impossible).message.find("edge length"), std::string::npos);
+// Settings that give no table, and a prompt font that cannot be read, come
+// back from the scene builder as errors of their own kinds (the harness
+// tells a person to fix the protocol for one and the installation for the
+// other).
+TEST(StimulusScene, ImpossibleSettingsAndAMissingFontAreErrorsOfTheirKind) {
+  auto no_table = settings_in(SpaceKind::H3);
+  no_table.table.edge_m = -1.0;
+  const auto impossible = harness::runner::viewed_scene(SceneKind::table, no_table, {}, "", CURVLAB_DEFAULT_FONT);
+  ASSERT_FALSE(impossible);
+  EXPECT_EQ(impossible.error().kind, harness::Error::Kind::bad_input);
+  EXPECT_NE(impossible.error().message.find("edge length"), std::string::npos) << impossible.error().message;
 
-  StimulusOptions no_font;
-  no_font.font_path = "/nonexistent/font.ttf";
-  const auto unreadable = make_stimulus_scene(geometry::SpaceKind::E3, SceneKind::stick, no_font);
-  ASSERT_TRUE(std::holds_alternative<RenderError>(unreadable));
-  EXPECT_EQ(std::get<RenderError>(unreadable).kind, RenderError::Kind::font);
-  EXPECT_NE(std::get<RenderError>(unreadable).message.find("/nonexistent/font.ttf"), std::string::npos);
+  const auto unreadable = harness::runner::viewed_scene(SceneKind::stick, settings_in(SpaceKind::E3), {}, "prompt",
+                                                        "/nonexistent/font.ttf");
+  ASSERT_FALSE(unreadable);
+  EXPECT_EQ(unreadable.error().kind, harness::Error::Kind::io);
+  EXPECT_NE(unreadable.error().message.find("/nonexistent/font.ttf"), std::string::npos);
 }
 
 // ---- colour --------------------------------------------------------------

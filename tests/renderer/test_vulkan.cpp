@@ -30,6 +30,10 @@ using namespace curvlab;
 using namespace curvlab::renderer;
 using curvlab::renderer::fixtures::frame_for;
 using curvlab::renderer::fixtures::make;
+using curvlab::renderer::fixtures::make_from;
+using curvlab::renderer::fixtures::SceneKind;
+using curvlab::renderer::fixtures::settings_in;
+using curvlab::renderer::fixtures::StimulusScene;
 using geometry::SpaceKind;
 
 namespace {
@@ -166,9 +170,12 @@ TEST_F(VulkanTest, UnchangedHeadlessFrameIsNotRenderedAgain) {
   EXPECT_EQ(second.passes, 0);
   EXPECT_EQ(second.draws, 0);
   EXPECT_EQ(target.image(Eye::left).pixels, before.pixels);
-  // Moving the cue ball is a change: drawn again, and the image differs.
-  s.scene.edit(16).pose = s.scene.objects()[16].pose *
-                          geometry::translation_m(s.space, geometry::Vec3(0.1, 0.0, -0.1));
+  // Moving the cue ball (the first ball) is a change: drawn again, and the
+  // image differs.
+  std::size_t cue = 0;
+  while (s.scene.objects().at(cue).name != "ball") ++cue;
+  s.scene.edit(cue).pose = s.scene.objects()[cue].pose *
+                           geometry::translation_m(s.space, geometry::Vec3(0.1, 0.0, -0.1));
   const FrameStats third = renderer.render(s.scene, f, target);
   EXPECT_FALSE(third.reused);
   EXPECT_GT(third.draws, 0);
@@ -605,17 +612,13 @@ TEST_F(VulkanTest, TheStickFollowsSubMillimetreBends) {
   // at one and at four samples per pixel; edges quantized to a sample grid
   // are off by up to 0.1 px.
   constexpr std::uint32_t kPx = 512;
-  const auto scene = [](double sagitta_m) {
-    StimulusOptions o;
-    o.stick_sagitta_m = sagitta_m;
-    return std::get<StimulusScene>(make_stimulus_scene(SpaceKind::E3, SceneKind::stick, o));
-  };
+  const auto scene = [](double sagitta_m) { return make_from(SceneKind::stick, settings_in(SpaceKind::E3, sagitta_m)); };
   const StimulusScene straight = scene(0.0);
   const auto project_middle = [&](double sagitta_m) {
     const Isometry eye = straight.head * geometry::translation_m(straight.space, geometry::Vec3(-0.0315, 0.0, 0.0));
     const geometry::Point middle =
         geometry::translation_m(straight.space, geometry::Vec3(0.0, -0.25, -0.75)).m *
-        geometry::BentStick{1.0, sagitta_m, 0.0125}.centre_point(straight.space, Isometry::identity(), 0.0);
+        geometry::BentStick{1.0, sagitta_m, 0.012}.centre_point(straight.space, Isometry::identity(), 0.0);
     const glm::dvec4 q = glm::inverse(eye.m) * middle;
     return glm::dvec2(kPx / 2.0 + (kPx / 2.0) * q.x / -q.z, kPx / 2.0 - (kPx / 2.0) * q.y / -q.z);
   };
@@ -653,11 +656,12 @@ TEST_F(VulkanTest, TextPanelsStaySharpUnderMultisampling) {
   const StimulusScene s = make(SpaceKind::E3, SceneKind::stick);
   const Rgba8Image one = render_left(ctx(), s, 256, 1);
   const Rgba8Image four = render_left(ctx(), s, 256, 4);
-  // The prompt panel (0.9 × 0.26 m, centred 0.22 m up and 1.1 m ahead; the
-  // left eye 31.5 mm left of the nose), its border left out.
+  // The prompt panel (1 × 0.22 m, centred 0.32 m up and 1.5 m ahead of the
+  // head at onset, runner/stimulus.cpp; the left eye 31.5 mm left of the
+  // nose), its border left out.
   const double focal = 128.0, eye_x = -0.0315;
-  const int x0 = int(128 + focal * (-0.45 - eye_x) / 1.1) + 3, x1 = int(128 + focal * (0.45 - eye_x) / 1.1) - 3;
-  const int y0 = int(128 - focal * 0.35 / 1.1) + 3, y1 = int(128 - focal * 0.09 / 1.1) - 3;
+  const int x0 = int(128 + focal * (-0.5 - eye_x) / 1.5) + 3, x1 = int(128 + focal * (0.5 - eye_x) / 1.5) - 3;
+  const int y0 = int(128 - focal * 0.43 / 1.5) + 3, y1 = int(128 - focal * 0.21 / 1.5) - 3;
   int ink = 0, differing = 0;
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {

@@ -1,12 +1,17 @@
 // `curvlab render …`: one stereo frame of a stimulus scene, offscreen, written
 // as DIR/left.png, DIR/right.png and DIR/plan.json (what the render plan
 // drew and skipped, and how long it took; for the stick scene also the eye
-// geometry and stick that `curvlab measure stick` reads).
+// geometry and stick that `curvlab measure stick` reads). The scene is a
+// trial's, built by the session runner's builder (runner/stimulus.hpp,
+// viewed_scene) from protocol settings filled from the options, so what is
+// rendered here is what participants see.
 #include "common.hpp"
 
 #include "curvlab/harness/render_result.hpp"
 #include "curvlab/geometry/enum_names.hpp"
 #include "curvlab/harness/measure/stick.hpp"
+#include "curvlab/harness/protocol/settings.hpp"
+#include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/renderer/offscreen.hpp"
 #include "curvlab/renderer/renderer.hpp"
 
@@ -22,6 +27,12 @@ namespace curvlab::cli {
 namespace {
 
 using namespace curvlab::renderer;
+using harness::runner::SceneKind;
+using harness::runner::ViewedScene;
+
+// The prompt a choice about the stick asks, shown with the stimulus as in a
+// trial's response window.
+constexpr const char* kPrompt = "Is the cue stick bent toward you,\nstraight, or bent away?";
 
 struct RenderArgs {
   std::string space = "E3";
@@ -44,19 +55,19 @@ struct RenderArgs {
 };
 
 // What `curvlab measure stick` needs besides the images: the eyes and the
-// stick (the stick scene's pose, as make_stimulus_scene places it).
-Json stick_record(const StimulusScene& stimulus, const FrameDescription& frame, const StimulusOptions& options) {
-  harness::measure::StickScene s;
-  s.space = stimulus.space;
-  s.preset = perceived_preset(frame.settings.projection, frame.settings.eyes);
-  s.head = stimulus.head;
-  s.rig = frame.rig;
-  s.width_px = frame.width_px;
-  s.height_px = frame.height_px;
-  s.stick = {options.stick_length_m, options.stick_sagitta_m, options.stick_radius_m};
-  s.stick_pose = stimulus.scene.objects().front().pose;
-  s.marks = options.stick_marks;
-  return harness::measure::scene_json(s);
+// stick as placed at onset.
+Json stick_record(const ViewedScene& stimulus, const FrameDescription& frame, const harness::protocol::Settings& s) {
+  harness::measure::StickScene m;
+  m.space = stimulus.space;
+  m.preset = perceived_preset(frame.settings.projection, frame.settings.eyes);
+  m.head = stimulus.head;
+  m.rig = frame.rig;
+  m.width_px = frame.width_px;
+  m.height_px = frame.height_px;
+  m.stick = stimulus.placement.stick;
+  m.stick_pose = stimulus.placement.stick_pose;
+  m.marks = s.stimulus.stick_marks;
+  return harness::measure::scene_json(m);
 }
 
 // The arguments parsed and range-checked, before anything is made.
@@ -75,13 +86,13 @@ RenderRequest check_render_args(const RenderArgs& a) {
   const auto preset = geometry::parse_view_preset(a.view);
   if (!preset)
     throw UsageError("--view must be " + geometry::alternatives_text(geometry::kViewPresets) + ", got '" + a.view + "'");
-  const auto scene_kind = parse_scene_kind(a.scene);
+  const auto scene_kind = harness::runner::parse_scene_kind(a.scene);
   if (!scene_kind)
     throw UsageError("--scene must be stick, table, billiards or tiling, got '" + a.scene + "'");
   if (a.radius_m && !(*a.radius_m > 0.0 && std::isfinite(*a.radius_m)))
     throw UsageError("--radius-m must be a positive number of metres");
   if (!(a.eye_height_m > 0.85 && a.eye_height_m < 3.0))
-    throw UsageError("--eye-height-m must lie between 0.85 and 3 m (the cloth is at 0.80 m)");
+    throw UsageError("--eye-height-m must lie between 0.85 and 3 m (the cloth is at the table height, 0.76 m)");
   if (!(a.fov_deg >= 10.0 && a.fov_deg <= 170.0))
     throw UsageError("--fov-deg must lie between 10 and 170 degrees");
   if (a.back_hemisphere != "on" && a.back_hemisphere != "off")
@@ -106,21 +117,22 @@ ViewSettings view_settings(const RenderArgs& a, geometry::ViewPreset preset) {
   return settings;
 }
 
-StimulusOptions stimulus_options(const RenderArgs& a) {
-  StimulusOptions options;
-  options.radius_m = a.radius_m;
-  options.eye_height_m = a.eye_height_m;
-  options.stick_sagitta_m = a.bend_m;
+// The protocol's settings (and so its dimensions: table, stick, balls) with
+// what the options set; the scene kind adds what it shows (scene_settings).
+harness::protocol::Settings scene_settings(const RenderArgs& a, const RenderRequest& rq) {
+  harness::protocol::Settings s;
+  s.space.kind = rq.kind;
+  s.space.radius_m = a.radius_m;
+  s.stimulus.stick_sagitta_m = a.bend_m;
   const auto marks = parse_stick_marks(a.stick_marks);
   if (!marks)
     throw UsageError("--stick-marks must be " + geometry::alternatives_text(kStickMarks) + ", got '" + a.stick_marks +
                      "'");
-  options.stick_marks = *marks;
-  options.yaw_rad = a.yaw_deg * std::numbers::pi / 180.0;
-  return options;
+  s.stimulus.stick_marks = *marks;
+  return s;
 }
 
-FrameDescription frame_description(const RenderArgs& a, const RenderRequest& rq, const StimulusScene& stimulus,
+FrameDescription frame_description(const RenderArgs& a, const RenderRequest& rq, const ViewedScene& stimulus,
                                    const ViewSettings& settings) {
   FrameDescription frame;
   frame.space = stimulus.space;
@@ -142,7 +154,7 @@ void write_eye_images(const std::string& dir, const OffscreenTarget& target) {
 }
 
 // plan.json: what was asked for, and what the render plan drew and skipped.
-Json plan_record(const RenderArgs& a, const RenderRequest& rq, const StimulusScene& stimulus,
+Json plan_record(const RenderArgs& a, const RenderRequest& rq, const ViewedScene& stimulus,
                  const ViewSettings& settings, const Context& ctx, const Renderer& renderer, const FrameStats& stats) {
   Json plan;
   plan["space"] = std::string(geometry::to_string(rq.kind));
@@ -172,9 +184,11 @@ Json plan_record(const RenderArgs& a, const RenderRequest& rq, const StimulusSce
 void run_render(const RenderArgs& a) {
   const RenderRequest rq = check_render_args(a);
   const ViewSettings settings = view_settings(a, rq.preset);
-  const StimulusOptions options = stimulus_options(a);
+  const harness::protocol::Settings s = scene_settings(a, rq);
   // Options that give no table are bad input (exit 2); an unreadable prompt font is io (exit 1).
-  auto made = harness::from_renderer(make_stimulus_scene(rq.kind, rq.scene, options));
+  auto made = harness::runner::viewed_scene(
+      rq.scene, s, {.eye_height_m = a.eye_height_m, .yaw_rad = a.yaw_deg * std::numbers::pi / 180.0}, kPrompt,
+      CURVLAB_DEFAULT_FONT);
   if (!made) raise(made.error());
   auto& stimulus = made.value();
 
@@ -195,7 +209,7 @@ void run_render(const RenderArgs& a) {
 
   write_eye_images(a.out, target);
   Json plan = plan_record(a, rq, stimulus, settings, ctx, renderer, stats);
-  if (rq.scene == SceneKind::stick) plan["measure"] = stick_record(stimulus, frame, options);
+  if (rq.scene == SceneKind::stick) plan["measure"] = stick_record(stimulus, frame, s);
   const std::string plan_path = (std::filesystem::path(a.out) / "plan.json").string();
   std::ofstream out(plan_path);
   out << plan.dump(2) << '\n';
@@ -211,7 +225,7 @@ void add_render_commands(CLI::App& app) {
       "render", "draw one stereo frame of a stimulus scene offscreen (left.png, right.png, plan.json)");
   cmd->add_option("--space", args->space, "S3, E3 or H3")->required();
   cmd->add_option_function<double>("--radius-m", [args](double r) { args->radius_m = r; },
-                                   "radius ρ in metres (default: from the 0.9 m table edge)");
+                                   "radius ρ in metres (default: from the protocol's table edge, 1 m)");
   cmd->add_option("--view", args->view, geometry::alternatives_text(geometry::kViewPresets))->required();
   cmd->add_option("--scene", args->scene, "stick, table, billiards or tiling")->required();
   cmd->add_option("--eye-height-m", args->eye_height_m, "eye height above the floor (default 1.55)");

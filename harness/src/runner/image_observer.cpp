@@ -30,7 +30,7 @@ measure::StickScene stick_scene(const World& world, const protocol::Settings& s,
 
 Result<Done> write_onset_record(const std::string& path, const World& world, const protocol::Settings& s,
                                 const Placement& placement, const OnsetView& view) {
-  if (!s.stimulus.show_stick) return Done{};
+  if (!stick_stimulus_kind().shown(s)) return Done{};
   std::ofstream out(path);
   out << measure::scene_json(stick_scene(world, s, placement, view)).dump(2) << '\n';
   if (!out) return Error{Error::Kind::io, "cannot write " + path};
@@ -40,7 +40,7 @@ Result<Done> write_onset_record(const std::string& path, const World& world, con
 Result<std::optional<Percept>> OnsetReader::read(const World& world, const protocol::Settings& s,
                                                  const Placement& placement, const OnsetView& view,
                                                  const ObserverParams& observer) {
-  if (judged(s) != Judged::stick) return std::optional<Percept>{};
+  if (&judged_kind(s) != &stick_stimulus_kind()) return std::optional<Percept>{};
   if (!target_ || target_->image(renderer::Eye::left).width != static_cast<int>(view.width_px) ||
       target_->image(renderer::Eye::left).height != static_cast<int>(view.height_px))
     target_.emplace(ctx_, view.width_px, view.height_px);
@@ -59,7 +59,7 @@ Result<std::optional<Percept>> OnsetReader::read(const World& world, const proto
 Result<Done> check_image_observer(const protocol::Protocol& p) {
   const protocol::Design design = protocol::expand_design(p, 1);
   for (const auto& t : design.trials)
-    if (judged(t.settings) == Judged::stick && geometry::binocular(perceived_preset(t.settings)) &&
+    if (&judged_kind(t.settings) == &stick_stimulus_kind() && geometry::binocular(perceived_preset(t.settings)) &&
         t.settings.stimulus.stick_marks != renderer::StickMarks::rings)
       return Error{Error::Kind::usage,
                    "--observer image reads the stick's rings from the images, but block '" + t.block +

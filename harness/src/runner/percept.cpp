@@ -55,7 +55,7 @@ Percept perceive(const World& world, const protocol::Settings& s, const Placemen
   const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
   const auto points = judged_points(world, s, placement);
   // The eyes fixate the stick's middle or the table's centre.
-  const std::size_t fixated = judged(s) == Judged::stick ? 1 : points.size() - 1;
+  const std::size_t fixated = judged_kind(s).fixated_point(points.size());
   const geometry::HumanPercept hp =
       geometry::perceive_human_at(world.space, head, eyes, preset, points, fixated, observer.vision);
   const double sagitta = perceived_sagitta_with(world, s, hp.points_m, [&](const geometry::Point& q) {

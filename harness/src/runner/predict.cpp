@@ -303,14 +303,14 @@ Result<Conditions> collect_conditions(const protocol::Protocol& p, Prediction& o
       continue;
     }
     auto key = order_key(p, t.protocol_block, t.levels);
-    key.push_back(judged(t.settings) == Judged::stick ? 0 : 1);
+    key.push_back(judged_index(t.settings));
     auto& into = forecast == protocol::Forecast::convergence ? adaptive : choice;
     auto it = into.find(key);
     if (it == into.end()) {
       Condition c;
       c.block = &p.blocks.at(t.protocol_block);
       c.first = t;
-      c.judged = judged(t.settings) == Judged::stick ? "stick" : "table";
+      c.judged = std::string(judged_kind(t.settings).name());
       auto made = make_world(t.settings);
       if (!made) return made.error();
       c.world = std::move(made).value();

@@ -444,7 +444,7 @@ void write_responses(std::ostringstream& o, const protocol::Protocol& p, const p
 bool write_predictions(std::ostringstream& o, const Prediction& prediction, const PreviewCondition& c,
                        const protocol::PlannedTrial& t) {
   bool any = false;
-  const std::string judged_name = judged(t.settings) == Judged::stick ? "stick" : "table";
+  const std::string judged_name(judged_kind(t.settings).name());
   const bool proportions = t.judgement->forecast() == protocol::Forecast::proportions;
   for (const auto& pc : prediction.conditions) {
     if (!proportions || pc.levels != c.levels || pc.judged != judged_name) continue;

@@ -204,6 +204,9 @@ renderer::FrameStats SessionFrames::end(Frame& f, const io::Overlay& overlay, bo
   desc.width_px = static_cast<std::uint32_t>(protocol.resolution_width);
   desc.height_px = static_cast<std::uint32_t>(protocol.resolution_height);
   const bool draw = options_.drawing == FrameDrawing::all || (options_.drawing == FrameDrawing::onset && onset);
+  // What moves with time or with the body (stimulus_kind.hpp) moves to
+  // where it is when this frame is shown.
+  if (tracker_) scene_->update(f.timing.predicted_display_ns, tracker_->output());
   const auto before_submit = SteadyTime::now();
   const renderer::FrameStats stats = station.display->submit(scene_->scene(), desc, overlay, draw);
   const auto after_submit = SteadyTime::now();

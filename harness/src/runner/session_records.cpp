@@ -68,7 +68,7 @@ std::string conditions_json(const Protocol& p, const PlannedTrial& t) {
   add("view", view_name(s));
   add("projection", std::string(renderer::to_string(s.viewing.projection)));
   add("eyes", std::string(renderer::to_string(s.viewing.eyes)));
-  add("judged", judged(s) == Judged::stick ? "stick" : "table");
+  add("judged", std::string(judged_kind(s).name()));
   const auto& judgement = block_of(p, t).judgement;
   for (const auto& [name, value] : judgement.type->conditions(judgement, t)) add(name.c_str(), value);
   return j.dump();

@@ -185,34 +185,9 @@ Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& tex
   return fit;
 }
 
-Judged judged(const Settings& s) { return s.stimulus.show_stick ? Judged::stick : Judged::table; }
-
 Placement place_stimulus(const World& world, const Settings& s, const Isometry& head_at_onset) {
-  const auto& st = s.stimulus;
   Placement p;
-  p.stick = geometry::BentStick{st.stick_length_m, st.stick_sagitta_m, st.stick_radius_m};
-  p.table_sagitta_m = st.table_sagitta_m;
-  const double yaw = st.stick_yaw_deg * std::numbers::pi / 180.0;
-  const Isometry turn = geometry::rotation(Vec3(0.0, 1.0, 0.0), yaw);
-  const auto& space = world.space;
-  if (st.stick_anchor == protocol::StickAnchor::head) {
-    // Head-locked at onset, then fixed in the world for the trial.
-    p.stick_pose = head_at_onset *
-                   geometry::translation_m(space, Vec3(0.0, st.stick_height_m, -st.stick_distance_m)) *
-                   turn;
-    return p;
-  }
-  // Across the table, stick_distance_m from its centre toward the viewer,
-  // stick_height_m above the cloth, its +z (the bow) facing the viewer.
-  Vec3 toward = geometry::log_origin(space, head_at_onset.m * geometry::origin(space));
-  toward.y = 0.0;
-  const double len = glm::length(toward);
-  toward = len > 1e-9 ? toward / len : Vec3(0.0, 0.0, 1.0);
-  const Vec3 up(0.0, 1.0, 0.0);
-  const geometry::Mat3 frame(glm::cross(up, toward), up, toward);
-  p.stick_pose = geometry::translation_m(space, toward * st.stick_distance_m) *
-                 geometry::translation_m(space, Vec3(0.0, st.stick_height_m, 0.0)) *
-                 geometry::rotation(frame) * turn;
+  for (const StimulusKind* kind : stimulus_kinds()) kind->place(world, s, head_at_onset, p);
   return p;
 }
 
@@ -248,33 +223,12 @@ std::string view_name(const Settings& s) {
 }
 
 std::vector<Point> judged_points(const World& world, const Settings& s, const Placement& placement) {
-  const auto& space = world.space;
-  std::vector<Point> points;
-  if (judged(s) == Judged::stick) {
-    const double half = placement.stick.length_m / 2.0;
-    for (const double u : {-half, 0.0, half})
-      points.push_back(placement.stick.centre_point(space, placement.stick_pose, u));
-    return points;
-  }
-  for (int e = 0; e < world.table.sides; ++e)
-    points.push_back(geometry::table_edge_frame(space, world.table, e, world.table.edge_m / 2.0).m *
-                     geometry::origin(space));
-  points.push_back(geometry::translation_m(space, Vec3(0.0, placement.table_sagitta_m, 0.0)).m *
-                   geometry::origin(space));
-  return points;
+  return judged_kind(s).judged_points(world, placement);
 }
 
 double perceived_sagitta_with(const World& world, const Settings& s, std::vector<Vec3> p,
                               const std::function<Vec3(const Point&)>& seen) {
-  const auto& space = world.space;
-  if (judged(s) == Judged::stick) return geometry::bow_toward_viewer(p[0], p[1], p[2]);
-  // The table top: its (possibly raised) centre against the plane of the
-  // perceived edge midpoints, oriented by the perceived up.
-  const Vec3 centre = p.back();
-  p.pop_back();
-  const Vec3 flat_centre = seen(geometry::origin(space));
-  const Vec3 above = seen(geometry::translation_m(space, Vec3(0.0, 0.1, 0.0)).m * geometry::origin(space));
-  return geometry::height_above_rim(p, centre, above - flat_centre);
+  return judged_kind(s).perceived_sagitta_m(world, std::move(p), seen);
 }
 
 double perceived_sagitta_m(const World& world, const Settings& s, const Placement& placement,
@@ -303,85 +257,42 @@ SightLineCount diverging_sight_lines(const World& world, const Settings& s, cons
   return count;
 }
 
-double physical_sagitta_m(const Settings& s) {
-  return judged(s) == Judged::stick ? s.stimulus.stick_sagitta_m : s.stimulus.table_sagitta_m;
-}
+double physical_sagitta_m(const Settings& s) { return judged_kind(s).physical_sagitta_m(s); }
 
 Result<TrialScene> TrialScene::build(const World& world, const Settings& s, const std::string& prompt,
                                      const std::string& font_path) {
   TrialScene t;
   t.world_ = world;
   t.font_path_ = font_path;
-  const auto& space = world.space;
-  const auto& st = s.stimulus;
-  auto hidden = [](renderer::SceneObject o) {
-    o.visible = false;
-    return o;
-  };
-  if (st.show_table) {
-    renderer::TableStyle style;
-    style.cloth_sagitta_m = st.table_sagitta_m;
-    t.table_ = t.scene_.add(hidden(renderer::table_object(space, world.table, style)));
-    t.has_table_ = true;
-    t.table_sagitta_m_ = st.table_sagitta_m;
-    // Balls in a row across the far half of the cloth, the first one white.
-    const double r = st.ball_radius_m;
-    const double z = -0.3 * world.table.apothem_m();
-    for (std::int64_t i = 0; i < st.balls; ++i) {
-      const glm::vec4 colour = i == 0 ? glm::vec4(0.95f, 0.95f, 0.92f, 1.0f)
-                                      : glm::vec4(0.85f, 0.12f, 0.10f, 1.0f);
-      const double x = (static_cast<double>(i) - 0.5 * static_cast<double>(st.balls - 1)) * 3.0 * r;
-      t.balls_.push_back(t.scene_.add(hidden(renderer::ball_object(
-          space, r, colour,
-          geometry::translation_m(space, Vec3(x, 0.0, z)) * geometry::translation_m(space, Vec3(0.0, r, 0.0))))));
-    }
-  }
-  if (st.show_stick) {
-    const geometry::BentStick stick{st.stick_length_m, st.stick_sagitta_m, st.stick_radius_m};
-    t.stick_ = t.scene_.add(hidden(renderer::stick_object(space, stick, Isometry::identity(), st.stick_marks)));
-    t.has_stick_ = true;
-    t.stick_sagitta_m_ = st.stick_sagitta_m;
-    t.stick_length_m_ = st.stick_length_m;
-  }
+  for (const StimulusKind* kind : stimulus_kinds())
+    if (kind->shown(s)) t.stimuli_.push_back(kind->build(t.scene_, world, s));
   for (auto [index, name, text, w, h] :
        {std::tuple{&t.prompt_, "prompt", prompt, 1.0, 0.22},
         std::tuple{&t.fixation_, "fixation", std::string("+"), 0.08, 0.08},
         std::tuple{&t.page_, "page", std::string(" "), 1.0, 0.5}}) {
-    auto made = from_renderer(renderer::text_panel_object(space, name, text.empty() ? std::string(" ") : text,
+    auto made = from_renderer(renderer::text_panel_object(world.space, name, text.empty() ? std::string(" ") : text,
                                                           font_path, w, h, Isometry::identity()));
     if (!made) return made.error();  // the font: io
-    *index = t.scene_.add(hidden(std::move(made).value()));
+    auto panel = std::move(made).value();
+    panel.visible = false;
+    *index = t.scene_.add(std::move(panel));
   }
   return t;
 }
 
 void TrialScene::place(const Placement& placement, const Isometry& head_at_onset) {
   const auto& space = world_.space;
-  if (has_stick_) scene_.edit(stick_).pose = placement.stick_pose;
-  scene_.edit(prompt_).pose =
-      head_at_onset * geometry::translation_m(space, Vec3(0.0, 0.32, -1.5));
+  for (auto& stimulus : stimuli_) stimulus->place(scene_, placement);
+  scene_.edit(prompt_).pose = head_at_onset * geometry::translation_m(space, Vec3(0.0, 0.32, -1.5));
   scene_.edit(fixation_).pose = head_at_onset * geometry::translation_m(space, Vec3(0.0, 0.0, -1.2));
 }
 
 void TrialScene::set_stimulus(const Settings& s, const Placement& placement) {
-  const auto& space = world_.space;
-  const auto& st = s.stimulus;
-  if (has_stick_) {
-    if (st.stick_sagitta_m != stick_sagitta_m_ || st.stick_length_m != stick_length_m_) {
-      auto o = renderer::stick_object(space, placement.stick, placement.stick_pose, st.stick_marks);
-      scene_.replace_mesh(stick_, std::move(o.build), std::move(o.info));
-      stick_sagitta_m_ = st.stick_sagitta_m;
-      stick_length_m_ = st.stick_length_m;
-    }
-    scene_.edit(stick_).pose = placement.stick_pose;
-  }
-  if (has_table_ && st.table_sagitta_m != table_sagitta_m_) {
-    renderer::TableStyle style;
-    style.cloth_sagitta_m = st.table_sagitta_m;
-    auto o = renderer::table_object(space, world_.table, style);
-    scene_.replace_mesh(table_, std::move(o.build), std::move(o.info));
-    table_sagitta_m_ = st.table_sagitta_m;
-  }
+  for (auto& stimulus : stimuli_) stimulus->set_stimulus(scene_, s, placement);
+}
+
+void TrialScene::update(std::int64_t t_ns, const FramePoses& poses) {
+  for (auto& stimulus : stimuli_) stimulus->update(scene_, t_ns, poses);
 }
 
 void TrialScene::show(Phase phase, bool stimulus_during_response) {
@@ -390,9 +301,7 @@ void TrialScene::show(Phase phase, bool stimulus_during_response) {
   auto set = [&](std::size_t i, bool v) {
     if (scene_.objects()[i].visible != v) scene_.edit(i).visible = v;
   };
-  if (has_table_) set(table_, stimulus);
-  for (auto b : balls_) set(b, stimulus);
-  if (has_stick_) set(stick_, stimulus);
+  for (auto& s : stimuli_) s->show(scene_, stimulus);
   set(fixation_, phase == Phase::fixation);
   set(prompt_, phase == Phase::response);
   set(page_, phase == Phase::instructions || phase == Phase::break_page || phase == Phase::done);
@@ -409,6 +318,109 @@ Result<Done> TrialScene::set_page(const std::string& text, const Isometry& head)
   }
   scene_.edit(page_).pose = head * geometry::translation_m(world_.space, Vec3(0.0, 0.0, -1.2));
   return Done{};
+}
+
+std::optional<SceneKind> parse_scene_kind(std::string_view text) {
+  for (const SceneKind kind : {SceneKind::stick, SceneKind::table, SceneKind::billiards, SceneKind::tiling})
+    if (text == to_string(kind)) return kind;
+  return std::nullopt;
+}
+
+std::string_view to_string(SceneKind kind) {
+  switch (kind) {
+    case SceneKind::stick: return "stick";
+    case SceneKind::table: return "table";
+    case SceneKind::billiards: return "billiards";
+    case SceneKind::tiling: return "tiling";
+  }
+  return "?";
+}
+
+Settings scene_settings(SceneKind kind, Settings s) {
+  auto& st = s.stimulus;
+  switch (kind) {
+    case SceneKind::stick:
+      // Head-locked, across the line of sight below eye level.
+      st.show_stick = true;
+      st.show_table = false;
+      st.balls = 0;
+      st.stick_anchor = protocol::StickAnchor::head;
+      st.stick_distance_m = 0.75;
+      st.stick_height_m = -0.25;
+      break;
+    case SceneKind::table:
+    case SceneKind::tiling:
+      st.show_stick = false;
+      st.show_table = true;
+      st.balls = 0;
+      break;
+    case SceneKind::billiards:
+      // Three balls, and the stick lying across the table between them and
+      // the viewer, a little above the cloth.
+      st.show_stick = true;
+      st.show_table = true;
+      st.balls = 3;
+      st.stick_anchor = protocol::StickAnchor::table;
+      st.stick_distance_m = 0.2;
+      st.stick_height_m = 0.05;
+      break;
+  }
+  return s;
+}
+
+namespace {
+
+// The viewer outside edge 0 (facing −z toward the centre), eyes
+// eye_height_m above the floor, looking down at the table's centre.
+Isometry table_viewer(const World& world, const Settings& s, double eye_height_m, double yaw_rad) {
+  const auto& space = world.space;
+  const double back_m = world.table.apothem_m() + 0.40;
+  const double up_m = eye_height_m - s.table.height_m;
+  const Isometry place = geometry::translation_m(space, Vec3(0.0, 0.0, back_m)) *
+                         geometry::translation_m(space, Vec3(0.0, up_m, 0.0));
+  // Pitch so the table centre is straight ahead: its direction as seen from
+  // the eye, through the log map (one formula for every space).
+  const Vec3 dir = geometry::log_origin(space, geometry::inverse(space, place) * geometry::origin(space));
+  const double pitch = std::atan2(-dir.y, -dir.z);
+  return place * geometry::rotation(Vec3(0.0, 1.0, 0.0), yaw_rad) * geometry::rotation(Vec3(1.0, 0.0, 0.0), -pitch);
+}
+
+}  // namespace
+
+Result<ViewedScene> viewed_scene(SceneKind kind, const Settings& base, const SceneView& view,
+                                 const std::string& prompt, const std::string& font_path) {
+  const Settings s = scene_settings(kind, base);
+  auto made = make_world(s);
+  if (!made) return made.error();
+  const World world = std::move(made).value();
+  ViewedScene out;
+  out.space = world.space;
+  const auto& space = world.space;
+  if (kind == SceneKind::tiling) {
+    renderer::add_tiling(out.scene, space);
+    // Off-centre and turned, so the view is not symmetric.
+    out.head = geometry::translation_m(space, Vec3(0.12, 0.07, 0.2 * space.radius_m)) *
+               geometry::rotation(glm::normalize(Vec3(0.3, 1.0, 0.1)), 0.35) *
+               geometry::rotation(Vec3(0.0, 1.0, 0.0), view.yaw_rad);
+    return out;
+  }
+  auto built = TrialScene::build(world, s, prompt, font_path);
+  if (!built) return built.error();
+  auto& trial = built.value();
+  Isometry onset_head = Isometry::identity();
+  if (kind == SceneKind::stick) {
+    out.head = geometry::rotation(Vec3(0.0, 1.0, 0.0), view.yaw_rad);
+  } else {
+    out.table = world.table;
+    onset_head = table_viewer(world, s, view.eye_height_m, 0.0);
+    out.head = table_viewer(world, s, view.eye_height_m, view.yaw_rad);
+  }
+  out.placement = place_stimulus(world, s, onset_head);
+  trial.place(out.placement, onset_head);
+  // What a participant sees while answering: the stimulus and the prompt.
+  trial.show(Phase::response, true);
+  out.scene = std::move(trial.scene());
+  return out;
 }
 
 }  // namespace curvlab::harness::runner

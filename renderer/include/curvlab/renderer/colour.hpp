@@ -34,7 +34,7 @@ inline double relative_luminance(const glm::vec3& linear) {
 }
 
 // The stimulus palette, linear RGBA (docs/renderer.md lists the relative
-// luminance of each). Authored as display values; balls are in scene.cpp.
+// luminance of each). Authored as display values; ball colours are chosen where balls are built.
 namespace palette {
 inline const glm::vec4 background = display(0.015f, 0.017f, 0.03f);  // the void
 inline const glm::vec4 cloth = display(0.10f, 0.42f, 0.20f);

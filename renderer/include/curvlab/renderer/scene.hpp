@@ -49,8 +49,8 @@ class Scene {
   static std::uint64_t next_revision();
 };
 
-// The stimulus's objects (model frames as in mesh.hpp), shared by the
-// stimulus scenes below and the session runner's trial scenes.
+// The stimulus's objects (model frames as in mesh.hpp), from which the
+// session runner builds its trial scenes (harness runner/stimulus.hpp).
 SceneObject stick_object(const Space& space, const geometry::BentStick& stick, const Isometry& pose,
                          StickMarks marks = StickMarks::none);
 SceneObject table_object(const Space& space, const geometry::TableShape& table,
@@ -64,38 +64,8 @@ std::variant<SceneObject, RenderError> text_panel_object(const Space& space, std
                                                          const std::string& font, double width_m,
                                                          double height_m, const Isometry& pose);
 
-enum class SceneKind { stick, table, billiards, tiling };
-std::optional<SceneKind> parse_scene_kind(std::string_view text);
-std::string_view to_string(SceneKind kind);
-
-struct StimulusOptions {
-  double table_edge_m = 0.9;   // physical edge; fixes ρ in S3 and H3
-  std::optional<double> radius_m;  // overrides: the table then follows from ρ
-  double eye_height_m = 1.55;  // above the floor; the cloth is at 0.80 m
-  double yaw_rad = 0.0;        // head turned left (+) from facing the stimulus
-  double stick_length_m = 1.0;
-  double stick_radius_m = 0.0125;
-  double stick_sagitta_m = 0.0;  // bend: + toward the viewer
-  StickMarks stick_marks = StickMarks::none;
-  double ball_radius_m = 0.0285; // 57 mm balls
-  std::string prompt = "Is the cue stick bent toward you,\nstraight, or bent away?";
-  std::string font_path = CURVLAB_DEFAULT_FONT;
-};
-
-struct StimulusScene {
-  Space space;
-  Scene scene;
-  Isometry head;  // where the participant's nose is, facing the stimulus
-  std::optional<geometry::TableShape> table;
-};
-
-// The stimulus scenes of the study (DESIGN.md §4). The space's radius comes
-// from the table's physical edge (S3 triangle, E3 square, H3 pentagon, all
-// right-angled) unless options.radius_m is given. Options that give no table
-// (geometry's GeometryError) are a RenderError of kind `stimulus` with
-// geometry's message; a prompt font that cannot be read, of kind `font`.
-std::variant<StimulusScene, RenderError> make_stimulus_scene(geometry::SpaceKind kind,
-                                                             SceneKind scene,
-                                                             const StimulusOptions& options);
+// The space's honeycomb (tiling.hpp), in shells by distance, each its own
+// object with its own subdivision: a debug scene of the renderer's.
+void add_tiling(Scene& scene, const Space& space);
 
 }  // namespace curvlab::renderer

@@ -2,11 +2,13 @@
 // virtual table (paper, "Construction of the billiards tables"), where the
 // stick goes at onset (relative to the head or to the table), the scene the
 // renderer draws through the trial's phases, and the quantity the simulated
-// observer judges (DESIGN.md §5).
+// observer judges (DESIGN.md §5). What is shown and judged is asked of the
+// trial's stimulus kinds (stimulus_kind.hpp).
 #pragma once
 
 #include "curvlab/harness/result.hpp"
 #include "curvlab/harness/runner/phase.hpp"
+#include "curvlab/harness/runner/stimulus_kind.hpp"
 
 #include "curvlab/geometry/calibration.hpp"
 #include "curvlab/geometry/perception.hpp"
@@ -17,21 +19,17 @@
 #include "curvlab/renderer/scene.hpp"
 #include "curvlab/renderer/view.hpp"
 
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
 namespace curvlab::harness::runner {
 
-struct World {
-  geometry::Space space;
-  geometry::TableShape table;
-  // Equal worlds share one tracker, so the edge correspondence survives
-  // from trial to trial.
-  [[nodiscard]] bool same_as(const World& other) const;
-};
 Result<World> make_world(const protocol::Settings& s);
 
 // The physical table of the tracking code, from calibration (centre, yaw)
@@ -50,15 +48,8 @@ geometry::PhysicalTableFit nominal_calibration(const protocol::Settings& s);
 std::string calibration_json(const geometry::PhysicalTableFit& fit);
 Result<geometry::PhysicalTableFit> parse_calibration_json(const std::string& text, const std::string& file = "");
 
-enum class Judged { stick, table };
-Judged judged(const protocol::Settings& s);
-
-// The stimulus fixed at onset.
-struct Placement {
-  geometry::BentStick stick;
-  geometry::Isometry stick_pose;  // model → world: chord along x, bow toward +z (the viewer)
-  double table_sagitta_m = 0.0;
-};
+// The placement at onset: each of the trial's kinds takes its share from
+// the head at onset (StimulusKind::place).
 Placement place_stimulus(const World& world, const protocol::Settings& s,
                          const geometry::Isometry& head_at_onset);
 
@@ -77,9 +68,9 @@ renderer::ViewSettings view_settings(const protocol::Settings& s, renderer::Eye 
 // "native", "monocular" (native, one eye) or "custom" (tourist, one eye).
 std::string view_name(const protocol::Settings& s);
 
-// The points a judgement rests on: the stick's ends and middle (end,
-// middle, end), or the table's edge midpoints followed by its (possibly
-// raised) centre.
+// The points a judgement rests on (the judged kind's, judged_kind): the
+// stick's ends and middle (end, middle, end), or the table's edge midpoints
+// followed by its (possibly raised) centre.
 std::vector<geometry::Point> judged_points(const World& world, const protocol::Settings& s,
                                            const Placement& placement);
 
@@ -111,8 +102,11 @@ SightLineCount diverging_sight_lines(const World& world, const protocol::Setting
 // The same for the physical stimulus alone (the null observer).
 double physical_sagitta_m(const protocol::Settings& s);
 
-// The scene of one trial: table, stick, balls, a prompt panel and a
-// fixation mark, with visibility switched per phase.
+// The scene of one trial: the objects of the stimulus kinds the trial shows
+// (stimulus_kind.hpp), a prompt panel, a fixation mark and a page of text,
+// with visibility switched per phase. The one builder of what participants
+// see: sessions, `replay`, `preview` and `curvlab render` (viewed_scene
+// below) all draw it. Not thread-safe.
 class TrialScene {
  public:
   static Result<TrialScene> build(const World& world, const protocol::Settings& s, const std::string& prompt,
@@ -123,19 +117,57 @@ class TrialScene {
   // A changed stimulus during the trial (method of adjustment): the stick's
   // shape and pose and the cloth's convexity follow the settings.
   void set_stimulus(const protocol::Settings& s, const Placement& placement);
+  // Every frame, before it is drawn: the kinds follow the clock and the
+  // frame's curved-space poses (a rolling ball, a cue in a hand).
+  void update(std::int64_t t_ns, const FramePoses& poses);
   // A page of text in front of the head (instructions, breaks); empty hides it.
   Result<Done> set_page(const std::string& text, const geometry::Isometry& head);
   renderer::Scene& scene() { return scene_; }
+  [[nodiscard]] const renderer::Scene& scene() const { return scene_; }
 
  private:
   World world_;
   renderer::Scene scene_;
   std::string font_path_;
-  std::size_t table_ = 0, stick_ = 0, prompt_ = 0, fixation_ = 0, page_ = 0;
-  std::vector<std::size_t> balls_;
-  bool has_table_ = false, has_stick_ = false;
-  double stick_sagitta_m_ = 0.0, stick_length_m_ = 0.0, table_sagitta_m_ = 0.0;
+  std::size_t prompt_ = 0, fixation_ = 0, page_ = 0;
+  std::vector<std::unique_ptr<StimulusObjects>> stimuli_;
   std::string page_text_;
 };
+
+// The scenes `curvlab render`, the renderer's golden images and the
+// benchmarks draw, built by TrialScene from protocol settings (scene_settings)
+// so that what is tested is what participants see: the `stick` alone in
+// front of the head, the `table`, or `billiards` (the table, balls and a
+// stick across it), shown as in a trial's response window (stimulus and
+// prompt); `tiling` is the space's honeycomb, a debug scene of the renderer's.
+enum class SceneKind { stick, table, billiards, tiling };
+std::optional<SceneKind> parse_scene_kind(std::string_view text);
+std::string_view to_string(SceneKind kind);
+
+// Protocol settings `base` (the space, its radius, the stick's bend and
+// marks, …) with what a scene kind shows.
+protocol::Settings scene_settings(SceneKind kind, protocol::Settings base);
+
+// Where the viewer stands: the stick scene's head at the origin; the table
+// scenes' eyes eye_height_m above the floor outside edge 0, looking at the
+// table's centre. yaw_rad turns the head left (+) from facing the stimulus,
+// after the stimulus was placed.
+struct SceneView {
+  double eye_height_m = 1.55;
+  double yaw_rad = 0.0;
+};
+
+struct ViewedScene {
+  geometry::Space space;
+  std::optional<geometry::TableShape> table;  // the table scenes'
+  renderer::Scene scene;
+  geometry::Isometry head;  // where the viewer's nose is
+  Placement placement;      // the stimulus as placed at onset
+};
+
+// Settings that give no table are bad_input; a prompt font that cannot be
+// read, io.
+Result<ViewedScene> viewed_scene(SceneKind kind, const protocol::Settings& s, const SceneView& view,
+                                 const std::string& prompt, const std::string& font_path);
 
 }  // namespace curvlab::harness::runner
