@@ -120,19 +120,64 @@ Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
   return out;
 }
 
-// The HID response devices of --responses, each file's devices all
-// connected: a bad mapping file is bad input (exit 2), an absent device a
-// device error (exit 1), before anything is written.
+// The kinds of device --responses KIND:ARGUMENT opens, one entry each: a
+// new kind of response device is its source (an io::ResponseSource under
+// harness/src/devices/) and one entry here.
+struct ResponseKind {
+  std::string_view name;      // before the colon
+  std::string_view argument;  // what follows it, for the usage message
+  // What the device can press, from the argument alone (a bad one: exit 2).
+  harness::io::Reach (*reach)(const std::string& argument);
+  // The device, opened (an absent one: exit 1).
+  std::unique_ptr<harness::io::ResponseSource> (*open)(const std::string& argument, const harness::io::Clock& clock);
+};
+
+devices::MappingFile hid_mapping(const std::string& path) {
+  auto file = devices::load_mapping(path);
+  if (!file) raise(file.error());
+  return std::move(file).value();
+}
+
+const ResponseKind kResponseKinds[] = {
+    {"hid", "MAPPING.toml (a HID mapping file, docs/devices.md)",
+     [](const std::string& path) { return devices::mapping_reach(hid_mapping(path)); },
+     [](const std::string& path, const harness::io::Clock& clock) -> std::unique_ptr<harness::io::ResponseSource> {
+       auto opened = devices::HidResponses::open(hid_mapping(path), clock);
+       if (!opened) raise(opened.error());
+       return std::move(opened).value();
+     }},
+};
+
+// Each --responses value's kind and argument; an unknown kind: exit 2.
+std::vector<std::pair<const ResponseKind*, std::string>> response_specs(const BackendArgs& a) {
+  std::vector<std::pair<const ResponseKind*, std::string>> out;
+  for (const auto& spec : a.responses) {
+    const auto colon = spec.find(':');
+    const ResponseKind* kind = nullptr;
+    for (const auto& k : kResponseKinds)
+      if (colon != std::string::npos && spec.compare(0, colon, k.name) == 0) kind = &k;
+    if (kind == nullptr) {
+      std::string expected;
+      for (const auto& k : kResponseKinds)
+        expected += (expected.empty() ? "" : " or ") + std::string(k.name) + ":" + std::string(k.argument);
+      throw UsageError("--responses " + spec + ": expected " + expected);
+    }
+    out.emplace_back(kind, spec.substr(colon + 1));
+  }
+  return out;
+}
+
+// The response devices of --responses, each one connected, before anything
+// is written: a bad argument is bad input (exit 2), an absent device a
+// device error (exit 1).
 void open_responses(Devices& out, const BackendArgs& a) {
   if (a.responses.empty()) return;
   if (a.backend == "headless" && a.pace == "fast")
     throw UsageError("--responses needs a person answering in real time: add --pace realtime, or use --backend "
                      "desktop or xr");
-  for (const auto& file : response_mappings(a)) {
-    auto opened = devices::HidResponses::open(file, *out.clock);
-    if (!opened) raise(opened.error());
-    out.hid.push_back(std::move(opened).value());
-    out.station.responses.push_back(out.hid.back().get());
+  for (const auto& [kind, argument] : response_specs(a)) {
+    out.response_devices.push_back(kind->open(argument, *out.clock));
+    out.station.responses.push_back(out.response_devices.back().get());
   }
 }
 
@@ -151,18 +196,6 @@ bool wants_operator_window(const BackendArgs& a) {
     throw UsageError("--operator-window must be auto, on or off, got '" + a.operator_window + "'");
   // The desktop pilot's own window is the participant's view: its panel opens on request.
   return a.backend == "xr" && display_present();
-}
-
-std::vector<devices::MappingFile> response_mappings(const BackendArgs& a) {
-  std::vector<devices::MappingFile> out;
-  for (const auto& spec : a.responses) {
-    if (spec.rfind("hid:", 0) != 0)
-      throw UsageError("--responses " + spec + ": expected hid:MAPPING.toml (a HID mapping file, docs/devices.md)");
-    auto file = devices::load_mapping(spec.substr(4));
-    if (!file) raise(file.error());
-    out.push_back(std::move(file).value());
-  }
-  return out;
 }
 
 // The signal that asked a frame loop to stop (0: none): platform/signals.hpp.
@@ -184,7 +217,7 @@ std::optional<std::string> unreachable_answer(const BackendArgs& a, const harnes
   std::vector<harness::io::Reach> reach;
   if (a.backend == "desktop") reach.push_back(desktop::keyboard_reach());
   if (a.backend == "xr") reach.push_back(xr::controller_reach());
-  for (const auto& file : response_mappings(a)) reach.push_back(devices::mapping_reach(file));
+  for (const auto& [kind, argument] : response_specs(a)) reach.push_back(kind->reach(argument));
   if (reach.empty()) return std::nullopt;
   const auto missing = harness::runner::unreachable_answer(reach, p);
   if (!missing) return std::nullopt;

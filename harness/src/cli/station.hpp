@@ -42,7 +42,7 @@ struct BackendArgs {
   std::string preview = "side-by-side";
   std::string screenshot;
   std::string key_script;
-  std::vector<std::string> responses;  // "hid:MAPPING.toml"
+  std::vector<std::string> responses;  // "KIND:ARGUMENT", e.g. "hid:MAPPING.toml"
   bool quiet = false;
   bool json = false;
   std::string export_dir;
@@ -78,7 +78,7 @@ struct Devices {
   std::unique_ptr<xr::Controllers> xr_controllers;
   std::unique_ptr<xr::TrackedPoses> xr_poses;
   std::unique_ptr<xr::SwapchainDisplay> xr_display;
-  std::vector<std::unique_ptr<devices::HidResponses>> hid;
+  std::vector<std::unique_ptr<harness::io::ResponseSource>> response_devices;  // --responses
   harness::io::Station station;
 
   void use(harness::io::InteractiveDisplay& d) {
@@ -105,9 +105,6 @@ struct StationNeeds {
 // RuntimeFailure (exit 1). Warns when the device draws with fewer samples
 // than asked.
 Devices open_station(const BackendArgs& a, const StationNeeds& needs);
-
-// The HID mapping files of --responses, read (a bad one: exit 2).
-std::vector<devices::MappingFile> response_mappings(const BackendArgs& a);
 
 // The options with the protocol's [responses] HID mapping files added as
 // --responses (resolved against the protocol file's folder), for desktop and

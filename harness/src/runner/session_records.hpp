@@ -19,7 +19,7 @@ namespace curvlab::harness::runner {
 
 using Json = nlohmann::ordered_json;
 
-// The block a planned trial belongs to. Its name comes from the design of
+// The block a planned trial belongs to, by its stored index. The index comes from the design of
 // the same protocol, so a miss is a broken contract: it aborts.
 const protocol::Block& block_of(const protocol::Protocol& p, const protocol::PlannedTrial& t);
 // Adaptive tracks (staircases) are named uniquely within a session: the
