@@ -1,6 +1,6 @@
 // The stimulus kinds, registered in the order a trial's judged kind is
 // chosen and its objects are built. Each kind's file (stimuli/<name>.cpp)
-// defines its function.
+// defines its function; a new kind declares it here.
 #include "curvlab/harness/runner/stimulus_kind.hpp"
 
 namespace curvlab::harness::runner {
