@@ -18,7 +18,7 @@
 #include <string>
 #include <thread>
 
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 using Clock = std::chrono::steady_clock;
 
 namespace {

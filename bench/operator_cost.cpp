@@ -38,10 +38,10 @@ double quantile(std::vector<double> v, double q) {
 // One round: a fresh backend (and window), `frames` frames after 30 to settle.
 bool round(bool window, int frames, const bench::StimulusScene& s, std::vector<double>& cpu_ms) {
   harness::io::SteadyClock clock;
-  xr::XrBackendOptions o;
+  harness::xr::XrBackendOptions o;
   o.clock = &clock;
   o.mirror = window;
-  auto made = xr::make_xr_backend(o);
+  auto made = harness::xr::make_xr_backend(o);
   if (!made) {
     std::fprintf(stderr, "%s\n", made.error().message.c_str());
     return false;

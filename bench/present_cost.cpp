@@ -73,15 +73,15 @@ int main(int argc, char** argv) {
         if (i >= 3) offscreen_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
       }
     }
-    for (const auto preview : {desktop::DesktopPreview::side_by_side, desktop::DesktopPreview::left}) {
-      desktop::DesktopOptions o;
+    for (const auto preview : {harness::desktop::DesktopPreview::side_by_side, harness::desktop::DesktopPreview::left}) {
+      harness::desktop::DesktopOptions o;
       o.eye_width_px = size;
       o.eye_height_px = size;
       o.preview = preview;
       o.software = true;
       o.vsync = false;
       o.clock = &clock;
-      auto backend_made = desktop::DesktopBackend::create(o);
+      auto backend_made = harness::desktop::DesktopBackend::create(o);
       if (!backend_made) {
         std::fprintf(stderr, "%s\n", backend_made.error().message.c_str());
         return 1;
@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
       const double off = median(offscreen_ms);
       const double win = median(window_ms);
       std::printf("%-6u %-13s %12.2f %12.2f %8.2f %8.1f\n", size,
-                  preview == desktop::DesktopPreview::side_by_side ? "side-by-side" : "one eye",
+                  preview == harness::desktop::DesktopPreview::side_by_side ? "side-by-side" : "one eye",
                   off, win, win / off, 1000.0 / win);
     }
   }

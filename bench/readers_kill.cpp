@@ -27,8 +27,8 @@
 
 namespace fs = std::filesystem;
 namespace sh = curvlab::testing::sharing;
-using curvlab::data::Connection;
-using curvlab::data::OpenFlags;
+using curvlab::harness::data::Connection;
+using curvlab::harness::data::OpenFlags;
 
 namespace {
 
@@ -65,7 +65,7 @@ void hard_read(const fs::path& db, int turn) {
 std::string integrity(const std::string& db) {
   try {
     auto c = Connection::open(db, OpenFlags::read_only);
-    curvlab::data::Statement s(c, "PRAGMA integrity_check");
+    curvlab::harness::data::Statement s(c, "PRAGMA integrity_check");
     return s.step() ? s.column_text(0) : "no result";
   } catch (const std::exception& e) {
     return e.what();
@@ -91,7 +91,7 @@ void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms
   fs::create_directories(dir / "links");
   const std::string db = (dir / "real" / name).string();
   const fs::path link = dir / "links" / name;
-  curvlab::data::remove_database_files(db);
+  curvlab::harness::data::remove_database_files(db);
   fs::remove(link);
   fs::create_symlink(fs::path("..") / "real" / name, link);
   // The last round's output must not answer for this one's first trial.
@@ -136,7 +136,7 @@ void round(const std::string& bin, const fs::path& dir, int k, int kill_after_ms
     t.lost += reported - stored;
   }
   if (integrity(db) != "ok") ++t.integrity_failures;
-  curvlab::data::remove_database_files(db);
+  curvlab::harness::data::remove_database_files(db);
   for (const char* companion : {".lock", ".reserve-1"}) fs::remove(db + companion);
   fs::remove(link);
 }

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <string>
 
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 
 int main(int argc, char** argv) {
   if (argc != 2) {

@@ -36,9 +36,9 @@ inline void write_file(const fs::path& p, const std::string& bytes) {
 
 // The first column of the first row ("NULL" for none), or the open error.
 inline std::string scalar(const fs::path& db, const std::string& sql) {
-  auto d = data::Database::open(db.string(), data::OpenMode::read_only);
+  auto d = harness::data::Database::open(db.string(), harness::data::OpenMode::read_only);
   if (!d) return d.error().message;
-  data::Statement s(d.value().connection(), sql);
+  harness::data::Statement s(d.value().connection(), sql);
   if (!s.step() || s.is_null(0)) return "NULL";
   return s.column_text(0);
 }

@@ -14,7 +14,7 @@
 #include <random>
 #include <sstream>
 
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 namespace fs = std::filesystem;
 
 namespace {

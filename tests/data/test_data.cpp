@@ -22,7 +22,7 @@
 #include <sstream>
 #include <thread>
 
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 namespace fs = std::filesystem;
 
 namespace {

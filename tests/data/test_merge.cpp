@@ -24,7 +24,7 @@
 #include <thread>
 
 namespace fs = std::filesystem;
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 
 using curvlab::testing::read_file;
 using curvlab::testing::scalar;

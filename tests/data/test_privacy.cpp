@@ -17,7 +17,7 @@
 #include <sstream>
 
 namespace fs = std::filesystem;
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 using curvlab::testing::run_cli;
 
 using curvlab::testing::read_file;

@@ -21,7 +21,7 @@
 #include <filesystem>
 #include <sstream>
 
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 using curvlab::testing::run_cli;
 using curvlab::testing::scalar;
 using Json = nlohmann::json;

@@ -17,7 +17,7 @@
 #include <random>
 #include <thread>
 
-using namespace curvlab::data;
+using namespace curvlab::harness::data;
 using curvlab::testing::run_cli;
 namespace fs = std::filesystem;
 namespace sh = curvlab::testing::sharing;

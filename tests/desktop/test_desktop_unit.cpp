@@ -15,7 +15,7 @@
 
 namespace {
 
-using namespace curvlab::desktop;
+using namespace curvlab::harness::desktop;
 
 TEST(KeyScript, ParsesKeysDelaysAndComments) {
   auto parsed = parse_key_script("# pilot\nspace\n\n2 150  # straight\nLEFT 0\n", "keys.txt");
@@ -205,9 +205,9 @@ TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
   unsetenv("DISPLAY");
   unsetenv("WAYLAND_DISPLAY");
   curvlab::harness::io::SteadyClock clock;
-  curvlab::desktop::DesktopOptions options;
+  curvlab::harness::desktop::DesktopOptions options;
   options.clock = &clock;
-  auto made = curvlab::desktop::make_desktop_backend(options);
+  auto made = curvlab::harness::desktop::make_desktop_backend(options);
   ASSERT_FALSE(made.has_value());
   EXPECT_EQ(made.error().kind, curvlab::harness::Error::Kind::device);
   const auto& message = made.error().message;
@@ -220,12 +220,12 @@ TEST(DesktopBackend, WithoutADisplayNamesTheGlfwErrorAndTheFix) {
 
 TEST(DesktopBackend, BadOptionsAreRefusedBeforeAnyWindow) {
   curvlab::harness::io::SteadyClock clock;
-  curvlab::desktop::DesktopOptions options;
-  auto no_clock = curvlab::desktop::make_desktop_backend(options);
+  curvlab::harness::desktop::DesktopOptions options;
+  auto no_clock = curvlab::harness::desktop::make_desktop_backend(options);
   ASSERT_FALSE(no_clock.has_value());
   options.clock = &clock;
   options.key_script = "/nonexistent/keys.txt";
-  auto no_script = curvlab::desktop::make_desktop_backend(options);
+  auto no_script = curvlab::harness::desktop::make_desktop_backend(options);
   ASSERT_FALSE(no_script.has_value());
   EXPECT_NE(no_script.error().message.find("keys.txt"), std::string::npos);
 }

@@ -25,7 +25,7 @@ namespace {
 
 using namespace curvlab;
 using harness::io::Signal;
-using desktop::DesktopOptions;
+using harness::desktop::DesktopOptions;
 using harness::io::InputEvent;
 using harness::io::Overlay;
 
@@ -74,7 +74,7 @@ bool wood(int r, int g, int b) { return r > 40 && r > g + 10 && g > b + 5 && r <
 
 // One frame of a stimulus scene, as the runner submits it; false: the
 // window gave no frame.
-bool show_stimulus_frame(desktop::DesktopBackend& backend, const renderer::fixtures::StimulusScene& s) {
+bool show_stimulus_frame(harness::desktop::DesktopBackend& backend, const renderer::fixtures::StimulusScene& s) {
   auto timing = backend.begin_frame();
   if (!timing) return false;
   renderer::FrameDescription f;
@@ -101,8 +101,8 @@ class DesktopWindow : public ::testing::Test {
     return o;
   }
   // The backend, or null with the factory's error reported as a failure.
-  static std::unique_ptr<desktop::DesktopBackend> open(const DesktopOptions& options) {
-    auto made = desktop::DesktopBackend::create(options);
+  static std::unique_ptr<harness::desktop::DesktopBackend> open(const DesktopOptions& options) {
+    auto made = harness::desktop::DesktopBackend::create(options);
     if (!made) {
       ADD_FAILURE() << made.error().message;
       return nullptr;
@@ -124,7 +124,7 @@ TEST_F(DesktopWindow, ScriptedKeyArrivesAndStimulusScreenshotShowsTheTable) {
   const auto opened = open(options);
   ASSERT_NE(opened, nullptr);
   auto& backend = *opened;
-  EXPECT_EQ(backend.info().backend, curvlab::data::Backend::desktop);
+  EXPECT_EQ(backend.info().backend, curvlab::harness::data::Backend::desktop);
   EXPECT_NE(backend.info().renderer_device.find("llvmpipe"), std::string::npos);
 
   const auto s = renderer::fixtures::make(geometry::SpaceKind::E3, renderer::fixtures::SceneKind::billiards);
@@ -234,7 +234,7 @@ TEST_F(DesktopWindow, SideBySideEyesAreSeparatedByAGap) {
 
 TEST_F(DesktopWindow, OneEyePreviewAndResizeKeepPresenting) {
   DesktopOptions options = window(200, 150);
-  options.preview = desktop::DesktopPreview::right;
+  options.preview = harness::desktop::DesktopPreview::right;
   options.vsync = false;
   options.validation = validation_layer_installed();
   const auto opened = open(options);

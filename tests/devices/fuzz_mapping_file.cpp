@@ -14,7 +14,7 @@
 #include <span>
 #include <string_view>
 
-using namespace curvlab::devices;
+using namespace curvlab::harness::devices;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -5,7 +5,7 @@
 
 namespace {
 
-using namespace curvlab::devices;
+using namespace curvlab::harness::devices;
 
 std::string error_of(const std::string& text) {
   auto r = parse_mapping(text, "pedals.toml");
@@ -107,7 +107,7 @@ TEST(MappingFile, MissingFileIsAnError) {
 
 namespace {
 
-using namespace curvlab::devices;
+using namespace curvlab::harness::devices;
 
 // The mapping file goes through the same guard as protocol files: text that
 // would reach toml++ 3.3's undefined behaviour is a syntax error naming where.

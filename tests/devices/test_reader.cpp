@@ -11,7 +11,7 @@
 
 namespace {
 
-using namespace curvlab::devices;
+using namespace curvlab::harness::devices;
 
 // Replays reports, then fails like an unplugged device.
 class RecordedSource final : public ReportSource {
@@ -111,12 +111,12 @@ TEST(HidLibrary, EnumerationWithoutDevicesIsEmptyNotAnError) {
 namespace {
 
 TEST(HidDevice, OpeningAMissingDeviceIsAnErrorNamingIt) {
-  curvlab::devices::HidDeviceInfo info;
+  curvlab::harness::devices::HidDeviceInfo info;
   info.vendor_id = 0x046d;
   info.product_id = 0xc216;
   info.product = "Dual Action";
   info.path = "/dev/hidraw-curvlab-missing";
-  auto opened = curvlab::devices::HidDevice::open(info);
+  auto opened = curvlab::harness::devices::HidDevice::open(info);
   ASSERT_FALSE(opened);
   EXPECT_EQ(opened.error().kind, curvlab::harness::Error::Kind::device);
   const std::string msg = opened.error().message;

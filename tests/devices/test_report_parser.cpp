@@ -10,7 +10,7 @@
 
 namespace {
 
-using namespace curvlab::devices;
+using namespace curvlab::harness::devices;
 
 MappingFile parse_ok(const std::string& text) {
   auto r = parse_mapping(text, "test.toml");

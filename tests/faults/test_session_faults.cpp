@@ -136,7 +136,7 @@ void fault_then_resume(const std::string& db, const harness::io::Station& statio
   ASSERT_TRUE(healthy.display);
   auto resumed = rn::resume_session(db, session, s, *loaded, options(drawing), healthy.station(), healthy.clock());
   ASSERT_TRUE(resumed.has_value()) << resumed.error().message;
-  EXPECT_EQ(resumed->status, curvlab::data::SessionStatus::completed);
+  EXPECT_EQ(resumed->status, curvlab::harness::data::SessionStatus::completed);
   EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
   // Every trial completed; the ones done before the fault kept as they were.
   EXPECT_EQ(count(db, "SELECT count(*) FROM trials WHERE status = 'completed'"), 8);

@@ -27,10 +27,10 @@ inline std::filesystem::path fresh_dir(const std::string& name) {
 
 // Rows of a query, each column as text ("NULL" for null).
 inline std::vector<std::vector<std::string>> query(const std::string& db_path, const std::string& sql) {
-  auto db = data::Database::open(db_path, data::OpenMode::read_only);
+  auto db = harness::data::Database::open(db_path, harness::data::OpenMode::read_only);
   std::vector<std::vector<std::string>> rows;
   if (!db) return rows;
-  data::Statement s(db.value().connection(), sql);
+  harness::data::Statement s(db.value().connection(), sql);
   while (s.step()) {
     std::vector<std::string> row;
     for (int c = 0; c < s.column_count(); ++c) row.push_back(s.is_null(c) ? "NULL" : s.column_text(c));
@@ -40,7 +40,7 @@ inline std::vector<std::vector<std::string>> query(const std::string& db_path, c
 }
 
 inline std::string integrity(const std::string& db_path) {
-  auto db = data::Database::open(db_path, data::OpenMode::read_only);
+  auto db = harness::data::Database::open(db_path, harness::data::OpenMode::read_only);
   if (!db) return db.error().message;
   return db.value().integrity_check();
 }

@@ -36,9 +36,9 @@ Vec3 corner(int j) { return curvlab::geometry::physical_table_corner(table(), j)
 curvlab::harness::io::InputEvent press(std::string name, std::string device, bool pressed = true) {
   namespace io = curvlab::harness::io;
   if (device.rfind("xr:", 0) == 0)
-    return curvlab::xr::controller_input(0, device == "xr:left", std::move(name), pressed);
-  if (device.rfind("hid:", 0) == 0) return curvlab::devices::response_input(0, device.substr(4), std::move(name), pressed);
-  return curvlab::desktop::key_input(0, std::move(name), pressed,
+    return curvlab::harness::xr::controller_input(0, device == "xr:left", std::move(name), pressed);
+  if (device.rfind("hid:", 0) == 0) return curvlab::harness::devices::response_input(0, device.substr(4), std::move(name), pressed);
+  return curvlab::harness::desktop::key_input(0, std::move(name), pressed,
                                      device == "script" ? io::SourceKind::script : io::SourceKind::keyboard);
 }
 
@@ -84,7 +84,7 @@ TEST(CalibrationSteps, OnlyTheSourcesThatCalibrateGiveCommands) {
 // The text names the controls of the sources at hand that can calibrate.
 TEST(CalibrationSteps, TheControlsAtHandAreThoseThatCanTouch) {
   namespace io = curvlab::harness::io;
-  const auto keyboard = curvlab::desktop::keyboard_reach();
+  const auto keyboard = curvlab::harness::desktop::keyboard_reach();
   io::Reach observer;
   observer.kind = io::SourceKind::observer;
   observer.simulated = true;
@@ -97,7 +97,7 @@ TEST(CalibrationSteps, TheControlsAtHandAreThoseThatCanTouch) {
   EXPECT_FALSE(only_keys.controller);
   io::Reach controllers;
   controllers.kind = io::SourceKind::xr_controller;
-  controllers.intents = curvlab::xr::controller_intents("right_trigger");
+  controllers.intents = curvlab::harness::xr::controller_intents("right_trigger");
   const auto both = rn::calibration_controls({controllers, keyboard});
   EXPECT_TRUE(both.keyboard);
   EXPECT_TRUE(both.controller);

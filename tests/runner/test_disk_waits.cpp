@@ -47,7 +47,7 @@ TEST(DiskWaits, NoSyncFromTheFrameThreadAndEachTrialIsDurableBeforeTheNext) {
     };
   });
   vfs::set_sync_delay(std::chrono::microseconds(0));
-  ASSERT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
+  ASSERT_EQ(out.summary.status, curvlab::harness::data::SessionStatus::completed);
   EXPECT_EQ(loop_syncs, 0) << "disk syncs issued by the frame loop";
   EXPECT_GT(vfs::total_syncs() - vfs::syncs_from(frame_thread), out.summary.trials_completed)
       << "the writer thread syncs at least once per completed trial";

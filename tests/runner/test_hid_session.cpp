@@ -25,7 +25,7 @@ namespace {
 using namespace curvlab;
 namespace rn = harness::runner;
 namespace pr = harness::protocol;
-namespace dv = curvlab::devices;
+namespace dv = curvlab::harness::devices;
 using curvlab::testing::fresh_dir;
 using curvlab::testing::query;
 
@@ -82,7 +82,7 @@ TEST(HidSession, ARecordedButtonBoxAnswersEveryTrialOnTheSessionClock) {
   const auto db = (fresh_dir("hid_session") / "s.sqlite").string();
   auto result = rn::run_session(p, text, db, o, station, clock);
   ASSERT_TRUE(result.has_value()) << result.error().message;
-  EXPECT_EQ(result->status, curvlab::data::SessionStatus::completed);
+  EXPECT_EQ(result->status, curvlab::harness::data::SessionStatus::completed);
   EXPECT_EQ(result->trials_completed, 4);
 
   const auto rows = query(db, "SELECT response, response_device, onset_ns, response_ns, rt_ns FROM trials "

@@ -208,7 +208,7 @@ TEST(InputFiles, ReplayOfAFrameWithoutAFiniteHeadPoseIsRefused) {
   for (int k = 0; k < 16; ++k) nan_blob += "000000000000F87F";  // quiet NaN, little-endian
   nan_blob += "'";
   {
-    auto file = curvlab::data::Database::open(db, curvlab::data::OpenMode::open_existing);
+    auto file = curvlab::harness::data::Database::open(db, curvlab::harness::data::OpenMode::open_existing);
     ASSERT_TRUE(file);
     file.value().connection().exec("UPDATE tracking_samples SET virtual_pose = " + nan_blob +
                                    " WHERE device = 'head' AND frame_index = " + onset);

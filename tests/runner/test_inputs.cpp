@@ -39,17 +39,17 @@ TEST(Inputs, EachSourceIsStoredAsBefore) {
   EXPECT_EQ(io::to_string(io::SourceId{io::SourceKind::script, ""}), "script");
   EXPECT_EQ(io::to_string(io::SourceId{io::SourceKind::observer, ""}), "observer");
   EXPECT_EQ(io::to_string(io::SourceId{io::SourceKind::hid, "button box"}), "hid:button box");
-  EXPECT_EQ(io::to_string(curvlab::xr::controller_input(0, true, "x", true).source), "xr:left");
-  EXPECT_EQ(io::to_string(curvlab::xr::controller_input(0, false, "a", true).source), "xr:right");
-  EXPECT_EQ(io::to_string(curvlab::devices::response_input(0, "pedals", "left", true).source), "hid:pedals");
-  EXPECT_EQ(io::to_string(curvlab::desktop::key_input(0, "1", true).source), "keyboard");
-  EXPECT_EQ(io::to_string(curvlab::desktop::key_input(0, "1", true, io::SourceKind::script).source), "script");
+  EXPECT_EQ(io::to_string(curvlab::harness::xr::controller_input(0, true, "x", true).source), "xr:left");
+  EXPECT_EQ(io::to_string(curvlab::harness::xr::controller_input(0, false, "a", true).source), "xr:right");
+  EXPECT_EQ(io::to_string(curvlab::harness::devices::response_input(0, "pedals", "left", true).source), "hid:pedals");
+  EXPECT_EQ(io::to_string(curvlab::harness::desktop::key_input(0, "1", true).source), "keyboard");
+  EXPECT_EQ(io::to_string(curvlab::harness::desktop::key_input(0, "1", true, io::SourceKind::script).source), "script");
 }
 
 // A and the trigger are one event each: it continues a page, and answers
 // where the protocol binds the button.
 TEST(Inputs, TheControllersAIsOneEventThatContinuesAndAnswers) {
-  const io::InputEvent a = curvlab::xr::controller_input(7, false, "a", true);
+  const io::InputEvent a = curvlab::harness::xr::controller_input(7, false, "a", true);
   EXPECT_EQ(a.t_ns, 7);
   EXPECT_EQ(a.control, (io::Control{io::ControlKind::button, "a"}));
   EXPECT_TRUE(a.intents.has(Intent::continue_page));
@@ -57,12 +57,12 @@ TEST(Inputs, TheControllersAIsOneEventThatContinuesAndAnswers) {
   EXPECT_FALSE(a.intents.has(Intent::calibration_touch));
   for (const bool left : {true, false}) {
     const io::InputEvent trigger =
-        curvlab::xr::controller_input(0, left, curvlab::xr::protocol_button("trigger", left), true);
+        curvlab::harness::xr::controller_input(0, left, curvlab::harness::xr::protocol_button("trigger", left), true);
     EXPECT_TRUE(trigger.intents.has(Intent::continue_page));
     EXPECT_EQ(trigger.intents.has(Intent::calibration_touch), !left);  // the right hand touches
   }
-  EXPECT_TRUE(curvlab::xr::controller_input(0, false, "b", true).intents.has(Intent::calibration_fit_three));
-  EXPECT_FALSE(curvlab::xr::controller_input(0, true, "x", true).intents.has(Intent::continue_page));
+  EXPECT_TRUE(curvlab::harness::xr::controller_input(0, false, "b", true).intents.has(Intent::calibration_fit_three));
+  EXPECT_FALSE(curvlab::harness::xr::controller_input(0, true, "x", true).intents.has(Intent::continue_page));
 
   // one_eye_vs_two binds A to "straight": the one press both turns a page
   // and, in a trial, answers.
@@ -81,17 +81,17 @@ TEST(Inputs, TheControllersAIsOneEventThatContinuesAndAnswers) {
 // name does not, and the box's own continue button turns pages.
 TEST(Inputs, AHidButtonNamedInTheMappingGivesItsAnswer) {
   const pr::Judgement j = button_box();
-  const io::InputEvent second = curvlab::devices::response_input(5, "box", "hid_2", true);
+  const io::InputEvent second = curvlab::harness::devices::response_input(5, "box", "hid_2", true);
   EXPECT_EQ(second.control, (io::Control{io::ControlKind::button, "hid_2"}));
   EXPECT_TRUE(second.intents.empty());
   const auto verdict = rn::classify_input(j, second, true);
   EXPECT_EQ(verdict.use, rn::InputUse::choose);
   EXPECT_EQ(verdict.option, 1u);
-  EXPECT_EQ(rn::classify_input(j, curvlab::devices::response_input(5, "box", "hid_1", true), true).option, 0u);
-  EXPECT_EQ(rn::classify_input(j, curvlab::desktop::key_input(5, "hid_2", true), true).use, rn::InputUse::ignored);
+  EXPECT_EQ(rn::classify_input(j, curvlab::harness::devices::response_input(5, "box", "hid_1", true), true).option, 0u);
+  EXPECT_EQ(rn::classify_input(j, curvlab::harness::desktop::key_input(5, "hid_2", true), true).use, rn::InputUse::ignored);
   EXPECT_EQ(rn::classify_input(j, second, false).use, rn::InputUse::early);
 
-  const io::InputEvent go = curvlab::devices::response_input(0, "box", "continue", true);
+  const io::InputEvent go = curvlab::harness::devices::response_input(0, "box", "continue", true);
   EXPECT_TRUE(go.intents.has(Intent::continue_page));
   const std::vector<std::string> none;
   rn::Page page(0, 0, none);
@@ -99,13 +99,13 @@ TEST(Inputs, AHidButtonNamedInTheMappingGivesItsAnswer) {
   EXPECT_FALSE(page.frame(1, {second}));
   EXPECT_TRUE(page.frame(2, {go}));
 
-  auto mapping = curvlab::devices::parse_mapping(
+  auto mapping = curvlab::harness::devices::parse_mapping(
       "[[device]]\nname = \"box\"\nvendor_id = 0x1234\n"
       "[[device.binding]]\nresponse = \"hid_1\"\nkind = \"bit\"\nbyte = 0\nbit = 0\n"
       "[[device.binding]]\nresponse = \"continue\"\nkind = \"bit\"\nbyte = 0\nbit = 1\n",
       "box.toml");
   ASSERT_TRUE(mapping.has_value()) << mapping.error().message;
-  const io::Reach reach = curvlab::devices::mapping_reach(*mapping);
+  const io::Reach reach = curvlab::harness::devices::mapping_reach(*mapping);
   EXPECT_EQ(reach.kind, io::SourceKind::hid);
   EXPECT_TRUE(reach.intents.has(Intent::continue_page));
   EXPECT_FALSE(reach.intents.has(Intent::calibration_touch));
@@ -115,22 +115,22 @@ TEST(Inputs, AHidButtonNamedInTheMappingGivesItsAnswer) {
 // The keyboard's keys: space and enter turn pages and calibrate, F and R
 // calibrate; the others only answer through the protocol's keys.
 TEST(Inputs, TheKeyboardsKeysMeanWhatThePagesAndTheCalibrationAsk) {
-  const io::InputEvent space = curvlab::desktop::key_input(3, "space", true);
+  const io::InputEvent space = curvlab::harness::desktop::key_input(3, "space", true);
   EXPECT_EQ(space.control, (io::Control{io::ControlKind::key, "space"}));
   EXPECT_TRUE(space.intents.has(Intent::continue_page));
   EXPECT_TRUE(space.intents.has(Intent::calibration_touch));
-  EXPECT_TRUE(curvlab::desktop::key_input(0, "enter", true).intents.has(Intent::calibration_accept));
-  EXPECT_TRUE(curvlab::desktop::key_input(0, "return", true).intents.has(Intent::continue_page));
-  EXPECT_TRUE(curvlab::desktop::key_input(0, "1", true).intents.empty());
-  EXPECT_FALSE(curvlab::desktop::key_input(0, "a", true).intents.has(Intent::calibration_accept));
-  const io::Reach reach = curvlab::desktop::keyboard_reach();
+  EXPECT_TRUE(curvlab::harness::desktop::key_input(0, "enter", true).intents.has(Intent::calibration_accept));
+  EXPECT_TRUE(curvlab::harness::desktop::key_input(0, "return", true).intents.has(Intent::continue_page));
+  EXPECT_TRUE(curvlab::harness::desktop::key_input(0, "1", true).intents.empty());
+  EXPECT_FALSE(curvlab::harness::desktop::key_input(0, "a", true).intents.has(Intent::calibration_accept));
+  const io::Reach reach = curvlab::harness::desktop::keyboard_reach();
   EXPECT_TRUE(reach.every_key);
   EXPECT_TRUE(reach.intents.has(Intent::calibration_redo));
 
   const pr::Protocol demo = example("demo");
   const auto verdict = rn::classify_input(demo.blocks.at(0).judgement.type != nullptr ? demo.blocks.at(0).judgement
                                                                                       : demo.judgement,
-                                          curvlab::desktop::key_input(0, "2", true), true);
+                                          curvlab::harness::desktop::key_input(0, "2", true), true);
   EXPECT_EQ(verdict.use, rn::InputUse::choose);
   EXPECT_EQ(verdict.option, 1u);
 }
@@ -140,17 +140,17 @@ TEST(Inputs, TheKeyboardsKeysMeanWhatThePagesAndTheCalibrationAsk) {
 TEST(Inputs, CalibrationCommandsComeFromEachSourceKind) {
   using Stage = rn::CalibrationStage;
   using Command = rn::CalibrationCommand;
-  const io::InputEvent touches[] = {curvlab::desktop::key_input(0, "space", true),
-                                    curvlab::desktop::key_input(0, "space", true, io::SourceKind::script),
-                                    curvlab::xr::controller_input(0, false, "right_trigger", true)};
+  const io::InputEvent touches[] = {curvlab::harness::desktop::key_input(0, "space", true),
+                                    curvlab::harness::desktop::key_input(0, "space", true, io::SourceKind::script),
+                                    curvlab::harness::xr::controller_input(0, false, "right_trigger", true)};
   for (const auto& in : touches) EXPECT_EQ(rn::calibration_command(in, Stage::touching), Command::touch);
-  const io::InputEvent accepts[] = {curvlab::desktop::key_input(0, "enter", true),
-                                    curvlab::xr::controller_input(0, false, "a", true)};
+  const io::InputEvent accepts[] = {curvlab::harness::desktop::key_input(0, "enter", true),
+                                    curvlab::harness::xr::controller_input(0, false, "a", true)};
   for (const auto& in : accepts) EXPECT_EQ(rn::calibration_command(in, Stage::fitted), Command::accept);
-  const io::InputEvent fits[] = {curvlab::desktop::key_input(0, "f", true),
-                                 curvlab::xr::controller_input(0, false, "b", true)};
+  const io::InputEvent fits[] = {curvlab::harness::desktop::key_input(0, "f", true),
+                                 curvlab::harness::xr::controller_input(0, false, "b", true)};
   for (const auto& in : fits) EXPECT_EQ(rn::calibration_command(in, Stage::touching), Command::fit_three);
-  EXPECT_FALSE(rn::calibration_command(curvlab::devices::response_input(0, "box", "continue", true), Stage::touching));
+  EXPECT_FALSE(rn::calibration_command(curvlab::harness::devices::response_input(0, "box", "continue", true), Stage::touching));
   io::InputEvent observer;
   observer.source = {io::SourceKind::observer, ""};
   observer.control = {io::ControlKind::key, "space"};

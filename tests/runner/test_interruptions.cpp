@@ -50,10 +50,10 @@ TEST(Interruptions, PressesBeforeTheDisplayedOnsetAreAnticipationsNotAnswers) {
       if (phase == "fixation") {
         // Includes the frame in which the runner decides onset: stamped at
         // the frame's start, before its predicted display time.
-        in.push_back(curvlab::desktop::key_input(t.now_ns, "1", true));
+        in.push_back(curvlab::harness::desktop::key_input(t.now_ns, "1", true));
         answered = false;
       } else if ((phase == "stimulus" || phase == "response") && !answered) {
-        in.push_back(curvlab::desktop::key_input(t.predicted_display_ns, "2", true));
+        in.push_back(curvlab::harness::desktop::key_input(t.predicted_display_ns, "2", true));
         answered = true;
       }
       return rn::Signal::none;
@@ -95,11 +95,11 @@ TEST(Interruptions, FlaggedTrackingLossKeepsTheTrialAndRecordsHowLong) {
   EXPECT_NEAR(std::stod(flagged[0][1]), 500.0, 12.0);  // one 90 Hz frame either side
   EXPECT_EQ(flagged[0][2], "1");
 
-  auto db = data::Database::open(out.db, data::OpenMode::read_only);
+  auto db = harness::data::Database::open(out.db, harness::data::OpenMode::read_only);
   ASSERT_TRUE(db);
-  data::ExportOptions eo;
+  harness::data::ExportOptions eo;
   eo.out_dir = fresh_dir("interrupt_flag_export").string();
-  ASSERT_TRUE(data::export_trials_csv(db.value(), eo));
+  ASSERT_TRUE(harness::data::export_trials_csv(db.value(), eo));
   std::ifstream csv(std::filesystem::path(eo.out_dir) / "trials.csv");
   std::string header, first, second;
   std::getline(csv, header);
@@ -131,7 +131,7 @@ TEST(Interruptions, AbortPolicyGivesUpTheTrialAndWaitsForTrackingBeforeTheNext) 
   const auto out = run_demo("abort", "[tracking]\non_loss = \"abort\"\n", true,
                             [](ScriptedDevices& b) { b.head_valid = lost_between({{50, 2000}}); });
   ASSERT_FALSE(out.db.empty());
-  EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
+  EXPECT_EQ(out.summary.status, curvlab::harness::data::SessionStatus::completed);
   EXPECT_EQ(out.summary.trials_aborted, 1);
   EXPECT_EQ(out.summary.trials_completed, 7);
   EXPECT_EQ(query(out.db, "SELECT trial_index, attempt, status FROM trials WHERE status != 'completed'"),

@@ -157,7 +157,7 @@ TEST(RunHeadless, ReplayReproducesTheStimulusImage) {
   // Frames stored without eye geometry (schema version 2) are replayed with
   // the headless backend's: the same image here, marked "assumed".
   {
-    auto c = curvlab::data::Connection::open(db, curvlab::data::OpenFlags::read_write);
+    auto c = curvlab::harness::data::Connection::open(db, curvlab::harness::data::OpenFlags::read_write);
     c.exec("UPDATE frames SET eye_width_px = NULL, eye_height_px = NULL, eye_views = NULL");
   }
   const auto assumed = (dir / "assumed").string();
@@ -209,7 +209,7 @@ TEST(RunHeadless, ReplayShowsTheAdjustmentInForceAtTheFrame) {
 
   // The change shows: without the logged changes the same frame looks different.
   {
-    auto c = curvlab::data::Connection::open(db, curvlab::data::OpenFlags::read_write);
+    auto c = curvlab::harness::data::Connection::open(db, curvlab::harness::data::OpenFlags::read_write);
     c.exec("DELETE FROM events WHERE kind = 'adjustment'");
   }
   EXPECT_DOUBLE_EQ(replay(changes.back()[0], "unadjusted")["adjustment_value"].get<double>(), start);

@@ -59,7 +59,7 @@ class ScreenFollower {
  public:
   // Reads each frame's overlay as the pilot window shows it.
   void read(const io::Overlay& overlay) {
-    const std::string legend = desktop::legend_text(overlay);
+    const std::string legend = harness::desktop::legend_text(overlay);
     const std::string seen = std::string(io::to_string(overlay.phase)) + "\n" + overlay.text + "\n" + legend;
     if (seen == seen_) return;
     seen_ = seen;
@@ -77,8 +77,8 @@ class ScreenFollower {
     // A screen that names no key would hold a page for ever: give up.
     if (!unreadable_.empty()) return io::Signal::quit;
     if (key_.empty() || now_ns < next_ns_) return io::Signal::none;
-    out.push_back(desktop::key_input(now_ns, key_, true));
-    out.push_back(desktop::key_input(now_ns, key_, false));
+    out.push_back(harness::desktop::key_input(now_ns, key_, true));
+    out.push_back(harness::desktop::key_input(now_ns, key_, false));
     next_ns_ = now_ns + 1'000'000'000;
     return ++presses_ > 600 ? io::Signal::quit : io::Signal::none;  // ten minutes on one screen: not listening
   }
@@ -97,7 +97,7 @@ TEST_P(ScreenFollowerRun, CompletesWithEveryTrialAnswered) {
   ScreenFollower person;
   const auto out = curvlab::testing::run_protocol(GetParam(), std::string("screen_") + GetParam(), "", false,
                                                   [&](curvlab::testing::ScriptedDevices& d) {
-                                                    d.reach_as = desktop::keyboard_reach();
+                                                    d.reach_as = harness::desktop::keyboard_reach();
                                                     d.shown = [&](const io::Overlay& o) { person.read(o); };
                                                     d.inputs = [&](const io::FrameTiming& t, const std::string&,
                                                                    std::vector<io::InputEvent>& in) {
@@ -106,7 +106,7 @@ TEST_P(ScreenFollowerRun, CompletesWithEveryTrialAnswered) {
                                                   });
   ASSERT_FALSE(out.db.empty());
   EXPECT_TRUE(person.unreadable_.empty()) << "a screen asked without saying how:\n" << person.unreadable_.front();
-  EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
+  EXPECT_EQ(out.summary.status, curvlab::harness::data::SessionStatus::completed);
   EXPECT_GT(out.summary.trials_completed, 0);
   EXPECT_EQ(query(out.db, "SELECT count(*) FROM trials WHERE status = 'completed' AND response IS NULL")[0][0], "0")
       << "trials timed out: the legend named keys that do not answer";

@@ -23,7 +23,7 @@ TEST(StaircaseRun, PseStaircasesSettleWherePredicted) {
   const auto out = curvlab::testing::run_protocol("stick_pse_staircase", "pse", "", true,
                                                   [](curvlab::testing::ScriptedDevices&) {});
   ASSERT_FALSE(out.db.empty());
-  EXPECT_EQ(out.summary.status, curvlab::data::SessionStatus::completed);
+  EXPECT_EQ(out.summary.status, curvlab::harness::data::SessionStatus::completed);
 
   auto loaded = pr::load_protocol_file(CURVLAB_SOURCE_DIR "/protocols/stick_pse_staircase.toml");
   ASSERT_TRUE(loaded.has_value());

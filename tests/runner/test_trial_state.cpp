@@ -41,14 +41,14 @@ struct Press {
 std::vector<curvlab::harness::io::InputEvent> inputs(const std::vector<Press>& presses) {
   std::vector<curvlab::harness::io::InputEvent> out;
   for (const auto& p : presses)
-    out.push_back(p.name == "continue" ? curvlab::devices::response_input(0, "box", p.name, p.pressed)
-                                       : curvlab::desktop::key_input(0, p.name, p.pressed));
+    out.push_back(p.name == "continue" ? curvlab::harness::devices::response_input(0, "box", p.name, p.pressed)
+                                       : curvlab::harness::desktop::key_input(0, p.name, p.pressed));
   return out;
 }
 
-curvlab::harness::io::InputEvent key(const char* name) { return curvlab::desktop::key_input(0, name, true); }
+curvlab::harness::io::InputEvent key(const char* name) { return curvlab::harness::desktop::key_input(0, name, true); }
 curvlab::harness::io::InputEvent button(const char* name) {
-  return curvlab::xr::controller_input(0, false, name, true);
+  return curvlab::harness::xr::controller_input(0, false, name, true);
 }
 
 }  // namespace

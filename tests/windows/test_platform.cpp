@@ -21,8 +21,8 @@
 #include <string>
 
 namespace fs = std::filesystem;
-namespace pf = curvlab::platform;
-using curvlab::data::WriterLock;
+namespace pf = curvlab::harness::platform;
+using curvlab::harness::data::WriterLock;
 
 namespace {
 
@@ -107,7 +107,7 @@ TEST_F(PlatformTest, ASecondWriterOfASessionIsRefusedAndToldWhichProcessHoldsIt)
   ASSERT_TRUE(first) << first.error().message;
   auto second = WriterLock::for_session(db, 2);
   ASSERT_FALSE(second);
-  EXPECT_EQ(second.error().kind, curvlab::data::DataError::Kind::in_use);
+  EXPECT_EQ(second.error().kind, curvlab::harness::data::DataError::Kind::in_use);
   EXPECT_NE(second.error().message.find("process " + std::to_string(pf::process_id())), std::string::npos)
       << second.error().message;
   EXPECT_TRUE(WriterLock::for_session(db, 3)) << "another session of the same file is free";

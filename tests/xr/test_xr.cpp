@@ -14,7 +14,7 @@
 
 namespace {
 
-using namespace curvlab::xr;
+using namespace curvlab::harness::xr;
 
 TEST(XrResultName, NamesWithoutAnInstance) {
   EXPECT_EQ(result_name(XR_ERROR_RUNTIME_UNAVAILABLE), "XR_ERROR_RUNTIME_UNAVAILABLE");

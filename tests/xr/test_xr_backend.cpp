@@ -16,7 +16,7 @@
 
 namespace {
 
-using namespace curvlab::xr;
+using namespace curvlab::harness::xr;
 
 TEST(XrBackend, WithoutARuntimeNamesTheResultAndTheFixAndWritesNothing) {
   const auto dir = std::filesystem::temp_directory_path() /

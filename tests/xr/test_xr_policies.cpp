@@ -14,7 +14,7 @@
 
 namespace {
 
-using namespace curvlab::xr;
+using namespace curvlab::harness::xr;
 
 constexpr double kTol = 1e-5;  // m; XrPosef holds floats
 

@@ -21,7 +21,7 @@
 #include "curvlab/harness/platform/files.hpp"
 #include "curvlab/harness/platform/terminal.hpp"
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -264,4 +264,4 @@ void add_authoring_commands(CLI::App& app) {
   preview->callback([pa] { run_preview(*pa); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -24,7 +24,7 @@
 #include <memory>
 #include <sstream>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 
 namespace rn = curvlab::harness::runner;
 
@@ -244,4 +244,4 @@ void add_calibrate_commands(CLI::App& app) {
   });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

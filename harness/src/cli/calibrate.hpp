@@ -6,7 +6,7 @@
 
 #include "curvlab/harness/runner/calibration.hpp"
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 
 // Runs the calibration (runner/calibration.hpp) on the devices and says on
 // stderr what happened: each refused fit with its reason, then the fit kept.
@@ -21,4 +21,4 @@ harness::runner::CalibrationResult calibrate_on(const Devices& devices,
 // to, in touch order.
 Json calibration_document(const geometry::PhysicalTableFit& fit, const std::vector<geometry::Vec3>& touches_m);
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

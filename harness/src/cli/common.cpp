@@ -12,7 +12,7 @@
 #include <iostream>
 #include <sstream>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 std::string human(const Json& v) {
@@ -145,4 +145,4 @@ void ignore_broken_pipes() {
 #endif
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -18,7 +18,7 @@ namespace CLI {
 class App;
 }
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 
 // Bad arguments or input a person must fix: message on stderr, exit code 2.
 struct UsageError : std::runtime_error {
@@ -94,4 +94,4 @@ void add_calibrate_commands(CLI::App& app);  // calibrate: the physical table
 // (sessions store it).
 harness::protocol::Protocol load_protocol_or_usage(const std::string& path, std::string* text = nullptr);  // run, resume, predict, replay
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -11,7 +11,7 @@
 #include <iostream>
 #include <memory>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 struct DevicesArgs {
@@ -21,7 +21,7 @@ struct DevicesArgs {
 };
 
 void run_devices(const DevicesArgs& a) {
-  using namespace curvlab::devices;
+  using namespace curvlab::harness::devices;
   std::optional<MappingFile> mapping;
   if (!a.mapping.empty()) {
     auto loaded = load_mapping(a.mapping);
@@ -82,15 +82,15 @@ void run_devices(const DevicesArgs& a) {
 }
 
 void run_xr_check(bool as_json) {
-  auto result = curvlab::xr::probe("curvlab xr-check");
+  auto result = curvlab::harness::xr::probe("curvlab xr-check");
   if (!result) {
     const auto& e = result.error();
     if (as_json) {
       Json doc;
       doc["ok"] = false;
-      if (const auto f = curvlab::xr::failed_call(e)) {
+      if (const auto f = curvlab::harness::xr::failed_call(e)) {
         doc["call"] = f->call;
-        doc["result"] = curvlab::xr::result_name(f->result);
+        doc["result"] = curvlab::harness::xr::result_name(f->result);
         doc["result_code"] = static_cast<int>(f->result);
       }
       doc["message"] = e.message;
@@ -135,4 +135,4 @@ void add_devices_commands(CLI::App& app) {
   }
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -17,7 +17,7 @@
 #include <memory>
 #include "curvlab/harness/platform/process.hpp"
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -121,4 +121,4 @@ void add_export_commands(CLI::App& app) {
   cmd->callback([args, session] { run_export(*args, session->count() > 0); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -13,7 +13,7 @@
 #include <numbers>
 #include <sstream>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 using namespace curvlab::geometry;
@@ -188,4 +188,4 @@ void add_inspect_commands(CLI::App& app) {
   }
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

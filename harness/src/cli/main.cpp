@@ -9,7 +9,7 @@
 #include <iostream>
 
 int main(int argc, char** argv) {
-  curvlab::cli::ignore_broken_pipes();
+  curvlab::harness::cli::ignore_broken_pipes();
   CLI::App app{"curvlab — perception experiments in S3, E3 and H3"};
   app.set_version_flag("--version", std::string(curvlab::software_version()) + " (" +
                                         std::string(curvlab::git_commit()) + ")");
@@ -18,18 +18,18 @@ int main(int argc, char** argv) {
   // are --x everywhere, and a positional path may begin with a slash.
   // Subcommands take this setting when they are added, below.
   app.allow_windows_style_options(false);
-  curvlab::cli::add_inspect_commands(app);
-  curvlab::cli::add_devices_commands(app);
-  curvlab::cli::add_export_commands(app);
-  curvlab::cli::add_sessions_commands(app);
-  curvlab::cli::add_merge_commands(app);
-  curvlab::cli::add_track_commands(app);
-  curvlab::cli::add_render_commands(app);
-  curvlab::cli::add_measure_commands(app);
-  curvlab::cli::add_protocol_commands(app);
-  curvlab::cli::add_authoring_commands(app);
-  curvlab::cli::add_run_commands(app);
-  curvlab::cli::add_calibrate_commands(app);
+  curvlab::harness::cli::add_inspect_commands(app);
+  curvlab::harness::cli::add_devices_commands(app);
+  curvlab::harness::cli::add_export_commands(app);
+  curvlab::harness::cli::add_sessions_commands(app);
+  curvlab::harness::cli::add_merge_commands(app);
+  curvlab::harness::cli::add_track_commands(app);
+  curvlab::harness::cli::add_render_commands(app);
+  curvlab::harness::cli::add_measure_commands(app);
+  curvlab::harness::cli::add_protocol_commands(app);
+  curvlab::harness::cli::add_authoring_commands(app);
+  curvlab::harness::cli::add_run_commands(app);
+  curvlab::harness::cli::add_calibrate_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -41,10 +41,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return 2;
-  } catch (const curvlab::cli::UsageError& e) {
+  } catch (const curvlab::harness::cli::UsageError& e) {
     std::cerr << "curvlab: error: " << e.what() << '\n';
     return 2;
-  } catch (const curvlab::cli::RuntimeFailure& e) {
+  } catch (const curvlab::harness::cli::RuntimeFailure& e) {
     std::cerr << "curvlab: " << e.what() << '\n';
     return e.exit_code;
   } catch (const std::exception& e) {

@@ -19,7 +19,7 @@
 #include <utility>
 #include <variant>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -147,4 +147,4 @@ void add_measure_commands(CLI::App& app) {
   stick->callback([args] { run_measure_stick(*args); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

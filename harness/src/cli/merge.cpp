@@ -14,7 +14,7 @@
 #include <iostream>
 #include <memory>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 
 std::vector<std::string> expand_database_args(const std::vector<std::string>& args, const std::string& exclude) {
   namespace fs = std::filesystem;
@@ -145,4 +145,4 @@ void add_merge_commands(CLI::App& app) {
   cmd->callback([args] { run_merge(*args); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 
 namespace rn = curvlab::harness::runner;
 
@@ -45,4 +45,4 @@ std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::ui
   return p;
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

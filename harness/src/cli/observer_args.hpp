@@ -13,7 +13,7 @@
 #include <optional>
 #include <string>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 
 struct ObserverArgs {
   std::string model = "human";
@@ -32,4 +32,4 @@ void add_observer_options(CLI::App* cmd, ObserverArgs& o);
 // UsageError.
 std::optional<harness::runner::ObserverParams> observer_params(const ObserverArgs& a, std::uint64_t default_seed);
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -12,7 +12,7 @@
 #include <memory>
 #include <string>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace rn = curvlab::harness::runner;
@@ -187,4 +187,4 @@ void add_predict_command(CLI::App& app) {
   p->callback([pa] { predict_command(*pa); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

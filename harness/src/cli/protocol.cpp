@@ -13,7 +13,7 @@
 #include <iostream>
 #include <sstream>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace pr = curvlab::harness::protocol;
@@ -201,4 +201,4 @@ void add_protocol_commands(CLI::App& app) {
   design->callback([args] { run_design(args->file, args->participant, args->json); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

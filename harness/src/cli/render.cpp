@@ -23,7 +23,7 @@
 #include <memory>
 #include <numbers>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 using namespace curvlab::renderer;
@@ -245,4 +245,4 @@ void add_render_commands(CLI::App& app) {
   cmd->callback([args] { run_render(*args); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

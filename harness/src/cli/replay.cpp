@@ -10,7 +10,7 @@
 #include <memory>
 #include <optional>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace rn = curvlab::harness::runner;
@@ -54,4 +54,4 @@ void add_replay_command(CLI::App& app) {
   rp->callback([ra] { replay_command(*ra); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

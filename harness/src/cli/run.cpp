@@ -41,7 +41,7 @@
 #include <memory>
 #include <sstream>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace rn = curvlab::harness::runner;
@@ -407,4 +407,4 @@ void add_run_commands(CLI::App& app) {
   add_replay_command(app);
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -19,7 +19,7 @@
 #include <optional>
 #include <string_view>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 struct SessionsArgs {
@@ -189,4 +189,4 @@ void add_sessions_commands(CLI::App& app) {
   cmd->callback([args] { sessions_command(*args); });
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

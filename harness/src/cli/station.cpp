@@ -15,7 +15,7 @@
 #include <cstdlib>
 #include <tuple>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 namespace rn = curvlab::harness::runner;
@@ -239,4 +239,4 @@ Devices open_station(const BackendArgs& a, const StationNeeds& needs) {
   return out;
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

@@ -21,14 +21,14 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 class Session;
 class Controllers;
 class TrackedPoses;
 class SwapchainDisplay;
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 
 struct BackendArgs {
   std::string backend = "headless";
@@ -135,4 +135,4 @@ const std::atomic<int>& catch_stop_signals();
 // The signal caught since, or 0.
 int stop_signal_received();
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

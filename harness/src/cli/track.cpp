@@ -17,7 +17,7 @@
 #include <memory>
 #include <numbers>
 
-namespace curvlab::cli {
+namespace curvlab::harness::cli {
 namespace {
 
 using namespace curvlab::geometry;
@@ -398,4 +398,4 @@ void add_track_commands(CLI::App& app) {
   }
 }
 
-}  // namespace curvlab::cli
+}  // namespace curvlab::harness::cli

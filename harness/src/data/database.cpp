@@ -13,7 +13,7 @@
 #include <vector>
 #include <system_error>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 
 namespace fs = std::filesystem;
@@ -427,4 +427,4 @@ void remove_database_files(const std::string& path) {
   for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path + suffix, ec);
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

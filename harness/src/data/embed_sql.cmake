@@ -15,7 +15,7 @@ endforeach()
 file(WRITE "${OUTPUT}.tmp" "// Generated from data_schema/ by embed_sql.cmake; do not edit.
 #include \"curvlab/harness/data/database.hpp\"
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 constexpr std::string_view k_schema = R\"curvlab_sql(${schema})curvlab_sql\";
 constexpr std::string_view k_migration_2 = R\"curvlab_sql(${m2})curvlab_sql\";
@@ -34,6 +34,6 @@ std::string_view migration_sql(std::int64_t to) {
   return {};
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data
 ")
 file(COPY_FILE "${OUTPUT}.tmp" "${OUTPUT}" ONLY_IF_DIFFERENT)

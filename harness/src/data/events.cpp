@@ -4,7 +4,7 @@
 
 #include <array>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 
 // Key order is kept as written (ordered_json): the stored detail reads in
@@ -205,4 +205,4 @@ Expected<events::Onset> parse_onset(const std::string& detail_json) {
   return o;
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -18,7 +18,7 @@
 #include <map>
 #include <set>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 using namespace exporting;
 using OJson = nlohmann::ordered_json;
@@ -480,4 +480,4 @@ Expected<ExportSummary> export_bids_motion(Database& db, const ExportOptions& op
                       [&](const std::string& root) { return write_dataset(db, sessions.value(), root); });
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

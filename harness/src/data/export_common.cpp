@@ -18,7 +18,7 @@
 #include <map>
 #include <system_error>
 
-namespace curvlab::data::exporting {
+namespace curvlab::harness::data::exporting {
 
 namespace fs = std::filesystem;
 
@@ -503,9 +503,9 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
   return table;
 }
 
-}  // namespace curvlab::data::exporting
+}  // namespace curvlab::harness::data::exporting
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 const std::vector<ExportFormat>& export_formats() {
   static const std::vector<ExportFormat> formats{
@@ -523,4 +523,4 @@ Expected<Done> check_export_labels(Database& db, const ExportOptions& options) {
   return Done{};
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::data::exporting {
+namespace curvlab::harness::data::exporting {
 
 struct Column {
   std::string name;
@@ -74,4 +74,4 @@ std::string tsv_field(const std::string& value);  // tabs and newlines become sp
 // Letters and digits only (BIDS labels, Psych-DS keyword values).
 std::string alnum_label(const std::string& text);
 
-}  // namespace curvlab::data::exporting
+}  // namespace curvlab::harness::data::exporting

@@ -2,7 +2,7 @@
 // as missing by both R's read.csv and pandas.read_csv).
 #include "export_common.hpp"
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 using namespace exporting;
 
@@ -42,4 +42,4 @@ Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& opt
   });
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

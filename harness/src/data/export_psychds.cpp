@@ -9,7 +9,7 @@
 
 #include <filesystem>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 using namespace exporting;
 
@@ -69,4 +69,4 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
   });
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

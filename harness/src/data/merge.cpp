@@ -22,7 +22,7 @@
 #include <filesystem>
 #include <optional>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 
 namespace fs = std::filesystem;
@@ -547,4 +547,4 @@ Expected<std::string> session_content_digest(const std::string& db_path, const s
   }
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

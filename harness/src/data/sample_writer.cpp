@@ -20,7 +20,7 @@
 #include <utility>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 
 double thread_cpu_seconds() {
@@ -561,4 +561,4 @@ std::string SampleWriter::last_error() const {
   return impl_->error;
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

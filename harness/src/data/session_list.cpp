@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cctype>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 
 // sessions ⋈ participants ⋈ protocols with each session's trial counts, in
@@ -156,4 +156,4 @@ DataError missing_session_error(Database& db, std::int64_t session_id) {
                                                    db.path() + " lists them with the command that continues each"};
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -10,7 +10,7 @@
 #include <cstring>
 #include <span>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 
 using Json = nlohmann::json;
@@ -249,4 +249,4 @@ Expected<std::optional<ViewGeometry>> read_view_geometry(Database& db, std::int6
   });
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 const char* to_string(DominantEye eye) {
   switch (eye) {
@@ -567,4 +567,4 @@ Expected<std::int64_t> SessionStore::count_trials(std::int64_t session_id, std::
   });
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -7,7 +7,7 @@
 #include <array>
 #include <cstdint>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 struct Sha256::State {
   sha256_ctx ctx{};
@@ -37,4 +37,4 @@ std::string Sha256::hex() {
 
 std::string sha256_hex(std::string_view bytes) { return Sha256().add(bytes).hex(); }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

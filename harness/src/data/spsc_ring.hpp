@@ -8,7 +8,7 @@
 #include <type_traits>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // Single-producer / single-consumer ring of trivially copyable records. The
 // producer only writes head_, the consumer only tail_; acquire/release on
@@ -52,4 +52,4 @@ class SpscRing {
   alignas(64) std::atomic<std::size_t> tail_{0};
 };
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

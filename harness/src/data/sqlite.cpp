@@ -9,7 +9,7 @@
 #include <cstring>
 #include <filesystem>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 DataError to_data_error(const SqliteFailure& failure, const std::string& path) {
   const std::string where = path + ": " + failure.what();
@@ -239,4 +239,4 @@ void Transaction::commit() {
   open_ = false;
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -9,7 +9,7 @@
 #include "curvlab/harness/platform/lock_file.hpp"
 #include "curvlab/harness/platform/process.hpp"
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 namespace fs = std::filesystem;
 
@@ -73,4 +73,4 @@ std::size_t remove_numbered(const std::string& dir, const std::string& prefix, S
   return removed;
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

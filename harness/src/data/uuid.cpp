@@ -4,7 +4,7 @@
 #include <chrono>
 #include <random>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 std::string session_uuid_v7(std::uint64_t unix_ms, std::uint16_t rand_a, std::uint64_t rand_b) {
   std::array<unsigned char, 16> b{};
@@ -44,4 +44,4 @@ bool is_session_uuid(const std::string& t) {
   return t[19] == '8' || t[19] == '9' || t[19] == 'a' || t[19] == 'b';
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -14,7 +14,7 @@
 #include <thread>
 #include <utility>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 namespace {
 
 namespace fs = std::filesystem;
@@ -337,4 +337,4 @@ void WriterLock::release() noexcept {
   data_.close();
 }
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

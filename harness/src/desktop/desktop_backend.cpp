@@ -14,7 +14,7 @@
 #include <numbers>
 #include <thread>
 
-namespace curvlab::desktop {
+namespace curvlab::harness::desktop {
 
 using harness::Error;
 using harness::Result;
@@ -535,4 +535,4 @@ Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_desktop_backend(co
   return std::unique_ptr<harness::io::InteractiveDisplay>(std::move(made).value());
 }
 
-}  // namespace curvlab::desktop
+}  // namespace curvlab::harness::desktop

@@ -17,7 +17,7 @@
 
 struct GLFWwindow;
 
-namespace curvlab::desktop {
+namespace curvlab::harness::desktop {
 
 // GLFW's process-wide state: glfwInit on creation, glfwTerminate when the
 // last owner goes. Every window is destroyed before it.
@@ -101,4 +101,4 @@ class DesktopBackend final : public harness::io::InteractiveDisplay {
 // "f12", "kp_1"); empty for keys curvlab does not name.
 std::string key_name(int glfw_key);
 
-}  // namespace curvlab::desktop
+}  // namespace curvlab::harness::desktop

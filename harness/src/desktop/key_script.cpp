@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace curvlab::desktop {
+namespace curvlab::harness::desktop {
 
 using harness::Error;
 using harness::Result;
@@ -123,4 +123,4 @@ std::optional<ScriptedKey> KeyScriptPlayer::due(std::int64_t now_ns) {
   return keys_[next_++];
 }
 
-}  // namespace curvlab::desktop
+}  // namespace curvlab::harness::desktop

@@ -17,7 +17,7 @@
 #include <variant>
 #include <vector>
 
-namespace curvlab::desktop {
+namespace curvlab::harness::desktop {
 
 struct ScriptedKey {
   std::string name;  // lower-case, as InputEvent names keys ("1", "space", "left"); "hand" for a hand line
@@ -56,4 +56,4 @@ class KeyScriptPlayer {
   std::optional<std::int64_t> armed_at_ns_;
 };
 
-}  // namespace curvlab::desktop
+}  // namespace curvlab::harness::desktop

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace curvlab::desktop {
+namespace curvlab::harness::desktop {
 namespace {
 
 constexpr double kMaxPitchRad = 85.0 * std::numbers::pi / 180.0;
@@ -71,4 +71,4 @@ geometry::LabFrame PilotBody::frame() const {
   return f;
 }
 
-}  // namespace curvlab::desktop
+}  // namespace curvlab::harness::desktop

@@ -9,7 +9,7 @@
 
 #include "curvlab/geometry/tracking.hpp"
 
-namespace curvlab::desktop {
+namespace curvlab::harness::desktop {
 
 struct PilotBodyOptions {
   glm::dvec3 start_head_m{0.0, 1.55, 0.9};
@@ -58,4 +58,4 @@ class PilotBody {
   glm::dvec3 right_offset_m_;
 };
 
-}  // namespace curvlab::desktop
+}  // namespace curvlab::harness::desktop

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <mutex>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 namespace {
 
 std::mutex g_library_mutex;
@@ -127,4 +127,4 @@ std::string describe(const HidDeviceInfo& info) {
   return out;
 }
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

@@ -6,7 +6,7 @@
 #include <set>
 #include <sstream>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 namespace {
 
 namespace tr = harness::toml_reader;
@@ -215,4 +215,4 @@ harness::Result<MappingFile> load_mapping(const std::filesystem::path& path) {
   return parse_mapping(text.str(), path.string());
 }
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

@@ -2,7 +2,7 @@
 
 #include <array>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 
 void EventQueue::push(DeviceEvent event) {
   {
@@ -71,4 +71,4 @@ void DeviceReader::run() {
   finished_.store(true);
 }
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

@@ -2,7 +2,7 @@
 
 #include <optional>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 namespace {
 
 // nullopt when the report is too short for the binding.
@@ -74,4 +74,4 @@ std::vector<ResponseEvent> ReportParser::release_all(std::int64_t t_ns) {
   return events;
 }
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

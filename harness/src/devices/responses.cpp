@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <thread>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 
 using harness::Error;
 
@@ -122,4 +122,4 @@ harness::Result<std::size_t> RecordedReports::read(std::span<std::uint8_t> buffe
   return n;
 }
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

@@ -4,7 +4,7 @@
 
 #include <utility>
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 
 std::string describe(Unsafe why) {
   switch (why) {
@@ -38,4 +38,4 @@ LockFile& LockFile::operator=(LockFile&& other) noexcept {
 
 LockFile::~LockFile() { close(); }
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

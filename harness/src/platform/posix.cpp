@@ -24,7 +24,7 @@
 #include <vector>
 #include <utility>
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 
 // --- process ---------------------------------------------------------------
 
@@ -273,4 +273,4 @@ std::string signal_name(int sig) { return ::strsignal(sig); }
 
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

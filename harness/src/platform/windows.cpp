@@ -26,7 +26,7 @@
 #include <filesystem>
 #include <utility>
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 namespace {
 
 std::wstring wide(const std::string& utf8) { return std::filesystem::u8path(utf8).wstring(); }
@@ -354,4 +354,4 @@ bool stderr_is_terminal() {
   return ::GetConsoleMode(::GetStdHandle(STD_ERROR_HANDLE), &mode) != 0;
 }
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

@@ -329,7 +329,7 @@ void write_header(std::ostringstream& o, const protocol::Protocol& p, const Prev
   o << "<table class=\"meta\">\n"
     << "<tr><td>protocol file</td><td><code>" << html(fs::path(rq.protocol_path).filename().string())
     << "</code></td></tr>\n"
-    << "<tr><td>protocol SHA-256</td><td><code id=\"sha256\">" << curvlab::data::sha256_hex(rq.protocol_text)
+    << "<tr><td>protocol SHA-256</td><td><code id=\"sha256\">" << curvlab::harness::data::sha256_hex(rq.protocol_text)
     << "</code></td></tr>\n"
     << "<tr><td>software</td><td>curvlab " << html(std::string(software_version())) << " ("
     << html(std::string(git_commit())) << ")</td></tr>\n"

@@ -1,6 +1,6 @@
 #include "curvlab/harness/xr/actions.hpp"
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 namespace {
 constexpr const char* kSimple = "/interaction_profiles/khr/simple_controller";
@@ -126,4 +126,4 @@ std::vector<std::string> profile_input_paths(const std::string& profile) {
   return out;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -9,7 +9,7 @@
 
 #include <utility>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::Error;
 using harness::Result;
@@ -77,4 +77,4 @@ Result<std::unique_ptr<InteractiveDisplay>> make_xr_backend(const XrBackendOptio
       std::move(display).value()));
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <iostream>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::io::InputEvent;
 using harness::io::Signal;
@@ -119,4 +119,4 @@ harness::io::Reach controller_reach() {
   return r;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

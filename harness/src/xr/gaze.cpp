@@ -10,7 +10,7 @@
 #include <iostream>
 #include <utility>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::Done;
 using harness::Error;
@@ -196,4 +196,4 @@ EyeTracking::Located EyeTracking::locate(XrSpace stage, XrTime time, const Stage
   return out;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstring>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 namespace {
 
 constexpr const char* kVulkanEnable2 = "XR_KHR_vulkan_enable2";
@@ -293,4 +293,4 @@ harness::Result<ProbeReport> probe(const std::string& application_name) {
   return report;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

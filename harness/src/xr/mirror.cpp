@@ -5,7 +5,7 @@
 #include <cstring>
 #include <utility>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 namespace {
 
@@ -90,4 +90,4 @@ void OperatorMirror::copy(const std::array<vk::Image, 2>& images) {
   state_.store(kCopying, std::memory_order_release);
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -22,7 +22,7 @@
 #include <atomic>
 #include <cstdint>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 class OperatorMirror final : public harness::io::FrameMirror {
  public:
@@ -51,4 +51,4 @@ class OperatorMirror final : public harness::io::FrameMirror {
   std::atomic<int> state_{kIdle};
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

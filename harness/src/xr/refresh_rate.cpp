@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 namespace {
 
@@ -47,4 +47,4 @@ bool RefreshRatePolicy::on_change(float to_hz) {
   return false;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

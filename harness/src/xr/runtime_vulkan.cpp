@@ -11,7 +11,7 @@
 #include <utility>
 #include <variant>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::Done;
 using harness::Error;
@@ -135,4 +135,4 @@ XrGraphicsBindingVulkan2KHR graphics_binding(const renderer::Context& c) {
   return binding;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

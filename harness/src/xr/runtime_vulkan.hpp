@@ -9,7 +9,7 @@
 
 #include "platform.hpp"
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 // XR_KHR_vulkan_enable2's functions, for one instance and system.
 struct VulkanEnable2 {
@@ -33,4 +33,4 @@ harness::Result<renderer::Context> runtime_made_context(const VulkanEnable2& fns
 // What xrCreateSession is given to draw with `context`.
 XrGraphicsBindingVulkan2KHR graphics_binding(const renderer::Context& context);
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -13,7 +13,7 @@
 #include <iostream>
 #include <limits>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::Done;
 using harness::Error;
@@ -349,4 +349,4 @@ std::int64_t Session::to_session_ns(XrTime t) {
   return clock_map_.to_session(t);
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -1,6 +1,6 @@
 #include "curvlab/harness/xr/session_state.hpp"
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 namespace {
 
 // Transitions OpenXR's session lifecycle allows (specification, "Session
@@ -139,4 +139,4 @@ SessionUpdate SessionStateMachine::on_state_changed(SessionState next) {
   return u;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

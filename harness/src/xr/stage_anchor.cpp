@@ -2,7 +2,7 @@
 
 #include "curvlab/harness/xr/views.hpp"
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 std::optional<XrPosef> StageAnchor::offset_after(bool pose_valid, const XrPosef& moved) const {
   if (!pose_valid) return std::nullopt;
@@ -31,4 +31,4 @@ void StageAnchor::follow() {
   pending_.reset();
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

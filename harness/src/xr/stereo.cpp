@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 namespace {
 
 // VkFormat numbers (vulkan_core.h), kept here so this file needs no Vulkan
@@ -43,4 +43,4 @@ std::optional<std::int64_t> choose_swapchain_format(const std::vector<std::int64
   return std::nullopt;
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -20,7 +20,7 @@
 #include <thread>
 #include <utility>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::Done;
 using harness::Error;
@@ -368,4 +368,4 @@ void SwapchainDisplay::on_refresh_rate_changed(const XrEventDataDisplayRefreshRa
   request_refresh_rate();
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

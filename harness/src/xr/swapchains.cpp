@@ -6,7 +6,7 @@
 #include <iostream>
 #include <string>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::Done;
 using harness::Error;
@@ -148,4 +148,4 @@ void EyeSwapchains::wait_image(Session& session, XrSwapchain swapchain) {
   }
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -19,7 +19,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 class EyeSwapchains {
  public:
@@ -61,4 +61,4 @@ class EyeSwapchains {
   bool wait_said_ = false;
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

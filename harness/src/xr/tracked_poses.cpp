@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 using harness::Done;
 using harness::Error;
@@ -202,4 +202,4 @@ std::string TrackedPoses::describe_head_tracking() const {
   return location_flags_text(head_flags_) + " (xrLocateSpace of the VIEW space)";
 }
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

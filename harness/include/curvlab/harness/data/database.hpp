@@ -11,7 +11,7 @@
 #include <string>
 #include <string_view>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // The schema version this build writes (PRAGMA user_version).
 inline constexpr std::int64_t current_schema_version = 5;
@@ -91,4 +91,4 @@ void configure_connection(Connection& connection, bool synchronous_full);
 // there; for temporary files (merge's staging copy, a pooled export).
 void remove_database_files(const std::string& path);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -5,7 +5,7 @@
 
 #include "curvlab/harness/result.hpp"
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 using DataError = harness::Error;
 template <class T>
@@ -13,4 +13,4 @@ using Expected = harness::Result<T>;
 using harness::Done;
 using harness::to_string;
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

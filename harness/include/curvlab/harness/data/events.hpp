@@ -15,7 +15,7 @@
 #include <variant>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 enum class EventKind {
   session_start,
@@ -186,4 +186,4 @@ EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> tr
 Expected<events::SessionStart> parse_session_start(const std::string& detail_json);
 Expected<events::Onset> parse_onset(const std::string& detail_json);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

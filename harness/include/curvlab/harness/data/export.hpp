@@ -11,7 +11,7 @@
 #include <string_view>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 struct ExportOptions {
   std::string out_dir;                    // created if missing
@@ -54,4 +54,4 @@ struct ExportFormat {
 };
 const std::vector<ExportFormat>& export_formats();
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

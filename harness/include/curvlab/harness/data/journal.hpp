@@ -11,7 +11,7 @@
 #include <string>
 #include <variant>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // Marks a trial running and counts the attempt (SessionStore::begin_trial).
 struct BeginTrial {
@@ -33,4 +33,4 @@ struct StatusChange {
 
 using JournalEntry = std::variant<EventRecord, BeginTrial, TrialResult, EndUnanswered, StatusChange>;
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

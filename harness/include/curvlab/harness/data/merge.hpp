@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 struct MergeOptions {
   std::string out_path;              // the study database; created when missing
@@ -62,4 +62,4 @@ Expected<std::vector<std::string>> database_files_in(const std::string& dir);
 // indices they stand for. Equal for a file and its merged copy.
 Expected<std::string> session_content_digest(const std::string& db_path, const std::string& session_uuid);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -11,7 +11,7 @@
 #include <string_view>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 enum class DominantEye { left, right, unknown };
 enum class Backend { headless, desktop, xr };
@@ -251,4 +251,4 @@ struct FrameRecord {
   ViewGeometry view_geometry{};
 };
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -47,7 +47,7 @@
 #include <memory>
 #include <string>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 struct SampleWriterConfig {
   // 32768 samples ≈ 10.9 s of 3 devices at 1 kHz (about 9.4 MiB).
@@ -128,4 +128,4 @@ class SampleWriter {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

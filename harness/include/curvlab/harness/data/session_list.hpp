@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // A session's trials by trials.status; the rest of `planned` are pending or
 // were running when the session stopped.
@@ -77,4 +77,4 @@ Expected<std::string> read_protocol_text(Database& db, const std::string& sha256
 // and points to `curvlab sessions --db FILE`.
 DataError missing_session_error(Database& db, std::int64_t session_id);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

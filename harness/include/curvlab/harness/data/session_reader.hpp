@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // The simulated observer's parameters as the session's `observer` event
 // stored them (codebook: events.kind): its JSON, which the runner reads
@@ -142,4 +142,4 @@ Expected<std::int64_t> read_trial_event_count(Database& db, std::int64_t trial_i
 Expected<std::optional<ViewGeometry>> read_view_geometry(Database& db, std::int64_t session_id,
                                                          std::int64_t frame_index);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 struct StartedSession {
   std::int64_t session_id = 0;
@@ -99,4 +99,4 @@ class SessionStore {
   std::unique_ptr<Statements> stmts_;
 };
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // Incremental: add() any number of byte strings, then hex() once.
 class Sha256 {
@@ -25,4 +25,4 @@ class Sha256 {
 
 std::string sha256_hex(std::string_view bytes);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

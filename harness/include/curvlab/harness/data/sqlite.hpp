@@ -20,7 +20,7 @@
 struct sqlite3;
 struct sqlite3_stmt;
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 struct SqliteFailure : std::runtime_error {
   SqliteFailure(int result_code, const std::string& message)
@@ -133,4 +133,4 @@ class Transaction {
   bool open_ = true;
 };
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -12,7 +12,7 @@
 #include <string>
 #include <sys/types.h>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // True while a process with this id exists (another user's process counts
 // as living; platform/process.hpp).
@@ -40,4 +40,4 @@ std::size_t remove_stale_staging(const std::string& dir, const std::string& pref
 std::size_t remove_numbered(const std::string& dir, const std::string& prefix, StagingKind kind,
                             const std::function<bool(std::int64_t number)>& stale);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

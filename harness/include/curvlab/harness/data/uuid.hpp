@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // A version 7 UUID (RFC 9562 §5.7): 48 bits of Unix time in milliseconds,
 // then 74 random bits, so that sessions sort by creation time.
@@ -16,4 +16,4 @@ std::string session_uuid_v7(std::uint64_t unix_ms, std::uint16_t rand_a, std::ui
 // True for the canonical text form of any RFC 9562 UUID with variant 10.
 bool is_session_uuid(const std::string& text);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -43,7 +43,7 @@
 #include <string>
 #include <utility>
 
-namespace curvlab::data {
+namespace curvlab::harness::data {
 
 // Who holds a session or the file: from the holder's slot.
 struct LockHolder {
@@ -116,4 +116,4 @@ std::string describe(const LockHolder& holder);
 // The message for a session a live process writes.
 std::string session_in_use_message(const std::string& db_path, std::int64_t session_id, const LockHolder& holder);
 
-}  // namespace curvlab::data
+}  // namespace curvlab::harness::data

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::desktop {
+namespace curvlab::harness::desktop {
 
 enum class DesktopPreview { side_by_side, left, right };
 
@@ -62,4 +62,4 @@ std::string legend_text(const harness::io::Overlay& overlay);
 // kind `device`.
 harness::Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_desktop_backend(const DesktopOptions& options);
 
-}  // namespace curvlab::desktop
+}  // namespace curvlab::harness::desktop

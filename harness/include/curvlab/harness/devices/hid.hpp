@@ -12,7 +12,7 @@
 
 struct hid_device_;
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 
 struct HidDeviceInfo {
   std::uint16_t vendor_id = 0;
@@ -85,4 +85,4 @@ class HidDevice final : public ReportSource {
 // "046d:c216 Logitech Dual Action (usage 0x01:0x05)" — no serial.
 std::string describe(const HidDeviceInfo& info);
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

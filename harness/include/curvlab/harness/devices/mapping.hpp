@@ -12,7 +12,7 @@
 #include <variant>
 #include <vector>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 
 // A button that is one bit of one byte (gamepads, button boxes, keyboard
 // modifiers).
@@ -76,4 +76,4 @@ struct MappingFile {
 harness::Result<MappingFile> parse_mapping(std::string_view text, const std::string& file_name);
 harness::Result<MappingFile> load_mapping(const std::filesystem::path& path);
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

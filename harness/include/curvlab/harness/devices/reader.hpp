@@ -16,7 +16,7 @@
 #include <optional>
 #include <thread>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 
 struct DeviceEvent {
   enum class Kind { Response, Disconnected };
@@ -67,4 +67,4 @@ class DeviceReader {
   std::thread thread_;  // last: starts after every member above exists
 };
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 
 struct ResponseEvent {
   enum class Edge { Down, Up };
@@ -43,4 +43,4 @@ class ReportParser {
   std::uint64_t short_reports_ = 0;
 };
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

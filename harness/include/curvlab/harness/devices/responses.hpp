@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-namespace curvlab::devices {
+namespace curvlab::harness::devices {
 
 // What the devices of a mapping file can press: each binding's response name.
 harness::io::Reach mapping_reach(const MappingFile& file);
@@ -87,4 +87,4 @@ class RecordedReports final : public ReportSource {
   std::string label_;
 };
 
-}  // namespace curvlab::devices
+}  // namespace curvlab::harness::devices

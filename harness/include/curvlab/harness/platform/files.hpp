@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 
 // True when this process may write `path` (a file, or a folder to create
 // files in).
@@ -35,4 +35,4 @@ std::FILE* create_new_file(const std::string& path);
 // `relative` resolved against the folder of the running executable (UTF-8).
 std::string beside_executable(const std::string& relative);
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

@@ -31,7 +31,7 @@
 #include <map>
 #include <string>
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 
 // Why a companion was refused after it was opened.
 enum class Unsafe { none, link, not_regular, several_names, other_owner };
@@ -103,4 +103,4 @@ bool reserve_file(const std::string& path, std::int64_t bytes);
 // folder); true when it was removed.
 bool remove_regular_file(const std::string& path);
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 
 // This process's id.
 std::int64_t process_id();
@@ -24,4 +24,4 @@ std::string utc_now_iso8601();
 // Sets an environment variable unless it is set already.
 void set_env_default(const char* name, const char* value);
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

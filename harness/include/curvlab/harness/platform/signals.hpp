@@ -9,7 +9,7 @@
 #include <atomic>
 #include <string>
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 
 // Installs the handlers once (each fires once, then the default action
 // returns: a second Ctrl-C ends the process). Returns the number of the
@@ -22,4 +22,4 @@ int stop_signal_received();
 // "Interrupt", "Terminated", "Hangup", ...
 std::string signal_name(int sig);
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

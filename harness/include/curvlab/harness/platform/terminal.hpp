@@ -3,8 +3,8 @@
 // console handle (GetConsoleMode), since MinTTY and redirections are pipes.
 #pragma once
 
-namespace curvlab::platform {
+namespace curvlab::harness::platform {
 
 bool stderr_is_terminal();
 
-}  // namespace curvlab::platform
+}  // namespace curvlab::harness::platform

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 inline constexpr const char* kLeftHand = "/user/hand/left";
 inline constexpr const char* kRightHand = "/user/hand/right";
@@ -65,4 +65,4 @@ harness::io::InputEvent controller_input(std::int64_t t_ns, bool left_hand, std:
 // interaction-profile tables), to check the bindings against.
 std::vector<std::string> profile_input_paths(const std::string& profile);
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -16,7 +16,7 @@
 #include <optional>
 #include <string>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 struct XrBackendOptions {
   std::string application_name = "curvlab";
@@ -37,4 +37,4 @@ struct XrBackendOptions {
 // ("xrWaitFrame: XR_ERROR_SESSION_LOST").
 harness::Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_xr_backend(const XrBackendOptions& options);
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

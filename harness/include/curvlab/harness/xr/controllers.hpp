@@ -26,7 +26,7 @@
 #include <string_view>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 // What the controllers of curvlab's action set can press (button names as
 // protocols write them); pages continue on a trigger or A.
@@ -89,4 +89,4 @@ class Controllers final : public harness::io::ResponseSource, private SessionPar
   std::vector<std::string> reported_;
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

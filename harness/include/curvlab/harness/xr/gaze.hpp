@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 namespace io = harness::io;
 
@@ -91,4 +91,4 @@ class EyeTracking {
   std::unique_ptr<State> state_;
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

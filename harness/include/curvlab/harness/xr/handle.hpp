@@ -7,7 +7,7 @@
 
 #include <utility>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 // Owns one OpenXR child handle. Move-only; destroyed by the destructor.
 template <class H, XrResult (*Destroy)(H)>
@@ -43,4 +43,4 @@ using SessionHandle = Handle<XrSession, xrDestroySession>;
 using SpaceHandle = Handle<XrSpace, xrDestroySpace>;
 using SwapchainHandle = Handle<XrSwapchain, xrDestroySwapchain>;
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -17,7 +17,7 @@
 #include <string_view>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 // The name of an XrResult ("XR_ERROR_RUNTIME_UNAVAILABLE"), without an
 // instance (xrResultToString needs one, which is exactly what is missing
@@ -128,4 +128,4 @@ harness::Result<std::vector<std::string>> available_extensions();
 // renderer's Vulkan device) and describes what it found.
 harness::Result<ProbeReport> probe(const std::string& application_name);
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 class RefreshRatePolicy {
  public:
@@ -48,4 +48,4 @@ class RefreshRatePolicy {
   float requested_hz_ = 0.0f;  // the rate asked for; its change event is expected (0: none)
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -40,7 +40,7 @@ namespace curvlab::renderer {
 class Context;
 }
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 inline constexpr XrViewConfigurationType kViewConfig = XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO;
 inline constexpr XrPosef kIdentityPose{{0.0f, 0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f}};
@@ -190,4 +190,4 @@ class Session {
   std::int64_t offset_at_ns_ = -1;  // when it was made (CLOCK_MONOTONIC); -1 none
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -14,7 +14,7 @@
 
 #include <string>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 // The same numbering as XrSessionState, so conversion is a cast checked by a
 // test; this header needs no OpenXR include.
@@ -77,4 +77,4 @@ class SessionStateMachine {
   bool paused_ = false;  // a pause was given and not yet its resume
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <optional>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 class StageAnchor {
  public:
@@ -44,4 +44,4 @@ class StageAnchor {
   std::int64_t change_at_ = 0;
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

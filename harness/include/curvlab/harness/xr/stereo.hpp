@@ -12,7 +12,7 @@
 #include <optional>
 #include <vector>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 // Eye offsets and fields of view as the renderer takes them (DESIGN.md §4):
 // each eye's position and rotation relative to the head (the VIEW space,
@@ -56,4 +56,4 @@ class XrClockMap {
   bool anchored_ = false;
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -39,7 +39,7 @@ class ExternalImagesTarget;
 struct VulkanFailure;
 }  // namespace curvlab::renderer
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 class EyeSwapchains;
 class OperatorMirror;
@@ -125,4 +125,4 @@ class SwapchainDisplay final : public harness::io::Display, private SessionPart 
   std::optional<std::array<XrView, 2>> shown_views_;
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -27,7 +27,7 @@
 #include <optional>
 #include <string>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 class TrackedPoses final : public harness::io::PoseSource, private SessionPart {
  public:
@@ -83,4 +83,4 @@ class TrackedPoses final : public harness::io::PoseSource, private SessionPart {
   std::optional<harness::io::Gaze> gaze_;  // located with lab_; nullopt without eye tracking
 };
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr

@@ -8,7 +8,7 @@
 
 #include <openxr/openxr.h>
 
-namespace curvlab::xr {
+namespace curvlab::harness::xr {
 
 // A pose as the runtime reports it in STAGE space, before curvlab adds what
 // it knows of tracking (geometry::LabPose, with its validity flags; see
@@ -56,4 +56,4 @@ struct FrustumTangents {
 
 FrustumTangents tangents(const AsymmetricFov& fov);
 
-}  // namespace curvlab::xr
+}  // namespace curvlab::harness::xr
