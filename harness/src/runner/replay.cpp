@@ -226,6 +226,12 @@ Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
   if (!f.adjusted) placement.stick_pose = isometry(f.onset.stick_pose);
   scene.place(placement, head_at_onset);
   scene.show(phase, f.settings.timeline.stimulus_during_response);
+  // What moves (stimulus_kind.hpp) is where it was when the frame was shown,
+  // for the head the frame recorded.
+  FramePoses poses;
+  poses.pose[0] = f.head;
+  poses.tracked[0] = true;
+  scene.update(f.display_ns, poses);
 
   auto created = renderer::Context::create(
       {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,
