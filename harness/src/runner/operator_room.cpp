@@ -19,22 +19,26 @@ std::optional<io::Signal> operator_signal(OperatorActionKind kind) {
 
 }  // namespace
 
-void OperatorRoom::take(std::int64_t elapsed_ns, std::int64_t now_ns, io::Signal& signal,
-                        const std::function<void(const data::Event&)>& log) {
-  if (console_ == nullptr) return;
+const std::vector<data::events::OperatorActionEvent>& OperatorRoom::take(std::int64_t elapsed_ns,
+                                                                          std::int64_t now_ns, io::Signal& signal) {
   actions_.clear();
+  events_.clear();
   console_->take(elapsed_ns, actions_);
   for (const auto& a : actions_) {
     data::events::OperatorActionEvent action{std::string(to_string(a.kind)), a.source, now_ns, std::nullopt};
     if (a.kind == OperatorActionKind::note) action.text = a.text;
-    log(action);
+    events_.push_back(std::move(action));
     if (const auto s = operator_signal(a.kind)) signals_.push_back(*s);
-    console_->acted(a);
   }
   if (signal == io::Signal::none && !signals_.empty()) {
     signal = signals_.front();
     signals_.pop_front();
   }
+  return events_;
+}
+
+void OperatorRoom::acted() {
+  for (const auto& a : actions_) console_->acted(a);
 }
 
 void OperatorRoom::show(const StatusFacts& facts, Phase phase) {

@@ -13,7 +13,6 @@
 #include <array>
 #include <cstdint>
 #include <deque>
-#include <functional>
 #include <optional>
 #include <vector>
 
@@ -38,11 +37,14 @@ class OperatorRoom {
   [[nodiscard]] bool open() const { return console_ != nullptr; }
 
   // The actions due `elapsed_ns` after the start (`now_ns` on the session
-  // clock), each stored through `log`;
-  // the first signal among them (or one left from an earlier frame) becomes
-  // `signal` when the frame has none yet.
-  void take(std::int64_t elapsed_ns, std::int64_t now_ns, io::Signal& signal,
-            const std::function<void(const data::Event&)>& log);
+  // clock), as the events to store; the first signal among them (or one
+  // left from an earlier frame) becomes `signal` when the frame has none
+  // yet. Call only when open().
+  const std::vector<data::events::OperatorActionEvent>& take(std::int64_t elapsed_ns, std::int64_t now_ns,
+                                                              io::Signal& signal);
+  // Tells the console its actions were carried out (stored and signalled):
+  // its screenshots are taken here.
+  void acted();
   // Every frame: the status as of its end.
   void show(const StatusFacts& facts, Phase phase);
   // The last status, once the session is over.
@@ -62,6 +64,7 @@ class OperatorRoom {
  private:
   OperatorConsole* console_;
   std::vector<OperatorAction> actions_;       // this frame's, reused
+  std::vector<data::events::OperatorActionEvent> events_;  // their records, reused
   std::deque<io::Signal> signals_;            // not yet handed to the loop
   std::array<std::int64_t, 3> lost_since_{-1, -1, -1};
 };

@@ -129,9 +129,11 @@ bool SessionFrames::begin(Frame& f) {
   f.inputs.clear();
   f.signal = poll_devices(f.inputs);
   store_display_reports();
-  const auto trial_id = current_trial_id();
-  room.take(f.timing.now_ns - session_start_ns, clock.now_ns(), f.signal,
-            [&](const data::Event& e) { event(trial_id, e); });
+  if (room.open()) {
+    for (const auto& action : room.take(f.timing.now_ns - session_start_ns, clock.now_ns(), f.signal))
+      event(current_trial_id(), action);
+    room.acted();
+  }
   take_stop_signal(f);
   return true;
 }
