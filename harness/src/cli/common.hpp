@@ -89,6 +89,7 @@ void add_run_commands(CLI::App& app);  // run, resume, then predict and replay:
 void add_predict_command(CLI::App& app);
 void add_replay_command(CLI::App& app);
 void add_calibrate_commands(CLI::App& app);  // calibrate: the physical table
+void add_billiards_commands(CLI::App& app);  // billiards shot, billiards rack
 // Reads and loads a protocol file, or prints every diagnostic and throws a
 // UsageError (exit 2). `text`, when given, receives the text that was loaded
 // (sessions store it).

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   curvlab::harness::cli::add_authoring_commands(app);
   curvlab::harness::cli::add_run_commands(app);
   curvlab::harness::cli::add_calibrate_commands(app);
+  curvlab::harness::cli::add_billiards_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
