@@ -4,7 +4,7 @@
 -- nanoseconds of the session's monotonic clock, *_utc are ISO 8601 UTC text.
 -- Adding or changing anything here means a new version, a migration in
 -- migrations/, and a codebook entry: no column is ever added at run time.
-PRAGMA user_version = 5;
+PRAGMA user_version = 6;
 
 CREATE TABLE schema_migrations (
   version INTEGER PRIMARY KEY,
@@ -192,4 +192,31 @@ CREATE TABLE events (
   t_ns INTEGER NOT NULL,
   kind TEXT NOT NULL,
   detail TEXT NOT NULL DEFAULT '{}' CHECK (json_valid(detail))
+) STRICT;
+
+CREATE TABLE shots (
+  shot_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER NOT NULL REFERENCES trials(trial_id),
+  shot_index INTEGER NOT NULL CHECK (shot_index >= 0),
+  t_ns INTEGER NOT NULL,
+  rest_ns INTEGER NOT NULL,
+  player TEXT NOT NULL CHECK (player IN ('participant', 'simulated')),
+  ball TEXT NOT NULL,
+  aim_x REAL NOT NULL,
+  aim_z REAL NOT NULL,
+  speed_m_s REAL NOT NULL CHECK (speed_m_s >= 0),
+  cue_speed_m_s REAL,
+  tip_side REAL,
+  tip_height REAL,
+  miscue INTEGER NOT NULL DEFAULT 0 CHECK (miscue IN (0, 1)),
+  cue_pose TEXT CHECK (cue_pose IS NULL OR json_valid(cue_pose)),
+  table_settings TEXT NOT NULL CHECK (json_valid(table_settings)),
+  before_state TEXT NOT NULL CHECK (json_valid(before_state)),
+  shot TEXT NOT NULL CHECK (json_valid(shot)),
+  events TEXT NOT NULL CHECK (json_valid(events)),
+  rest_state TEXT NOT NULL CHECK (json_valid(rest_state)),
+  pocketed TEXT NOT NULL CHECK (json_valid(pocketed)),
+  event_count INTEGER NOT NULL CHECK (event_count >= 0),
+  UNIQUE (trial_id, shot_index)
 ) STRICT;

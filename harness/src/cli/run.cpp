@@ -195,6 +195,10 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
   doc["trials_aborted"] = s.trials_aborted;
   doc["trials_flagged"] = s.trials_flagged;
   doc["attempts_repeated"] = s.attempts_repeated;
+  if (s.shots > 0) {
+    doc["shots"] = s.shots;
+    doc["balls_pocketed"] = s.balls_pocketed;
+  }
   doc["frames"] = s.frames;
   doc["msaa"] = msaa;
   doc["samples_dropped"] = s.samples_dropped;

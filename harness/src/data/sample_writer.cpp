@@ -329,6 +329,8 @@ struct SampleWriter::Impl {
           } else if constexpr (std::is_same_v<T, EndUnanswered>) {
             return entry.aborted ? store.abort_trial(entry.trial_id, entry.reason)
                                  : store.skip_trial(entry.trial_id, entry.reason);
+          } else if constexpr (std::is_same_v<T, ShotRecord>) {
+            return store.record_shot(entry);
           } else if constexpr (std::is_same_v<T, StatusChange>) {
             return entry.close ? store.close_session(entry.session_id, entry.status)
                                : store.set_session_status(entry.session_id, entry.status);

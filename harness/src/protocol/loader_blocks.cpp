@@ -3,6 +3,8 @@
 // run in for each participant.
 #include "loader_impl.hpp"
 
+#include "curvlab/geometry/billiards.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -163,7 +165,8 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
     }
     check_keys(*t, bp, {"name", "kind", "practice", "repetitions", "randomize", "levels", "instructions",
                         "break_every_trials", "break_text", "break_min_ms", "space", "tracking",
-                        "viewing", "timeline", "stimulus", "table", "judgement"});
+                        "viewing", "timeline", "stimulus", "table", "judgement", "duration_s", "shots",
+                        "until", "rack", "physics"});
     Block b;
     b.pos = pos_of(*t);
     b.name = get_string(*t, "name", bp, true).value_or("");
@@ -174,6 +177,7 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
       else if (!names.insert(b.name).second)
         error(pos_of(*t->get("name")), bp + ".name", "duplicate block name \"" + b.name + "\"");
     }
+    read_play(*t, bp, b);
     b.practice = get_bool(*t, "practice", bp).value_or(false);
     b.repetitions = static_cast<int>(get_int(*t, "repetitions", bp, 1, 1000, false).value_or(reps));
     const auto mode = get_enum(*t, "randomize", bp, {"none", "shuffle", "shuffle_within_repetition"});
@@ -196,9 +200,44 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
     else if (has_root_judgement_) b.judgement = p.judgement;
     else error(b.pos, bp + ".judgement",
                "this block has no judgement: add a top-level [judgement] or one for the block");
-    if (const auto problem = b.judgement.type ? b.judgement.type->repetitions_problem(b.repetitions) : std::nullopt)
+    if (const auto problem = b.judgement.type && b.kind != "play" ? b.judgement.type->repetitions_problem(b.repetitions) : std::nullopt)
       error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions", *problem);
     p.blocks.push_back(std::move(b));
+  }
+}
+
+void Loader::read_play(const toml::table& t, const std::string& bp, Block& b) {
+  const bool play = b.kind == "play";
+  for (const char* key : {"duration_s", "shots", "until", "rack", "physics"})
+    if (!play && t.contains(key))
+      error(pos_of(*t.get(key)), bp + "." + key, "only a play block (kind = \"play\") takes " + std::string(key));
+  if (!play) return;
+  PlaySettings& s = b.play;
+  if (const auto d = get_number(t, "duration_s", bp, false)) {
+    if (!(*d > 0.0) || *d > 86400.0)
+      error(pos_of(*t.get("duration_s")), bp + ".duration_s", "expected seconds above 0 and at most 86400");
+    else
+      s.duration_s = *d;
+  }
+  s.shots = static_cast<int>(get_int(t, "shots", bp, 0, 100000, false).value_or(0));
+  if (const auto u = get_enum(t, "until", bp, {"all_pocketed", "time"})) s.until_all_pocketed = *u == "all_pocketed";
+  s.rack = static_cast<int>(get_int(t, "rack", bp, 0, 15, false).value_or(15));
+  if (const toml::table* ph = sub_table(t, "physics", bp)) {
+    geometry::billiards::Parameters params;
+    for (auto&& [k, v] : *ph) {
+      const std::string name(k.str());
+      const std::string field = bp + ".physics." + name;
+      const auto value = node_number(v);
+      if (!value) {
+        error(pos_of(v), field, with_found("expected a number", v));
+        continue;
+      }
+      if (const auto problem = geometry::billiards::set_parameter(params, name, *value)) {
+        error(pos_of(k.source()), field, *problem);
+        continue;
+      }
+      s.physics.emplace_back(name, *value);
+    }
   }
 }
 

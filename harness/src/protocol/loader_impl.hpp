@@ -47,6 +47,7 @@ class Loader : private TableReader {
 
   // ---- blocks ------------------------------------------------------------
   void read_blocks(const toml::table& root, Protocol& p);
+  void read_play(const toml::table& t, const std::string& bp, Block& b);
   void read_block_levels(const toml::table& lv, const std::string& prefix, const Protocol& p, Block& b);
   void read_counterbalance(const toml::table& root, Protocol& p);
 

@@ -5,6 +5,8 @@
 // tests/protocol/schema_tests.cpp holds the two together key by key.
 #include "curvlab/harness/protocol/schema.hpp"
 
+#include "curvlab/geometry/billiards.hpp"
+
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
@@ -188,11 +190,23 @@ Json break_fields(Json props) {
   return props;
 }
 
+// A play block's physics parameters by name (geometry/billiards.hpp).
+Json play_physics_schema() {
+  Json props = Json::object();
+  for (const auto& info : geometry::billiards::parameter_table())
+    props[std::string(info.name)] = {{"type", "number"},
+                                     {"minimum", info.min},
+                                     {"maximum", info.max},
+                                     {"description", std::string(info.meaning)}};
+  return closed_object(props, "play blocks: billiards physics parameters by name (docs/billiards.md)");
+}
+
 Json block_schema() {
   Json props = {
       {"name", {{"type", "string"}, {"pattern", kIdentifierPattern},
                 {"description", "unique; a lower-case identifier"}}},
-      {"kind", with_default(enum_field(block_kind_names(), "what the block's frames show: trials, judged trials"),
+      {"kind", with_default(enum_field(block_kind_names(), "what the block's frames show: trials (judged "
+                                                           "trials) or play (curved-space billiards)"),
                             block_kind_names().front())},
       {"practice", with_default(Json{{"type", "boolean"},
                                      {"description", "practice blocks run first, in file order, and are "
@@ -208,6 +222,15 @@ Json block_schema() {
                    {{"anyOf", Json::array({Json{{"type", Json::array({"string", "number", "boolean"})}},
                                            Json{{"type", "array"}, {"minItems", 1}}})}}}}},
       {"instructions", string_array("instruction pages shown before the block")},
+      {"duration_s", {{"type", "number"}, {"exclusiveMinimum", 0}, {"maximum", 86400}, {"default", 300},
+                      {"description", "play blocks: seconds of play"}}},
+      {"shots", integer(0, 100000, "play blocks: the most shots (0: no limit)")},
+      {"until", with_default(enum_field({"all_pocketed", "time"},
+                                        "play blocks: all_pocketed ends play when the last object ball is "
+                                        "pocketed; time plays on for duration_s"),
+                             "all_pocketed")},
+      {"rack", integer(0, 15, "play blocks: object balls in the rack (default 15)")},
+      {"physics", play_physics_schema()},
   };
   props = break_fields(props);
   add_settings_sections(props, "this block; overrides the top-level section");

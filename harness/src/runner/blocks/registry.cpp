@@ -7,9 +7,10 @@
 namespace curvlab::harness::runner {
 
 const BlockKind& trials_block_kind();
+const BlockKind& play_block_kind();
 
 const BlockKind* find_block_kind(std::string_view name) {
-  static const std::array<const BlockKind*, 1> kinds{&trials_block_kind()};
+  static const std::array<const BlockKind*, 2> kinds{&trials_block_kind(), &play_block_kind()};
   for (const BlockKind* k : kinds)
     if (k->name() == name) return k;
   return nullptr;

@@ -31,6 +31,6 @@ struct StatusChange {
   bool close = false;
 };
 
-using JournalEntry = std::variant<EventRecord, BeginTrial, TrialResult, EndUnanswered, StatusChange>;
+using JournalEntry = std::variant<EventRecord, BeginTrial, TrialResult, EndUnanswered, StatusChange, ShotRecord>;
 
 }  // namespace curvlab::harness::data

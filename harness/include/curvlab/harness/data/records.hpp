@@ -105,6 +105,33 @@ struct StaircaseStep {
   std::optional<StepPosterior> posterior = std::nullopt;  // Bayesian methods (psi); nullopt for staircases
 };
 
+// One billiards shot of a play block (table shots; docs/billiards.md). The
+// JSON columns hold what `curvlab billiards shot` reads and prints.
+struct ShotRecord {
+  std::int64_t session_id = 0;
+  std::int64_t trial_id = 0;
+  std::int64_t shot_index = 0;
+  std::int64_t t_ns = 0;
+  std::int64_t rest_ns = 0;
+  std::string player;  // participant | simulated
+  std::string ball;
+  double aim_x = 0.0;
+  double aim_z = 0.0;
+  double speed_m_s = 0.0;
+  std::optional<double> cue_speed_m_s;
+  std::optional<double> tip_side;
+  std::optional<double> tip_height;
+  bool miscue = false;
+  std::optional<std::string> cue_pose;
+  std::string table_settings = "{}";
+  std::string before_state = "{}";
+  std::string shot = "{}";
+  std::string events = "[]";
+  std::string rest_state = "[]";
+  std::string pocketed = "[]";
+  std::int64_t event_count = 0;
+};
+
 struct TrialResult {
   std::int64_t trial_id = 0;
   std::int64_t onset_ns = 0;     // predicted display time of the stimulus's first frame

@@ -72,6 +72,10 @@ class SessionStore {
   Expected<std::int64_t> record_event(const EventRecord& event);
   // Several events in one transaction, in order.
   Expected<Done> record_events(const std::vector<EventRecord>& events);
+  // A play block's shot, in its own transaction.
+  Expected<Done> record_shot(const ShotRecord& shot);
+  // The shots stored for a play block's trial, in order.
+  Expected<std::vector<ShotRecord>> shots(std::int64_t trial_id);
   Expected<Done> set_session_status(std::int64_t session_id, SessionStatus status);
   // Sets the final status and the end time.
   Expected<Done> close_session(std::int64_t session_id, SessionStatus status);

@@ -75,11 +75,23 @@ enum class BlockOrder { fixed, latin_square, random };
 std::string_view to_string(RandomizeMode m);
 std::string_view to_string(BlockOrder o);
 
+// What a play block plays (kind "play"; docs/billiards.md): curved-space
+// billiards at the table until the time, the shot limit or the last ball.
+struct PlaySettings {
+  double duration_s = 300.0;
+  int shots = 0;               // 0: no limit
+  bool until_all_pocketed = true;
+  int rack = 15;               // object balls in the rack
+  // Physics parameters by name (geometry/billiards.hpp), checked at load.
+  std::vector<std::pair<std::string, double>> physics;
+};
+
 struct Block {
   std::string name;
   // What the block's frames show (the runner's block kinds): "trials", a
   // list of judged trials.
   std::string kind = "trials";
+  PlaySettings play;  // kind "play" only
   bool practice = false;
   int repetitions = 1;
   RandomizeMode randomize = RandomizeMode::shuffle;

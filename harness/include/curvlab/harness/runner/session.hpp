@@ -80,6 +80,8 @@ struct SessionSummary {
   std::int64_t trials_aborted = 0;   // given up after tracking loss (tracking.on_loss, max_attempts)
   std::int64_t trials_flagged = 0;   // completed with tracking lost (tracking.on_loss = "flag")
   std::int64_t attempts_repeated = 0;
+  std::int64_t shots = 0;           // play blocks' shots in this run
+  std::int64_t balls_pocketed = 0;  // by those shots
   std::int64_t frames = 0;
   std::uint64_t samples_dropped = 0;
   double session_s = 0.0;  // on the session clock

@@ -1,0 +1,362 @@
+// The play block kind: curved-space billiards at the table between judgement
+// blocks (docs/billiards.md). The block is one planned trial; each shot is
+// simulated exactly at the strike (its events are what is stored), shown
+// frame by frame as the balls roll, and committed in its own transaction
+// when they come to rest, so a killed block resumes at the rest state after
+// its last completed shot.
+//
+// Who shoots: the simulated player in headless runs (a seeded choice of ball
+// and pocket, aimed along geodesics through the ghost ball, with human aim
+// and speed noise), otherwise the participant: the cue-strike control
+// strikes the cue ball along the head's line of sight.
+#include "../block_kind.hpp"
+
+#include "curvlab/harness/billiards/shot.hpp"
+#include "curvlab/harness/protocol/random.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace curvlab::harness::runner {
+
+namespace {
+
+namespace bl = curvlab::harness::billiards;
+namespace phys = curvlab::geometry::billiards;
+using Json = nlohmann::ordered_json;
+
+constexpr double kPi = std::numbers::pi;
+
+phys::Parameters play_parameters(const protocol::PlaySettings& play) {
+  phys::Parameters p;
+  for (const auto& [name, value] : play.physics) (void)phys::set_parameter(p, name, value);
+  return p;
+}
+
+glm::vec4 ball_colour(std::size_t i) {
+  if (i == 0) return renderer::display(0.95f, 0.95f, 0.92f);
+  static const std::array<glm::vec3, 8> kColours{{{0.95f, 0.78f, 0.10f},
+                                                  {0.10f, 0.25f, 0.75f},
+                                                  {0.85f, 0.12f, 0.10f},
+                                                  {0.45f, 0.15f, 0.55f},
+                                                  {0.95f, 0.45f, 0.05f},
+                                                  {0.10f, 0.50f, 0.20f},
+                                                  {0.50f, 0.12f, 0.10f},
+                                                  {0.05f, 0.05f, 0.05f}}};
+  const glm::vec3 c = kColours[(i - 1) % kColours.size()];
+  return renderer::display(c.x, c.y, c.z);
+}
+
+// The simulated player's shot: for each object ball and pocket, the ghost
+// ball (2R behind the object ball on the geodesic from the pocket) and the
+// cut angle at it; the smallest cut wins. Aim and speed carry noise.
+bl::ShotSpec choose_shot(const phys::System& sys, const std::vector<bl::BallPlace>& balls,
+                         const phys::Parameters& p, protocol::Engine& rng) {
+  const phys::Cloth& c = sys.cloth();
+  const geometry::Space space = c.space();
+  const glm::dvec3 cue = phys::frame_position(c, sys.ball(0).frame);
+  double best = 1e300;
+  glm::dvec3 aim_point = phys::from_native(c, {0.0, 0.0});
+  double distance = 0.5;
+  for (std::size_t i = 1; i < balls.size(); ++i) {
+    if (sys.ball(i).motion == phys::Motion::pocketed) continue;
+    const phys::Frame of = sys.ball(i).frame;
+    const glm::dvec3 ob = phys::frame_position(c, of);
+    for (const glm::dvec3& pocket : c.corners) {
+      // The direction at the object ball away from the pocket, and the ghost
+      // ball 2R along it.
+      const phys::Vec2 to_pocket = phys::direction_toward(c, of, pocket);
+      const double t = 2.0 * p.radius_m / c.radius_m;
+      const phys::Frame step = of * phys::Frame{1.0};
+      const glm::dvec3 ghost_dir = -(step[0] * to_pocket.x + step[1] * to_pocket.y);
+      const glm::dvec3 ghost = space.C(t) * ob + c.radius_m * space.S(t) * ghost_dir;
+      if (phys::distance_m(c, cue, ghost) < 2.0 * p.radius_m) continue;
+      // Cut angle: between cue → ghost and object → pocket at the ghost.
+      const phys::Frame gf = phys::frame_at(c, ghost);
+      const phys::Vec2 a = phys::direction_toward(c, gf, ob);
+      const phys::Vec2 b = -phys::direction_toward(c, gf, cue);
+      const double cut = std::acos(std::clamp(glm::dot(a, b), -1.0, 1.0));
+      if (cut > 1.3) continue;
+      const double score = cut + 0.5 * phys::distance_m(c, ob, pocket);
+      if (score < best) {
+        best = score;
+        aim_point = ghost;
+        distance = phys::distance_m(c, cue, ghost) + phys::distance_m(c, ob, pocket);
+      }
+    }
+  }
+  std::normal_distribution<double> noise(0.0, 1.0);
+  bl::ShotSpec s;
+  s.ball = balls[0].id;
+  // Aim noise of about 1°: the aim point turned about the cue ball.
+  const phys::Frame cf = sys.ball(0).frame;
+  const phys::Vec2 dir = phys::direction_toward(c, cf, aim_point);
+  const double turn = noise(rng) * kPi / 180.0;
+  const phys::Vec2 aim{dir.x * std::cos(turn) - dir.y * std::sin(turn), dir.x * std::sin(turn) + dir.y * std::cos(turn)};
+  const double reach = 0.5;
+  const glm::dvec3 toward = space.C(reach / c.radius_m) * cue +
+                            c.radius_m * space.S(reach / c.radius_m) * (cf[0] * aim.x + cf[1] * aim.y);
+  s.toward_m = phys::to_native(c, toward);
+  s.cue_speed_m_s = std::clamp((1.2 + 2.2 * distance) * (1.0 + 0.08 * noise(rng)), 0.8, 7.0);
+  s.tip = {0.05 * noise(rng), 0.15 + 0.1 * noise(rng)};
+  return s;
+}
+
+// The participant's shot: along the head's line of sight across the cloth.
+bl::ShotSpec sighted_shot(const phys::System& sys, const std::vector<bl::BallPlace>& balls,
+                          const geometry::Isometry& head) {
+  const phys::Cloth& c = sys.cloth();
+  const geometry::Point eye = geometry::position(c.space(), head);
+  const geometry::Point ahead = head * (geometry::origin(c.space()) + geometry::Vec4(0.0, 0.0, -0.3, 0.0));
+  // Horizontal direction of sight, as native coordinates, from the cue ball.
+  const phys::Vec2 from{eye.x, eye.z};
+  const phys::Vec2 to{ahead.x, ahead.z};
+  phys::Vec2 d = to - from;
+  if (glm::length(d) < 1e-9) d = {0.0, -1.0};
+  const phys::Vec2 cue = phys::to_native(c, phys::frame_position(c, sys.ball(0).frame));
+  bl::ShotSpec s;
+  s.ball = balls[0].id;
+  s.toward_m = cue + 0.5 * glm::normalize(d);
+  s.cue_speed_m_s = 3.0;
+  s.tip = {0.0, 0.2};
+  return s;
+}
+
+class PlayBlock {
+ public:
+  explicit PlayBlock(BlockRun& run)
+      : run_(run),
+        f_(run.frames),
+        play_(f_.protocol.blocks[run.block.protocol_block].play),
+        params_(play_parameters(play_)) {}
+
+  Outcome run() {
+    index_ = run_.block.first_trial;
+    trial_id_ = f_.trial_ids[index_];
+    const auto& planned = f_.design.trials[index_];
+    f_.prepare(planned.settings, "");
+    f_.set_current_trial(index_);
+    f_.writer.journal(data::BeginTrial{trial_id_});
+    const World& world = f_.world();
+    cloth_ = phys::make_cloth(world.space, world.table);
+    load_rest_state();
+    add_objects();
+    simulated_ = f_.options().observer.has_value();
+    rng_.seed(protocol::mix_seed(f_.design.seed ^ protocol::mix_seed(0x9a1e0000ULL + index_)));
+    const std::int64_t start_ns = f_.clock.now_ns();
+    std::int64_t next_shot_ns = start_ns + think_ns();
+    const double duration_ns = play_.duration_s * 1e9 - elapsed_before_s_ * 1e9;
+    std::optional<Rolling> rolling;
+    const io::Overlay overlay{Phase::stimulus, run_.block.name + "  play", false};
+    for (;;) {
+      Frame g;
+      if (!f_.begin(g)) return Outcome::quit;
+      if (g.signal == Signal::pause) {
+        if (f_.hold(Phase::stimulus, trial_id_) == Outcome::quit) return Outcome::quit;
+        continue;
+      }
+      const std::int64_t t_ns = g.timing.predicted_display_ns;
+      if (!rolling) {
+        if (finished(static_cast<double>(g.timing.now_ns - start_ns) > duration_ns)) {
+          f_.end(g, overlay, false, trial_id_);
+          break;
+        }
+        bool strike = simulated_ && g.timing.now_ns >= next_shot_ns;
+        for (const auto& in : g.inputs)
+          if (in.pressed && in.intents.has(io::Intent::cue_strike)) strike = true;
+        if (strike) rolling = start_shot(t_ns, g);
+      }
+      if (rolling) {
+        const double t_s = static_cast<double>(t_ns - rolling->strike_ns) * 1e-9;
+        while (rolling->system.next_event(t_s)) {
+        }
+        show(rolling->system, t_s);
+        if (rolling->system.all_still() || t_s > rolling->outcome.end_s) {
+          commit_shot(*rolling, t_ns, static_cast<double>(g.timing.now_ns - start_ns) * 1e-9);
+          rolling.reset();
+          next_shot_ns = g.timing.now_ns + think_ns();
+        }
+      }
+      f_.end(g, overlay, false, trial_id_);
+      if (g.signal == Signal::quit) return Outcome::quit;
+    }
+    data::TrialResult r;
+    r.trial_id = trial_id_;
+    r.onset_ns = start_ns;
+    r.response_ns = f_.clock.now_ns();
+    r.response = std::to_string(shots_) + " shots, " + std::to_string(pocketed_) + " pocketed";
+    r.response_device = simulated_ ? "simulated" : "participant";
+    f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(r))));
+    f_.report_trial(index_, data::TrialStatus::completed, "");
+    for (const auto i : objects_) f_.scene().scene().edit(i).visible = false;
+    return Outcome::done;
+  }
+
+ private:
+  struct Rolling {
+    std::int64_t strike_ns = 0;
+    bl::ShotSpec spec;
+    bl::ShotOutcome outcome;
+    phys::System system;
+    std::optional<std::string> cue_pose;
+  };
+
+  std::int64_t think_ns() {
+    return static_cast<std::int64_t>((1.5 + 1.5 * protocol::uniform01(rng_)) * 1e9);
+  }
+
+  bool finished(bool out_of_time) const {
+    if (out_of_time) return true;
+    if (play_.shots > 0 && shots_ >= play_.shots) return true;
+    if (play_.until_all_pocketed) {
+      bool any = false;
+      for (std::size_t i = 1; i < balls_.size(); ++i) any = any || !balls_[i].pocketed;
+      if (!any) return true;
+    }
+    return balls_.empty() || balls_[0].pocketed;
+  }
+
+  void load_rest_state() {
+    const auto stored = f_.check(f_.store.shots(trial_id_));
+    if (!stored.empty()) {
+      const Json rest = Json::parse(stored.back().rest_state);
+      for (const auto& b : rest)
+        balls_.push_back({b["id"].get<std::string>(), {b["x_m"].get<double>(), b["z_m"].get<double>()},
+                          b.value("pocketed", false), b.value("pocket", -1)});
+      shots_ = static_cast<int>(stored.size());
+      for (const auto& s : stored) pocketed_ += static_cast<int>(Json::parse(s.pocketed).size());
+      const Json settings = Json::parse(stored.back().table_settings);
+      elapsed_before_s_ = settings.value("play_elapsed_s", 0.0);
+      return;
+    }
+    auto rack = phys::rack(cloth_, params_, play_.rack);
+    if (const auto* e = std::get_if<geometry::GeometryError>(&rack))
+      throw Stop{{Error::Kind::bad_input, "block '" + run_.block.name + "': " + e->message}};
+    for (const auto& b : std::get<std::vector<phys::RackBall>>(rack)) balls_.push_back({b.id, b.native_m, false, -1});
+  }
+
+  void add_objects() {
+    auto& scene = f_.scene().scene();
+    f_.scene().show(Phase::iti, false);  // the trial stimuli stay hidden
+    const phys::System sys = bl::at_rest(cloth_, params_, balls_);
+    for (std::size_t i = 0; i < balls_.size(); ++i)
+      objects_.push_back(scene.add(renderer::ball_object(f_.world().space, params_.radius_m, ball_colour(i),
+                                                         pose_of(sys.ball(i)))));
+    table_ = scene.add(renderer::table_object(f_.world().space, f_.world().table));
+    show(sys, 0.0);
+  }
+
+  geometry::Isometry pose_of(const phys::Ball& b) const {
+    const geometry::Space space = f_.world().space;
+    geometry::Isometry turn = geometry::rotation(glm::mat3_cast(b.orientation));
+    return phys::to_isometry(b.frame) * geometry::translation_m(space, {0.0, params_.radius_m, 0.0}) * turn;
+  }
+
+  void show(const phys::System& sys, double t_s) {
+    auto& scene = f_.scene().scene();
+    for (std::size_t i = 0; i < balls_.size(); ++i) {
+      const phys::Ball b = sys.ball_at(i, std::max(t_s, sys.time_s()));
+      const bool visible = b.motion != phys::Motion::pocketed;
+      const geometry::Isometry pose = pose_of(b);
+      const auto& o = scene.objects()[objects_[i]];
+      if (o.visible != visible || o.pose.m != pose.m) {
+        auto& e = scene.edit(objects_[i]);
+        e.visible = visible;
+        e.pose = pose;
+      }
+    }
+  }
+
+  Rolling start_shot(std::int64_t t_ns, const Frame& g) {
+    (void)g;
+    const phys::System rest = bl::at_rest(cloth_, params_, balls_);
+    bl::ShotSpec spec = simulated_ ? choose_shot(rest, balls_, params_, rng_) : sighted_shot(rest, balls_, f_.head());
+    Rolling r{t_ns, spec, bl::simulate(cloth_, params_, balls_, spec, 120.0), bl::at_rest(cloth_, params_, balls_),
+              std::nullopt};
+    const phys::Strike strike = bl::strike_for(r.system, params_, 0, spec);
+    if (!strike.miscue) r.system.set_motion(0, strike.v, strike.w);
+    return r;
+  }
+
+  void commit_shot(const Rolling& r, std::int64_t rest_ns, double elapsed_s) {
+    data::ShotRecord s;
+    s.session_id = f_.session_id;
+    s.trial_id = trial_id_;
+    s.shot_index = shots_;
+    s.t_ns = r.strike_ns;
+    s.rest_ns = rest_ns;
+    s.player = simulated_ ? "simulated" : "participant";
+    s.ball = r.spec.ball;
+    const phys::System rest = bl::at_rest(cloth_, params_, balls_);
+    const phys::Vec2 aim = phys::direction_toward(cloth_, rest.ball(0).frame, phys::from_native(cloth_, r.spec.toward_m));
+    s.aim_x = aim.x;
+    s.aim_z = aim.y;
+    const phys::Strike strike = bl::strike_for(rest, params_, 0, r.spec);
+    s.speed_m_s = glm::length(strike.v);
+    s.cue_speed_m_s = r.spec.cue_speed_m_s;
+    if (r.spec.cue_speed_m_s) {
+      s.tip_side = r.spec.tip.x;
+      s.tip_height = r.spec.tip.y;
+    }
+    s.miscue = r.outcome.miscue;
+    s.cue_pose = r.cue_pose;
+    const World& w = f_.world();
+    Json settings{{"space", std::string(geometry::to_string(w.space.kind))},
+                  {"edge_m", w.table.edge_m},
+                  {"sides", w.table.sides},
+                  {"parameters", bl::to_json(params_)},
+                  {"play_elapsed_s", elapsed_before_s_ + elapsed_s}};
+    s.table_settings = settings.dump();
+    s.before_state = Json{{"balls", bl::to_json(balls_)}}.dump();
+    s.shot = bl::to_json(r.spec).dump();
+    const Json outcome = bl::to_json(r.outcome, balls_);
+    s.events = outcome["events"].dump();
+    s.event_count = static_cast<std::int64_t>(r.outcome.events.size());
+    Json pocketed = Json::array();
+    for (std::size_t i = 0; i < balls_.size(); ++i)
+      if (!balls_[i].pocketed && r.outcome.final[i].pocketed) pocketed.push_back(balls_[i].id);
+    s.pocketed = pocketed.dump();
+    balls_ = bl::rest_state(r.outcome);
+    s.rest_state = bl::to_json(balls_).dump();
+    pocketed_ += static_cast<int>(pocketed.size());
+    ++shots_;
+    f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(s))));
+    f_.summary.shots += 1;
+    f_.summary.balls_pocketed += static_cast<std::int64_t>(pocketed.size());
+    show(bl::at_rest(cloth_, params_, balls_), 0.0);
+  }
+
+  BlockRun& run_;
+  SessionFrames& f_;
+  const protocol::PlaySettings& play_;
+  phys::Parameters params_;
+  phys::Cloth cloth_;
+  std::vector<bl::BallPlace> balls_;
+  std::vector<std::size_t> objects_;
+  std::size_t table_ = 0;
+  std::size_t index_ = 0;
+  std::int64_t trial_id_ = 0;
+  int shots_ = 0;
+  int pocketed_ = 0;
+  double elapsed_before_s_ = 0.0;
+  bool simulated_ = false;
+  protocol::Engine rng_;
+};
+
+class PlayKind final : public BlockKind {
+ public:
+  [[nodiscard]] std::string_view name() const override { return "play"; }
+  [[nodiscard]] std::size_t resume_position(const protocol::PlannedBlock&, std::size_t) const override { return 0; }
+  Outcome run(BlockRun& run) const override { return PlayBlock(run).run(); }
+};
+
+}  // namespace
+
+const BlockKind& play_block_kind() {
+  static const PlayKind kind;
+  return kind;
+}
+
+}  // namespace curvlab::harness::runner
