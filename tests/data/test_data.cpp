@@ -292,8 +292,8 @@ TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
     auto& c = db.value().connection();
-    c.exec("DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; DELETE FROM schema_migrations;"
-           "PRAGMA user_version = 4");
+    c.exec("DROP TABLE shots; DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; "
+           "DELETE FROM schema_migrations; PRAGMA user_version = 4");
   }
   auto db = Database::open(path, OpenMode::open_existing);
   ASSERT_TRUE(db) << db.error().message;
@@ -303,6 +303,26 @@ TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
   EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
   EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM gaze_samples"), 0);
   EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 5"), 1);
+}
+
+// A file of version 5 (before play blocks) gets the shots table, as a new
+// file has it.
+TEST(Schema, MigratesVersion5FileAddingTheShotsTable) {
+  const auto dir = fresh_dir("migrate5");
+  const auto path = (dir / "v5.db").string();
+  {
+    auto db = Database::open(path, OpenMode::create_or_open);
+    ASSERT_TRUE(db);
+    db.value().connection().exec("DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 5");
+  }
+  auto db = Database::open(path, OpenMode::open_existing);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(db.value().schema_version(), current_schema_version);
+  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(fresh);
+  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM shots"), 0);
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 6"), 1);
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {
