@@ -215,7 +215,25 @@ class PlayBlock {
       for (std::size_t i = 1; i < balls_.size(); ++i) any = any || !balls_[i].pocketed;
       if (!any) return true;
     }
-    return balls_.empty() || balls_[0].pocketed;
+    return balls_.empty();
+  }
+
+  // A pocketed cue ball comes back on its spot, halfway from the centre to
+  // edge 0, or the nearest free place toward the centre and beyond.
+  void respot_cue_ball() {
+    const double apothem = cloth_.table.apothem_m();
+    for (int k = 0; k <= 200; ++k) {
+      const phys::Vec2 spot{0.0, apothem / 2.0 - static_cast<double>(k) * apothem / 200.0};
+      const glm::dvec3 p = phys::from_native(cloth_, spot);
+      bool free = true;
+      for (std::size_t i = 1; i < balls_.size() && free; ++i)
+        free = balls_[i].pocketed ||
+               phys::distance_m(cloth_, p, phys::from_native(cloth_, balls_[i].native_m)) > 2.0 * params_.radius_m + 1e-6;
+      if (free) {
+        balls_[0] = {balls_[0].id, spot, false, -1};
+        return;
+      }
+    }
   }
 
   void load_rest_state() {
@@ -319,6 +337,7 @@ class PlayBlock {
       if (!balls_[i].pocketed && r.outcome.final[i].pocketed) pocketed.push_back(balls_[i].id);
     s.pocketed = pocketed.dump();
     balls_ = bl::rest_state(r.outcome);
+    if (balls_[0].pocketed) respot_cue_ball();
     s.rest_state = bl::to_json(balls_).dump();
     pocketed_ += static_cast<int>(pocketed.size());
     ++shots_;

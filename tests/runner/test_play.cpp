@@ -1,0 +1,189 @@
+// Play blocks run by the real `curvlab`: judge → play → judge with the
+// simulated player in S3, E3 and H3; every stored shot, handed to a second
+// program (`curvlab billiards shot`) from its stored inputs alone, gives the
+// stored events; a play block killed with SIGKILL resumes at the rest state
+// after its last completed shot.
+#include "run_cli.hpp"
+#include "session_db.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <fcntl.h>
+#include <fstream>
+#include <spawn.h>
+#include <sstream>
+#include <sys/wait.h>
+#include <thread>
+
+extern char** environ;
+
+using curvlab::testing::fresh_dir;
+using curvlab::testing::query;
+using curvlab::testing::run_cli;
+using Json = nlohmann::ordered_json;
+
+namespace {
+
+std::string protocol_text() {
+  std::ifstream in(std::string(CURVLAB_SOURCE_DIR) + "/protocols/adaptation_play.toml");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+// The adaptation protocol with its play block in `space`.
+std::string play_in(const std::string& space) {
+  std::string t = protocol_text();
+  t = replaced(t, "levels = [\"E3\", \"H3\"]", "levels = [\"S3\", \"E3\", \"H3\"]");
+  t = replaced(t, "levels = { space = \"H3\" }", "levels = { space = \"" + space + "\" }");
+  return t;
+}
+
+std::string write(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(PlayBlock, JudgePlayJudgeRunsInEverySpaceAndEachStoredShotReplaysToItsEvents) {
+  for (const std::string space : {"S3", "E3", "H3"}) {
+    SCOPED_TRACE(space);
+    const auto dir = fresh_dir("play_" + space);
+    const std::string protocol = write(dir / "p.toml", play_in(space));
+    const std::string db = (dir / "p.sqlite").string();
+    const auto r = run_cli("run " + protocol + " --participant SIM01 --db " + db + " --render none --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const Json summary = Json::parse(r.out.substr(r.out.find('{')));
+    EXPECT_EQ(summary["status"], "completed");
+    EXPECT_GT(summary["shots"].get<int>(), 0);
+    const auto shots = query(db, "SELECT shot_index, table_settings, before_state, shot, events, rest_state, "
+                                 "event_count FROM shots ORDER BY shot_index");
+    ASSERT_EQ(static_cast<int>(shots.size()), summary["shots"].get<int>());
+    std::string previous_rest;
+    for (const auto& row : shots) {
+      SCOPED_TRACE("shot " + row[0]);
+      const Json settings = Json::parse(row[1]);
+      EXPECT_EQ(settings["space"], space);
+      // The shot's start is the previous shot's rest state.
+      if (!previous_rest.empty()) {
+        EXPECT_EQ(Json::parse(row[2])["balls"], Json::parse(previous_rest));
+      }
+      previous_rest = row[5];
+      Json state = Json::parse(row[2]);
+      state["shot"] = Json::parse(row[3]);
+      const std::string file = write(dir / ("shot" + row[0] + ".json"), state.dump());
+      std::string sets;
+      for (const auto& [name, value] : settings["parameters"].items()) {
+        std::ostringstream v;
+        v.precision(17);
+        v << value.get<double>();
+        sets += " --set " + name + "=" + v.str();
+      }
+      const auto again = run_cli("billiards shot --json --space " + space + " --edge-m " +
+                                 std::to_string(settings["edge_m"].get<double>()) + " --state " + file + sets);
+      ASSERT_EQ(again.exit_code, 0) << again.out;
+      const Json out = Json::parse(again.out);
+      EXPECT_EQ(out["events"], Json::parse(row[4]));
+      EXPECT_EQ(static_cast<long>(out["events"].size()), std::stol(row[6]));
+      Json rest = Json::array();
+      for (const auto& b : out["final"]) {
+        Json place{{"id", b["id"]}, {"x_m", b["x_m"]}, {"z_m", b["z_m"]}};
+        if (b["pocketed"].get<bool>()) {
+          place["pocketed"] = true;
+          place["pocket"] = b["pocket"];
+        }
+        rest.push_back(place);
+      }
+      // A pocketed cue ball is stored back on the table (respotted).
+      Json stored = Json::parse(row[5]);
+      if (rest[0].value("pocketed", false)) {
+        EXPECT_FALSE(stored[0].value("pocketed", false));
+        rest.erase(0);
+        stored.erase(0);
+      }
+      EXPECT_EQ(rest, stored);
+    }
+    // The play block is one completed trial between the judgement blocks.
+    const auto trials = query(db, "SELECT count(*) FROM trials WHERE status != 'completed'");
+    EXPECT_EQ(trials[0][0], "0");
+  }
+}
+
+// Starts curvlab with its output discarded and kills it once `ready()`.
+bool run_until_then_kill(const std::vector<std::string>& args, const std::function<bool()>& ready) {
+  std::vector<char*> argv;
+  std::string bin = CURVLAB_BIN;
+  argv.push_back(bin.data());
+  std::vector<std::string> copy = args;
+  for (auto& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, bin.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) return false;
+  int status = 0;
+  for (int i = 0; i < 6000 && !ready(); ++i) {
+    if (waitpid(pid, &status, WNOHANG) != 0) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const bool running = waitpid(pid, &status, WNOHANG) == 0;
+  if (running) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+  }
+  return running;
+}
+
+TEST(PlayBlock, KilledMidPlayResumesAtTheRestStateAfterTheLastShot) {
+  const auto dir = fresh_dir("play_kill");
+  // One judgement each side of a realtime play block of a few shots.
+  std::string t = protocol_text();
+  t = replaced(t, "repetitions = 2", "repetitions = 1");
+  t = replaced(t, "name = \"before\"", "name = \"before\"\nlevels = { space = \"E3\", bend = 0.0 }");
+  t = replaced(t, "name = \"after\"", "name = \"after\"\nlevels = { space = \"E3\", bend = 0.0 }");
+  t = replaced(t, "shots = 8", "shots = 4");
+  const std::string protocol = write(dir / "p.toml", t);
+  const std::string db = (dir / "p.sqlite").string();
+  const auto shots_stored = [&] {
+    if (!std::filesystem::exists(db)) return 0;
+    const auto rows = query(db, "SELECT count(*) FROM shots");
+    return rows.empty() ? 0 : std::stoi(rows[0][0]);
+  };
+  ASSERT_TRUE(run_until_then_kill({"run", protocol, "--participant", "SIM01", "--db", db, "--render", "none",
+                                   "--pace", "realtime"},
+                                  [&] { return shots_stored() >= 2; }))
+      << "the session ended before two shots were stored";
+  const int before = shots_stored();
+  ASSERT_GE(before, 2);
+  ASSERT_LT(before, 4);
+  const auto kept = query(db, "SELECT shot_index, events, rest_state FROM shots ORDER BY shot_index");
+  const auto r = run_cli("resume --db " + db + " --session 1 --render none --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto status = query(db, "SELECT status FROM sessions");
+  EXPECT_EQ(status[0][0], "completed");
+  const auto shots = query(db, "SELECT shot_index, events, rest_state, before_state FROM shots ORDER BY shot_index");
+  ASSERT_EQ(shots.size(), 4u);
+  for (std::size_t i = 0; i < shots.size(); ++i) EXPECT_EQ(shots[i][0], std::to_string(i));
+  // Nothing committed was lost or changed, and play went on from the rest
+  // state of the last shot stored before the kill.
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    EXPECT_EQ(shots[i][1], kept[i][1]);
+    EXPECT_EQ(shots[i][2], kept[i][2]);
+  }
+  EXPECT_EQ(Json::parse(shots[kept.size()][3])["balls"], Json::parse(kept.back()[2]));
+}
+
+}  // namespace
