@@ -65,6 +65,15 @@ TEST(PlayBlock, JudgePlayJudgeRunsInEverySpaceAndEachStoredShotReplaysToItsEvent
     const Json summary = Json::parse(r.out.substr(r.out.find('{')));
     EXPECT_EQ(summary["status"], "completed");
     EXPECT_GT(summary["shots"].get<int>(), 0);
+    // Laps round the physical table per lap round the virtual one: n/4,
+    // from the head's positions (the paper's 0.75, 1 and 1.25).
+    const double sides = space == "S3" ? 3.0 : space == "E3" ? 4.0 : 5.0;
+    ASSERT_EQ(summary["play"].size(), 1u);
+    EXPECT_GT(std::abs(summary["play"][0]["laps_physical"].get<double>()), 2.0);
+    EXPECT_NEAR(summary["play"][0]["laps_ratio"].get<double>(), sides / 4.0, 0.01);
+    EXPECT_LT(summary["play"][0]["hand_error_m"].get<double>(), 1e-6);
+    const auto stored = query(db, "SELECT json_extract(detail, '$.laps_physical') FROM events WHERE kind = 'play_summary'");
+    ASSERT_EQ(stored.size(), 1u);
     const auto shots = query(db, "SELECT shot_index, table_settings, before_state, shot, events, rest_state, "
                                  "event_count FROM shots ORDER BY shot_index");
     ASSERT_EQ(static_cast<int>(shots.size()), summary["shots"].get<int>());

@@ -199,6 +199,20 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
     doc["shots"] = s.shots;
     doc["balls_pocketed"] = s.balls_pocketed;
   }
+  if (!s.play.empty()) {
+    Json play = Json::array();
+    for (const auto& p : s.play)
+      play.push_back(Json{{"block", p.block},
+                          {"shots", p.shots},
+                          {"pocketed", p.pocketed},
+                          {"time_s", p.time_s},
+                          {"walked_m", p.walked_m},
+                          {"laps_physical", p.laps_physical},
+                          {"laps_virtual", p.laps_virtual},
+                          {"laps_ratio", p.laps_virtual != 0.0 ? p.laps_physical / p.laps_virtual : 0.0},
+                          {"hand_error_m", p.hand_error_m}});
+    doc["play"] = play;
+  }
   doc["frames"] = s.frames;
   doc["msaa"] = msaa;
   doc["samples_dropped"] = s.samples_dropped;

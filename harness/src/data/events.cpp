@@ -11,7 +11,7 @@ namespace {
 // the order a person expects, and equal events give equal texts.
 using Json = nlohmann::ordered_json;
 
-constexpr std::array<std::pair<EventKind, std::string_view>, 27> kind_names{{
+constexpr std::array<std::pair<EventKind, std::string_view>, 28> kind_names{{
     {EventKind::session_start, "session_start"},
     {EventKind::observer, "observer"},
     {EventKind::resume, "resume"},
@@ -37,6 +37,7 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 27> kind_names{{
     {EventKind::stage_moved, "stage_moved"},
     {EventKind::refresh_rate, "refresh_rate"},
     {EventKind::posterior, "posterior"},
+    {EventKind::play_summary, "play_summary"},
     {EventKind::merged_from, "merged_from"},
     {EventKind::session_renumbered, "session_renumbered"},
 }};
@@ -134,6 +135,17 @@ Detail detail(const events::StageMoved& e) {
 }
 Detail detail(const events::RefreshRate& e) {
   return {EventKind::refresh_rate, Json{{"from_hz", e.from_hz}, {"to_hz", e.to_hz}, {"requested", e.requested}}};
+}
+
+Detail detail(const events::PlaySummary& e) {
+  return {EventKind::play_summary, Json{{"block", e.block},
+                                        {"shots", e.shots},
+                                        {"pocketed", e.pocketed},
+                                        {"time_s", e.time_s},
+                                        {"walked_m", e.walked_m},
+                                        {"laps_physical", e.laps_physical},
+                                        {"laps_virtual", e.laps_virtual},
+                                        {"hand_error_m", e.hand_error_m}}};
 }
 
 // The lapse keys are null when the method keeps λ fixed.

@@ -93,7 +93,7 @@ void SessionFrames::prepare(const protocol::Settings& s, const std::string& prom
   if (!made) throw Stop{{made.error().kind, "impossible table: " + made.error().message}};
   World world = std::move(made).value();
   if (!tracker_ || !world_ || !world_->same_as(world) || tracker_->algorithm() != s.tracking) {
-    tracker_ = geometry::make_tracker(s.tracking, world.space, world.table, physical_table(s, options_.calibration));
+    tracker_ = geometry::make_tracker(s.tracking, world.space, world.table, runner::physical_table(s, options_.calibration));
     if (tracker_ && last_lab_) tracker_->update(*last_lab_);
   }
   world_ = world;
@@ -113,12 +113,16 @@ geometry::Isometry SessionFrames::head() const {
 
 // ---- one frame --------------------------------------------------------------
 
+geometry::PhysicalTable SessionFrames::physical_table() const {
+  return runner::physical_table(settings_, options_.calibration);
+}
+
 bool SessionFrames::begin(Frame& f) {
   auto timing = station.display->begin_frame();
   if (!timing) return false;
   f.started = SteadyTime::now();
   f.timing = *timing;
-  lab_ = station.poses->poses(f.timing);
+  lab_ = lab_override ? lab_override(f.timing) : station.poses->poses(f.timing);
   // A pose no lab can hold (NaN, inf, 1e308 m) is lost tracking, stored as
   // such, and never reaches the tracker (lab_volume.hpp).
   for (auto& pose : lab_.pose) pose = possible_pose(pose);

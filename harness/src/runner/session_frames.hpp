@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -77,6 +78,16 @@ class SessionFrames {
   [[nodiscard]] const World& world() const { return *world_; }
   [[nodiscard]] TrialScene& scene() { return *scene_; }
   [[nodiscard]] geometry::Isometry head() const;
+  // This frame's lab poses and the tracker's curved-space poses (null
+  // before the first frame of a world).
+  [[nodiscard]] const geometry::LabFrame& lab() const { return lab_; }
+  [[nodiscard]] const geometry::TrackingOutput* tracking() const { return tracker_ ? &tracker_->output() : nullptr; }
+  // The physical table the tracker anchors to (the calibration's, or the
+  // protocol's table where there is none).
+  [[nodiscard]] geometry::PhysicalTable physical_table() const;
+  // Where set, the frames take the lab's poses from it instead of the
+  // station's pose source (the simulated player walking round the table).
+  std::function<geometry::LabFrame(const io::FrameTiming&)> lab_override;
   [[nodiscard]] double ipd() const { return options_.ipd_m.value_or(settings_.viewing.ipd_m); }
   [[nodiscard]] renderer::Eye dominant() const { return dominant_; }
   [[nodiscard]] std::int64_t frame_index() const { return frame_index_; }

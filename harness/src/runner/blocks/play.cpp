@@ -11,6 +11,7 @@
 // strikes the cue ball along the head's line of sight.
 #include "../block_kind.hpp"
 
+#include "curvlab/geometry/trajectory.hpp"
 #include "curvlab/harness/billiards/shot.hpp"
 #include "curvlab/harness/protocol/random.hpp"
 
@@ -24,6 +25,7 @@ namespace curvlab::harness::runner {
 namespace {
 
 namespace bl = curvlab::harness::billiards;
+namespace events = curvlab::harness::data::events;
 namespace phys = curvlab::geometry::billiards;
 using Json = nlohmann::ordered_json;
 
@@ -124,6 +126,56 @@ bl::ShotSpec sighted_shot(const phys::System& sys, const std::vector<bl::BallPla
   return s;
 }
 
+// The head's unwrapped azimuth about a centre, in laps, and the distance it
+// walked.
+class Laps {
+ public:
+  void add(double azimuth_rad) {
+    if (last_) {
+      double d = azimuth_rad - *last_;
+      while (d > kPi) d -= 2.0 * kPi;
+      while (d <= -kPi) d += 2.0 * kPi;
+      total_rad_ += d;
+    }
+    last_ = azimuth_rad;
+  }
+  [[nodiscard]] double laps() const { return total_rad_ / (2.0 * kPi); }
+
+ private:
+  std::optional<double> last_;
+  double total_rad_ = 0.0;
+};
+
+// What a play block measures frame by frame (docs/billiards.md, "Play
+// figures"): laps round each table, distance walked, the hands' seen-versus-
+// felt error.
+struct PlayFigures {
+  Laps physical, virtual_table;
+  double walked_m = 0.0;
+  std::optional<glm::dvec2> last_head;
+  double hand_error_sum_m = 0.0;
+  std::int64_t hand_error_n = 0;
+
+  void add(const geometry::LabFrame& lab, const geometry::PhysicalTable& table,
+           const geometry::TrackingOutput* tracking) {
+    const auto& head = lab[geometry::Device::head];
+    if (head.valid) {
+      const glm::dvec2 h{head.position_m.x - table.centre_x_m, head.position_m.z - table.centre_z_m};
+      physical.add(std::atan2(h.y, h.x));
+      if (last_head) walked_m += glm::length(h - *last_head);
+      last_head = h;
+    }
+    if (tracking == nullptr || !tracking->tracked[0]) return;
+    const geometry::Isometry& v = tracking->pose[0];
+    virtual_table.add(std::atan2(v.m[3].z, v.m[3].x));
+    for (const auto& c : tracking->coherence)
+      if (c.measured) {
+        hand_error_sum_m += c.error_m;
+        ++hand_error_n;
+      }
+  }
+};
+
 class PlayBlock {
  public:
   explicit PlayBlock(BlockRun& run)
@@ -147,6 +199,20 @@ class PlayBlock {
     rng_.seed(protocol::mix_seed(f_.design.seed ^ protocol::mix_seed(0x9a1e0000ULL + index_)));
     const std::int64_t start_ns = f_.clock.now_ns();
     std::int64_t next_shot_ns = start_ns + think_ns();
+    // The simulated player walks round the physical table while it plays.
+    struct Restore {
+      SessionFrames& f;
+      ~Restore() { f.lab_override = nullptr; }
+    } restore{f_};
+    const geometry::PhysicalTable physical = f_.physical_table();
+    if (simulated_) walk_ = walking_trajectory(physical);
+    if (!walk_.empty()) {
+      f_.lab_override = [this, start_ns](const io::FrameTiming& t) {
+        const std::int64_t period = walk_[1].t_ns - walk_[0].t_ns;
+        const auto k = static_cast<std::size_t>(std::max<std::int64_t>(0, t.predicted_display_ns - start_ns) / period);
+        return walk_[std::min(k, walk_.size() - 1)].frame;
+      };
+    }
     const double duration_ns = play_.duration_s * 1e9 - elapsed_before_s_ * 1e9;
     std::optional<Rolling> rolling;
     const io::Overlay overlay{Phase::stimulus, run_.block.name + "  play", false};
@@ -158,6 +224,7 @@ class PlayBlock {
         continue;
       }
       const std::int64_t t_ns = g.timing.predicted_display_ns;
+      figures_.add(f_.lab(), physical, f_.tracking());
       if (!rolling) {
         if (finished(static_cast<double>(g.timing.now_ns - start_ns) > duration_ns)) {
           f_.end(g, overlay, false, trial_id_);
@@ -182,6 +249,18 @@ class PlayBlock {
       f_.end(g, overlay, false, trial_id_);
       if (g.signal == Signal::quit) return Outcome::quit;
     }
+    events::PlaySummary summary;
+    summary.block = run_.block.name;
+    summary.shots = shots_;
+    summary.pocketed = pocketed_;
+    summary.time_s = static_cast<double>(f_.clock.now_ns() - start_ns) * 1e-9 + elapsed_before_s_;
+    summary.walked_m = figures_.walked_m;
+    summary.laps_physical = figures_.physical.laps();
+    summary.laps_virtual = figures_.virtual_table.laps();
+    summary.hand_error_m =
+        figures_.hand_error_n > 0 ? figures_.hand_error_sum_m / static_cast<double>(figures_.hand_error_n) : 0.0;
+    f_.event(trial_id_, summary);
+    f_.summary.play.push_back(summary);
     data::TrialResult r;
     r.trial_id = trial_id_;
     r.onset_ns = start_ns;
@@ -202,6 +281,16 @@ class PlayBlock {
     phys::System system;
     std::optional<std::string> cue_pose;
   };
+
+  // Laps enough for the whole block at a slow walk, 0.4 m/s.
+  geometry::Trajectory walking_trajectory(const geometry::PhysicalTable& table) const {
+    geometry::WalkAroundOptions o;
+    o.common.table = table;
+    o.speed_m_s = 0.4;
+    const double circle_m = 2.0 * kPi * (0.5 * table.edge_m + o.common.head_distance_m);
+    o.laps = std::ceil(play_.duration_s * o.speed_m_s / circle_m) + 1.0;
+    return geometry::walk_around(o);
+  }
 
   std::int64_t think_ns() {
     return static_cast<std::int64_t>((1.5 + 1.5 * protocol::uniform01(rng_)) * 1e9);
@@ -333,7 +422,8 @@ class PlayBlock {
     s.events = outcome["events"].dump();
     s.event_count = static_cast<std::int64_t>(r.outcome.events.size());
     Json pocketed = Json::array();
-    for (std::size_t i = 0; i < balls_.size(); ++i)
+    // Object balls only: a pocketed cue ball is a scratch, respotted below.
+    for (std::size_t i = 1; i < balls_.size(); ++i)
       if (!balls_[i].pocketed && r.outcome.final[i].pocketed) pocketed.push_back(balls_[i].id);
     s.pocketed = pocketed.dump();
     balls_ = bl::rest_state(r.outcome);
@@ -362,6 +452,8 @@ class PlayBlock {
   double elapsed_before_s_ = 0.0;
   bool simulated_ = false;
   protocol::Engine rng_;
+  geometry::Trajectory walk_;
+  PlayFigures figures_;
 };
 
 class PlayKind final : public BlockKind {

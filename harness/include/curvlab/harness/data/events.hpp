@@ -43,6 +43,7 @@ enum class EventKind {
   stage_moved,   // the headset's STAGE origin moved
   refresh_rate,  // the headset's refresh rate changed
   posterior,  // a Bayesian adaptive method's posterior after the trial's answer
+  play_summary,  // a play block's figures when it ends (docs/billiards.md)
   merged_from,
   session_renumbered,
 };
@@ -167,6 +168,20 @@ struct Posterior {
   StepPosterior value;
 };
 
+// A play block's figures: shots, balls pocketed, time, distance walked,
+// laps round the physical and the virtual table (from the head's unwrapped
+// azimuth about each table's centre), and the seen-versus-felt hand error.
+struct PlaySummary {
+  std::string block;
+  std::int64_t shots = 0;
+  std::int64_t pocketed = 0;
+  double time_s = 0.0;
+  double walked_m = 0.0;
+  double laps_physical = 0.0;
+  double laps_virtual = 0.0;
+  double hand_error_m = 0.0;  // mean over frames, both hands
+};
+
 }  // namespace events
 
 using Event = std::variant<events::SessionStart, events::Observer, events::Resume, events::BlockStart, events::Page,
@@ -174,7 +189,7 @@ using Event = std::variant<events::SessionStart, events::Observer, events::Resum
                            events::Unpaused, events::TrialAborted, events::TrialRepeated, events::TrialAbandoned,
                            events::TrialSkipped, events::EarlyInput, events::AdjustmentEvent, events::Onset,
                            events::TrackingFlagged, events::EventsLost, events::StageMoved, events::RefreshRate,
-                           events::Posterior>;
+                           events::Posterior, events::PlaySummary>;
 
 // The row an event is stored as.
 EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,

@@ -23,6 +23,7 @@
 #pragma once
 
 #include "curvlab/geometry/calibration.hpp"
+#include "curvlab/harness/data/events.hpp"
 #include "curvlab/harness/data/records.hpp"
 #include "curvlab/harness/io/clock.hpp"
 #include "curvlab/harness/protocol/design.hpp"
@@ -82,6 +83,7 @@ struct SessionSummary {
   std::int64_t attempts_repeated = 0;
   std::int64_t shots = 0;           // play blocks' shots in this run
   std::int64_t balls_pocketed = 0;  // by those shots
+  std::vector<data::events::PlaySummary> play;  // each play block ended in this run
   std::int64_t frames = 0;
   std::uint64_t samples_dropped = 0;
   double session_s = 0.0;  // on the session clock
