@@ -72,8 +72,8 @@ TEST(PlayBlock, JudgePlayJudgeRunsInEverySpaceAndEachStoredShotReplaysToItsEvent
     EXPECT_GT(std::abs(summary["play"][0]["laps_physical"].get<double>()), 2.0);
     EXPECT_NEAR(summary["play"][0]["laps_ratio"].get<double>(), sides / 4.0, 0.01);
     EXPECT_LT(summary["play"][0]["hand_error_m"].get<double>(), 1e-6);
-    const auto stored = query(db, "SELECT json_extract(detail, '$.laps_physical') FROM events WHERE kind = 'play_summary'");
-    ASSERT_EQ(stored.size(), 1u);
+    const auto summaries = query(db, "SELECT json_extract(detail, '$.laps_physical') FROM events WHERE kind = 'play_summary'");
+    ASSERT_EQ(summaries.size(), 1u);
     const auto shots = query(db, "SELECT shot_index, table_settings, before_state, shot, events, rest_state, "
                                  "event_count FROM shots ORDER BY shot_index");
     ASSERT_EQ(static_cast<int>(shots.size()), summary["shots"].get<int>());
