@@ -196,3 +196,31 @@ TEST(PlayBlock, KilledMidPlayResumesAtTheRestStateAfterTheLastShot) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(PlayBlock, ReplayDrawsAFrameOfPlayFromTheStoredShots) {
+  const auto dir = fresh_dir("play_replay");
+  const std::string db = (dir / "p.sqlite").string();
+  ASSERT_EQ(run_cli("run " + write(dir / "p.toml", protocol_text()) + " --participant SIM01 --db " + db +
+                    " --render none --quiet").exit_code, 0);
+  const auto play = query(db, "SELECT trial_index, trial_id FROM trials t JOIN blocks b USING (block_id) "
+                              "WHERE b.name = 'play'");
+  ASSERT_EQ(play.size(), 1u);
+  const auto shot = query(db, "SELECT t_ns FROM shots WHERE shot_index = 0");
+  const auto frame = query(db, "SELECT frame_index FROM frames WHERE trial_id = " + play[0][1] +
+                                   " AND predicted_display_ns > " + shot[0][0] + " + 100000000 LIMIT 1");
+  ASSERT_EQ(frame.size(), 1u);
+  const auto r = run_cli("replay --db " + db + " --session 1 --trial " + play[0][0] + " --frame " + frame[0][0] +
+                         " --out " + (dir / "frame").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "frame" / "left.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "frame" / "right.png"));
+  // A play block has no onset: the frame must be named.
+  const auto no_frame = run_cli("replay --db " + db + " --session 1 --trial " + play[0][0] + " --out " +
+                                (dir / "none").string());
+  EXPECT_EQ(no_frame.exit_code, 2);
+  EXPECT_NE(no_frame.out.find("--frame"), std::string::npos) << no_frame.out;
+}
+
+}  // namespace

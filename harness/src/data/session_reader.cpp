@@ -143,6 +143,44 @@ Expected<std::int64_t> read_trial_id(Database& db, std::int64_t session_id, std:
   });
 }
 
+Expected<std::vector<ShotRecord>> read_shots(Database& db, std::int64_t trial_id) {
+  return guarded(db, [&]() -> Expected<std::vector<ShotRecord>> {
+    Statement s(db.connection(),
+                "SELECT session_id, trial_id, shot_index, t_ns, rest_ns, player, ball, aim_x, aim_z, speed_m_s, "
+                "cue_speed_m_s, tip_side, tip_height, miscue, cue_pose, table_settings, before_state, shot, "
+                "events, rest_state, pocketed, event_count FROM shots WHERE trial_id = ?1 ORDER BY shot_index");
+    s.bind(1, trial_id);
+    std::vector<ShotRecord> out;
+    while (s.step()) {
+      ShotRecord r;
+      r.session_id = s.column_int(0);
+      r.trial_id = s.column_int(1);
+      r.shot_index = s.column_int(2);
+      r.t_ns = s.column_int(3);
+      r.rest_ns = s.column_int(4);
+      r.player = s.column_text(5);
+      r.ball = s.column_text(6);
+      r.aim_x = s.column_double(7);
+      r.aim_z = s.column_double(8);
+      r.speed_m_s = s.column_double(9);
+      r.cue_speed_m_s = s.column_opt_double(10);
+      r.tip_side = s.column_opt_double(11);
+      r.tip_height = s.column_opt_double(12);
+      r.miscue = s.column_int(13) != 0;
+      r.cue_pose = s.column_opt_text(14);
+      r.table_settings = s.column_text(15);
+      r.before_state = s.column_text(16);
+      r.shot = s.column_text(17);
+      r.events = s.column_text(18);
+      r.rest_state = s.column_text(19);
+      r.pocketed = s.column_text(20);
+      r.event_count = s.column_int(21);
+      out.push_back(std::move(r));
+    }
+    return out;
+  });
+}
+
 Expected<std::optional<OnsetRecord>> read_onset(Database& db, std::int64_t trial_id) {
   return guarded(db, [&]() -> Expected<std::optional<OnsetRecord>> {
     Statement s(db.connection(), "SELECT event_id, detail FROM events WHERE trial_id = ?1 AND kind = ?2 "

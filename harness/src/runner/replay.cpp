@@ -1,6 +1,8 @@
 #include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/replay.hpp"
 
+#include "play_scene.hpp"
+
 #include "curvlab/harness/data/database.hpp"
 #include "curvlab/harness/data/session_reader.hpp"
 #include "curvlab/harness/protocol/design.hpp"
@@ -49,6 +51,8 @@ struct StoredFrame {
   std::optional<data::ViewGeometry> views;  // nullopt: not recorded (schema version 2)
   bool adjusted = false;                   // an adjustment after onset changed the stimulus
   std::optional<double> adjustment_value;  // an adjustment trial's value shown at the frame
+  std::vector<data::ShotRecord> shots;     // a play block's (its trial has no onset)
+  bool play = false;
 };
 
 // The session's protocol, re-expanded for its participant: the trial's
@@ -143,6 +147,22 @@ Result<StoredFrame> read_stored_frame(const ReplayRequest& rq) {
   auto trial_id = data::read_trial_id(db, rq.session_id, rq.trial_index);
   if (!trial_id) return trial_id.error();
   out.trial_id = *trial_id;
+  out.play = out.block && out.block->kind == "play";
+  if (out.play) {
+    // A play block's frames: its shots say where the balls were.
+    auto shots = data::read_shots(db, out.trial_id);
+    if (!shots) return shots.error();
+    out.shots = std::move(*shots);
+    if (!rq.frame_index)
+      return Error{Kind::usage, "trial " + std::to_string(rq.trial_index) +
+                                    " is a play block, which has no onset: give the frame to draw with --frame"};
+    out.frame_index = *rq.frame_index;
+    if (auto r = read_head(db, rq, out); !r) return r.error();
+    auto views = data::read_view_geometry(db, rq.session_id, out.frame_index);
+    if (!views) return views.error();
+    out.views = *views;
+    return out;
+  }
   auto onset = data::read_onset(db, out.trial_id);
   if (!onset) return onset.error();
   if (!*onset)
@@ -160,6 +180,7 @@ Result<StoredFrame> read_stored_frame(const ReplayRequest& rq) {
 
 // fixation, stimulus or response at the frame, from the onset and the timeline.
 Phase phase_at(const StoredFrame& f) {
+  if (f.play) return Phase::stimulus;
   const std::int64_t onset_ns = f.onset.predicted_display_ns;
   if (f.display_ns < onset_ns) return Phase::fixation;
   if (f.display_ns < onset_ns + f.settings.timeline.stimulus_ms * 1'000'000) return Phase::stimulus;
@@ -219,19 +240,31 @@ Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
                                  CURVLAB_DEFAULT_FONT);
   if (!built) return built.error();
   auto& scene = built.value();
-  // The stimulus stays where onset placed it; an adjustment re-places it
-  // from the head at onset, as the session did.
-  const geometry::Isometry head_at_onset = isometry(f.onset.head_pose);
-  Placement placement = place_stimulus(world, f.settings, head_at_onset);
-  if (!f.adjusted) placement.stick_pose = isometry(f.onset.stick_pose);
-  scene.place(placement, head_at_onset);
-  scene.show(phase, f.settings.timeline.stimulus_during_response);
-  // What moves (stimulus_kind.hpp) is where it was when the frame was shown,
-  // for the head the frame recorded.
-  FramePoses poses;
-  poses.pose[0] = f.head;
-  poses.tracked[0] = true;
-  scene.update(f.display_ns, poses);
+  std::optional<PlayScene> play;
+  if (f.play) {
+    // The table and balls where the stored shots put them at the frame.
+    auto state = play_state_at(world, f.shots, f.display_ns);
+    if (!state) return state.error();
+    scene.show(Phase::iti, false);
+    if (state->system) {
+      play.emplace(scene.scene(), world, state->params, state->balls.size());
+      play->show(scene.scene(), *state->system, state->t_s);
+    }
+  } else {
+    // The stimulus stays where onset placed it; an adjustment re-places it
+    // from the head at onset, as the session did.
+    const geometry::Isometry head_at_onset = isometry(f.onset.head_pose);
+    Placement placement = place_stimulus(world, f.settings, head_at_onset);
+    if (!f.adjusted) placement.stick_pose = isometry(f.onset.stick_pose);
+    scene.place(placement, head_at_onset);
+    scene.show(phase, f.settings.timeline.stimulus_during_response);
+    // What moves (stimulus_kind.hpp) is where it was when the frame was
+    // shown, for the head the frame recorded.
+    FramePoses poses;
+    poses.pose[0] = f.head;
+    poses.tracked[0] = true;
+    scene.update(f.display_ns, poses);
+  }
 
   auto created = renderer::Context::create(
       {.device = rq.software ? renderer::DeviceChoice::software : renderer::DeviceChoice::automatic,

@@ -10,6 +10,7 @@
 // and speed noise), otherwise the participant: the cue-strike control
 // strikes the cue ball along the head's line of sight.
 #include "../block_kind.hpp"
+#include "../play_scene.hpp"
 
 #include "curvlab/geometry/trajectory.hpp"
 #include "curvlab/harness/billiards/shot.hpp"
@@ -35,20 +36,6 @@ phys::Parameters play_parameters(const protocol::PlaySettings& play) {
   phys::Parameters p;
   for (const auto& [name, value] : play.physics) (void)phys::set_parameter(p, name, value);
   return p;
-}
-
-glm::vec4 ball_colour(std::size_t i) {
-  if (i == 0) return renderer::display(0.95f, 0.95f, 0.92f);
-  static const std::array<glm::vec3, 8> kColours{{{0.95f, 0.78f, 0.10f},
-                                                  {0.10f, 0.25f, 0.75f},
-                                                  {0.85f, 0.12f, 0.10f},
-                                                  {0.45f, 0.15f, 0.55f},
-                                                  {0.95f, 0.45f, 0.05f},
-                                                  {0.10f, 0.50f, 0.20f},
-                                                  {0.50f, 0.12f, 0.10f},
-                                                  {0.05f, 0.05f, 0.05f}}};
-  const glm::vec3 c = kColours[(i - 1) % kColours.size()];
-  return renderer::display(c.x, c.y, c.z);
 }
 
 // The simulated player's shot: for each object ball and pocket, the ghost
@@ -269,7 +256,7 @@ class PlayBlock {
     r.response_device = simulated_ ? "simulated" : "participant";
     f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(r))));
     f_.report_trial(index_, data::TrialStatus::completed, "");
-    for (const auto i : objects_) f_.scene().scene().edit(i).visible = false;
+    scene_->hide(f_.scene().scene());
     return Outcome::done;
   }
 
@@ -345,36 +332,12 @@ class PlayBlock {
   }
 
   void add_objects() {
-    auto& scene = f_.scene().scene();
     f_.scene().show(Phase::iti, false);  // the trial stimuli stay hidden
-    const phys::System sys = bl::at_rest(cloth_, params_, balls_);
-    for (std::size_t i = 0; i < balls_.size(); ++i)
-      objects_.push_back(scene.add(renderer::ball_object(f_.world().space, params_.radius_m, ball_colour(i),
-                                                         pose_of(sys.ball(i)))));
-    table_ = scene.add(renderer::table_object(f_.world().space, f_.world().table));
-    show(sys, 0.0);
+    scene_.emplace(f_.scene().scene(), f_.world(), params_, balls_.size());
+    show(bl::at_rest(cloth_, params_, balls_), 0.0);
   }
 
-  geometry::Isometry pose_of(const phys::Ball& b) const {
-    const geometry::Space space = f_.world().space;
-    geometry::Isometry turn = geometry::rotation(glm::mat3_cast(b.orientation));
-    return phys::to_isometry(b.frame) * geometry::translation_m(space, {0.0, params_.radius_m, 0.0}) * turn;
-  }
-
-  void show(const phys::System& sys, double t_s) {
-    auto& scene = f_.scene().scene();
-    for (std::size_t i = 0; i < balls_.size(); ++i) {
-      const phys::Ball b = sys.ball_at(i, std::max(t_s, sys.time_s()));
-      const bool visible = b.motion != phys::Motion::pocketed;
-      const geometry::Isometry pose = pose_of(b);
-      const auto& o = scene.objects()[objects_[i]];
-      if (o.visible != visible || o.pose.m != pose.m) {
-        auto& e = scene.edit(objects_[i]);
-        e.visible = visible;
-        e.pose = pose;
-      }
-    }
-  }
+  void show(const phys::System& sys, double t_s) { scene_->show(f_.scene().scene(), sys, t_s); }
 
   Rolling start_shot(std::int64_t t_ns, const Frame& g) {
     (void)g;
@@ -443,8 +406,7 @@ class PlayBlock {
   phys::Parameters params_;
   phys::Cloth cloth_;
   std::vector<bl::BallPlace> balls_;
-  std::vector<std::size_t> objects_;
-  std::size_t table_ = 0;
+  std::optional<PlayScene> scene_;
   std::size_t index_ = 0;
   std::int64_t trial_id_ = 0;
   int shots_ = 0;

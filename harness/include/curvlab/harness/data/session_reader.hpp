@@ -98,6 +98,8 @@ struct OnsetRecord {
   std::array<double, 16> stick_pose{};  // column-major 4×4 isometry of the stick
 };
 Expected<std::optional<OnsetRecord>> read_onset(Database& db, std::int64_t trial_id);
+// A play block's shots (table shots), in order.
+Expected<std::vector<ShotRecord>> read_shots(Database& db, std::int64_t trial_id);
 
 // staircase_steps.intensity of the trial (the value it showed), if it was a
 // staircase trial whose step was committed.
