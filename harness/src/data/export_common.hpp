@@ -40,6 +40,9 @@ struct TrialTable {
 // Sessions selected by the options; not_found when --session names none.
 Expected<std::vector<SessionInfo>> load_sessions(Database& db, const ExportOptions& options);
 Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options);
+// The play blocks' shots, one row per shot (export_shots.cpp); no rows where
+// nothing was played.
+Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options);
 
 // What messages call the exported data: the options' source, else the file.
 std::string origin(const Database& db, const ExportOptions& options);

@@ -35,11 +35,24 @@ Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& opt
   auto table = load_trial_table(db, options);
   if (!table) return table.error();
   const std::string name = "trials.csv";
-  return write_staged(options.out_dir, name, false, [&](const std::string& path) -> Expected<ExportSummary> {
+  auto written = write_staged(options.out_dir, name, false, [&](const std::string& path) -> Expected<ExportSummary> {
     const CsvText csv = render_csv(table.value(), std::nullopt);
     if (auto e = write_text(path, csv.text)) return *e;
     return ExportSummary{{name}, csv.rows};
   });
+  if (!written) return written;
+  // Play blocks' shots beside the trials, where any were played.
+  auto shots = load_shot_table(db, options);
+  if (!shots) return shots.error();
+  if (shots->rows.empty()) return written;
+  auto more = write_staged(options.out_dir, "shots.csv", false, [&](const std::string& path) -> Expected<ExportSummary> {
+    const CsvText csv = render_csv(shots.value(), std::nullopt);
+    if (auto e = write_text(path, csv.text)) return *e;
+    return ExportSummary{{"shots.csv"}, csv.rows};
+  });
+  if (!more) return more;
+  written->files.push_back("shots.csv");
+  return written;
 }
 
 }  // namespace curvlab::harness::data

@@ -18,7 +18,7 @@ namespace {
 // The dataset in `root` (the psychds folder); `source` names the data's
 // origin in the description.
 Expected<ExportSummary> write_dataset(const std::string& root, const std::vector<SessionInfo>& sessions,
-                                      const TrialTable& table, const std::string& source) {
+                                      const TrialTable& table, const TrialTable& shots, const std::string& source) {
   if (auto e = make_dir(root + "/data")) return *e;
   ExportSummary summary;
   for (const SessionInfo& s : sessions) {
@@ -29,6 +29,14 @@ Expected<ExportSummary> write_dataset(const std::string& root, const std::vector
     if (auto e = write_text(root + "/" + name, csv.text)) return *e;
     summary.files.push_back("psychds/" + name);
     summary.rows += csv.rows;
+    // The session's shots, where it played (same keywords, "shots" added).
+    const CsvText shot_csv = render_csv(shots, s.session_id);
+    if (shot_csv.rows == 0) continue;
+    const std::string shot_name = "data/study-" + alnum_label(s.protocol_name) + "_subject-" +
+                                  alnum_label(s.pseudonym) + "_session-" + std::to_string(s.session_number) +
+                                  "_task-play_data.csv";
+    if (auto e = write_text(root + "/" + shot_name, shot_csv.text)) return *e;
+    summary.files.push_back("psychds/" + shot_name);
   }
 
   nlohmann::ordered_json doc;
@@ -41,7 +49,14 @@ Expected<ExportSummary> write_dataset(const std::string& root, const std::vector
   doc["keywords"] = nlohmann::ordered_json::array({"perception", "virtual reality", "curved space"});
   doc["dateCreated"] = sessions.empty() ? "" : sessions.front().started_utc;
   auto& vars = doc["variableMeasured"] = nlohmann::ordered_json::array();
-  for (const Column& c : table.columns) {
+  std::vector<Column> described = table.columns;
+  if (!shots.rows.empty())
+    for (const Column& c : shots.columns) {
+      bool known = false;
+      for (const Column& d : described) known = known || d.name == c.name;
+      if (!known) described.push_back(c);
+    }
+  for (const Column& c : described) {
     nlohmann::ordered_json v;
     v["@type"] = "PropertyValue";
     v["name"] = c.name;
@@ -62,10 +77,12 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
   if (auto e = check_labels(sessions.value(), origin(db, options))) return *e;
   auto table = load_trial_table(db, options);
   if (!table) return table.error();
+  auto shots = load_shot_table(db, options);
+  if (!shots) return shots.error();
   const std::string source =
       options.source.empty() ? std::filesystem::path(db.path()).filename().string() : options.source;
   return write_staged(options.out_dir, "psychds", true, [&](const std::string& root) {
-    return write_dataset(root, sessions.value(), table.value(), source);
+    return write_dataset(root, sessions.value(), table.value(), shots.value(), source);
   });
 }
 
