@@ -243,6 +243,9 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "     ON oe.trial_id = gt.trial_id AND oe.at_ns = gt.onset_ns",
     "   WHERE g.t_ns >= gt.onset_ns AND g.t_ns < coalesce(gt.onset_ns + oe.ms * 1000000, gt.response_ns)",
     "   GROUP BY g.trial_id) gz ON gz.trial_id = t.trial_id",
+    # A play block's one trial stands for the block: it is not a judgement.
+    "WHERE NOT EXISTS (SELECT 1 FROM shots sh WHERE sh.trial_id = t.trial_id)",
+    "  AND NOT EXISTS (SELECT 1 FROM events pe WHERE pe.trial_id = t.trial_id AND pe.kind = 'play_summary')",
     "ORDER BY t.session_id, t.trial_index"))
   cond <- expand_json_column(raw_trials$conditions, "cond_", path, "trials.conditions")
   stim <- expand_json_column(raw_trials$stimulus, "stim_", path, "trials.stimulus")
@@ -271,6 +274,19 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "ORDER BY st.session_id, st.staircase, st.step_index"))
 
   events <- q("SELECT session_id, trial_id, t_ns, kind, detail FROM events WHERE kind = 'observer'")
+  # Play blocks' figures (docs/billiards.md) and where they sat in the run.
+  play <- q(paste(
+    "SELECT e.session_id, se.session_uuid, p.pseudonym AS participant, b.block_index,",
+    "json_extract(e.detail, '$.block') AS block, json_extract(t.conditions, '$.space') AS space,",
+    "json_extract(e.detail, '$.shots') AS shots, json_extract(e.detail, '$.pocketed') AS pocketed,",
+    "json_extract(e.detail, '$.time_s') AS time_s, json_extract(e.detail, '$.walked_m') AS walked_m,",
+    "json_extract(e.detail, '$.laps_physical') AS laps_physical,",
+    "json_extract(e.detail, '$.laps_virtual') AS laps_virtual,",
+    "json_extract(e.detail, '$.hand_error_m') AS hand_error_m",
+    "FROM events e JOIN sessions se ON se.session_id = e.session_id",
+    "JOIN participants p ON p.participant_id = se.participant_id",
+    "JOIN trials t ON t.trial_id = e.trial_id JOIN blocks b ON b.block_id = t.block_id",
+    "WHERE e.kind = 'play_summary' ORDER BY e.session_id, b.block_index"))
 
   # Thin long recordings evenly per session and device so figures stay light:
   # a 1 kHz hour would otherwise be millions of points on a top-view plot.
@@ -286,7 +302,7 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
 
   list(source = normalizePath(path), kind = "database", trials = trials,
        sessions = sessions, staircase = staircase, tracking = tracking, events = events,
-       tracking_stride = stride)
+       play = play, tracking_stride = stride)
 }
 
 # JSON objects (one per row) → data frame of prefixed columns, keys in order of
@@ -533,6 +549,7 @@ pool_parts <- function(parts) {
   staircase <- renumber_trials(bind_rows_fill(pick("staircase")))
   tracking <- renumber_trials(bind_rows_fill(pick("tracking")))
   events <- renumber_trials(bind_rows_fill(pick("events")))
+  play <- bind_rows_fill(pick("play"))
   trials$trial_id <- seq_len(nrow(trials))
   rownames(trials) <- NULL
   sessions$session_id <- sessions$new_id
@@ -543,6 +560,7 @@ pool_parts <- function(parts) {
        staircase = order_by(staircase, c("session_id", "staircase", "step_index")),
        tracking = order_by(tracking, c("session_id", "device", "t_ns")),
        events = order_by(events, c("session_id", "t_ns")),
+       play = play,
        tracking_stride = max(vapply(parts, function(p) p$tracking_stride, 1)))
 }
 

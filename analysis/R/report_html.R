@@ -143,7 +143,7 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
   truth_html <- if (!is.null(truth) && nrow(truth)) {
     cmp <- truth
     cmp$true_pse_m <- -cmp$bias_m
-    if (nrow(fits)) {
+    if (nrow(fits) && any(stats::complete.cases(fits[c("pse_m", "slope_per_m")]))) {
       agg <- stats::aggregate(cbind(pse_m, slope_per_m) ~ participant, fits, mean)
       cmp <- merge(cmp, agg, by = "participant", all.x = TRUE)
       names(cmp)[names(cmp) == "pse_m"] <- "mean_fitted_pse_m"
@@ -190,6 +190,7 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
     else if (adaptive_n) "<p class=\"empty\">(no constant-stimulus blocks: the adaptive blocks' conditions are compared by their PSEs under <em>Adaptive blocks</em>, not by a choice model, whose odds ratios would depend on where the adaptive method placed the trials)</p>"
     else "<p class=\"empty\">(no model: no completed trials)</p>",
     truth_html,
+    play_section_html(data$play, analysed, positive),
     "<h2>Tracking</h2>",
     vapply(figures[grepl("trajectories", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
     if (!any(grepl("trajectories", vapply(figures, `[[`, "", 1)))) "<p class=\"empty\">(no tracking samples in this source)</p>" else "",

@@ -12,6 +12,8 @@ void add_observer_options(CLI::App* cmd, ObserverArgs& o) {
                   "geometer; 'perception' is its former name), physical (null model), random, image (the human "
                   "model reading the stick from the rendered onset pair), or none");
   cmd->add_option("--observer-bias-m", o.bias_m, "simulated observer: bias added to the perceived sagitta (m)");
+  cmd->add_option("--observer-adaptation-m", o.adaptation_m,
+                  "simulated observer: shift of the perceived sagitta after a play block (m; default 0)");
   cmd->add_option("--observer-slope-per-m", o.slope_per_m,
                   "simulated observer: 1 / noise SD in metres (triangulation and physical; the human model's without "
                   "disparity; default 300 /m)");
@@ -37,6 +39,7 @@ std::optional<rn::ObserverParams> observer_params(const ObserverArgs& a, std::ui
   p.model = *model;
   p.vision = a.vision;
   p.bias_m = a.bias_m;
+  p.adaptation_m = a.adaptation_m;
   p.slope_per_m = a.slope_per_m;
   p.lapse = a.lapse;
   p.criterion_m = a.criterion_m;

@@ -19,6 +19,7 @@ struct ObserverArgs {
   std::string model = "human";
   geometry::HumanVision vision;
   double bias_m = 0.0;
+  double adaptation_m = 0.0;
   double slope_per_m = 300.0;
   double lapse = 0.02;
   double criterion_m = 0.006;

@@ -31,6 +31,7 @@ std::optional<ObserverModel> parse_observer_model(std::string_view text) {
 Result<Done> check_observer(const ObserverParams& p) {
   const auto bad = [](const char* m) { return Error{Error::Kind::usage, m}; };
   if (!(std::abs(p.bias_m) <= 1.0)) return bad("bias_m must lie in [-1, 1] metres");
+  if (!(std::abs(p.adaptation_m) <= 1.0)) return bad("adaptation_m must lie in [-1, 1] metres");
   if (!(p.slope_per_m > 0.0 && p.slope_per_m <= 1e6))
     return bad("slope_per_m must be a positive number (1 / noise SD in metres)");
   if (!(p.lapse >= 0.0 && p.lapse <= 1.0)) return bad("lapse must lie in [0, 1]");
@@ -73,6 +74,7 @@ std::string observer_json(const ObserverParams& p) {
   nlohmann::ordered_json j;
   j["model"] = std::string(to_string(p.model));
   j["bias_m"] = p.bias_m;
+  j["adaptation_m"] = p.adaptation_m;
   j["slope_per_m"] = p.slope_per_m;
   j["lapse"] = p.lapse;
   j["criterion_m"] = p.criterion_m;
@@ -101,6 +103,7 @@ Result<ObserverParams> observer_from_json(std::string_view json) {
                                              "', not human, triangulation (perception), physical, random or image"};
     p.model = *parsed;
     p.bias_m = d.value("bias_m", p.bias_m);
+    p.adaptation_m = d.value("adaptation_m", p.adaptation_m);
     p.slope_per_m = d.value("slope_per_m", p.slope_per_m);
     p.lapse = d.value("lapse", p.lapse);
     p.criterion_m = d.value("criterion_m", p.criterion_m);

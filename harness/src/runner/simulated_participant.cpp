@@ -9,6 +9,12 @@ SimulatedParticipant::SimulatedParticipant(const ObserverParams& params, std::ui
 std::unique_ptr<SimulatedParticipant> SimulatedParticipant::seat(SessionSetup& setup) {
   if (!setup.options.observer) return nullptr;
   auto participant = std::make_unique<SimulatedParticipant>(*setup.options.observer, setup.design.seed, *setup.clock);
+  // Trials after a play block carry the hypothesised adaptation.
+  bool played = false;
+  for (const auto& block : setup.design.blocks) {
+    for (std::size_t i = 0; i < block.trial_count; ++i) participant->after_play_.push_back(played);
+    played = played || block.kind == "play";
+  }
   // Last among the sources: its presses come after the devices' in a frame.
   setup.station.responses.push_back(participant.get());
   setup.watchers.push_back(participant.get());
@@ -25,6 +31,7 @@ void SimulatedParticipant::page_shown(std::int64_t shown_ns, std::int64_t min_ns
 void SimulatedParticipant::attempt_begins(std::size_t trial_index, std::int64_t draw) {
   ObserverParams op = params_;
   op.seed = attempt_seed(params_.seed, session_seed_, trial_index, draw);
+  if (trial_index < after_play_.size() && after_play_[trial_index]) op.bias_m += params_.adaptation_m;
   observer_.emplace(op);
   keys_.clear();
 }

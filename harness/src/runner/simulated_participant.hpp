@@ -9,6 +9,7 @@
 #include "trial_watcher.hpp"
 
 #include <memory>
+#include <vector>
 #include <optional>
 
 namespace curvlab::harness::runner {
@@ -32,6 +33,7 @@ class SimulatedParticipant final : public io::ResponseSource, public TrialWatche
   ObserverKeys keys_;
   std::optional<SimulatedObserver> observer_;  // this attempt's stream
   std::unique_ptr<OnsetReader> onset_reader_;  // --observer image only
+  std::vector<bool> after_play_;               // per design trial
 };
 
 }  // namespace curvlab::harness::runner

@@ -50,6 +50,9 @@ struct ObserverParams {
   ObserverModel model = ObserverModel::human;
   geometry::HumanVision vision;  // human and image: the observer's limits
   double bias_m = 0.0;           // added to the perceived quantity
+  // A hypothesised adaptation to play: added to the perceived quantity in
+  // trials after a play block (0: play changes nothing).
+  double adaptation_m = 0.0;
   // 1 / noise SD in metres (300 /m: SD 3.3 mm): the triangulation and
   // physical models' noise, and the human model's when it has no disparity
   // to go on (one eye, or double images).
