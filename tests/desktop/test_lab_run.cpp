@@ -164,3 +164,50 @@ TEST(LabRun, XrWithoutARuntimeExitsWithTheResultAndWritesNothing) {
 }
 
 }  // namespace
+
+namespace {
+
+// A desktop pilot of a play block: the key script swings the right hand (the
+// cue's tip) through the cue ball, and the strike is read from the tip's
+// motion: one shot by the participant, along the swing, at its speed.
+TEST(LabRun, ADesktopPilotStrikesTheCueBallWithTheTrackedCue) {
+  curvlab::test::XServer x;
+  if (!x.available()) GTEST_SKIP() << "no X display: " << x.reason();
+  const auto dir = fresh_dir("play_cue");
+  std::ofstream(dir / "play.toml") << "[protocol]\nname = \"play-pilot\"\nversion = \"1.0.0\"\n"
+                                      "[randomization]\nseed = 1\n[table]\nedge_m = 1.0\n"
+                                      "[space]\nkind = \"H3\"\nradius_m = \"from_table\"\n"
+                                      "[tracking]\nalgorithm = \"table-anchored\"\n"
+                                      "[judgement]\ntype = \"choice\"\nprompt = \"?\"\n"
+                                      "[[judgement.options]]\nvalue = \"a\"\nkeys = [\"1\"]\n"
+                                      "[[judgement.options]]\nvalue = \"b\"\nkeys = [\"2\"]\n"
+                                      "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 8\nshots = 1\n"
+                                      "instructions = [\"Play.\"]\n";
+  // The cue ball rests 0.2 m in from the middle of edge 0, at cue height;
+  // the hand moves 0.25 m toward the centre in four 20 ms steps.
+  std::ofstream(dir / "keys.txt") << "space 300\nhand right 0 0.79 0.45 300\nhand right 0 0.79 0.33 20\n"
+                                     "hand right 0 0.79 0.27 20\nhand right 0 0.79 0.23 20\nhand right 0 0.79 0.20 20\n";
+  const auto db = (dir / "pilot.db").string();
+  const auto r = run_cli("run " + (dir / "play.toml").string() + " --participant T3 --db " + db +
+                         " --backend desktop --software --window-size 256x256 --key-script " +
+                         (dir / "keys.txt").string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  sqlite3* handle = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &handle, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* stmt = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(handle, "SELECT player, cue_speed_m_s, aim_x, aim_z, event_count, cue_pose FROM shots",
+                               -1, &stmt, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(stmt), SQLITE_ROW);
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0))), "participant");
+  EXPECT_GT(sqlite3_column_double(stmt, 1), 1.5);
+  EXPECT_LT(sqlite3_column_double(stmt, 1), 6.0);
+  EXPECT_NEAR(sqlite3_column_double(stmt, 2), 0.0, 0.05);
+  EXPECT_NEAR(sqlite3_column_double(stmt, 3), -1.0, 0.01);
+  EXPECT_GT(sqlite3_column_int(stmt, 4), 0);
+  EXPECT_NE(sqlite3_column_type(stmt, 5), SQLITE_NULL);
+  EXPECT_EQ(sqlite3_step(stmt), SQLITE_DONE);
+  sqlite3_finalize(stmt);
+  sqlite3_close(handle);
+}
+
+}  // namespace

@@ -511,7 +511,7 @@ harness::io::Reach keyboard_reach() {
 
 harness::io::Intents key_intents(const std::string& key) {
   using harness::io::Intent;
-  if (key == "space") return {Intent::continue_page, Intent::calibration_touch};
+  if (key == "space") return {Intent::continue_page, Intent::calibration_touch, Intent::cue_strike};
   if (key == "enter") return {Intent::continue_page, Intent::calibration_accept};
   if (key == "return") return {Intent::continue_page};
   if (key == "f") return {Intent::calibration_fit_three};

@@ -7,12 +7,17 @@
 //
 // Who shoots: the simulated player in headless runs (a seeded choice of ball
 // and pocket, aimed along geodesics through the ghost ball, with human aim
-// and speed noise), otherwise the participant: the cue-strike control
-// strikes the cue ball along the head's line of sight.
+// and speed noise), otherwise the participant with the cue in the right
+// hand: a strike is the cue's tip reaching the cue ball, its speed and the
+// tip's offset taken from the tip's motion over the last frames. On the
+// desktop, holding the cue-strike key (space) and letting go strikes along
+// the line of sight, harder the longer it was held.
 #include "../block_kind.hpp"
 #include "../play_scene.hpp"
 
+#include "curvlab/geometry/maps.hpp"
 #include "curvlab/geometry/trajectory.hpp"
+#include "curvlab/renderer/colour.hpp"
 #include "curvlab/harness/billiards/shot.hpp"
 #include "curvlab/harness/protocol/random.hpp"
 
@@ -163,6 +168,100 @@ struct PlayFigures {
   }
 };
 
+// The cue in the participant's right hand and both hands, drawn every frame,
+// and the strike read from the cue tip's motion.
+class TrackedCue {
+ public:
+  static constexpr double kLength_m = 1.2;
+  static constexpr std::size_t kHistory = 4;
+
+  TrackedCue(renderer::Scene& scene, const geometry::Space& space, const glm::dvec3& tip_offset_m)
+      : space_(space), tip_offset_m_(tip_offset_m) {
+    geometry::BentStick stick;
+    stick.length_m = kLength_m;
+    stick.radius_m = 0.0065;
+    cue_ = scene.add(renderer::stick_object(space, stick, {}));
+    for (auto& h : hands_) h = scene.add(renderer::ball_object(space, 0.04, renderer::display(0.85f, 0.66f, 0.52f), {}));
+  }
+
+  // Draws the cue and hands from this frame's curved-space poses; the tip,
+  // in the cue ball's frame (metres), joins the history.
+  void update(renderer::Scene& scene, const geometry::TrackingOutput& t, const geometry::Isometry& cue_ball,
+              std::int64_t t_ns) {
+    const geometry::Isometry& right = t.pose[2];
+    const geometry::Isometry tip = right * geometry::translation_m(space_, tip_offset_m_);
+    // Model chord along x, centred: turned to point along the hand's −z,
+    // its front end at the tip.
+    const geometry::Isometry pose = tip * geometry::rotation(glm::dvec3(0.0, 1.0, 0.0), kPi / 2.0) *
+                                    geometry::translation_m(space_, {-kLength_m / 2.0, 0.0, 0.0});
+    set(scene, cue_, t.tracked[2], pose);
+    set(scene, hands_[0], t.tracked[1], t.pose[1]);
+    set(scene, hands_[1], t.tracked[2], right);
+    if (!t.tracked[2]) {
+      history_.clear();
+      return;
+    }
+    const geometry::Point p = geometry::position(space_, tip);
+    const glm::dvec3 local = geometry::log_origin(space_, geometry::inverse(space_, cue_ball) * p);
+    history_.push_back({t_ns, local});
+    if (history_.size() > kHistory) history_.erase(history_.begin());
+  }
+
+  // A strike when the tip enters the ball this frame: the aim and the cue's
+  // speed from the horizontal motion over the last frames, the tip's offset
+  // at the point where it entered, across the aim (side) and above the
+  // centre (height), in fractions of R.
+  std::optional<bl::ShotSpec> strike(double radius_m) const {
+    if (history_.size() < 2) return std::nullopt;
+    const glm::dvec3 now = history_.back().local_m;
+    const glm::dvec3 prev = history_[history_.size() - 2].local_m;
+    if (glm::length(now) > radius_m || glm::length(prev) <= radius_m) return std::nullopt;
+    const auto& then = history_.front();
+    const double dt = static_cast<double>(history_.back().t_ns - then.t_ns) * 1e-9;
+    if (!(dt > 0.0)) return std::nullopt;
+    const glm::dvec3 v = (now - then.local_m) / dt;
+    const phys::Vec2 vh{v.x, v.z};
+    if (glm::length(vh) < 0.1) return std::nullopt;
+    // Where the segment prev → now crosses the sphere |x| = R.
+    const glm::dvec3 d = now - prev;
+    const double a = glm::dot(d, d), b = 2.0 * glm::dot(prev, d), c = glm::dot(prev, prev) - radius_m * radius_m;
+    const double u = (-b - std::sqrt(std::max(0.0, b * b - 4.0 * a * c))) / (2.0 * a);
+    const glm::dvec3 entry = prev + std::clamp(u, 0.0, 1.0) * d;
+    const phys::Vec2 aim = glm::normalize(vh);
+    const phys::Vec2 right{-aim.y, aim.x};
+    bl::ShotSpec s;
+    s.cue_speed_m_s = std::min(glm::length(vh), 12.0);
+    s.tip = {glm::dot(phys::Vec2{entry.x, entry.z}, right) / radius_m, entry.y / radius_m};
+    aim_ = aim;
+    return s;
+  }
+  [[nodiscard]] phys::Vec2 aim() const { return aim_; }
+
+  void hide(renderer::Scene& scene) const {
+    scene.edit(cue_).visible = false;
+    for (const auto h : hands_) scene.edit(h).visible = false;
+  }
+
+ private:
+  static void set(renderer::Scene& scene, std::size_t i, bool visible, const geometry::Isometry& pose) {
+    const auto& o = scene.objects()[i];
+    if (o.visible == visible && o.pose.m == pose.m) return;
+    auto& e = scene.edit(i);
+    e.visible = visible;
+    e.pose = pose;
+  }
+  struct Sample {
+    std::int64_t t_ns;
+    glm::dvec3 local_m;
+  };
+  geometry::Space space_;
+  glm::dvec3 tip_offset_m_;
+  std::size_t cue_ = 0;
+  std::array<std::size_t, 2> hands_{};
+  std::vector<Sample> history_;
+  mutable phys::Vec2 aim_{0.0, -1.0};
+};
+
 class PlayBlock {
  public:
   explicit PlayBlock(BlockRun& run)
@@ -182,7 +281,11 @@ class PlayBlock {
     cloth_ = phys::make_cloth(world.space, world.table);
     load_rest_state();
     add_objects();
+    rest_.emplace(bl::at_rest(cloth_, params_, balls_));
     simulated_ = f_.options().observer.has_value();
+    const auto& tip = f_.protocol.calibration.tip_offset_m;
+    tip_offset_m_ = {tip[0], tip[1], tip[2]};
+    if (!simulated_) cue_.emplace(f_.scene().scene(), f_.world().space, tip_offset_m_);
     rng_.seed(protocol::mix_seed(f_.design.seed ^ protocol::mix_seed(0x9a1e0000ULL + index_)));
     const std::int64_t start_ns = f_.clock.now_ns();
     std::int64_t next_shot_ns = start_ns + think_ns();
@@ -202,7 +305,7 @@ class PlayBlock {
     }
     const double duration_ns = play_.duration_s * 1e9 - elapsed_before_s_ * 1e9;
     std::optional<Rolling> rolling;
-    const io::Overlay overlay{Phase::stimulus, run_.block.name + "  play", false};
+    const io::Overlay overlay{Phase::stimulus, run_.block.name + "  play: strike the white ball with the cue", !simulated_};
     for (;;) {
       Frame g;
       if (!f_.begin(g)) return Outcome::quit;
@@ -217,10 +320,31 @@ class PlayBlock {
           f_.end(g, overlay, false, trial_id_);
           break;
         }
-        bool strike = simulated_ && g.timing.now_ns >= next_shot_ns;
-        for (const auto& in : g.inputs)
-          if (in.pressed && in.intents.has(io::Intent::cue_strike)) strike = true;
-        if (strike) rolling = start_shot(t_ns, g);
+        std::optional<bl::ShotSpec> spec;
+        std::optional<std::string> cue_pose;
+        if (simulated_ && g.timing.now_ns >= next_shot_ns) spec = choose_shot(*rest_, balls_, params_, rng_);
+        if (cue_ && f_.tracking() != nullptr) {
+          cue_->update(f_.scene().scene(), *f_.tracking(), cue_ball_pose(), t_ns);
+          if (auto s = cue_->strike(params_.radius_m)) {
+            s->ball = balls_[0].id;
+            s->toward_m = toward_along(*rest_, cue_->aim());
+            spec = s;
+            cue_pose = lab_cue_pose();
+          }
+        }
+        // The desktop's cue: hold the key, let go to strike.
+        for (const auto& in : g.inputs) {
+          if (!in.intents.has(io::Intent::cue_strike)) continue;
+          if (in.pressed) {
+            charge_from_ns_ = in.t_ns;
+          } else if (charge_from_ns_) {
+            const double held_s = static_cast<double>(in.t_ns - *charge_from_ns_) * 1e-9;
+            spec = sighted_shot(*rest_, balls_, f_.head());
+            spec->cue_speed_m_s = std::clamp(0.8 + 3.0 * held_s, 0.8, 7.0);
+            charge_from_ns_.reset();
+          }
+        }
+        if (spec) rolling = start_shot(t_ns, *spec, cue_pose);
       }
       if (rolling) {
         const double t_s = static_cast<double>(t_ns - rolling->strike_ns) * 1e-9;
@@ -257,6 +381,7 @@ class PlayBlock {
     f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(r))));
     f_.report_trial(index_, data::TrialStatus::completed, "");
     scene_->hide(f_.scene().scene());
+    if (cue_) cue_->hide(f_.scene().scene());
     return Outcome::done;
   }
 
@@ -339,12 +464,36 @@ class PlayBlock {
 
   void show(const phys::System& sys, double t_s) { scene_->show(f_.scene().scene(), sys, t_s); }
 
-  Rolling start_shot(std::int64_t t_ns, const Frame& g) {
-    (void)g;
-    const phys::System rest = bl::at_rest(cloth_, params_, balls_);
-    bl::ShotSpec spec = simulated_ ? choose_shot(rest, balls_, params_, rng_) : sighted_shot(rest, balls_, f_.head());
+  // The cue ball's centre frame at rest (its frame lifted by R).
+  geometry::Isometry cue_ball_pose() const {
+    return phys::to_isometry(rest_->ball(0).frame) *
+           geometry::translation_m(f_.world().space, {0.0, params_.radius_m, 0.0});
+  }
+
+  // The point 0.5 m from the cue ball along `aim` (its frame's coordinates),
+  // in native coordinates: the stored form of an aim.
+  phys::Vec2 toward_along(const phys::System& sys, phys::Vec2 aim) const {
+    const phys::Cloth& c = sys.cloth();
+    const geometry::Space space = c.space();
+    const phys::Frame f = sys.ball(0).frame;
+    const double t = 0.5 / c.radius_m;
+    return phys::to_native(c, space.C(t) * phys::frame_position(c, f) +
+                                  c.radius_m * space.S(t) * (f[0] * aim.x + f[1] * aim.y));
+  }
+
+  // The right hand and cue tip in the lab at the strike, for the shot's record.
+  std::string lab_cue_pose() const {
+    const auto& hand = f_.lab()[geometry::Device::right_hand];
+    const glm::dvec3 tip = hand.position_m + hand.orientation * tip_offset_m_;
+    return Json{{"tip_m", {tip.x, tip.y, tip.z}},
+                {"hand_m", {hand.position_m.x, hand.position_m.y, hand.position_m.z}},
+                {"orientation_xyzw", {hand.orientation.x, hand.orientation.y, hand.orientation.z, hand.orientation.w}}}
+        .dump();
+  }
+
+  Rolling start_shot(std::int64_t t_ns, const bl::ShotSpec& spec, std::optional<std::string> cue_pose) {
     Rolling r{t_ns, spec, bl::simulate(cloth_, params_, balls_, spec, 120.0), bl::at_rest(cloth_, params_, balls_),
-              std::nullopt};
+              std::move(cue_pose)};
     const phys::Strike strike = bl::strike_for(r.system, params_, 0, spec);
     if (!strike.miscue) r.system.set_motion(0, strike.v, strike.w);
     return r;
@@ -397,7 +546,8 @@ class PlayBlock {
     f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(s))));
     f_.summary.shots += 1;
     f_.summary.balls_pocketed += static_cast<std::int64_t>(pocketed.size());
-    show(bl::at_rest(cloth_, params_, balls_), 0.0);
+    rest_.emplace(bl::at_rest(cloth_, params_, balls_));
+    show(*rest_, 0.0);
   }
 
   BlockRun& run_;
@@ -416,6 +566,10 @@ class PlayBlock {
   protocol::Engine rng_;
   geometry::Trajectory walk_;
   PlayFigures figures_;
+  std::optional<phys::System> rest_;  // the balls at rest between shots
+  std::optional<TrackedCue> cue_;
+  glm::dvec3 tip_offset_m_{0.0};
+  std::optional<std::int64_t> charge_from_ns_;
 };
 
 class PlayKind final : public BlockKind {

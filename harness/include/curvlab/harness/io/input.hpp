@@ -80,7 +80,7 @@ enum class Intent : std::uint8_t {
   calibration_fit_three,  // fit the three corners touched so far
   calibration_accept,     // keep the fitted table
   calibration_redo,       // touch the corners again
-  cue_strike,             // strike with the cue (play blocks; no source gives it yet)
+  cue_strike,             // strike with the cue (play blocks): the desktop's space key, held and let go
 };
 
 inline std::string_view to_string(Intent intent) {
