@@ -319,7 +319,8 @@ MeshInfo stick_info(const Space& space, const geometry::BentStick& stick) {
   return info;
 }
 
-MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color) {
+MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color,
+                    const std::optional<glm::vec4>& marking) {
   MeshData m;
   constexpr int kRings = 12;
   constexpr int kSlices = 18;
@@ -330,7 +331,8 @@ MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color)
       const Vec3 dir(std::sin(lat) * std::cos(lon), std::cos(lat), std::sin(lat) * std::sin(lon));
       const Point p = geometry::exp_origin(space, radius_m * dir);
       const Point out = geometry::exp_origin(space, (radius_m + 1e-3) * dir);
-      push(m, space, p, out, color);
+      const bool cap = marking && (r <= 1 || r >= kRings - 1);
+      push(m, space, p, out, cap ? *marking : color);
     }
   }
   grid_indices(m, 0, kRings + 1, kSlices + 1);

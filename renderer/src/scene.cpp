@@ -57,9 +57,14 @@ SceneObject table_object(const Space& space, const geometry::TableShape& table,
 
 SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour,
                         const Isometry& pose) {
+  return ball_object(space, radius_m, colour, pose, std::nullopt);
+}
+
+SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour, const Isometry& pose,
+                        const std::optional<glm::vec4>& marking) {
   SceneObject o;
   o.name = "ball";
-  o.build = [space, radius_m, colour](int) { return build_ball(space, radius_m, colour); };
+  o.build = [space, radius_m, colour, marking](int) { return build_ball(space, radius_m, colour, marking); };
   o.info = ball_info(space, radius_m);
   o.pose = pose;
   return o;

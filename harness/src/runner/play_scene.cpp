@@ -44,7 +44,9 @@ PlayScene::PlayScene(renderer::Scene& scene, const World& world, const phys::Par
     : space_(world.space), radius_m_(params.radius_m) {
   table_ = scene.add(renderer::table_object(world.space, world.table));
   for (std::size_t i = 0; i < balls; ++i)
-    balls_.push_back(scene.add(renderer::ball_object(world.space, params.radius_m, ball_colour(i), {})));
+    balls_.push_back(scene.add(renderer::ball_object(world.space, params.radius_m, ball_colour(i), {},
+                                                     i == 0 ? renderer::display(0.80f, 0.10f, 0.10f)
+                                                            : renderer::display(0.96f, 0.96f, 0.92f))));
 }
 
 void PlayScene::show(renderer::Scene& scene, const phys::System& system, double t_s) const {

@@ -127,7 +127,10 @@ MeshData build_stick(const Space& space, const geometry::BentStick& stick, int l
 MeshInfo stick_info(const Space& space, const geometry::BentStick& stick);
 
 // A ball of the given radius centred at the model origin.
-MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color);
+// A ball; with `marking`, two polar caps of that colour (30° across) that
+// show how the ball turns.
+MeshData build_ball(const Space& space, double radius_m, const glm::vec4& color,
+                    const std::optional<glm::vec4>& marking = std::nullopt);
 MeshInfo ball_info(const Space& space, double radius_m);
 
 // A flat panel in the geodesic plane z = 0 of the model frame, centred on the

@@ -55,6 +55,8 @@ SceneObject stick_object(const Space& space, const geometry::BentStick& stick, c
                          StickMarks marks = StickMarks::none);
 SceneObject table_object(const Space& space, const geometry::TableShape& table,
                          const TableStyle& style = {});
+SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour, const Isometry& pose,
+                        const std::optional<glm::vec4>& marking);
 SceneObject ball_object(const Space& space, double radius_m, const glm::vec4& colour,
                         const Isometry& pose);
 // A text panel of width × height metres (about 1000 px per metre), or a
