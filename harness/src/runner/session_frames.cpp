@@ -239,8 +239,11 @@ renderer::FrameStats SessionFrames::end(Frame& f, const io::Overlay& overlay, bo
 
 // ---- records ----------------------------------------------------------------
 
-void SessionFrames::event(std::optional<std::int64_t> trial_id, const data::Event& e) {
-  writer.journal(data::event_record(session_id, trial_id, clock.now_ns(), e));
+void SessionFrames::event(std::optional<std::int64_t> trial_id, const data::Event& e,
+                          std::optional<std::int64_t> moment_ns) {
+  data::EventRecord record = data::event_record(session_id, trial_id, clock.now_ns(), e);
+  if (options_.streams != nullptr) mark_event(record, e, moment_ns);
+  writer.journal(std::move(record));
 }
 
 void SessionFrames::set_current_trial(std::optional<std::size_t> i) { current_trial_ = i; }
@@ -288,6 +291,9 @@ ProgressPoint SessionFrames::progress_point() const {
 void SessionFrames::report_trial(std::size_t i, data::TrialStatus status, const std::string& reason) {
   ++trials_reported_;
   const protocol::PlannedTrial& t = design.trials[i];
+  if (options_.streams != nullptr)
+    marker(clock.now_ns(), "trial_end", trial_ids[i],
+           Json{{"trial_index", i}, {"status", data::to_string(status)}, {"end_reason", reason}}.dump());
   if (!progress_.json()) return;
   Json line{{"trial", i + 1},
             {"of", design.trials.size()},
@@ -384,6 +390,7 @@ void SessionFrames::log_frame(const Frame& f, const renderer::FrameStats& stats,
   fr.has_view_geometry = true;
   fr.view_geometry = record_view_geometry(rig, eye_size_.first, eye_size_.second);
   push([&] { return writer.push_frame(fr); });
+  if (options_.streams != nullptr) options_.streams->frame(f.timing.predicted_display_ns, lab_, station.poses->gaze());
   if (const auto gaze = station.poses->gaze()) {
     data::GazeSample g = gaze_record(*gaze);
     g.session_id = session_id;
