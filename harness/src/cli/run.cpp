@@ -324,7 +324,7 @@ void run_command(const RunArgs& a) {
   check_answers_reachable(backend, p, o.observer.has_value());
   check_lsl_args(a.lsl, p, a.backend);
   auto devices = open_devices(backend, p, table, 0);
-  const auto streams = open_lsl(a.lsl, p, *devices.clock);
+  auto streams = open_lsl(a.lsl, p, *devices.clock);
   o.streams = streams.get();
   watch_stop_signals(o);
   if (calibrates_at_start(p, a.backend)) o.calibration = calibrate_on(devices, calibration_options(p, table, a, o)).fit;
@@ -336,6 +336,7 @@ void run_command(const RunArgs& a) {
   o.console = console.get();
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
+  streams.reset();  // what its recorders still held is stored before the export
   report(result, a.backend, devices.station.display->info().msaa);
 }
 
@@ -371,13 +372,14 @@ void resume_command(const ResumeArgs& a) {
   check_answers_reachable(backend, *loaded, o.observer.has_value() || stored.observer.has_value());
   check_lsl_args(a.lsl, *loaded, a.backend);
   auto devices = open_devices(backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
-  const auto streams = open_lsl(a.lsl, *loaded, *devices.clock);
+  auto streams = open_lsl(a.lsl, *loaded, *devices.clock);
   o.streams = streams.get();
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();
   watch_stop_signals(o);
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
   console.reset();
+  streams.reset();
   report(result, a.backend, devices.station.display->info().msaa);
 }
 
