@@ -46,13 +46,13 @@ Expected<CsvText> lsl_samples_csv(Database& db, const ExportOptions& options) {
                 "ORDER BY st.session_id, s.lsl_stream_id, s.lsl_sample_id");
     s.bind(1, options.session_id);
     CsvText csv;
-    csv.text = "session_id,stream_name,stream_type,source_id,t_ns,lsl_time_s,lsl_offset_s,received_ns,value\n";
+    csv.text = "session_id,stream_name,stream_type,source_id,t_ns,lsl_time_s,lsl_offset_s,received_ns,value\r\n";
     while (s.step()) {
       for (int c = 0; c < 9; ++c) {
         if (c > 0) csv.text += ',';
         csv.text += csv_field(s.column_text(c));
       }
-      csv.text += '\n';
+      csv.text += "\r\n";
       ++csv.rows;
     }
     return csv;
