@@ -291,9 +291,7 @@ ProgressPoint SessionFrames::progress_point() const {
 void SessionFrames::report_trial(std::size_t i, data::TrialStatus status, const std::string& reason) {
   ++trials_reported_;
   const protocol::PlannedTrial& t = design.trials[i];
-  if (options_.streams != nullptr)
-    marker(clock.now_ns(), "trial_end", trial_ids[i],
-           Json{{"trial_index", i}, {"status", data::to_string(status)}, {"end_reason", reason}}.dump());
+  mark_trial_end(i, status, reason);
   if (!progress_.json()) return;
   Json line{{"trial", i + 1},
             {"of", design.trials.size()},

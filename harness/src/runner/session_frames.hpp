@@ -94,7 +94,8 @@ class SessionFrames {
               const std::string& detail_json);
   // The participant's answer, at its input's time.
   void mark_response(const data::TrialResult& r);
-  // The design's block `b` is over.
+  // The design's trial `i` ended so (report_trial), and block `b` is over.
+  void mark_trial_end(std::size_t i, data::TrialStatus status, const std::string& reason);
   void mark_block_end(std::size_t b);
   template <class T>
   T check(Result<T> r) {

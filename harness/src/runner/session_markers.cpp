@@ -3,8 +3,8 @@
 // end, as one JSON object each —
 //   {"event": KIND, "trial_id": ID or null, "detail": {…}}
 // where KIND and detail are the events row's (data_schema/codebook.md,
-// "events") or, for the three that are no event, "response", "trial_end"
-// and "block_end". Each marker is stamped with the moment it describes: an
+// "events") or, for those that are no event, "session_start" (or "resume"),
+// "response", "trial_end" and "block_end". Each marker is stamped with the moment it describes: an
 // onset with its predicted display time, an answer or an early press with
 // its input's time, a page with the display time of its first frame.
 #include "session_frames.hpp"
@@ -72,6 +72,12 @@ void SessionFrames::mark_response(const data::TrialResult& r) {
               {"device", r.response_device},
               {"rt_ms", static_cast<double>(r.response_ns - r.onset_ns) * 1e-6}}
              .dump());
+}
+
+void SessionFrames::mark_trial_end(std::size_t i, data::TrialStatus status, const std::string& reason) {
+  if (options_.streams == nullptr) return;
+  marker(clock.now_ns(), "trial_end", trial_ids[i],
+         Json{{"trial_index", i}, {"status", data::to_string(status)}, {"end_reason", reason}}.dump());
 }
 
 void SessionFrames::mark_block_end(std::size_t b) {
