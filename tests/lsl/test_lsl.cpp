@@ -109,6 +109,8 @@ struct Running {
   int exit_code = -1;
 };
 
+#ifdef CURVLAB_WITH_LSL
+
 // The session's UUID once the program has stored it (polled; empty when the
 // program ended first or a minute passed).
 std::string session_uuid(const std::string& db, Running& run) {
@@ -120,8 +122,6 @@ std::string session_uuid(const std::string& db, Running& run) {
   }
   return {};
 }
-
-#ifdef CURVLAB_WITH_LSL
 
 // The session clock's nanoseconds on the LSL clock, through the stored
 // reading nearest in time (lsl_clock).
