@@ -6,10 +6,22 @@
 # ../shared/third_party, prints nothing and exits 0 (curvlab is then built
 # without LSL and its LSL tests skip). Build facts: ../shared/third_party/README.md.
 #
+# With --windows, the same for 64-bit Windows with MinGW-w64
+# (cmake/mingw-w64-x86_64.cmake), for scripts/build_windows.sh.
+#
 #   bash scripts/lsl.sh               # → /var/cache/curvlab/liblsl-<sha>/install
+#   bash scripts/lsl.sh --windows     # → /var/cache/curvlab/liblsl-win64-<sha>/install
 #   CURVLAB_CACHE=DIR bash scripts/lsl.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+root=$(pwd)
+
+flavour=""
+toolchain=()
+if [ "${1:-}" = "--windows" ]; then
+  flavour="win64-"
+  toolchain=(-DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake")
+fi
 
 third_party=$(cd .. && pwd)/shared/third_party
 tarball=liblsl-1.16.2.tar.gz
@@ -22,7 +34,7 @@ fi
   exit 1
 }
 sha=$(sha256sum "$third_party/$tarball" | cut -c1-16)
-cache=${CURVLAB_CACHE:-/var/cache/curvlab}/liblsl-$sha
+cache=${CURVLAB_CACHE:-/var/cache/curvlab}/liblsl-$flavour$sha
 prefix=$cache/install
 if [ -f "$cache/built" ] && [ -f "$prefix/include/lsl_cpp.h" ]; then
   echo "$prefix"
@@ -33,7 +45,7 @@ rm -rf "$cache"
 mkdir -p "$cache/src"
 tar -xzf "$third_party/$tarball" -C "$cache/src" --strip-components=1
 echo "liblsl: building $tarball into $cache (about 1 minute of CPU)" >&2
-cmake -S "$cache/src" -B "$cache/build" -DCMAKE_BUILD_TYPE=Release -DLSL_UNITTESTS=OFF \
+cmake -S "$cache/src" -B "$cache/build" -DCMAKE_BUILD_TYPE=Release -DLSL_UNITTESTS=OFF "${toolchain[@]}" \
   -DCMAKE_INSTALL_PREFIX="$prefix" > "$cache/configure.log" 2>&1 || {
   tail -30 "$cache/configure.log" >&2
   exit 1

@@ -380,3 +380,78 @@ TEST(LslRecord, ATestOutletsMarkersLandInTheDatabaseAndTheExport) {
   EXPECT_NE(text.str().find("flash 19"), std::string::npos) << text.str().substr(0, 2000);
 #endif
 }
+
+// A headset session (the scripted OpenXR runtime of tests/xr/runtime, with
+// per-eye gaze) streams the gaze it tracks: each sample at its frame's
+// display time, with the stored gaze's values.
+TEST(LslXr, AHeadsetSessionStreamsTheGazeItTracks) {
+#ifndef CURVLAB_WITH_LSL
+  GTEST_SKIP() << "curvlab was built without liblsl (run scripts/lsl.sh and configure with its prefix)";
+#else
+  const auto dir = fresh_dir("lsl_xr");
+  const auto db = (dir / "xr.sqlite").string();
+  // The runtime and what it scripts, for the program only.
+  setenv("XR_RUNTIME_JSON", CURVLAB_TEST_XR_RUNTIME_JSON, 1);
+  setenv("CURVLAB_TEST_XR_GAZE", "both:vergence=1.5:0.9,0.7", 1);
+  setenv("CURVLAB_TEST_XR_PRESS", "right:a@1.0/1.8,left:x@1.6/1.8,right:trigger@2.2/1.8", 1);
+  Running run({"run", std::string(CURVLAB_SOURCE_DIR) + "/tests/xr/demo_buttons.toml", "--participant", "G01",
+               "--backend", "xr", "--db", db, "--lsl", "--lsl-wait-s", "60", "--quiet"},
+              (dir / "run.log").string());
+  for (const char* v : {"XR_RUNTIME_JSON", "CURVLAB_TEST_XR_GAZE", "CURVLAB_TEST_XR_PRESS"}) unsetenv(v);
+  const std::string uuid = session_uuid(db, run);
+  ASSERT_FALSE(uuid.empty()) << run.output();
+  auto markers = subscribe("curvlab-" + uuid + "-markers");
+  auto poses = subscribe("curvlab-" + uuid + "-poses");
+  ASSERT_TRUE(markers && poses) << run.output();
+  // The gaze stream appears with the first frame that has gaze.
+  auto gaze = subscribe("curvlab-" + uuid + "-gaze");
+  ASSERT_TRUE(gaze) << run.output();
+  EXPECT_EQ(gaze->info(5.0).desc().child("channels").child("channel").next_sibling().child_value("label"),
+            std::string("combined_origin_x"));
+  std::vector<std::pair<double, std::vector<float>>> got;
+  std::vector<float> sample;
+  std::vector<std::string> text;
+  std::vector<float> pose;
+  auto pull = [&](double timeout) {
+    bool any = false;
+    for (double ts = gaze->pull_sample(sample, timeout); ts != 0.0; ts = gaze->pull_sample(sample, 0.0)) {
+      got.emplace_back(ts, sample);
+      any = true;
+    }
+    while (markers->pull_sample(text, 0.0) != 0.0 || poses->pull_sample(pose, 0.0) != 0.0) {
+    }
+    return any;
+  };
+  while (!run.exited()) pull(0.02);
+  while (pull(0.5)) {
+  }
+  ASSERT_EQ(run.exit_code, 0) << run.output();
+
+  // Each sample is a stored gaze row's: the one of the frame at its time
+  // (the last sample may be the one liblsl sends as the outlet closes).
+  const ClockMap clock(db);
+  const auto rows = query(db, "SELECT t_ns, left_valid, right_valid, left_confidence, vergence_rad, "
+                              "coalesce(combined_valid, 0) "
+                              "FROM gaze_samples WHERE session_id = 1 ORDER BY frame_index");
+  ASSERT_GT(got.size(), 10u);
+  ASSERT_FALSE(rows.empty());
+  std::size_t matched = 0;
+  for (const auto& [ts, v] : got) {
+    const auto row = std::find_if(rows.begin(), rows.end(), [&](const auto& r) {
+      return std::abs(clock.to_lsl(std::stoll(r[0])) - ts) < 1e-4;
+    });
+    if (row == rows.end()) continue;
+    ++matched;
+    EXPECT_EQ(v[0], std::stof((*row)[5]));
+    EXPECT_EQ(v[7], std::stof((*row)[1]));
+    EXPECT_EQ(v[15], std::stof((*row)[2]));
+    EXPECT_NEAR(v[8], std::stod((*row)[3]), 1e-6);
+    if ((*row)[4] != "NULL") {
+      EXPECT_NEAR(v[23], std::stod((*row)[4]), 1e-6);
+    }
+  }
+  EXPECT_GE(matched + 1, got.size());
+  std::printf("gaze samples: %zu received, %zu matched to stored gaze rows (%zu stored)\n", got.size(), matched,
+              rows.size());
+#endif
+}
