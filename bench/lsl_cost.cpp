@@ -143,7 +143,7 @@ int main(int argc, char** argv) {
       const auto db = (tmp / ("run" + std::to_string(round) + (on ? "on" : "off") + ".sqlite")).string();
       const auto result = rn::run_session(p, text.str(), db, o, devices.station(), devices.clock());
       streams.reset();
-      std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // the reader catches up
+      std::this_thread::sleep_for(std::chrono::milliseconds(2500));  // the reader catches up (its search takes 1 s)
       if (!result) {
         std::fprintf(stderr, "%s\n", result.error().message.c_str());
         return 1;
