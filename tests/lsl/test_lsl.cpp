@@ -372,6 +372,12 @@ TEST(LslRecord, ATestOutletsMarkersLandInTheDatabaseAndTheExport) {
         static_cast<double>(std::stoll(reading[0][0])) + (lsl_s - std::stod(reading[0][1])) * 1e9;
     EXPECT_NEAR(static_cast<double>(std::stoll(rows[k][3])), expected_ns, 1e5);
   }
+  // The streams' stored descriptions name no machine (DESIGN.md §7).
+  for (const auto& row : query(db, "SELECT info_xml FROM lsl_streams")) {
+    EXPECT_EQ(row[0].find("hostname"), std::string::npos) << row[0];
+    EXPECT_EQ(row[0].find("address"), std::string::npos) << row[0];
+    EXPECT_NE(row[0].find("<source_id>" + name + "</source_id>"), std::string::npos) << row[0];
+  }
   // The export's extra table has them too.
   std::ifstream csv(dir / "export" / "csv" / "lsl_samples.csv");
   ASSERT_TRUE(csv) << "no lsl_samples.csv in the export";

@@ -77,22 +77,31 @@ std::int64_t to_session(const data::LslClockRecord& r, double lsl_s) {
 }
 
 // A stream's description as stored: LSL's own XML less what names the
-// machine or the network (DESIGN.md §7: no host names are stored).
-std::string stored_xml(std::string xml) {
-  for (const char* tag : {"hostname", "v4address", "v6address", "uid", "session_id", "v4data_port",
-                          "v4service_port", "v6data_port", "v6service_port"}) {
-    const std::string open = std::string("<") + tag + ">";
-    const std::string close = std::string("</") + tag + ">";
-    const auto a = xml.find(open);
-    const auto b = xml.find(close, a == std::string::npos ? 0 : a);
-    if (a == std::string::npos || b == std::string::npos) continue;
-    // The whole line: its indentation and its end.
-    const auto from = xml.rfind('\n', a);
-    const auto to = xml.find('\n', b);
-    if (from == std::string::npos || to == std::string::npos) xml.erase(a, b + close.size() - a);
-    else xml.erase(from, to - from);
+// machine or the network (DESIGN.md §7: no host names are stored) — those
+// lines of its header, before <desc>, filled or empty.
+std::string stored_xml(const std::string& xml) {
+  static const std::array<std::string_view, 9> kDropped{"hostname", "v4address", "v6address", "uid", "session_id",
+                                                         "v4data_port", "v4service_port", "v6data_port",
+                                                         "v6service_port"};
+  std::string out;
+  bool in_desc = false;
+  std::size_t from = 0;
+  while (from < xml.size()) {
+    const std::size_t to = std::min(xml.find('\n', from), xml.size());
+    const std::string_view line(xml.data() + from, to - from);
+    const auto text = line.substr(std::min(line.find_first_not_of(" \t"), line.size()));
+    if (text.starts_with("<desc")) in_desc = true;
+    const bool dropped = !in_desc && std::any_of(kDropped.begin(), kDropped.end(), [&](std::string_view tag) {
+      return text.starts_with("<" + std::string(tag) + ">") || text.starts_with("<" + std::string(tag) + " ") ||
+             text.starts_with("<" + std::string(tag) + "/");
+    });
+    if (!dropped) {
+      out += line;
+      if (to < xml.size()) out += '\n';
+    }
+    from = to + 1;
   }
-  return xml;
+  return out;
 }
 
 std::string format_name(::lsl::channel_format_t f) {
