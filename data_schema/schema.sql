@@ -1,10 +1,10 @@
--- curvlab data schema, version 5 (current). The program embeds this file at
+-- curvlab data schema, version 7 (current). The program embeds this file at
 -- build time and executes it verbatim to create a new database; the codebook
 -- (codebook.md) gives every column its meaning and unit. Times: *_ns are
 -- nanoseconds of the session's monotonic clock, *_utc are ISO 8601 UTC text.
 -- Adding or changing anything here means a new version, a migration in
 -- migrations/, and a codebook entry: no column is ever added at run time.
-PRAGMA user_version = 6;
+PRAGMA user_version = 7;
 
 CREATE TABLE schema_migrations (
   version INTEGER PRIMARY KEY,
@@ -193,6 +193,44 @@ CREATE TABLE events (
   kind TEXT NOT NULL,
   detail TEXT NOT NULL DEFAULT '{}' CHECK (json_valid(detail))
 ) STRICT;
+
+-- Lab Streaming Layer (docs/lsl.md): the streams a session sent and recorded,
+-- recorded samples on the session clock, the session clock ↔ LSL clock mapping.
+CREATE TABLE lsl_streams (
+  lsl_stream_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  role TEXT NOT NULL CHECK (role IN ('outlet', 'recorded')),
+  name TEXT NOT NULL,
+  type TEXT NOT NULL,
+  source_id TEXT NOT NULL,
+  channel_count INTEGER NOT NULL CHECK (channel_count > 0),
+  nominal_srate_hz REAL NOT NULL CHECK (nominal_srate_hz >= 0),
+  channel_format TEXT NOT NULL,
+  info_xml TEXT NOT NULL,
+  UNIQUE (session_id, role, source_id, name, type)
+) STRICT;
+
+CREATE TABLE lsl_samples (
+  lsl_sample_id INTEGER PRIMARY KEY,
+  lsl_stream_id INTEGER NOT NULL REFERENCES lsl_streams(lsl_stream_id),
+  t_ns INTEGER NOT NULL,
+  lsl_time_s REAL NOT NULL,
+  lsl_offset_s REAL NOT NULL,
+  received_ns INTEGER NOT NULL,
+  value TEXT NOT NULL CHECK (json_valid(value))
+) STRICT;
+
+CREATE INDEX lsl_samples_by_stream_time ON lsl_samples (lsl_stream_id, t_ns);
+
+CREATE TABLE lsl_clock (
+  lsl_clock_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  t_ns INTEGER NOT NULL,
+  lsl_time_s REAL NOT NULL,
+  uncertainty_ns INTEGER NOT NULL CHECK (uncertainty_ns >= 0)
+) STRICT;
+
+CREATE INDEX lsl_clock_by_session_time ON lsl_clock (session_id, t_ns);
 
 CREATE TABLE shots (
   shot_id INTEGER PRIMARY KEY,

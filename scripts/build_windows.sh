@@ -7,9 +7,11 @@
 #    and the stb implementations for x86_64-w64-mingw32 once, into a cache
 #    outside the clone keyed by the sources' checksums and this recipe
 #    (/var/cache/curvlab/mingw-<key>, or $CURVLAB_CACHE/mingw-<key>);
-# 3. builds curvlab with cmake/mingw-w64-x86_64.cmake into build/windows;
+# 3. builds curvlab with cmake/mingw-w64-x86_64.cmake into build/windows,
+#    with the Lab Streaming Layer where scripts/lsl.sh --windows builds
+#    liblsl (its own cache; without its source curvlab.exe has no LSL);
 # 4. packs build/windows/curvlab-VERSION-win64.zip: curvlab.exe, the DLLs it
-#    loads (MinGW runtime, sqlite, nettle, glfw, hidapi, openxr_loader; never
+#    loads (MinGW runtime, sqlite, nettle, glfw, hidapi, openxr_loader, liblsl; never
 #    vulkan-1.dll nor an OpenXR runtime: the lab's driver and headset vendor
 #    provide those), protocols/, analysis/, data_schema/, a font and
 #    README-windows.txt.
@@ -193,9 +195,15 @@ fi
 # --- 3. curvlab ------------------------------------------------------------
 out=$root/build/windows
 start=$(date +%s)
+# liblsl for Windows, cached apart from the dependencies above (docs/lsl.md).
+lsl_prefix=$(bash scripts/lsl.sh --windows)
+lsl=()
+if [ -n "$lsl_prefix" ]; then lsl=(-DLSL_DIR="$lsl_prefix/lib/cmake/LSL"); fi
 cmake -S "$root" -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
-  -DCURVLAB_WINDOWS_DEPS="$prefix" -DCURVLAB_WERROR=ON -DCURVLAB_BUILD_BENCH=OFF "${launcher[@]}" >/dev/null
+  -DCURVLAB_WINDOWS_DEPS="$prefix" -DCURVLAB_WERROR=ON -DCURVLAB_BUILD_BENCH=OFF "${lsl[@]}" "${launcher[@]}" >/dev/null
 cmake --build "$out" -j"$jobs" --target curvlab >&2
+# Beside curvlab.exe, where Windows (and Wine, for the windows tests) looks first.
+if [ -n "$lsl_prefix" ]; then cp "$lsl_prefix/bin/liblsl.dll" "$out/bin/"; fi
 cmake --build "$out" -j"$jobs" --target curvlab_windows_tests >&2  # run under Wine by tests/windows
 log "curvlab built in $(( $(date +%s) - start )) s"
 
@@ -210,6 +218,7 @@ for dll in libstdc++-6.dll libgcc_s_seh-1.dll libwinpthread-1.dll zlib1.dll libs
            glfw3.dll libhidapi.dll libopenxr_loader.dll; do
   cp "$prefix/bin/$dll" "$stage/"
 done
+if [ -n "$lsl_prefix" ]; then cp "$lsl_prefix/bin/liblsl.dll" "$stage/"; fi
 # Debug symbols are not shipped (libstdc++ alone carries 20 MB of them).
 $triple-strip --strip-unneeded "$stage"/*.exe "$stage"/*.dll
 cp -r protocols analysis data_schema "$stage/"
@@ -218,7 +227,7 @@ cp /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf "$stage/fonts/"
 cp docs/windows-readme.txt "$stage/README-windows.txt"
 # Every DLL the executable imports must be in the zip or be part of Windows
 # (vulkan-1.dll comes with the GPU driver and is loaded at run time).
-windows_dlls='^(kernel32|user32|gdi32|shell32|advapi32|ole32|oleaut32|ws2_32|bcrypt|rpcrt4|setupapi|hid|opengl32|msvcrt|winmm|imm32|version|shlwapi|comdlg32|cfgmgr32|api-ms-win-.*)\.dll$'
+windows_dlls='^(kernel32|user32|gdi32|shell32|advapi32|ole32|oleaut32|ws2_32|mswsock|iphlpapi|bcrypt|rpcrt4|setupapi|hid|opengl32|msvcrt|winmm|imm32|version|shlwapi|comdlg32|cfgmgr32|api-ms-win-.*)\.dll$'
 for f in "$stage"/*.exe "$stage"/*.dll; do
   for dll in $($triple-objdump -p "$f" | sed -n 's/^\s*DLL Name: //p'); do
     [ -f "$stage/$dll" ] || echo "$dll" | tr 'A-Z' 'a-z' | grep -Eq "$windows_dlls" || {

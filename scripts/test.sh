@@ -8,7 +8,13 @@ bash scripts/deps.sh
 jobs=$(nproc)
 launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
-cmake --preset ci "${launcher[@]}" >/dev/null
+# liblsl, built once from the pinned source into a cache outside the clone:
+# curvlab is then built and tested with the Lab Streaming Layer (nothing
+# where ../shared is absent; curvlab builds without it and its LSL tests skip).
+lsl_prefix=$(bash scripts/lsl.sh)
+prefix=()
+if [ -n "$lsl_prefix" ]; then prefix=(-DCMAKE_PREFIX_PATH="$lsl_prefix"); fi
+cmake --preset ci "${launcher[@]}" "${prefix[@]}" >/dev/null
 cmake --build --preset ci -j "$jobs"
 # Monado, the OpenXR runtime the `monado` tests run sessions through, built
 # once into a cache outside the clone (nothing where ../shared is absent).

@@ -1,7 +1,7 @@
 # Reading curvlab data into plain data frames.
 #
 # Two sources give the same trial table:
-#   - a curvlab SQLite file (schema version 6, data_schema/schema.sql), read
+#   - a curvlab SQLite file (schema version 7, data_schema/schema.sql), read
 #     read-only with RSQLite; conditions/stimulus JSON are expanded into
 #     cond_<name> / stim_<name> columns exactly as `curvlab export --format csv`
 #     names them, and staircase steps are joined on trial_id;
@@ -13,7 +13,7 @@
 # names the file and what was expected; report.R turns it into exit code 2.
 
 curvlab_application_id <- 1129729090  # PRAGMA application_id "CVLB"
-curvlab_schema_version <- 6L
+curvlab_schema_version <- 7L
 
 input_error <- function(...) {
   stop(structure(class = c("curvlab_input_error", "error", "condition"),

@@ -283,6 +283,33 @@ TEST(Schema, NewerFileIsRefusedAndLeftUntouched) {
   EXPECT_EQ(c.query_int("PRAGMA user_version"), current_schema_version + 1);
 }
 
+// What version 6 added: the Lab Streaming Layer's tables.
+constexpr const char* kDropLslTables =
+    "DROP INDEX lsl_samples_by_stream_time; DROP INDEX lsl_clock_by_session_time; DROP TABLE lsl_samples; "
+    "DROP TABLE lsl_streams; DROP TABLE lsl_clock;";
+
+// A file of version 5 (before the LSL tables) gets them, as a new file has
+// them, empty.
+TEST(Schema, MigratesVersion5FileAddingTheLslTables) {
+  const auto dir = fresh_dir("migrate5");
+  const auto path = (dir / "v5.db").string();
+  {
+    auto db = Database::open(path, OpenMode::create_or_open);
+    ASSERT_TRUE(db);
+    db.value().connection().exec(std::string(kDropLslTables) +
+                                 "DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 5");
+  }
+  auto db = Database::open(path, OpenMode::open_existing);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(db.value().schema_version(), current_schema_version);
+  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(fresh);
+  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
+  for (const char* table : {"lsl_streams", "lsl_samples", "lsl_clock"})
+    EXPECT_EQ(db.value().connection().query_int(std::string("SELECT count(*) FROM ") + table), 0) << table;
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 6"), 1);
+}
+
 // A file of version 4 (before gaze_samples) gets the table, as a new file
 // has it, and keeps its sessions.
 TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
@@ -292,7 +319,8 @@ TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
     auto& c = db.value().connection();
-    c.exec("DROP TABLE shots; DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; "
+    c.exec(std::string(kDropLslTables) +
+           "DROP TABLE shots; DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; "
            "DELETE FROM schema_migrations; PRAGMA user_version = 4");
   }
   auto db = Database::open(path, OpenMode::open_existing);
@@ -305,15 +333,15 @@ TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
   EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 5"), 1);
 }
 
-// A file of version 5 (before play blocks) gets the shots table, as a new
+// A file of version 6 (before play blocks) gets the shots table, as a new
 // file has it.
-TEST(Schema, MigratesVersion5FileAddingTheShotsTable) {
-  const auto dir = fresh_dir("migrate5");
-  const auto path = (dir / "v5.db").string();
+TEST(Schema, MigratesVersion6FileAddingTheShotsTable) {
+  const auto dir = fresh_dir("migrate6");
+  const auto path = (dir / "v6.db").string();
   {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec("DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 5");
+    db.value().connection().exec("DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 6");
   }
   auto db = Database::open(path, OpenMode::open_existing);
   ASSERT_TRUE(db) << db.error().message;
@@ -322,7 +350,7 @@ TEST(Schema, MigratesVersion5FileAddingTheShotsTable) {
   ASSERT_TRUE(fresh);
   EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
   EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM shots"), 0);
-  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 6"), 1);
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 7"), 1);
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {

@@ -280,6 +280,23 @@ TEST(Diagnostics, CalibrationSectionIsReadAndChecked) {
                                            "calibration.tip_offset_m"}));
 }
 
+// [lsl]: outlets on or off (default off); anything else is named.
+TEST(Diagnostics, LslSectionIsReadAndChecked) {
+  const std::string head = "[protocol]\nname = \"x\"\nversion = \"1\"\n[randomization]\nseed = 1\n";
+  const std::string tail = "[judgement]\ntype = \"choice\"\n"
+                           "options = [{ value = \"a\", keys = [\"1\"] }, { value = \"b\", keys = [\"2\"] }]\n";
+  const auto unset = load_protocol_text(head + tail, "inline.toml");
+  ASSERT_TRUE(unset.has_value());
+  EXPECT_FALSE(unset->lsl_outlets);
+  const auto set = load_protocol_text(head + "[lsl]\noutlets = true\n" + tail, "inline.toml");
+  ASSERT_TRUE(set.has_value()) << set.error().message;
+  EXPECT_TRUE(set->lsl_outlets);
+  const auto bad = load_protocol_text(head + "[lsl]\noutlets = \"yes\"\noutlet = true\n" + tail, "inline.toml");
+  std::set<std::string> fields;
+  for (const auto& d : problems(bad)) fields.insert(d.field);
+  EXPECT_EQ(fields, (std::set<std::string>{"lsl.outlets", "lsl.outlet"}));
+}
+
 TEST(Diagnostics, GarbageNeverCrashes) {
   for (const std::string& text : {std::string(), std::string("\0\0\0", 3), std::string("[[[[["),
                                  std::string("a = [") + std::string(5000, '['), std::string("x = 1e999"),

@@ -1,6 +1,7 @@
 // `curvlab devices` (HID response devices and mapping files) and
 // `curvlab xr-check` (can this machine run the xr backend?).
 #include "common.hpp"
+#include "lsl_args.hpp"
 
 #include "curvlab/harness/devices/hid.hpp"
 #include "curvlab/harness/devices/mapping.hpp"
@@ -53,6 +54,7 @@ void run_devices(const DevicesArgs& a) {
   }
   if (a.json) {
     doc["devices"] = list;
+    doc["lsl"] = lsl_build_line();
     if (mapping) {
       Json names = Json::array();
       for (const auto& m : mapping->devices) names.push_back(m.name);
@@ -62,6 +64,7 @@ void run_devices(const DevicesArgs& a) {
     print_result(doc, true);
     return;
   }
+  std::cout << "curvlab " << lsl_build_line() << '\n';
   if (mapping)
     std::cout << "mapping file " << mapping->file << ": " << mapping->devices.size()
               << " device mapping(s), valid\n";
@@ -94,6 +97,7 @@ void run_xr_check(bool as_json) {
         doc["result_code"] = static_cast<int>(f->result);
       }
       doc["message"] = e.message;
+      doc["lsl"] = lsl_build_line();
       print_result(doc, true);
     }
     throw RuntimeFailure("xr backend unavailable: " + e.message);
@@ -109,6 +113,7 @@ void run_xr_check(bool as_json) {
                          std::to_string(r.max_swapchain_height);
   doc["api_layers"] = r.api_layers;
   doc["extensions"] = r.extensions;
+  doc["lsl"] = lsl_build_line();
   print_result(doc, as_json);
 }
 

@@ -1,6 +1,7 @@
 // The one wiring point: builds the command tree and maps failures to exit
 // codes (0 success, 1 run-time failure, 2 bad arguments or input).
 #include "common.hpp"
+#include "lsl_args.hpp"
 
 #include "curvlab/harness/version.hpp"
 
@@ -12,7 +13,8 @@ int main(int argc, char** argv) {
   curvlab::harness::cli::ignore_broken_pipes();
   CLI::App app{"curvlab — perception experiments in S3, E3 and H3"};
   app.set_version_flag("--version", std::string(curvlab::software_version()) + " (" +
-                                        std::string(curvlab::git_commit()) + ")");
+                                        std::string(curvlab::git_commit()) + "), " +
+                                        curvlab::harness::cli::lsl_build_line());
   app.require_subcommand(1);
   // CLI11 reads /x as an option on Windows by default; curvlab's options
   // are --x everywhere, and a positional path may begin with a slash.

@@ -3,6 +3,7 @@
 // (predict.cpp) and `replay` (replay.cpp) are registered after them.
 #include "common.hpp"
 #include "calibrate.hpp"
+#include "lsl_args.hpp"
 #include "observer_args.hpp"
 #include "station.hpp"
 
@@ -274,6 +275,7 @@ struct RunArgs {
   std::string calibration;
   ObserverArgs observer;
   BackendArgs backend;
+  LslArgs lsl;
 };
 
 std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& path) {
@@ -338,7 +340,10 @@ void run_command(const RunArgs& a) {
   auto script = read_operator_script(a.backend);
   const BackendArgs backend = with_protocol_responses(a.backend, p);
   check_answers_reachable(backend, p, o.observer.has_value());
+  check_lsl_args(a.lsl, p, a.backend);
   auto devices = open_devices(backend, p, table, 0);
+  auto streams = open_lsl(a.lsl, p, *devices.clock);
+  o.streams = streams.get();
   watch_stop_signals(o);
   if (calibrates_at_start(p, a.backend)) o.calibration = calibrate_on(devices, calibration_options(p, table, a, o)).fit;
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
@@ -349,6 +354,7 @@ void run_command(const RunArgs& a) {
   o.console = console.get();
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
+  streams.reset();  // what its recorders still held is stored before the export
   report(result, a.backend, devices.station.display->info().msaa);
 }
 
@@ -358,6 +364,7 @@ struct ResumeArgs {
   ObserverArgs observer;
   bool observer_given = false;
   BackendArgs backend;
+  LslArgs lsl;
 };
 
 void resume_command(const ResumeArgs& a) {
@@ -381,12 +388,16 @@ void resume_command(const ResumeArgs& a) {
   auto script = read_operator_script(a.backend);
   const BackendArgs backend = with_protocol_responses(a.backend, *loaded);
   check_answers_reachable(backend, *loaded, o.observer.has_value() || stored.observer.has_value());
+  check_lsl_args(a.lsl, *loaded, a.backend);
   auto devices = open_devices(backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
+  auto streams = open_lsl(a.lsl, *loaded, *devices.clock);
+  o.streams = streams.get();
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();
   watch_stop_signals(o);
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
   console.reset();
+  streams.reset();
   report(result, a.backend, devices.station.display->info().msaa);
 }
 
@@ -406,6 +417,7 @@ void add_run_commands(CLI::App& app) {
   r->add_option("--calibration", run->calibration, "table calibration JSON (centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
   add_observer_options(r, run->observer);
   add_backend_options(r, run->backend);
+  add_lsl_options(r, run->lsl);
   r->callback([run] { run_command(*run); });
 
   auto res = std::make_shared<ResumeArgs>();
@@ -414,6 +426,7 @@ void add_run_commands(CLI::App& app) {
   rs->add_option("--session", res->session, "session id")->required();
   add_observer_options(rs, res->observer);
   add_backend_options(rs, res->backend);
+  add_lsl_options(rs, res->lsl);
   rs->callback([res, rs] {
     res->observer_given = false;
     for (const CLI::Option* opt : rs->get_options())

@@ -80,7 +80,7 @@ void Loader::read_settings(const toml::table& t, const std::string& prefix, std:
 void Loader::read_root(const toml::table& root, Protocol& p) {
   check_keys(root, "", {"protocol", "space", "tracking", "viewing", "timeline", "stimulus",
                         "table", "backend", "calibration", "responses", "randomization", "counterbalance", "session",
-                        "factors", "judgement", "instructions", "blocks"});
+                        "factors", "judgement", "instructions", "blocks", "lsl"});
   read_metadata(root, p);
   read_settings(root, "", p.session_overrides);
   read_backend(root, p);
@@ -88,6 +88,10 @@ void Loader::read_root(const toml::table& root, Protocol& p) {
   if (const toml::table* r = sub_table(root, "responses", "")) {
     check_keys(*r, "responses", {"hid"});
     p.hid_mappings = get_string_array(*r, "hid", "responses");
+  }
+  if (const toml::table* l = sub_table(root, "lsl", "")) {
+    check_keys(*l, "lsl", {"outlets"});
+    p.lsl_outlets = get_bool(*l, "outlets", "lsl").value_or(false);
   }
   read_randomization(root, p);
   read_factors(root, p);

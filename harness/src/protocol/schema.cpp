@@ -291,6 +291,12 @@ Json root_schema() {
                 {"description", "HID mapping files (relative to this file) whose devices answer in desktop and "
                                 "xr runs, beside the keyboard or controllers (docs/devices.md)"}}}},
       "response devices besides the backend's own");
+  props["lsl"] = closed_object(
+      {{"outlets", with_default(Json{{"type", "boolean"},
+                                     {"description", "stream markers, poses and gaze to the Lab Streaming Layer "
+                                                     "during the session, as run --lsl does (docs/lsl.md)"}},
+                                false)}},
+      "Lab Streaming Layer outlets");
   Json randomization = closed_object(
       {{"seed", integer(0, std::numeric_limits<std::int64_t>::max(),
                         "the protocol's seed: every order is reproducible from it")},

@@ -243,8 +243,11 @@ renderer::FrameStats SessionFrames::end(Frame& f, const io::Overlay& overlay, bo
 
 // ---- records ----------------------------------------------------------------
 
-void SessionFrames::event(std::optional<std::int64_t> trial_id, const data::Event& e) {
-  writer.journal(data::event_record(session_id, trial_id, clock.now_ns(), e));
+void SessionFrames::event(std::optional<std::int64_t> trial_id, const data::Event& e,
+                          std::optional<std::int64_t> moment_ns) {
+  data::EventRecord record = data::event_record(session_id, trial_id, clock.now_ns(), e);
+  if (options_.streams != nullptr) mark_event(record, e, moment_ns);
+  writer.journal(std::move(record));
 }
 
 void SessionFrames::set_current_trial(std::optional<std::size_t> i) { current_trial_ = i; }
@@ -292,6 +295,7 @@ ProgressPoint SessionFrames::progress_point() const {
 void SessionFrames::report_trial(std::size_t i, data::TrialStatus status, const std::string& reason) {
   ++trials_reported_;
   const protocol::PlannedTrial& t = design.trials[i];
+  mark_trial_end(i, status, reason);
   if (!progress_.json()) return;
   Json line{{"trial", i + 1},
             {"of", design.trials.size()},
@@ -388,6 +392,7 @@ void SessionFrames::log_frame(const Frame& f, const renderer::FrameStats& stats,
   fr.has_view_geometry = true;
   fr.view_geometry = record_view_geometry(rig, eye_size_.first, eye_size_.second);
   push([&] { return writer.push_frame(fr); });
+  if (options_.streams != nullptr) options_.streams->frame(f.timing.predicted_display_ns, lab_, station.poses->gaze());
   if (const auto gaze = station.poses->gaze()) {
     data::GazeSample g = gaze_record(*gaze);
     g.session_id = session_id;

@@ -93,7 +93,21 @@ class SessionFrames {
   [[nodiscard]] std::int64_t frame_index() const { return frame_index_; }
 
   // ---- records ----
-  void event(std::optional<std::int64_t> trial_id, const data::Event& e);
+  // Stored, and streamed as a marker (session_markers.cpp) stamped with the
+  // moment it describes: `moment_ns`, else the event's own time, else now.
+  void event(std::optional<std::int64_t> trial_id, const data::Event& e,
+             std::optional<std::int64_t> moment_ns = std::nullopt);
+  // ---- markers for the lab's other instruments (session_markers.cpp) ----
+  // The streams open and the session's start (or a resumed run's) is marked.
+  void start_streams(bool resumed);
+  // A marker of `kind` at `t_ns` (session clock) with a JSON object's text.
+  void marker(std::int64_t t_ns, std::string_view kind, std::optional<std::int64_t> trial_id,
+              const std::string& detail_json);
+  // The participant's answer, at its input's time.
+  void mark_response(const data::TrialResult& r);
+  // The design's trial `i` ended so (report_trial), and block `b` is over.
+  void mark_trial_end(std::size_t i, data::TrialStatus status, const std::string& reason);
+  void mark_block_end(std::size_t b);
   template <class T>
   T check(Result<T> r) {
     if (!r) throw Stop{r.error()};
@@ -146,6 +160,7 @@ class SessionFrames {
   template <class Push>
   void push(Push&& try_push);
   void restore_adaptive(const std::vector<std::pair<std::int64_t, bool>>& history);
+  void mark_event(const data::EventRecord& record, const data::Event& e, std::optional<std::int64_t> moment_ns);
   Outcome page(const std::string& text, std::size_t k, Phase phase, std::int64_t min_ns,
                std::optional<std::int64_t> trial_id);
   Error head_never_came(AbortReason reason) const;

@@ -38,6 +38,7 @@ class SessionLoop::Impl {
     const auto wall0 = SteadyTime::now();
     frames_.session_start_ns = frames_.clock.now_ns();
     try {
+      frames_.start_streams(!start_pages);
       const Outcome outcome = run_blocks(from, start_pages);
       end_session(outcome == Outcome::done ? data::SessionStatus::completed : data::SessionStatus::interrupted);
     } catch (const Stop& stop) {
@@ -73,6 +74,7 @@ class SessionLoop::Impl {
       BlockRun run{frames_, b, block, b == from.block ? from.position : 0, b == from.block};
       if (kind->enter(run) == Outcome::quit || kind->run(run) == Outcome::quit || kind->leave(run) == Outcome::quit)
         return Outcome::quit;
+      frames_.mark_block_end(b);
     }
     return frames_.pages(frames_.protocol.instructions_end, Phase::done, 0, std::nullopt);
   }

@@ -49,7 +49,7 @@ Outcome SessionFrames::page(const std::string& text, std::size_t k, Phase phase,
   scene_->show(phase, false);
   Page state(f.timing.now_ns, min_ns, continues_);
   for (TrialWatcher* w : watchers) w->page_shown(f.timing.now_ns, min_ns);
-  event(trial_id, data::events::Page{page_event(phase), k, shown_text});
+  event(trial_id, data::events::Page{page_event(phase), k, shown_text}, f.timing.predicted_display_ns);
   const io::Overlay overlay{phase, shown_text, true};
   for (;;) {
     const bool advance = state.frame(f.timing.now_ns, f.inputs);

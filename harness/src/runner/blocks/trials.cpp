@@ -383,6 +383,7 @@ class TrialsBlock {
     }
     // A staircase's or an adjustment's value is stored with the trial.
     if (!t.judgement->parameter.empty()) r.stimulus_json = shown_stimulus_json(f_.protocol, *t.planned, t.settings);
+    if (a.answer) f_.mark_response(r);
     f_.room.status.last_response = r.response;
     f_.room.status.last_rt_ms = a.answer ? static_cast<double>(r.response_ns - r.onset_ns) * 1e-6 : -1.0;
     completed_ticket_ = f_.writer.journal(std::move(r));

@@ -143,6 +143,9 @@ struct Protocol {
   int refresh_hz = 90;
   int resolution_width = 1024, resolution_height = 1024;
   CalibrationStep calibration;
+  // The [lsl] section: the session streams its markers, poses and gaze to
+  // the Lab Streaming Layer (as `curvlab run --lsl` does; docs/lsl.md).
+  bool lsl_outlets = false;
 
   // The session's settings: defaults with the session sections applied.
   [[nodiscard]] Settings session_settings() const;

@@ -30,6 +30,7 @@
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/result.hpp"
 #include "curvlab/harness/io/station.hpp"
+#include "curvlab/harness/io/streams.hpp"
 #include "curvlab/harness/runner/observer.hpp"
 #include "curvlab/harness/runner/operator.hpp"
 
@@ -69,6 +70,9 @@ struct RunOptions {
   // Set (to the signal's number) by the caller's signal handler: the session
   // ends interrupted at the next frame. nullptr: not watched.
   const std::atomic<int>* stop_signal = nullptr;
+  // What the lab's other instruments are told (io/streams.hpp: the Lab
+  // Streaming Layer's outlets). Not owned; outlives the run. nullptr: none.
+  io::SessionStreams* streams = nullptr;
 };
 
 struct SessionSummary {
