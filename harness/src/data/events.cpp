@@ -11,7 +11,7 @@ namespace {
 // the order a person expects, and equal events give equal texts.
 using Json = nlohmann::ordered_json;
 
-constexpr std::array<std::pair<EventKind, std::string_view>, 28> kind_names{{
+constexpr std::array<std::pair<EventKind, std::string_view>, 30> kind_names{{
     {EventKind::session_start, "session_start"},
     {EventKind::observer, "observer"},
     {EventKind::resume, "resume"},
@@ -38,6 +38,8 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 28> kind_names{{
     {EventKind::refresh_rate, "refresh_rate"},
     {EventKind::posterior, "posterior"},
     {EventKind::play_summary, "play_summary"},
+    {EventKind::strike, "strike"},
+    {EventKind::pocket, "pocket"},
     {EventKind::merged_from, "merged_from"},
     {EventKind::session_renumbered, "session_renumbered"},
 }};
@@ -146,6 +148,14 @@ Detail detail(const events::PlaySummary& e) {
                                         {"laps_physical", e.laps_physical},
                                         {"laps_virtual", e.laps_virtual},
                                         {"hand_error_m", e.hand_error_m}}};
+}
+
+Detail detail(const events::Strike& e) {
+  return {EventKind::strike,
+          Json{{"shot_index", e.shot_index}, {"ball", e.ball}, {"speed_m_s", e.speed_m_s}, {"miscue", e.miscue}}};
+}
+Detail detail(const events::Pocket& e) {
+  return {EventKind::pocket, Json{{"shot_index", e.shot_index}, {"ball", e.ball}, {"pocket", e.pocket}}};
 }
 
 // The lapse keys are null when the method keeps λ fixed.

@@ -496,6 +496,7 @@ class PlayBlock {
               std::move(cue_pose)};
     const phys::Strike strike = bl::strike_for(r.system, params_, 0, spec);
     if (!strike.miscue) r.system.set_motion(0, strike.v, strike.w);
+    f_.event(trial_id_, events::Strike{shots_, spec.ball, glm::length(strike.v), strike.miscue}, t_ns);
     return r;
   }
 
@@ -538,6 +539,10 @@ class PlayBlock {
     for (std::size_t i = 1; i < balls_.size(); ++i)
       if (!balls_[i].pocketed && r.outcome.final[i].pocketed) pocketed.push_back(balls_[i].id);
     s.pocketed = pocketed.dump();
+    for (const auto& e : r.outcome.events)
+      if (e.event.kind == phys::EventKind::pocket)
+        f_.event(trial_id_, events::Pocket{shots_, balls_[static_cast<std::size_t>(e.event.a)].id, e.event.pocket},
+                 r.strike_ns + static_cast<std::int64_t>(e.event.t_s * 1e9));
     balls_ = bl::rest_state(r.outcome);
     if (balls_[0].pocketed) respot_cue_ball();
     s.rest_state = bl::to_json(balls_).dump();

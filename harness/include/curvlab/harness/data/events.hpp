@@ -44,6 +44,8 @@ enum class EventKind {
   refresh_rate,  // the headset's refresh rate changed
   posterior,  // a Bayesian adaptive method's posterior after the trial's answer
   play_summary,  // a play block's figures when it ends (docs/billiards.md)
+  strike,        // a play block's strike of the cue ball
+  pocket,        // a ball pocketed in a play block
   merged_from,
   session_renumbered,
 };
@@ -182,6 +184,21 @@ struct PlaySummary {
   double hand_error_m = 0.0;  // mean over frames, both hands
 };
 
+// A strike in a play block, at the display time of its frame.
+struct Strike {
+  std::int64_t shot_index = 0;
+  std::string ball;
+  double speed_m_s = 0.0;
+  bool miscue = false;
+};
+// A ball pocketed by a shot, at the moment it fell (the strike's time plus
+// the event's simulated time).
+struct Pocket {
+  std::int64_t shot_index = 0;
+  std::string ball;
+  std::int64_t pocket = 0;
+};
+
 }  // namespace events
 
 using Event = std::variant<events::SessionStart, events::Observer, events::Resume, events::BlockStart, events::Page,
@@ -189,7 +206,7 @@ using Event = std::variant<events::SessionStart, events::Observer, events::Resum
                            events::Unpaused, events::TrialAborted, events::TrialRepeated, events::TrialAbandoned,
                            events::TrialSkipped, events::EarlyInput, events::AdjustmentEvent, events::Onset,
                            events::TrackingFlagged, events::EventsLost, events::StageMoved, events::RefreshRate,
-                           events::Posterior, events::PlaySummary>;
+                           events::Posterior, events::PlaySummary, events::Strike, events::Pocket>;
 
 // The row an event is stored as.
 EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,
