@@ -40,7 +40,7 @@ std::string in_schema(std::string sql, const std::string& schema) {
 // pseudonym). session_number is left out: a merge may renumber. The events
 // a merge writes itself (merged_from, session_renumbered) are provenance of
 // the pooled copy, not something the session recorded, so they are left out.
-constexpr std::array<const char*, 8> digest_queries = {
+constexpr std::array<const char*, 9> digest_queries = {
     "SELECT json_array(s.session_uuid, pr.sha256, p.pseudonym, s.software_version, s.software_commit, "
     "s.backend, s.renderer_device, s.renderer_driver, s.display_refresh_hz, s.seed, s.table_calibration, "
     "s.status, s.started_utc, s.ended_utc) FROM {s}.sessions s "
@@ -73,6 +73,9 @@ constexpr std::array<const char*, 8> digest_queries = {
     "x.right_dy, x.right_dz, x.vergence_rad, x.vergence_distance_m) FROM {s}.gaze_samples x LEFT "
     "JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE "
     "x.session_id = ?1 ORDER BY x.gaze_id",
+    "SELECT json_array(t.trial_index, x.shot_index, x.t_ns, x.rest_ns, x.player, x.ball, x.aim_x, x.aim_z, x.speed_m_s, x.cue_speed_m_s, x.tip_side, x.tip_height, x.miscue, x.cue_pose, x.table_settings, x.before_state, x.shot, x.events, x.rest_state, x.pocketed, x.event_count) FROM {s}.shots x "
+    "JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE x.session_id = ?1 "
+    "ORDER BY t.trial_index, x.shot_index",
     "SELECT json_array(t.trial_index, x.t_ns, x.kind, x.detail) FROM {s}.events x "
     "LEFT JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id "
     "WHERE x.session_id = ?1 AND x.kind NOT IN ('merged_from', 'session_renumbered') ORDER BY x.event_id",
@@ -222,7 +225,7 @@ struct RowCopy {
   std::int64_t MergeInputReport::*counted = nullptr;
 };
 
-constexpr std::array<RowCopy, 7> copy_statements = {{
+constexpr std::array<RowCopy, 8> copy_statements = {{
     {"INSERT INTO main.blocks (session_id, block_index, name, is_practice, settings) SELECT ?2, block_index, "
     "name, is_practice, settings FROM src.blocks WHERE session_id = ?1 ORDER BY block_id", nullptr},
     {"INSERT INTO main.trials (session_id, block_id, trial_index, trial_in_block, conditions, stimulus, status, "
@@ -259,6 +262,8 @@ constexpr std::array<RowCopy, 7> copy_statements = {{
     "x.right_oy_m, x.right_oz_m, x.right_dx, x.right_dy, x.right_dz, x.vergence_rad, "
     "x.vergence_distance_m FROM src.gaze_samples x{trial} WHERE x.session_id = ?1 ORDER BY "
     "x.gaze_id", nullptr},
+    {"INSERT INTO main.shots (session_id, trial_id, shot_index, t_ns, rest_ns, player, ball, aim_x, aim_z, speed_m_s, cue_speed_m_s, tip_side, tip_height, miscue, cue_pose, table_settings, before_state, shot, events, rest_state, pocketed, event_count) SELECT ?2, mt.trial_id, x.shot_index, x.t_ns, x.rest_ns, x.player, x.ball, x.aim_x, x.aim_z, x.speed_m_s, x.cue_speed_m_s, x.tip_side, x.tip_height, x.miscue, x.cue_pose, x.table_settings, x.before_state, x.shot, x.events, x.rest_state, x.pocketed, x.event_count "
+    "FROM src.shots x{trial} WHERE x.session_id = ?1 ORDER BY x.shot_id", nullptr},
     {"INSERT INTO main.events (session_id, trial_id, t_ns, kind, detail) SELECT ?2, mt.trial_id, x.t_ns, "
     "x.kind, x.detail FROM src.events x{trial} WHERE x.session_id = ?1 ORDER BY x.event_id", nullptr},
 }};
