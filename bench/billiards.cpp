@@ -472,9 +472,10 @@ void frame_cost(bool quick) {
   constexpr int kInner = 64;  // ball_at sweeps timed together, for resolution
   std::printf("(c) per-frame cost of play during a break, 90 Hz frames (budget 11.1 ms):\n");
   std::printf("    states: System::ball_at for all 16 balls at the frame time;\n");
-  std::printf("    advance: next_event(frame time) until the clock stands there, with the events between\n\n");
-  std::printf("%-5s %7s %14s %14s %15s %15s %10s\n", "space", "frames", "states ns", "states max ns",
-              "advance mean ns", "advance max ns", "of budget");
+  std::printf("    advance: next_event(frame time) until the clock stands there, with the events between;\n");
+  std::printf("    worst events: the events resolved in the frame whose advance took longest; of budget: mean\n\n");
+  std::printf("%-5s %7s %14s %14s %15s %15s %13s %10s\n", "space", "frames", "states ns", "states max ns",
+              "advance mean ns", "advance max ns", "worst events", "of budget");
   volatile double sink = 0.0;
   for (SpaceKind kind : kKinds) {
     const Cloth c = table_cloth(kind);
@@ -483,13 +484,13 @@ void frame_cost(bool quick) {
     System s(c, p, shot.balls);
     s.set_motion(shot.cue, shot.v, shot.w);
     double states_sum = 0.0, states_max = 0.0, adv_sum = 0.0, adv_max = 0.0;
-    long frames = 0;
+    long frames = 0, worst_events = 0;
     const long max_frames = quick ? 90 : 1L << 30;
     for (long f = 1; !s.all_still() && f <= max_frames; ++f, ++frames) {
       const double t = static_cast<double>(f) * kFrame_s;
       const auto t0 = Clock::now();
-      while (s.next_event(t)) {
-      }
+      long events = 0;
+      while (s.next_event(t)) ++events;
       const double adv = seconds_since(t0);
       const auto t1 = Clock::now();
       double acc = 0.0;
@@ -500,11 +501,14 @@ void frame_cost(bool quick) {
       states_sum += states;
       states_max = std::max(states_max, states);
       adv_sum += adv;
-      adv_max = std::max(adv_max, adv);
+      if (adv > adv_max) {
+        adv_max = adv;
+        worst_events = events;
+      }
     }
     const double fr = static_cast<double>(std::max(frames, 1L));
-    std::printf("%-5s %7ld %14.0f %14.0f %15.0f %15.0f %9.4f%%\n", std::string(to_string(kind)).c_str(), frames,
-                states_sum / fr * 1e9, states_max * 1e9, adv_sum / fr * 1e9, adv_max * 1e9,
+    std::printf("%-5s %7ld %14.0f %14.0f %15.0f %15.0f %13ld %9.4f%%\n", std::string(to_string(kind)).c_str(),
+                frames, states_sum / fr * 1e9, states_max * 1e9, adv_sum / fr * 1e9, adv_max * 1e9, worst_events,
                 (states_sum + adv_sum) / fr / kFrame_s * 100.0);
     std::fflush(stdout);
   }
