@@ -170,8 +170,9 @@ void System::begin_segment(std::size_t i, double t_s, Ball b) {
   ++version_[i];
 }
 
-Ball System::evaluate(const Segment& s, double t_s) const {
+Ball System::evaluate(const Segment& s, double t_s, Orientation orientation) const {
   Ball b = s.start;
+  const bool orient = orientation == Orientation::track;
   double tau = std::max(0.0, t_s - s.t0_s);
   if (std::isfinite(s.end_s)) tau = std::min(tau, s.end_s - s.t0_s);
   const double k = cloth_.k();
@@ -183,7 +184,7 @@ Ball System::evaluate(const Segment& s, double t_s) const {
     case Motion::stationary: return b;
     case Motion::spinning:
       b.w.y = spin_rate(s.start.w.y, alpha, tau);
-      b.orientation = turned(b.orientation, {0.0, spin_angle(s.start.w.y, alpha, tau), 0.0});
+      if (orient) b.orientation = turned(b.orientation, {0.0, spin_angle(s.start.w.y, alpha, tau), 0.0});
       return b;
     case Motion::rolling: {
       const double v0 = glm::length(s.start.v);
@@ -194,8 +195,10 @@ Ball System::evaluate(const Segment& s, double t_s) const {
       b.v = (v0 - s.accel_m_s2 * tau) * u;
       const glm::dvec3 roll = rolling_spin(params_, b.v);
       b.w = {roll.x, spin_rate(s.start.w.y, alpha, tau), roll.z};
-      const glm::dvec3 turn = rolling_spin(params_, dist * u);
-      b.orientation = turned(b.orientation, {turn.x, spin_angle(s.start.w.y, alpha, tau), turn.z});
+      if (orient) {
+        const glm::dvec3 turn = rolling_spin(params_, dist * u);
+        b.orientation = turned(b.orientation, {turn.x, spin_angle(s.start.w.y, alpha, tau), turn.z});
+      }
       return b;
     }
     case Motion::sliding: {
@@ -213,10 +216,12 @@ Ball System::evaluate(const Segment& s, double t_s) const {
         const double from = static_cast<double>(n) * s.h_s;
         b.frame = s.knots[n] * magnus_step(k, rho, s.start.v, a, sd, from, tau - from);
       }
-      const glm::dvec3 turn{s.start.w.x * tau + 0.5 * rate * tau * tau * sd.y,
-                            spin_angle(s.start.w.y, alpha, tau),
-                            s.start.w.z * tau - 0.5 * rate * tau * tau * sd.x};
-      b.orientation = turned(b.orientation, turn);
+      if (orient) {
+        const glm::dvec3 turn{s.start.w.x * tau + 0.5 * rate * tau * tau * sd.y,
+                              spin_angle(s.start.w.y, alpha, tau),
+                              s.start.w.z * tau - 0.5 * rate * tau * tau * sd.x};
+        b.orientation = turned(b.orientation, turn);
+      }
       return b;
     }
   }
@@ -246,7 +251,7 @@ double System::kinetic_energy_j() const {
   const double inertia = 0.4 * m * params_.radius_m * params_.radius_m;
   double e = 0.0;
   for (std::size_t i = 0; i < segments_.size(); ++i) {
-    const Ball b = ball(i);
+    const Ball b = evaluate(segments_[i], t_s_, Orientation::skip);
     e += 0.5 * m * glm::dot(b.v, b.v) + 0.5 * inertia * glm::dot(b.w, b.w);
   }
   return e;
@@ -298,8 +303,8 @@ void System::search_pair(std::size_t i, std::size_t j, Search& s, double to_s) {
   const double rho = cloth_.radius_m;
   const double two_r = 2.0 * params_.radius_m;
   const auto gap = [&](double t) {
-    const Ball bi = evaluate(si, t);
-    const Ball bj = evaluate(sj, t);
+    const Ball bi = evaluate(si, t, Orientation::skip);
+    const Ball bj = evaluate(sj, t, Orientation::skip);
     const glm::dvec3 pi = bi.frame[2] * rho;
     const glm::dvec3 pj = bj.frame[2] * rho;
     const double d = detail::distance_rad(space, pi, pj) * rho;
@@ -400,7 +405,7 @@ void System::search_walls(std::size_t i, Search& s, double to_s) {
       offer(std::max(seg.t0_s + tau, s.searched_to_s), EventKind::cushion, edge);
     } else {
       const auto gap = [&](double t) {
-        const Ball b = evaluate(seg, t);
+        const Ball b = evaluate(seg, t, Orientation::skip);
         const glm::dvec3 p = b.frame[2] * rho;
         const double sd = glm::dot(p, nu) / rho;
         const double d = space.S_inv(sd) * rho;
@@ -417,7 +422,7 @@ void System::search_walls(std::size_t i, Search& s, double to_s) {
     for (int corner = 0; corner < sides; ++corner) {
       const glm::dvec3& q = cloth_.corners[static_cast<std::size_t>(corner)];
       const auto gap = [&](double t) {
-        const Ball b = evaluate(seg, t);
+        const Ball b = evaluate(seg, t, Orientation::skip);
         const glm::dvec3 p = b.frame[2] * rho;
         const double d = detail::distance_rad(space, p, q) * rho;
         const double rate = -detail::vector_form(k, ambient(b.frame, b.v), detail::direction(space, p, q));
@@ -577,7 +582,7 @@ void System::check_after(const Event& e) {
   const std::size_t n = segments_.size();
   const Space space = cloth_.space();
   std::vector<Ball> now(n);
-  for (std::size_t i = 0; i < n; ++i) now[i] = ball(i);
+  for (std::size_t i = 0; i < n; ++i) now[i] = evaluate(segments_[i], t_s_, Orientation::skip);
   for (int who : {e.a, e.b}) {
     if (who < 0) continue;
     const auto w = static_cast<std::size_t>(who);

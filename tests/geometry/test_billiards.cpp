@@ -128,6 +128,35 @@ Q q_line_distance(SpaceKind kind, Q rho, const oracle::QVec4& a, const oracle::Q
   return 0;
 }
 
+TEST(Billiards, RollingBallTurnsThroughItsDistanceOverRAboutTheHorizontalAxis) {
+  // What the renderer draws: a ball that rolled s metres has turned s/R
+  // radians about up × direction, in its transported frame — read at any
+  // time of the segment and after it stops.
+  for (SpaceKind kind : kKinds) {
+    SCOPED_TRACE(std::string(to_string(kind)));
+    const Cloth c = table_cloth(kind);
+    const Parameters p = no_pockets();
+    Ball b = ball_at_native(c, {0.05, -0.05});
+    b.v = {0.2, 0.0};  // stops 0.2 m on, well inside every table
+    b.w = rolling_spin(p, b.v);
+    System s(c, p, {b});
+    const double a = p.mu_roll * p.g_m_s2;
+    const auto expected = [&](double tau) {
+      const double dist = 0.2 * tau - 0.5 * a * tau * tau;
+      return glm::angleAxis(dist / p.radius_m, glm::dvec3{0.0, 0.0, -1.0});
+    };
+    for (double tau : {0.05, 0.5, 2.0}) {
+      const Quat q = s.ball_at(0, tau).orientation;
+      EXPECT_NEAR(std::abs(glm::dot(q, expected(tau))), 1.0, 1e-9) << tau;
+    }
+    const auto events = run(s);
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events.back().kind, EventKind::stop);
+    const double t_stop = 0.2 / a;
+    EXPECT_NEAR(std::abs(glm::dot(s.ball(0).orientation, expected(t_stop))), 1.0, 1e-9);
+  }
+}
+
 TEST(Billiards, CushionContactTimeAndPointMatchTheOracleForPerpendicularAndObliqueShots) {
   for (SpaceKind kind : kKinds) {
     SCOPED_TRACE(std::string(to_string(kind)));

@@ -46,8 +46,16 @@ Result<phys::Cloth> make_table(const TableSpec& spec) {
 
 Result<ShotInput> parse_shot_input(const std::string& text, const std::string& source,
                                    const phys::Cloth& cloth, const phys::Parameters& params) {
-  Json doc = Json::parse(text, nullptr, false);
-  if (doc.is_discarded()) return bad(source, "(file)", "not valid JSON");
+  Json doc;
+  try {
+    doc = Json::parse(text);
+  } catch (const Json::exception& e) {
+    // The parser's own words: the line, the column and what it read, or the
+    // number too large for a double (1e999; JSON has no infinity).
+    std::string why = e.what();
+    if (const auto at = why.find("] "); at != std::string::npos) why = why.substr(at + 2);
+    return bad(source, "(file)", "not valid JSON: " + why);
+  }
   if (!doc.is_object()) return bad(source, "(file)", "expected a JSON object with \"balls\"");
   ShotInput in;
   const auto balls = doc.find("balls");

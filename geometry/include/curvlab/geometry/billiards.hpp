@@ -204,7 +204,11 @@ class System {
     std::optional<Event> found;
   };
   void begin_segment(std::size_t i, double t_s, Ball b);
-  [[nodiscard]] Ball evaluate(const Segment& s, double t_s) const;
+  // The ball on segment s at t_s. The root search and the invariants read
+  // only positions, velocities and spins; they skip the orientation, which
+  // costs a quaternion's sine and cosine per call.
+  enum class Orientation { track, skip };
+  [[nodiscard]] Ball evaluate(const Segment& s, double t_s, Orientation orientation = Orientation::track) const;
   void search_pair(std::size_t i, std::size_t j, Search& s, double to_s);
   void search_walls(std::size_t i, Search& s, double to_s);
   void resolve(const Event& e);
