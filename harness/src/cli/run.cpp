@@ -66,7 +66,8 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--window-size", b.window_size, "desktop: per-eye size WxH (default 960x960)");
   cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
   cmd->add_option("--screenshot", b.screenshot, "desktop: save every onset (and F12) here");
-  cmd->add_option("--key-script", b.key_script, "desktop: a file of scripted key presses");
+  cmd->add_option("--key-script", b.key_script,
+                  "a file of scripted key presses (desktop; headless: they answer instead of the simulated observer)");
   cmd->add_option("--responses", b.responses,
                   "also answer from HID devices: hid:MAPPING.toml (repeatable; docs/devices.md)");
   cmd->add_option("--export", b.export_dir, "afterwards, export CSV, Psych-DS and BIDS motion here");
@@ -130,6 +131,36 @@ void check_operator_args(const BackendArgs& a) {
 // (nullopt) lets the display's renderer pick for its device; a count is
 // clamped to the device, with a warning. The count drawn with is the
 // display's (DisplayInfo::msaa), stored with the session.
+// What a key script must fit (desktop.hpp): each timed phase's shortest
+// length over the protocol's blocks, and every key that answers.
+desktop::KeyScriptLimits key_script_limits(const pr::Protocol& p) {
+  desktop::KeyScriptLimits l;
+  l.protocol = p.file;
+  bool first = true;
+  auto add_keys = [&l](const pr::Judgement& j) {
+    for (const auto& option : j.options)
+      for (const auto& key : option.keys) l.answer_keys.push_back(key);
+  };
+  add_keys(p.judgement);
+  for (const auto& b : p.blocks) {
+    const auto t = p.block_settings(b).timeline;
+    l.fixation_ms = first ? t.fixation_ms : std::min(l.fixation_ms, t.fixation_ms);
+    l.stimulus_ms = first ? t.stimulus_ms : std::min(l.stimulus_ms, t.stimulus_ms);
+    l.response_ms = first ? t.response_ms : std::min(l.response_ms, t.response_ms);
+    l.iti_ms = first ? t.iti_ms : std::min(l.iti_ms, t.iti_ms);
+    first = false;
+    add_keys(b.judgement);
+  }
+  if (first) {
+    const auto t = p.session_settings().timeline;
+    l.fixation_ms = t.fixation_ms;
+    l.stimulus_ms = t.stimulus_ms;
+    l.response_ms = t.response_ms;
+    l.iti_ms = t.iti_ms;
+  }
+  return l;
+}
+
 Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
                      std::int64_t start_ns) {
   StationNeeds n;
@@ -139,6 +170,7 @@ Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry
   n.height_px = static_cast<std::uint32_t>(p.resolution_height);
   n.table = table;
   n.start_ns = start_ns;
+  n.key_script_limits = key_script_limits(p);
   return open_station(a, n);
 }
 
@@ -305,7 +337,11 @@ void run_command(const RunArgs& a) {
   else if (a.dominant_eye == "right") o.dominant_eye = data::DominantEye::right;
   else if (a.dominant_eye != "unknown") throw UsageError("--dominant-eye must be left, right or unknown");
   o.calibration = read_calibration(a.calibration);
-  if (a.backend.backend == "headless") {
+  if (a.backend.backend == "headless" && !a.backend.key_script.empty()) {
+    // The script answers, in place of the simulated observer.
+    if (a.observer.model != "human" && a.observer.model != "none")
+      throw UsageError("--key-script answers in place of the simulated observer; drop --observer " + a.observer.model);
+  } else if (a.backend.backend == "headless") {
     const std::uint64_t seed = pr::participant_seed(p.seed, o.participant_number, p.seed_per_participant);
     o.observer = observer_params(a.observer, pr::mix_seed(seed ^ 0x5eedULL));
     if (o.observer && o.observer->model == rn::ObserverModel::image)
