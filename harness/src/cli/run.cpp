@@ -30,6 +30,9 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <array>
+#include <functional>
+#include <set>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -195,6 +198,37 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
     if (ec) throw RuntimeFailure("cannot create --images folder " + a.images + ": " + ec.message());
   }
   return o;
+}
+
+// The run options a session stores with its start (and each resume with
+// itself), which `resume` takes as its defaults: how frames are drawn and
+// paced, where onset images and exports go, who answers.
+constexpr std::array<std::pair<const char*, std::string BackendArgs::*>, 4> kStoredRunOptions{{
+    {"render", &BackendArgs::render},
+    {"pace", &BackendArgs::pace},
+    {"images", &BackendArgs::images},
+    {"export", &BackendArgs::export_dir},
+}};
+
+std::string run_options_json(const BackendArgs& a, const std::string& observer) {
+  Json j = Json::object();
+  for (const auto& [name, field] : kStoredRunOptions) j[name] = a.*field;
+  j["observer"] = observer;
+  return j.dump();
+}
+
+// `resume`'s options: each stored run option the command line does not give.
+// Returns the observer model the session ran with ("" when none recorded).
+std::string apply_stored_run_options(BackendArgs& a, const std::string& stored_json,
+                                     const std::function<bool(const std::string&)>& given) {
+  const Json j = Json::parse(stored_json, nullptr, false);
+  if (!j.is_object()) return {};
+  for (const auto& [name, field] : kStoredRunOptions) {
+    const std::string option = std::string("--") + name;
+    if (const auto v = j.find(name); v != j.end() && v->is_string() && !given(option)) a.*field = v->get<std::string>();
+  }
+  const auto observer = j.find("observer");
+  return observer != j.end() && observer->is_string() ? observer->get<std::string>() : std::string();
 }
 
 void export_all(const std::string& db_path, std::int64_t session_id, const std::string& dir, Json& doc) {
@@ -365,6 +399,7 @@ void run_command(const RunArgs& a) {
   }
   auto console = open_console(a.backend, std::move(script), *devices.station.display, db);
   o.console = console.get();
+  o.run_options_json = run_options_json(a.backend, o.observer ? std::string(rn::to_string(o.observer->model)) : "none");
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
   report(result, a.backend, devices.station.display->info().msaa);
@@ -376,9 +411,10 @@ struct ResumeArgs {
   ObserverArgs observer;
   bool observer_given = false;
   BackendArgs backend;
+  std::set<std::string> given;  // the options on the command line ("--render")
 };
 
-void resume_command(const ResumeArgs& a) {
+void resume_command(ResumeArgs a) {
   check_db_argument(a.db);
   // Before a window or headset starts; resume_session holds the lock itself.
   if (const auto holder = data::WriterLock::session_writer(a.db, a.session))
@@ -386,6 +422,12 @@ void resume_command(const ResumeArgs& a) {
   auto stored_v = rn::read_stored_session(a.db, a.session);
   if (!stored_v) raise(stored_v.error());
   const auto& stored = stored_v.value();
+  // The session continues as it ran: its stored run options, unless the
+  // command line gives others (which are then stored with the resume).
+  std::string observer_model;
+  if (stored.run_options_json)
+    observer_model = apply_stored_run_options(a.backend, *stored.run_options_json,
+                                              [&a](const std::string& name) { return a.given.contains(name); });
   auto loaded = pr::load_protocol_text(stored.protocol_text, stored.protocol_source);
   if (!loaded)
     throw RuntimeFailure("the stored protocol no longer loads: " +
@@ -403,6 +445,9 @@ void resume_command(const ResumeArgs& a) {
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();
   watch_stop_signals(o);
+  if (o.observer) observer_model = rn::to_string(o.observer->model);
+  else if (observer_model.empty()) observer_model = stored.observer ? rn::to_string(stored.observer->model) : "none";
+  o.run_options_json = run_options_json(a.backend, observer_model);
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
   console.reset();
   report(result, a.backend, devices.station.display->info().msaa);
@@ -434,8 +479,11 @@ void add_run_commands(CLI::App& app) {
   add_backend_options(rs, res->backend);
   rs->callback([res, rs] {
     res->observer_given = false;
-    for (const CLI::Option* opt : rs->get_options())
+    res->given.clear();
+    for (const CLI::Option* opt : rs->get_options()) {
+      if (opt->count() > 0) res->given.insert(opt->get_name());
       if (opt->get_name().starts_with("--observer") && opt->count() > 0) res->observer_given = true;
+    }
     resume_command(*res);
   });
 

@@ -68,6 +68,10 @@ struct RunOptions {
   // Set (to the signal's number) by the caller's signal handler: the session
   // ends interrupted at the next frame. nullptr: not watched.
   const std::atomic<int>* stop_signal = nullptr;
+  // The command line's run options as a JSON object (render, pace, images,
+  // export, observer), stored with the session_start or resume event: they
+  // are what `resume` continues with by default. Empty: not stored.
+  std::string run_options_json;
 };
 
 struct SessionSummary {
@@ -123,6 +127,7 @@ struct StoredSession {
   std::optional<geometry::PhysicalTableFit> calibration;
   std::optional<ObserverParams> observer;
   std::int64_t last_t_ns = 0;  // latest time stamp logged (a resumed clock starts after it)
+  std::optional<std::string> run_options_json;  // the run options it last ran with (RunOptions)
 };
 Result<StoredSession> read_stored_session(const std::string& db_path, std::int64_t session_id);
 
