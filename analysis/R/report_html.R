@@ -71,7 +71,8 @@ report_css <- paste(
   ".scroll{max-width:100%;overflow-x:auto}",
   "table.provenance{font-size:.8em}table.provenance td,table.provenance th{text-align:left;padding:.2em .35em}",
   "table.provenance td.wrap{min-width:5em;max-width:9em;overflow-wrap:anywhere}",
-  ".method{background:#eef5fb;border-left:4px solid #4a90c2;padding:.4em .8em;margin:.5em 0}")
+  ".method{background:#eef5fb;border-left:4px solid #4a90c2;padding:.4em .8em;margin:.5em 0}",
+  ".warning{background:#fdecea;border-left:4px solid #c62828;padding:.4em .8em;margin:.5em 0}")
 
 # Writes report.html (and the PNG/CSV files) into out_dir; returns its path.
 build_report <- function(data, out_dir, positive = "convex", lapse = "free", lapse_max = 0.1,
@@ -162,6 +163,7 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
            html_escape(utils::packageVersion("lme4")), ". ", nrow(analysed), " completed non-practice trials of ",
            nrow(trials), " planned, ", length(unique(analysed$participant)), " participant(s), ",
            nrow(s), " session(s).</p>"),
+    protocol_warnings_html(s),
     if (data$kind == "export") "<p class=\"note\">Read from an export directory: trials.csv carries no protocol name, software, renderer or seed; run the report on the database for full provenance.</p>" else "",
     "<h2>Sessions and provenance</h2>", provenance,
     "<h2>Designs</h2>",
@@ -360,4 +362,20 @@ model_section_html <- function(m) {
          if (isTRUE(m$mixed_is_fixed)) "<p>One participant: no mixed model; the bias-reduced GLM above is the model.</p>"
          else html_table(m$coefficients, paste0("Mixed model: ", if (is.null(m$mixed_method)) "none" else m$mixed_method)),
          html_table(m$tests, "Tests against the model without these terms"))
+}
+
+# The warnings curvlab gave the protocol when its sessions started (the human
+# observer model's range of validity: stored with each session_start event),
+# repeated before any result, once each.
+protocol_warnings_html <- function(sessions) {
+  if (is.null(sessions$protocol_warnings)) return("")
+  texts <- unlist(lapply(stats::na.omit(sessions$protocol_warnings), function(j) {
+    w <- tryCatch(jsonlite::fromJSON(j), error = function(e) character())
+    as.character(w)
+  }))
+  texts <- unique(texts)
+  if (!length(texts)) return("")
+  paste0("<div class=\"warning\"><p><strong>Warnings about the protocol</strong> (given by curvlab when the sessions ",
+         "started; simulated participants answered with the model these concern):</p><ul>",
+         paste0("<li>", html_escape(texts), "</li>", collapse = ""), "</ul></div>")
 }

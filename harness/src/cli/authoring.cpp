@@ -4,6 +4,7 @@
 // every condition's stimulus; runner/preview.hpp).
 #include "common.hpp"
 
+#include "curvlab/harness/runner/stimulus_checks.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/schema.hpp"
 #include "curvlab/harness/runner/preview.hpp"
@@ -222,6 +223,7 @@ void run_preview(const PreviewArgs& a) {
               << (what.empty() ? "" : "  " + what) << (tty ? "\033[K" : "\n") << std::flush;
     if (tty && done == total) std::cerr << '\n';
   };
+  for (const auto& w : harness::runner::protocol_warnings(p)) std::cerr << "curvlab: warning: " << w.message << '\n';
   auto result = harness::runner::write_preview(p, rq);
   if (!result) raise(result.error());
   const auto& r = result.value();

@@ -3,6 +3,7 @@
 #include "common.hpp"
 #include "station.hpp"
 
+#include "curvlab/harness/runner/stimulus_checks.hpp"
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
@@ -112,6 +113,11 @@ void run_validate(const std::string& file, bool as_json, const BackendArgs& devi
     check_devices(file, *loaded, devices, true);
     Json doc = design_json(*loaded, pr::expand_design(*loaded, 1), false);
     doc["ok"] = true;
+    Json warnings = Json::array();
+    for (const auto& w : harness::runner::protocol_warnings(*loaded))
+      warnings.push_back({{"kind", harness::runner::to_string(w.kind)}, {"block", w.block}, {"condition", w.condition},
+                          {"message", w.message}});
+    doc["warnings"] = warnings;
     std::cout << doc.dump(2) << '\n';
     return;
   }
@@ -137,6 +143,7 @@ void run_validate(const std::string& file, bool as_json, const BackendArgs& devi
   std::cout << "  total " << d.trials.size() << " trials, estimated duration "
             << duration_text(d.estimated_duration_ms())
             << " (timelines and breaks; instruction reading not included)\n";
+  for (const auto& w : harness::runner::protocol_warnings(p)) std::cout << "warning: " << w.message << '\n';
 }
 
 void run_design(const std::string& file, std::int64_t participant, bool as_json) {

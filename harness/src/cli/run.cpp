@@ -23,6 +23,7 @@
 #include "curvlab/harness/runner/replay.hpp"
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/stimulus_checks.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/tracking/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
@@ -400,6 +401,8 @@ void run_command(const RunArgs& a) {
   auto console = open_console(a.backend, std::move(script), *devices.station.display, db);
   o.console = console.get();
   o.run_options_json = run_options_json(a.backend, o.observer ? std::string(rn::to_string(o.observer->model)) : "none");
+  for (const auto& w : rn::stimulus_warnings(p))
+    if (w.kind == rn::StimulusWarningKind::model_range) o.warnings.push_back(w.message);
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
   report(result, a.backend, devices.station.display->info().msaa);

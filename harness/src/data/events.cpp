@@ -69,6 +69,7 @@ Detail detail(const events::SessionStart& e) {
          {"backend", e.backend},  {"msaa", e.msaa},    {"trials", e.trials}};
   if (e.counterbalance_row) j["counterbalance_row"] = *e.counterbalance_row;
   if (e.run_options_json) j["run_options"] = Json::parse(*e.run_options_json, nullptr, false);
+  if (!e.warnings.empty()) j["warnings"] = e.warnings;
   return {EventKind::session_start, j};
 }
 Detail detail(const events::Observer& e) { return {EventKind::observer, e.params_json}; }

@@ -65,6 +65,9 @@ struct SessionStart {
   // The command line's run options (a JSON object: render, pace, images,
   // export, observer), the defaults of `resume`; nullopt: not recorded.
   std::optional<std::string> run_options_json;
+  // What the protocol was warned about when the session started (the human
+  // model's range of validity; runner/stimulus_checks.hpp), for the report.
+  std::vector<std::string> warnings;
 };
 // The simulated observer's parameters, as the runner writes them.
 struct Observer {

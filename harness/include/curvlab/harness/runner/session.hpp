@@ -72,6 +72,9 @@ struct RunOptions {
   // export, observer), stored with the session_start or resume event: they
   // are what `resume` continues with by default. Empty: not stored.
   std::string run_options_json;
+  // Warnings about the protocol stored with the session's start (the human
+  // model's range of validity), which the report repeats.
+  std::vector<std::string> warnings;
 };
 
 struct SessionSummary {
