@@ -288,31 +288,6 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
   }
 }
 
-// The largest participant number a pseudonym's trailing digits may give:
-// nine digits. A longer number is refused rather than folded onto another
-// participant's seed and counterbalancing row.
-constexpr std::uint64_t kMaxPseudonymNumber = 999'999'999;
-
-// The participant number of a pseudonym: its trailing number (P07 → 7), 1
-// when it has none (docs/runner.md, `curvlab run`). A trailing number
-// of 0 or above kMaxPseudonymNumber is a UsageError naming --participant.
-std::uint64_t number_from_pseudonym(const std::string& id) {
-  std::size_t end = id.size();
-  std::size_t begin = end;
-  while (begin > 0 && std::isdigit(static_cast<unsigned char>(id[begin - 1]))) --begin;
-  if (begin == end) return 1;
-  const std::string digits = id.substr(begin, end - begin);
-  const std::size_t significant = digits.find_first_not_of('0');
-  if (significant == std::string::npos)
-    throw UsageError("--participant " + id + ": its trailing number " + digits +
-                     " is 0; participant numbers start at 1 (or give --participant-number N)");
-  if (digits.size() - significant > 9)
-    throw UsageError("--participant " + id + ": its trailing number " + digits + " is larger than " +
-                     std::to_string(kMaxPseudonymNumber) +
-                     ", the largest participant number a pseudonym gives; pass --participant-number N explicitly");
-  return std::stoull(digits.substr(significant));
-}
-
 struct RunArgs {
   std::string protocol;
   std::string participant;
@@ -321,6 +296,7 @@ struct RunArgs {
   std::optional<double> ipd_m;
   std::string dominant_eye = "unknown";
   std::string calibration;
+  bool new_session = false;
   ObserverArgs observer;
   BackendArgs backend;
 };
@@ -364,8 +340,7 @@ void run_command(const RunArgs& a) {
   const pr::Protocol p = load_protocol_or_usage(a.protocol, &text);
   rn::RunOptions o = drawing_options(a.backend);
   o.participant = a.participant;
-  o.participant_number = a.participant_number ? *a.participant_number : number_from_pseudonym(a.participant);
-  if (o.participant_number < 1) throw UsageError("--participant-number must be at least 1");
+  o.participant_number = participant_number(a.participant, a.participant_number);
   o.ipd_m = a.ipd_m;
   if (a.ipd_m && !(*a.ipd_m > 0.04 && *a.ipd_m < 0.09)) throw UsageError("--ipd-m must lie in (0.04, 0.09) m");
   if (a.dominant_eye == "left") o.dominant_eye = data::DominantEye::left;
@@ -386,6 +361,7 @@ void run_command(const RunArgs& a) {
                              ? (std::filesystem::path("results") / (p.meta.name + ".sqlite")).string()
                              : a.db;
   check_db_argument(db);
+  if (!a.new_session) check_participant_is_new(db, a.participant);
   const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
@@ -469,6 +445,8 @@ void add_run_commands(CLI::App& app) {
   r->add_option("--db", run->db, "SQLite file (default results/<protocol name>.sqlite)");
   r->add_option_function<double>("--ipd-m", [run](double v) { run->ipd_m = v; }, "participant's IPD in metres");
   r->add_option("--dominant-eye", run->dominant_eye, "left, right or unknown");
+  r->add_flag("--new-session", run->new_session,
+              "start another session of a pseudonym that already has one in --db (otherwise exit 2)");
   r->add_option("--calibration", run->calibration, "table calibration JSON (centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
   add_observer_options(r, run->observer);
   add_backend_options(r, run->backend);
