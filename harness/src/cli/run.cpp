@@ -327,6 +327,9 @@ rn::CalibrationOptions calibration_options(const pr::Protocol& p, const geometry
   c.known = known;
   c.tip_offset_m = {p.calibration.tip_offset_m[0], p.calibration.tip_offset_m[1], p.calibration.tip_offset_m[2]};
   c.limits.max_residual_m = p.calibration.max_residual_mm / 1000.0;
+  // The virtual table's edges equal the protocol's edge: the physical one
+  // must measure the same.
+  c.limits.known_edge_m = p.session_settings().table.edge_m;
   c.ipd_m = o.ipd_m.value_or(p.session_settings().viewing.ipd_m);
   c.width_px = static_cast<std::uint32_t>(p.resolution_width);
   c.height_px = static_cast<std::uint32_t>(p.resolution_height);
