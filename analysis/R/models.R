@@ -70,7 +70,7 @@ fit_mixed <- function(formula, data, bayes) {
   # common near separation), Nelder-Mead from lme4's start.
   for (optimizer in c("bobyqa", "Nelder_Mead")) {
     r <- fit_mixed_with(formula, data, bayes, optimizer)
-    if (!any(grepl("failed to converge", r$notes))) break
+    if (!any(grepl("optimiser stopped before it converged", r$notes, fixed = TRUE))) break
   }
   if (!is.null(r$fit) && lme4::isSingular(r$fit))
     r$notes <- c(r$notes, "singular fit: the participant variance is estimated at (or near) zero")
