@@ -65,7 +65,7 @@ figure_psychometric <- function(trials, fits, positive = "convex") {
     ggplot2::geom_point(data = pse, ggplot2::aes(x = 1000 * pse_m, y = 0.5), shape = 4, size = 3,
                         stroke = 1.2, inherit.aes = FALSE) +
     ggplot2::facet_wrap(~ condition) +
-    ggplot2::scale_size_area(max_size = 4) +
+    ggplot2::scale_size_area(max_size = 4, breaks = integer_breaks) +
     ggplot2::scale_y_continuous(limits = c(0, 1)) +
     ggplot2::labs(x = "shown sagitta (mm, + toward the viewer)", y = paste0("P(", positive, ")"),
                   title = "Psychometric functions", size = "trials",
@@ -94,10 +94,18 @@ figure_staircases <- function(trials) {
     theme_curvlab()
 }
 
+# Legend breaks for counts of trials: whole numbers only (a bin holds 4 or 5
+# trials, never 4.25).
+integer_breaks <- function(limits) {
+  b <- unique(round(pretty(limits, n = 4)))
+  b[b >= max(1, ceiling(limits[1])) & b <= floor(limits[2])]
+}
+
 # Table outline (lab x–z corners) for a session: its calibration JSON when
-# present, otherwise the default physical table of the tracking library.
+# present (every session stores one: the calibration, else the protocol's
+# [table] at the lab origin), otherwise a 1.0 m table, the protocols' default.
 table_outline <- function(calibration_json) {
-  t <- list(centre_x_m = 0, centre_z_m = 0, yaw_rad = 0, edge_m = 0.9)
+  t <- list(centre_x_m = 0, centre_z_m = 0, yaw_rad = 0, edge_m = 1.0)
   if (!is.null(calibration_json) && !is.na(calibration_json)) {
     cal <- tryCatch(jsonlite::fromJSON(calibration_json), error = function(e) list())
     for (k in names(t)) if (!is.null(cal[[k]])) t[[k]] <- as.numeric(cal[[k]])
@@ -108,7 +116,7 @@ table_outline <- function(calibration_json) {
   # The tracking library's rotate_y: x' = c x + s z, z' = -s x + c z.
   data.frame(x = t$centre_x_m + c_ * local[, 1] + s_ * local[, 2],
              z = t$centre_z_m - s_ * local[, 1] + c_ * local[, 2],
-             calibrated = !is.null(calibration_json) && !is.na(calibration_json))
+             calibrated = !is.null(calibration_json) && !is.na(calibration_json), edge_m = t$edge_m)
 }
 
 # Head and hand paths seen from above (lab x right, z toward the
@@ -136,7 +144,8 @@ figure_trajectories <- function(tracking, sessions) {
     ggplot2::scale_y_reverse() +
     ggplot2::labs(x = "lab x (m, right)", y = "lab z (m; up the page = forward, -z)", colour = "device",
                   title = "Head and hand paths over the table (top view)",
-                  subtitle = "green: physical table (calibration, else the default 0.9 m table); triangles: start") +
+                  subtitle = paste0("green: the physical table as each session stored it (its calibration, else the protocol's [table] at the lab origin; edge ",
+                                    paste(sprintf("%.2f m", sort(unique(tables$edge_m))), collapse = ", "), "); triangles: start")) +
     theme_curvlab()
 }
 
@@ -264,7 +273,7 @@ figure_adaptive <- function(trials, fits, hierarchical, positive = "convex", bin
       ggplot2::geom_point(data = pse, ggplot2::aes(x = 1000 * pse_m, y = 0.5), inherit.aes = FALSE,
                           shape = 23, size = 2.6, fill = "#c62828", colour = "black")
   plot + ggplot2::facet_wrap(~ condition, scales = "free_x") +
-    ggplot2::scale_size_area(max_size = 5) +
+    ggplot2::scale_size_area(max_size = 5, breaks = integer_breaks) +
     ggplot2::scale_y_continuous(limits = c(0, 1)) +
     ggplot2::labs(x = "shown sagitta (mm, + toward the viewer)", y = paste0("P(", positive, ")"),
                   title = "Psychometric functions of the adaptive blocks", size = "trials per bin", colour = "participant",

@@ -124,7 +124,7 @@ fit_psychometric <- function(x, y, k_options = 2L, lapse = c("free", "none"), la
                               type = "MPL_Jeffreys")
     else stats::glm(y ~ x, family = stats::binomial(link = "probit")),
     warning = function(w) {
-      if (!grepl("non-integer #successes", conditionMessage(w))) notes <<- c(notes, conditionMessage(w))
+      if (!grepl("non-integer #successes", conditionMessage(w))) notes <<- c(notes, plain_note(conditionMessage(w)))
       invokeRestart("muffleWarning")
     })
   a <- stats::coef(g)[1]; b <- stats::coef(g)[2]; V <- stats::vcov(g)

@@ -194,7 +194,7 @@ fit_psychometric_mixed <- function(formula, d, bayes, lambda = 0, k_options = 2L
          else with_notes(eval(bquote(blme::bglmer(formula, data = d, family = probit, control = control,
                                                   fixef.prior = normal(sd = c(.(hierarchical_prior_sd),
                                                                               .(hierarchical_prior_sd)))))))
-    if (!any(grepl("failed to converge", r$notes))) break
+    if (!any(grepl("optimiser stopped before it converged", r$notes, fixed = TRUE))) break
   }
   if (!is.null(r$fit) && lme4::isSingular(r$fit))
     r$notes <- c(r$notes, "singular fit: a participant variance is estimated at (or near) zero, or the slopes and intercepts are perfectly correlated")

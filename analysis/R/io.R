@@ -262,7 +262,9 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "(SELECT count(*) FROM trials t WHERE t.session_id = s.session_id",
     "   AND t.status = 'completed') AS trials_completed,",
     "(SELECT e.detail FROM events e WHERE e.session_id = s.session_id",
-    "   AND e.kind = 'observer' ORDER BY e.event_id LIMIT 1) AS observer",
+    "   AND e.kind = 'observer' ORDER BY e.event_id LIMIT 1) AS observer,",
+    "(SELECT json_extract(e.detail, '$.warnings') FROM events e WHERE e.session_id = s.session_id",
+    "   AND e.kind = 'session_start' ORDER BY e.event_id LIMIT 1) AS protocol_warnings",
     "FROM sessions s JOIN participants p ON p.participant_id = s.participant_id",
     "JOIN protocols pr ON pr.protocol_id = s.protocol_id ORDER BY s.session_id"))
 

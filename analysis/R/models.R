@@ -34,10 +34,25 @@ model_outcomes <- function(trials, positive = "convex") {
 prior_sd_intercept <- 10
 prior_sd_effects <- 2.5
 
-# Runs a fit, collecting its warnings and messages as notes.
+# What R's fitting functions warn, said for a reader of the report: the
+# known messages in plain words, any other kept as R wrote it.
+plain_note <- function(msg) {
+  msg <- trimws(msg)
+  known <- list(
+    c("non-integer #successes", "the answers were fitted as proportions with trial-count weights; the binomial fit treats them as counts (harmless)"),
+    c("fitted probabilities numerically 0 or 1", "some conditions were answered all one way (fitted probabilities of 0 or 1): their estimates are unbounded; see the separation check"),
+    c("algorithm did not converge", "the fit did not converge: its estimates are unreliable"),
+    c("failed to converge", "the mixed model's optimiser stopped before it converged: treat its estimates with caution"),
+    c("singular", "the participants' random effects have (near) zero variance: the mixed model reduces to its fixed effects"),
+    c("nearly unidentifiable", "the model is nearly unidentifiable: it has more terms than the data can separate"))
+  for (k in known) if (grepl(k[1], msg, fixed = TRUE)) return(k[2])
+  paste0("R: ", msg)
+}
+
+# Runs a fit, collecting its warnings and messages as notes (plain_note).
 with_notes <- function(expr) {
   notes <- character(0)
-  collect <- function(w) { notes <<- c(notes, trimws(conditionMessage(w))); invokeRestart(
+  collect <- function(w) { notes <<- c(notes, plain_note(conditionMessage(w))); invokeRestart(
     if (inherits(w, "warning")) "muffleWarning" else "muffleMessage") }
   fit <- tryCatch(withCallingHandlers(expr, warning = collect, message = collect),
                   error = function(e) {
@@ -55,7 +70,7 @@ fit_mixed <- function(formula, data, bayes) {
   # common near separation), Nelder-Mead from lme4's start.
   for (optimizer in c("bobyqa", "Nelder_Mead")) {
     r <- fit_mixed_with(formula, data, bayes, optimizer)
-    if (!any(grepl("failed to converge", r$notes))) break
+    if (!any(grepl("optimiser stopped before it converged", r$notes, fixed = TRUE))) break
   }
   if (!is.null(r$fit) && lme4::isSingular(r$fit))
     r$notes <- c(r$notes, "singular fit: the participant variance is estimated at (or near) zero")

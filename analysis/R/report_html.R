@@ -71,7 +71,9 @@ report_css <- paste(
   ".scroll{max-width:100%;overflow-x:auto}",
   "table.provenance{font-size:.8em}table.provenance td,table.provenance th{text-align:left;padding:.2em .35em}",
   "table.provenance td.wrap{min-width:5em;max-width:9em;overflow-wrap:anywhere}",
-  ".method{background:#eef5fb;border-left:4px solid #4a90c2;padding:.4em .8em;margin:.5em 0}")
+  ".method{background:#eef5fb;border-left:4px solid #4a90c2;padding:.4em .8em;margin:.5em 0}",
+  "ol.fit-notes{font-size:.85em;color:#444;max-width:60em}",
+  ".warning{background:#fdecea;border-left:4px solid #c62828;padding:.4em .8em;margin:.5em 0}")
 
 # Writes report.html (and the PNG/CSV files) into out_dir; returns its path.
 build_report <- function(data, out_dir, positive = "convex", lapse = "free", lapse_max = 0.1,
@@ -162,6 +164,7 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
            html_escape(utils::packageVersion("lme4")), ". ", nrow(analysed), " completed non-practice trials of ",
            nrow(trials), " planned, ", length(unique(analysed$participant)), " participant(s), ",
            nrow(s), " session(s).</p>"),
+    protocol_warnings_html(s),
     if (data$kind == "export") "<p class=\"note\">Read from an export directory: trials.csv carries no protocol name, software, renderer or seed; run the report on the database for full provenance.</p>" else "",
     "<h2>Sessions and provenance</h2>", provenance,
     "<h2>Designs</h2>",
@@ -178,7 +181,7 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
            "K the number of answer options, &lambda; the lapse rate (", if (lapse == "free") sprintf("fitted by maximum likelihood in [0, %g]", lapse_max) else "fixed at 0: probit GLM",
            "). Standard errors from the observed information. Fitted wherever the shown sagitta takes three or more values in a participant &times; condition cell (constant-stimulus levels or staircase steps pooled).</p>"),
     vapply(figures[grepl("psychometric", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
-    html_table(fits, "PSE (m) and slope (1/m) per participant and condition, 95% Wald intervals"),
+    fits_table_html(fits, "PSE (m) and slope (1/m) per participant and condition, 95% Wald intervals"),
     if (length(hierarchical)) adaptive_section_html(hierarchical, estimates, figures) else "",
     if (nrow(thresholds)) c("<h2>Staircases</h2>",
                             vapply(figures[grepl("staircases", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
@@ -223,8 +226,11 @@ adaptive_section_html <- function(hierarchical, estimates, figures) {
       paste0("<p class=\"note\"><strong>Separation detected</strong>: ", html_escape(separation_words(m$separation)), ".</p>")
     else "<p>No separation: the maximum-likelihood estimates exist.</p>"
     paste0("<h3>", html_escape(m$outcome), " — judged: ", html_escape(m$judged), "</h3>",
-           "<p><code>", html_escape(m$formula), "</code>, probit; z = (x &minus; ", sprintf("%.4g", m$centre_m),
-           " m) / ", sprintf("%.4g", m$scale_m), " m; ", m$n, " trials, ", m$participants, " participant(s).</p>",
+           "<p>Model: &Phi;<sup>&minus;1</sup>(P) = a<sub>c</sub> + b<sub>c</sub>&middot;z, an intercept a and a slope b ",
+           "for each condition c (probit), with z = (x &minus; ", sprintf("%.4g", m$centre_m),
+           " m) / ", sprintf("%.4g", m$scale_m), " m the shown sagitta standardised; ", m$n, " trials, ",
+           m$participants, " participant(s). <details><summary>as R writes it</summary><code>",
+           html_escape(m$formula), "</code></details></p>",
            sep,
            paste0("<p class=\"method\">", html_escape(c(m$method, m$methods)), "</p>", collapse = ""),
            paste0("<p class=\"note\">", html_escape(m$notes), "</p>", collapse = ""),
@@ -361,4 +367,33 @@ model_section_html <- function(m) {
          if (isTRUE(m$mixed_is_fixed)) "<p>One participant: no mixed model; the bias-reduced GLM above is the model.</p>"
          else html_table(m$coefficients, paste0("Mixed model: ", if (is.null(m$mixed_method)) "none" else m$mixed_method)),
          html_table(m$tests, "Tests against the model without these terms"))
+}
+
+# The warnings curvlab gave the protocol when its sessions started (the human
+# observer model's range of validity: stored with each session_start event),
+# repeated before any result, once each.
+protocol_warnings_html <- function(sessions) {
+  if (is.null(sessions$protocol_warnings)) return("")
+  texts <- unlist(lapply(stats::na.omit(sessions$protocol_warnings), function(j) {
+    w <- tryCatch(jsonlite::fromJSON(j), error = function(e) character())
+    as.character(w)
+  }))
+  texts <- unique(texts)
+  if (!length(texts)) return("")
+  paste0("<div class=\"warning\"><p><strong>Warnings about the protocol</strong> (given by curvlab when the sessions ",
+         "started; simulated participants answered with the model these concern):</p><ul>",
+         paste0("<li>", html_escape(texts), "</li>", collapse = ""), "</ul></div>")
+}
+
+# The per-participant fits with their notes below the table, numbered, so
+# that a long note neither makes its row hundreds of pixels tall nor pushes
+# the table off the page's right edge.
+fits_table_html <- function(fits, caption) {
+  if (!nrow(fits) || !"note" %in% names(fits)) return(html_table(fits, caption))
+  has <- !is.na(fits$note) & nzchar(fits$note)
+  shown <- fits
+  shown$note <- ifelse(has, paste0("note ", cumsum(has)), "")
+  notes <- paste0("<li>", html_escape(paste0(fits$participant[has], ", ", fits$condition[has], ": ", fits$note[has])),
+                  "</li>", collapse = "")
+  paste0(html_table(shown, caption), if (any(has)) paste0("<ol class=\"fit-notes\">", notes, "</ol>") else "")
 }

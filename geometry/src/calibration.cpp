@@ -112,7 +112,10 @@ std::variant<PhysicalTableFit, GeometryError> fit_square_table(std::span<const V
   PhysicalTableFit fit;
   fit.corners_used = n;
   fit.yaw_rad = std::atan2(b, a);
-  fit.edge_m = std::hypot(a, b) / q_norm2;
+  fit.fitted_edge_m = std::hypot(a, b) / q_norm2;
+  // With the edge known, the rigid fit keeps the same yaw (it maximises the
+  // same sum) at the known scale.
+  fit.edge_m = limits.known_edge_m ? *limits.known_edge_m : fit.fitted_edge_m;
   fit.centre_m = p_mean - rotate_about_y(q_mean * fit.edge_m, fit.yaw_rad);
   fit.height_m = height_sum / n;
 
@@ -129,15 +132,24 @@ std::variant<PhysicalTableFit, GeometryError> fit_square_table(std::span<const V
   }
   fit.rms_residual_m = std::sqrt(sum2 / n);
 
+  if (fit.fitted_edge_m < limits.min_edge_m || fit.fitted_edge_m > limits.max_edge_m)
+    return GeometryError{"the fitted table edge is " + mm(fit.fitted_edge_m) + ", outside " +
+                         mm(limits.min_edge_m) + " … " + mm(limits.max_edge_m) +
+                         " (were two touches made at the same corner?)"};
+  // A table of another size first: its touches would also miss the known
+  // corners, but the edge says why.
+  if (limits.known_edge_m && !(std::abs(fit.fitted_edge_m - *limits.known_edge_m) <= limits.max_edge_difference_m))
+    return GeometryError{"the touches span a table of edge " + mm(fit.fitted_edge_m) + ", the table as known has " +
+                         mm(*limits.known_edge_m) + " (the protocol's [table] edge_m or --edge-m): they differ by " +
+                         mm(std::abs(fit.fitted_edge_m - *limits.known_edge_m)) + ", more than the " +
+                         mm(limits.max_edge_difference_m) +
+                         " tolerance: measure the table and give its edge (--edge-m, or the protocol's [table] "
+                         "edge_m), or touch the corners again"};
   if (!(fit.max_residual_m <= limits.max_residual_m))
     return GeometryError{"the touches do not form a square table: " +
                          touch_name(fit.worst_corner) + " is " + mm(fit.max_residual_m) +
                          " from the fitted corner (limit " + mm(limits.max_residual_m) +
                          "); repeat the calibration and " + kOrderHint};
-  if (fit.edge_m < limits.min_edge_m || fit.edge_m > limits.max_edge_m)
-    return GeometryError{"the fitted table edge is " + mm(fit.edge_m) + ", outside " +
-                         mm(limits.min_edge_m) + " … " + mm(limits.max_edge_m) +
-                         " (were two touches made at the same corner?)"};
   return fit;
 }
 

@@ -10,7 +10,7 @@ src=$1
 curvlab=$2
 shot=${3:-}
 chromium_bin=$(command -v chromium || true)
-[ -n "$chromium_bin" ] || { echo "FAIL: chromium is not installed; run: bash scripts/deps.sh (Debian package chromium)"; exit 1; }
+[ -n "$chromium_bin" ] || { echo "FAIL: chromium is not installed; run: bash scripts/deps.sh all (Debian package chromium)"; exit 1; }
 command -v Rscript >/dev/null || { echo "Rscript not found (apt-get install r-base-core): skipped"; exit 77; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

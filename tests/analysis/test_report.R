@@ -147,5 +147,18 @@ if (nzchar(curvlab) && file.exists(curvlab)) {
   check(nrow(dm) > 0 && all(is.finite(dm$estimate) & is.finite(dm$ci_low) & is.finite(dm$ci_high)) && max(dm$se) < 50,
         sprintf("demo: %d estimates, all CIs finite, largest SE %.2f", nrow(dm), max(dm$se)))
   check(!grepl("Wald", paste(dm$method, collapse = " ")), "demo: no Wald statistic of a separated fit")
+  check(!grepl("Warnings about the protocol", demo_html, fixed = TRUE), "demo: no warning about its protocol")
+  cat("The stick PSE protocol: the report repeats the model-range warning\n")
+  pse_db <- scratch("pse.sqlite")
+  if (file.exists(pse_db)) file.remove(pse_db)
+  r <- run(curvlab, c("run", file.path(source_root, "protocols/stick_pse_staircase.toml"), "--participant", "P01",
+                      "--db", pse_db, "--render", "none", "--quiet"))
+  check(r$status == 0, "curvlab run protocols/stick_pse_staircase.toml --render none")
+  pse_out <- scratch("report_pse")
+  r <- run(rscript, c(report_r, "--db", pse_db, "--out", pse_out, "--quiet"))
+  pse_html <- paste(readLines(file.path(pse_out, "report.html"), warn = FALSE), collapse = "\n")
+  check(r$status == 0 && grepl("Warnings about the protocol", pse_html, fixed = TRUE) &&
+          grepl("block main: in 4 of its 4 binocular conditions the human observer model&#39;s predictions lie outside its range of validity|block main: in 4 of its 4 binocular conditions the human observer model's predictions lie outside its range of validity", pse_html),
+        "the report repeats the model-range warning curvlab gave when the session started")
 } else cat("(no curvlab binary given: export path not tested)\n")
 finish()

@@ -29,7 +29,7 @@ taplo="$src/tools/node_modules/.bin/taplo"
 if [ -x "$taplo" ]; then
   check '"$taplo" lint --no-auto-config --colors never $f >taplo.log 2>&1' "taplo validates it through the directive"
 else
-  echo "FAIL: taplo is not installed at $taplo; run: bash scripts/deps.sh"; fail=1
+  echo "FAIL: taplo is not installed at $taplo; run: bash scripts/deps.sh all"; fail=1
 fi
 
 # A fresh seed when none is given; two protocols get different seeds.

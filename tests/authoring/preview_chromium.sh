@@ -12,7 +12,7 @@ curvlab=$2
 protocol=$3
 chromium_bin=$(command -v chromium || true)
 if [ -z "$chromium_bin" ]; then
-  echo "FAIL: chromium is not installed; run: bash scripts/deps.sh (Debian package chromium)"
+  echo "FAIL: chromium is not installed; run: bash scripts/deps.sh all (Debian package chromium)"
   exit 1
 fi
 py=/usr/bin/python3

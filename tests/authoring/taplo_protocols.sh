@@ -9,7 +9,7 @@ src=$1
 curvlab=$2
 taplo="$src/tools/node_modules/.bin/taplo"
 if [ ! -x "$taplo" ]; then
-  echo "FAIL: taplo is not installed at $taplo; run: bash scripts/deps.sh (it installs tools/package-lock.json's @taplo/cli with npm)"
+  echo "FAIL: taplo is not installed at $taplo; run: bash scripts/deps.sh all (it installs tools/package-lock.json's @taplo/cli with npm)"
   exit 1
 fi
 work=$(mktemp -d)

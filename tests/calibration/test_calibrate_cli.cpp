@@ -57,11 +57,12 @@ TEST(CalibrateCli, RecoversEdgeCentreAndYawFromNoisyTouches) {
   const auto touches = simulate_corner_touches(truth(), 4, 0.001, 11);
   const auto csv = write_csv(dir / "touches.csv", touches);
   const auto out = dir / "table.json";
-  const auto r = run_cli("calibrate --touches " + csv + " --json --out " + out.string());
+  const auto r = run_cli("calibrate --touches " + csv + " --edge-m 1.05 --json --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto doc = json_of(r.out);
   ASSERT_TRUE(doc.is_object()) << r.out;
-  EXPECT_NEAR(doc["edge_m"].get<double>(), 1.05, 0.003);
+  EXPECT_EQ(doc["edge_m"].get<double>(), 1.05);  // the known edge, kept
+  EXPECT_NEAR(doc["fitted_edge_m"].get<double>(), 1.05, 0.003);  // and the touched one beside it
   EXPECT_NEAR(std::hypot(doc["centre_x_m"].get<double>() - 0.32, doc["centre_z_m"].get<double>() + 0.41), 0.0, 0.003);
   EXPECT_LT(angle_diff_rad(doc["yaw_rad"].get<double>(), 0.35), 0.3 * std::numbers::pi / 180.0);
   EXPECT_NEAR(doc["height_m"].get<double>(), 0.74, 0.003);
@@ -93,7 +94,7 @@ TEST(CalibrateCli, RecoversEdgeCentreAndYawFromNoisyTouches) {
 TEST(CalibrateCli, ThreeTouchesWithoutAHeaderAreEnough) {
   const auto dir = fresh_dir("three");
   const auto csv = write_csv(dir / "touches.csv", simulate_corner_touches(truth(), 3, 0.0005, 3), false);
-  const auto r = run_cli("calibrate --touches " + csv);
+  const auto r = run_cli("calibrate --touches " + csv + " --edge-m 1.05");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("corners_used:"), std::string::npos) << r.out;  // human-readable without --json
   EXPECT_NE(r.out.find("edge_m:"), std::string::npos) << r.out;
@@ -112,16 +113,20 @@ TEST(CalibrateCli, BadSetsExitTwoWithTheReason) {
   off[2].x += 0.03;  // one touch 3 cm off
   PhysicalTableFit huge = truth();
   huge.edge_m = 10.0;
+  PhysicalTableFit larger = truth();  // a table 30 mm larger than the one given
+  larger.edge_m = 1.08;
   const std::vector<Case> cases = {
       {"clockwise", {exact[0], exact[3], exact[2], exact[1]}, "clockwise"},
       {"off", off, "touch 3 (back-right)"},
       {"huge", simulate_corner_touches(huge, 4, 0.0, 1), "outside 200.0 mm … 5000.0 mm"},
+      {"larger", simulate_corner_touches(larger, 4, 0.0, 1),
+       "the touches span a table of edge 1080.0 mm, the table as known has 1050.0 mm"},
       {"two", {exact[0], exact[1]}, "3 or 4 touched corners, got 2"},
   };
   for (const auto& c : cases) {
     const auto out = dir / (c.name + ".json");
-    const auto r = run_cli("calibrate --touches " + write_csv(dir / (c.name + ".csv"), c.touches) + " --out " +
-                           out.string());
+    const auto r = run_cli("calibrate --touches " + write_csv(dir / (c.name + ".csv"), c.touches) +
+                           " --edge-m 1.05 --out " + out.string());
     EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.out;
     EXPECT_NE(r.out.find(c.reason), std::string::npos) << c.name << ": " << r.out;
     EXPECT_NE(r.out.find(c.name + ".csv: "), std::string::npos) << c.name << ": " << r.out;

@@ -244,4 +244,62 @@ TEST(Calibration, DegenerateInputIsRejected) {
   EXPECT_NE(error_of({{0, 0, 0}, {NAN, 0, 0}, {0, 0, 1}}).find("non-finite"), std::string::npos);
 }
 
+// Against the known table (its edge given): one corner touched 30 mm off,
+// in any direction and at any corner, is refused — a free fit would let the
+// edge absorb part of it and leave the touch near the 15 mm limit, accepted
+// or refused by chance.
+TEST(Calibration, OneCorner30mmOffInAnyDirectionIsRefusedAgainstTheKnownEdge) {
+  const Truth t{0.2, -0.1, 0.4, 1.0, 0.76};
+  CalibrationLimits known;
+  known.known_edge_m = 1.0;
+  int free_accepted = 0;
+  for (int corner = 0; corner < 4; ++corner) {
+    for (int k = 0; k < 16; ++k) {
+      // 14 directions in the floor plane and straight up and down.
+      Vec3 off{0.0};
+      if (k < 14) {
+        const double a = 2.0 * std::numbers::pi * k / 14.0;
+        off = {0.030 * std::cos(a), 0.0, 0.030 * std::sin(a)};
+      } else {
+        off = {0.0, k == 14 ? 0.030 : -0.030, 0.0};
+      }
+      std::vector<Vec3> touches;
+      for (int j = 0; j < 4; ++j) touches.push_back(true_corner(t, j));
+      touches[static_cast<std::size_t>(corner)] += off;
+      const auto fitted = fit_square_table(touches, known);
+      EXPECT_TRUE(std::holds_alternative<GeometryError>(fitted))
+          << "corner " << corner << " moved by (" << off.x << ", " << off.y << ", " << off.z << ") m was accepted";
+      if (std::holds_alternative<PhysicalTableFit>(fit_square_table(touches))) ++free_accepted;
+    }
+  }
+  // The free fit, by contrast, accepts some of these.
+  EXPECT_GT(free_accepted, 0);
+}
+
+// Exact touches of the known table: the fit keeps its edge and reports the
+// one the touches span beside it; a physical table 25 mm larger is refused
+// naming both edges and the tolerance.
+TEST(Calibration, TheKnownEdgeIsKeptAndADifferentTableIsRefused) {
+  CalibrationLimits known;
+  known.known_edge_m = 1.0;
+  std::mt19937_64 rng(7);
+  const auto good = fit_square_table(noisy_touches(Truth{0.1, 0.2, -0.3, 1.0, 0.76}, 4, 0.001, rng), known);
+  ASSERT_TRUE(std::holds_alternative<PhysicalTableFit>(good));
+  const auto& fit = std::get<PhysicalTableFit>(good);
+  EXPECT_EQ(fit.edge_m, 1.0);
+  EXPECT_NEAR(fit.fitted_edge_m, 1.0, 0.003);
+
+  std::vector<Vec3> larger;
+  for (int j = 0; j < 4; ++j) larger.push_back(true_corner(Truth{0.0, 0.0, 0.0, 1.025, 0.76}, j));
+  const auto refused = fit_square_table(larger, known);
+  ASSERT_TRUE(std::holds_alternative<GeometryError>(refused));
+  const std::string msg = std::get<GeometryError>(refused).message;
+  EXPECT_NE(msg.find("the touches span a table of edge 1025.0 mm, the table as known has 1000.0 mm"),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("more than the 10.0 mm tolerance"), std::string::npos) << msg;
+  // Without a known edge the same touches fit a 1.025 m table.
+  EXPECT_TRUE(std::holds_alternative<PhysicalTableFit>(fit_square_table(larger)));
+}
+
 }  // namespace

@@ -127,8 +127,10 @@ TEST(ValidateJson, AGoodFileKeepsItsSummary) {
   std::vector<std::string> keys;
   for (const auto& [k, v] : doc.items()) keys.push_back(k);
   EXPECT_EQ(keys, (std::vector<std::string>{"protocol", "version", "participant", "protocol_seed", "seed",
-                                            "block_order", "blocks", "total_trials", "estimated_duration_s", "ok"}));
+                                            "block_order", "blocks", "total_trials", "estimated_duration_s", "ok",
+                                            "warnings"}));
   EXPECT_EQ(doc["ok"], true);
+  EXPECT_TRUE(doc["warnings"].empty()) << doc["warnings"].dump(2);
   EXPECT_EQ(doc["total_trials"], 8);
 }
 

@@ -35,7 +35,8 @@ const std::string kDemo = std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.tom
 // One completed headless session of protocols/demo.toml per pseudonym.
 void run_sessions(const fs::path& db, const std::vector<std::string>& pseudonyms) {
   for (const auto& p : pseudonyms) {
-    const auto r = run_cli("run " + kDemo + " --participant " + p + " --db " + db.string() + " --render none --quiet");
+    const auto r = run_cli("run " + kDemo + " --participant " + p + " --db " + db.string() +
+                           " --render none --quiet --new-session");
     ASSERT_EQ(r.exit_code, 0) << p << ":\n" << r.out;
   }
 }
@@ -120,7 +121,7 @@ TEST(CliExportLabels, ProtocolNamesSharingALabelAreRefused) {
     copy.replace(at, 13, std::string("name = \"") + name + "\"");
     std::ofstream(dir / (std::string(name) + ".toml")) << copy;
     const auto r = run_cli("run " + (dir / (std::string(name) + ".toml")).string() + " --participant P01 --db " +
-                           (dir / "s.sqlite").string() + " --render none --quiet");
+                           (dir / "s.sqlite").string() + " --render none --quiet --new-session");
     ASSERT_EQ(r.exit_code, 0) << r.out;
   }
   const auto r = run_cli("export --db " + (dir / "s.sqlite").string() + " --out " + (dir / "out").string());

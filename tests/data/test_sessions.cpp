@@ -312,3 +312,58 @@ TEST(CliSessions, AnOldFilesSessionIsListedButNotOfferedForResume) {
       << text.out;
   EXPECT_EQ(curvlab::testing::read_file(db), before);
 }
+
+namespace {
+
+// The participant registry: a pseudonym run a second time into the same
+// file is refused (exit 2, nothing written) naming its earlier session,
+// until --new-session says it is meant; `curvlab participants` lists who
+// the file holds.
+TEST(Participants, ASecondRunOfAPseudonymAsksForNewSessionAndTheListShowsEveryone) {
+  const auto dir = fresh_dir("registry");
+  const std::string db = (dir / "study.sqlite").string();
+  const std::string run = "run " + demo + " --render none --quiet --db " + quoted(db) + " --participant ";
+  ASSERT_EQ(run_cli(run + "SIM01").exit_code, 0);
+  const auto again = run_cli(run + "SIM01");
+  EXPECT_EQ(again.exit_code, 2) << again.out;
+  EXPECT_NE(again.out.find("--participant SIM01 already has session 1 (demo 1.0.0, completed 8/8, started "),
+            std::string::npos)
+      << again.out;
+  EXPECT_NE(again.out.find("add --new-session"), std::string::npos) << again.out;
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM sessions"), "1") << "the refused run wrote a session";
+
+  ASSERT_EQ(run_cli(run + "SIM01 --new-session").exit_code, 0);
+  ASSERT_EQ(run_cli(run + "SIM02").exit_code, 0);
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM sessions"), "3");
+
+  const auto listed = run_cli("participants --db " + quoted(db));
+  ASSERT_EQ(listed.exit_code, 0) << listed.out;
+  EXPECT_NE(listed.out.find("SIM01               2          2"), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find("1 demo completed, 2 demo completed"), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find("SIM02               1          1"), std::string::npos) << listed.out;
+  const auto json = run_cli("participants --json --db " + quoted(db));
+  ASSERT_EQ(json.exit_code, 0) << json.out;
+  const Json doc = Json::parse(json.out);
+  ASSERT_EQ(doc.size(), 2u);
+  EXPECT_EQ(doc[0]["participant"], "SIM01");
+  EXPECT_EQ(doc[0]["sessions"].size(), 2u);
+  EXPECT_EQ(doc[1]["sessions"][0]["session_id"], 3);
+  fs::remove_all(dir);
+}
+
+// An unfinished earlier session is offered for resuming instead.
+TEST(Participants, AnUnfinishedEarlierSessionIsOfferedForResuming) {
+  const auto dir = fresh_dir("registry_unfinished");
+  const std::string db = (dir / "study.sqlite").string();
+  curvlab::testing::run_shell(std::string(CURVLAB_BIN) + " run " + demo + " --render none --db " + quoted(db) +
+                              " --participant SIM01 --progress json 2>/dev/null | head -2 >/dev/null");
+  ASSERT_EQ(scalar(db, "SELECT status FROM sessions"), "interrupted");
+  const auto again = run_cli("run " + demo + " --render none --db " + quoted(db) + " --participant SIM01");
+  EXPECT_EQ(again.exit_code, 2) << again.out;
+  EXPECT_NE(again.out.find("continue the unfinished one (curvlab resume --db " + db + " --session 1)"),
+            std::string::npos)
+      << again.out;
+  fs::remove_all(dir);
+}
+
+}  // namespace

@@ -46,7 +46,7 @@ TEST(KeyScript, BadLinesNameFileLineAndWhatWasExpected) {
     auto parsed = parse_key_script(bad, "keys.txt");
     ASSERT_FALSE(parsed) << bad;
     const auto& message = parsed.error().message;
-    EXPECT_EQ(message.rfind("keys.txt:2: expected `KEY [DELAY_MS]`", 0), 0u) << message;
+    EXPECT_EQ(message.rfind("keys.txt:2: expected `KEY [PHASE+DELAY_MS | DELAY_MS]`", 0), 0u) << message;
   }
   auto missing = load_key_script("/nonexistent/keys.txt");
   ASSERT_FALSE(missing);
@@ -71,7 +71,7 @@ TEST(KeyScript, HandLinesPlaceAHand) {
                           "space\nhand right 0 1 40\n", "space\nhand right 0 1 0 10 3\n"}) {
     auto refused = parse_key_script(bad, "keys.txt");
     ASSERT_FALSE(refused) << bad;
-    EXPECT_EQ(refused.error().message.rfind("keys.txt:2: expected `hand left|right X Y Z [DELAY_MS]`", 0), 0u)
+    EXPECT_EQ(refused.error().message.rfind("keys.txt:2: expected `hand left|right X Y Z [PHASE+DELAY_MS | DELAY_MS]`", 0), 0u)
         << refused.error().message;
   }
 }
@@ -97,27 +97,175 @@ TEST(KeyScript, UnprintableBytesInAMessageAreEscaped) {
 }
 
 TEST(KeyScript, EachKeyWaitsForTheNextWaitAndItsDelay) {
-  KeyScriptPlayer player({{"space", 100, 1, std::nullopt, false}, {"2", 50, 2, std::nullopt, false}});
+  using curvlab::harness::io::Phase;
+  KeyScriptPlayer player({{"space", 100, 1, std::nullopt, false, std::nullopt}, {"2", 50, 2, std::nullopt, false, std::nullopt}});
   constexpr std::int64_t ms = 1'000'000;
-  EXPECT_FALSE(player.due(0));            // nothing armed yet
-  player.on_frame(false, 0);              // fixation: not waiting
+  EXPECT_FALSE(player.due(0));                       // nothing armed yet
+  player.on_frame(Phase::fixation, false, 0);        // fixation: not waiting
   EXPECT_FALSE(player.due(1000 * ms));
-  player.on_frame(true, 1000 * ms);       // instructions wait: armed at 1000 ms
-  player.on_frame(true, 1050 * ms);       // still the same wait: not re-armed
+  player.on_frame(Phase::instructions, true, 1000 * ms);  // a page waits: armed at 1000 ms
+  player.on_frame(Phase::instructions, true, 1050 * ms);  // still the same wait: not re-armed
   EXPECT_FALSE(player.due(1000 * ms + 99));
   auto first = player.due(1000 * ms + 100);
   ASSERT_TRUE(first);
   EXPECT_EQ(first->name, "space");
-  EXPECT_FALSE(player.due(5000 * ms));    // the next key waits for a new wait
-  player.on_frame(false, 5000 * ms);
-  player.on_frame(true, 6000 * ms);       // the response window
+  // The frame that took the key still shows the page: it arms nothing.
+  player.on_frame(Phase::instructions, true, 1100 * ms);
+  EXPECT_FALSE(player.due(5000 * ms));
+  player.on_frame(Phase::fixation, false, 5000 * ms);
+  player.on_frame(Phase::stimulus, true, 6000 * ms);  // the trial waits for an answer
   EXPECT_FALSE(player.due(6000 * ms + 49));
   auto second = player.due(6000 * ms + 50);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->name, "2");
   EXPECT_TRUE(player.finished());
-  player.on_frame(true, 7000 * ms);
+  player.on_frame(Phase::response, true, 7000 * ms);
   EXPECT_FALSE(player.due(9000 * ms));
+}
+
+// `2 response+150` after the last instruction page: the answer waits for the
+// response window itself, however long fixation and stimulus last, and
+// never lands in the fixation that follows the page.
+TEST(KeyScript, APhaseKeyCountsFromThatPhasesStart) {
+  using curvlab::harness::io::Phase;
+  auto parsed = parse_key_script("space instructions+300\n2 response+150\n2 response+150\n", "keys.txt");
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  ASSERT_EQ(parsed.value().size(), 3u);
+  EXPECT_EQ(parsed.value()[1].phase, Phase::response);
+  EXPECT_EQ(parsed.value()[1].delay_ns, 150'000'000);
+  KeyScriptPlayer player(parsed.value());
+  constexpr std::int64_t ms = 1'000'000;
+  player.on_frame(Phase::instructions, true, 0);
+  ASSERT_TRUE(player.due(300 * ms));
+  player.on_frame(Phase::instructions, true, 300 * ms);  // the frame that took it
+  for (std::int64_t t = 311; t < 811; t += 11) {         // 500 ms of fixation
+    player.on_frame(Phase::fixation, false, t * ms);
+    EXPECT_FALSE(player.due(t * ms)) << "pressed during fixation at " << t << " ms";
+  }
+  for (std::int64_t t = 811; t < 3811; t += 11) {        // 3 s of stimulus, which also takes answers
+    player.on_frame(Phase::stimulus, true, t * ms);
+    EXPECT_FALSE(player.due(t * ms)) << "pressed during the stimulus at " << t << " ms";
+  }
+  player.on_frame(Phase::response, true, 3811 * ms);
+  EXPECT_FALSE(player.due(3960 * ms));
+  auto answer = player.due(3961 * ms);
+  ASSERT_TRUE(answer);
+  EXPECT_EQ(answer->name, "2");
+  EXPECT_EQ(answer->line, 2);
+  player.on_frame(Phase::response, true, 3972 * ms);  // took the answer
+  player.on_frame(Phase::iti, false, 3983 * ms);
+  EXPECT_FALSE(player.due(9000 * ms));  // the next answer waits for the next response window
+  player.on_frame(Phase::response, true, 9000 * ms);
+  EXPECT_TRUE(player.due(9150 * ms));
+  EXPECT_TRUE(player.finished());
+  EXPECT_EQ(player.last_line(), 3);
+}
+
+// A break page that must stay up 10 s: the page key's time counts from when
+// the page accepts a key, not from when it appeared.
+TEST(KeyScript, APageKeyCountsFromWhenThePageAcceptsKeys) {
+  using curvlab::harness::io::Phase;
+  KeyScriptPlayer player(parse_key_script("space break+300\n", "keys.txt").value());
+  constexpr std::int64_t ms = 1'000'000;
+  player.on_frame(Phase::break_page, false, 0);
+  player.on_frame(Phase::break_page, false, 9990 * ms);
+  EXPECT_FALSE(player.due(9990 * ms));
+  player.on_frame(Phase::break_page, true, 10000 * ms);
+  EXPECT_FALSE(player.due(10299 * ms));
+  EXPECT_TRUE(player.due(10300 * ms));
+}
+
+// Standing rules: every instruction page and every response window gets its
+// key, however many there are, and a line in order still comes first.
+TEST(KeyScript, ARepeatLinePressesAtEveryStartOfItsPhase) {
+  using curvlab::harness::io::Phase;
+  auto parsed = parse_key_script("space instructions+300 repeat\n2 response+150 repeat\n", "keys.txt");
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  KeyScriptPlayer player(parsed.value());
+  constexpr std::int64_t ms = 1'000'000;
+  std::int64_t t = 0;
+  int spaces = 0;
+  int answers = 0;
+  // Two pages, then three trials; each frame 10 ms.
+  const auto run = [&](Phase phase, bool waiting, int frames) {
+    for (int i = 0; i < frames; ++i, t += 10 * ms) {
+      if (auto k = player.due(t)) (k->name == "space" ? spaces : answers) += 1;
+      player.on_frame(phase, waiting, t);
+    }
+  };
+  // A page turns on the frame that takes its key (the 31st), as an answer
+  // ends the response window on the frame that takes it (the 16th).
+  run(Phase::instructions, true, 31);
+  EXPECT_EQ(spaces, 1);
+  run(Phase::instructions, true, 31);
+  EXPECT_EQ(spaces, 2);
+  for (int trial = 0; trial < 3; ++trial) {
+    run(Phase::fixation, false, 50);
+    run(Phase::stimulus, true, 100);
+    run(Phase::response, true, 16);
+    run(Phase::iti, false, 50);
+  }
+  EXPECT_EQ(spaces, 2);
+  EXPECT_EQ(answers, 3);
+  EXPECT_TRUE(player.finished());
+  EXPECT_FALSE(parse_key_script("2 150 repeat\n", "keys.txt"));
+  EXPECT_FALSE(parse_key_script("2 response+150 again\n", "keys.txt"));
+}
+
+// A script that stopped answering: a page that waits with the script used
+// up ends the pilot after a stated wait, unless someone types.
+TEST(KeyScript, AUsedUpScriptRunsOutAtAWaitingPage) {
+  using curvlab::harness::io::Phase;
+  KeyScriptPlayer player(parse_key_script("space\n", "keys.txt").value());
+  constexpr std::int64_t ms = 1'000'000;
+  player.on_frame(Phase::instructions, true, 0);
+  ASSERT_TRUE(player.due(300 * ms));
+  player.on_frame(Phase::instructions, true, 310 * ms);
+  player.on_frame(Phase::break_page, true, 320 * ms);
+  EXPECT_FALSE(player.ran_out(320 * ms + KeyScriptPlayer::kRunOutNs - 1));
+  player.typed();
+  player.on_frame(Phase::break_page, true, 400 * ms);
+  EXPECT_FALSE(player.ran_out(320 * ms + KeyScriptPlayer::kRunOutNs));
+  EXPECT_TRUE(player.ran_out(400 * ms + KeyScriptPlayer::kRunOutNs));
+  EXPECT_EQ(player.ran_out_message("keys.txt", Phase::break_page),
+            "the key script keys.txt ran out (its last key, line 1, was pressed) and the break page waited 5 s for a "
+            "key; the session ends here, resumable");
+}
+
+TEST(KeyScript, ALineThatWouldLandInTheWrongPhaseIsRefusedWithItsLine) {
+  KeyScriptLimits limits;
+  limits.protocol = "study.toml";
+  limits.fixation_ms = 500;
+  limits.stimulus_ms = 3000;
+  limits.response_ms = 4000;
+  limits.iti_ms = 500;
+  limits.answer_keys = {"1", "2", "3"};
+  const auto check = [&limits](const std::string& text) {
+    auto keys = parse_key_script(text, "keys.txt");
+    EXPECT_TRUE(keys) << text;
+    return check_key_script(keys.value(), "keys.txt", limits);
+  };
+  EXPECT_FALSE(check("space instructions+300\n2 response+150\n3 stimulus+2999\nspace break+100\n2 150\n"));
+  const auto late = check("space\n2 response+150\n2 response+4000\n");
+  ASSERT_TRUE(late);
+  EXPECT_EQ(late->message,
+            "keys.txt:3: '2 response+4000' would land in the iti, not the response (it lasts 4000 ms in study.toml); "
+            "expected a delay below 4000 ms");
+  const auto early = check("2 fixation+100\n");
+  ASSERT_TRUE(early);
+  EXPECT_EQ(early->message.rfind("keys.txt:1: '2' answers in study.toml, and an answer during fixation is an early "
+                                 "input the trial drops",
+                                 0),
+            0u)
+      << early->message;
+  const auto bare = check("space\n\n1 7000\n");
+  ASSERT_TRUE(bare);
+  EXPECT_EQ(bare->message.rfind("keys.txt:3: '1 7000 ms' would answer after the response window closes", 0), 0u)
+      << bare->message;
+  auto unknown = parse_key_script("2 respons+150\n", "keys.txt");
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.error().message.rfind("keys.txt:1: expected `KEY [PHASE+DELAY_MS | DELAY_MS]` with WHEN a phase", 0), 0u)
+      << unknown.error().message;
 }
 
 TEST(PilotBody, StartsAtTheTableLookingAtItsCentre) {

@@ -41,6 +41,13 @@ std::string touch_lines(const std::vector<Vec3>& touches) {
   return out.str();
 }
 
+// The limits of a fit that knows the table's edge, as calibrate and run give it.
+CalibrationLimits known_edge(double edge_m) {
+  CalibrationLimits l;
+  l.known_edge_m = edge_m;
+  return l;
+}
+
 void expect_same_table(const nlohmann::json& doc, const PhysicalTableFit& fit, const std::string& what) {
   SCOPED_TRACE(what);
   EXPECT_NEAR(doc["centre_x_m"].get<double>(), fit.centre_m.x, 1e-9);
@@ -82,14 +89,14 @@ TEST(LabCalibration, DesktopTouchesAreFittedAfterARefusedSetIsRedone) {
   }
   const auto out = dir / "table.json";
   const auto shots = dir / "shots";
-  const auto r = run_cli("calibrate --backend desktop --software --window-size 320x320 --key-script " +
+  const auto r = run_cli("calibrate --backend desktop --edge-m 0.94 --software --window-size 320x320 --key-script " +
                          (dir / "keys.txt").string() + " --out " + out.string() + " --screenshot " +
                          shots.string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("calibration: fit refused: the touches do not form a square table: touch 2 (front-right)"),
             std::string::npos)
       << r.out;
-  const auto expected = std::get<PhysicalTableFit>(fit_square_table(good));
+  const auto expected = std::get<PhysicalTableFit>(fit_square_table(good, known_edge(0.94)));
   std::ifstream file(out);
   const auto doc = nlohmann::json::parse(file);
   expect_same_table(doc, expected, "--out");
@@ -116,8 +123,13 @@ TEST(LabCalibration, AProtocolThatCalibratesAtStartRunsOnTheFittedTable) {
   std::ifstream demo(std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml");
   std::ostringstream text;
   text << demo.rdbuf() << "\n[calibration]\nat_start = true\ntip_offset_m = [0.0, -0.02, -0.05]\n";
+  // The lab's table, which the virtual one's edges equal.
+  std::string protocol_text = text.str();
+  const auto edge = protocol_text.find("edge_m = 1.0\n");
+  ASSERT_NE(edge, std::string::npos);
+  protocol_text.replace(edge, 13, "edge_m = 0.94\n");
   const auto protocol = dir / "calibrated.toml";
-  std::ofstream(protocol) << text.str();
+  std::ofstream(protocol) << protocol_text;
   // The pilot body starts facing −z (toward the table centre), so its
   // hand's grip frame is the lab's: the tip is the grip plus the offset.
   const auto touches = simulate_corner_touches(truth(), 4, 0.001, 9);
@@ -138,7 +150,8 @@ TEST(LabCalibration, AProtocolThatCalibratesAtStartRunsOnTheFittedTable) {
   const auto rows = curvlab::testing::query(db.string(), "SELECT table_calibration FROM sessions");
   ASSERT_EQ(rows.size(), 1u);
   const auto stored = nlohmann::json::parse(rows[0][0]);
-  expect_same_table(stored, std::get<PhysicalTableFit>(fit_square_table(touches)), "sessions.table_calibration");
+  expect_same_table(stored, std::get<PhysicalTableFit>(fit_square_table(touches, known_edge(0.94))),
+                    "sessions.table_calibration");
   fs::remove_all(dir);
 }
 

@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace {
 
@@ -145,6 +146,104 @@ TEST(LabRun, ReplayReproducesTheDesktopOnsetFrame) {
       EXPECT_EQ(diff.differing_pixels, 0) << name << ": largest channel difference " << diff.max_channel_diff;
     }
   }
+  std::filesystem::remove_all(dir);
+}
+
+// The key-script example of docs/lab.md, "Key scripts", as the docs show it.
+std::string docs_key_script() {
+  std::ifstream in(std::string(CURVLAB_SOURCE_DIR) + "/docs/lab.md");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string doc = text.str();
+  const auto section = doc.find("### Key scripts");
+  if (section == std::string::npos) return {};
+  const auto open = doc.find("```\n", section);
+  const auto close = doc.find("```", open + 4);
+  if (open == std::string::npos || close == std::string::npos) return {};
+  return doc.substr(open + 4, close - open - 4);
+}
+
+// A single value of a query on a database file, as text ("" when none).
+std::string query_text(const std::string& db_path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  std::string value;
+  if (sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) == SQLITE_OK && sqlite3_step(stmt) == SQLITE_ROW &&
+        sqlite3_column_text(stmt, 0) != nullptr)
+      value = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0));
+    sqlite3_finalize(stmt);
+  }
+  sqlite3_close(db);
+  return value;
+}
+
+// The docs' example pilots the whole proposed study (168 trials, breaks that
+// must stay up 10 s, a 500 ms fixation before every stimulus): every trial
+// answered by the script, none of its keys dropped as early. Headless in
+// simulated time, so the 13-minute session takes seconds.
+TEST(LabRun, TheDocsKeyScriptPilotsTheWholeProposedStudy) {
+  const auto dir = fresh_dir("docs_script");
+  const std::string script = docs_key_script();
+  ASSERT_NE(script.find("response+150"), std::string::npos) << "docs/lab.md's key script example not found:\n"
+                                                             << script;
+  std::ofstream(dir / "keys.txt") << script;
+  const auto db = dir / "pilot.db";
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/proposed_study.toml --participant PILOT1 "
+                         "--db " + db.string() + " --render none --key-script " + (dir / "keys.txt").string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto doc = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  EXPECT_EQ(doc["status"], "completed");
+  EXPECT_EQ(doc["trials_planned"], 168);
+  EXPECT_EQ(doc["trials_completed"], 168);
+  EXPECT_EQ(query_text(db.string(), "SELECT count(*) FROM trials WHERE response = 'straight' AND "
+                                    "response_device = 'script'"),
+            "168");
+  EXPECT_EQ(query_text(db.string(), "SELECT count(*) FROM events WHERE kind = 'early_input'"), "0");
+  std::filesystem::remove_all(dir);
+}
+
+// A line that would land in the wrong phase is refused at load with its file
+// and line, before anything is written.
+TEST(LabRun, AKeyScriptLineInTheWrongPhaseIsRefusedWithFileAndLine) {
+  const auto dir = fresh_dir("wrong_phase");
+  std::ofstream(dir / "keys.txt") << "space instructions+300 repeat\n2 response+150\n2 response+4000\n";
+  const auto db = dir / "pilot.db";
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/proposed_study.toml --participant PILOT1 "
+                         "--db " + db.string() + " --render none --key-script " + (dir / "keys.txt").string());
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find((dir / "keys.txt").string() +
+                       ":3: '2 response+4000' would land in the iti, not the response (it lasts 4000 ms in "),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+  std::filesystem::remove_all(dir);
+}
+
+// A script that stops answering ends the session with a message at the first
+// page left waiting, resumable, instead of waiting forever; a scripted
+// Escape ends it as the key does.
+TEST(LabRun, AKeyScriptThatStopsOrEscapesEndsTheSessionResumable) {
+  const auto dir = fresh_dir("ran_out");
+  std::ofstream(dir / "short.txt") << "space instructions\nspace instructions\nspace instructions\n";
+  const auto db = dir / "pilot.db";
+  const auto r = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/proposed_study.toml --participant PILOT1 "
+                         "--db " + db.string() + " --render none --key-script " + (dir / "short.txt").string());
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("the key script " + (dir / "short.txt").string() +
+                       " ran out (its last key, line 3, was pressed) and the instructions page waited 5 s for a key"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("curvlab resume --db " + db.string() + " --session 1"), std::string::npos) << r.out;
+  EXPECT_EQ(query_text(db.string(), "SELECT status FROM sessions WHERE session_id = 1"), "interrupted");
+
+  std::ofstream(dir / "escape.txt") << "space instructions+300 repeat\n2 response+150\nescape response+100\n";
+  const auto r2 = run_cli(std::string("run ") + CURVLAB_SOURCE_DIR + "/protocols/proposed_study.toml --participant "
+                          "PILOT2 --db " + db.string() + " --render none --key-script " + (dir / "escape.txt").string());
+  EXPECT_EQ(r2.exit_code, 1) << r2.out;
+  EXPECT_NE(r2.out.find("curvlab resume --db " + db.string() + " --session 2"), std::string::npos) << r2.out;
+  EXPECT_EQ(query_text(db.string(), "SELECT status FROM sessions WHERE session_id = 2"), "interrupted");
+  EXPECT_EQ(query_text(db.string(), "SELECT count(*) FROM trials WHERE session_id = 2 AND status = 'completed'"), "1");
   std::filesystem::remove_all(dir);
 }
 

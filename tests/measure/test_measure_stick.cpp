@@ -182,3 +182,20 @@ TEST(MeasureStick, RefusesWhatItCannotRead) {
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("measure"), std::string::npos) << r.out;
 }
+
+// Rings outside an eye's view: the refusal says which eye lost which ring,
+// from the recorded eye geometry, instead of a bare count.
+TEST(MeasureStick, SaysWhichEyeLostWhichRing) {
+  const auto dir = (fresh_dir("measure") / "narrow").string();
+  ASSERT_EQ(run_cli("render --space E3 --view tourist --scene stick --size 384x384 --fov-deg 50 --msaa 1 "
+                    "--stick-marks rings --out " + dir)
+                .exit_code,
+            0);
+  const auto r = run_cli("measure stick --from " + dir);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("out of view: the left eye loses ring 1 at the butt end (26° left; the view reaches 25°), "
+                       "ring 5 at the tip (30° right; the view reaches 25°); the right eye loses ring 1 at the butt "
+                       "end (30° left"),
+            std::string::npos)
+      << r.out;
+}

@@ -4,6 +4,7 @@
 #include "session_db.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -234,4 +235,95 @@ TEST(Resume, LostTrackingRepeatsTheTrial) {
   EXPECT_GT(std::stoi(query(db, "SELECT COUNT(*) FROM tracking_samples WHERE device = 'head' "
                                 "AND position_valid = 0")[0][0]),
             20);
+}
+
+namespace {
+
+// Starts `run …` with its progress read as JSON lines by `head -N`: when
+// head exits after N trials, the session ends interrupted, resumable.
+void run_interrupted_after(const std::string& args, int trials) {
+  curvlab::testing::run_shell(std::string(CURVLAB_BIN) + " run " + args + " --progress json 2>/dev/null | head -" +
+                              std::to_string(trials) + " >/dev/null");
+}
+
+nlohmann::json summary_of(const std::string& out) {
+  const auto start = out.find('{');
+  return start == std::string::npos ? nlohmann::json() : nlohmann::json::parse(out.substr(start), nullptr, false);
+}
+
+}  // namespace
+
+// `resume` continues as the session ran: an interrupted --render none
+// session resumes without drawing (no Vulkan device; nothing drawn).
+TEST(Resume, AnInterruptedRenderNoneSessionResumesWithoutRendering) {
+  const auto dir = fresh_dir("resume_render_none");
+  const std::string db = (dir / "s.sqlite").string();
+  run_interrupted_after(kProtocols + "demo.toml --participant P01 --render none --db " + db, 2);
+  ASSERT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  const auto r = run_cli("resume --db " + db + " --session 1 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto doc = summary_of(r.out);
+  EXPECT_EQ(doc["status"], "completed") << r.out;
+  EXPECT_EQ(doc["msaa"], 0) << "the resumed session drew frames: " << r.out;
+  EXPECT_EQ(query(db, "SELECT json_extract(detail, '$.run_options.render') FROM events WHERE kind = 'resume'")[0][0],
+            "none");
+  std::filesystem::remove_all(dir);
+}
+
+// Every stored run option is the default of `resume` (render, pace, images,
+// export, observer), and one given on its command line wins and is recorded.
+TEST(Resume, EveryStoredRunOptionIsResumesDefaultAndTheCommandLineOverrides) {
+  const auto dir = fresh_dir("resume_options");
+  const std::string db = (dir / "s.sqlite").string();
+  const std::string images = (dir / "onsets").string();
+  const std::string exported = (dir / "export").string();
+  run_interrupted_after(kProtocols + "demo.toml --participant P01 --render onset --pace fast --observer random --images " +
+                            images + " --export " + exported + " --db " + db,
+                        2);
+  ASSERT_EQ(query(db, "SELECT status FROM sessions")[0][0], "interrupted");
+  const auto stored = query(db, "SELECT json_extract(detail, '$.run_options.render'), "
+                                "json_extract(detail, '$.run_options.pace'), json_extract(detail, '$.run_options.images'), "
+                                "json_extract(detail, '$.run_options.export'), "
+                                "json_extract(detail, '$.run_options.observer') FROM events WHERE kind = 'session_start'");
+  ASSERT_EQ(stored.size(), 1u);
+  EXPECT_EQ(stored[0], (std::vector<std::string>{"onset", "fast", images, exported, "random"}));
+  const auto done_before = std::stoi(query(db, "SELECT count(*) FROM trials WHERE status = 'completed'")[0][0]);
+  ASSERT_GE(done_before, 1);
+  ASSERT_LT(done_before, 8);
+
+  const auto r = run_cli("resume --db " + db + " --session 1 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto doc = summary_of(r.out);
+  EXPECT_EQ(doc["status"], "completed");
+  // render onset and images: every trial's onset is in the folder, the
+  // resumed ones included; export: the files are written where the run said.
+  EXPECT_EQ(doc["images_dir"], images) << r.out;
+  EXPECT_GT(doc["msaa"].get<int>(), 0) << r.out;
+  int onsets = 0;
+  for (const auto& f : std::filesystem::directory_iterator(images))
+    if (f.path().filename().string().find("_left.png") != std::string::npos) ++onsets;
+  EXPECT_EQ(onsets, 8);
+  EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(exported) / "csv")) << r.out;
+  EXPECT_FALSE(doc["exports"].empty()) << r.out;
+  // The observer kept answering: the random observer's answers, all trials.
+  EXPECT_EQ(query(db, "SELECT count(*) FROM trials WHERE status = 'completed' AND response_device = 'observer'")[0][0],
+            "8");
+  const auto resumed = query(db, "SELECT json_extract(detail, '$.run_options.render'), "
+                                 "json_extract(detail, '$.run_options.pace'), json_extract(detail, '$.run_options.images'), "
+                                 "json_extract(detail, '$.run_options.export'), "
+                                 "json_extract(detail, '$.run_options.observer') FROM events WHERE kind = 'resume'");
+  ASSERT_EQ(resumed.size(), 1u);
+  EXPECT_EQ(resumed[0], stored[0]);
+
+  // An option on resume's command line overrides the stored one and is
+  // recorded with that resume.
+  const std::string db2 = (dir / "s2.sqlite").string();
+  run_interrupted_after(kProtocols + "demo.toml --participant P02 --render onset --db " + db2, 2);
+  ASSERT_EQ(query(db2, "SELECT status FROM sessions")[0][0], "interrupted");
+  const auto r2 = run_cli("resume --db " + db2 + " --session 1 --render none --json");
+  ASSERT_EQ(r2.exit_code, 0) << r2.out;
+  EXPECT_EQ(summary_of(r2.out)["msaa"], 0) << r2.out;
+  EXPECT_EQ(query(db2, "SELECT json_extract(detail, '$.run_options.render') FROM events WHERE kind = 'resume'")[0][0],
+            "none");
+  std::filesystem::remove_all(dir);
 }

@@ -9,7 +9,7 @@ src=$1
 curvlab=$2
 validator="$src/tools/node_modules/.bin/bids-validator"
 if [ ! -x "$validator" ]; then
-  echo "FAIL: bids-validator is not installed at $validator; run: bash scripts/deps.sh (npm ci in tools/)"
+  echo "FAIL: bids-validator is not installed at $validator; run: bash scripts/deps.sh all (npm ci in tools/)"
   exit 1
 fi
 work=$(mktemp -d)

@@ -82,7 +82,8 @@ TEST(XrCalibration, ControllerTouchesAreFittedAfterARefusedSetIsRedone) {
   RuntimeEnv env({{"CURVLAB_TEST_XR_HAND", hand},
                   {"CURVLAB_TEST_XR_PRESS", press},
                   {"CURVLAB_TEST_XR_LOG", log_path.string()}});
-  const auto r = run_cli("calibrate --backend xr --tip-offset-m 0,-0.02,-0.06 --out " + out.string() + " --json");
+  const auto r = run_cli("calibrate --backend xr --edge-m 0.98 --tip-offset-m 0,-0.02,-0.06 --out " + out.string() +
+                         " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("calibration: fit refused: the touches do not form a square table: touch 3 (back-right)"),
             std::string::npos)

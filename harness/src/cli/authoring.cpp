@@ -4,6 +4,7 @@
 // every condition's stimulus; runner/preview.hpp).
 #include "common.hpp"
 
+#include "curvlab/harness/runner/stimulus_checks.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/protocol/schema.hpp"
 #include "curvlab/harness/runner/preview.hpp"
@@ -196,12 +197,13 @@ void run_new(const NewArgs& a) {
 
 struct PreviewArgs {
   std::string file, out, size;
-  std::int64_t participant = 1;
+  std::string participant = "1";
+  std::optional<std::uint64_t> participant_number;
   bool software = false;
 };
 
 void run_preview(const PreviewArgs& a) {
-  if (a.participant < 1) throw UsageError("--participant must be a participant number ≥ 1");
+  const std::uint64_t participant = participant_number(a.participant, a.participant_number);
   std::optional<std::pair<std::uint32_t, std::uint32_t>> size;
   if (!a.size.empty()) size = parse_size(a.size, "--size");
   std::string text;
@@ -209,7 +211,7 @@ void run_preview(const PreviewArgs& a) {
   harness::runner::PreviewRequest rq;
   rq.protocol_path = a.file;
   rq.protocol_text = text;
-  rq.participant = static_cast<std::uint64_t>(a.participant);
+  rq.participant = participant;
   rq.out_dir = a.out;
   rq.size = size;
   rq.software = a.software;
@@ -222,6 +224,7 @@ void run_preview(const PreviewArgs& a) {
               << (what.empty() ? "" : "  " + what) << (tty ? "\033[K" : "\n") << std::flush;
     if (tty && done == total) std::cerr << '\n';
   };
+  for (const auto& w : harness::runner::protocol_warnings(p)) std::cerr << "curvlab: warning: " << w.message << '\n';
   auto result = harness::runner::write_preview(p, rq);
   if (!result) raise(result.error());
   const auto& r = result.value();
@@ -256,8 +259,14 @@ void add_authoring_commands(CLI::App& app) {
   preview->add_option("protocol", pa->file, "protocol (TOML)")->required();
   preview->add_option("--out", pa->out, "folder for index.html and its images (nothing is written elsewhere)")
       ->required();
-  preview->add_option("--participant", pa->participant, "participant number (≥ 1): block order and seed")
+  preview->add_option("--participant", pa->participant,
+                      "participant pseudonym or number, as run takes it (P07 and 7 give participant number 7): "
+                      "block order and seed")
       ->default_str("1");
+  preview->add_option_function<std::uint64_t>("--participant-number",
+                                              [pa](std::uint64_t n) { pa->participant_number = n; },
+                                              "counterbalancing row and seed (default: the pseudonym's trailing "
+                                              "number, else 1)");
   preview->add_option("--size", pa->size, "per-eye image size WxH (default: the protocol's resolution, at most "
                                           "480 px wide)");
   preview->add_flag("--software", pa->software, "render on lavapipe even with a GPU");

@@ -36,6 +36,7 @@ struct CalibrateArgs {
   bool json = false;
   std::optional<double> edge_m;
   std::optional<double> height_m;
+  std::string protocol;  // the table as known: its [table] edge_m and height_m
   std::string tip_offset = "0,0,0";
   double max_residual_mm = 15.0;
   double ipd_m = 0.063;
@@ -119,9 +120,13 @@ void write_out(const Json& doc, const std::string& path) {
   if (!out) throw RuntimeFailure("cannot write the calibration to " + path);
 }
 
+geometry::PhysicalTableFit known_table(const CalibrateArgs& a);
+
 void fit_recorded(const CalibrateArgs& a) {
   const auto touches = read_touches_csv(a.touches);
-  auto fitted = geometry::fit_square_table(touches, limits_of(a.max_residual_mm));
+  auto limits = limits_of(a.max_residual_mm);
+  limits.known_edge_m = known_table(a).edge_m;
+  auto fitted = geometry::fit_square_table(touches, limits);
   if (auto* e = std::get_if<geometry::GeometryError>(&fitted)) throw UsageError(a.touches + ": " + e->message);
   const Json doc = calibration_document(std::get<geometry::PhysicalTableFit>(fitted), touches);
   write_out(doc, a.out);
@@ -129,12 +134,14 @@ void fit_recorded(const CalibrateArgs& a) {
 }
 
 // The table as known before the calibration: --edge-m and --height-m, else
-// the protocol defaults' ([table] edge_m, height_m), centred at the origin.
+// --protocol's [table] edge_m and height_m, else the protocol defaults',
+// centred at the origin. The fit keeps this edge (CalibrationLimits).
 geometry::PhysicalTableFit known_table(const CalibrateArgs& a) {
-  const harness::protocol::Settings defaults;
+  const harness::protocol::Settings settings =
+      a.protocol.empty() ? harness::protocol::Settings{} : load_protocol_or_usage(a.protocol).session_settings();
   geometry::PhysicalTableFit t;
-  t.edge_m = a.edge_m.value_or(defaults.table.edge_m);
-  t.height_m = a.height_m.value_or(defaults.table.height_m);
+  t.edge_m = a.edge_m.value_or(settings.table.edge_m);
+  t.height_m = a.height_m.value_or(settings.table.height_m);
   if (!(t.edge_m >= 0.2 && t.edge_m <= 5.0)) throw UsageError("--edge-m must lie in [0.2, 5] m");
   if (!(t.height_m >= 0.3 && t.height_m <= 1.5)) throw UsageError("--height-m must lie in [0.3, 1.5] m");
   return t;
@@ -153,6 +160,7 @@ void calibrate_now(const CalibrateArgs& a) {
   o.tip_offset_m = {tip[0], tip[1], tip[2]};
   if (glm::length(o.tip_offset_m) > 0.5) throw UsageError("--tip-offset-m must lie within 0.5 m of the grip");
   o.limits = limits_of(a.max_residual_mm);
+  o.limits.known_edge_m = o.known.edge_m;
   if (!(a.ipd_m > 0.04 && a.ipd_m < 0.09)) throw UsageError("--ipd-m must lie in (0.04, 0.09) m");
   o.ipd_m = a.ipd_m;
   o.screenshot_dir = a.backend.screenshot;
@@ -199,14 +207,17 @@ rn::CalibrationResult calibrate_on(const Devices& devices, const rn::Calibration
   std::cerr << "curvlab: calibration: table fitted to " << r.fit.corners_used << " corners";
   for (std::size_t j = 0; j < r.touches_m.size(); ++j)
     std::cerr << (j == 0 ? ": " : ", ") << vec_text(r.touches_m[j]);
-  char largest[48];
-  std::snprintf(largest, sizeof largest, "; largest residual %.1f mm\n", r.fit.max_residual_m * 1000.0);
+  char largest[128];
+  std::snprintf(largest, sizeof largest, "; edge %.1f mm as known, %.1f mm as touched; largest residual %.1f mm\n",
+                r.fit.edge_m * 1000.0, r.fit.fitted_edge_m * 1000.0, r.fit.max_residual_m * 1000.0);
   std::cerr << largest;
   return r;
 }
 
 Json calibration_document(const geometry::PhysicalTableFit& fit, const std::vector<geometry::Vec3>& touches_m) {
   Json doc = Json::parse(rn::calibration_json(fit));
+  // The edge the touches span beside the known one the fit kept.
+  doc["fitted_edge_m"] = fit.fitted_edge_m;
   Json touches = Json::array();
   for (const auto& p : touches_m) touches.push_back(Json::array({p.x, p.y, p.z}));
   doc["touches_m"] = touches;
@@ -224,7 +235,9 @@ void add_calibrate_commands(CLI::App& app) {
                 "refuse a touch farther than this from its fitted corner (default 15)");
   c->add_option("--backend", args->backend.backend, "touch the corners now: desktop or xr");
   c->add_option_function<double>("--edge-m", [args](double v) { args->edge_m = v; },
-                                  "the table as known before: its edge (default: the protocol default)");
+                                  "the table's edge as known, which the fit keeps; touches spanning an edge more "
+                                  "than 10 mm different are refused (default: --protocol's, else 1.0 m)");
+  c->add_option("--protocol", args->protocol, "take the table as known (edge, height) from this protocol's [table]");
   c->add_option_function<double>("--height-m", [args](double v) { args->height_m = v; },
                                   "the table as known before: its height (default: the protocol default)");
   c->add_option("--tip-offset-m", args->tip_offset,

@@ -1,6 +1,7 @@
 #include "common.hpp"
 
 #include "curvlab/harness/data/database.hpp"
+#include "curvlab/harness/protocol/diagnostic.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -143,6 +144,94 @@ void ignore_broken_pipes() {
 #ifdef SIGPIPE
   std::signal(SIGPIPE, SIG_IGN);
 #endif
+}
+
+namespace {
+
+// A command typed with a slip: up to two edits (a swapped pair of letters
+// is two), or a third of a long word.
+std::string closest_command(const std::string& word, const std::vector<std::string>& names) {
+  const std::size_t limit = std::max<std::size_t>(2, word.size() / 3);
+  std::string best;
+  std::size_t best_d = limit + 1;
+  for (const auto& n : names)
+    if (const std::size_t d = protocol::edit_distance(word, n); d < best_d) {
+      best_d = d;
+      best = n;
+    }
+  return best;
+}
+
+}  // namespace
+
+std::optional<std::string> misspelt_argument(CLI::App& app, int argc, const char* const* argv) {
+  CLI::App* cmd = &app;
+  std::string path = "curvlab";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") break;
+    if (arg.rfind("--", 0) == 0) {
+      const std::string name = arg.substr(0, arg.find('='));
+      if (cmd->get_option_no_throw(name) != nullptr || app.get_option_no_throw(name) != nullptr) continue;
+      std::vector<std::string> known;
+      for (const CLI::Option* o : cmd->get_options())
+        for (const auto& l : o->get_lnames()) known.push_back("--" + l);
+      const std::string guess = closest_command(name, known);
+      if (guess.empty()) return std::nullopt;
+      return path + ": unknown option " + name + "; did you mean " + guess + "? (`" + path + " --help` lists them)";
+    }
+    if (arg.empty() || arg[0] == '-') continue;  // a short option, a negative number
+    const auto subs = cmd->get_subcommands([](CLI::App*) { return true; });
+    if (subs.empty()) continue;  // a positional argument or an option's value
+    CLI::App* next = nullptr;
+    std::vector<std::string> names;
+    for (CLI::App* s : subs) {
+      names.push_back(s->get_name());
+      if (s->get_name() == arg) next = s;
+    }
+    if (next != nullptr) {
+      cmd = next;
+      path += " " + arg;
+      continue;
+    }
+    const std::string guess = closest_command(arg, names);
+    std::string all;
+    for (const auto& n : names) all += (all.empty() ? "" : ", ") + n;
+    return "'" + arg + "' is not a command of " + path + (guess.empty() ? "" : "; did you mean '" + guess + "'?") +
+           " Expected one of: " + all;
+  }
+  return std::nullopt;
+}
+
+// The largest participant number a pseudonym's trailing digits may give:
+// nine digits. A longer number is refused rather than folded onto another
+// participant's seed and counterbalancing row.
+constexpr std::uint64_t kMaxPseudonymNumber = 999'999'999;
+
+// The participant number of a pseudonym: its trailing number (P07 → 7), 1
+// when it has none (docs/runner.md, `curvlab run`). A trailing number
+// of 0 or above kMaxPseudonymNumber is a UsageError naming --participant.
+std::uint64_t number_from_pseudonym(const std::string& id) {
+  std::size_t end = id.size();
+  std::size_t begin = end;
+  while (begin > 0 && std::isdigit(static_cast<unsigned char>(id[begin - 1]))) --begin;
+  if (begin == end) return 1;
+  const std::string digits = id.substr(begin, end - begin);
+  const std::size_t significant = digits.find_first_not_of('0');
+  if (significant == std::string::npos)
+    throw UsageError("--participant " + id + ": its trailing number " + digits +
+                     " is 0; participant numbers start at 1 (or give --participant-number N)");
+  if (digits.size() - significant > 9)
+    throw UsageError("--participant " + id + ": its trailing number " + digits + " is larger than " +
+                     std::to_string(kMaxPseudonymNumber) +
+                     ", the largest participant number a pseudonym gives; pass --participant-number N explicitly");
+  return std::stoull(digits.substr(significant));
+}
+
+std::uint64_t participant_number(const std::string& participant, std::optional<std::uint64_t> number) {
+  const std::uint64_t n = number ? *number : number_from_pseudonym(participant);
+  if (n < 1) throw UsageError("--participant-number must be at least 1");
+  return n;
 }
 
 }  // namespace curvlab::harness::cli

@@ -46,6 +46,19 @@ void check_db_argument(const std::string& path);
 // Prints `doc` as indented JSON, or as aligned "key: value" lines.
 void print_result(const Json& doc, bool as_json);
 
+// The participant number (counterbalancing row and seed) of `run`, `design`
+// and `preview`: `number` (--participant-number) when given, else the
+// pseudonym's trailing number (P07 → 7, a plain 7 → 7, none → 1). A
+// trailing number of 0 or one too large for a seed is a UsageError naming
+// --participant and asking for --participant-number.
+std::uint64_t participant_number(const std::string& participant, std::optional<std::uint64_t> number);
+
+// A mistyped command or option, found before CLI11 parses (which would say
+// "A subcommand is required" or name a required option instead): the
+// message with a did-you-mean, nullopt when every word is known or no
+// known one is close (CLI11's own message follows then).
+std::optional<std::string> misspelt_argument(CLI::App& app, int argc, const char* const* argv);
+
 // Called first in main: a write to a pipe whose reader has gone fails with
 // EPIPE instead of killing the process with SIGPIPE, so a session whose
 // --progress json reader exits ends interrupted and resumable instead of
@@ -75,7 +88,12 @@ std::pair<std::uint32_t, std::uint32_t> parse_size(const std::string& text, cons
 void add_inspect_commands(CLI::App& app);
 void add_devices_commands(CLI::App& app);
 void add_export_commands(CLI::App& app);
-void add_sessions_commands(CLI::App& app);  // sessions: what a data file holds
+void add_sessions_commands(CLI::App& app);  // sessions, participants: what a data file holds
+// `run` of a pseudonym that already has a session in `db` (the participant
+// registry): a UsageError naming the earlier sessions and asking for
+// --new-session. Nothing when the file does not exist yet or the pseudonym
+// is new.
+void check_participant_is_new(const std::string& db, const std::string& pseudonym);
 void add_merge_commands(CLI::App& app);
 // Database arguments of merge and export: each folder is replaced by the
 // *.sqlite files directly in it (sorted by name), leaving out `exclude`.

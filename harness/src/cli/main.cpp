@@ -33,6 +33,10 @@ int main(int argc, char** argv) {
   curvlab::harness::cli::add_run_commands(app);
   curvlab::harness::cli::add_calibrate_commands(app);
   curvlab::harness::cli::add_billiards_commands(app);
+  if (const auto wrong = curvlab::harness::cli::misspelt_argument(app, argc, argv)) {
+    std::cerr << "curvlab: error: " << *wrong << '\n';
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

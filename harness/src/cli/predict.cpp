@@ -3,6 +3,7 @@
 #include "common.hpp"
 #include "observer_args.hpp"
 
+#include "curvlab/harness/runner/stimulus_checks.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 
@@ -104,6 +105,11 @@ Json prediction_json(const pr::Protocol& p, const rn::PredictOptions& o, const r
   for (const auto& sp : pred.staircases) stairs.push_back(staircase_json(sp));
   doc["staircases"] = stairs;
   doc["notes"] = pred.notes;
+  Json warnings = Json::array();
+  for (const auto& w : rn::stimulus_warnings(p))
+    warnings.push_back({{"kind", rn::to_string(w.kind)}, {"block", w.block}, {"condition", w.condition},
+                        {"message", w.message}});
+  doc["warnings"] = warnings;
   return doc;
 }
 
@@ -156,6 +162,7 @@ void print_prediction(const pr::Protocol& p, const rn::Prediction& pred) {
                 pe.level_a.c_str(), pe.level_b.c_str(), pe.measure.c_str(), pe.predicted_difference, pe.power,
                 pe.simulations);
   for (const auto& n : pred.notes) std::printf("note: %s\n", n.c_str());
+  for (const auto& w : rn::stimulus_warnings(p)) std::printf("warning: %s\n", w.message.c_str());
 }
 
 void predict_command(const PredictArgs& a) {

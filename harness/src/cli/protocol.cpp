@@ -3,6 +3,7 @@
 #include "common.hpp"
 #include "station.hpp"
 
+#include "curvlab/harness/runner/stimulus_checks.hpp"
 #include "curvlab/harness/protocol/design.hpp"
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/protocol/loader.hpp"
@@ -112,6 +113,11 @@ void run_validate(const std::string& file, bool as_json, const BackendArgs& devi
     check_devices(file, *loaded, devices, true);
     Json doc = design_json(*loaded, pr::expand_design(*loaded, 1), false);
     doc["ok"] = true;
+    Json warnings = Json::array();
+    for (const auto& w : harness::runner::protocol_warnings(*loaded))
+      warnings.push_back({{"kind", harness::runner::to_string(w.kind)}, {"block", w.block}, {"condition", w.condition},
+                          {"message", w.message}});
+    doc["warnings"] = warnings;
     std::cout << doc.dump(2) << '\n';
     return;
   }
@@ -137,10 +143,10 @@ void run_validate(const std::string& file, bool as_json, const BackendArgs& devi
   std::cout << "  total " << d.trials.size() << " trials, estimated duration "
             << duration_text(d.estimated_duration_ms())
             << " (timelines and breaks; instruction reading not included)\n";
+  for (const auto& w : harness::runner::protocol_warnings(p)) std::cout << "warning: " << w.message << '\n';
 }
 
-void run_design(const std::string& file, std::int64_t participant, bool as_json) {
-  if (participant < 1) throw UsageError("--participant must be a participant number ≥ 1");
+void run_design(const std::string& file, std::uint64_t participant, bool as_json) {
   const auto p = load_protocol_or_usage(file);
   const auto d = pr::expand_design(p, static_cast<std::uint64_t>(participant));
   if (as_json) {
@@ -180,7 +186,8 @@ void add_protocol_commands(CLI::App& app) {
   struct Args {
     std::string file;
     bool json = false;
-    std::int64_t participant = 0;
+    std::string participant;
+    std::optional<std::uint64_t> participant_number;
     BackendArgs devices;  // validate --backend / --responses
   };
   auto args = std::make_shared<Args>();
@@ -196,9 +203,17 @@ void add_protocol_commands(CLI::App& app) {
 
   auto* design = app.add_subcommand("design", "print the expanded trial list for one participant");
   design->add_option("protocol", args->file, "protocol (TOML)")->required();
-  design->add_option("--participant", args->participant, "participant number (≥ 1)")->required();
+  design->add_option("--participant", args->participant,
+                     "participant pseudonym or number, as run takes it (P07 and 7 give participant number 7)")
+      ->required();
+  design->add_option_function<std::uint64_t>("--participant-number",
+                                             [args](std::uint64_t n) { args->participant_number = n; },
+                                             "counterbalancing row and seed (default: the pseudonym's trailing "
+                                             "number, else 1)");
   design->add_flag("--json", args->json, "print JSON (the list the runner stores)");
-  design->callback([args] { run_design(args->file, args->participant, args->json); });
+  design->callback([args] {
+    run_design(args->file, participant_number(args->participant, args->participant_number), args->json);
+  });
 }
 
 }  // namespace curvlab::harness::cli

@@ -24,6 +24,7 @@
 #include "curvlab/harness/runner/replay.hpp"
 #include "curvlab/harness/runner/session.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/stimulus_checks.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/tracking/trajectory_csv.hpp"
 #include "curvlab/harness/xr/backend.hpp"
@@ -31,6 +32,9 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <array>
+#include <functional>
+#include <set>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -67,7 +71,8 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_option("--window-size", b.window_size, "desktop: per-eye size WxH (default 960x960)");
   cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
   cmd->add_option("--screenshot", b.screenshot, "desktop: save every onset (and F12) here");
-  cmd->add_option("--key-script", b.key_script, "desktop: a file of scripted key presses");
+  cmd->add_option("--key-script", b.key_script,
+                  "a file of scripted key presses (desktop; headless: they answer instead of the simulated observer)");
   cmd->add_option("--responses", b.responses,
                   "also answer from HID devices: hid:MAPPING.toml (repeatable; docs/devices.md)");
   cmd->add_option("--export", b.export_dir, "afterwards, export CSV, Psych-DS and BIDS motion here");
@@ -131,6 +136,36 @@ void check_operator_args(const BackendArgs& a) {
 // (nullopt) lets the display's renderer pick for its device; a count is
 // clamped to the device, with a warning. The count drawn with is the
 // display's (DisplayInfo::msaa), stored with the session.
+// What a key script must fit (desktop.hpp): each timed phase's shortest
+// length over the protocol's blocks, and every key that answers.
+desktop::KeyScriptLimits key_script_limits(const pr::Protocol& p) {
+  desktop::KeyScriptLimits l;
+  l.protocol = p.file;
+  bool first = true;
+  auto add_keys = [&l](const pr::Judgement& j) {
+    for (const auto& option : j.options)
+      for (const auto& key : option.keys) l.answer_keys.push_back(key);
+  };
+  add_keys(p.judgement);
+  for (const auto& b : p.blocks) {
+    const auto t = p.block_settings(b).timeline;
+    l.fixation_ms = first ? t.fixation_ms : std::min(l.fixation_ms, t.fixation_ms);
+    l.stimulus_ms = first ? t.stimulus_ms : std::min(l.stimulus_ms, t.stimulus_ms);
+    l.response_ms = first ? t.response_ms : std::min(l.response_ms, t.response_ms);
+    l.iti_ms = first ? t.iti_ms : std::min(l.iti_ms, t.iti_ms);
+    first = false;
+    add_keys(b.judgement);
+  }
+  if (first) {
+    const auto t = p.session_settings().timeline;
+    l.fixation_ms = t.fixation_ms;
+    l.stimulus_ms = t.stimulus_ms;
+    l.response_ms = t.response_ms;
+    l.iti_ms = t.iti_ms;
+  }
+  return l;
+}
+
 Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
                      std::int64_t start_ns) {
   StationNeeds n;
@@ -140,6 +175,7 @@ Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry
   n.height_px = static_cast<std::uint32_t>(p.resolution_height);
   n.table = table;
   n.start_ns = start_ns;
+  n.key_script_limits = key_script_limits(p);
   return open_station(a, n);
 }
 
@@ -164,6 +200,37 @@ rn::RunOptions drawing_options(const BackendArgs& a) {
     if (ec) throw RuntimeFailure("cannot create --images folder " + a.images + ": " + ec.message());
   }
   return o;
+}
+
+// The run options a session stores with its start (and each resume with
+// itself), which `resume` takes as its defaults: how frames are drawn and
+// paced, where onset images and exports go, who answers.
+constexpr std::array<std::pair<const char*, std::string BackendArgs::*>, 4> kStoredRunOptions{{
+    {"render", &BackendArgs::render},
+    {"pace", &BackendArgs::pace},
+    {"images", &BackendArgs::images},
+    {"export", &BackendArgs::export_dir},
+}};
+
+std::string run_options_json(const BackendArgs& a, const std::string& observer) {
+  Json j = Json::object();
+  for (const auto& [name, field] : kStoredRunOptions) j[name] = a.*field;
+  j["observer"] = observer;
+  return j.dump();
+}
+
+// `resume`'s options: each stored run option the command line does not give.
+// Returns the observer model the session ran with ("" when none recorded).
+std::string apply_stored_run_options(BackendArgs& a, const std::string& stored_json,
+                                     const std::function<bool(const std::string&)>& given) {
+  const Json j = Json::parse(stored_json, nullptr, false);
+  if (!j.is_object()) return {};
+  for (const auto& [name, field] : kStoredRunOptions) {
+    const std::string option = std::string("--") + name;
+    if (const auto v = j.find(name); v != j.end() && v->is_string() && !given(option)) a.*field = v->get<std::string>();
+  }
+  const auto observer = j.find("observer");
+  return observer != j.end() && observer->is_string() ? observer->get<std::string>() : std::string();
 }
 
 void export_all(const std::string& db_path, std::int64_t session_id, const std::string& dir, Json& doc) {
@@ -240,31 +307,6 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
   }
 }
 
-// The largest participant number a pseudonym's trailing digits may give:
-// nine digits. A longer number is refused rather than folded onto another
-// participant's seed and counterbalancing row.
-constexpr std::uint64_t kMaxPseudonymNumber = 999'999'999;
-
-// The participant number of a pseudonym: its trailing number (P07 → 7), 1
-// when it has none (docs/runner.md, `curvlab run`). A trailing number
-// of 0 or above kMaxPseudonymNumber is a UsageError naming --participant.
-std::uint64_t number_from_pseudonym(const std::string& id) {
-  std::size_t end = id.size();
-  std::size_t begin = end;
-  while (begin > 0 && std::isdigit(static_cast<unsigned char>(id[begin - 1]))) --begin;
-  if (begin == end) return 1;
-  const std::string digits = id.substr(begin, end - begin);
-  const std::size_t significant = digits.find_first_not_of('0');
-  if (significant == std::string::npos)
-    throw UsageError("--participant " + id + ": its trailing number " + digits +
-                     " is 0; participant numbers start at 1 (or give --participant-number N)");
-  if (digits.size() - significant > 9)
-    throw UsageError("--participant " + id + ": its trailing number " + digits + " is larger than " +
-                     std::to_string(kMaxPseudonymNumber) +
-                     ", the largest participant number a pseudonym gives; pass --participant-number N explicitly");
-  return std::stoull(digits.substr(significant));
-}
-
 struct RunArgs {
   std::string protocol;
   std::string participant;
@@ -273,6 +315,7 @@ struct RunArgs {
   std::optional<double> ipd_m;
   std::string dominant_eye = "unknown";
   std::string calibration;
+  bool new_session = false;
   ObserverArgs observer;
   BackendArgs backend;
   LslArgs lsl;
@@ -304,6 +347,9 @@ rn::CalibrationOptions calibration_options(const pr::Protocol& p, const geometry
   c.known = known;
   c.tip_offset_m = {p.calibration.tip_offset_m[0], p.calibration.tip_offset_m[1], p.calibration.tip_offset_m[2]};
   c.limits.max_residual_m = p.calibration.max_residual_mm / 1000.0;
+  // The virtual table's edges equal the protocol's edge: the physical one
+  // must measure the same.
+  c.limits.known_edge_m = p.session_settings().table.edge_m;
   c.ipd_m = o.ipd_m.value_or(p.session_settings().viewing.ipd_m);
   c.width_px = static_cast<std::uint32_t>(p.resolution_width);
   c.height_px = static_cast<std::uint32_t>(p.resolution_height);
@@ -317,15 +363,18 @@ void run_command(const RunArgs& a) {
   const pr::Protocol p = load_protocol_or_usage(a.protocol, &text);
   rn::RunOptions o = drawing_options(a.backend);
   o.participant = a.participant;
-  o.participant_number = a.participant_number ? *a.participant_number : number_from_pseudonym(a.participant);
-  if (o.participant_number < 1) throw UsageError("--participant-number must be at least 1");
+  o.participant_number = participant_number(a.participant, a.participant_number);
   o.ipd_m = a.ipd_m;
   if (a.ipd_m && !(*a.ipd_m > 0.04 && *a.ipd_m < 0.09)) throw UsageError("--ipd-m must lie in (0.04, 0.09) m");
   if (a.dominant_eye == "left") o.dominant_eye = data::DominantEye::left;
   else if (a.dominant_eye == "right") o.dominant_eye = data::DominantEye::right;
   else if (a.dominant_eye != "unknown") throw UsageError("--dominant-eye must be left, right or unknown");
   o.calibration = read_calibration(a.calibration);
-  if (a.backend.backend == "headless") {
+  if (a.backend.backend == "headless" && !a.backend.key_script.empty()) {
+    // The script answers, in place of the simulated observer.
+    if (a.observer.model != "human" && a.observer.model != "none")
+      throw UsageError("--key-script answers in place of the simulated observer; drop --observer " + a.observer.model);
+  } else if (a.backend.backend == "headless") {
     const std::uint64_t seed = pr::participant_seed(p.seed, o.participant_number, p.seed_per_participant);
     o.observer = observer_params(a.observer, pr::mix_seed(seed ^ 0x5eedULL));
     if (o.observer && o.observer->model == rn::ObserverModel::image)
@@ -335,6 +384,7 @@ void run_command(const RunArgs& a) {
                              ? (std::filesystem::path("results") / (p.meta.name + ".sqlite")).string()
                              : a.db;
   check_db_argument(db);
+  if (!a.new_session) check_participant_is_new(db, a.participant);
   const auto table = o.calibration.value_or(rn::nominal_calibration(p.session_settings()));
   check_operator_args(a.backend);
   auto script = read_operator_script(a.backend);
@@ -352,6 +402,9 @@ void run_command(const RunArgs& a) {
   }
   auto console = open_console(a.backend, std::move(script), *devices.station.display, db);
   o.console = console.get();
+  o.run_options_json = run_options_json(a.backend, o.observer ? std::string(rn::to_string(o.observer->model)) : "none");
+  for (const auto& w : rn::stimulus_warnings(p))
+    if (w.kind == rn::StimulusWarningKind::model_range) o.warnings.push_back(w.message);
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
   console.reset();  // its last screenshot shows the session's end
   streams.reset();  // what its recorders still held is stored before the export
@@ -365,9 +418,10 @@ struct ResumeArgs {
   bool observer_given = false;
   BackendArgs backend;
   LslArgs lsl;
+  std::set<std::string> given;  // the options on the command line ("--render")
 };
 
-void resume_command(const ResumeArgs& a) {
+void resume_command(ResumeArgs a) {
   check_db_argument(a.db);
   // Before a window or headset starts; resume_session holds the lock itself.
   if (const auto holder = data::WriterLock::session_writer(a.db, a.session))
@@ -375,6 +429,12 @@ void resume_command(const ResumeArgs& a) {
   auto stored_v = rn::read_stored_session(a.db, a.session);
   if (!stored_v) raise(stored_v.error());
   const auto& stored = stored_v.value();
+  // The session continues as it ran: its stored run options, unless the
+  // command line gives others (which are then stored with the resume).
+  std::string observer_model;
+  if (stored.run_options_json)
+    observer_model = apply_stored_run_options(a.backend, *stored.run_options_json,
+                                              [&a](const std::string& name) { return a.given.contains(name); });
   auto loaded = pr::load_protocol_text(stored.protocol_text, stored.protocol_source);
   if (!loaded)
     throw RuntimeFailure("the stored protocol no longer loads: " +
@@ -395,6 +455,9 @@ void resume_command(const ResumeArgs& a) {
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);
   o.console = console.get();
   watch_stop_signals(o);
+  if (o.observer) observer_model = rn::to_string(o.observer->model);
+  else if (observer_model.empty()) observer_model = stored.observer ? rn::to_string(stored.observer->model) : "none";
+  o.run_options_json = run_options_json(a.backend, observer_model);
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
   console.reset();
   streams.reset();
@@ -414,6 +477,8 @@ void add_run_commands(CLI::App& app) {
   r->add_option("--db", run->db, "SQLite file (default results/<protocol name>.sqlite)");
   r->add_option_function<double>("--ipd-m", [run](double v) { run->ipd_m = v; }, "participant's IPD in metres");
   r->add_option("--dominant-eye", run->dominant_eye, "left, right or unknown");
+  r->add_flag("--new-session", run->new_session,
+              "start another session of a pseudonym that already has one in --db (otherwise exit 2)");
   r->add_option("--calibration", run->calibration, "table calibration JSON (centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
   add_observer_options(r, run->observer);
   add_backend_options(r, run->backend);
@@ -429,8 +494,11 @@ void add_run_commands(CLI::App& app) {
   add_lsl_options(rs, res->lsl);
   rs->callback([res, rs] {
     res->observer_given = false;
-    for (const CLI::Option* opt : rs->get_options())
+    res->given.clear();
+    for (const CLI::Option* opt : rs->get_options()) {
+      if (opt->count() > 0) res->given.insert(opt->get_name());
       if (opt->get_name().starts_with("--observer") && opt->count() > 0) res->observer_given = true;
+    }
     resume_command(*res);
   });
 

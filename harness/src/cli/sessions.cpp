@@ -178,9 +178,107 @@ void sessions_command(const SessionsArgs& a) {
   std::cout << doc.dump(2) << '\n';
 }
 
+// ---- curvlab participants -------------------------------------------------
+
+struct ParticipantsArgs {
+  std::string db;
+  bool json = false;
+};
+
+// Each pseudonym of the file with its sessions, in order of first session.
+std::vector<std::pair<std::string, std::vector<const data::ListedSession*>>> by_participant(
+    const std::vector<data::ListedSession>& sessions) {
+  std::vector<std::pair<std::string, std::vector<const data::ListedSession*>>> out;
+  for (const auto& s : sessions) {
+    auto it = std::find_if(out.begin(), out.end(), [&](const auto& p) { return p.first == s.summary.pseudonym; });
+    if (it == out.end()) it = out.insert(out.end(), {s.summary.pseudonym, {}});
+    it->second.push_back(&s);
+  }
+  return out;
+}
+
+// "session 1 (demo 1.0, completed 8/8, started 2025-11-25 10:31:02)"
+std::string session_line(const data::ListedSession& s, ProtocolVersions& versions) {
+  const auto& m = s.summary;
+  const auto version = versions.of(m.protocol_sha256);
+  return "session " + std::to_string(m.session_id) + " (" + m.protocol_name + (version ? " " + *version : "") + ", " +
+         std::string(data::to_string(s.status)) + " " + std::to_string(m.trials.completed) + "/" +
+         std::to_string(m.trials.planned) + ", started " + readable_utc(m.started_utc) + " UTC)";
+}
+
+void participants_command(const ParticipantsArgs& a) {
+  if (std::error_code ec; std::filesystem::is_directory(a.db, ec))
+    throw UsageError("--db " + a.db + ": is a folder; expected a curvlab data file");
+  auto db = data::Database::open(a.db, data::OpenMode::read_only);
+  if (!db) raise(db.error());
+  auto sessions = data::list_sessions(db.value());
+  if (!sessions) raise(sessions.error());
+  ProtocolVersions versions(db.value());
+  const auto people = by_participant(sessions.value());
+  if (a.json) {
+    Json doc = Json::array();
+    for (const auto& [pseudonym, list] : people) {
+      Json ids = Json::array();
+      for (const auto* s : list) ids.push_back(session_json(*s, versions.of(s->summary.protocol_sha256), a.db));
+      doc.push_back({{"participant", pseudonym}, {"sessions", ids}});
+    }
+    std::cout << doc.dump(2) << '\n';
+    return;
+  }
+  if (people.empty()) {
+    std::cout << a.db << ": no participants\n";
+    return;
+  }
+  std::vector<Row> rows{{"participant", "sessions", "completed", "first started (UTC)", "last activity (UTC)", "which"}};
+  for (const auto& [pseudonym, list] : people) {
+    int completed = 0;
+    std::string which, last;
+    for (const auto* s : list) {
+      if (s->status == data::SessionStatus::completed) ++completed;
+      which += (which.empty() ? "" : ", ") + std::to_string(s->summary.session_id) + " " +
+               s->summary.protocol_name + " " + std::string(data::to_string(s->status));
+      last = std::max(last, s->summary.last_activity_utc);
+    }
+    rows.push_back({pseudonym, std::to_string(list.size()), std::to_string(completed),
+                    readable_utc(list.front()->summary.started_utc), readable_utc(last), which});
+  }
+  print_table(rows, {false, true, true, false, false, false});
+}
+
 }  // namespace
 
+void check_participant_is_new(const std::string& db_path, const std::string& pseudonym) {
+  std::error_code ec;
+  if (!std::filesystem::exists(db_path, ec)) return;
+  auto db = data::Database::open(db_path, data::OpenMode::read_only);
+  if (!db) return;  // the run itself reports a file it cannot use
+  auto sessions = data::list_sessions(db.value());
+  if (!sessions) return;
+  ProtocolVersions versions(db.value());
+  std::string earlier;
+  std::optional<std::int64_t> unfinished;
+  for (const auto& s : sessions.value()) {
+    if (s.summary.pseudonym != pseudonym) continue;
+    earlier += (earlier.empty() ? "" : "; ") + session_line(s, versions);
+    if (s.resumable && !unfinished) unfinished = s.summary.session_id;
+  }
+  if (earlier.empty()) return;
+  throw UsageError("--participant " + pseudonym + " already has " + earlier + " in " + db_path +
+                   ". A new session of the same pseudonym gets the same participant number, so the same trial order "
+                   "and counterbalancing row. Check the pseudonym (curvlab participants --db " + shell_word(db_path) +
+                   " lists them), " +
+                   (unfinished ? "continue the unfinished one (" + resume_command(db_path, *unfinished) + "), " : "") +
+                   "or add --new-session to start another session of this participant");
+}
+
 void add_sessions_commands(CLI::App& app) {
+  auto pa = std::make_shared<ParticipantsArgs>();
+  auto* people = app.add_subcommand("participants", "list the participants (pseudonyms) of a data file and their "
+                                                    "sessions");
+  people->add_option("--db", pa->db, "curvlab data file (opened read-only)")->required();
+  people->add_flag("--json", pa->json, "print one JSON array of participants with their sessions");
+  people->callback([pa] { participants_command(*pa); });
+
   auto args = std::make_shared<SessionsArgs>();
   auto* cmd =
       app.add_subcommand("sessions", "list the sessions of a data file, their progress and how to continue them");

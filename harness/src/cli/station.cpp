@@ -58,6 +58,13 @@ void open_headless(Devices& out, const BackendArgs& a, const StationNeeds& n) {
   out.headless = std::move(made).value();
   out.clock = &out.headless.clock();
   out.station = out.headless.station();
+  if (!a.key_script.empty()) {
+    auto keys = desktop::make_scripted_keys(*out.station.display, *out.clock, a.key_script, n.key_script_limits);
+    if (!keys) raise(keys.error());
+    out.scripted_keys = std::move(keys).value();
+    out.station.display = out.scripted_keys.get();
+    out.station.responses.push_back(out.scripted_keys.get());
+  }
 }
 
 // The headset, composed of its parts as hello_xr composes its plugins, in
@@ -105,6 +112,7 @@ Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
     else throw UsageError("--preview must be side-by-side, left or right, got '" + a.preview + "'");
     o.screenshot_dir = a.screenshot;
     o.key_script = a.key_script;
+    o.key_script_limits = n.key_script_limits;
     o.software = a.software;
     o.msaa = n.msaa;
     o.clock = out.clock;

@@ -8,6 +8,7 @@
 #include "common.hpp"
 
 #include "curvlab/geometry/calibration.hpp"
+#include "curvlab/harness/desktop/desktop.hpp"
 #include "curvlab/harness/devices/mapping.hpp"
 #include "curvlab/harness/devices/responses.hpp"
 #include "curvlab/harness/io/clock.hpp"
@@ -79,6 +80,8 @@ struct Devices {
   std::unique_ptr<xr::TrackedPoses> xr_poses;
   std::unique_ptr<xr::SwapchainDisplay> xr_display;
   std::vector<std::unique_ptr<harness::io::ResponseSource>> response_devices;  // --responses
+  // A headless run's --key-script: wraps the offscreen display it borrows.
+  std::unique_ptr<desktop::ScriptedKeys> scripted_keys;
   harness::io::Station station;
 
   void use(harness::io::InteractiveDisplay& d) {
@@ -98,6 +101,9 @@ struct StationNeeds {
   std::uint32_t height_px = 1024;
   geometry::PhysicalTableFit table;
   std::int64_t start_ns = 0;
+  // The protocol's timeline and answer keys a desktop key script is checked
+  // against (nullopt: a calibration, which has no trials).
+  std::optional<desktop::KeyScriptLimits> key_script_limits;
 };
 
 // Opens --backend's display (with --responses' HID devices). A bad option

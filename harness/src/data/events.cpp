@@ -71,11 +71,15 @@ Detail detail(const events::SessionStart& e) {
   Json j{{"participant_number", e.participant_number}, {"seed", e.seed}, {"protocol_seed", e.protocol_seed},
          {"backend", e.backend},  {"msaa", e.msaa},    {"trials", e.trials}};
   if (e.counterbalance_row) j["counterbalance_row"] = *e.counterbalance_row;
+  if (e.run_options_json) j["run_options"] = Json::parse(*e.run_options_json, nullptr, false);
+  if (!e.warnings.empty()) j["warnings"] = e.warnings;
   return {EventKind::session_start, j};
 }
 Detail detail(const events::Observer& e) { return {EventKind::observer, e.params_json}; }
 Detail detail(const events::Resume& e) {
-  return {EventKind::resume, Json{{"from_trial", e.from_trial}, {"backend", e.backend}}};
+  Json j{{"from_trial", e.from_trial}, {"backend", e.backend}};
+  if (e.run_options_json) j["run_options"] = Json::parse(*e.run_options_json, nullptr, false);
+  return {EventKind::resume, j};
 }
 Detail detail(const events::BlockStart& e) {
   return {EventKind::block_start, Json{{"block", e.block}, {"block_index", e.block_index}}};
@@ -211,6 +215,14 @@ Expected<events::SessionStart> parse_session_start(const std::string& detail_jso
   if (const auto backend = d.find("backend"); backend != d.end() && backend->is_string())
     s.backend = backend->get<std::string>();
   return s;
+}
+
+std::optional<std::string> parse_run_options(const std::string& detail_json) {
+  const Json d = Json::parse(detail_json, nullptr, false);
+  if (d.is_discarded() || !d.is_object()) return std::nullopt;
+  const auto o = d.find("run_options");
+  if (o == d.end() || !o->is_object()) return std::nullopt;
+  return o->dump();
 }
 
 Expected<events::Onset> parse_onset(const std::string& detail_json) {

@@ -79,16 +79,24 @@ Expected<SessionProvenance> read_session_provenance(Database& db, std::int64_t s
     last.bind(1, session_id);
     if (last.step()) out.last_t_ns = last.column_int(0);
 
-    Statement ev(c, "SELECT kind, detail FROM events WHERE session_id = ?1 AND kind IN (?2, ?3) ORDER BY event_id");
+    Statement ev(c, "SELECT kind, detail FROM events WHERE session_id = ?1 AND kind IN (?2, ?3, ?4) "
+                    "ORDER BY event_id");
     ev.bind(1, session_id)
         .bind_static(2, to_string(EventKind::session_start))
-        .bind_static(3, to_string(EventKind::observer));
+        .bind_static(3, to_string(EventKind::observer))
+        .bind_static(4, to_string(EventKind::resume));
     while (ev.step()) {
-      if (parse_event_kind(ev.column_text(0)) == EventKind::session_start) {
+      const auto kind = parse_event_kind(ev.column_text(0));
+      if (kind == EventKind::session_start) {
         auto start = parse_session_start(ev.column_text(1));
         if (!start) return corrupt_file_error(db.path(), start.error().message);
         out.participant_number = start->participant_number;
         out.msaa = start->msaa;
+        out.run_options_json = parse_run_options(ev.column_text(1));
+        continue;
+      }
+      if (kind == EventKind::resume) {
+        if (auto options = parse_run_options(ev.column_text(1))) out.run_options_json = std::move(options);
         continue;
       }
       out.observer = StoredObserver{std::string(ev.column_text(1))};

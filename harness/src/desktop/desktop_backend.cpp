@@ -183,6 +183,9 @@ Result<std::unique_ptr<DesktopBackend>> DesktopBackend::create(const DesktopOpti
   if (!options.key_script.empty()) {
     auto loaded = load_key_script(options.key_script);
     if (!loaded) return loaded.error();
+    if (options.key_script_limits)
+      if (auto wrong = check_key_script(loaded.value(), options.key_script, *options.key_script_limits))
+        return *wrong;
     b->script_.emplace(std::move(loaded).value());
   }
 
@@ -312,6 +315,7 @@ void DesktopBackend::on_key(int key, int action, int mods) {
   if (!name.empty())
     pending_.push_back(key_input(options_.clock->now_ns(), name, pressed));
   if (!pressed) return;
+  if (script_) script_->typed();  // someone is at the keyboard
   if (key == GLFW_KEY_ESCAPE) {
     glfwSetWindowShouldClose(window_.get(), GLFW_TRUE);
     signal_ = Signal::quit;
@@ -352,6 +356,12 @@ Signal DesktopBackend::poll(std::vector<InputEvent>& out) {
     if (auto key = script_->due(options_.clock->now_ns())) {
       if (key->hand_m) body_.place_hand(key->left_hand ? Hand::left : Hand::right, *key->hand_m);
       else out.push_back(key_input(options_.clock->now_ns(), key->name, true, harness::io::SourceKind::script));
+      // A scripted Escape ends the session as the key does.
+      if (key->name == "escape") glfwSetWindowShouldClose(window_.get(), GLFW_TRUE);
+    }
+    if (script_->ran_out(options_.clock->now_ns()) && !quit_delivered_) {
+      std::cerr << "curvlab: " << script_->ran_out_message(options_.key_script, last_phase_) << '\n';
+      glfwSetWindowShouldClose(window_.get(), GLFW_TRUE);
     }
   }
   while (!pending_.empty()) {
@@ -409,7 +419,7 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
   (void)draw;
   renderer::FrameStats stats;
   const std::int64_t now = options_.clock->now_ns();
-  if (script_) script_->on_frame(overlay.waiting_for_input, now);
+  if (script_) script_->on_frame(overlay.phase, overlay.waiting_for_input, now);
   if (std::string banner = banner_text(overlay); banner != banner_) {
     banner_ = std::move(banner);
     const std::string title = banner_.empty() ? "curvlab" : "curvlab — " + banner_;

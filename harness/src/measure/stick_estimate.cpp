@@ -162,6 +162,41 @@ geometry::EyeOffsets eyes_of(const StickScene& scene) {
   return {scene.rig.eyes[0].position_m, scene.rig.eyes[1].position_m};
 }
 
+// Which rings each eye cannot see, by the recorded geometry: each ring's
+// line of sight from the eye (the view's optics, perception.hpp) against the
+// eye's field of view. "" when every ring is in both views. Names the eye,
+// the ring (1 at the butt end … 5 at the tip) and how far off it lies.
+std::string rings_out_of_view(const StickScene& scene) {
+  const auto eyes = eyes_of(scene);
+  const auto& fractions = renderer::kStickRingFractions;
+  std::string out;
+  for (int e = 0; e < 2; ++e) {
+    const auto& eye = scene.rig.eyes[static_cast<std::size_t>(e)];
+    std::string lost;
+    for (std::size_t i = 0; i < fractions.size(); ++i) {
+      const geometry::Point q =
+          scene.stick.centre_point(scene.space, scene.stick_pose, fractions[i] * scene.stick.length_m);
+      const Vec3 d = glm::transpose(eye.rotation) *
+                     geometry::sight_lines(scene.space, scene.head, eyes, scene.preset, q)[static_cast<std::size_t>(e)]
+                         .direction;
+      const double x = std::atan2(d.x, -d.z), y = std::atan2(d.y, -d.z);
+      const bool inside = d.z < 0.0 && x >= eye.fov.angle_left_rad && x <= eye.fov.angle_right_rad &&
+                          y >= eye.fov.angle_down_rad && y <= eye.fov.angle_up_rad;
+      if (inside) continue;
+      char buf[160];
+      const double deg = 180.0 / 3.14159265358979323846;
+      std::snprintf(buf, sizeof buf, "ring %zu%s (%.0f° %s; the view reaches %.0f°)", i + 1,
+                    i == 0 ? " at the butt end" : i + 1 == fractions.size() ? " at the tip" : "",
+                    std::abs(x) * deg, x < 0.0 ? "left" : "right",
+                    (x < 0.0 ? -eye.fov.angle_left_rad : eye.fov.angle_right_rad) * deg);
+      lost += std::string(lost.empty() ? "" : ", ") + buf;
+    }
+    if (!lost.empty())
+      out += std::string(out.empty() ? "" : "; ") + "the " + (e == 0 ? "left" : "right") + " eye loses " + lost;
+  }
+  return out;
+}
+
 // The perceived ends and middle of the stick's centre line: the ideal
 // geometer's, or the human observer's fixating the middle.
 std::array<Vec3, 3> model_points(const StickScene& scene, const geometry::HumanVision* vision) {
@@ -299,9 +334,16 @@ Result<StickEstimate> measure_stick(const renderer::Rgba8Image& left, const rend
     return bad("a plain stick has no features along its length to match between the eyes; "
                "mark it with rings (render --stick-marks rings, protocol stimulus.stick_marks = \"rings\")");
   auto l = find_rings(left, *left_stick, scene.stick.radius_m);
-  if (!l) return Error{l.error().kind, "left image: " + l.error().message};
-  auto r = find_rings(right, *right_stick, scene.stick.radius_m);
-  if (!r) return Error{r.error().kind, "right image: " + r.error().message};
+  auto r = l ? find_rings(right, *right_stick, scene.stick.radius_m) : l;
+  if (!l || !r) {
+    // Say which eye lost which ring where the recorded geometry shows it.
+    const std::string lost = rings_out_of_view(scene);
+    const Error& err = !l ? l.error() : r.error();
+    return Error{err.kind, std::string(!l ? "left" : "right") + " image: " + err.message +
+                               (lost.empty() ? "" : "; out of view: " + lost +
+                                                        " (a shorter stick, a farther one or a wider field of view "
+                                                        "keeps every ring in both eyes)")};
+  }
   const auto& fractions = renderer::kStickRingFractions;
   std::vector<std::array<geometry::SightLine, 2>> lines(fractions.size());
   std::size_t middle = 0;

@@ -572,4 +572,13 @@ Result<Prediction> predict(const protocol::Protocol& p, const PredictOptions& o)
   return out;
 }
 
+std::vector<StaircasePrediction> predict_convergence(const protocol::Protocol& p, const ObserverParams& observer) {
+  Prediction out;
+  auto collected = collect_conditions(p, out);
+  if (!collected) return {};
+  const SimulatedObserver mean_observer(observer);
+  for (auto& c : collected.value().adaptive) predict_tracks(c, mean_observer, out);
+  return out.staircases;
+}
+
 }  // namespace curvlab::harness::runner

@@ -106,6 +106,7 @@ Result<StoredSession> read_stored_session(const std::string& db_path, std::int64
     out.observer = *observer;
   }
   out.last_t_ns = prov->last_t_ns;
+  out.run_options_json = prov->run_options_json;
   return out;
 }
 
@@ -125,7 +126,8 @@ RunResult resume_session(const std::string& db_path, std::int64_t session_id, co
   auto point = read_resume_point(store, db_path, session_id, p, design);
   if (!point) return point.error();
   if (auto r = store.set_session_status(session_id, data::SessionStatus::running); !r) return r.error();
-  const data::events::Resume resumed{point->first, data::to_string(station.display->info().backend)};
+  data::events::Resume resumed{point->first, data::to_string(station.display->info().backend), std::nullopt};
+  if (!options.run_options_json.empty()) resumed.run_options_json = options.run_options_json;
   if (auto r = store.record_event(data::event_record(session_id, std::nullopt, clock.now_ns(), resumed)); !r)
     return r.error();
   auto writer = data::SampleWriter::open(db_path);

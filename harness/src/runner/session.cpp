@@ -61,7 +61,8 @@ Result<data::StartedSession> create(
   auto participant_id = store.add_participant({options.participant, options.ipd_m, options.dominant_eye});
   if (!participant_id) return participant_id.error();
   data::events::SessionStart start{options.participant_number, design.seed, design.protocol_seed, data::to_string(info.backend),
-                                   info.msaa, design.trials.size(), std::nullopt};
+                                   info.msaa, design.trials.size(), std::nullopt, std::nullopt, options.warnings};
+  if (!options.run_options_json.empty()) start.run_options_json = options.run_options_json;
   if (design.counterbalance_row) start.counterbalance_row = *design.counterbalance_row;
   std::vector<data::EventRecord> events{data::event_record(0, std::nullopt, clock.now_ns(), start)};
   if (options.observer)

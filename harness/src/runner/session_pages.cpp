@@ -50,8 +50,12 @@ Outcome SessionFrames::page(const std::string& text, std::size_t k, Phase phase,
   Page state(f.timing.now_ns, min_ns, continues_);
   for (TrialWatcher* w : watchers) w->page_shown(f.timing.now_ns, min_ns);
   event(trial_id, data::events::Page{page_event(phase), k, shown_text}, f.timing.predicted_display_ns);
-  const io::Overlay overlay{phase, shown_text, true};
+  // The page waits for a key once its shortest time has passed (a break's
+  // break_min_ms): a key before then does not turn it.
+  io::Overlay overlay{phase, shown_text, true};
+  const std::int64_t open_ns = f.timing.now_ns + min_ns;
   for (;;) {
+    overlay.waiting_for_input = f.timing.now_ns >= open_ns;
     const bool advance = state.frame(f.timing.now_ns, f.inputs);
     if (f.signal == Signal::quit) return Outcome::quit;
     if (f.signal == Signal::pause) {

@@ -23,6 +23,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <variant>
 #include <vector>
@@ -36,7 +37,10 @@ namespace curvlab::geometry {
 struct PhysicalTableFit {
   glm::dvec2 centre_m{0.0, 0.0};  // (x, z) of the table centre
   double yaw_rad = 0.0;           // rotation about +y taking the yaw-0 table to the lab's
-  double edge_m = 0.0;            // edge length of the square
+  double edge_m = 0.0;            // edge length of the square (the known one, when the fit was given it)
+  // The edge the touches span, fitted freely (a similarity fit): beside the
+  // known edge, what the physical table measures.
+  double fitted_edge_m = 0.0;
   double height_m = 0.0;          // mean y of the touched corners
 
   // Quality of the fit: distances between each touch and the fitted corner
@@ -58,6 +62,14 @@ struct CalibrationLimits {
   // Tables smaller than this are not plausible (two touches at one corner).
   double min_edge_m = 0.2;
   double max_edge_m = 5.0;
+  // The table's edge as known (a protocol's [table] edge_m, which the
+  // virtual table's edges must equal, or `calibrate --edge-m`): the square is
+  // then fitted at that size (rotation and translation only), so a touch off
+  // its corner shows in its residual instead of being absorbed by the scale;
+  // and touches spanning a table whose edge differs from it by more than
+  // max_edge_difference_m are refused. nullopt: the edge is fitted freely.
+  std::optional<double> known_edge_m;
+  double max_edge_difference_m = 0.010;
 };
 
 // Fits the square table to 3 or 4 touched corners (see the order above).

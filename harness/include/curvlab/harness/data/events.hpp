@@ -65,6 +65,12 @@ struct SessionStart {
   std::uint32_t msaa = 1;
   std::size_t trials = 0;
   std::optional<std::size_t> counterbalance_row;
+  // The command line's run options (a JSON object: render, pace, images,
+  // export, observer), the defaults of `resume`; nullopt: not recorded.
+  std::optional<std::string> run_options_json;
+  // What the protocol was warned about when the session started (the human
+  // model's range of validity; runner/stimulus_checks.hpp), for the report.
+  std::vector<std::string> warnings;
 };
 // The simulated observer's parameters, as the runner writes them.
 struct Observer {
@@ -73,6 +79,7 @@ struct Observer {
 struct Resume {
   std::size_t from_trial = 0;
   std::string backend;
+  std::optional<std::string> run_options_json;  // as SessionStart's: those the continuation ran with
 };
 struct BlockStart {
   std::string block;
@@ -217,5 +224,8 @@ EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> tr
 // wrong shape.
 Expected<events::SessionStart> parse_session_start(const std::string& detail_json);
 Expected<events::Onset> parse_onset(const std::string& detail_json);
+// The run options of a session_start or resume event's detail (a JSON
+// object's text), nullopt when it records none.
+std::optional<std::string> parse_run_options(const std::string& detail_json);
 
 }  // namespace curvlab::harness::data

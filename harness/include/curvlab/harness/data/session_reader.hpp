@@ -50,6 +50,9 @@ struct SessionProvenance {
   // Samples per pixel the session drew with (session_start); nullopt: not
   // recorded (sessions from before multisampling drew with 1), 0: nothing drawn.
   std::optional<std::uint32_t> msaa;
+  // The run options it last ran with (session_start, or the latest resume
+  // that recorded them; a JSON object's text); nullopt: none recorded.
+  std::optional<std::string> run_options_json;
   // The latest time stamp logged for the session (frames and events), 0 if
   // none: a resumed session's clock must not run backwards past it.
   std::int64_t last_t_ns = 0;

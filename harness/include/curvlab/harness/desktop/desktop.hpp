@@ -18,6 +18,18 @@ namespace curvlab::harness::desktop {
 
 enum class DesktopPreview { side_by_side, left, right };
 
+// What a key script is checked against before the window opens (the
+// protocol's timeline, key_script.hpp): each timed phase's shortest length
+// across the protocol's blocks and the keys that answer.
+struct KeyScriptLimits {
+  std::string protocol;  // its file, for messages
+  std::int64_t fixation_ms = 0;
+  std::int64_t stimulus_ms = 0;
+  std::int64_t response_ms = 0;
+  std::int64_t iti_ms = 0;
+  std::vector<std::string> answer_keys;  // lower case, as the script names keys
+};
+
 struct DesktopOptions {
   std::uint32_t eye_width_px = 960;  // per eye
   std::uint32_t eye_height_px = 960;
@@ -26,10 +38,11 @@ struct DesktopOptions {
   // Empty: screenshots only on F12, into the current directory.
   std::string screenshot_dir;
   // A file of key presses made for the participant (scripted pilots and
-  // tests): one `KEY [DELAY_MS]` per line, '#' comments. Each key is pressed
-  // DELAY_MS (default 300) after the runner next waits for input (overlay
-  // phase instructions, response or break). Empty: none.
+  // tests): one `KEY [PHASE+DELAY_MS | DELAY_MS]` per line, '#' comments
+  // (key_script.hpp; docs/lab.md, "Key scripts"). Empty: none.
   std::string key_script;
+  // Checked against these before the window opens, when given.
+  std::optional<KeyScriptLimits> key_script_limits;
   bool software = false;  // lavapipe even with a GPU
   bool vsync = true;
   std::optional<std::uint32_t> msaa;  // samples per pixel requested (clamped); nullopt: the device's automatic count
@@ -61,5 +74,20 @@ std::string legend_text(const harness::io::Overlay& overlay);
 // hands) and response source (keys). No display or no Vulkan: an Error of
 // kind `device`.
 harness::Result<std::unique_ptr<harness::io::InteractiveDisplay>> make_desktop_backend(const DesktopOptions& options);
+
+// A key script typed into a display that has no keyboard (a headless run,
+// `run --key-script` without --backend desktop): the display's frames pass
+// through unchanged, and the script's keys arrive as inputs of the `script`
+// device on the display's clock, simulated or real, by the rules of the
+// desktop window's script (docs/lab.md, "Key scripts"). A scripted Escape
+// ends the session, resumable; a script used up at a page ends it with a
+// message. Borrows the display and clock, which must outlive it.
+class ScriptedKeys : public harness::io::Display, public harness::io::ResponseSource {};
+// A bad line (a hand line among them: there is no body to move) is an Error
+// naming FILE:LINE.
+harness::Result<std::unique_ptr<ScriptedKeys>> make_scripted_keys(harness::io::Display& inner,
+                                                                  const harness::io::Clock& clock,
+                                                                  const std::string& script,
+                                                                  const std::optional<KeyScriptLimits>& limits);
 
 }  // namespace curvlab::harness::desktop

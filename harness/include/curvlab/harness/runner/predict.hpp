@@ -104,6 +104,9 @@ struct Prediction {
 };
 
 Result<Prediction> predict(const protocol::Protocol& p, const PredictOptions& options);
+// Only where each adaptive track converges for the mean observer (no
+// proportions, no power): cheap enough for `validate`.
+std::vector<StaircasePrediction> predict_convergence(const protocol::Protocol& p, const ObserverParams& observer);
 
 // Two-sided p value of Student's t with `df` degrees of freedom.
 double student_t_two_sided_p(double t, double df);

@@ -73,6 +73,13 @@ struct RunOptions {
   // What the lab's other instruments are told (io/streams.hpp: the Lab
   // Streaming Layer's outlets). Not owned; outlives the run. nullptr: none.
   io::SessionStreams* streams = nullptr;
+  // The command line's run options as a JSON object (render, pace, images,
+  // export, observer), stored with the session_start or resume event: they
+  // are what `resume` continues with by default. Empty: not stored.
+  std::string run_options_json;
+  // Warnings about the protocol stored with the session's start (the human
+  // model's range of validity), which the report repeats.
+  std::vector<std::string> warnings;
 };
 
 struct SessionSummary {
@@ -131,6 +138,7 @@ struct StoredSession {
   std::optional<geometry::PhysicalTableFit> calibration;
   std::optional<ObserverParams> observer;
   std::int64_t last_t_ns = 0;  // latest time stamp logged (a resumed clock starts after it)
+  std::optional<std::string> run_options_json;  // the run options it last ran with (RunOptions)
 };
 Result<StoredSession> read_stored_session(const std::string& db_path, std::int64_t session_id);
 
