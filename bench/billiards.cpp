@@ -168,28 +168,12 @@ Frame reorthonormalize(double k, Frame f) {
   return f;
 }
 
-Vec2 rot90(Vec2 n) { return {-n.y, n.x}; }
 Vec2 slip_of(const Parameters& p, const Ball& b) {
   return {b.v.x + p.radius_m * b.w.z, b.v.y - p.radius_m * b.w.x};
 }
 double decayed(double w, double by) {
   const double left = std::abs(w) - by;
   return left > 0.0 ? std::copysign(left, w) : 0.0;
-}
-
-struct Local {
-  double vn, vt, wn, wu, wt;
-};
-Local to_local(const Ball& b, Vec2 n) {
-  const Vec2 t = rot90(n);
-  const Vec2 wh{b.w.x, b.w.z};
-  return {glm::dot(b.v, n), glm::dot(b.v, t), glm::dot(wh, n), b.w.y, glm::dot(wh, t)};
-}
-void from_local(Ball& b, Vec2 n, const Local& l) {
-  const Vec2 t = rot90(n);
-  b.v = l.vn * n + l.vt * t;
-  const Vec2 wh = l.wn * n + l.wt * t;
-  b.w = {wh.x, l.wu, wh.y};
 }
 
 class Stepper {
@@ -305,24 +289,7 @@ class Stepper {
   void ball_ball(std::size_t i, std::size_t j) {
     Ball& a = balls_[i];
     Ball& b = balls_[j];
-    const double m = p_.mass_kg, R = p_.radius_m, inertia = 0.4 * m * R * R;
-    const Vec2 na = direction_toward(c_, a.frame, frame_position(c_, b.frame));
-    const Vec2 nb = -direction_toward(c_, b.frame, frame_position(c_, a.frame));
-    Local la = to_local(a, na), lb = to_local(b, nb);
-    const double closing = la.vn - lb.vn;
-    if (!(closing > 0.0)) return;
-    const double jn = 0.5 * m * (1.0 + p_.restitution_ball) * closing;
-    la.vn -= jn / m;
-    lb.vn += jn / m;
-    const double slip = (la.vt - R * la.wu) - (lb.vt + R * lb.wu);
-    const double jt = std::min(p_.friction_ball * jn, m * std::abs(slip) / 7.0);
-    const double sign = slip > 0.0 ? 1.0 : -1.0;
-    la.vt -= sign * jt / m;
-    lb.vt += sign * jt / m;
-    la.wu += sign * R * jt / inertia;
-    lb.wu += sign * R * jt / inertia;
-    from_local(a, na, la);
-    from_local(b, nb, lb);
+    if (!collide_balls(c_, p_, a, b)) return;
     a.motion = classify(p_, a.v, a.w);
     b.motion = classify(p_, b.v, b.w);
     ++out_.contacts[key_of(EventKind::ball, static_cast<int>(i), static_cast<int>(j), -1, -1)];
@@ -330,19 +297,7 @@ class Stepper {
 
   void cushion(std::size_t i, int edge) {
     Ball& a = balls_[i];
-    const double m = p_.mass_kg, R = p_.radius_m, inertia = 0.4 * m * R * R;
-    const glm::dvec3& nu = c_.edges[static_cast<std::size_t>(edge)];
-    const Vec2 n = -glm::normalize(Vec2{glm::dot(a.frame[0], nu), glm::dot(a.frame[1], nu)});
-    Local l = to_local(a, n);
-    if (!(l.vn > 0.0)) return;
-    const double jn = m * (1.0 + p_.restitution_cushion) * l.vn;
-    l.vn = -p_.restitution_cushion * l.vn;
-    const double slip = l.vt - R * l.wu;
-    const double jt = std::min(p_.friction_cushion * jn, 2.0 * m * std::abs(slip) / 7.0);
-    const double sign = slip > 0.0 ? 1.0 : -1.0;
-    l.vt -= sign * jt / m;
-    l.wu += sign * R * jt / inertia;
-    from_local(a, n, l);
+    if (!collide_cushion(c_, p_, a, edge)) return;
     a.motion = classify(p_, a.v, a.w);
     ++out_.contacts[key_of(EventKind::cushion, static_cast<int>(i), -1, edge, -1)];
   }

@@ -15,6 +15,9 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // A contact is resolved once the gap is this small and closing.
 constexpr double kContact_m = 1e-12;
+// The most a touching, non-closing pair may close within one step of the
+// search (below the invariants' 1e-9 m).
+constexpr double kOverlap_m = 1e-10;
 // The shortest step of the root search away from a touching contact.
 constexpr double kMinStep_s = 1e-9;
 // How far ahead one pass of the search looks before it stops to check.
@@ -278,7 +281,9 @@ std::optional<double> first_contact(GapFn&& gap, double from, double to, double 
     // does not cancel.
     const double root = std::sqrt(rate * rate + 2.0 * bound * gp);
     double h = rate < 0.0 ? 2.0 * gp / (root - rate) : (rate + root) / bound;
-    if (g <= kContact_m) h = std::max(h, kMinStep_s);
+    // Touching and not closing (sliding along a cushion, two balls moving
+    // together): a step that lets the gap close by at most kOverlap_m.
+    if (g <= kContact_m) h = std::max({h, kMinStep_s, std::sqrt(2.0 * kOverlap_m / bound)});
     if (!(h > 0.0)) h = kMinStep_s;
     if (t + h == t) return t;  // no progress left in double: touching here
     t += h;
@@ -491,12 +496,6 @@ std::optional<Event> System::next_event(double until_s) {
 
 void System::resolve(const Event& e) {
   t_s_ = std::max(t_s_, e.t_s);
-  const double k = cloth_.k();
-  const double rho = cloth_.radius_m;
-  const Space space = cloth_.space();
-  const double m = params_.mass_kg;
-  const double R = params_.radius_m;
-  const double inertia = 0.4 * m * R * R;
   const auto i = static_cast<std::size_t>(e.a);
   Ball a = evaluate(segments_[i], e.t_s);
   switch (e.kind) {
@@ -518,62 +517,74 @@ void System::resolve(const Event& e) {
       a.pocket = e.pocket;
       begin_segment(i, e.t_s, a);
       break;
-    case EventKind::cushion: {
-      const glm::dvec3& nu = cloth_.edges[static_cast<std::size_t>(e.cushion)];
-      const Vec2 inward{glm::dot(a.frame[0], nu), glm::dot(a.frame[1], nu)};
-      const Vec2 n = -glm::normalize(inward);  // toward the cushion
-      Local l = to_local(a, n);
-      if (l.vn > 0.0) {
-        const double jn = m * (1.0 + params_.restitution_cushion) * l.vn;
-        l.vn = -params_.restitution_cushion * l.vn;
-        const double slip = l.vt - R * l.wu;
-        const double jt = std::min(params_.friction_cushion * jn, 2.0 * m * std::abs(slip) / 7.0);
-        const double sign = slip > 0.0 ? 1.0 : -1.0;
-        l.vt -= sign * jt / m;
-        l.wu += sign * R * jt / inertia;
-        from_local(a, n, l);
-        a.motion = Motion::sliding;
-      }
+    case EventKind::cushion:
+      if (collide_cushion(cloth_, params_, a, e.cushion)) a.motion = Motion::sliding;
       begin_segment(i, e.t_s, a);
       break;
-    }
     case EventKind::ball: {
       const auto j = static_cast<std::size_t>(e.b);
       Ball b = evaluate(segments_[j], e.t_s);
-      const glm::dvec3 pa = a.frame[2] * rho;
-      const glm::dvec3 pb = b.frame[2] * rho;
-      const glm::dvec3 da = detail::direction(space, pa, pb);
-      const glm::dvec3 db = detail::direction(space, pb, pa);
-      // Each ball's normal toward the other in its own frame; parallel
-      // transport along the joining geodesic takes one to minus the other.
-      const Vec2 na = glm::normalize(Vec2{detail::vector_form(k, da, a.frame[0]),
-                                          detail::vector_form(k, da, a.frame[1])});
-      const Vec2 nb = -glm::normalize(Vec2{detail::vector_form(k, db, b.frame[0]),
-                                           detail::vector_form(k, db, b.frame[1])});
-      Local la = to_local(a, na);
-      Local lb = to_local(b, nb);
-      const double closing = la.vn - lb.vn;
-      if (closing > 0.0) {
-        const double jn = 0.5 * m * (1.0 + params_.restitution_ball) * closing;
-        la.vn -= jn / m;
-        lb.vn += jn / m;
-        const double slip = (la.vt - R * la.wu) - (lb.vt + R * lb.wu);
-        const double jt = std::min(params_.friction_ball * jn, m * std::abs(slip) / 7.0);
-        const double sign = slip > 0.0 ? 1.0 : -1.0;
-        la.vt -= sign * jt / m;
-        lb.vt += sign * jt / m;
-        la.wu += sign * R * jt / inertia;
-        lb.wu += sign * R * jt / inertia;
-        from_local(a, na, la);
-        from_local(b, nb, lb);
-        a.motion = b.motion = Motion::sliding;
-      }
+      if (collide_balls(cloth_, params_, a, b)) a.motion = b.motion = Motion::sliding;
       begin_segment(i, e.t_s, a);
       begin_segment(j, e.t_s, b);
       break;
     }
   }
   check_after(e);
+}
+
+bool collide_cushion(const Cloth& cloth, const Parameters& p, Ball& a, int edge) {
+  const double m = p.mass_kg;
+  const double R = p.radius_m;
+  const double inertia = 0.4 * m * R * R;
+  const glm::dvec3& nu = cloth.edges[static_cast<std::size_t>(edge)];
+  const Vec2 inward{glm::dot(a.frame[0], nu), glm::dot(a.frame[1], nu)};
+  const Vec2 n = -glm::normalize(inward);  // toward the cushion
+  Local l = to_local(a, n);
+  if (!(l.vn > 0.0)) return false;
+  const double jn = m * (1.0 + p.restitution_cushion) * l.vn;
+  l.vn = -p.restitution_cushion * l.vn;
+  const double slip = l.vt - R * l.wu;
+  const double jt = std::min(p.friction_cushion * jn, 2.0 * m * std::abs(slip) / 7.0);
+  const double sign = slip > 0.0 ? 1.0 : -1.0;
+  l.vt -= sign * jt / m;
+  l.wu += sign * R * jt / inertia;
+  from_local(a, n, l);
+  return true;
+}
+
+bool collide_balls(const Cloth& cloth, const Parameters& p, Ball& a, Ball& b) {
+  const Space space = cloth.space();
+  const double k = cloth.k();
+  const double rho = cloth.radius_m;
+  const double m = p.mass_kg;
+  const double R = p.radius_m;
+  const double inertia = 0.4 * m * R * R;
+  const glm::dvec3 pa = a.frame[2] * rho;
+  const glm::dvec3 pb = b.frame[2] * rho;
+  const glm::dvec3 da = detail::direction(space, pa, pb);
+  const glm::dvec3 db = detail::direction(space, pb, pa);
+  // Each ball's normal toward the other in its own frame; parallel
+  // transport along the joining geodesic takes one to minus the other.
+  const Vec2 na = glm::normalize(Vec2{detail::vector_form(k, da, a.frame[0]), detail::vector_form(k, da, a.frame[1])});
+  const Vec2 nb = -glm::normalize(Vec2{detail::vector_form(k, db, b.frame[0]), detail::vector_form(k, db, b.frame[1])});
+  Local la = to_local(a, na);
+  Local lb = to_local(b, nb);
+  const double closing = la.vn - lb.vn;
+  if (!(closing > 0.0)) return false;
+  const double jn = 0.5 * m * (1.0 + p.restitution_ball) * closing;
+  la.vn -= jn / m;
+  lb.vn += jn / m;
+  const double slip = (la.vt - R * la.wu) - (lb.vt + R * lb.wu);
+  const double jt = std::min(p.friction_ball * jn, m * std::abs(slip) / 7.0);
+  const double sign = slip > 0.0 ? 1.0 : -1.0;
+  la.vt -= sign * jt / m;
+  lb.vt += sign * jt / m;
+  la.wu += sign * R * jt / inertia;
+  lb.wu += sign * R * jt / inertia;
+  from_local(a, na, la);
+  from_local(b, nb, lb);
+  return true;
 }
 
 void System::check_after(const Event& e) {

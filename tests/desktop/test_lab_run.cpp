@@ -298,7 +298,7 @@ TEST(LabRun, ADesktopPilotStrikesTheCueBallWithTheTrackedCue) {
                                -1, &stmt, nullptr), SQLITE_OK);
   ASSERT_EQ(sqlite3_step(stmt), SQLITE_ROW);
   EXPECT_EQ(std::string(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0))), "participant");
-  EXPECT_GT(sqlite3_column_double(stmt, 1), 1.5);
+  EXPECT_GT(sqlite3_column_double(stmt, 1), 0.3);
   EXPECT_LT(sqlite3_column_double(stmt, 1), 6.0);
   EXPECT_NEAR(sqlite3_column_double(stmt, 2), 0.0, 0.05);
   EXPECT_NEAR(sqlite3_column_double(stmt, 3), -1.0, 0.01);

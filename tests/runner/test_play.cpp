@@ -3,6 +3,7 @@
 // program (`curvlab billiards shot`) from its stored inputs alone, gives the
 // stored events; a play block killed with SIGKILL resumes at the rest state
 // after its last completed shot.
+#include "run_and_kill.hpp"
 #include "run_cli.hpp"
 #include "session_db.hpp"
 
@@ -10,18 +11,12 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
-#include <csignal>
-#include <fcntl.h>
 #include <fstream>
-#include <spawn.h>
 #include <sstream>
-#include <sys/wait.h>
-#include <thread>
-
-extern char** environ;
 
 using curvlab::testing::fresh_dir;
 using curvlab::testing::query;
+using curvlab::testing::run_and_kill;
 using curvlab::testing::run_cli;
 using Json = nlohmann::ordered_json;
 
@@ -127,34 +122,6 @@ TEST(PlayBlock, JudgePlayJudgeRunsInEverySpaceAndEachStoredShotReplaysToItsEvent
   }
 }
 
-// Starts curvlab with its output discarded and kills it once `ready()`.
-bool run_until_then_kill(const std::vector<std::string>& args, const std::function<bool()>& ready) {
-  std::vector<char*> argv;
-  std::string bin = CURVLAB_BIN;
-  argv.push_back(bin.data());
-  std::vector<std::string> copy = args;
-  for (auto& a : copy) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, bin.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) return false;
-  int status = 0;
-  for (int i = 0; i < 6000 && !ready(); ++i) {
-    if (waitpid(pid, &status, WNOHANG) != 0) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  const bool running = waitpid(pid, &status, WNOHANG) == 0;
-  if (running) {
-    kill(pid, SIGKILL);
-    waitpid(pid, &status, 0);
-  }
-  return running;
-}
 
 TEST(PlayBlock, KilledMidPlayResumesAtTheRestStateAfterTheLastShot) {
   const auto dir = fresh_dir("play_kill");
@@ -171,9 +138,9 @@ TEST(PlayBlock, KilledMidPlayResumesAtTheRestStateAfterTheLastShot) {
     const auto rows = query(db, "SELECT count(*) FROM shots");
     return rows.empty() ? 0 : std::stoi(rows[0][0]);
   };
-  ASSERT_TRUE(run_until_then_kill({"run", protocol, "--participant", "SIM01", "--db", db, "--render", "none",
+  ASSERT_TRUE(run_and_kill({"run", protocol, "--participant", "SIM01", "--db", db, "--render", "none",
                                    "--pace", "realtime"},
-                                  [&] { return shots_stored() >= 2; }))
+                           std::chrono::milliseconds(0), [&] { return shots_stored() >= 2; }))
       << "the session ended before two shots were stored";
   const int before = shots_stored();
   ASSERT_GE(before, 2);

@@ -160,20 +160,26 @@ void print_text(const std::vector<data::ListedSession>& sessions, ProtocolVersio
                    "down); its completed trials are kept\n";
 }
 
-void sessions_command(const SessionsArgs& a) {
-  if (std::error_code ec; std::filesystem::is_directory(a.db, ec))
-    throw UsageError("--db " + a.db + ": is a folder; expected a curvlab data file");
-  auto db = data::Database::open(a.db, data::OpenMode::read_only);
+// The --db file opened read-only, and its sessions.
+std::pair<data::Database, std::vector<data::ListedSession>> open_listing(const std::string& path) {
+  if (std::error_code ec; std::filesystem::is_directory(path, ec))
+    throw UsageError("--db " + path + ": is a folder; expected a curvlab data file");
+  auto db = data::Database::open(path, data::OpenMode::read_only);
   if (!db) raise(db.error());
   auto sessions = data::list_sessions(db.value());
   if (!sessions) raise(sessions.error());
-  ProtocolVersions versions(db.value());
+  return {std::move(db).value(), std::move(sessions).value()};
+}
+
+void sessions_command(const SessionsArgs& a) {
+  auto [database, sessions] = open_listing(a.db);
+  ProtocolVersions versions(database);
   if (!a.json) {
-    print_text(sessions.value(), versions, a.db);
+    print_text(sessions, versions, a.db);
     return;
   }
   Json doc = Json::array();
-  for (const auto& s : sessions.value())
+  for (const auto& s : sessions)
     doc.push_back(session_json(s, versions.of(s.summary.protocol_sha256), a.db));
   std::cout << doc.dump(2) << '\n';
 }
@@ -207,14 +213,9 @@ std::string session_line(const data::ListedSession& s, ProtocolVersions& version
 }
 
 void participants_command(const ParticipantsArgs& a) {
-  if (std::error_code ec; std::filesystem::is_directory(a.db, ec))
-    throw UsageError("--db " + a.db + ": is a folder; expected a curvlab data file");
-  auto db = data::Database::open(a.db, data::OpenMode::read_only);
-  if (!db) raise(db.error());
-  auto sessions = data::list_sessions(db.value());
-  if (!sessions) raise(sessions.error());
-  ProtocolVersions versions(db.value());
-  const auto people = by_participant(sessions.value());
+  auto [database, sessions] = open_listing(a.db);
+  ProtocolVersions versions(database);
+  const auto people = by_participant(sessions);
   if (a.json) {
     Json doc = Json::array();
     for (const auto& [pseudonym, list] : people) {

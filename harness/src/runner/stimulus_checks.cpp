@@ -133,7 +133,9 @@ std::vector<StimulusWarning> stimulus_warnings(const protocol::Protocol& p) {
           break;
         }
         const double ecc = std::acos(std::clamp(glm::dot(d, to_fixated[e].direction), -1.0, 1.0));
-        if (ecc > worst) {
+        // Ties (a stick's two ends seen symmetrically) go to the first point
+        // whatever the last bits of the build's arithmetic say.
+        if (ecc > worst + 1e-9) {
           worst = ecc;
           worst_point = point_name(judged, i, points.size());
         }

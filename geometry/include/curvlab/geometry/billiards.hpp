@@ -134,6 +134,15 @@ struct Strike {
 };
 Strike cue_strike(const Parameters& p, Vec2 aim_unit, double cue_speed_m_s, Vec2 tip_fraction);
 
+// The collision laws (docs/billiards.md, "Collisions"), on balls at the
+// moment of contact: restitution along the line of centres in a common frame
+// (one ball's carried to the other by parallel transport), Coulomb friction
+// across it. Return false, changing nothing, where the balls are not
+// closing. The balls' motions are left for the caller to classify.
+bool collide_balls(const Cloth& cloth, const Parameters& p, Ball& a, Ball& b);
+// A ball against edge `edge`'s cushion.
+bool collide_cushion(const Cloth& cloth, const Parameters& p, Ball& a, int edge);
+
 enum class EventKind { ball, cushion, pocket, rolling, spinning, stop };
 std::string_view to_string(EventKind kind);
 

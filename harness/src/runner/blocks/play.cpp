@@ -339,6 +339,8 @@ class PlayBlock {
             charge_from_ns_ = in.t_ns;
           } else if (charge_from_ns_) {
             const double held_s = static_cast<double>(in.t_ns - *charge_from_ns_) * 1e-9;
+            charge_from_ns_.reset();
+            if (held_s < 0.15) continue;  // a tap (a page's key) is not a stroke
             spec = sighted_shot(*rest_, balls_, f_.head());
             spec->cue_speed_m_s = std::clamp(0.8 + 3.0 * held_s, 0.8, 7.0);
             charge_from_ns_.reset();
