@@ -333,6 +333,51 @@ void System::search_pair(std::size_t i, std::size_t j, Search& s, double to_s) {
   }
 }
 
+namespace {
+
+// The first σ ≥ σ_now where A·C(σ) + B·S(σ) falls through c (a ball rolling
+// along a geodesic reaching R from an edge's line), in closed form per
+// space, polished by two Newton steps; nothing where it never does.
+std::optional<double> first_descending_root(const Space& space, double A, double B, double c, double sigma_now) {
+  const double k = space.k();
+  const auto f = [&](double x) { return A * space.C(x) + B * space.S(x); };
+  const auto fd = [&](double x) { return -k * A * space.S(x) + B * space.C(x); };
+  std::optional<double> sigma;
+  const auto consider = [&](double x) {
+    if (!std::isfinite(x) || x < sigma_now - 1e-12 || fd(x) >= 0.0) return;
+    if (!sigma || x < *sigma) sigma = x;
+  };
+  if (k == 0.0) {
+    if (B < 0.0) consider((c - A) / B);
+  } else if (k > 0.0) {
+    const double M = std::hypot(A, B);
+    if (M > c) {
+      const double phi = std::atan2(B, A);
+      double x = phi + std::acos(c / M);
+      const double turn = 2.0 * std::numbers::pi;
+      x -= turn * std::floor((x - sigma_now + 1e-9) / turn);
+      consider(x);
+    }
+  } else {
+    const double P = A + B, Q = A - B;
+    const double disc = c * c - P * Q;
+    if (disc >= 0.0) {
+      const double q = c + std::sqrt(disc);
+      if (P != 0.0 && q / P > 0.0) consider(std::log(q / P));
+      if (Q / q > 0.0) consider(std::log(Q / q));
+    }
+  }
+  if (!sigma) return std::nullopt;
+  double x = *sigma;
+  for (int it = 0; it < 2; ++it) {
+    const double d = fd(x);
+    if (d != 0.0) x -= (f(x) - c) / d;
+  }
+  return x;
+}
+
+}  // namespace
+
 void System::search_walls(std::size_t i, Search& s, double to_s) {
   const Segment& seg = segments_[i];
   const double end = std::min(to_s, seg.end_s);
@@ -362,47 +407,15 @@ void System::search_walls(std::size_t i, Search& s, double to_s) {
       // Closed form along the geodesic: A·C(σ) + B·S(σ) = ρ·S(R/ρ).
       const double v0 = glm::length(seg.start.v);
       const Vec2 u = seg.start.v / v0;
-      const glm::dvec3 p0 = seg.start.frame[2] * rho;
-      const double A = glm::dot(p0, nu);
+      const double A = glm::dot(seg.start.frame[2] * rho, nu);
       const double B = rho * glm::dot(ambient(seg.start.frame, u), nu);
       const double c = rho * space.S(R / rho);
       const double a = seg.accel_m_s2;
       const double tau_now = s.searched_to_s - seg.t0_s;
       const double sigma_now = (v0 * tau_now - 0.5 * a * tau_now * tau_now) / rho;
-      std::optional<double> sigma;
-      const auto f = [&](double x) { return A * space.C(x) + B * space.S(x); };
-      const auto fd = [&](double x) { return -k * A * space.S(x) + B * space.C(x); };
-      const auto consider = [&](double x) {
-        if (!std::isfinite(x) || x < sigma_now - 1e-12 || fd(x) >= 0.0) return;
-        if (!sigma || x < *sigma) sigma = x;
-      };
-      if (k == 0.0) {
-        if (B < 0.0) consider((c - A) / B);
-      } else if (k > 0.0) {
-        const double M = std::hypot(A, B);
-        if (M > c) {
-          const double phi = std::atan2(B, A);
-          double x = phi + std::acos(c / M);
-          const double turn = 2.0 * std::numbers::pi;
-          x -= turn * std::floor((x - sigma_now + 1e-9) / turn);
-          consider(x);
-        }
-      } else {
-        const double P = A + B, Q = A - B;
-        const double disc = c * c - P * Q;
-        if (disc >= 0.0) {
-          const double q = c + std::sqrt(disc);
-          if (P != 0.0 && q / P > 0.0) consider(std::log(q / P));
-          if (Q / q > 0.0) consider(std::log(Q / q));
-        }
-      }
+      const std::optional<double> sigma = first_descending_root(space, A, B, c, sigma_now);
       if (!sigma) continue;
-      double x = *sigma;
-      for (int it = 0; it < 2; ++it) {
-        const double d = fd(x);
-        if (d != 0.0) x -= (f(x) - c) / d;
-      }
-      const double dist = x * rho;
+      const double dist = *sigma * rho;
       const double disc = v0 * v0 - 2.0 * a * dist;
       if (disc < 0.0) continue;
       const double tau = 2.0 * dist / (v0 + std::sqrt(disc));

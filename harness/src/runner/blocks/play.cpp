@@ -43,6 +43,17 @@ phys::Parameters play_parameters(const protocol::PlaySettings& play) {
   return p;
 }
 
+// The point 0.5 m from the struck ball along `aim` (its frame's
+// coordinates), in native coordinates: the stored form of an aim.
+phys::Vec2 toward_along(const phys::System& sys, phys::Vec2 aim) {
+  const phys::Cloth& c = sys.cloth();
+  const geometry::Space space = c.space();
+  const phys::Frame f = sys.ball(0).frame;
+  const double t = 0.5 / c.radius_m;
+  return phys::to_native(c, space.C(t) * phys::frame_position(c, f) +
+                                c.radius_m * space.S(t) * (f[0] * aim.x + f[1] * aim.y));
+}
+
 // The simulated player's shot: for each object ball and pocket, the ghost
 // ball (2R behind the object ball on the geodesic from the pocket) and the
 // cut angle at it; the smallest cut wins. Aim and speed carry noise.
@@ -89,10 +100,7 @@ bl::ShotSpec choose_shot(const phys::System& sys, const std::vector<bl::BallPlac
   const phys::Vec2 dir = phys::direction_toward(c, cf, aim_point);
   const double turn = noise(rng) * kPi / 180.0;
   const phys::Vec2 aim{dir.x * std::cos(turn) - dir.y * std::sin(turn), dir.x * std::sin(turn) + dir.y * std::cos(turn)};
-  const double reach = 0.5;
-  const glm::dvec3 toward = space.C(reach / c.radius_m) * cue +
-                            c.radius_m * space.S(reach / c.radius_m) * (cf[0] * aim.x + cf[1] * aim.y);
-  s.toward_m = phys::to_native(c, toward);
+  s.toward_m = toward_along(sys, aim);
   s.cue_speed_m_s = std::clamp((1.2 + 2.2 * distance) * (1.0 + 0.08 * noise(rng)), 0.8, 7.0);
   s.tip = {0.05 * noise(rng), 0.15 + 0.1 * noise(rng)};
   return s;
@@ -320,32 +328,8 @@ class PlayBlock {
           f_.end(g, overlay, false, trial_id_);
           break;
         }
-        std::optional<bl::ShotSpec> spec;
         std::optional<std::string> cue_pose;
-        if (simulated_ && g.timing.now_ns >= next_shot_ns) spec = choose_shot(*rest_, balls_, params_, rng_);
-        if (cue_ && f_.tracking() != nullptr) {
-          cue_->update(f_.scene().scene(), *f_.tracking(), cue_ball_pose(), t_ns);
-          if (auto s = cue_->strike(params_.radius_m)) {
-            s->ball = balls_[0].id;
-            s->toward_m = toward_along(*rest_, cue_->aim());
-            spec = s;
-            cue_pose = lab_cue_pose();
-          }
-        }
-        // The desktop's cue: hold the key, let go to strike.
-        for (const auto& in : g.inputs) {
-          if (!in.intents.has(io::Intent::cue_strike)) continue;
-          if (in.pressed) {
-            charge_from_ns_ = in.t_ns;
-          } else if (charge_from_ns_) {
-            const double held_s = static_cast<double>(in.t_ns - *charge_from_ns_) * 1e-9;
-            charge_from_ns_.reset();
-            if (held_s < 0.15) continue;  // a tap (a page's key) is not a stroke
-            spec = sighted_shot(*rest_, balls_, f_.head());
-            spec->cue_speed_m_s = std::clamp(0.8 + 3.0 * held_s, 0.8, 7.0);
-            charge_from_ns_.reset();
-          }
-        }
+        const auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
         if (spec) rolling = start_shot(t_ns, *spec, cue_pose);
       }
       if (rolling) {
@@ -362,6 +346,67 @@ class PlayBlock {
       f_.end(g, overlay, false, trial_id_);
       if (g.signal == Signal::quit) return Outcome::quit;
     }
+    store_play(start_ns);
+    scene_->hide(f_.scene().scene());
+    if (cue_) cue_->hide(f_.scene().scene());
+    return Outcome::done;
+  }
+
+ private:
+  struct Rolling {
+    std::int64_t strike_ns = 0;
+    bl::ShotSpec spec;
+    bl::ShotOutcome outcome;
+    phys::System system;
+    std::optional<std::string> cue_pose;
+    phys::Strike strike;
+  };
+
+  // Laps enough for the whole block at a slow walk, 0.4 m/s.
+  geometry::Trajectory walking_trajectory(const geometry::PhysicalTable& table) const {
+    geometry::WalkAroundOptions o;
+    o.common.table = table;
+    o.speed_m_s = 0.4;
+    const double circle_m = 2.0 * kPi * (0.5 * table.edge_m + o.common.head_distance_m);
+    o.laps = std::ceil(play_.duration_s * o.speed_m_s / circle_m) + 1.0;
+    return geometry::walk_around(o);
+  }
+
+  // This frame's strike, if any: the simulated player's when its thinking
+  // time is up; the tracked cue's tip entering the cue ball; the desktop's
+  // strike key held and let go.
+  std::optional<bl::ShotSpec> take_strike(const Frame& g, std::int64_t t_ns, std::int64_t next_shot_ns,
+                                          std::optional<std::string>& cue_pose) {
+std::optional<bl::ShotSpec> spec;
+    if (simulated_ && g.timing.now_ns >= next_shot_ns) spec = choose_shot(*rest_, balls_, params_, rng_);
+    if (cue_ && f_.tracking() != nullptr) {
+      cue_->update(f_.scene().scene(), *f_.tracking(), cue_ball_pose(), t_ns);
+      if (auto s = cue_->strike(params_.radius_m)) {
+        s->ball = balls_[0].id;
+        s->toward_m = toward_along(*rest_, cue_->aim());
+        spec = s;
+        cue_pose = lab_cue_pose();
+      }
+    }
+    // The desktop's cue: hold the key, let go to strike.
+    for (const auto& in : g.inputs) {
+      if (!in.intents.has(io::Intent::cue_strike)) continue;
+      if (in.pressed) {
+        charge_from_ns_ = in.t_ns;
+      } else if (charge_from_ns_) {
+        const double held_s = static_cast<double>(in.t_ns - *charge_from_ns_) * 1e-9;
+        charge_from_ns_.reset();
+        if (held_s < 0.15) continue;  // a tap (a page's key) is not a stroke
+        spec = sighted_shot(*rest_, balls_, f_.head());
+        spec->cue_speed_m_s = std::clamp(0.8 + 3.0 * held_s, 0.8, 7.0);
+      }
+    }
+    return spec;
+  }
+
+  // The block's figures (a play_summary event and the run summary) and its
+  // one trial, completed.
+  void store_play(std::int64_t start_ns) {
     events::PlaySummary summary;
     summary.block = run_.block.name;
     summary.shots = shots_;
@@ -382,28 +427,6 @@ class PlayBlock {
     r.response_device = simulated_ ? "simulated" : "participant";
     f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(r))));
     f_.report_trial(index_, data::TrialStatus::completed, "");
-    scene_->hide(f_.scene().scene());
-    if (cue_) cue_->hide(f_.scene().scene());
-    return Outcome::done;
-  }
-
- private:
-  struct Rolling {
-    std::int64_t strike_ns = 0;
-    bl::ShotSpec spec;
-    bl::ShotOutcome outcome;
-    phys::System system;
-    std::optional<std::string> cue_pose;
-  };
-
-  // Laps enough for the whole block at a slow walk, 0.4 m/s.
-  geometry::Trajectory walking_trajectory(const geometry::PhysicalTable& table) const {
-    geometry::WalkAroundOptions o;
-    o.common.table = table;
-    o.speed_m_s = 0.4;
-    const double circle_m = 2.0 * kPi * (0.5 * table.edge_m + o.common.head_distance_m);
-    o.laps = std::ceil(play_.duration_s * o.speed_m_s / circle_m) + 1.0;
-    return geometry::walk_around(o);
   }
 
   std::int64_t think_ns() {
@@ -472,17 +495,6 @@ class PlayBlock {
            geometry::translation_m(f_.world().space, {0.0, params_.radius_m, 0.0});
   }
 
-  // The point 0.5 m from the cue ball along `aim` (its frame's coordinates),
-  // in native coordinates: the stored form of an aim.
-  phys::Vec2 toward_along(const phys::System& sys, phys::Vec2 aim) const {
-    const phys::Cloth& c = sys.cloth();
-    const geometry::Space space = c.space();
-    const phys::Frame f = sys.ball(0).frame;
-    const double t = 0.5 / c.radius_m;
-    return phys::to_native(c, space.C(t) * phys::frame_position(c, f) +
-                                  c.radius_m * space.S(t) * (f[0] * aim.x + f[1] * aim.y));
-  }
-
   // The right hand and cue tip in the lab at the strike, for the shot's record.
   std::string lab_cue_pose() const {
     const auto& hand = f_.lab()[geometry::Device::right_hand];
@@ -494,11 +506,10 @@ class PlayBlock {
   }
 
   Rolling start_shot(std::int64_t t_ns, const bl::ShotSpec& spec, std::optional<std::string> cue_pose) {
-    Rolling r{t_ns, spec, bl::simulate(cloth_, params_, balls_, spec, 120.0), bl::at_rest(cloth_, params_, balls_),
-              std::move(cue_pose)};
-    const phys::Strike strike = bl::strike_for(r.system, params_, 0, spec);
-    if (!strike.miscue) r.system.set_motion(0, strike.v, strike.w);
-    f_.event(trial_id_, events::Strike{shots_, spec.ball, glm::length(strike.v), strike.miscue}, t_ns);
+    Rolling r{t_ns, spec, bl::simulate(cloth_, params_, balls_, spec, 120.0), *rest_, std::move(cue_pose),
+              bl::strike_for(*rest_, params_, 0, spec)};
+    if (!r.strike.miscue) r.system.set_motion(0, r.strike.v, r.strike.w);
+    f_.event(trial_id_, events::Strike{shots_, spec.ball, glm::length(r.strike.v), r.strike.miscue}, t_ns);
     return r;
   }
 
@@ -511,12 +522,12 @@ class PlayBlock {
     s.rest_ns = rest_ns;
     s.player = simulated_ ? "simulated" : "participant";
     s.ball = r.spec.ball;
-    const phys::System rest = bl::at_rest(cloth_, params_, balls_);
-    const phys::Vec2 aim = phys::direction_toward(cloth_, rest.ball(0).frame, phys::from_native(cloth_, r.spec.toward_m));
+    // rest_ still holds the balls as they were struck.
+    const phys::Vec2 aim =
+        phys::direction_toward(cloth_, rest_->ball(0).frame, phys::from_native(cloth_, r.spec.toward_m));
     s.aim_x = aim.x;
     s.aim_z = aim.y;
-    const phys::Strike strike = bl::strike_for(rest, params_, 0, r.spec);
-    s.speed_m_s = glm::length(strike.v);
+    s.speed_m_s = glm::length(r.strike.v);
     s.cue_speed_m_s = r.spec.cue_speed_m_s;
     if (r.spec.cue_speed_m_s) {
       s.tip_side = r.spec.tip.x;
