@@ -3,6 +3,7 @@
 layout(constant_id = 0) const int NATIVE_VIEW = 0;  // 0 tourist, 1 native
 layout(constant_id = 1) const int CURVATURE = 0;    // k: +1 S3, 0 E3, −1 H3
 layout(constant_id = 2) const int BACK = 0;         // 1: S3 back hemisphere
+layout(constant_id = 28) const int OVERLAY = 0;     // 1: head-locked panel, model_view is clip ← model
 
 #include "curved.glsl"
 
@@ -26,6 +27,12 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out vec2 out_light;  // x: toward the viewer, y: from above
 
 void main() {
+  if (OVERLAY != 0) {
+    gl_Position = draw.model_view * in_position;
+    out_color = in_color * draw.tint;
+    out_light = vec2(1.0);
+    return;
+  }
   float rho = view.params.x;
   vec4 p = draw.model_view * in_position;
   vec4 n = draw.model_view * in_normal;

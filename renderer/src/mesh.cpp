@@ -365,6 +365,21 @@ MeshData build_panel(const Space& space, double width_m, double height_m, int le
   return m;
 }
 
+MeshData build_head_panel(double half_w_m, double half_h_m) {
+  MeshData m;
+  m.shading = Shading::text;
+  for (int j = 0; j <= 1; ++j)
+    for (int i = 0; i <= 1; ++i) {
+      const auto u = static_cast<float>(i);
+      const auto v = static_cast<float>(j);
+      m.vertices.push_back({glm::vec4(static_cast<float>((2.0 * i - 1.0) * half_w_m),
+                                      static_cast<float>((1.0 - 2.0 * j) * half_h_m), 0.0f, 1.0f),
+                            glm::vec4(0.0f, 0.0f, 1.0f, 0.0f), glm::vec4(u, v, 0.0f, 1.0f)});
+    }
+  grid_indices(m, 0, 2, 2);
+  return m;
+}
+
 MeshInfo panel_info(const Space& space, double width_m, double height_m) {
   MeshInfo info;
   info.bounds.push_back({geometry::origin(space), 0.5 * std::hypot(width_m, height_m)});

@@ -14,6 +14,7 @@ struct SpecData {
   std::int32_t curvature;
   std::int32_t back;
   std::int32_t shading;
+  std::int32_t overlay;
   glm::vec3 ink;    // text panels' glyphs, linear RGB
   glm::vec3 paper;  // text panels' ground, linear RGB
   // Tubes (tube.frag): the stick's colours, linear RGB, and its rings.
@@ -32,9 +33,9 @@ std::int32_t native_view(Projection proj) {
 }
 
 // The specialisation constants of a pipeline's shaders.
-SpecData spec_data(Projection proj, int k, Hemisphere hemi, Shading shading) {
-  SpecData spec{native_view(proj), k, hemi == Hemisphere::back ? 1 : 0,
-                static_cast<std::int32_t>(shading), glm::vec3(palette::text_ink),
+SpecData spec_data(const PipelineKey& key) {
+  SpecData spec{native_view(key.projection), key.k, key.hemisphere == Hemisphere::back ? 1 : 0,
+                static_cast<std::int32_t>(key.shading), key.overlay ? 1 : 0, glm::vec3(palette::text_ink),
                 glm::vec3(palette::text_paper),
                 {glm::vec3(palette::stick_butt), glm::vec3(palette::stick_shaft),
                  glm::vec3(palette::stick_tip), glm::vec3(palette::stick_ring)},
@@ -61,6 +62,7 @@ std::vector<vk::SpecializationMapEntry> spec_entries() {
   for (std::uint32_t i = 0; i < 5; ++i)
     entries.push_back({22 + i, static_cast<std::uint32_t>(offsetof(SpecData, ring_fractions) + 4 * i), 4});
   entries.push_back({27, offsetof(SpecData, ring_half_m), 4});
+  entries.push_back({28, offsetof(SpecData, overlay), 4});
   return entries;
 }
 
@@ -84,6 +86,8 @@ const vk::PipelineRasterizationStateCreateInfo kRasterization{.polygonMode = vk:
                                                               .lineWidth = 1.0f};
 const vk::PipelineDepthStencilStateCreateInfo kDepthTest{
     .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE, .depthCompareOp = vk::CompareOp::eLess};
+// Head-locked panels are drawn last, over whatever the scene put there.
+const vk::PipelineDepthStencilStateCreateInfo kNoDepth{.depthTestEnable = VK_FALSE, .depthWriteEnable = VK_FALSE};
 
 // Tubes carry their coverage in alpha and are blended over what is behind
 // them (they are drawn after everything else); the rest is opaque.
@@ -114,7 +118,7 @@ std::vector<std::uint32_t> compile_or_abort(std::string_view name, ShaderStage s
 vk::raii::Pipeline make_pipeline(const vk::raii::Device& dev, const PipelineKey& key, const PipelineShaders& shaders,
                                  vk::PipelineLayout layout, std::uint32_t msaa) {
   const bool tube = key.shading == Shading::tube;
-  const SpecData spec = spec_data(key.projection, key.k, key.hemisphere, key.shading);
+  const SpecData spec = spec_data(key);
   const auto entries = spec_entries();
   const vk::SpecializationInfo spec_info{.mapEntryCount = static_cast<std::uint32_t>(entries.size()),
                                          .pMapEntries = entries.data(),
@@ -155,7 +159,7 @@ vk::raii::Pipeline make_pipeline(const vk::raii::Device& dev, const PipelineKey&
                                             .pViewportState = &viewport,
                                             .pRasterizationState = &kRasterization,
                                             .pMultisampleState = &multisample,
-                                            .pDepthStencilState = &kDepthTest,
+                                            .pDepthStencilState = key.overlay ? &kNoDepth : &kDepthTest,
                                             .pColorBlendState = &blend_state,
                                             .pDynamicState = &dynamic,
                                             .layout = layout};

@@ -44,6 +44,7 @@ struct PipelineKey {
   Hemisphere hemisphere = Hemisphere::front;
   Shading shading = Shading::lit;
   Topology topology = Topology::triangles;
+  bool overlay = false;  // a head-locked panel: clip position given, no depth
   auto operator<=>(const PipelineKey&) const = default;
 };
 

@@ -137,6 +137,14 @@ std::pair<int, double> choose_level(const ViewConstants& view, Hemisphere hemi,
   return {level, err};
 }
 
+glm::dmat4 head_locked_clip(const EyeOffset& eye, const glm::dmat4& nose_from_model) {
+  const glm::dmat3 rt = glm::transpose(eye.rotation);
+  glm::dmat4 eye_from_nose(rt);
+  eye_from_nose[3] = glm::dvec4(-(rt * eye.position_m), 1.0);
+  // Euclidean points (x, y, z, 1): w/(−z) is 1/distance, 20 at 5 cm, 0.01 at 100 m.
+  return projection_matrix(eye.fov, 1.0 / 0.05, 1.0 / 100.0, 0.0, 1.0) * eye_from_nose * nose_from_model;
+}
+
 RenderPlan plan_frame(const Scene& scene, const FrameDescription& frame) {
   RenderPlan plan;
   const bool s3 = frame.space.kind == SpaceKind::S3;
@@ -153,6 +161,11 @@ RenderPlan plan_frame(const Scene& scene, const FrameDescription& frame) {
       for (std::size_t i = 0; i < objects.size(); ++i) {
         const SceneObject& o = objects[i];
         if (!o.visible) continue;
+        if (o.head_locked) {
+          if (hemi == Hemisphere::front)
+            vp.draws.push_back({i, 0, hemi, head_locked_clip(frame.rig.eyes[e], o.pose.m), true});
+          continue;
+        }
         const glm::dmat4 mv = vp.constants.viewer_from_world.m * o.pose.m;
         bool visible = o.info.bounds.empty();
         for (const auto& ball : o.info.bounds)

@@ -269,15 +269,23 @@ void Renderer::Impl::record_draws(FrameRecording& rec, const ViewPlan& vp, const
   const vk::raii::CommandBuffer& cb = rec.slot.cb;
   FrameStats& stats = rec.stats;
   vk::Pipeline bound{};
-  // Two passes over the draws: tubes last, as they blend over what is
-  // behind them.
-  for (const bool tubes : {false, true}) {
+  // Three passes over the draws: the opaque scene, then tubes (they blend
+  // over what is behind them), then head-locked panels over everything.
+  enum class Pass { scene, tubes, overlays };
+  auto pass_of = [&](std::size_t i) {
+    if (vp.draws[i].overlay) return Pass::overlays;
+    return draws.meshes[i]->shading == Shading::tube ? Pass::tubes : Pass::scene;
+  };
+  for (const Pass pass : {Pass::scene, Pass::tubes, Pass::overlays}) {
     for (std::size_t i = 0; i < vp.draws.size(); ++i) {
-      if ((draws.meshes[i]->shading == Shading::tube) != tubes) continue;
+      if (pass_of(i) != pass) continue;
       const PlannedDraw& d = vp.draws[i];
       GpuMesh& m = *draws.meshes[i];
       if (m.index_count == 0) continue;
-      const auto& pipe = pipeline({rec.frame.settings.projection, rec.k, d.hemisphere, m.shading, m.topology});
+      const PipelineKey key = d.overlay ? PipelineKey{.shading = m.shading, .topology = m.topology, .overlay = true}
+                                        : PipelineKey{rec.frame.settings.projection, rec.k, d.hemisphere, m.shading,
+                                                      m.topology};
+      const auto& pipe = pipeline(key);
       if (*pipe != bound) {
         cb.bindPipeline(vk::PipelineBindPoint::eGraphics, *pipe);
         bound = *pipe;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <memory>
+#include <numbers>
 
 namespace curvlab::renderer {
 
@@ -86,6 +87,29 @@ std::variant<SceneObject, RenderError> text_panel_object(const Space& space, std
   o.info = panel_info(space, width_m, height_m);
   o.pose = pose;
   o.text = std::move(std::get<CoverageBitmap>(bmp));
+  return o;
+}
+
+std::variant<SceneObject, RenderError> head_panel_object(std::string name, const std::string& text,
+                                                         const std::string& font, const HeadPanelLayout& layout) {
+  const double line_px = layout.text_height_deg * layout.px_per_deg;
+  auto made = render_text_block(text, line_px, static_cast<int>(std::lround(layout.max_width_deg * layout.px_per_deg)),
+                                font);
+  if (auto* e = std::get_if<RenderError>(&made)) return *e;
+  TextBlock block = std::move(std::get<TextBlock>(made));
+  // A flat card facing the eyes at distance_m, its angular size the
+  // bitmap's at px_per_deg (half-angles, so the edges subtend exactly that).
+  const double deg = std::numbers::pi / 180.0;
+  const double d = layout.distance_m;
+  const double half_w = d * std::tan(0.5 * block.bitmap.width / layout.px_per_deg * deg);
+  const double half_h = d * std::tan(0.5 * block.bitmap.height / layout.px_per_deg * deg);
+  SceneObject o;
+  o.name = std::move(name);
+  o.build = [half_w, half_h](int) { return build_head_panel(half_w, half_h); };
+  o.pose = Isometry{glm::dmat4(1.0)};
+  o.pose.m[3] = glm::dvec4(0.0, d * std::tan(layout.elevation_deg * deg), -d, 1.0);
+  o.text = std::move(block.bitmap);
+  o.head_locked = true;
   return o;
 }
 

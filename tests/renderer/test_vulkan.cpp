@@ -692,3 +692,124 @@ TEST_F(VulkanTest, SrgbTargetsShowTheAuthoredDisplayValues) {
   EXPECT_NEAR(right.pixels[1], 0.017 * 255, 1.0);
   EXPECT_NEAR(right.pixels[2], 0.03 * 255, 1.0);
 }
+
+// ---- head-locked panels: what the participant reads ----------------------
+
+namespace {
+
+// The ink of the response panel in a rendered eye: the panel is the box of
+// pixels in the panel's paper colour, its ink the pixels inside that are
+// nearer the ink's colour than the paper's.
+struct PanelInk {
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // the panel's box, inclusive
+  std::vector<std::uint8_t> ink;          // row major over the box
+  [[nodiscard]] int width() const { return x1 - x0 + 1; }
+  [[nodiscard]] int height() const { return y1 - y0 + 1; }
+  [[nodiscard]] bool at(int x, int y) const { return ink[static_cast<std::size_t>(y * width() + x)] != 0; }
+};
+
+PanelInk find_panel(const Rgba8Image& img) {
+  auto to_display = [](const glm::vec4& c) {
+    return glm::dvec3(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z));
+  };
+  const glm::dvec3 paper = to_display(palette::text_paper);
+  const glm::dvec3 ink = to_display(palette::text_ink);
+  auto channel = [&](int x, int y, int c) {
+    return static_cast<double>(img.pixels[static_cast<std::size_t>((y * img.width + x) * 4 + c)]) / 255.0;
+  };
+  PanelInk p{img.width, img.height, -1, -1, {}};
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      bool is_paper = true;
+      for (int c = 0; c < 3; ++c) is_paper = is_paper && std::abs(channel(x, y, c) - paper[c]) < 1.5 / 255.0;
+      if (!is_paper) continue;
+      p.x0 = std::min(p.x0, x), p.y0 = std::min(p.y0, y), p.x1 = std::max(p.x1, x), p.y1 = std::max(p.y1, y);
+    }
+  if (p.x1 < p.x0) return p;
+  const double mid = 0.5 * (paper.y + ink.y);
+  for (int y = p.y0; y <= p.y1; ++y)
+    for (int x = p.x0; x <= p.x1; ++x) p.ink.push_back(channel(x, y, 1) > mid ? 1 : 0);
+  return p;
+}
+
+// The rows of the panel's first line of text: the first run of rows with ink.
+std::pair<int, int> first_line_rows(const PanelInk& p) {
+  int first = -1;
+  for (int y = 0; y < p.height(); ++y) {
+    bool any = false;
+    for (int x = 0; x < p.width(); ++x) any = any || p.at(x, y);
+    if (any && first < 0) first = y;
+    if (!any && first >= 0) return {first, y - 1};
+  }
+  return {first, p.height() - 1};
+}
+
+}  // namespace
+
+// The response panel is fixed to the head and drawn over the curved scene:
+// its capitals are as tall as the protocol's viewing.text_height_deg says,
+// at least half a degree, identical in S3, E3 and H3, and never mirrored
+// (an F's stem is on its left).
+TEST_F(VulkanTest, ResponsePanelTextIsTheStatedVisualAngleInEverySpace) {
+  constexpr std::uint32_t px = 640;  // the desktop pilot's eye
+  const double px_per_deg = px / 90.0;
+  // Pixels per radian at the centre of a 90° view.
+  const double focal_px = 0.5 * px / std::tan(std::numbers::pi / 4.0);
+  const std::string prompt = "FFF FFF\n\n[1]\u00a0one     [2]\u00a0two";
+  std::vector<PanelInk> panels;
+  for (const SpaceKind kind : {SpaceKind::S3, SpaceKind::E3, SpaceKind::H3}) {
+    SCOPED_TRACE(std::string(geometry::to_string(kind)));
+    const auto s = settings_in(kind);
+    auto made = harness::runner::viewed_scene(SceneKind::table, s, {.panel_px_per_deg = px_per_deg}, prompt,
+                                              CURVLAB_DEFAULT_FONT);
+    ASSERT_TRUE(made) << made.error().message;
+    Renderer renderer(ctx(), RendererOptions{.msaa = 1});
+    OffscreenTarget target(ctx(), px, px);
+    renderer.render(made.value().scene, frame_for(made.value(), ViewPreset::tourist, px), target);
+    const Rgba8Image left = target.image(Eye::left);
+    if (kind == SpaceKind::H3) {
+      std::filesystem::create_directories(CURVLAB_GOLDEN_OUT_DIR);
+      ASSERT_TRUE(test::png_written(
+          write_png((std::filesystem::path(CURVLAB_GOLDEN_OUT_DIR) / "response_panel_H3.png").string(), left)));
+    }
+    PanelInk p = find_panel(left);
+    ASSERT_GT(p.width(), 20) << "no response panel in the image";
+    // The panel lies above the line of sight, clear of the image's centre.
+    EXPECT_LT(p.y1, static_cast<int>(px) / 2);
+
+    const auto [top, bottom] = first_line_rows(p);
+    ASSERT_GE(top, 0) << "no text on the panel";
+    const int cap_px = bottom - top + 1;
+    auto block = renderer::render_text_block("F", s.viewing.text_height_deg * px_per_deg, 600, CURVLAB_DEFAULT_FONT);
+    ASSERT_TRUE(std::holds_alternative<renderer::TextBlock>(block));
+    const double cap_deg = std::get<renderer::TextBlock>(block).cap_height_px / px_per_deg;
+    // A flat card 16° above the line of sight: a degree there spans sec²(16°)
+    // of a degree's pixels at the centre.
+    const double sec2 = 1.0 / std::pow(std::cos(16.0 * std::numbers::pi / 180.0), 2);
+    const double expected_px = cap_deg * std::numbers::pi / 180.0 * focal_px * sec2;
+    EXPECT_NEAR(cap_px, expected_px, 1.5) << "capital height " << cap_px << " px, stated " << cap_deg << "°";
+    EXPECT_GE(cap_px, 0.5 * std::numbers::pi / 180.0 * focal_px) << "text under half a degree";
+
+    // Not mirrored: the first ink column of the first line is an F's stem
+    // (as tall as the capital), the last its arm's end (short).
+    auto column_ink = [&](int x) {
+      int n = 0;
+      for (int y = top; y <= bottom; ++y) n += p.at(x, y) ? 1 : 0;
+      return n;
+    };
+    int first_col = -1, last_col = -1;
+    for (int x = 0; x < p.width(); ++x)
+      if (column_ink(x) > 0) {
+        if (first_col < 0) first_col = x;
+        last_col = x;
+      }
+    EXPECT_GE(column_ink(first_col), cap_px - 1);
+    EXPECT_LE(column_ink(last_col), cap_px / 2);
+    panels.push_back(std::move(p));
+  }
+  for (std::size_t i = 1; i < panels.size(); ++i) {
+    EXPECT_EQ(panels[i].width(), panels[0].width());
+    EXPECT_EQ(panels[i].height(), panels[0].height());
+    EXPECT_EQ(panels[i].ink, panels[0].ink) << "the panel's text differs between spaces";
+  }
+}

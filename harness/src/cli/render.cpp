@@ -187,8 +187,11 @@ void run_render(const RenderArgs& a) {
   const harness::protocol::Settings s = scene_settings(a, rq);
   // Options that give no table are bad input (exit 2); an unreadable prompt font is io (exit 1).
   auto made = harness::runner::viewed_scene(
-      rq.scene, s, {.eye_height_m = a.eye_height_m, .yaw_rad = a.yaw_deg * std::numbers::pi / 180.0}, kPrompt,
-      CURVLAB_DEFAULT_FONT);
+      rq.scene, s,
+      {.eye_height_m = a.eye_height_m,
+       .yaw_rad = a.yaw_deg * std::numbers::pi / 180.0,
+       .panel_px_per_deg = static_cast<double>(rq.width_px) / a.fov_deg},
+      kPrompt, CURVLAB_DEFAULT_FONT);
   if (!made) raise(made.error());
   auto& stimulus = made.value();
 

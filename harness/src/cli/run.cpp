@@ -70,7 +70,7 @@ void add_backend_options(CLI::App* cmd, BackendArgs& b) {
   cmd->add_flag("--software", b.software, "use a CPU Vulkan device (lavapipe) even with a GPU");
   cmd->add_option("--window-size", b.window_size, "desktop: per-eye size WxH (default 960x960)");
   cmd->add_option("--preview", b.preview, "desktop: side-by-side (default), left or right");
-  cmd->add_option("--screenshot", b.screenshot, "desktop: save every onset (and F12) here");
+  cmd->add_option("--screenshot", b.screenshot, "desktop: save every stimulus onset and response window (and F12) here");
   cmd->add_option("--key-script", b.key_script,
                   "a file of scripted key presses (desktop; headless: they answer instead of the simulated observer)");
   cmd->add_option("--responses", b.responses,

@@ -446,6 +446,8 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
     throw DeviceFailure("vkCreateSwapchainKHR", "unusable surface", e->message);
   }
   const bool onset = overlay.phase == harness::io::Phase::stimulus && last_phase_ != harness::io::Phase::stimulus;
+  // The response panel as the participant first read it, numbered as its stimulus.
+  const bool answering = overlay.phase == harness::io::Phase::response && last_phase_ != harness::io::Phase::response;
   last_phase_ = overlay.phase;
   if (!std::get<bool>(ready)) return stats;  // minimised: nothing to draw into
 
@@ -460,6 +462,11 @@ renderer::FrameStats DesktopBackend::submit(const renderer::Scene& scene,
   if (onset && !options_.screenshot_dir.empty()) {
     char name[32];
     std::snprintf(name, sizeof name, "stimulus_%03d", ++stimulus_onsets_);
+    save_frame((std::filesystem::path(options_.screenshot_dir) / name).string());
+  }
+  if (answering && !options_.screenshot_dir.empty()) {
+    char name[32];
+    std::snprintf(name, sizeof name, "response_%03d", stimulus_onsets_);
     save_frame((std::filesystem::path(options_.screenshot_dir) / name).string());
   }
   if (f12_) {

@@ -243,6 +243,10 @@ std::vector<SettingInfo> make_registry() {
       boolean<&S::viewing, &Viewing::back_hemisphere>("viewing.back_hemisphere", "S3: draw the antipodal images"),
       number<&S::viewing, &Viewing::ipd_m>("viewing.ipd_m", 0.045, 0.085,
                                            "default interpupillary distance (used when the runtime gives none)"),
+      number<&S::viewing, &Viewing::text_height_deg>(
+          "viewing.text_height_deg", 0.5, 6.0,
+          "height of a line of the participant's panels (instructions, prompts, answers) in degrees of "
+          "visual angle; the panels are fixed to the head, the same in every space"),
       {"viewing.msaa", K::integer_or_auto, 1, 8, {"1", "2", "4", "8"},
        "samples per pixel for anti-aliased edges (1: none), clamped to what the device supports; "
        "\"auto\": 4 on a GPU, 1 on a CPU device (lavapipe)",

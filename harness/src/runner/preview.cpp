@@ -5,6 +5,7 @@
 #include "curvlab/harness/protocol/judgement.hpp"
 #include "curvlab/harness/runner/predict.hpp"
 #include "curvlab/harness/runner/stimulus.hpp"
+#include "curvlab/harness/runner/trial_state.hpp"
 #include "curvlab/harness/platform/process.hpp"
 #include "curvlab/harness/version.hpp"
 #include "curvlab/renderer/context.hpp"
@@ -287,7 +288,8 @@ Result<Rendered> render_condition(const protocol::Protocol& p, const protocol::P
   auto made = make_world(s);
   if (!made) return made.error();
   const World world = std::move(made).value();
-  auto built = TrialScene::build(world, s, block ? block->judgement.prompt : std::string(), CURVLAB_DEFAULT_FONT);
+  auto built = TrialScene::build(world, s, block ? response_panel_text(block->judgement, {}) : std::string(),
+                                 CURVLAB_DEFAULT_FONT);
   if (!built) return built.error();
   auto& scene = built.value();
   const geometry::Isometry head = standing_head(world, s);

@@ -1,5 +1,6 @@
 #include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/runner/replay.hpp"
+#include "curvlab/harness/runner/trial_state.hpp"
 
 #include "play_scene.hpp"
 
@@ -236,7 +237,7 @@ Result<ReplayResult> replay_frame(const ReplayRequest& rq) {
   auto made = make_world(f.settings);
   if (!made) return made.error();
   const World world = std::move(made).value();
-  auto built = TrialScene::build(world, f.settings, f.block ? f.block->judgement.prompt : std::string(),
+  auto built = TrialScene::build(world, f.settings, f.block ? response_panel_text(f.block->judgement, {}) : std::string(),
                                  CURVLAB_DEFAULT_FONT);
   if (!built) return built.error();
   auto& scene = built.value();

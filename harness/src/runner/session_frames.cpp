@@ -73,9 +73,8 @@ SessionFrames::SessionFrames(SessionSetup& s)
   restore_adaptive(s.staircase_history);
   resumed_trial.attempts = s.first_trial_attempts;
   resumed_trial.aborts = s.first_trial_aborts;
-  std::vector<io::Reach> reach;
-  for (const io::ResponseSource* source : station.responses) reach.push_back(source->reach());
-  continue_line_ = continue_line(reach, protocol);
+  for (const io::ResponseSource* source : station.responses) reach_.push_back(source->reach());
+  continue_line_ = continue_line(reach_, protocol);
   room.status.participant = options_.participant;
   room.status.session_id = session_id;
   room.status.protocol = protocol.meta.name;
@@ -98,7 +97,10 @@ void SessionFrames::prepare(const protocol::Settings& s, const std::string& prom
   }
   world_ = world;
   settings_ = s;
-  auto built = TrialScene::build(*world_, settings_, prompt, font());
+  // The panels' texels match the display's pixels (a 90° field of view
+  // where the display does not say).
+  const double px_per_deg = std::clamp(static_cast<double>(eye_size_.first) / 90.0, 8.0, 40.0);
+  auto built = TrialScene::build(*world_, settings_, prompt, font(), px_per_deg);
   if (!built) throw Stop{built.error()};
   scene_.emplace(std::move(built).value());
 }

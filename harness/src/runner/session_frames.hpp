@@ -73,8 +73,13 @@ class SessionFrames {
   // ---- the world and what is drawn ----
   // World, tracker and scene for these settings (the tracker is kept while
   // the world stays the same, so the edge correspondence carries over);
-  // `prompt`: the question the scene's panel shows.
+  // `prompt`: what the response panel shows (response_panel()).
   void prepare(const protocol::Settings& s, const std::string& prompt);
+  // The response panel's text for a judgement: its question and its answers
+  // with the inputs that give them at this station.
+  [[nodiscard]] std::string response_panel(const protocol::Judgement& j) const {
+    return response_panel_text(j, reach_);
+  }
   [[nodiscard]] const World& world() const { return *world_; }
   [[nodiscard]] TrialScene& scene() { return *scene_; }
   [[nodiscard]] geometry::Isometry head() const;
@@ -169,6 +174,7 @@ class SessionFrames {
   RunOptions options_;
   std::int64_t frame_index_;
   Progress progress_;
+  std::vector<io::Reach> reach_;        // what the station's sources can press
   std::vector<std::string> continues_;  // inputs that turn pages
   std::string continue_line_;           // under every page
   renderer::Eye dominant_ = renderer::Eye::right;

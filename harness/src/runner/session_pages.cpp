@@ -45,7 +45,7 @@ Outcome SessionFrames::page(const std::string& text, std::size_t k, Phase phase,
   if (!begin(f)) return Outcome::quit;
   // The protocol's text, then how to go on with the devices at hand.
   const std::string shown_text = continue_line_.empty() ? text : text + "\n\n" + continue_line_;
-  if (auto shown = scene_->set_page(shown_text, head()); !shown) throw Stop{shown.error()};
+  if (auto shown = scene_->set_page(shown_text); !shown) throw Stop{shown.error()};
   scene_->show(phase, false);
   Page state(f.timing.now_ns, min_ns, continues_);
   for (TrialWatcher* w : watchers) w->page_shown(f.timing.now_ns, min_ns);

@@ -260,20 +260,26 @@ SightLineCount diverging_sight_lines(const World& world, const Settings& s, cons
 double physical_sagitta_m(const Settings& s) { return judged_kind(s).physical_sagitta_m(s); }
 
 Result<TrialScene> TrialScene::build(const World& world, const Settings& s, const std::string& prompt,
-                                     const std::string& font_path) {
+                                     const std::string& font_path, double px_per_deg) {
   TrialScene t;
   t.world_ = world;
   t.font_path_ = font_path;
+  t.page_layout_ = {.text_height_deg = s.viewing.text_height_deg, .px_per_deg = px_per_deg};
   for (const StimulusKind* kind : stimulus_kinds())
     if (kind->shown(s)) t.stimuli_.push_back(kind->build(t.scene_, world, s));
-  for (auto [index, name, text, w, h] :
-       {std::tuple{&t.prompt_, "prompt", prompt, 1.0, 0.22},
-        std::tuple{&t.fixation_, "fixation", std::string("+"), 0.08, 0.08},
-        std::tuple{&t.page_, "page", std::string(" "), 1.0, 0.5}}) {
-    auto made = from_renderer(renderer::text_panel_object(world.space, name, text.empty() ? std::string(" ") : text,
-                                                          font_path, w, h, Isometry::identity()));
-    if (!made) return made.error();  // the font: io
-    auto panel = std::move(made).value();
+  // The fixation mark is in the world, where the stimulus will be; the
+  // panels are fixed to the head, above the stimulus while it is shown.
+  auto mark = from_renderer(renderer::text_panel_object(world.space, "fixation", "+", font_path, 0.08, 0.08,
+                                                        Isometry::identity()));
+  renderer::HeadPanelLayout prompt_layout = t.page_layout_;
+  prompt_layout.elevation_deg = 16.0;
+  auto question = from_renderer(
+      renderer::head_panel_object("prompt", prompt.empty() ? std::string(" ") : prompt, font_path, prompt_layout));
+  auto page = from_renderer(renderer::head_panel_object("page", " ", font_path, t.page_layout_));
+  for (auto [made, index] : {std::pair{&mark, &t.fixation_}, std::pair{&question, &t.prompt_},
+                             std::pair{&page, &t.page_}}) {
+    if (!*made) return made->error();  // the font: io
+    auto panel = std::move(*made).value();
     panel.visible = false;
     *index = t.scene_.add(std::move(panel));
   }
@@ -283,7 +289,6 @@ Result<TrialScene> TrialScene::build(const World& world, const Settings& s, cons
 void TrialScene::place(const Placement& placement, const Isometry& head_at_onset) {
   const auto& space = world_.space;
   for (auto& stimulus : stimuli_) stimulus->place(scene_, placement);
-  scene_.edit(prompt_).pose = head_at_onset * geometry::translation_m(space, Vec3(0.0, 0.32, -1.5));
   scene_.edit(fixation_).pose = head_at_onset * geometry::translation_m(space, Vec3(0.0, 0.0, -1.2));
 }
 
@@ -307,16 +312,14 @@ void TrialScene::show(Phase phase, bool stimulus_during_response) {
   set(page_, phase == Phase::instructions || phase == Phase::break_page || phase == Phase::done);
 }
 
-Result<Done> TrialScene::set_page(const std::string& text, const Isometry& head) {
-  if (text != page_text_) {
-    auto made = from_renderer(renderer::text_panel_object(
-        world_.space, "page", text.empty() ? std::string(" ") : text, font_path_, 1.0, 0.5, Isometry::identity()));
-    if (!made) return made.error();  // the font: io
-    auto& o = made.value();
-    scene_.replace_mesh(page_, std::move(o.build), std::move(o.info), std::move(o.text));
-    page_text_ = text;
-  }
-  scene_.edit(page_).pose = head * geometry::translation_m(world_.space, Vec3(0.0, 0.0, -1.2));
+Result<Done> TrialScene::set_page(const std::string& text) {
+  if (text == page_text_) return Done{};
+  auto made = from_renderer(
+      renderer::head_panel_object("page", text.empty() ? std::string(" ") : text, font_path_, page_layout_));
+  if (!made) return made.error();  // the font: io
+  auto& o = made.value();
+  scene_.replace_mesh(page_, std::move(o.build), std::move(o.info), std::move(o.text));
+  page_text_ = text;
   return Done{};
 }
 
@@ -404,7 +407,7 @@ Result<ViewedScene> viewed_scene(SceneKind kind, const Settings& base, const Sce
                geometry::rotation(Vec3(0.0, 1.0, 0.0), view.yaw_rad);
     return out;
   }
-  auto built = TrialScene::build(world, s, prompt, font_path);
+  auto built = TrialScene::build(world, s, prompt, font_path, view.panel_px_per_deg);
   if (!built) return built.error();
   auto& trial = built.value();
   Isometry onset_head = Isometry::identity();

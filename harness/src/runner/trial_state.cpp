@@ -149,6 +149,49 @@ std::string continue_line(const std::vector<io::Reach>& sources, const protocol:
   return "To continue: " + join(ways, ", or ") + ".";
 }
 
+std::string response_panel_text(const protocol::Judgement& j, const std::vector<io::Reach>& sources) {
+  if (j.type == nullptr) return j.prompt;
+  const bool keyboard = sources.empty() || std::any_of(sources.begin(), sources.end(), [](const io::Reach& r) {
+                          return r.gives_key("");
+                        });
+  constexpr const char* kNoBreak = "\u00a0";  // keeps an answer's input and label on one line
+  auto readable = [&](std::string name) {
+    std::replace(name.begin(), name.end(), '_', ' ');
+    std::string out;
+    for (const char c : name) out += c == ' ' ? std::string(kNoBreak) : std::string(1, c);
+    return out;
+  };
+  std::vector<std::string> answers;
+  for (const auto& a : j.type->answer_bindings(j)) {
+    std::vector<std::string> inputs;
+    if (keyboard) inputs = a.keys;
+    for (const auto& b : a.buttons)
+      if (std::any_of(sources.begin(), sources.end(), [&](const io::Reach& r) { return r.gives_button(b); }) &&
+          (inputs.empty() || !keyboard))
+        inputs.push_back(b);
+    if (inputs.empty()) continue;
+    std::string label = a.answer;
+    for (const auto& o : j.options)
+      if (o.value == a.answer && !o.label.empty()) label = o.label;
+    std::vector<std::string> shown;
+    for (const auto& in : inputs) shown.push_back(readable(in));
+    std::string answer{"["};
+    answer += join(shown, "/");
+    answer += ']';
+    answer += kNoBreak;
+    answer += readable(label);
+    answers.push_back(std::move(answer));
+  }
+  if (answers.empty()) return j.prompt;
+  std::string text = j.prompt;
+  if (!text.empty()) text += "\n\n";
+  for (std::size_t i = 0; i < answers.size(); ++i) {
+    if (i > 0) text += "     ";
+    text += answers[i];
+  }
+  return text;
+}
+
 std::optional<std::string> unreachable_answer(const std::vector<io::Reach>& sources,
                                               const protocol::Protocol& p) {
   std::optional<std::string> out;

@@ -212,7 +212,7 @@ class TrialsBlock {
     const auto& j = *t.judgement;
     a.adjustment = j.type->adjustment(j, *t.planned);
     if (a.adjustment) protocol::set_numeric_setting(t.settings, j.parameter, a.adjustment->value());
-    f_.prepare(t.settings, j.prompt);
+    f_.prepare(t.settings, f_.response_panel(j));
     f_.writer.journal(data::BeginTrial{t.id});
     for (TrialWatcher* w : f_.watchers) w->attempt_begins(t.index, t.aborts + 1);
     return a;

@@ -137,5 +137,9 @@ MeshInfo ball_info(const Space& space, double radius_m);
 // origin, facing +z; uv (0,0) top-left … (1,1) bottom-right in colour.xy.
 MeshData build_panel(const Space& space, double width_m, double height_m, int level);
 MeshInfo panel_info(const Space& space, double width_m, double height_m);
+// A head-locked panel's card (scene.hpp): the rectangle |x| ≤ half_w,
+// |y| ≤ half_h in the plane z = 0, Euclidean (x, y, z, 1), atlas
+// coordinates in the colour.
+MeshData build_head_panel(double half_w_m, double half_h_m);
 
 }  // namespace curvlab::renderer

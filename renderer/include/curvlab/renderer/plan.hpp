@@ -25,6 +25,9 @@ struct PlannedDraw {
   int level = 0;
   Hemisphere hemisphere = Hemisphere::front;
   glm::dmat4 model_view{1.0};  // viewer ← model, double (uploaded as float)
+  // A head-locked object: model_view is clip ← model (the eye's Euclidean
+  // perspective), drawn after the scene without depth.
+  bool overlay = false;
 };
 
 struct ViewPlan {
@@ -55,6 +58,11 @@ bool may_be_visible(const ViewConstants& view, Hemisphere hemi, const Point& cen
 std::pair<int, double> choose_level(const ViewConstants& view, Hemisphere hemi,
                                     const glm::dmat4& model_view, const MeshInfo& info,
                                     const FrameDescription& frame);
+
+// Clip ← model for a head-locked object (SceneObject::head_locked): the
+// eye's Euclidean perspective (Vulkan conventions) after its offset from
+// the nose.
+glm::dmat4 head_locked_clip(const EyeOffset& eye, const glm::dmat4& nose_from_model);
 
 RenderPlan plan_frame(const Scene& scene, const FrameDescription& frame);
 

@@ -19,10 +19,16 @@ struct SceneObject {
   std::string name;
   std::function<MeshData(int level)> build;  // pure: same level → same mesh
   MeshInfo info;
-  Isometry pose;  // model → world
+  // model → world; for head-locked objects model → the nose, a Euclidean
+  // rigid motion in lab metres acting on (x, y, z, 1).
+  Isometry pose;
   glm::vec4 tint{1.0f};
   bool visible = true;
   std::optional<CoverageBitmap> text;  // text panels only
+  // Fixed to the head and drawn over the curved scene with each eye's
+  // Euclidean perspective: the same size, never mirrored or culled, in every
+  // space and view (instructions, prompts, answers).
+  bool head_locked = false;
 };
 
 // A list of objects. Not thread-safe. Every mutable access bumps revision();
@@ -65,6 +71,21 @@ std::variant<SceneObject, RenderError> text_panel_object(const Space& space, std
                                                          const std::string& text,
                                                          const std::string& font, double width_m,
                                                          double height_m, const Isometry& pose);
+
+// Where a head-locked text panel sits and how large its text is, in visual
+// angle: a participant reads it at the same size in S3, E3 and H3.
+struct HeadPanelLayout {
+  double text_height_deg = 2.0;   // a line of text, ascent to descent
+  double max_width_deg = 44.0;    // longer lines are broken at spaces
+  double elevation_deg = 0.0;     // the centre above (+) or below the line of sight
+  double distance_m = 1.5;        // where the eyes converge on it
+  double px_per_deg = 16.0;       // texels per degree: at least the display's pixels
+};
+
+// A head-locked text panel (SceneObject::head_locked) sized to its text, or
+// a RenderError of kind `font`.
+std::variant<SceneObject, RenderError> head_panel_object(std::string name, const std::string& text,
+                                                         const std::string& font, const HeadPanelLayout& layout);
 
 // The space's honeycomb (tiling.hpp), in shells by distance, each its own
 // object with its own subdivision: a debug scene of the renderer's.

@@ -24,4 +24,17 @@ struct CoverageBitmap {
 std::variant<CoverageBitmap, RenderError> render_text(const std::string& text, int width, int height,
                                                       double max_line_px, const std::string& font_path);
 
+// Text at a fixed size for a panel that is sized to it (head-locked panels,
+// scene.hpp): line_px is a line's pixel height (ascent to descent), lines
+// longer than max_width_px are broken at spaces, every line is centred, and
+// the bitmap is as wide as the widest line (at least a third of
+// max_width_px) and as tall as the lines, each plus a margin of 0.6 lines.
+struct TextBlock {
+  CoverageBitmap bitmap;
+  int lines = 0;
+  double cap_height_px = 0.0;  // a capital letter's height at this size
+};
+std::variant<TextBlock, RenderError> render_text_block(const std::string& text, double line_px, int max_width_px,
+                                                      const std::string& font_path);
+
 }  // namespace curvlab::renderer

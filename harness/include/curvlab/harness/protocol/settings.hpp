@@ -80,6 +80,10 @@ struct Viewing {
   renderer::EyeSelection eyes = renderer::EyeSelection::both;
   bool back_hemisphere = true;  // S3 only: draw the antipodal images
   double ipd_m = 0.063;
+  // A line of the participant's panels (instructions, prompts, answers),
+  // ascent to descent, in degrees of visual angle: head-locked, so the same
+  // in every space.
+  double text_height_deg = 2.0;
   // Samples per pixel for anti-aliasing (1, 2, 4 or 8), clamped by the
   // renderer to what the device supports; nullopt ("auto"): the renderer's
   // choice for its device, 4 on a GPU and 1 on a CPU device

@@ -109,8 +109,14 @@ double physical_sagitta_m(const protocol::Settings& s);
 // below) all draw it. Not thread-safe.
 class TrialScene {
  public:
+  // `prompt`: the response panel's text, the question and its answers
+  // (response_panel_text). The panels are head-locked (renderer
+  // HeadPanelLayout) with text s.viewing.text_height_deg high, drawn at
+  // px_per_deg texels per degree (the display's pixels per degree).
   static Result<TrialScene> build(const World& world, const protocol::Settings& s, const std::string& prompt,
-                                  const std::string& font_path);
+                                  const std::string& font_path, double px_per_deg = kPanelPxPerDeg);
+  // Texels per degree where the display's density is not known.
+  static constexpr double kPanelPxPerDeg = 16.0;
   // Visibility for a phase and the stimulus placement (fixed at onset).
   void show(Phase phase, bool stimulus_during_response);
   void place(const Placement& placement, const geometry::Isometry& head_at_onset);
@@ -120,8 +126,8 @@ class TrialScene {
   // Every frame, before it is drawn: the kinds follow the clock and the
   // frame's curved-space poses (a rolling ball, a cue in a hand).
   void update(std::int64_t t_ns, const FramePoses& poses);
-  // A page of text in front of the head (instructions, breaks); empty hides it.
-  Result<Done> set_page(const std::string& text, const geometry::Isometry& head);
+  // A page of text fixed to the head (instructions, breaks, questions).
+  Result<Done> set_page(const std::string& text);
   renderer::Scene& scene() { return scene_; }
   [[nodiscard]] const renderer::Scene& scene() const { return scene_; }
 
@@ -129,6 +135,7 @@ class TrialScene {
   World world_;
   renderer::Scene scene_;
   std::string font_path_;
+  renderer::HeadPanelLayout page_layout_;
   std::size_t prompt_ = 0, fixation_ = 0, page_ = 0;
   std::vector<std::unique_ptr<StimulusObjects>> stimuli_;
   std::string page_text_;
@@ -155,6 +162,7 @@ protocol::Settings scene_settings(SceneKind kind, protocol::Settings base);
 struct SceneView {
   double eye_height_m = 1.55;
   double yaw_rad = 0.0;
+  double panel_px_per_deg = 16.0;  // the panels' texels (TrialScene::build)
 };
 
 struct ViewedScene {

@@ -121,6 +121,13 @@ std::vector<std::string> page_continues(const protocol::Protocol& p);
 // source can give one of the protocol's.
 std::string continue_line(const std::vector<io::Reach>& sources, const protocol::Protocol& p);
 
+// What the participant reads in the response window: the judgement's
+// question, then each answer's label with the input that gives it from the
+// sources at hand ("[1] straight"), keys where a source has them, else
+// buttons; with no sources (preview, replay) the keys. An answer's label and
+// input are never split across lines.
+std::string response_panel_text(const protocol::Judgement& j, const std::vector<io::Reach>& sources);
+
 // A protocol answer that none of `sources` can give: "the answer 'convex'
 // (keys 1)", naming the block; nullopt when every answer can be given.
 std::optional<std::string> unreachable_answer(const std::vector<io::Reach>& sources, const protocol::Protocol& p);
