@@ -99,7 +99,8 @@ void SessionFrames::prepare(const protocol::Settings& s, const std::string& prom
   settings_ = s;
   // The panels' texels match the display's pixels (a 90° field of view
   // where the display does not say).
-  const double px_per_deg = std::clamp(static_cast<double>(eye_size_.first) / 90.0, 8.0, 40.0);
+  const auto eye_now = eye_image_size(station.display->info(), eye_size_.first, eye_size_.second);
+  const double px_per_deg = std::clamp(static_cast<double>(eye_now.first) / 90.0, 5.0, 40.0);
   auto built = TrialScene::build(*world_, settings_, prompt, font(), px_per_deg);
   if (!built) throw Stop{built.error()};
   scene_.emplace(std::move(built).value());
