@@ -158,3 +158,29 @@ TEST(Inputs, CalibrationCommandsComeFromEachSourceKind) {
 }
 
 }  // namespace
+
+// The response panel names each answer by its label with the input that
+// gives it at this station: keys at a keyboard, the box's buttons where the
+// station has only the box; an answer's input and label stay together.
+TEST(Inputs, TheResponsePanelShowsEachAnswerWithTheInputAtHand) {
+  const std::string nb = "\u00a0";
+  const pr::Protocol p = example("demo");
+  io::Reach keyboard;
+  keyboard.every_key = true;
+  EXPECT_EQ(rn::response_panel_text(p.judgement, {keyboard}),
+            p.judgement.prompt + "\n\n[1]" + nb + "convex     [2]" + nb + "straight     [3]" + nb + "concave");
+
+  pr::Judgement box = button_box();
+  box.prompt = "Which way?";
+  box.options[0].label = "bowed toward me";
+  io::Reach buttons;
+  buttons.kind = io::SourceKind::hid;
+  buttons.buttons = {"hid_1", "hid_2"};
+  EXPECT_EQ(rn::response_panel_text(box, {buttons}),
+            "Which way?\n\n[hid" + nb + "1]" + nb + "bowed" + nb + "toward" + nb + "me     [hid" + nb + "2]" + nb +
+                "concave");
+  // A source that cannot give an answer does not offer it.
+  io::Reach one;
+  one.buttons = {"hid_2"};
+  EXPECT_EQ(rn::response_panel_text(box, {one}), "Which way?\n\n[hid" + nb + "2]" + nb + "concave");
+}

@@ -366,3 +366,42 @@ TEST(RunHeadless, MsaaAutoDrawsWithOneSampleOnACpuDeviceAndANumberWins) {
   EXPECT_EQ(bad.exit_code, 2) << bad.out;
   EXPECT_NE(bad.out.find("--msaa must be auto, 1, 2, 4 or 8, got 'four'"), std::string::npos) << bad.out;
 }
+
+// judgement.feedback: after every answer the participant is shown the answer
+// given, by its label, and the session stores what was shown with the trial;
+// without it nothing is shown.
+TEST(RunHeadless, FeedbackShowsTheAnswerGivenByItsLabel) {
+  const auto dir = fresh_dir("feedback");
+  std::ifstream in(kProtocols + "demo.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string protocol = text.str();
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"prompt = \"Convex, straight or concave?\"", "prompt = \"Convex, straight or concave?\"\nfeedback = true"},
+           {"{ value = \"convex\",", "{ value = \"convex\", label = \"bowed toward me\","},
+           {"{ value = \"straight\",", "{ value = \"straight\", label = \"straight\","},
+           {"{ value = \"concave\",", "{ value = \"concave\", label = \"bowed away\","}}) {
+    const auto at = protocol.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    protocol.replace(at, from.size(), to);
+  }
+  std::ofstream(dir / "feedback.toml") << protocol;
+  const auto db = (dir / "feedback.sqlite").string();
+  auto r = run_cli("run " + (dir / "feedback.toml").string() + " --participant P01 --db " + db +
+                   " --render none --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto rows = query(db,
+                          "SELECT t.response, json_extract(e.detail, '$.text') FROM trials t "
+                          "LEFT JOIN events e ON e.trial_id = t.trial_id AND e.kind = 'feedback' "
+                          "ORDER BY t.trial_id");
+  ASSERT_EQ(rows.size(), 8u);
+  const std::map<std::string, std::string> labels{
+      {"convex", "bowed toward me"}, {"straight", "straight"}, {"concave", "bowed away"}, {"timeout", ""}};
+  for (const auto& row : rows)
+    EXPECT_EQ(row[1], row[0] == "timeout" ? "No answer" : "Your answer: " + labels.at(row[0]));
+
+  const auto plain = (dir / "plain.sqlite").string();
+  r = run_cli("run " + kProtocols + "demo.toml --participant P01 --db " + plain + " --render none --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(query(plain, "SELECT count(*) FROM events WHERE kind = 'feedback'").at(0).at(0), "0");
+}

@@ -11,7 +11,7 @@ namespace {
 // the order a person expects, and equal events give equal texts.
 using Json = nlohmann::ordered_json;
 
-constexpr std::array<std::pair<EventKind, std::string_view>, 30> kind_names{{
+constexpr std::array<std::pair<EventKind, std::string_view>, 31> kind_names{{
     {EventKind::session_start, "session_start"},
     {EventKind::observer, "observer"},
     {EventKind::resume, "resume"},
@@ -38,6 +38,7 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 30> kind_names{{
     {EventKind::refresh_rate, "refresh_rate"},
     {EventKind::posterior, "posterior"},
     {EventKind::play_summary, "play_summary"},
+    {EventKind::feedback, "feedback"},
     {EventKind::strike, "strike"},
     {EventKind::pocket, "pocket"},
     {EventKind::merged_from, "merged_from"},

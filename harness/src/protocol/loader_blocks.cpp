@@ -116,6 +116,7 @@ Judgement Loader::read_judgement(const toml::table& j, const std::string& prefix
     return out;
   }
   out.prompt = get_string(j, "prompt", prefix, false).value_or("");
+  out.feedback = get_bool(j, "feedback", prefix).value_or(false);
   out.type = find_judgement_type(*type);
   check_keys(j, prefix, table_keys(*out.type));
   JudgementSection section(*this, j, prefix, p);

@@ -162,6 +162,10 @@ Json judgement_schema() {
   Json props = {
       {"type", enum_field(names, summaries())},
       {"prompt", string_field("shown on the in-headset panel")},
+      {"feedback", with_default(Json{{"type", "boolean"},
+                                     {"description", "after each answer, show the answer given (its label), or "
+                                                     "\"No answer\" after a timeout, through the inter-trial interval"}},
+                                false)},
   };
   for (auto& k : type_keys()) {
     k.schema["description"] = taken_by(k.types) + k.schema["description"].get<std::string>();

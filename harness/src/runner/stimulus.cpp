@@ -323,6 +323,12 @@ Result<Done> TrialScene::set_page(const std::string& text) {
   return Done{};
 }
 
+Result<Done> TrialScene::show_page(const std::string& text) {
+  if (auto set = set_page(text); !set) return set;
+  if (!scene_.objects()[page_].visible) scene_.edit(page_).visible = true;
+  return Done{};
+}
+
 std::optional<SceneKind> parse_scene_kind(std::string_view text) {
   for (const SceneKind kind : {SceneKind::stick, SceneKind::table, SceneKind::billiards, SceneKind::tiling})
     if (text == to_string(kind)) return kind;

@@ -132,7 +132,7 @@ JudgementFields fields_of(const JudgementType& type) {
 }
 
 std::vector<std::string> table_keys(const JudgementType& type) {
-  std::vector<std::string> keys{"type", "prompt"};
+  std::vector<std::string> keys{"type", "prompt", "feedback"};
   const JudgementFields fields = fields_of(type);
   for (const auto& [key, schema] : fields.keys()) keys.push_back(key);
   return keys;
@@ -160,7 +160,7 @@ std::vector<TypeKey> type_keys() {
 }
 
 std::vector<std::string> any_table_keys() {
-  std::vector<std::string> keys{"type", "prompt"};
+  std::vector<std::string> keys{"type", "prompt", "feedback"};
   for (const auto& k : type_keys()) keys.push_back(k.key);
   return keys;
 }

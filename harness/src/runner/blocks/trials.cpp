@@ -386,7 +386,23 @@ class TrialsBlock {
     if (a.answer) f_.mark_response(r);
     f_.room.status.last_response = r.response;
     f_.room.status.last_rt_ms = a.answer ? static_cast<double>(r.response_ns - r.onset_ns) * 1e-6 : -1.0;
+    feedback_.clear();
+    if (t.judgement->feedback) {
+      feedback_ = "No answer";
+      if (a.answer) {
+        feedback_ = "Your answer: " + a.answer->first;
+        for (const auto& o : t.judgement->options)
+          if (o.value == a.answer->first && !o.label.empty()) feedback_ = "Your answer: " + o.label;
+      }
+    }
     completed_ticket_ = f_.writer.journal(std::move(r));
+  }
+
+  // The answer's feedback on the page panel, when the judgement asks for it.
+  void show_feedback(const TrialRun& t) {
+    if (feedback_.empty()) return;
+    if (auto shown = f_.scene().show_page(feedback_); !shown) throw Stop{shown.error()};
+    f_.event(t.id, data::events::Page{data::EventKind::feedback, 0, feedback_});
   }
 
   // Nothing on screen. A pause here holds the session; the interval starts
@@ -395,6 +411,7 @@ class TrialsBlock {
     const auto iti_ns = ms_to_ns(t.settings.timeline.iti_ms);
     std::int64_t iti_end = f_.clock.now_ns() + iti_ns;
     f_.scene().show(Phase::iti, false);
+    show_feedback(t);
     for (;;) {
       Frame g;
       if (!f_.begin(g)) return Outcome::quit;
@@ -420,6 +437,7 @@ class TrialsBlock {
   BlockRun& run_;
   SessionFrames& f_;
   std::uint64_t completed_ticket_ = 0;
+  std::string feedback_;  // shown in the inter-trial interval; "" none
 };
 
 class TrialsKind final : public BlockKind {

@@ -48,6 +48,7 @@ enum class EventKind {
   pocket,        // a ball pocketed in a play block
   merged_from,
   session_renumbered,
+  feedback,      // what the participant was shown after an answer (judgement.feedback)
 };
 
 std::string_view to_string(EventKind kind);

@@ -64,6 +64,9 @@ struct Judgement {
   // The registered type; null only in a protocol that failed to load.
   const JudgementType* type = nullptr;
   std::string prompt;
+  // After each answer, the answer given (its label) or "No answer" is shown
+  // on the participant's panel through the inter-trial interval.
+  bool feedback = false;
   std::vector<ResponseOption> options;  // types answered by choosing: the answers
   std::string parameter;                // types that vary a numeric setting: its path
   std::shared_ptr<const JudgementSpec> spec;  // the rest, the type's own; shared by copies

@@ -128,6 +128,9 @@ class TrialScene {
   void update(std::int64_t t_ns, const FramePoses& poses);
   // A page of text fixed to the head (instructions, breaks, questions).
   Result<Done> set_page(const std::string& text);
+  // The page's panel with `text` shown now, whatever the phase (an answer's
+  // feedback); the next show() hides it again.
+  Result<Done> show_page(const std::string& text);
   renderer::Scene& scene() { return scene_; }
   [[nodiscard]] const renderer::Scene& scene() const { return scene_; }
 
