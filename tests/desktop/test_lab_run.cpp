@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 namespace {
 
@@ -310,3 +311,74 @@ TEST(LabRun, ADesktopPilotStrikesTheCueBallWithTheTrackedCue) {
 }
 
 }  // namespace
+
+// The start form, filled in by a person who reads only the window (keys
+// typed through the X server by xdotool): a pseudonym already in the data
+// file asks for Enter again, then the session runs as `curvlab run` would
+// with --new-session and the note stored with its start; Escape closes the
+// form and starts nothing.
+TEST(LabRun, DesktopStartFormStartsTheSessionItDescribes) {
+  curvlab::test::XServer x;
+  if (!x.available()) GTEST_SKIP() << "no X display: " << x.reason();
+  if (std::system("command -v xdotool > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xdotool is not installed (apt-get install xdotool)";
+  const auto dir = fresh_dir("start_form");
+  std::filesystem::create_directories(dir / "protocols");
+  // One short trial: the demo with one level of each factor.
+  std::ifstream in(std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string demo = text.str();
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"levels = [\"E3\", \"H3\"]", "levels = [\"H3\"]"},
+           {"levels = [\"tourist\", \"native\"]", "levels = [\"native\"]"},
+           {"repetitions = 2", "repetitions = 1"}}) {
+    const auto at = demo.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    demo.replace(at, from.size(), to);
+  }
+  std::ofstream(dir / "protocols" / "a_short.toml") << demo;
+  std::filesystem::copy_file(std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml", dir / "protocols" / "demo.toml");
+  const auto db = (dir / "lab.sqlite").string();
+  ASSERT_EQ(run_cli("run " + (dir / "protocols" / "a_short.toml").string() + " --participant P01 --db " + db +
+                    " --render none --quiet")
+                .exit_code,
+            0);
+
+  // The form in a window; the keys a person would press, reading it.
+  auto fill = [&](const std::string& keys) {
+    return curvlab::testing::run_shell(
+        "cd " + dir.string() + " && (" + CURVLAB_BIN + " start --db " + db +
+        " --protocols protocols --software --window-size 320x320 > form.out 2>&1 & pid=$!; "
+        "timeout 60 xdotool search --sync --name '^curvlab' windowfocus --sync > /dev/null && "
+        "xdotool key --delay 60 " + keys + "; wait $pid; echo \"exit $?\" >> form.out); cat form.out");
+  };
+  // P01 (shift+p 0 1), Tab to the protocol (the first, a_short), Tab to the
+  // backend, Right Right (desktop → xr → headless), Tab to the note.
+  auto r = fill("shift+p 0 1 Tab Tab Right Right Tab f i r s t space p i l o t Return Return");
+  EXPECT_NE(r.out.find("starting: curvlab run protocols/a_short.toml --participant P01 --db " + db +
+                       " --backend headless --new-session --note 'first pilot'"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("exit 0"), std::string::npos) << r.out;
+  EXPECT_EQ(count_trials(db, "completed"), 2);  // the earlier session's trial and the new one's
+  sqlite3* h = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* stmt = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(h,
+                               "SELECT e.session_id, json_extract(e.detail, '$.text') FROM events e "
+                               "WHERE e.kind = 'operator_note'",
+                               -1, &stmt, nullptr),
+            SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(stmt), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(stmt, 0), 2);
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 1))), "first pilot");
+  sqlite3_finalize(stmt);
+  sqlite3_close(h);
+
+  // Escape: nothing started, nothing written.
+  r = fill("shift+p 0 2 Escape");
+  EXPECT_NE(r.out.find("start form closed: no session started"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("exit 0"), std::string::npos) << r.out;
+  EXPECT_EQ(count_trials(db, "completed"), 2);
+}

@@ -93,7 +93,12 @@ void add_sessions_commands(CLI::App& app);  // sessions, participants: what a da
 // registry): a UsageError naming the earlier sessions and asking for
 // --new-session. Nothing when the file does not exist yet or the pseudonym
 // is new.
+// `path` as one shell word: quoted when it holds anything a shell reads.
+std::string shell_word(const std::string& path);
 void check_participant_is_new(const std::string& db, const std::string& pseudonym);
+// Each pseudonym of a data file with its number of sessions, in order of
+// first session; none when the file does not exist yet.
+std::vector<std::pair<std::string, int>> participants_in(const std::string& db);
 void add_merge_commands(CLI::App& app);
 // Database arguments of merge and export: each folder is replaced by the
 // *.sqlite files directly in it (sorted by name), leaving out `exclude`.
@@ -103,7 +108,15 @@ void add_render_commands(CLI::App& app);
 void add_measure_commands(CLI::App& app);  // measure stick
 void add_protocol_commands(CLI::App& app);
 void add_authoring_commands(CLI::App& app);  // schema, new, preview
-void add_run_commands(CLI::App& app);  // run, resume, then predict and replay:
+void add_run_commands(CLI::App& app);
+// What the start form chose, run as `curvlab run` would with these options.
+struct FormRun {
+  std::string protocol, participant, db, backend, note, window_size;
+  bool new_session = false;
+  bool software = false;
+};
+void run_from_form(const FormRun& f);
+void add_start_command(CLI::App& app);  // curvlab start (start.cpp)  // run, resume, then predict and replay:
 void add_predict_command(CLI::App& app);
 void add_replay_command(CLI::App& app);
 void add_calibrate_commands(CLI::App& app);  // calibrate: the physical table

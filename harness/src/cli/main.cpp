@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   curvlab::harness::cli::add_protocol_commands(app);
   curvlab::harness::cli::add_authoring_commands(app);
   curvlab::harness::cli::add_run_commands(app);
+  curvlab::harness::cli::add_start_command(app);
   curvlab::harness::cli::add_calibrate_commands(app);
   curvlab::harness::cli::add_billiards_commands(app);
   if (const auto wrong = curvlab::harness::cli::misspelt_argument(app, argc, argv)) {

@@ -316,6 +316,7 @@ struct RunArgs {
   std::string dominant_eye = "unknown";
   std::string calibration;
   bool new_session = false;
+  std::string note;
   ObserverArgs observer;
   BackendArgs backend;
   LslArgs lsl;
@@ -365,6 +366,7 @@ void run_command(const RunArgs& a) {
   o.participant = a.participant;
   o.participant_number = participant_number(a.participant, a.participant_number);
   o.ipd_m = a.ipd_m;
+  o.note = a.note;
   if (a.ipd_m && !(*a.ipd_m > 0.04 && *a.ipd_m < 0.09)) throw UsageError("--ipd-m must lie in (0.04, 0.09) m");
   if (a.dominant_eye == "left") o.dominant_eye = data::DominantEye::left;
   else if (a.dominant_eye == "right") o.dominant_eye = data::DominantEye::right;
@@ -410,6 +412,23 @@ void run_command(const RunArgs& a) {
   streams.reset();  // what its recorders still held is stored before the export
   report(result, a.backend, devices.station.display->info().msaa);
 }
+
+}  // namespace
+
+void run_from_form(const FormRun& f) {
+  RunArgs a;
+  a.protocol = f.protocol;
+  a.participant = f.participant;
+  a.db = f.db;
+  a.new_session = f.new_session;
+  a.note = f.note;
+  a.backend.backend = f.backend;
+  a.backend.software = f.software;
+  a.backend.window_size = f.window_size;
+  run_command(a);
+}
+
+namespace {
 
 struct ResumeArgs {
   std::string db;
@@ -479,6 +498,7 @@ void add_run_commands(CLI::App& app) {
   r->add_option("--dominant-eye", run->dominant_eye, "left, right or unknown");
   r->add_flag("--new-session", run->new_session,
               "start another session of a pseudonym that already has one in --db (otherwise exit 2)");
+  r->add_option("--note", run->note, "the experimenter's note, stored with the session's start (an operator_note event)");
   r->add_option("--calibration", run->calibration, "table calibration JSON (centre_x_m, centre_z_m, yaw_rad, edge_m, height_m)");
   add_observer_options(r, run->observer);
   add_backend_options(r, run->backend);

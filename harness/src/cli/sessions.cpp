@@ -20,12 +20,6 @@
 #include <string_view>
 
 namespace curvlab::harness::cli {
-namespace {
-
-struct SessionsArgs {
-  std::string db;
-  bool json = false;
-};
 
 // `path` as one shell word: quoted when it holds anything a shell reads.
 std::string shell_word(const std::string& path) {
@@ -38,6 +32,14 @@ std::string shell_word(const std::string& path) {
   for (char c : path) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return out + "'";
 }
+
+namespace {
+
+struct SessionsArgs {
+  std::string db;
+  bool json = false;
+};
+
 
 std::string resume_command(const std::string& db, std::int64_t session_id) {
   return "curvlab resume --db " + shell_word(db) + " --session " + std::to_string(session_id);
@@ -247,6 +249,16 @@ void participants_command(const ParticipantsArgs& a) {
 }
 
 }  // namespace
+
+std::vector<std::pair<std::string, int>> participants_in(const std::string& db_path) {
+  std::vector<std::pair<std::string, int>> out;
+  std::error_code ec;
+  if (!std::filesystem::exists(db_path, ec)) return out;
+  auto [database, sessions] = open_listing(db_path);
+  for (const auto& [pseudonym, list] : by_participant(sessions))
+    out.emplace_back(pseudonym, static_cast<int>(list.size()));
+  return out;
+}
 
 void check_participant_is_new(const std::string& db_path, const std::string& pseudonym) {
   std::error_code ec;

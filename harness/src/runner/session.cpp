@@ -65,6 +65,10 @@ Result<data::StartedSession> create(
   if (!options.run_options_json.empty()) start.run_options_json = options.run_options_json;
   if (design.counterbalance_row) start.counterbalance_row = *design.counterbalance_row;
   std::vector<data::EventRecord> events{data::event_record(0, std::nullopt, clock.now_ns(), start)};
+  if (!options.note.empty())
+    events.push_back(data::event_record(
+        0, std::nullopt, clock.now_ns(),
+        data::events::OperatorActionEvent{"note", "start", clock.now_ns(), options.note}));
   if (options.observer)
     events.push_back(
         data::event_record(0, std::nullopt, clock.now_ns(), data::events::Observer{observer_json(*options.observer)}));

@@ -80,6 +80,9 @@ struct RunOptions {
   // Warnings about the protocol stored with the session's start (the human
   // model's range of validity), which the report repeats.
   std::vector<std::string> warnings;
+  // The experimenter's note at the start (run --note, the start form),
+  // stored as an operator_note event with the session's start; "" none.
+  std::string note;
 };
 
 struct SessionSummary {
