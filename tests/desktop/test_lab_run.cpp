@@ -3,6 +3,7 @@
 // backend on a machine without an OpenXR runtime.
 #include "../cli/run_cli.hpp"
 #include "xvfb.hpp"
+#include "../support/edited_file.hpp"
 #include "../support/png_files.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
@@ -325,19 +326,11 @@ TEST(LabRun, DesktopStartFormStartsTheSessionItDescribes) {
   const auto dir = fresh_dir("start_form");
   std::filesystem::create_directories(dir / "protocols");
   // One short trial: the demo with one level of each factor.
-  std::ifstream in(std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string demo = text.str();
-  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
-           {"levels = [\"E3\", \"H3\"]", "levels = [\"H3\"]"},
-           {"levels = [\"tourist\", \"native\"]", "levels = [\"native\"]"},
-           {"repetitions = 2", "repetitions = 1"}}) {
-    const auto at = demo.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    demo.replace(at, from.size(), to);
-  }
-  std::ofstream(dir / "protocols" / "a_short.toml") << demo;
+  std::ofstream(dir / "protocols" / "a_short.toml") << curvlab::test::edited_file(
+      std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml",
+      {{"levels = [\"E3\", \"H3\"]", "levels = [\"H3\"]"},
+       {"levels = [\"tourist\", \"native\"]", "levels = [\"native\"]"},
+       {"repetitions = 2", "repetitions = 1"}});
   std::filesystem::copy_file(std::string(CURVLAB_SOURCE_DIR) + "/protocols/demo.toml", dir / "protocols" / "demo.toml");
   const auto db = (dir / "lab.sqlite").string();
   ASSERT_EQ(run_cli("run " + (dir / "protocols" / "a_short.toml").string() + " --participant P01 --db " + db +

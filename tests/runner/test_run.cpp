@@ -3,6 +3,7 @@
 #include "run_cli.hpp"
 #include "../data/data_files.hpp"
 #include "session_db.hpp"
+#include "../support/edited_file.hpp"
 #include "../support/png_files.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
@@ -372,20 +373,12 @@ TEST(RunHeadless, MsaaAutoDrawsWithOneSampleOnACpuDeviceAndANumberWins) {
 // without it nothing is shown.
 TEST(RunHeadless, FeedbackShowsTheAnswerGivenByItsLabel) {
   const auto dir = fresh_dir("feedback");
-  std::ifstream in(kProtocols + "demo.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string protocol = text.str();
-  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
-           {"prompt = \"Convex, straight or concave?\"", "prompt = \"Convex, straight or concave?\"\nfeedback = true"},
-           {"{ value = \"convex\",", "{ value = \"convex\", label = \"bowed toward me\","},
-           {"{ value = \"straight\",", "{ value = \"straight\", label = \"straight\","},
-           {"{ value = \"concave\",", "{ value = \"concave\", label = \"bowed away\","}}) {
-    const auto at = protocol.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    protocol.replace(at, from.size(), to);
-  }
-  std::ofstream(dir / "feedback.toml") << protocol;
+  std::ofstream(dir / "feedback.toml") << curvlab::test::edited_file(
+      kProtocols + "demo.toml",
+      {{"prompt = \"Convex, straight or concave?\"", "prompt = \"Convex, straight or concave?\"\nfeedback = true"},
+       {"{ value = \"convex\",", "{ value = \"convex\", label = \"bowed toward me\","},
+       {"{ value = \"straight\",", "{ value = \"straight\", label = \"straight\","},
+       {"{ value = \"concave\",", "{ value = \"concave\", label = \"bowed away\","}});
   const auto db = (dir / "feedback.sqlite").string();
   auto r = run_cli("run " + (dir / "feedback.toml").string() + " --participant P01 --db " + db +
                    " --render none --quiet");
