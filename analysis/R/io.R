@@ -459,7 +459,7 @@ normalise_trials <- function(trials) {
                 "vergence_demand_arcmin", "gaze_samples", "gaze_valid_samples", "gaze_vergence_arcmin"))
     if (!col %in% names(trials)) trials[[col]] <- NA
   if (!"is_practice" %in% names(trials)) trials$is_practice <- 0L
-  if (!"cond_judged" %in% names(trials)) trials$cond_judged <- "stick"
+  if (!"cond_judged" %in% names(trials)) trials$cond_judged <- rep("stick", nrow(trials))
   # The staircase name is also a condition value; the step row is authoritative.
   if ("cond_staircase" %in% names(trials))
     trials$staircase <- ifelse(is.na(trials$staircase), trials$cond_staircase, trials$staircase)

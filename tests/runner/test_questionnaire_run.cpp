@@ -159,7 +159,7 @@ TEST(QuestionnaireBlock, KilledMidQuestionnaireResumesAtTheFirstUnansweredItem) 
   const auto kept = query(db, "SELECT item_index, value, t_ns FROM questionnaire_answers ORDER BY item_index");
   ASSERT_GE(kept.size(), 3u);
   ASSERT_LT(kept.size(), 16u);
-  const auto r = run_cli("resume --db " + db + " --session 1 --render none --quiet");
+  const auto r = run_cli("resume --db " + db + " --session 1 --render none --pace fast --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_EQ(query(db, "SELECT status FROM sessions")[0][0], "completed");
   // The resumed run started at the first item not stored, and nothing

@@ -52,13 +52,15 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-// A CSV of plain fields (no quotes) as header → column.
+// A CSV of plain fields (no quotes; lines ending in CRLF, RFC 4180) as
+// header → column.
 std::vector<std::map<std::string, std::string>> read_plain_csv(const fs::path& p) {
   std::ifstream in(p);
   std::string line;
   std::vector<std::string> header;
   std::vector<std::map<std::string, std::string>> out;
-  const auto split = [](const std::string& s) {
+  const auto split = [](std::string s) {
+    if (!s.empty() && s.back() == '\r') s.pop_back();
     std::vector<std::string> f;
     std::stringstream ss(s);
     std::string cell;
@@ -85,15 +87,15 @@ TEST(XrQuestionnaire, SsqBeforeAndAfterPlayAnsweredWithTheControllersIsScoredInT
                                      "[space]\nkind = \"H3\"\nradius_m = \"from_table\"\n"
                                      "[tracking]\nalgorithm = \"table-anchored\"\n"
                                      "[judgement]\ntype = \"choice\"\nprompt = \"?\"\n"
-                                     "[[judgement.options]]\nvalue = \"a\"\nkeys = [\"1\"]\n"
-                                     "[[judgement.options]]\nvalue = \"b\"\nkeys = [\"2\"]\n"
+                                     "[[judgement.options]]\nvalue = \"a\"\nkeys = [\"1\"]\nbuttons = [\"x\"]\n"
+                                     "[[judgement.options]]\nvalue = \"b\"\nkeys = [\"2\"]\nbuttons = [\"y\"]\n"
                                      "[[blocks]]\nname = \"ssq_before\"\nkind = \"questionnaire\"\ninstrument = \"ssq\"\n"
                                      "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 2\n"
                                      "[[blocks]]\nname = \"ssq_after\"\nkind = \"questionnaire\"\ninstrument = \"ssq\"\n";
   // Every 0.4 s from 1 s after focus: A moves the mark to Slight, and 0.2 s
   // later the trigger chooses it. An item that comes up between an A and
   // its trigger is answered None (its mark never moved).
-  RuntimeEnv env({{"CURVLAB_TEST_XR_PRESS", "right:a@1.0/0.4,right:trigger@1.2/0.4"}});
+  RuntimeEnv env(std::map<std::string, std::string>{{"CURVLAB_TEST_XR_PRESS", "right:a@1.0/0.4,right:trigger@1.2/0.4"}});
   const auto db = (dir / "xr.db").string();
   const auto r = run_cli("run " + (dir / "ssq.toml").string() + " --participant X1 --db " + db +
                          " --backend xr --operator-window off --quiet");
