@@ -370,6 +370,14 @@ read_export_dir <- function(dir) {
     v <- suppressWarnings(as.numeric(trials[[col]]))
     if (all(is.na(v) == is.na(trials[[col]]))) trials[[col]] <- v
   }
+  # A questionnaire block's one trial stands for the block (its blocks are
+  # those of questionnaire_scores.csv): it is not a judgement.
+  questionnaires <- read_questionnaire_scores_csv(dir)
+  if (nrow(questionnaires) && all(c("session_uuid", "block_name") %in% names(trials)) &&
+      "session_uuid" %in% names(questionnaires)) {
+    asked <- paste(questionnaires$session_uuid, questionnaires$block)
+    trials <- trials[!paste(trials$session_uuid, trials$block_name) %in% asked, , drop = FALSE]
+  }
   trials <- normalise_trials(trials)
 
   sessions <- unique(trials[c("session_id", "participant", "session_number", "protocol_sha256")])
@@ -393,7 +401,7 @@ read_export_dir <- function(dir) {
                       drop = FALSE]
   list(source = normalizePath(dir), kind = "export", trials = trials, sessions = sessions,
        staircase = staircase, tracking = read_bids_motion(dir), events = data.frame(),
-       questionnaires = read_questionnaire_scores_csv(dir), tracking_stride = 1)
+       questionnaires = questionnaires, tracking_stride = 1)
 }
 
 # questionnaire_scores.csv of an export directory, when present (sessions
