@@ -2,8 +2,8 @@
 // play block answered by the simulated participant, exported and scored,
 // the scores read back from questionnaire_scores.csv by a second program
 // (python3) that scores the exported answers itself; the same session run
-// again gives the same answers; a session killed inside a questionnaire
-// resumes at its first unanswered item.
+// again gives the same answers; merge pools both; a session killed inside a
+// questionnaire resumes at its first unanswered item.
 #include "run_and_kill.hpp"
 #include "run_cli.hpp"
 #include "session_db.hpp"
@@ -141,6 +141,32 @@ TEST(QuestionnaireBlock, SsqBeforeAndAfterPlayIsAnsweredStoredScoredAndExported)
   const std::string values = "SELECT group_concat(value, ',') FROM (SELECT value FROM questionnaire_answers "
                              "ORDER BY trial_id, item_index)";
   EXPECT_EQ(query(again, values), query(db, values));
+
+  // merge pools both sessions' answers and scores, with their trials, once
+  // however often it runs; a pooled export gives the merged file's tables.
+  const std::string study = (dir / "study.sqlite").string();
+  for (int pass = 0; pass < 2; ++pass) {
+    const auto m = run_cli("merge --out " + study + " " + db + " " + again);
+    ASSERT_EQ(m.exit_code, 0) << m.out;
+  }
+  EXPECT_EQ(query(study, "SELECT count(*) FROM questionnaire_answers")[0][0], "74");
+  EXPECT_EQ(query(study, "SELECT count(*) FROM questionnaire_scores WHERE score IS NOT NULL")[0][0], "20");
+  EXPECT_EQ(query(study, "SELECT count(*) FROM questionnaire_answers x JOIN trials t USING (trial_id) "
+                         "WHERE t.session_id != x.session_id")[0][0],
+            "0");
+  const auto from_study = run_cli("export --db " + study + " --out " + (dir / "study_export").string() + " --format csv");
+  ASSERT_EQ(from_study.exit_code, 0) << from_study.out;
+  const auto pooled = run_cli("export --db " + db + " " + again + " --out " + (dir / "pooled_export").string() +
+                              " --format csv");
+  ASSERT_EQ(pooled.exit_code, 0) << pooled.out;
+  for (const char* file : {"questionnaires.csv", "questionnaire_scores.csv"}) {
+    std::ifstream a(dir / "study_export" / file), b(dir / "pooled_export" / file);
+    std::stringstream sa, sb;
+    sa << a.rdbuf();
+    sb << b.rdbuf();
+    EXPECT_FALSE(sa.str().empty()) << file;
+    EXPECT_EQ(sa.str(), sb.str()) << file;
+  }
 }
 
 TEST(QuestionnaireBlock, KilledMidQuestionnaireResumesAtTheFirstUnansweredItem) {
