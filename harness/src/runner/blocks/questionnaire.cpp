@@ -50,15 +50,36 @@ std::vector<io::AnswerInputs> scale_inputs(const Instrument& ins) {
   return out;
 }
 
-// The line under each item: how to answer with the devices at hand.
-std::string controls_line(const Instrument& ins, std::size_t marked, bool can_go_back) {
-  std::string line = "Press a number";
-  if (!ins.scale.empty()) {
-    line += ", or move the mark [";
-    line += ins.scale[marked].key;
-    line += "] with X and A and choose with the trigger";
+// The line under each item: the marked point, and how to answer and go back
+// with the devices at hand (the participant is told only of controls they
+// have).
+std::string controls_line(const Instrument& ins, std::size_t marked, bool can_go_back,
+                          const std::vector<io::Reach>& reach) {
+  bool keys = false, controllers = false, box = false;
+  for (const auto& r : reach) {
+    keys = keys || r.every_key || r.simulated;
+    controllers = controllers || r.kind == io::SourceKind::xr_controller;
+    box = box || (r.kind == io::SourceKind::hid && r.gives_button("hid_1"));
   }
-  if (can_go_back) line += "; Backspace or B goes back";
+  std::vector<std::string> ways, backs;
+  if (keys) {
+    ways.emplace_back("press its number, or move the mark with the arrow keys and press Enter");
+    backs.emplace_back("Backspace");
+  }
+  if (controllers) {
+    ways.emplace_back("move the mark with X and A and press a trigger");
+    backs.emplace_back("B");
+  }
+  if (box) ways.emplace_back("press its button on the box (the first button for the first point)");
+  std::string line = "Marked: ";
+  (line += ins.scale[marked].key) += ' ';
+  line += ins.scale[marked].label;
+  for (std::size_t k = 0; k < ways.size(); ++k) (line += k == 0 ? ". To answer, " : "; or ") += ways[k];
+  if (can_go_back && !backs.empty()) {
+    line += ". ";
+    for (std::size_t k = 0; k < backs.size(); ++k) (line += k == 0 ? "" : " or ") += backs[k];
+    line += " goes back one item";
+  }
   return line;
 }
 
@@ -101,7 +122,9 @@ class QuestionnaireBlock {
  public:
   explicit QuestionnaireBlock(BlockRun& run)
       : run_(run), f_(run.frames), ins_(f_.protocol.blocks[run.block.protocol_block].instrument),
-        scale_(scale_inputs(ins_)) {}
+        scale_(scale_inputs(ins_)) {
+    for (const io::ResponseSource* source : f_.station.responses) reach_.push_back(source->reach());
+  }
 
   Outcome run() {
     index_ = run_.block.first_trial;
@@ -158,7 +181,7 @@ class QuestionnaireBlock {
   }
 
   std::string page_text(std::size_t item, std::size_t marked, bool can_go_back) const {
-    return protocol::item_page(ins_, item) + "\n\n" + controls_line(ins_, marked, can_go_back);
+    return protocol::item_page(ins_, item) + "\n\n" + controls_line(ins_, marked, can_go_back, reach_);
   }
 
   io::Overlay overlay(std::size_t item) const {
@@ -260,6 +283,7 @@ class QuestionnaireBlock {
   SessionFrames& f_;
   const Instrument& ins_;
   const std::vector<io::AnswerInputs> scale_;
+  std::vector<io::Reach> reach_;  // the response sources at hand
   std::size_t index_ = 0;
   std::int64_t trial_id_ = 0;
   std::vector<std::optional<std::int64_t>> values_;
