@@ -200,7 +200,9 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
     if (const toml::table* j = sub_table(*t, "judgement", bp)) b.judgement = read_judgement(*j, bp + ".judgement", p);
     else if (has_root_judgement_) b.judgement = p.judgement;
     else error(b.pos, bp + ".judgement",
-               "this block has no judgement: add a top-level [judgement] or one for the block");
+               b.kind == "trials" ? "this block has no judgement: add a top-level [judgement] or one for the block"
+                                  : "a " + b.kind + " block is stored as one trial, and every trial carries a "
+                                    "judgement: add a top-level [judgement] (the block asks none of it)");
     if (const auto problem = b.judgement.type && b.kind == "trials" ? b.judgement.type->repetitions_problem(b.repetitions) : std::nullopt)
       error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions", *problem);
     p.blocks.push_back(std::move(b));
