@@ -252,6 +252,7 @@ class QuestionnaireBlock {
     f_.room.status.last_response = std::to_string(a.value);
     f_.room.status.last_rt_ms = static_cast<double>(a.t_ns - shown_ns) * 1e-6;
     f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(a))));
+    ++f_.summary.items_answered;
   }
 
   // Every item answered: the subscales scored and stored, the block's trial
