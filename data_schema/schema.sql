@@ -1,10 +1,10 @@
--- curvlab data schema, version 7 (current). The program embeds this file at
+-- curvlab data schema, version 8 (current). The program embeds this file at
 -- build time and executes it verbatim to create a new database; the codebook
 -- (codebook.md) gives every column its meaning and unit. Times: *_ns are
 -- nanoseconds of the session's monotonic clock, *_utc are ISO 8601 UTC text.
 -- Adding or changing anything here means a new version, a migration in
 -- migrations/, and a codebook entry: no column is ever added at run time.
-PRAGMA user_version = 7;
+PRAGMA user_version = 8;
 
 CREATE TABLE schema_migrations (
   version INTEGER PRIMARY KEY,
@@ -257,4 +257,37 @@ CREATE TABLE shots (
   pocketed TEXT NOT NULL CHECK (json_valid(pocketed)),
   event_count INTEGER NOT NULL CHECK (event_count >= 0),
   UNIQUE (trial_id, shot_index)
+) STRICT;
+
+CREATE TABLE questionnaire_answers (
+  answer_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER NOT NULL REFERENCES trials(trial_id),
+  instrument TEXT NOT NULL,
+  item_index INTEGER NOT NULL CHECK (item_index >= 0),
+  item_id TEXT NOT NULL,
+  item_text TEXT NOT NULL,
+  value INTEGER NOT NULL,
+  label TEXT NOT NULL,
+  shown_ns INTEGER NOT NULL,
+  t_ns INTEGER NOT NULL,
+  rt_ms REAL NOT NULL CHECK (rt_ms >= 0),
+  device TEXT NOT NULL,
+  UNIQUE (trial_id, item_index)
+) STRICT;
+
+CREATE TABLE questionnaire_scores (
+  score_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER NOT NULL REFERENCES trials(trial_id),
+  instrument TEXT NOT NULL,
+  subscale_index INTEGER NOT NULL CHECK (subscale_index >= 0),
+  subscale TEXT NOT NULL,
+  rule TEXT NOT NULL CHECK (rule IN ('sum', 'mean')),
+  weight REAL NOT NULL,
+  items INTEGER NOT NULL CHECK (items >= 0),
+  answered INTEGER NOT NULL CHECK (answered >= 0),
+  raw REAL,
+  score REAL,
+  UNIQUE (trial_id, subscale_index)
 ) STRICT;

@@ -1,7 +1,7 @@
 # Reading curvlab data into plain data frames.
 #
 # Two sources give the same trial table:
-#   - a curvlab SQLite file (schema version 7, data_schema/schema.sql), read
+#   - a curvlab SQLite file (schema version 8, data_schema/schema.sql), read
 #     read-only with RSQLite; conditions/stimulus JSON are expanded into
 #     cond_<name> / stim_<name> columns exactly as `curvlab export --format csv`
 #     names them, and staircase steps are joined on trial_id;
@@ -13,7 +13,7 @@
 # names the file and what was expected; report.R turns it into exit code 2.
 
 curvlab_application_id <- 1129729090  # PRAGMA application_id "CVLB"
-curvlab_schema_version <- 7L
+curvlab_schema_version <- 8L
 
 input_error <- function(...) {
   stop(structure(class = c("curvlab_input_error", "error", "condition"),
@@ -243,9 +243,11 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "     ON oe.trial_id = gt.trial_id AND oe.at_ns = gt.onset_ns",
     "   WHERE g.t_ns >= gt.onset_ns AND g.t_ns < coalesce(gt.onset_ns + oe.ms * 1000000, gt.response_ns)",
     "   GROUP BY g.trial_id) gz ON gz.trial_id = t.trial_id",
-    # A play block's one trial stands for the block: it is not a judgement.
+    # A play or questionnaire block's one trial stands for the block: it is
+    # not a judgement.
     "WHERE NOT EXISTS (SELECT 1 FROM shots sh WHERE sh.trial_id = t.trial_id)",
-    "  AND NOT EXISTS (SELECT 1 FROM events pe WHERE pe.trial_id = t.trial_id AND pe.kind = 'play_summary')",
+    "  AND NOT EXISTS (SELECT 1 FROM events pe WHERE pe.trial_id = t.trial_id",
+    "                  AND pe.kind IN ('play_summary', 'questionnaire_start'))",
     "ORDER BY t.session_id, t.trial_index"))
   cond <- expand_json_column(raw_trials$conditions, "cond_", path, "trials.conditions")
   stim <- expand_json_column(raw_trials$stimulus, "stim_", path, "trials.stimulus")
@@ -290,6 +292,16 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     "JOIN trials t ON t.trial_id = e.trial_id JOIN blocks b ON b.block_id = t.block_id",
     "WHERE e.kind = 'play_summary' ORDER BY e.session_id, b.block_index"))
 
+  # Questionnaire blocks' scores (docs/questionnaires.md), one row per block
+  # and subscale, in the columns questionnaire_scores.csv has.
+  questionnaires <- q(paste(
+    "SELECT x.session_id, se.session_uuid, p.pseudonym AS participant, se.session_number,",
+    "b.name AS block, b.block_index, x.instrument, x.subscale, x.rule, x.weight, x.items, x.answered,",
+    "x.raw, x.score FROM questionnaire_scores x JOIN sessions se ON se.session_id = x.session_id",
+    "JOIN participants p ON p.participant_id = se.participant_id",
+    "JOIN trials t ON t.trial_id = x.trial_id JOIN blocks b ON b.block_id = t.block_id",
+    "ORDER BY x.session_id, b.block_index, x.subscale_index"))
+
   # Thin long recordings evenly per session and device so figures stay light:
   # a 1 kHz hour would otherwise be millions of points on a top-view plot.
   counts <- q(paste("SELECT session_id, device, count(*) AS n FROM tracking_samples",
@@ -304,7 +316,7 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
 
   list(source = normalizePath(path), kind = "database", trials = trials,
        sessions = sessions, staircase = staircase, tracking = tracking, events = events,
-       play = play, tracking_stride = stride)
+       play = play, questionnaires = questionnaires, tracking_stride = stride)
 }
 
 # JSON objects (one per row) → data frame of prefixed columns, keys in order of
@@ -358,6 +370,14 @@ read_export_dir <- function(dir) {
     v <- suppressWarnings(as.numeric(trials[[col]]))
     if (all(is.na(v) == is.na(trials[[col]]))) trials[[col]] <- v
   }
+  # A questionnaire block's one trial stands for the block (its blocks are
+  # those of questionnaire_scores.csv): it is not a judgement.
+  questionnaires <- read_questionnaire_scores_csv(dir)
+  if (nrow(questionnaires) && all(c("session_uuid", "block_name") %in% names(trials)) &&
+      "session_uuid" %in% names(questionnaires)) {
+    asked <- paste(questionnaires$session_uuid, questionnaires$block)
+    trials <- trials[!paste(trials$session_uuid, trials$block_name) %in% asked, , drop = FALSE]
+  }
   trials <- normalise_trials(trials)
 
   sessions <- unique(trials[c("session_id", "participant", "session_number", "protocol_sha256")])
@@ -381,7 +401,22 @@ read_export_dir <- function(dir) {
                       drop = FALSE]
   list(source = normalizePath(dir), kind = "export", trials = trials, sessions = sessions,
        staircase = staircase, tracking = read_bids_motion(dir), events = data.frame(),
-       tracking_stride = 1)
+       questionnaires = questionnaires, tracking_stride = 1)
+}
+
+# questionnaire_scores.csv of an export directory, when present (sessions
+# numbered as trials.csv numbers them: by session_uuid).
+read_questionnaire_scores_csv <- function(dir) {
+  csv <- file.path(dir, "questionnaire_scores.csv")
+  if (!file.exists(csv)) return(data.frame())
+  d <- tryCatch(utils::read.csv(csv, colClasses = "character", na.strings = c("", "NA"), check.names = FALSE),
+                error = function(e) input_error(csv, ": cannot read as CSV (", conditionMessage(e), ")"))
+  missing <- setdiff(c("participant", "block", "block_index", "instrument", "subscale", "score"), names(d))
+  if (length(missing))
+    input_error(csv, ": missing column(s) ", paste(missing, collapse = ", "),
+                " (expected the output of `curvlab export --format csv`)")
+  d$session_id <- as.integer(factor(if ("session_uuid" %in% names(d)) d$session_uuid else d$participant))
+  d
 }
 
 # Lab positions from a BIDS-motion export (DIR/bids/sub-*/ses-*/motion), when
@@ -432,7 +467,7 @@ normalise_trials <- function(trials) {
                 "vergence_demand_arcmin", "gaze_samples", "gaze_valid_samples", "gaze_vergence_arcmin"))
     if (!col %in% names(trials)) trials[[col]] <- NA
   if (!"is_practice" %in% names(trials)) trials$is_practice <- 0L
-  if (!"cond_judged" %in% names(trials)) trials$cond_judged <- "stick"
+  if (!"cond_judged" %in% names(trials)) trials$cond_judged <- rep("stick", nrow(trials))
   # The staircase name is also a condition value; the step row is authoritative.
   if ("cond_staircase" %in% names(trials))
     trials$staircase <- ifelse(is.na(trials$staircase), trials$cond_staircase, trials$staircase)
@@ -552,6 +587,7 @@ pool_parts <- function(parts) {
   tracking <- renumber_trials(bind_rows_fill(pick("tracking")))
   events <- renumber_trials(bind_rows_fill(pick("events")))
   play <- bind_rows_fill(pick("play"))
+  questionnaires <- bind_rows_fill(pick("questionnaires"))
   trials$trial_id <- seq_len(nrow(trials))
   rownames(trials) <- NULL
   sessions$session_id <- sessions$new_id
@@ -562,7 +598,7 @@ pool_parts <- function(parts) {
        staircase = order_by(staircase, c("session_id", "staircase", "step_index")),
        tracking = order_by(tracking, c("session_id", "device", "t_ns")),
        events = order_by(events, c("session_id", "t_ns")),
-       play = play,
+       play = play, questionnaires = questionnaires,
        tracking_stride = max(vapply(parts, function(p) p$tracking_stride, 1)))
 }
 

@@ -194,6 +194,7 @@ build_report <- function(data, out_dir, positive = "convex", lapse = "free", lap
     else "<p class=\"empty\">(no model: no completed trials)</p>",
     truth_html,
     play_section_html(data$play, analysed, positive),
+    questionnaire_section_html(data$questionnaires),
     "<h2>Tracking</h2>",
     vapply(figures[grepl("trajectories", vapply(figures, `[[`, "", 1))], function(f) html_figure(f[[1]], f[[2]]), ""),
     if (!any(grepl("trajectories", vapply(figures, `[[`, "", 1)))) "<p class=\"empty\">(no tracking samples in this source)</p>" else "",

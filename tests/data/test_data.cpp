@@ -288,6 +288,9 @@ constexpr const char* kDropLslTables =
     "DROP INDEX lsl_samples_by_stream_time; DROP INDEX lsl_clock_by_session_time; DROP TABLE lsl_samples; "
     "DROP TABLE lsl_streams; DROP TABLE lsl_clock;";
 
+// What version 8 added: the questionnaire blocks' tables.
+constexpr const char* kDropQuestionnaireTables = "DROP TABLE questionnaire_answers; DROP TABLE questionnaire_scores;";
+
 // A file of version 5 (before the LSL tables) gets them, as a new file has
 // them, empty.
 TEST(Schema, MigratesVersion5FileAddingTheLslTables) {
@@ -296,7 +299,7 @@ TEST(Schema, MigratesVersion5FileAddingTheLslTables) {
   {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec(std::string(kDropLslTables) +
+    db.value().connection().exec(std::string(kDropLslTables) + kDropQuestionnaireTables +
                                  "DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 5");
   }
   auto db = Database::open(path, OpenMode::open_existing);
@@ -319,7 +322,7 @@ TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
     auto& c = db.value().connection();
-    c.exec(std::string(kDropLslTables) +
+    c.exec(std::string(kDropLslTables) + kDropQuestionnaireTables +
            "DROP TABLE shots; DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; "
            "DELETE FROM schema_migrations; PRAGMA user_version = 4");
   }
@@ -341,7 +344,8 @@ TEST(Schema, MigratesVersion6FileAddingTheShotsTable) {
   {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec("DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 6");
+    db.value().connection().exec(std::string(kDropQuestionnaireTables) +
+                                 "DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 6");
   }
   auto db = Database::open(path, OpenMode::open_existing);
   ASSERT_TRUE(db) << db.error().message;
@@ -351,6 +355,28 @@ TEST(Schema, MigratesVersion6FileAddingTheShotsTable) {
   EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
   EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM shots"), 0);
   EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 7"), 1);
+}
+
+// A file of version 7 (before questionnaire blocks) gets their tables, as a
+// new file has them, empty, and keeps its sessions and shots.
+TEST(Schema, MigratesVersion7FileAddingTheQuestionnaireTables) {
+  const auto dir = fresh_dir("migrate7");
+  const auto path = (dir / "v7.db").string();
+  {
+    auto db = Database::open(path, OpenMode::create_or_open);
+    ASSERT_TRUE(db);
+    db.value().connection().exec(std::string(kDropQuestionnaireTables) +
+                                 "DELETE FROM schema_migrations; PRAGMA user_version = 7");
+  }
+  auto db = Database::open(path, OpenMode::open_existing);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(db.value().schema_version(), current_schema_version);
+  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
+  ASSERT_TRUE(fresh);
+  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
+  for (const char* table : {"questionnaire_answers", "questionnaire_scores"})
+    EXPECT_EQ(db.value().connection().query_int(std::string("SELECT count(*) FROM ") + table), 0) << table;
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 8"), 1);
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {

@@ -136,6 +136,10 @@ void run_validate(const std::string& file, bool as_json, const BackendArgs& devi
     std::cout << "  block " << b.name << (b.practice ? " (practice)" : "") << ": " << b.trial_count
               << " trials";
     const auto& src = p.blocks.at(b.protocol_block);
+    if (src.kind == "questionnaire") {
+      std::cout << ", questionnaire " << src.instrument.name << " (" << src.instrument.items.size() << " items)\n";
+      continue;
+    }
     std::cout << ", " << src.judgement.type->name();
     if (src.judgement.type->stops_early()) std::cout << " (at most)";
     std::cout << '\n';

@@ -267,6 +267,7 @@ void report(const rn::RunResult& result, const BackendArgs& a, std::uint32_t msa
     doc["shots"] = s.shots;
     doc["balls_pocketed"] = s.balls_pocketed;
   }
+  if (s.items_answered > 0) doc["items_answered"] = s.items_answered;
   if (!s.play.empty()) {
     Json play = Json::array();
     for (const auto& p : s.play)

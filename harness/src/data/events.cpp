@@ -11,7 +11,7 @@ namespace {
 // the order a person expects, and equal events give equal texts.
 using Json = nlohmann::ordered_json;
 
-constexpr std::array<std::pair<EventKind, std::string_view>, 31> kind_names{{
+constexpr std::array<std::pair<EventKind, std::string_view>, 33> kind_names{{
     {EventKind::session_start, "session_start"},
     {EventKind::observer, "observer"},
     {EventKind::resume, "resume"},
@@ -41,6 +41,8 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 31> kind_names{{
     {EventKind::feedback, "feedback"},
     {EventKind::strike, "strike"},
     {EventKind::pocket, "pocket"},
+    {EventKind::questionnaire_start, "questionnaire_start"},
+    {EventKind::questionnaire_end, "questionnaire_end"},
     {EventKind::merged_from, "merged_from"},
     {EventKind::session_renumbered, "session_renumbered"},
 }};
@@ -161,6 +163,17 @@ Detail detail(const events::Strike& e) {
 }
 Detail detail(const events::Pocket& e) {
   return {EventKind::pocket, Json{{"shot_index", e.shot_index}, {"ball", e.ball}, {"pocket", e.pocket}}};
+}
+
+Detail detail(const events::QuestionnaireStart& e) {
+  return {EventKind::questionnaire_start, Json{{"block", e.block},
+                                               {"instrument", e.instrument},
+                                               {"items", e.items},
+                                               {"first_item", e.first_item}}};
+}
+Detail detail(const events::QuestionnaireEnd& e) {
+  return {EventKind::questionnaire_end,
+          Json{{"block", e.block}, {"instrument", e.instrument}, {"answered", e.answered}}};
 }
 
 // The lapse keys are null when the method keeps λ fixed.

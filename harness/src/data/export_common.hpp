@@ -43,6 +43,11 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
 // The play blocks' shots, one row per shot (export_shots.cpp); no rows where
 // nothing was played.
 Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options);
+// The questionnaire blocks' answers, one row per item answered, and their
+// scores, one row per block and subscale (export_questionnaires.cpp); no
+// rows where no questionnaire was answered.
+Expected<TrialTable> load_questionnaire_table(Database& db, const ExportOptions& options);
+Expected<TrialTable> load_questionnaire_score_table(Database& db, const ExportOptions& options);
 
 // What messages call the exported data: the options' source, else the file.
 std::string origin(const Database& db, const ExportOptions& options);

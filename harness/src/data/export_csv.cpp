@@ -86,17 +86,28 @@ Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& opt
     if (!lsl) return lsl.error();
     written->files.push_back(lsl_name);
   }
-  // Play blocks' shots beside the trials, where any were played.
+  // Play blocks' shots and questionnaire blocks' answers and scores beside
+  // the trials, where there are any.
   auto shots = load_shot_table(db, options);
   if (!shots) return shots.error();
-  if (shots->rows.empty()) return written;
-  auto more = write_staged(options.out_dir, "shots.csv", false, [&](const std::string& path) -> Expected<ExportSummary> {
-    const CsvText csv = render_csv(shots.value(), std::nullopt);
-    if (auto e = write_text(path, csv.text)) return *e;
-    return ExportSummary{{"shots.csv"}, csv.rows};
-  });
-  if (!more) return more;
-  written->files.push_back("shots.csv");
+  auto answers = load_questionnaire_table(db, options);
+  if (!answers) return answers.error();
+  auto scores = load_questionnaire_score_table(db, options);
+  if (!scores) return scores.error();
+  const std::pair<const char*, const TrialTable*> beside[] = {
+      {"shots.csv", &shots.value()}, {"questionnaires.csv", &answers.value()},
+      {"questionnaire_scores.csv", &scores.value()}};
+  for (const auto& [file, rows] : beside) {
+    if (rows->rows.empty()) continue;
+    const std::string file_name(file);
+    auto more = write_staged(options.out_dir, file_name, false, [&](const std::string& path) -> Expected<ExportSummary> {
+      const CsvText csv = render_csv(*rows, std::nullopt);
+      if (auto e = write_text(path, csv.text)) return *e;
+      return ExportSummary{{file_name}, csv.rows};
+    });
+    if (!more) return more;
+    written->files.push_back(file_name);
+  }
   return written;
 }
 

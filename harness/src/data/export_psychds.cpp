@@ -15,10 +15,19 @@ using namespace exporting;
 
 namespace {
 
+// A table beside the trials, written per session as a file whose name adds
+// the task keyword: play blocks' shots (task-play), questionnaire answers
+// (task-questionnaire) and scores (task-questionnairescores).
+struct TaskTable {
+  std::string task;
+  const TrialTable* table = nullptr;
+};
+
 // The dataset in `root` (the psychds folder); `source` names the data's
 // origin in the description.
 Expected<ExportSummary> write_dataset(const std::string& root, const std::vector<SessionInfo>& sessions,
-                                      const TrialTable& table, const TrialTable& shots, const std::string& source) {
+                                      const TrialTable& table, const std::vector<TaskTable>& tasks,
+                                      const std::string& source) {
   if (auto e = make_dir(root + "/data")) return *e;
   ExportSummary summary;
   for (const SessionInfo& s : sessions) {
@@ -29,14 +38,17 @@ Expected<ExportSummary> write_dataset(const std::string& root, const std::vector
     if (auto e = write_text(root + "/" + name, csv.text)) return *e;
     summary.files.push_back("psychds/" + name);
     summary.rows += csv.rows;
-    // The session's shots, where it played (same keywords, "shots" added).
-    const CsvText shot_csv = render_csv(shots, s.session_id);
-    if (shot_csv.rows == 0) continue;
-    const std::string shot_name = "data/study-" + alnum_label(s.protocol_name) + "_subject-" +
-                                  alnum_label(s.pseudonym) + "_session-" + std::to_string(s.session_number) +
-                                  "_task-play_data.csv";
-    if (auto e = write_text(root + "/" + shot_name, shot_csv.text)) return *e;
-    summary.files.push_back("psychds/" + shot_name);
+    // The session's rows of each task table, where it has any (same
+    // keywords, the task added).
+    for (const TaskTable& task : tasks) {
+      const CsvText task_csv = render_csv(*task.table, s.session_id);
+      if (task_csv.rows == 0) continue;
+      const std::string task_name = "data/study-" + alnum_label(s.protocol_name) + "_subject-" +
+                                    alnum_label(s.pseudonym) + "_session-" + std::to_string(s.session_number) +
+                                    "_task-" + task.task + "_data.csv";
+      if (auto e = write_text(root + "/" + task_name, task_csv.text)) return *e;
+      summary.files.push_back("psychds/" + task_name);
+    }
   }
 
   nlohmann::ordered_json doc;
@@ -50,12 +62,14 @@ Expected<ExportSummary> write_dataset(const std::string& root, const std::vector
   doc["dateCreated"] = sessions.empty() ? "" : sessions.front().started_utc;
   auto& vars = doc["variableMeasured"] = nlohmann::ordered_json::array();
   std::vector<Column> described = table.columns;
-  if (!shots.rows.empty())
-    for (const Column& c : shots.columns) {
+  for (const TaskTable& task : tasks) {
+    if (task.table->rows.empty()) continue;
+    for (const Column& c : task.table->columns) {
       bool known = false;
       for (const Column& d : described) known = known || d.name == c.name;
       if (!known) described.push_back(c);
     }
+  }
   for (const Column& c : described) {
     nlohmann::ordered_json v;
     v["@type"] = "PropertyValue";
@@ -79,10 +93,16 @@ Expected<ExportSummary> export_psychds(Database& db, const ExportOptions& option
   if (!table) return table.error();
   auto shots = load_shot_table(db, options);
   if (!shots) return shots.error();
+  auto answers = load_questionnaire_table(db, options);
+  if (!answers) return answers.error();
+  auto scores = load_questionnaire_score_table(db, options);
+  if (!scores) return scores.error();
+  const std::vector<TaskTable> tasks{
+      {"play", &shots.value()}, {"questionnaire", &answers.value()}, {"questionnairescores", &scores.value()}};
   const std::string source =
       options.source.empty() ? std::filesystem::path(db.path()).filename().string() : options.source;
   return write_staged(options.out_dir, "psychds", true, [&](const std::string& root) {
-    return write_dataset(root, sessions.value(), table.value(), shots.value(), source);
+    return write_dataset(root, sessions.value(), table.value(), tasks, source);
   });
 }
 

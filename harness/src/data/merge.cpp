@@ -40,7 +40,7 @@ std::string in_schema(std::string sql, const std::string& schema) {
 // pseudonym). session_number is left out: a merge may renumber. The events
 // a merge writes itself (merged_from, session_renumbered) are provenance of
 // the pooled copy, not something the session recorded, so they are left out.
-constexpr std::array<const char*, 9> digest_queries = {
+constexpr std::array<const char*, 11> digest_queries = {
     "SELECT json_array(s.session_uuid, pr.sha256, p.pseudonym, s.software_version, s.software_commit, "
     "s.backend, s.renderer_device, s.renderer_driver, s.display_refresh_hz, s.seed, s.table_calibration, "
     "s.status, s.started_utc, s.ended_utc) FROM {s}.sessions s "
@@ -76,6 +76,14 @@ constexpr std::array<const char*, 9> digest_queries = {
     "SELECT json_array(t.trial_index, x.shot_index, x.t_ns, x.rest_ns, x.player, x.ball, x.aim_x, x.aim_z, x.speed_m_s, x.cue_speed_m_s, x.tip_side, x.tip_height, x.miscue, x.cue_pose, x.table_settings, x.before_state, x.shot, x.events, x.rest_state, x.pocketed, x.event_count) FROM {s}.shots x "
     "JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE x.session_id = ?1 "
     "ORDER BY t.trial_index, x.shot_index",
+    "SELECT json_array(t.trial_index, x.instrument, x.item_index, x.item_id, x.item_text, x.value, x.label, "
+    "x.shown_ns, x.t_ns, x.rt_ms, x.device) FROM {s}.questionnaire_answers x "
+    "JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE x.session_id = ?1 "
+    "ORDER BY t.trial_index, x.item_index",
+    "SELECT json_array(t.trial_index, x.instrument, x.subscale_index, x.subscale, x.rule, x.weight, x.items, "
+    "x.answered, x.raw, x.score) FROM {s}.questionnaire_scores x "
+    "JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE x.session_id = ?1 "
+    "ORDER BY t.trial_index, x.subscale_index",
     "SELECT json_array(t.trial_index, x.t_ns, x.kind, x.detail) FROM {s}.events x "
     "LEFT JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id "
     "WHERE x.session_id = ?1 AND x.kind NOT IN ('merged_from', 'session_renumbered') ORDER BY x.event_id",
@@ -225,7 +233,7 @@ struct RowCopy {
   std::int64_t MergeInputReport::*counted = nullptr;
 };
 
-constexpr std::array<RowCopy, 8> copy_statements = {{
+constexpr std::array<RowCopy, 10> copy_statements = {{
     {"INSERT INTO main.blocks (session_id, block_index, name, is_practice, settings) SELECT ?2, block_index, "
     "name, is_practice, settings FROM src.blocks WHERE session_id = ?1 ORDER BY block_id", nullptr},
     {"INSERT INTO main.trials (session_id, block_id, trial_index, trial_in_block, conditions, stimulus, status, "
@@ -264,6 +272,14 @@ constexpr std::array<RowCopy, 8> copy_statements = {{
     "x.gaze_id", nullptr},
     {"INSERT INTO main.shots (session_id, trial_id, shot_index, t_ns, rest_ns, player, ball, aim_x, aim_z, speed_m_s, cue_speed_m_s, tip_side, tip_height, miscue, cue_pose, table_settings, before_state, shot, events, rest_state, pocketed, event_count) SELECT ?2, mt.trial_id, x.shot_index, x.t_ns, x.rest_ns, x.player, x.ball, x.aim_x, x.aim_z, x.speed_m_s, x.cue_speed_m_s, x.tip_side, x.tip_height, x.miscue, x.cue_pose, x.table_settings, x.before_state, x.shot, x.events, x.rest_state, x.pocketed, x.event_count "
     "FROM src.shots x{trial} WHERE x.session_id = ?1 ORDER BY x.shot_id", nullptr},
+    {"INSERT INTO main.questionnaire_answers (session_id, trial_id, instrument, item_index, item_id, item_text, "
+    "value, label, shown_ns, t_ns, rt_ms, device) SELECT ?2, mt.trial_id, x.instrument, x.item_index, x.item_id, "
+    "x.item_text, x.value, x.label, x.shown_ns, x.t_ns, x.rt_ms, x.device "
+    "FROM src.questionnaire_answers x{trial} WHERE x.session_id = ?1 ORDER BY x.answer_id", nullptr},
+    {"INSERT INTO main.questionnaire_scores (session_id, trial_id, instrument, subscale_index, subscale, rule, "
+    "weight, items, answered, raw, score) SELECT ?2, mt.trial_id, x.instrument, x.subscale_index, x.subscale, "
+    "x.rule, x.weight, x.items, x.answered, x.raw, x.score "
+    "FROM src.questionnaire_scores x{trial} WHERE x.session_id = ?1 ORDER BY x.score_id", nullptr},
     {"INSERT INTO main.events (session_id, trial_id, t_ns, kind, detail) SELECT ?2, mt.trial_id, x.t_ns, "
     "x.kind, x.detail FROM src.events x{trial} WHERE x.session_id = ?1 ORDER BY x.event_id", nullptr},
 }};

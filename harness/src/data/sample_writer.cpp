@@ -331,6 +331,10 @@ struct SampleWriter::Impl {
                                  : store.skip_trial(entry.trial_id, entry.reason);
           } else if constexpr (std::is_same_v<T, ShotRecord>) {
             return store.record_shot(entry);
+          } else if constexpr (std::is_same_v<T, QuestionnaireAnswer>) {
+            return store.record_answer(entry);
+          } else if constexpr (std::is_same_v<T, QuestionnaireScores>) {
+            return store.record_scores(entry.rows);
           } else if constexpr (std::is_same_v<T, StatusChange>) {
             return entry.close ? store.close_session(entry.session_id, entry.status)
                                : store.set_session_status(entry.session_id, entry.status);

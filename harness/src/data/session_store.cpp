@@ -536,6 +536,68 @@ Expected<Done> SessionStore::record_shot(const ShotRecord& r) {
 
 Expected<std::vector<ShotRecord>> SessionStore::shots(std::int64_t trial_id) { return read_shots(db_, trial_id); }
 
+Expected<Done> SessionStore::record_answer(const QuestionnaireAnswer& a) {
+  return guarded(db_, [&]() -> Done {
+    Transaction txn(db_.connection());
+    Statement s(db_.connection(),
+                "INSERT OR REPLACE INTO questionnaire_answers (session_id, trial_id, instrument, item_index, "
+                "item_id, item_text, value, label, shown_ns, t_ns, rt_ms, device) VALUES "
+                "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)");
+    s.bind(1, a.session_id).bind(2, a.trial_id).bind(3, std::string_view(a.instrument)).bind(4, a.item_index);
+    s.bind(5, std::string_view(a.item_id)).bind(6, std::string_view(a.item_text)).bind(7, a.value);
+    s.bind(8, std::string_view(a.label)).bind(9, a.shown_ns).bind(10, a.t_ns);
+    s.bind(11, static_cast<double>(std::max<std::int64_t>(0, a.t_ns - a.shown_ns)) * 1e-6);
+    s.bind(12, std::string_view(a.device));
+    s.run();
+    txn.commit();
+    return Done{};
+  });
+}
+
+Expected<std::vector<QuestionnaireAnswer>> SessionStore::answers(std::int64_t trial_id) {
+  return guarded(db_, [&]() -> std::vector<QuestionnaireAnswer> {
+    Statement s(db_.connection(),
+                "SELECT session_id, trial_id, instrument, item_index, item_id, item_text, value, label, shown_ns, "
+                "t_ns, device FROM questionnaire_answers WHERE trial_id = ?1 ORDER BY item_index");
+    s.bind(1, trial_id);
+    std::vector<QuestionnaireAnswer> out;
+    while (s.step()) {
+      QuestionnaireAnswer a;
+      a.session_id = s.column_int(0);
+      a.trial_id = s.column_int(1);
+      a.instrument = s.column_text(2);
+      a.item_index = s.column_int(3);
+      a.item_id = s.column_text(4);
+      a.item_text = s.column_text(5);
+      a.value = s.column_int(6);
+      a.label = s.column_text(7);
+      a.shown_ns = s.column_int(8);
+      a.t_ns = s.column_int(9);
+      a.device = s.column_text(10);
+      out.push_back(std::move(a));
+    }
+    return out;
+  });
+}
+
+Expected<Done> SessionStore::record_scores(const std::vector<QuestionnaireScore>& scores) {
+  return guarded(db_, [&]() -> Done {
+    Transaction txn(db_.connection());
+    Statement s(db_.connection(),
+                "INSERT OR REPLACE INTO questionnaire_scores (session_id, trial_id, instrument, subscale_index, "
+                "subscale, rule, weight, items, answered, raw, score) VALUES "
+                "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)");
+    for (const auto& r : scores) {
+      s.bind(1, r.session_id).bind(2, r.trial_id).bind(3, std::string_view(r.instrument)).bind(4, r.subscale_index);
+      s.bind(5, std::string_view(r.subscale)).bind(6, std::string_view(r.rule)).bind(7, r.weight);
+      s.bind(8, r.items).bind(9, r.answered).bind(10, r.raw).bind(11, r.score);
+      s.run();
+    }
+    txn.commit();
+    return Done{};
+  });
+}
+
 Expected<std::int64_t> SessionStore::record_event(const EventRecord& e) {
   return guarded(db_, [&]() -> std::int64_t {
     Transaction txn(db_.connection());

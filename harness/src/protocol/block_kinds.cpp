@@ -6,7 +6,7 @@
 namespace curvlab::harness::protocol {
 
 const std::vector<std::string>& block_kind_names() {
-  static const std::vector<std::string> names{"trials", "play"};
+  static const std::vector<std::string> names{"trials", "play", "questionnaire"};
   return names;
 }
 

@@ -86,10 +86,12 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
     const Settings base = p.block_settings(b);
 
     const JudgementType& type = *b.judgement.type;
-    // A play block is one stretch of play in its first cell: one planned
-    // trial that stands for the block (its status says whether play ended).
-    const bool play = b.kind == "play";
-    const std::vector<DesignSlot> slots = play ? std::vector<DesignSlot>{DesignSlot{}} : type.slots(b, cells.size(), rng);
+    // A play block is one stretch of play in its first cell, a
+    // questionnaire block one run through its instrument's items: one
+    // planned trial that stands for the block (its status says whether it
+    // ended).
+    const bool one_trial = b.kind == "play" || b.kind == "questionnaire";
+    const std::vector<DesignSlot> slots = one_trial ? std::vector<DesignSlot>{DesignSlot{}} : type.slots(b, cells.size(), rng);
 
     PlannedBlock pb;
     pb.name = b.name;
@@ -122,7 +124,7 @@ Design expand_design(const Protocol& p, std::uint64_t participant) {
         t.levels.emplace_back(factor.name, level.label);
         if (const auto* info = find_setting(factor.sets)) apply_setting(t.settings, *info, level.value);
       }
-      if (!play) type.plan_trial(b.judgement, t, rng);
+      if (!one_trial) type.plan_trial(b.judgement, t, rng);
       const auto derived = derive(t.settings);
       t.derived = derived ? derived.value() : Derived{};
       t.break_before = b.break_every_trials > 0 && k > 0 &&

@@ -80,7 +80,7 @@ void Loader::read_settings(const toml::table& t, const std::string& prefix, std:
 void Loader::read_root(const toml::table& root, Protocol& p) {
   check_keys(root, "", {"protocol", "space", "tracking", "viewing", "timeline", "stimulus",
                         "table", "backend", "calibration", "responses", "randomization", "counterbalance", "session",
-                        "factors", "judgement", "instructions", "blocks", "lsl"});
+                        "factors", "judgement", "instructions", "blocks", "lsl", "instruments"});
   read_metadata(root, p);
   read_settings(root, "", p.session_overrides);
   read_backend(root, p);
@@ -110,6 +110,7 @@ void Loader::read_root(const toml::table& root, Protocol& p) {
     p.instructions_start = get_string_array(*ins, "start", "instructions");
     p.instructions_end = get_string_array(*ins, "end", "instructions");
   }
+  read_instruments(root, p);
   read_blocks(root, p);
   read_counterbalance(root, p);
 }

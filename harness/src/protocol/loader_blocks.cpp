@@ -167,7 +167,7 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
     check_keys(*t, bp, {"name", "kind", "practice", "repetitions", "randomize", "levels", "instructions",
                         "break_every_trials", "break_text", "break_min_ms", "space", "tracking",
                         "viewing", "timeline", "stimulus", "table", "judgement", "duration_s", "shots",
-                        "until", "rack", "physics"});
+                        "until", "rack", "physics", "instrument"});
     Block b;
     b.pos = pos_of(*t);
     b.name = get_string(*t, "name", bp, true).value_or("");
@@ -179,6 +179,7 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
         error(pos_of(*t->get("name")), bp + ".name", "duplicate block name \"" + b.name + "\"");
     }
     read_play(*t, bp, b);
+    read_questionnaire(*t, bp, p, b);
     b.practice = get_bool(*t, "practice", bp).value_or(false);
     b.repetitions = static_cast<int>(get_int(*t, "repetitions", bp, 1, 1000, false).value_or(reps));
     const auto mode = get_enum(*t, "randomize", bp, {"none", "shuffle", "shuffle_within_repetition"});
@@ -200,8 +201,10 @@ void Loader::read_blocks(const toml::table& root, Protocol& p) {
     if (const toml::table* j = sub_table(*t, "judgement", bp)) b.judgement = read_judgement(*j, bp + ".judgement", p);
     else if (has_root_judgement_) b.judgement = p.judgement;
     else error(b.pos, bp + ".judgement",
-               "this block has no judgement: add a top-level [judgement] or one for the block");
-    if (const auto problem = b.judgement.type && b.kind != "play" ? b.judgement.type->repetitions_problem(b.repetitions) : std::nullopt)
+               b.kind == "trials" ? "this block has no judgement: add a top-level [judgement] or one for the block"
+                                  : "a " + b.kind + " block is stored as one trial, and every trial carries a "
+                                    "judgement: add a top-level [judgement] (the block asks none of it)");
+    if (const auto problem = b.judgement.type && b.kind == "trials" ? b.judgement.type->repetitions_problem(b.repetitions) : std::nullopt)
       error(t->contains("repetitions") ? pos_of(*t->get("repetitions")) : b.pos, bp + ".repetitions", *problem);
     p.blocks.push_back(std::move(b));
   }

@@ -48,6 +48,12 @@ class Loader : private TableReader {
   // ---- blocks ------------------------------------------------------------
   void read_blocks(const toml::table& root, Protocol& p);
   void read_play(const toml::table& t, const std::string& bp, Block& b);
+  // ---- questionnaires (loader_questionnaires.cpp) --------------------------
+  void read_instruments(const toml::table& root, Protocol& p);
+  void read_scale(const toml::table& t, const std::string& prefix, Instrument& ins);
+  void read_items(const toml::table& t, const std::string& prefix, Instrument& ins);
+  void read_subscales(const toml::table& t, const std::string& prefix, Instrument& ins);
+  void read_questionnaire(const toml::table& t, const std::string& bp, const Protocol& p, Block& b);
   void read_block_levels(const toml::table& lv, const std::string& prefix, const Protocol& p, Block& b);
   void read_counterbalance(const toml::table& root, Protocol& p);
 

@@ -210,7 +210,8 @@ Json block_schema() {
       {"name", {{"type", "string"}, {"pattern", kIdentifierPattern},
                 {"description", "unique; a lower-case identifier"}}},
       {"kind", with_default(enum_field(block_kind_names(), "what the block's frames show: trials (judged "
-                                                           "trials) or play (curved-space billiards)"),
+                                                           "trials), play (curved-space billiards) or "
+                                                           "questionnaire (an instrument's items)"),
                             block_kind_names().front())},
       {"practice", with_default(Json{{"type", "boolean"},
                                      {"description", "practice blocks run first, in file order, and are "
@@ -235,6 +236,11 @@ Json block_schema() {
                              "all_pocketed")},
       {"rack", integer(0, 15, "play blocks: object balls in the rack (default 15)")},
       {"physics", play_physics_schema()},
+      {"instrument", {{"type", "string"},
+                      {"pattern", kIdentifierPattern},
+                      {"description", "questionnaire blocks: \"ssq\" (the built-in Simulator Sickness "
+                                      "Questionnaire) or the name of an [instruments.<name>] table "
+                                      "(docs/questionnaires.md)"}}},
   };
   props = break_fields(props);
   add_settings_sections(props, "this block; overrides the top-level section");
@@ -242,6 +248,56 @@ Json block_schema() {
   props["judgement"]["description"] = "this block's judgement; replaces the top-level [judgement]";
   Json j = closed_object(props, "a block of trials");
   j["required"] = Json::array({"name"});
+  return j;
+}
+
+// [instruments.<name>]: a questionnaire the protocol defines
+// (loader_questionnaires.cpp).
+Json instrument_schema() {
+  Json scale = closed_object(
+      {{"values", {{"type", "array"},
+                   {"minItems", 2},
+                   {"maxItems", 9},
+                   {"uniqueItems", true},
+                   {"items", {{"type", "integer"}, {"minimum", -1000}, {"maximum", 1000}}},
+                   {"description", "the scale's values in the order shown, e.g. [1, 2, 3, 4, 5, 6, 7] or "
+                                   "[-3, -2, -1, 0, 1, 2, 3]"}}},
+       {"labels", string_array("one label per value (\"\" leaves a point unlabelled)")}},
+      "the response scale every item is answered on");
+  scale["required"] = Json::array({"values", "labels"});
+  Json item = closed_object({{"id", {{"type", "string"}, {"pattern", kIdentifierPattern},
+                                     {"description", "unique in the instrument; a lower-case identifier"}}},
+                             {"text", {{"type", "string"}, {"minLength", 1},
+                                       {"description", "the item as shown to the participant"}}},
+                             {"reversed", with_default(Json{{"type", "boolean"},
+                                                            {"description", "scored mirrored on the scale "
+                                                                            "(lowest + highest − value)"}},
+                                                       false)}},
+                            "one item");
+  item["required"] = Json::array({"id", "text"});
+  Json subscale = closed_object(
+      {{"name", {{"type", "string"}, {"pattern", kIdentifierPattern}, {"description", "unique in the instrument"}}},
+       {"items", {{"type", "array"},
+                  {"minItems", 1},
+                  {"items", {{"type", "string"}}},
+                  {"description", "ids of the items it counts (an id listed twice counts twice)"}}},
+       {"score", with_default(enum_field({"sum", "mean"}, "how its items' values combine"), "sum")},
+       {"weight", with_default(Json{{"type", "number"},
+                                    {"exclusiveMinimum", 0},
+                                    {"maximum", 1e6},
+                                    {"description", "the sum or mean is multiplied by this"}},
+                               1.0)}},
+      "a subscale: weight × (sum or mean of its items)");
+  subscale["required"] = Json::array({"name", "items"});
+  Json j = closed_object(
+      {{"title", string_field("shown above each item")},
+       {"scale", scale},
+       {"items", {{"type", "array"}, {"minItems", 1}, {"maxItems", 500}, {"items", item},
+                  {"description", "the items, in the order asked"}}},
+       {"subscales", {{"type", "array"}, {"items", subscale},
+                      {"description", "scores stored and exported when the block ends"}}}},
+      "a questionnaire (docs/questionnaires.md)");
+  j["required"] = Json::array({"scale", "items"});
   return j;
 }
 
@@ -334,6 +390,11 @@ Json root_schema() {
   props["instructions"] = closed_object({{"start", string_array("pages shown before the first block")},
                                          {"end", string_array("pages shown after the last block")}},
                                         "instruction pages");
+  props["instruments"] = {{"type", "object"},
+                          {"description", "questionnaires for questionnaire blocks: name (a lower-case identifier, "
+                                          "not \"ssq\") → its scale, items and subscales"},
+                          {"propertyNames", {{"pattern", kIdentifierPattern}}},
+                          {"additionalProperties", instrument_schema()}};
   props["blocks"] = {{"type", "array"}, {"minItems", 1}, {"items", block_schema()},
                      {"description", "blocks of trials; without any, one block \"main\" crosses all factors"}};
   Json root = {{"$schema", "http://json-schema.org/draft-07/schema#"},

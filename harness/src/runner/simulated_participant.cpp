@@ -1,5 +1,7 @@
 #include "simulated_participant.hpp"
 
+#include "curvlab/harness/protocol/random.hpp"
+
 namespace curvlab::harness::runner {
 
 SimulatedParticipant::SimulatedParticipant(const ObserverParams& params, std::uint64_t session_seed,
@@ -53,6 +55,43 @@ std::optional<OnsetNote> SimulatedParticipant::onset(const OnsetFacts& f) {
                             f.adjustment, std::move(seen));
   keys_.replace(answer.plan.keys);
   return OnsetNote{answer.plan.perceived_m, answer.percept.human};
+}
+
+namespace {
+
+protocol::Engine item_stream(std::uint64_t session_seed, const ItemFacts& f) {
+  return protocol::Engine(protocol::mix_seed(session_seed ^ protocol::mix_seed(0x5e550000ULL + f.trial_index) ^
+                                             protocol::mix_seed(0x17e30000ULL + f.item)));
+}
+
+}  // namespace
+
+std::size_t simulated_item_answer(std::uint64_t session_seed, const ItemFacts& f, bool after_play) {
+  protocol::Engine rng = item_stream(session_seed, f);
+  const std::size_t n = f.instrument.scale.size();
+  if (f.instrument.name == protocol::kSsqName) {
+    const double before[] = {0.55, 0.30, 0.12, 0.03}, after[] = {0.35, 0.38, 0.20, 0.07};
+    const double* p = after_play ? after : before;
+    double u = protocol::uniform01(rng);
+    for (std::size_t k = 0; k + 1 < n; ++k) {
+      if (u < p[k]) return k;
+      u -= p[k];
+    }
+    return n - 1;
+  }
+  // A binomial draw over the scale's points: the middle most often.
+  std::size_t k = 0;
+  for (std::size_t i = 0; i + 1 < n; ++i) k += protocol::uniform01(rng) < 0.5 ? 1 : 0;
+  return k;
+}
+
+// The item's digit key, after 0.8 to 2 s of reading.
+void SimulatedParticipant::item_shown(const ItemFacts& f) {
+  const bool after_play = f.trial_index < after_play_.size() && after_play_[f.trial_index];
+  const std::size_t point = simulated_item_answer(session_seed_, f, after_play);
+  protocol::Engine rng = item_stream(session_seed_ ^ 0x7ea0ULL, f);
+  const auto read_ns = static_cast<std::int64_t>((0.8 + 1.2 * protocol::uniform01(rng)) * 1e9);
+  keys_.replace({ScheduledKey{f.shown_ns + read_ns, f.instrument.scale[point].key, false}});
 }
 
 }  // namespace curvlab::harness::runner

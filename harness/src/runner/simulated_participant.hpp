@@ -14,6 +14,13 @@
 
 namespace curvlab::harness::runner {
 
+// The scale point a simulated participant answers a questionnaire item
+// with: drawn from (session seed, trial, item) alone, so a resumed session
+// answers as the uninterrupted one would. SSQ symptoms are mostly None or
+// Slight, a little worse after a play block; other scales centre on their
+// middle point.
+std::size_t simulated_item_answer(std::uint64_t session_seed, const ItemFacts& facts, bool after_play);
+
 class SimulatedParticipant final : public io::ResponseSource, public TrialWatcher {
  public:
   SimulatedParticipant(const ObserverParams& params, std::uint64_t session_seed, const io::Clock& clock);
@@ -26,6 +33,7 @@ class SimulatedParticipant final : public io::ResponseSource, public TrialWatche
   void page_shown(std::int64_t shown_ns, std::int64_t min_ns) override;
   void attempt_begins(std::size_t trial_index, std::int64_t draw) override;
   std::optional<OnsetNote> onset(const OnsetFacts& facts) override;
+  void item_shown(const ItemFacts& facts) override;
 
  private:
   ObserverParams params_;

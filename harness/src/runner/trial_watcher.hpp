@@ -35,6 +35,14 @@ struct OnsetNote {
   std::optional<HumanAccount> account;
 };
 
+// A questionnaire item as it came up (questionnaire blocks).
+struct ItemFacts {
+  std::size_t trial_index = 0;  // the block's planned trial
+  std::size_t item = 0;         // in the instrument's order
+  const protocol::Instrument& instrument;
+  std::int64_t shown_ns = 0;  // session clock of the item's first frame
+};
+
 class TrialWatcher {
  public:
   virtual ~TrialWatcher() = default;
@@ -47,6 +55,8 @@ class TrialWatcher {
   // the design's trial `trial_index` begins.
   virtual void attempt_begins(std::size_t trial_index, std::int64_t draw) = 0;
   virtual std::optional<OnsetNote> onset(const OnsetFacts& facts) = 0;
+  // A questionnaire item is up, waiting for its answer.
+  virtual void item_shown(const ItemFacts& facts) { (void)facts; }
 };
 
 }  // namespace curvlab::harness::runner

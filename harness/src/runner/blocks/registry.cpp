@@ -8,9 +8,11 @@ namespace curvlab::harness::runner {
 
 const BlockKind& trials_block_kind();
 const BlockKind& play_block_kind();
+const BlockKind& questionnaire_block_kind();
 
 const BlockKind* find_block_kind(std::string_view name) {
-  static const std::array<const BlockKind*, 2> kinds{&trials_block_kind(), &play_block_kind()};
+  static const std::array<const BlockKind*, 3> kinds{&trials_block_kind(), &play_block_kind(),
+                                                     &questionnaire_block_kind()};
   for (const BlockKind* k : kinds)
     if (k->name() == name) return k;
   return nullptr;

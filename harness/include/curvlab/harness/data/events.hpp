@@ -46,6 +46,8 @@ enum class EventKind {
   play_summary,  // a play block's figures when it ends (docs/billiards.md)
   strike,        // a play block's strike of the cue ball
   pocket,        // a ball pocketed in a play block
+  questionnaire_start,  // a questionnaire block's first item (or a resumed run's) is shown
+  questionnaire_end,    // a questionnaire block's last item was answered
   merged_from,
   session_renumbered,
   feedback,      // what the participant was shown after an answer (judgement.feedback)
@@ -207,6 +209,22 @@ struct Pocket {
   std::int64_t pocket = 0;
 };
 
+// A questionnaire block starts (docs/questionnaires.md): its instrument,
+// how many items it has and the first this run shows (0, or where a resumed
+// run goes on).
+struct QuestionnaireStart {
+  std::string block;
+  std::string instrument;
+  std::int64_t items = 0;
+  std::int64_t first_item = 0;
+};
+// A questionnaire block's last item answered: the answers its trial holds.
+struct QuestionnaireEnd {
+  std::string block;
+  std::string instrument;
+  std::int64_t answered = 0;
+};
+
 }  // namespace events
 
 using Event = std::variant<events::SessionStart, events::Observer, events::Resume, events::BlockStart, events::Page,
@@ -214,7 +232,8 @@ using Event = std::variant<events::SessionStart, events::Observer, events::Resum
                            events::Unpaused, events::TrialAborted, events::TrialRepeated, events::TrialAbandoned,
                            events::TrialSkipped, events::EarlyInput, events::AdjustmentEvent, events::Onset,
                            events::TrackingFlagged, events::EventsLost, events::StageMoved, events::RefreshRate,
-                           events::Posterior, events::PlaySummary, events::Strike, events::Pocket>;
+                           events::Posterior, events::PlaySummary, events::Strike, events::Pocket,
+                           events::QuestionnaireStart, events::QuestionnaireEnd>;
 
 // The row an event is stored as.
 EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <string>
 #include <variant>
+#include <vector>
 
 namespace curvlab::harness::data {
 
@@ -31,6 +32,12 @@ struct StatusChange {
   bool close = false;
 };
 
-using JournalEntry = std::variant<EventRecord, BeginTrial, TrialResult, EndUnanswered, StatusChange, ShotRecord>;
+// A questionnaire block's scores, stored together in one transaction.
+struct QuestionnaireScores {
+  std::vector<QuestionnaireScore> rows;
+};
+
+using JournalEntry = std::variant<EventRecord, BeginTrial, TrialResult, EndUnanswered, StatusChange, ShotRecord,
+                                  QuestionnaireAnswer, QuestionnaireScores>;
 
 }  // namespace curvlab::harness::data

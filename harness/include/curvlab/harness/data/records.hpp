@@ -132,6 +132,40 @@ struct ShotRecord {
   std::int64_t event_count = 0;
 };
 
+// One item answered in a questionnaire block (table questionnaire_answers;
+// docs/questionnaires.md): the item as it was shown, the scale point chosen
+// and when. A questionnaire block is stored as one trial; its answers hang
+// from that trial.
+struct QuestionnaireAnswer {
+  std::int64_t session_id = 0;
+  std::int64_t trial_id = 0;
+  std::string instrument;
+  std::int64_t item_index = 0;  // 0-based, in the instrument's order
+  std::string item_id;
+  std::string item_text;
+  std::int64_t value = 0;  // the scale point's value as answered (before any reversal)
+  std::string label;       // the scale point's label
+  std::int64_t shown_ns = 0;  // the item's first frame (session clock)
+  std::int64_t t_ns = 0;      // the answering input (session clock)
+  std::string device;         // io::to_string of the input's source
+};
+
+// One subscale of a questionnaire block, scored when the block ends (table
+// questionnaire_scores): weight × (sum or mean of its items' scored values).
+struct QuestionnaireScore {
+  std::int64_t session_id = 0;
+  std::int64_t trial_id = 0;
+  std::string instrument;
+  std::int64_t subscale_index = 0;
+  std::string subscale;
+  std::string rule;  // sum | mean
+  double weight = 1.0;
+  std::int64_t items = 0;     // items the subscale counts (an item counted twice, twice)
+  std::int64_t answered = 0;  // of which answered
+  std::optional<double> raw;    // sum or mean; nullopt unless every item was answered
+  std::optional<double> score;  // weight × raw
+};
+
 struct TrialResult {
   std::int64_t trial_id = 0;
   std::int64_t onset_ns = 0;     // predicted display time of the stimulus's first frame

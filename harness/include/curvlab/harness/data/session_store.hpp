@@ -76,6 +76,13 @@ class SessionStore {
   Expected<Done> record_shot(const ShotRecord& shot);
   // The shots stored for a play block's trial, in order.
   Expected<std::vector<ShotRecord>> shots(std::int64_t trial_id);
+  // A questionnaire item's answer, in its own transaction; an item answered
+  // again (the participant went back) replaces its row.
+  Expected<Done> record_answer(const QuestionnaireAnswer& answer);
+  // The answers stored for a questionnaire block's trial, by item.
+  Expected<std::vector<QuestionnaireAnswer>> answers(std::int64_t trial_id);
+  // A questionnaire block's scores, replacing any stored for its trial.
+  Expected<Done> record_scores(const std::vector<QuestionnaireScore>& scores);
   Expected<Done> set_session_status(std::int64_t session_id, SessionStatus status);
   // Sets the final status and the end time.
   Expected<Done> close_session(std::int64_t session_id, SessionStatus status);

@@ -5,6 +5,7 @@
 
 #include "curvlab/geometry/table.hpp"
 #include "curvlab/harness/protocol/diagnostic.hpp"
+#include "curvlab/harness/protocol/questionnaire.hpp"
 #include "curvlab/harness/protocol/settings.hpp"
 #include "curvlab/harness/result.hpp"
 
@@ -92,9 +93,13 @@ struct PlaySettings {
 struct Block {
   std::string name;
   // What the block's frames show (the runner's block kinds): "trials", a
-  // list of judged trials.
+  // list of judged trials; "play", billiards; "questionnaire", an
+  // instrument's items.
   std::string kind = "trials";
   PlaySettings play;  // kind "play" only
+  // Kind "questionnaire" only: the instrument its items come from (the
+  // built-in SSQ or one of Protocol::instruments), as loaded.
+  Instrument instrument;
   bool practice = false;
   int repetitions = 1;
   RandomizeMode randomize = RandomizeMode::shuffle;
@@ -135,6 +140,8 @@ struct Protocol {
   std::vector<Factor> factors;
   Judgement judgement;
   std::vector<Block> blocks;  // in file order
+  // The [instruments.<name>] tables: questionnaires the protocol defines.
+  std::vector<Instrument> instruments;
   std::uint64_t seed = 0;
   bool seed_per_participant = true;
   BlockOrder block_order = BlockOrder::fixed;

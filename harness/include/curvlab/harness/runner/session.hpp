@@ -97,6 +97,7 @@ struct SessionSummary {
   std::int64_t attempts_repeated = 0;
   std::int64_t shots = 0;           // play blocks' shots in this run
   std::int64_t balls_pocketed = 0;  // by those shots
+  std::int64_t items_answered = 0;  // questionnaire blocks' items answered in this run
   std::vector<data::events::PlaySummary> play;  // each play block ended in this run
   std::int64_t frames = 0;
   std::uint64_t samples_dropped = 0;
