@@ -83,6 +83,7 @@ void UdpRelay::run() {
       return;
     }
     std::int64_t delay = options_.delay_ns + static_cast<std::int64_t>(u01(rng) * static_cast<double>(options_.jitter_ns));
+    if (!to_host) delay += options_.extra_delay_to_joiner_ns;
     if (u01(rng) < options_.reorder) {
       delay += 2 * options_.jitter_ns + 5'000'000;
       ++reordered_;

@@ -29,6 +29,7 @@ struct RelayOptions {
   std::uint16_t target_port = 0;  // the host's, on 127.0.0.1
   double loss = 0.0;
   std::int64_t delay_ns = 0;
+  std::int64_t extra_delay_to_joiner_ns = 0;  // an asymmetric path: added host → joiner only
   std::int64_t jitter_ns = 0;
   double reorder = 0.0;
   std::uint64_t seed = 1;

@@ -249,6 +249,11 @@ Poll Link::poll(int timeout_ms) {
   }
   impl_->maybe_ping();
   enet_host_flush(impl_->host.get());
+  // ENet's totals are 32-bit: moved into ours at every poll.
+  impl_->counters.wire_bytes_sent += impl_->host->totalSentData;
+  impl_->counters.wire_bytes_received += impl_->host->totalReceivedData;
+  impl_->host->totalSentData = 0;
+  impl_->host->totalReceivedData = 0;
   return out;
 }
 
@@ -272,6 +277,8 @@ void Link::close(const Bye& bye, int timeout_ms) {
 
 LinkCounters Link::counters() const {
   LinkCounters c = impl_->counters;
+  c.wire_bytes_sent += impl_->host->totalSentData;
+  c.wire_bytes_received += impl_->host->totalReceivedData;
   if (impl_->peer != nullptr) {
     c.enet_rtt_ms = impl_->peer->roundTripTime;
     c.enet_loss = static_cast<double>(impl_->peer->packetLoss) / static_cast<double>(static_cast<int>(ENET_PEER_PACKET_LOSS_SCALE));

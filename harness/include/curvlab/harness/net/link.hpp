@@ -48,6 +48,7 @@ struct LinkOptions {
 struct LinkCounters {
   std::uint64_t datagrams_sent = 0, datagrams_received = 0;
   std::uint64_t bytes_sent = 0, bytes_received = 0;  // curvlab's messages, without UDP/ENet headers
+  std::uint64_t wire_bytes_sent = 0, wire_bytes_received = 0;  // UDP payloads: with ENet's headers, acks, pings
   std::uint64_t poses_received = 0;
   std::uint64_t poses_late = 0;   // older than one already received (dropped)
   std::uint64_t poses_lost = 0;   // sequence numbers never seen
