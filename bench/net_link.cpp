@@ -133,7 +133,6 @@ void latency_case(const Path& path, double seconds) {
       s.shot_index = shots++;
       s.events.resize(40);
       s.rest.resize(16);
-      for (auto& b : s.rest) b.orientation = {1, 0, 0, 0};
       p.join->send(s);
       next_shot += 2'000'000'000;
     }

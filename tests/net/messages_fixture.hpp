@@ -33,8 +33,8 @@ inline harness::net::Shot shot(std::uint32_t index) {
   s.shooter = index % 2 ? harness::net::Role::join : harness::net::Role::host;
   s.strike_ns = 5'000'000'000LL + index;
   s.cue_ball = 0;
-  s.aim_x = std::sin(0.1 * index);
-  s.aim_z = std::cos(0.1 * index);
+  s.toward_x_m = 0.5 * std::sin(0.1 * index);
+  s.toward_z_m = 0.5 * std::cos(0.1 * index);
   s.cue_speed_m_s = 1.5;
   s.tip_side = 0.1;
   s.tip_height = -0.2;
@@ -43,9 +43,9 @@ inline harness::net::Shot shot(std::uint32_t index) {
                         static_cast<std::int16_t>(i == 2 ? 3 : -1), -1});
   for (int b = 0; b < 3; ++b) {
     harness::net::ShotBall ball;
-    ball.frame = {1, 0, 0, 0, 1, 0, 0.01 * b, 0.02, 1};
-    ball.orientation = {1, 0, 0, 0};
-    ball.motion = b == 2 ? 4 : 3;
+    ball.x_m = 0.01 * b;
+    ball.z_m = -0.2;
+    ball.pocketed = b == 2;
     ball.pocket = b == 2 ? 1 : -1;
     s.rest.push_back(ball);
   }

@@ -90,10 +90,9 @@ TEST(NetMessages, ValuesOutOfRangeAreRefused) {
   // ...but not infinite there either.
   p.pose[1].m[2][1] = std::numeric_limits<double>::infinity();
   EXPECT_EQ(net::decode(bytes_of(p)).failure, net::DecodeFailure::bad_value);
-  // An aim that is not a unit vector; a negative speed; an event's ball out of range.
+  // An aim point off any table; a negative speed; an event's ball out of range.
   auto s = curvlab::test::shot(1);
-  s.aim_x = 0.5;
-  s.aim_z = 0.5;
+  s.toward_x_m = 1e5;
   EXPECT_EQ(net::decode(bytes_of(s)).failure, net::DecodeFailure::bad_value);
   s = curvlab::test::shot(1);
   s.cue_speed_m_s = -1.0;
@@ -113,7 +112,7 @@ TEST(NetMessages, ValuesOutOfRangeAreRefused) {
 TEST(NetMessages, ListCountsBeyondTheirBoundAreRefusedBeforeAllocating) {
   // A Shot whose event count says 65535: refused as oversized, not read.
   auto b = bytes_of(curvlab::test::shot(1));
-  const std::size_t count_at = net::kHeaderBytes + 4 + 1 + 8 + 4 + 5 * 8;
+  const std::size_t count_at = net::kHeaderBytes + 4 + 1 + 1 + 8 + 4 + 5 * 8;
   ASSERT_EQ(b[count_at], 5);
   b[count_at] = 0xff;
   b[count_at + 1] = 0xff;

@@ -4,6 +4,7 @@
 #include "common.hpp"
 #include "calibrate.hpp"
 #include "lsl_args.hpp"
+#include "shared_args.hpp"
 #include "observer_args.hpp"
 #include "station.hpp"
 
@@ -319,6 +320,7 @@ struct RunArgs {
   ObserverArgs observer;
   BackendArgs backend;
   LslArgs lsl;
+  SharedArgs shared;
 };
 
 std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& path) {
@@ -391,10 +393,14 @@ void run_command(const RunArgs& a) {
   const BackendArgs backend = with_protocol_responses(a.backend, p);
   check_answers_reachable(backend, p, o.observer.has_value());
   check_lsl_args(a.lsl, p, a.backend);
+  check_shared_args(a.shared, p, a.backend);
   auto devices = open_devices(backend, p, table, 0);
   auto streams = open_lsl(a.lsl, p, *devices.clock);
   o.streams = streams.get();
   watch_stop_signals(o);
+  // The partner is found and compared before anything is written.
+  auto shared = open_shared(a.shared, a.participant, p, text, *devices.clock, o.stop_signal);
+  o.shared = shared.get();
   if (calibrates_at_start(p, a.backend)) o.calibration = calibrate_on(devices, calibration_options(p, table, a, o)).fit;
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
     std::error_code ec;
@@ -406,6 +412,7 @@ void run_command(const RunArgs& a) {
   for (const auto& w : rn::stimulus_warnings(p))
     if (w.kind == rn::StimulusWarningKind::model_range) o.warnings.push_back(w.message);
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
+  close_shared(shared.get());
   console.reset();  // its last screenshot shows the session's end
   streams.reset();  // what its recorders still held is stored before the export
   report(result, a.backend, devices.station.display->info().msaa);
@@ -483,6 +490,7 @@ void add_run_commands(CLI::App& app) {
   add_observer_options(r, run->observer);
   add_backend_options(r, run->backend);
   add_lsl_options(r, run->lsl);
+  add_shared_options(r, run->shared);
   r->callback([run] { run_command(*run); });
 
   auto res = std::make_shared<ResumeArgs>();

@@ -216,15 +216,17 @@ PoseFrame get_pose(Reader& r) {
 
 // ---- Shot
 constexpr std::size_t kEventBytes = 8 + 1 + 4 * 2;
-constexpr std::size_t kBallBytes = 13 * 8 + 2;
+constexpr std::size_t kBallBytes = 2 * 8 + 2;
+constexpr double kMaxNative_m = 1e3;
 
 void put_body(Writer& w, const Shot& s) {
   w.put(s.shot_index);
   w.put(s.shooter);
+  w.put(static_cast<std::uint8_t>(s.simulated ? 1 : 0));
   w.put(s.strike_ns);
   w.put(s.cue_ball);
-  w.put(s.aim_x);
-  w.put(s.aim_z);
+  w.put(s.toward_x_m);
+  w.put(s.toward_z_m);
   w.put(s.cue_speed_m_s);
   w.put(s.tip_side);
   w.put(s.tip_height);
@@ -239,9 +241,9 @@ void put_body(Writer& w, const Shot& s) {
   }
   w.count(s.rest.size(), kMaxBalls, "Shot::rest");
   for (const auto& b : s.rest) {
-    for (double v : b.frame) w.put(v);
-    for (double v : b.orientation) w.put(v);
-    w.put(b.motion);
+    w.put(b.x_m);
+    w.put(b.z_m);
+    w.put(static_cast<std::uint8_t>(b.pocketed ? 1 : 0));
     w.put(b.pocket);
   }
 }
@@ -250,12 +252,14 @@ Shot get_shot(Reader& r) {
   s.shot_index = r.get<std::uint32_t>();
   s.shooter = r.get<Role>();
   if (s.shooter != Role::host && s.shooter != Role::join) r.fail(DecodeFailure::bad_value);
+  const auto simulated = r.get<std::uint8_t>();
+  if (simulated > 1) r.fail(DecodeFailure::bad_value);
+  s.simulated = simulated == 1;
   s.strike_ns = r.get<std::int64_t>();
   s.cue_ball = r.get<std::int32_t>();
   if (s.cue_ball < 0 || s.cue_ball >= static_cast<std::int32_t>(kMaxBalls)) r.fail(DecodeFailure::bad_value);
-  s.aim_x = r.finite(1.0 + 1e-9);
-  s.aim_z = r.finite(1.0 + 1e-9);
-  if (r.ok() && std::fabs(std::hypot(s.aim_x, s.aim_z) - 1.0) > 1e-6) r.fail(DecodeFailure::bad_value);
+  s.toward_x_m = r.finite(kMaxNative_m);
+  s.toward_z_m = r.finite(kMaxNative_m);
   s.cue_speed_m_s = r.finite(100.0);
   s.tip_side = r.finite(10.0);
   s.tip_height = r.finite(10.0);
@@ -279,11 +283,12 @@ Shot get_shot(Reader& r) {
   s.rest.reserve(nb);
   for (std::size_t i = 0; i < nb && r.ok(); ++i) {
     ShotBall b;
-    for (double& v : b.frame) v = r.finite(1e6);
-    for (double& v : b.orientation) v = r.finite(1.0 + 1e-6);
-    b.motion = r.get<std::uint8_t>();
+    b.x_m = r.finite(kMaxNative_m);
+    b.z_m = r.finite(kMaxNative_m);
+    const auto pocketed = r.get<std::uint8_t>();
+    b.pocketed = pocketed == 1;
     b.pocket = r.get<std::int8_t>();
-    if (b.motion > 4 || b.pocket < -1 || b.pocket >= static_cast<std::int8_t>(kMaxBalls))
+    if (pocketed > 1 || b.pocket < -1 || b.pocket >= static_cast<std::int8_t>(kMaxBalls))
       r.fail(DecodeFailure::bad_value);
     s.rest.push_back(b);
   }

@@ -12,6 +12,12 @@
 // tip's offset taken from the tip's motion over the last frames. On the
 // desktop, holding the cue-strike key (space) and letting go strikes along
 // the line of sight, harder the longer it was held.
+//
+// Shared (docs/shared_play.md): two stations take turns — the host shoots
+// the even shots, the joiner the odd ones. The shooter's station simulates
+// its shot and sends the inputs, events and rest state; the other station
+// simulates the same inputs again when they arrive, compares, keeps the
+// shooter's rest state, and stores the shot as its own session's.
 #include "../block_kind.hpp"
 #include "../play_scene.hpp"
 
@@ -20,6 +26,8 @@
 #include "curvlab/renderer/colour.hpp"
 #include "curvlab/harness/billiards/shot.hpp"
 #include "curvlab/harness/protocol/random.hpp"
+#include "curvlab/harness/net/partner_poses.hpp"
+#include "curvlab/harness/runner/shared_play.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -291,6 +299,8 @@ class PlayBlock {
     add_objects();
     rest_.emplace(bl::at_rest(cloth_, params_, balls_));
     simulated_ = f_.options().observer.has_value();
+    shared_ = f_.options().shared;
+    if (shared_) start_shared();
     const auto& tip = f_.protocol.calibration.tip_offset_m;
     tip_offset_m_ = {tip[0], tip[1], tip[2]};
     if (!simulated_) cue_.emplace(f_.scene().scene(), f_.world().space, tip_offset_m_);
@@ -323,14 +333,34 @@ class PlayBlock {
       }
       const std::int64_t t_ns = g.timing.predicted_display_ns;
       figures_.add(f_.lab(), physical, f_.tracking());
+      if (shared_) exchange(t_ns);
       if (!rolling) {
-        if (finished(static_cast<double>(g.timing.now_ns - start_ns) > duration_ns)) {
-          f_.end(g, overlay, false, trial_id_);
-          break;
+        const bool out_of_time = static_cast<double>(g.timing.now_ns - start_ns) > duration_ns;
+        if (shared_ && !my_turn()) {
+          // The partner's turn: its shot, or the end it decided.
+          if (partner_over_ || finished(false)) {
+            f_.end(g, overlay, false, trial_id_);
+            break;
+          }
+          if (partner_shot_) {
+            rolling = start_partner_shot(*partner_shot_, t_ns);
+            partner_shot_.reset();
+          }
+          std::optional<std::string> ignored;
+          (void)take_strike(g, t_ns, next_shot_ns, ignored);  // draws the cue; not this station's turn
+        } else {
+          if (finished(out_of_time)) {
+            if (shared_) send_game_over();
+            f_.end(g, overlay, false, trial_id_);
+            break;
+          }
+          std::optional<std::string> cue_pose;
+          const auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
+          if (spec) {
+            rolling = start_shot(t_ns, *spec, cue_pose);
+            if (shared_) send_shot(*rolling);
+          }
         }
-        std::optional<std::string> cue_pose;
-        const auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
-        if (spec) rolling = start_shot(t_ns, *spec, cue_pose);
       }
       if (rolling) {
         const double t_s = static_cast<double>(t_ns - rolling->strike_ns) * 1e-9;
@@ -360,7 +390,153 @@ class PlayBlock {
     phys::System system;
     std::optional<std::string> cue_pose;
     phys::Strike strike;
+    std::optional<net::Shot> from_partner;  // shared: the partner's shot as it sent it
   };
+
+  // ---- Shared play (docs/shared_play.md)
+
+  [[nodiscard]] bool my_turn() const { return (shots_ % 2 == 0) == (shared_->mine.role == net::Role::host); }
+
+  void start_shared() {
+    const net::Link& link = *shared_->link;
+    events::SharedGame e;
+    e.game_uuid = uuid_text(shared_->game_uuid);
+    e.role = std::string(net::to_string(shared_->mine.role));
+    e.partner_initials = shared_->partner.initials;
+    e.partner_version = shared_->partner.software_version;
+    e.completed_shots = shots_;
+    f_.event(trial_id_, e);
+    (void)link;
+  }
+
+  // Each frame: what the partner sent, this station's poses out, and the
+  // clock estimate stored every 5 s.
+  void exchange(std::int64_t t_ns) {
+    net::Link& link = *shared_->link;
+    const net::Poll poll = link.poll(0);
+    for (const auto& r : poll.messages) {
+      if (const auto* shot = std::get_if<net::Shot>(&r.message)) {
+        if (static_cast<int>(shot->shot_index) == shots_ && shot->cue_ball < static_cast<int>(balls_.size()))
+          partner_shot_ = *shot;
+      } else if (const auto* g = std::get_if<net::GameState>(&r.message)) {
+        if (g->phase == net::GameState::Phase::over) partner_over_ = true;
+      } else if (std::holds_alternative<net::Bye>(r.message)) {
+        partner_over_ = true;
+      } else if (const auto* pose = std::get_if<net::PoseFrame>(&r.message)) {
+        partner_poses_.push(*pose, link.clock_estimator().to_local_ns(pose->display_ns));
+      }
+    }
+    send_poses(t_ns);
+    const net::ClockEstimate c = link.clock();
+    if (c.valid && t_ns >= next_clock_event_ns_) {
+      f_.event(trial_id_, events::PartnerClock{c.offset_ns, c.round_trip_ns, c.uncertainty_ns,
+                                               static_cast<std::int64_t>(c.samples)});
+      next_clock_event_ns_ = t_ns + 5'000'000'000;
+    }
+    link.flush();
+  }
+
+  // Head, hands and cue tip as this station's tracking placed them.
+  void send_poses(std::int64_t t_ns) {
+    const geometry::TrackingOutput* t = f_.tracking();
+    if (t == nullptr) return;
+    net::PoseFrame m;
+    m.sequence = ++pose_sequence_;
+    m.display_ns = t_ns;
+    m.space = f_.world().space.kind;
+    m.radius_m = f_.world().space.radius_m;
+    for (int d = 0; d < 3; ++d) {
+      m.pose[static_cast<std::size_t>(d)] = t->pose[static_cast<std::size_t>(d)];
+      if (t->tracked[static_cast<std::size_t>(d)]) m.tracked |= static_cast<std::uint8_t>(1u << d);
+    }
+    m.pose[net::PoseFrame::cue] = t->pose[2] * geometry::translation_m(f_.world().space, tip_offset_m_);
+    if (t->tracked[2]) m.tracked |= 1u << net::PoseFrame::cue;
+    shared_->link->send(m);
+  }
+
+  void send_shot(const Rolling& r) {
+    net::Shot m;
+    m.shot_index = static_cast<std::uint32_t>(shots_);
+    m.shooter = shared_->mine.role;
+    m.simulated = simulated_;
+    m.strike_ns = r.strike_ns;
+    m.cue_ball = 0;
+    m.toward_x_m = r.spec.toward_m.x;
+    m.toward_z_m = r.spec.toward_m.y;
+    m.cue_speed_m_s = r.spec.cue_speed_m_s.value_or(0.0);
+    m.tip_side = r.spec.tip.x;
+    m.tip_height = r.spec.tip.y;
+    for (const auto& e : r.outcome.events) {
+      if (m.events.size() == net::kMaxEvents) break;
+      m.events.push_back({e.event.t_s, static_cast<std::uint8_t>(e.event.kind), static_cast<std::int16_t>(e.event.a),
+                          static_cast<std::int16_t>(e.event.b), static_cast<std::int16_t>(e.event.cushion),
+                          static_cast<std::int16_t>(e.event.pocket)});
+    }
+    for (const auto& b : bl::rest_state(r.outcome))
+      m.rest.push_back({b.native_m.x, b.native_m.y, b.pocketed, static_cast<std::int8_t>(b.pocket)});
+    shared_->link->send(m);
+    shared_->link->flush();
+  }
+
+  void send_game_over() {
+    net::GameState g;
+    g.game_uuid = shared_->game_uuid;
+    g.phase = net::GameState::Phase::over;
+    g.completed_shots = static_cast<std::uint32_t>(shots_);
+    g.next_shooter = shots_ % 2 == 0 ? net::Role::host : net::Role::join;
+    g.balls = static_cast<std::uint16_t>(balls_.size());
+    shared_->link->send(g);
+    shared_->link->flush();
+  }
+
+  // The partner's shot from its inputs, struck when the partner struck it
+  // (on this station's clock), so both tables show the balls rolling together.
+  Rolling start_partner_shot(const net::Shot& m, std::int64_t t_ns) {
+    bl::ShotSpec spec;
+    spec.ball = balls_[static_cast<std::size_t>(m.cue_ball)].id;
+    spec.toward_m = {m.toward_x_m, m.toward_z_m};
+    spec.cue_speed_m_s = m.cue_speed_m_s;
+    spec.tip = {m.tip_side, m.tip_height};
+    const std::int64_t strike_ns = std::min(t_ns, shared_->link->clock_estimator().to_local_ns(m.strike_ns));
+    Rolling r = start_shot(strike_ns, spec, std::nullopt);
+    r.from_partner = m;
+    return r;
+  }
+
+  // The partner's shot as simulated here against what it sent: the same
+  // events, and the largest distance between rest places.
+  static std::pair<bool, double> compare(const Rolling& r, const std::vector<bl::BallPlace>& mine) {
+    const net::Shot& m = *r.from_partner;
+    bool same = m.events.size() == r.outcome.events.size();
+    for (std::size_t i = 0; same && i < m.events.size(); ++i) {
+      const auto& a = m.events[i];
+      const auto& b = r.outcome.events[i].event;
+      same = a.t_s == b.t_s && a.kind == static_cast<std::uint8_t>(b.kind) && a.a == b.a && a.b == b.b &&
+             a.cushion == b.cushion && a.pocket == b.pocket;
+    }
+    double diff = 0.0;
+    if (m.rest.size() != mine.size()) return {false, 0.0};
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      diff = std::max(diff, std::hypot(m.rest[i].x_m - mine[i].native_m.x, m.rest[i].z_m - mine[i].native_m.y));
+      if (m.rest[i].pocketed != mine[i].pocketed || m.rest[i].pocket != mine[i].pocket) same = false;
+    }
+    return {same, diff};
+  }
+
+  void store_network() {
+    const net::LinkCounters c = shared_->link->counters();
+    events::SharedNetwork e;
+    e.rtt_ms = c.enet_rtt_ms;
+    e.loss = c.enet_loss;
+    e.poses_received = static_cast<std::int64_t>(c.poses_received);
+    e.poses_late = static_cast<std::int64_t>(c.poses_late);
+    e.poses_lost = static_cast<std::int64_t>(c.poses_lost);
+    e.bytes_sent = static_cast<std::int64_t>(c.wire_bytes_sent);
+    e.bytes_received = static_cast<std::int64_t>(c.wire_bytes_received);
+    e.dropped = static_cast<std::int64_t>(c.dropped.total());
+    e.disconnects = static_cast<std::int64_t>(c.disconnects);
+    f_.event(trial_id_, e);
+  }
 
   // Laps enough for the whole block at a slow walk, 0.4 m/s.
   geometry::Trajectory walking_trajectory(const geometry::PhysicalTable& table) const {
@@ -407,6 +583,7 @@ std::optional<bl::ShotSpec> spec;
   // The block's figures (a play_summary event and the run summary) and its
   // one trial, completed.
   void store_play(std::int64_t start_ns) {
+    if (shared_) store_network();
     events::PlaySummary summary;
     summary.block = run_.block.name;
     summary.shots = shots_;
@@ -507,7 +684,7 @@ std::optional<bl::ShotSpec> spec;
 
   Rolling start_shot(std::int64_t t_ns, const bl::ShotSpec& spec, std::optional<std::string> cue_pose) {
     Rolling r{t_ns, spec, bl::simulate(cloth_, params_, balls_, spec, 120.0), *rest_, std::move(cue_pose),
-              bl::strike_for(*rest_, params_, 0, spec)};
+              bl::strike_for(*rest_, params_, 0, spec), std::nullopt};
     if (!r.strike.miscue) r.system.set_motion(0, r.strike.v, r.strike.w);
     f_.event(trial_id_, events::Strike{shots_, spec.ball, glm::length(r.strike.v), r.strike.miscue}, t_ns);
     return r;
@@ -520,7 +697,8 @@ std::optional<bl::ShotSpec> spec;
     s.shot_index = shots_;
     s.t_ns = r.strike_ns;
     s.rest_ns = rest_ns;
-    s.player = simulated_ ? "simulated" : "participant";
+    const bool simulated = r.from_partner ? r.from_partner->simulated : simulated_;
+    s.player = simulated ? "simulated" : "participant";
     s.ball = r.spec.ball;
     // rest_ still holds the balls as they were struck.
     const phys::Vec2 aim =
@@ -557,11 +735,30 @@ std::optional<bl::ShotSpec> spec;
         f_.event(trial_id_, events::Pocket{shots_, balls_[static_cast<std::size_t>(e.event.a)].id, e.event.pocket},
                  r.strike_ns + static_cast<std::int64_t>(e.event.t_s * 1e9));
     balls_ = bl::rest_state(r.outcome);
+    std::optional<events::SharedShot> shared_shot;
+    if (shared_) {
+      shared_shot.emplace();
+      shared_shot->shot_index = shots_;
+      shared_shot->local = !r.from_partner;
+      shared_shot->shooter = std::string(net::to_string(r.from_partner ? r.from_partner->shooter : shared_->mine.role));
+    }
+    if (r.from_partner) {
+      // The shooter's station is the authority: its rest state is kept.
+      const auto [same, diff] = compare(r, balls_);
+      shared_shot->same_events = same;
+      shared_shot->rest_difference_m = diff;
+      if (r.from_partner->rest.size() == balls_.size())
+        for (std::size_t i = 0; i < balls_.size(); ++i) {
+          const auto& b = r.from_partner->rest[i];
+          balls_[i] = {balls_[i].id, {b.x_m, b.z_m}, b.pocketed, b.pocket};
+        }
+    }
     if (balls_[0].pocketed) respot_cue_ball();
     s.rest_state = bl::to_json(balls_).dump();
     pocketed_ += static_cast<int>(pocketed.size());
     ++shots_;
     f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(s))));
+    if (shared_shot) f_.event(trial_id_, *shared_shot);
     f_.summary.shots += 1;
     f_.summary.balls_pocketed += static_cast<std::int64_t>(pocketed.size());
     rest_.emplace(bl::at_rest(cloth_, params_, balls_));
@@ -588,6 +785,12 @@ std::optional<bl::ShotSpec> spec;
   std::optional<TrackedCue> cue_;
   glm::dvec3 tip_offset_m_{0.0};
   std::optional<std::int64_t> charge_from_ns_;
+  SharedPlay* shared_ = nullptr;
+  net::PartnerPoseBuffer partner_poses_;
+  std::optional<net::Shot> partner_shot_;
+  bool partner_over_ = false;
+  std::int64_t next_clock_event_ns_ = 0;
+  std::uint32_t pose_sequence_ = 0;
 };
 
 class PlayKind final : public BlockKind {

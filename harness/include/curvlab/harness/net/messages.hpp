@@ -97,9 +97,8 @@ struct PoseFrame {
 // inputs (what the other station re-simulates from), the events and the rest
 // state its simulation gave (what it compares with, or takes).
 struct ShotBall {
-  std::array<double, 9> frame{};        // billiards::Frame, column-major
-  std::array<double, 4> orientation{};  // w x y z
-  std::uint8_t motion = 0;              // billiards::Motion
+  double x_m = 0.0, z_m = 0.0;  // native coordinates on the cloth (docs/billiards.md)
+  bool pocketed = false;
   std::int8_t pocket = -1;
   bool operator==(const ShotBall&) const = default;
 };
@@ -112,9 +111,13 @@ struct ShotEvent {
 struct Shot {
   std::uint32_t shot_index = 0;     // 0-based, in the game
   Role shooter = Role::host;
+  bool simulated = false;           // the shooter's simulated player shot it (else its participant)
   std::int64_t strike_ns = 0;       // the shooter's session clock
   std::int32_t cue_ball = 0;
-  double aim_x = 0.0, aim_z = 1.0;  // unit direction, the cue ball's frame
+  // The cue ball leaves along the geodesic toward this native point (the
+  // stored form of an aim, billiards::ShotSpec::toward_m), bit for bit what
+  // the shooter simulated.
+  double toward_x_m = 0.0, toward_z_m = 0.0;
   double cue_speed_m_s = 0.0;
   double tip_side = 0.0, tip_height = 0.0;  // fractions of the ball's radius
   std::vector<ShotEvent> events;

@@ -42,6 +42,10 @@
 #include <vector>
 
 namespace curvlab::harness::runner {
+struct SharedPlay;
+}
+
+namespace curvlab::harness::runner {
 
 // Which frames the backend must draw. Fast headless runs need pixels only
 // for the stimulus images; every other frame is planned (counts logged) but
@@ -80,6 +84,10 @@ struct RunOptions {
   // Warnings about the protocol stored with the session's start (the human
   // model's range of validity), which the report repeats.
   std::vector<std::string> warnings;
+  // Shared play's partner (shared_play.hpp): connected and compared before
+  // the session was written. Not owned; outlives the run. nullptr: play
+  // blocks are played alone.
+  SharedPlay* shared = nullptr;
 };
 
 struct SessionSummary {
