@@ -425,6 +425,7 @@ struct ResumeArgs {
   bool observer_given = false;
   BackendArgs backend;
   LslArgs lsl;
+  SharedArgs shared;
   std::set<std::string> given;  // the options on the command line ("--render")
 };
 
@@ -456,6 +457,7 @@ void resume_command(ResumeArgs a) {
   const BackendArgs backend = with_protocol_responses(a.backend, *loaded);
   check_answers_reachable(backend, *loaded, o.observer.has_value() || stored.observer.has_value());
   check_lsl_args(a.lsl, *loaded, a.backend);
+  check_shared_args(a.shared, *loaded, a.backend);
   auto devices = open_devices(backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
   auto streams = open_lsl(a.lsl, *loaded, *devices.clock);
   o.streams = streams.get();
@@ -465,7 +467,11 @@ void resume_command(ResumeArgs a) {
   if (o.observer) observer_model = rn::to_string(o.observer->model);
   else if (observer_model.empty()) observer_model = stored.observer ? rn::to_string(stored.observer->model) : "none";
   o.run_options_json = run_options_json(a.backend, observer_model);
+  // A station that comes back rejoins its game (docs/shared_play.md, "Faults").
+  auto shared = open_shared(a.shared, "", *loaded, stored.protocol_text, *devices.clock, o.stop_signal);
+  o.shared = shared.get();
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
+  close_shared(shared.get());
   console.reset();
   streams.reset();
   report(result, a.backend, devices.station.display->info().msaa);
@@ -500,6 +506,7 @@ void add_run_commands(CLI::App& app) {
   add_observer_options(rs, res->observer);
   add_backend_options(rs, res->backend);
   add_lsl_options(rs, res->lsl);
+  add_shared_options(rs, res->shared);
   rs->callback([res, rs] {
     res->observer_given = false;
     res->given.clear();

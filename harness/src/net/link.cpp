@@ -140,8 +140,10 @@ struct Link::Impl {
   void on_connect(ENetEvent& ev, Poll& out) {
     if (peer != nullptr && peer != ev.peer) {
       // A partner that comes back (a killed station restarted) replaces the
-      // one ENet has not yet timed out.
+      // one ENet has not yet timed out: the old one is gone, reported so.
       enet_peer_reset(peer);
+      ++counters.disconnects;
+      out.disconnected = true;
     }
     peer = ev.peer;
     enet_peer_timeout(peer, 0, options.timeout_ms, options.timeout_ms);

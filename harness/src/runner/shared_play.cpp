@@ -116,6 +116,7 @@ Result<std::unique_ptr<SharedPlay>> connect_partner(const SharedOptions& options
     }
     if (game) {
       shared->game_uuid = game->game_uuid;
+      shared->partner_completed_shots = game->completed_shots;
       break;
     }
   }

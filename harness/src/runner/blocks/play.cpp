@@ -31,6 +31,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -300,7 +301,10 @@ class PlayBlock {
     rest_.emplace(bl::at_rest(cloth_, params_, balls_));
     simulated_ = f_.options().observer.has_value();
     shared_ = f_.options().shared;
-    if (shared_) start_shared();
+    if (shared_) {
+      partner_completed_ = shared_->partner_completed_shots;
+      start_shared();
+    }
     const auto& tip = f_.protocol.calibration.tip_offset_m;
     tip_offset_m_ = {tip[0], tip[1], tip[2]};
     if (!simulated_) cue_.emplace(f_.scene().scene(), f_.world().space, tip_offset_m_);
@@ -323,7 +327,8 @@ class PlayBlock {
     }
     const double duration_ns = play_.duration_s * 1e9 - elapsed_before_s_ * 1e9;
     std::optional<Rolling> rolling;
-    const io::Overlay overlay{Phase::stimulus, run_.block.name + "  play: strike the white ball with the cue", !simulated_};
+    const std::string line = run_.block.name + "  play: strike the white ball with the cue";
+    io::Overlay overlay{Phase::stimulus, line, !simulated_};
     for (;;) {
       Frame g;
       if (!f_.begin(g)) return Outcome::quit;
@@ -333,18 +338,25 @@ class PlayBlock {
       }
       const std::int64_t t_ns = g.timing.predicted_display_ns;
       figures_.add(f_.lab(), physical, f_.tracking());
-      if (shared_) exchange(t_ns);
+      if (shared_) {
+        exchange(t_ns);
+        overlay.text = partner_away_ ? run_.block.name + "  paused: the partner station is disconnected; the game "
+                                                         "goes on when it is back"
+                                     : line;
+      }
       if (!rolling) {
         const bool out_of_time = static_cast<double>(g.timing.now_ns - start_ns) > duration_ns;
-        if (shared_ && !my_turn()) {
-          // The partner's turn: its shot, or the end it decided.
-          if (partner_over_ || finished(false)) {
+        if (shared_ && partner_shot_) {
+          // The partner's shot — or, for a station that came back behind,
+          // one it missed, sent again.
+          rolling = start_partner_shot(*partner_shot_, t_ns);
+          partner_shot_.reset();
+        } else if (shared_ && (!my_turn() || partner_completed_ > shots_)) {
+          // The partner's turn, or shots this station missed still to come:
+          // wait for them, or for the end the partner decided.
+          if (partner_completed_ <= shots_ && (partner_over_ || finished(false))) {
             f_.end(g, overlay, false, trial_id_);
             break;
-          }
-          if (partner_shot_) {
-            rolling = start_partner_shot(*partner_shot_, t_ns);
-            partner_shot_.reset();
           }
           std::optional<std::string> ignored;
           (void)take_strike(g, t_ns, next_shot_ns, ignored);  // draws the cue; not this station's turn
@@ -355,7 +367,8 @@ class PlayBlock {
             break;
           }
           std::optional<std::string> cue_pose;
-          const auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
+          auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
+          if (shared_ && partner_away_) spec.reset();  // paused until the partner is back
           if (spec) {
             rolling = start_shot(t_ns, *spec, cue_pose);
             if (shared_) send_shot(*rolling);
@@ -407,6 +420,48 @@ class PlayBlock {
     e.completed_shots = shots_;
     f_.event(trial_id_, e);
     (void)link;
+    // Where this station's game stands: a station that comes back behind its
+    // partner is sent the shots it missed.
+    send_game_state(net::GameState::Phase::playing);
+  }
+
+  void send_game_state(net::GameState::Phase phase) {
+    net::GameState g;
+    g.game_uuid = shared_->game_uuid;
+    g.phase = phase;
+    g.completed_shots = static_cast<std::uint32_t>(shots_);
+    g.next_shooter = shots_ % 2 == 0 ? net::Role::host : net::Role::join;
+    g.balls = static_cast<std::uint16_t>(balls_.size());
+    shared_->link->send(g);
+    shared_->link->flush();
+  }
+
+  // The partner disconnected: the game pauses (no new shot) until it is back.
+  void partner_left(std::int64_t t_ns) {
+    if (partner_away_) return;
+    partner_away_ = true;
+    away_since_ns_ = t_ns;
+    partner_shot_.reset();
+    f_.event(trial_id_, events::PartnerLeft{shots_}, t_ns);
+  }
+
+  // A partner connected (again): both sides say who they are and where their
+  // game stands.
+  void partner_connected() {
+    shared_->link->send(shared_->mine);
+    send_game_state(net::GameState::Phase::playing);
+  }
+
+  void partner_hello(const net::Hello& h, std::int64_t t_ns) {
+    if (const auto why = net::incompatibility(shared_->mine, h)) {
+      shared_->link->send(net::Bye{net::Bye::Reason::incompatible, *why});
+      shared_->link->flush();
+      return;
+    }
+    shared_->partner = h;
+    if (!partner_away_) return;
+    partner_away_ = false;
+    f_.event(trial_id_, events::PartnerBack{shots_, static_cast<double>(t_ns - away_since_ns_) * 1e-9}, t_ns);
   }
 
   // Each frame: what the partner sent, this station's poses out, and the
@@ -414,14 +469,25 @@ class PlayBlock {
   void exchange(std::int64_t t_ns) {
     net::Link& link = *shared_->link;
     const net::Poll poll = link.poll(0);
+    if (poll.disconnected) partner_left(t_ns);
+    if (poll.connected) partner_connected();
+    if (!link.connected() && shared_->mine.role == net::Role::join && t_ns >= next_reconnect_ns_) {
+      link.reconnect();
+      next_reconnect_ns_ = t_ns + 1'000'000'000;
+    }
     for (const auto& r : poll.messages) {
       if (const auto* shot = std::get_if<net::Shot>(&r.message)) {
         if (static_cast<int>(shot->shot_index) == shots_ && shot->cue_ball < static_cast<int>(balls_.size()))
           partner_shot_ = *shot;
       } else if (const auto* g = std::get_if<net::GameState>(&r.message)) {
         if (g->phase == net::GameState::Phase::over) partner_over_ = true;
-      } else if (std::holds_alternative<net::Bye>(r.message)) {
-        partner_over_ = true;
+        partner_completed_ = std::max<std::int64_t>(partner_completed_, g->completed_shots);
+        // Behind: the shots it missed, as they were played.
+        for (auto it = history_.lower_bound(g->completed_shots); it != history_.end(); ++it) link.send(it->second);
+      } else if (const auto* h = std::get_if<net::Hello>(&r.message)) {
+        partner_hello(*h, t_ns);
+      } else if (const auto* bye = std::get_if<net::Bye>(&r.message)) {
+        if (bye->reason != net::Bye::Reason::incompatible) partner_over_ = true;
       } else if (const auto* pose = std::get_if<net::PoseFrame>(&r.message)) {
         partner_poses_.push(*pose, link.clock_estimator().to_local_ns(pose->display_ns));
       }
@@ -474,20 +540,12 @@ class PlayBlock {
     }
     for (const auto& b : bl::rest_state(r.outcome))
       m.rest.push_back({b.native_m.x, b.native_m.y, b.pocketed, static_cast<std::int8_t>(b.pocket)});
+    history_[m.shot_index] = m;
     shared_->link->send(m);
     shared_->link->flush();
   }
 
-  void send_game_over() {
-    net::GameState g;
-    g.game_uuid = shared_->game_uuid;
-    g.phase = net::GameState::Phase::over;
-    g.completed_shots = static_cast<std::uint32_t>(shots_);
-    g.next_shooter = shots_ % 2 == 0 ? net::Role::host : net::Role::join;
-    g.balls = static_cast<std::uint16_t>(balls_.size());
-    shared_->link->send(g);
-    shared_->link->flush();
-  }
+  void send_game_over() { send_game_state(net::GameState::Phase::over); }
 
   // The partner's shot from its inputs, struck when the partner struck it
   // (on this station's clock), so both tables show the balls rolling together.
@@ -743,6 +801,7 @@ std::optional<bl::ShotSpec> spec;
       shared_shot->shooter = std::string(net::to_string(r.from_partner ? r.from_partner->shooter : shared_->mine.role));
     }
     if (r.from_partner) {
+      history_[r.from_partner->shot_index] = *r.from_partner;
       // The shooter's station is the authority: its rest state is kept.
       const auto [same, diff] = compare(r, balls_);
       shared_shot->same_events = same;
@@ -789,6 +848,11 @@ std::optional<bl::ShotSpec> spec;
   net::PartnerPoseBuffer partner_poses_;
   std::optional<net::Shot> partner_shot_;
   bool partner_over_ = false;
+  bool partner_away_ = false;
+  std::int64_t partner_completed_ = 0;  // the partner's completed shots, as it last said
+  std::int64_t away_since_ns_ = 0;
+  std::int64_t next_reconnect_ns_ = 0;
+  std::map<std::uint32_t, net::Shot> history_;  // shared: the shots this station played or received, by index
   std::int64_t next_clock_event_ns_ = 0;
   std::uint32_t pose_sequence_ = 0;
 };

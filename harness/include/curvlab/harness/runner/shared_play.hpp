@@ -39,6 +39,7 @@ struct SharedPlay {
   std::optional<net::Link> link;
   net::Hello mine, partner;
   net::Uuid game_uuid{};
+  std::uint32_t partner_completed_shots = 0;  // as the partner's game state said at connection
   std::string software_version;
 };
 
