@@ -412,7 +412,7 @@ void run_command(const RunArgs& a) {
   for (const auto& w : rn::stimulus_warnings(p))
     if (w.kind == rn::StimulusWarningKind::model_range) o.warnings.push_back(w.message);
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
-  close_shared(shared.get());
+  close_shared(shared.get(), result && result->status == data::SessionStatus::completed);
   console.reset();  // its last screenshot shows the session's end
   streams.reset();  // what its recorders still held is stored before the export
   report(result, a.backend, devices.station.display->info().msaa);
@@ -471,7 +471,7 @@ void resume_command(ResumeArgs a) {
   auto shared = open_shared(a.shared, "", *loaded, stored.protocol_text, *devices.clock, o.stop_signal);
   o.shared = shared.get();
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
-  close_shared(shared.get());
+  close_shared(shared.get(), result && result->status == data::SessionStatus::completed);
   console.reset();
   streams.reset();
   report(result, a.backend, devices.station.display->info().msaa);

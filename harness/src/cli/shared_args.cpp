@@ -64,9 +64,11 @@ std::unique_ptr<rn::SharedPlay> open_shared(const SharedArgs& a, const std::stri
   return std::move(shared).value();
 }
 
-void close_shared(rn::SharedPlay* shared) {
+void close_shared(rn::SharedPlay* shared, bool completed) {
   if (shared == nullptr || !shared->link) return;
-  shared->link->close(net::Bye{net::Bye::Reason::done, "the session ended"}, 1000);
+  shared->link->close(completed ? net::Bye{net::Bye::Reason::done, "the session ended"}
+                                : net::Bye{net::Bye::Reason::quitting, "the session was interrupted"},
+                      1000);
 }
 
 }  // namespace curvlab::harness::cli

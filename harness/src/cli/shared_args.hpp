@@ -41,7 +41,8 @@ std::unique_ptr<harness::runner::SharedPlay> open_shared(const SharedArgs& a, co
                                                          const harness::io::Clock& clock,
                                                          const std::atomic<int>* stop_signal);
 
-// Says goodbye to the partner after the session.
-void close_shared(harness::runner::SharedPlay* shared);
+// Says goodbye to the partner after the session: the game is over when the
+// session completed, paused (the partner waits) when it was interrupted.
+void close_shared(harness::runner::SharedPlay* shared, bool completed);
 
 }  // namespace curvlab::harness::cli

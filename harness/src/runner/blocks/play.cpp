@@ -279,6 +279,53 @@ class TrackedCue {
   mutable phys::Vec2 aim_{0.0, -1.0};
 };
 
+// The partner in a shared game (docs/shared_play.md, "The partner seen"):
+// a head, two hands and a cue placed each frame from the partner's stream at
+// this frame's display time (PartnerPoseBuffer), hidden where the partner's
+// tracking or the stream is lost. The objects are ordinary scene objects, so
+// every view mode draws them, and in S3 their antipodal images too.
+class PartnerAvatar {
+ public:
+  PartnerAvatar(renderer::Scene& scene, const geometry::Space& space) : space_(space) {
+    head_ = scene.add(renderer::ball_object(space, 0.11, renderer::display(0.25f, 0.45f, 0.85f), {}));
+    for (auto& h : hands_) h = scene.add(renderer::ball_object(space, 0.04, renderer::display(0.35f, 0.55f, 0.9f), {}));
+    geometry::BentStick stick;
+    stick.length_m = TrackedCue::kLength_m;
+    stick.radius_m = 0.0065;
+    cue_ = scene.add(renderer::stick_object(space, stick, {}));
+    hide(scene);
+  }
+
+  void update(renderer::Scene& scene, const net::PartnerPose& p) {
+    auto set = [&](std::size_t i, int device, const geometry::Isometry& pose) {
+      const bool visible = p.valid && (p.tracked & (1u << device)) != 0;
+      const auto& o = scene.objects()[i];
+      if (o.visible == visible && (!visible || o.pose.m == pose.m)) return;  // an unchanged frame stays unchanged
+      auto& e = scene.edit(i);
+      e.visible = visible;
+      if (visible) e.pose = pose;
+    };
+    set(head_, net::PoseFrame::head, p.pose[net::PoseFrame::head]);
+    set(hands_[0], net::PoseFrame::left_hand, p.pose[net::PoseFrame::left_hand]);
+    set(hands_[1], net::PoseFrame::right_hand, p.pose[net::PoseFrame::right_hand]);
+    // The stick's model chord along x, centred: turned along the tip's −z,
+    // its front end at the tip (as this station's own cue).
+    set(cue_, net::PoseFrame::cue,
+        p.pose[net::PoseFrame::cue] * geometry::rotation(glm::dvec3(0.0, 1.0, 0.0), kPi / 2.0) *
+            geometry::translation_m(space_, {-TrackedCue::kLength_m / 2.0, 0.0, 0.0}));
+  }
+
+  void hide(renderer::Scene& scene) const {
+    for (std::size_t i : {head_, hands_[0], hands_[1], cue_})
+      if (scene.objects()[i].visible) scene.edit(i).visible = false;
+  }
+
+ private:
+  geometry::Space space_;
+  std::size_t head_ = 0, cue_ = 0;
+  std::array<std::size_t, 2> hands_{};
+};
+
 class PlayBlock {
  public:
   explicit PlayBlock(BlockRun& run)
@@ -303,6 +350,7 @@ class PlayBlock {
     shared_ = f_.options().shared;
     if (shared_) {
       partner_completed_ = shared_->partner_completed_shots;
+      avatar_.emplace(f_.scene().scene(), f_.world().space);
       start_shared();
     }
     const auto& tip = f_.protocol.calibration.tip_offset_m;
@@ -340,17 +388,19 @@ class PlayBlock {
       figures_.add(f_.lab(), physical, f_.tracking());
       if (shared_) {
         exchange(t_ns);
+        avatar_->update(f_.scene().scene(), partner_poses_.at(t_ns));
         overlay.text = partner_away_ ? run_.block.name + "  paused: the partner station is disconnected; the game "
                                                          "goes on when it is back"
                                      : line;
       }
       if (!rolling) {
         const bool out_of_time = static_cast<double>(g.timing.now_ns - start_ns) > duration_ns;
-        if (shared_ && partner_shot_) {
+        const auto next = shared_ ? pending_.find(static_cast<std::uint32_t>(shots_)) : pending_.end();
+        if (next != pending_.end()) {
           // The partner's shot — or, for a station that came back behind,
           // one it missed, sent again.
-          rolling = start_partner_shot(*partner_shot_, t_ns);
-          partner_shot_.reset();
+          rolling = start_partner_shot(next->second, t_ns);
+          pending_.erase(pending_.begin(), std::next(next));
         } else if (shared_ && (!my_turn() || partner_completed_ > shots_)) {
           // The partner's turn, or shots this station missed still to come:
           // wait for them, or for the end the partner decided.
@@ -392,6 +442,7 @@ class PlayBlock {
     store_play(start_ns);
     scene_->hide(f_.scene().scene());
     if (cue_) cue_->hide(f_.scene().scene());
+    if (avatar_) avatar_->hide(f_.scene().scene());
     return Outcome::done;
   }
 
@@ -441,7 +492,6 @@ class PlayBlock {
     if (partner_away_) return;
     partner_away_ = true;
     away_since_ns_ = t_ns;
-    partner_shot_.reset();
     f_.event(trial_id_, events::PartnerLeft{shots_}, t_ns);
   }
 
@@ -477,8 +527,10 @@ class PlayBlock {
     }
     for (const auto& r : poll.messages) {
       if (const auto* shot = std::get_if<net::Shot>(&r.message)) {
-        if (static_cast<int>(shot->shot_index) == shots_ && shot->cue_ball < static_cast<int>(balls_.size()))
-          partner_shot_ = *shot;
+        // Kept by index: a partner whose last shot came to rest sooner on its
+        // table may strike the next one before this station has stored it.
+        if (static_cast<int>(shot->shot_index) >= shots_ && shot->cue_ball < static_cast<int>(balls_.size()))
+          pending_.emplace(shot->shot_index, *shot);
       } else if (const auto* g = std::get_if<net::GameState>(&r.message)) {
         if (g->phase == net::GameState::Phase::over) partner_over_ = true;
         partner_completed_ = std::max<std::int64_t>(partner_completed_, g->completed_shots);
@@ -487,7 +539,9 @@ class PlayBlock {
       } else if (const auto* h = std::get_if<net::Hello>(&r.message)) {
         partner_hello(*h, t_ns);
       } else if (const auto* bye = std::get_if<net::Bye>(&r.message)) {
-        if (bye->reason != net::Bye::Reason::incompatible) partner_over_ = true;
+        // The game over; a partner that quit (interrupted) is a pause.
+        if (bye->reason == net::Bye::Reason::done) partner_over_ = true;
+        if (bye->reason == net::Bye::Reason::quitting) partner_left(t_ns);
       } else if (const auto* pose = std::get_if<net::PoseFrame>(&r.message)) {
         partner_poses_.push(*pose, link.clock_estimator().to_local_ns(pose->display_ns));
       }
@@ -846,7 +900,8 @@ std::optional<bl::ShotSpec> spec;
   std::optional<std::int64_t> charge_from_ns_;
   SharedPlay* shared_ = nullptr;
   net::PartnerPoseBuffer partner_poses_;
-  std::optional<net::Shot> partner_shot_;
+  std::optional<PartnerAvatar> avatar_;
+  std::map<std::uint32_t, net::Shot> pending_;  // the partner's shots not yet played here, by index
   bool partner_over_ = false;
   bool partner_away_ = false;
   std::int64_t partner_completed_ = 0;  // the partner's completed shots, as it last said
