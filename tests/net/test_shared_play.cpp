@@ -104,6 +104,23 @@ void expect_same_game(const std::filesystem::path& dir, std::size_t shots = 4) {
   }
 }
 
+// `curvlab merge` pools the two files; the game links the two sessions.
+void expect_merged_game(const std::filesystem::path& dir) {
+  const std::string study = (dir / "study.sqlite").string();
+  const auto r = run_cli("merge --out " + study + " " + (dir / "host.sqlite").string() + " " +
+                         (dir / "join.sqlite").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto players = query(study, "SELECT json_extract(detail, '$.game_uuid'), json_extract(detail, '$.role'), "
+                                    "session_id FROM events WHERE kind = 'shared_game' ORDER BY 2");
+  ASSERT_EQ(players.size(), 2u);
+  EXPECT_EQ(players[0][0], players[1][0]);
+  EXPECT_EQ(players[0][1], "host");
+  EXPECT_EQ(players[1][1], "join");
+  EXPECT_NE(players[0][2], players[1][2]);
+  // Each session keeps its copy of the game's shots.
+  EXPECT_EQ(query(study, "SELECT 1 FROM shots").size(), 8u);
+}
+
 }  // namespace
 
 TEST(SharedPlay, TwoStationsPlayTheSameGameInEverySpace) {
@@ -117,6 +134,7 @@ TEST(SharedPlay, TwoStationsPlayTheSameGameInEverySpace) {
     ASSERT_EQ(r.host.exit_code, 0) << r.host.out;
     ASSERT_EQ(r.join.exit_code, 0) << r.join.out;
     expect_same_game(dir);
+    expect_merged_game(dir);
   }
 }
 

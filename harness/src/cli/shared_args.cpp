@@ -66,7 +66,7 @@ std::unique_ptr<rn::SharedPlay> open_shared(const SharedArgs& a, const std::stri
 
 void close_shared(rn::SharedPlay* shared, bool completed) {
   if (shared == nullptr || !shared->link) return;
-  shared->link->close(completed ? net::Bye{net::Bye::Reason::done, "the session ended"}
+  shared->close(completed ? net::Bye{net::Bye::Reason::done, "the session ended"}
                                 : net::Bye{net::Bye::Reason::quitting, "the session was interrupted"},
                       1000);
 }

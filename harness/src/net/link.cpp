@@ -259,6 +259,11 @@ Poll Link::poll(int timeout_ms) {
   return out;
 }
 
+void Link::wait_readable(int timeout_ms) const {
+  enet_uint32 condition = ENET_SOCKET_WAIT_RECEIVE;
+  (void)enet_socket_wait(impl_->host->socket, &condition, timeout_ms < 0 ? 0u : static_cast<enet_uint32>(timeout_ms));
+}
+
 void Link::close(const Bye& bye, int timeout_ms) {
   if (!impl_->is_connected()) return;
   impl_->send_raw(bye);
@@ -323,6 +328,7 @@ void Link::reconnect() {}
 bool Link::send(const Message&) { return false; }
 void Link::flush() {}
 Poll Link::poll(int) { return {}; }
+void Link::wait_readable(int) const {}
 void Link::close(const Bye&, int) {}
 LinkCounters Link::counters() const { return {}; }
 ClockEstimate Link::clock() const { return {}; }

@@ -32,6 +32,83 @@ net::Uuid parse_uuid(const std::string& text) {
 
 }  // namespace
 
+SharedPlay::~SharedPlay() { stop_service(); }
+
+void SharedPlay::start_service() {
+  if (thread_.joinable() || !link) return;
+  stop_ = false;
+  thread_ = std::thread([this] { serve(); });
+}
+
+void SharedPlay::stop_service() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+void SharedPlay::serve() {
+  while (!stop_) {
+    link->wait_readable(2);
+    std::lock_guard lock(mutex_);
+    net::Poll p = link->poll(0);
+    inbox_.connected = inbox_.connected || p.connected;
+    inbox_.disconnected = inbox_.disconnected || p.disconnected;
+    for (auto& r : p.messages) {
+      if (std::holds_alternative<net::PoseFrame>(r.message) && ++poses_waiting_ > 256) {
+        // The oldest pose frame waiting gives way (the frame thread is held up).
+        for (auto it = inbox_.messages.begin(); it != inbox_.messages.end(); ++it)
+          if (std::holds_alternative<net::PoseFrame>(it->message)) {
+            inbox_.messages.erase(it);
+            --poses_waiting_;
+            break;
+          }
+      }
+      inbox_.messages.push_back(std::move(r));
+    }
+  }
+}
+
+net::Poll SharedPlay::take() {
+  std::lock_guard lock(mutex_);
+  if (!thread_.joinable()) return link->poll(0);
+  net::Poll out = std::move(inbox_);
+  inbox_ = {};
+  poses_waiting_ = 0;
+  return out;
+}
+
+bool SharedPlay::send(const net::Message& m) {
+  std::lock_guard lock(mutex_);
+  return link->send(m);
+}
+void SharedPlay::flush() {
+  std::lock_guard lock(mutex_);
+  link->flush();
+}
+bool SharedPlay::connected() {
+  std::lock_guard lock(mutex_);
+  return link->connected();
+}
+void SharedPlay::reconnect() {
+  std::lock_guard lock(mutex_);
+  link->reconnect();
+}
+net::ClockEstimate SharedPlay::clock() {
+  std::lock_guard lock(mutex_);
+  return link->clock();
+}
+std::int64_t SharedPlay::to_local_ns(std::int64_t partner_ns) {
+  std::lock_guard lock(mutex_);
+  return link->clock_estimator().to_local_ns(partner_ns);
+}
+net::LinkCounters SharedPlay::counters() {
+  std::lock_guard lock(mutex_);
+  return link->counters();
+}
+void SharedPlay::close(const net::Bye& bye, int timeout_ms) {
+  stop_service();
+  if (link) link->close(bye, timeout_ms);
+}
+
 std::string uuid_text(const net::Uuid& u) {
   static constexpr char hex[] = "0123456789abcdef";
   std::string s;
@@ -120,6 +197,7 @@ Result<std::unique_ptr<SharedPlay>> connect_partner(const SharedOptions& options
       break;
     }
   }
+  shared->start_service();
   return shared;
 }
 

@@ -462,7 +462,6 @@ class PlayBlock {
   [[nodiscard]] bool my_turn() const { return (shots_ % 2 == 0) == (shared_->mine.role == net::Role::host); }
 
   void start_shared() {
-    const net::Link& link = *shared_->link;
     events::SharedGame e;
     e.game_uuid = uuid_text(shared_->game_uuid);
     e.role = std::string(net::to_string(shared_->mine.role));
@@ -470,7 +469,6 @@ class PlayBlock {
     e.partner_version = shared_->partner.software_version;
     e.completed_shots = shots_;
     f_.event(trial_id_, e);
-    (void)link;
     // Where this station's game stands: a station that comes back behind its
     // partner is sent the shots it missed.
     send_game_state(net::GameState::Phase::playing);
@@ -483,8 +481,8 @@ class PlayBlock {
     g.completed_shots = static_cast<std::uint32_t>(shots_);
     g.next_shooter = shots_ % 2 == 0 ? net::Role::host : net::Role::join;
     g.balls = static_cast<std::uint16_t>(balls_.size());
-    shared_->link->send(g);
-    shared_->link->flush();
+    shared_->send(g);
+    shared_->flush();
   }
 
   // The partner disconnected: the game pauses (no new shot) until it is back.
@@ -498,14 +496,14 @@ class PlayBlock {
   // A partner connected (again): both sides say who they are and where their
   // game stands.
   void partner_connected() {
-    shared_->link->send(shared_->mine);
+    shared_->send(shared_->mine);
     send_game_state(net::GameState::Phase::playing);
   }
 
   void partner_hello(const net::Hello& h, std::int64_t t_ns) {
     if (const auto why = net::incompatibility(shared_->mine, h)) {
-      shared_->link->send(net::Bye{net::Bye::Reason::incompatible, *why});
-      shared_->link->flush();
+      shared_->send(net::Bye{net::Bye::Reason::incompatible, *why});
+      shared_->flush();
       return;
     }
     shared_->partner = h;
@@ -517,8 +515,8 @@ class PlayBlock {
   // Each frame: what the partner sent, this station's poses out, and the
   // clock estimate stored every 5 s.
   void exchange(std::int64_t t_ns) {
-    net::Link& link = *shared_->link;
-    const net::Poll poll = link.poll(0);
+    SharedPlay& link = *shared_;
+    const net::Poll poll = link.take();
     if (poll.disconnected) partner_left(t_ns);
     if (poll.connected) partner_connected();
     if (!link.connected() && shared_->mine.role == net::Role::join && t_ns >= next_reconnect_ns_) {
@@ -543,7 +541,7 @@ class PlayBlock {
         if (bye->reason == net::Bye::Reason::done) partner_over_ = true;
         if (bye->reason == net::Bye::Reason::quitting) partner_left(t_ns);
       } else if (const auto* pose = std::get_if<net::PoseFrame>(&r.message)) {
-        partner_poses_.push(*pose, link.clock_estimator().to_local_ns(pose->display_ns));
+        partner_poses_.push(*pose, link.to_local_ns(pose->display_ns));
       }
     }
     send_poses(t_ns);
@@ -571,7 +569,7 @@ class PlayBlock {
     }
     m.pose[net::PoseFrame::cue] = t->pose[2] * geometry::translation_m(f_.world().space, tip_offset_m_);
     if (t->tracked[2]) m.tracked |= 1u << net::PoseFrame::cue;
-    shared_->link->send(m);
+    shared_->send(m);
   }
 
   void send_shot(const Rolling& r) {
@@ -595,8 +593,8 @@ class PlayBlock {
     for (const auto& b : bl::rest_state(r.outcome))
       m.rest.push_back({b.native_m.x, b.native_m.y, b.pocketed, static_cast<std::int8_t>(b.pocket)});
     history_[m.shot_index] = m;
-    shared_->link->send(m);
-    shared_->link->flush();
+    shared_->send(m);
+    shared_->flush();
   }
 
   void send_game_over() { send_game_state(net::GameState::Phase::over); }
@@ -609,7 +607,7 @@ class PlayBlock {
     spec.toward_m = {m.toward_x_m, m.toward_z_m};
     spec.cue_speed_m_s = m.cue_speed_m_s;
     spec.tip = {m.tip_side, m.tip_height};
-    const std::int64_t strike_ns = std::min(t_ns, shared_->link->clock_estimator().to_local_ns(m.strike_ns));
+    const std::int64_t strike_ns = std::min(t_ns, shared_->to_local_ns(m.strike_ns));
     Rolling r = start_shot(strike_ns, spec, std::nullopt);
     r.from_partner = m;
     return r;
@@ -636,7 +634,7 @@ class PlayBlock {
   }
 
   void store_network() {
-    const net::LinkCounters c = shared_->link->counters();
+    const net::LinkCounters c = shared_->counters();
     events::SharedNetwork e;
     e.rtt_ms = c.enet_rtt_ms;
     e.loss = c.enet_loss;

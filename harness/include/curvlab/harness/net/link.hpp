@@ -95,6 +95,10 @@ class Link {
   void flush();
   // Services the network, waiting up to timeout_ms for the first event.
   Poll poll(int timeout_ms);
+  // Waits up to timeout_ms until a datagram can be read, touching no ENet
+  // state (only the socket): a service thread may call it without the lock
+  // under which it calls everything else.
+  void wait_readable(int timeout_ms) const;
   // Sends a Bye and waits up to timeout_ms for it to be acknowledged.
   void close(const Bye& bye, int timeout_ms);
 

@@ -18,6 +18,8 @@
 #include "curvlab/harness/result.hpp"
 
 #include <atomic>
+#include <mutex>
+#include <thread>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -34,13 +36,47 @@ struct SharedOptions {
   std::int64_t wait_ns = 60'000'000'000;  // for the partner to appear
 };
 
-struct SharedPlay {
+// The link between the stations for the whole session. Once started, a
+// service thread waits on the link's socket and polls it the moment a
+// datagram arrives — so clock pings are answered and stamped then, not at
+// the next frame — and keeps what arrived for the frame thread's take().
+// Every call on the link holds one mutex; the messages kept are bounded
+// (pose frames beyond 256 waiting drop the oldest).
+class SharedPlay {
+ public:
   SharedOptions options;
-  std::optional<net::Link> link;
+  std::optional<net::Link> link;  // used directly only before start_service()
   net::Hello mine, partner;
   net::Uuid game_uuid{};
   std::uint32_t partner_completed_shots = 0;  // as the partner's game state said at connection
   std::string software_version;
+
+  SharedPlay() = default;
+  SharedPlay(const SharedPlay&) = delete;
+  SharedPlay& operator=(const SharedPlay&) = delete;
+  ~SharedPlay();
+
+  void start_service();
+  void stop_service();
+  // What arrived since the last take, with the connection changes.
+  net::Poll take();
+  bool send(const net::Message& m);
+  void flush();
+  bool connected();
+  void reconnect();
+  net::ClockEstimate clock();
+  std::int64_t to_local_ns(std::int64_t partner_ns);
+  net::LinkCounters counters();
+  // Stops the service and says goodbye.
+  void close(const net::Bye& bye, int timeout_ms);
+
+ private:
+  void serve();
+  std::mutex mutex_;
+  net::Poll inbox_;
+  std::size_t poses_waiting_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
 };
 
 // The parameters the two stations must share beyond the protocol file: each
