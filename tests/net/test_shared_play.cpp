@@ -193,6 +193,46 @@ TEST(SharedPlay, AKilledJoinerResumesAndRejoinsTheSameGame) {
   EXPECT_EQ(query(join_db, "SELECT 1 FROM events WHERE kind = 'shared_game'").size(), 2u);
 }
 
+// The host killed after its first stored shot and resumed: the joiner
+// pauses, names the game, and the host rejoins it.
+TEST(SharedPlay, AKilledHostResumesAndRejoinsTheSameGame) {
+  const auto dir = fresh_dir("shared_host_rejoin");
+  const std::string p = write(dir / "p.toml", protocol("S3"));
+  const std::uint16_t port = port_for(7);
+  const std::string host_db = (dir / "host.sqlite").string(), join_db = (dir / "join.sqlite").string();
+  auto join = std::async(std::launch::async, [&] {
+    return run_cli(station(p, "JOIN01", join_db, "--shared join --partner 127.0.0.1:" + std::to_string(port)));
+  });
+  const bool killed = curvlab::testing::run_and_kill(
+      {"run", p, "--participant", "HOST01", "--db", host_db, "--render", "none", "--pace", "realtime",
+       "--partner-wait-s", "30", "--shared", "host", "--bind", "127.0.0.1", "--listen", std::to_string(port)},
+      std::chrono::milliseconds(300), [&] {
+        return std::filesystem::exists(host_db) && !query(host_db, "SELECT 1 FROM shots").empty();
+      });
+  ASSERT_TRUE(killed);
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  const auto resumed = run_cli("resume --db " + host_db + " --session 1 --json --shared host --bind 127.0.0.1 --listen " +
+                               std::to_string(port));
+  const auto j = join.get();
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.out;
+  ASSERT_EQ(j.exit_code, 0) << j.out;
+  const std::string game_sql = "SELECT json_extract(detail, '$.game_uuid') FROM events WHERE kind = 'shared_game'";
+  const auto host_games = query(host_db, game_sql);
+  const auto join_games = query(join_db, game_sql);
+  ASSERT_EQ(host_games.size(), 2u);
+  ASSERT_EQ(join_games.size(), 1u);
+  EXPECT_EQ(host_games[0], join_games[0]);
+  EXPECT_EQ(host_games[1], join_games[0]);
+  const std::string shots_sql = "SELECT shot_index, shot, before_state, events, rest_state FROM shots ORDER BY shot_index";
+  const auto a = query(host_db, shots_sql);
+  EXPECT_EQ(a.size(), 4u);
+  EXPECT_EQ(a, query(join_db, shots_sql));
+  const auto pause = query(join_db, "SELECT kind FROM events WHERE kind IN ('partner_left', 'partner_back') ORDER BY event_id");
+  ASSERT_EQ(pause.size(), 2u);
+  EXPECT_EQ(pause[0][0], "partner_left");
+  EXPECT_EQ(pause[1][0], "partner_back");
+}
+
 TEST(SharedPlay, StationsWithDifferentProtocolsAreRefusedBeforeAnythingIsWritten) {
   const auto dir = fresh_dir("shared_refused");
   const std::string a = write(dir / "a.toml", protocol("E3"));

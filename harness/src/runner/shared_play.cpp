@@ -4,6 +4,7 @@
 #include "curvlab/harness/data/uuid.hpp"
 #include "curvlab/harness/version.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -183,7 +184,12 @@ Result<std::unique_ptr<SharedPlay>> connect_partner(const SharedOptions& options
     }
     shared->partner = *partner;
     if (options.role == net::Role::host) {
-      shared->game_uuid = parse_uuid(data::new_session_uuid());
+      // A partner still in a game (this host was killed and resumed) names
+      // it: the host rejoins that game; otherwise the host names a new one.
+      const bool rejoin = std::any_of(partner->game_uuid.begin(), partner->game_uuid.end(),
+                                      [](std::uint8_t b) { return b != 0; });
+      shared->game_uuid = rejoin ? partner->game_uuid : parse_uuid(data::new_session_uuid());
+      shared->partner_completed_shots = partner->completed_shots;
       net::GameState g;
       g.game_uuid = shared->game_uuid;
       g.phase = net::GameState::Phase::playing;

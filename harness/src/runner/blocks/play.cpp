@@ -496,6 +496,10 @@ class PlayBlock {
   // A partner connected (again): both sides say who they are and where their
   // game stands.
   void partner_connected() {
+    // The hello names this station's game and where it stands, so that a
+    // host that was killed and resumed rejoins the game.
+    shared_->mine.game_uuid = shared_->game_uuid;
+    shared_->mine.completed_shots = static_cast<std::uint32_t>(shots_);
     shared_->send(shared_->mine);
     send_game_state(net::GameState::Phase::playing);
   }
