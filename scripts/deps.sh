@@ -22,7 +22,7 @@ run_packages=(
   libglm-dev libvulkan-dev mesa-vulkan-drivers
   glslang-dev glslang-tools spirv-tools
   libsqlite3-dev sqlite3 nettle-dev libhidapi-dev libglfw3-dev libx11-dev libopenxr-dev libopenxr-loader1
-  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libpng-dev libstb-dev
+  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libpng-dev libstb-dev libenet-dev
   fonts-dejavu-core
   r-base-core r-cran-lme4 r-cran-ggplot2 r-cran-rsqlite r-cran-jsonlite python3-pandas python3-matplotlib
   r-cran-brglm2 r-cran-blme r-cran-emmeans r-cran-lpsolve

@@ -1000,7 +1000,7 @@ TEST(Events, KindsKeepTheirStoredNamesAndReadBack) {
   EXPECT_EQ(kind_of(events::SessionEnd{SessionStatus::interrupted}), "session_end");
   EXPECT_EQ(event_record(1, std::nullopt, 0, events::SessionEnd{SessionStatus::interrupted}).detail_json,
             R"({"status":"interrupted"})");
-  for (int k = 0; k <= static_cast<int>(EventKind::feedback); ++k) {
+  for (int k = 0; k <= static_cast<int>(EventKind::partner_back); ++k) {
     const auto kind = static_cast<EventKind>(k);
     EXPECT_EQ(parse_event_kind(to_string(kind)), kind) << to_string(kind);
   }

@@ -4,6 +4,7 @@
 #include "common.hpp"
 #include "calibrate.hpp"
 #include "lsl_args.hpp"
+#include "shared_args.hpp"
 #include "observer_args.hpp"
 #include "station.hpp"
 
@@ -321,6 +322,7 @@ struct RunArgs {
   ObserverArgs observer;
   BackendArgs backend;
   LslArgs lsl;
+  SharedArgs shared;
 };
 
 std::optional<geometry::PhysicalTableFit> read_calibration(const std::string& path) {
@@ -394,10 +396,14 @@ void run_command(const RunArgs& a) {
   const BackendArgs backend = with_protocol_responses(a.backend, p);
   check_answers_reachable(backend, p, o.observer.has_value());
   check_lsl_args(a.lsl, p, a.backend);
+  check_shared_args(a.shared, p, a.backend);
   auto devices = open_devices(backend, p, table, 0);
   auto streams = open_lsl(a.lsl, p, *devices.clock);
   o.streams = streams.get();
   watch_stop_signals(o);
+  // The partner is found and compared before anything is written.
+  auto shared = open_shared(a.shared, a.participant, p, text, *devices.clock, o.stop_signal);
+  o.shared = shared.get();
   if (calibrates_at_start(p, a.backend)) o.calibration = calibrate_on(devices, calibration_options(p, table, a, o)).fit;
   if (const auto parent = std::filesystem::path(db).parent_path(); !parent.empty()) {
     std::error_code ec;
@@ -409,6 +415,7 @@ void run_command(const RunArgs& a) {
   for (const auto& w : rn::stimulus_warnings(p))
     if (w.kind == rn::StimulusWarningKind::model_range) o.warnings.push_back(w.message);
   auto result = rn::run_session(p, text, db, o, devices.station, *devices.clock);
+  close_shared(shared.get(), result && result->status == data::SessionStatus::completed);
   console.reset();  // its last screenshot shows the session's end
   streams.reset();  // what its recorders still held is stored before the export
   report(result, a.backend, devices.station.display->info().msaa);
@@ -438,6 +445,7 @@ struct ResumeArgs {
   bool observer_given = false;
   BackendArgs backend;
   LslArgs lsl;
+  SharedArgs shared;
   std::set<std::string> given;  // the options on the command line ("--render")
 };
 
@@ -469,6 +477,7 @@ void resume_command(ResumeArgs a) {
   const BackendArgs backend = with_protocol_responses(a.backend, *loaded);
   check_answers_reachable(backend, *loaded, o.observer.has_value() || stored.observer.has_value());
   check_lsl_args(a.lsl, *loaded, a.backend);
+  check_shared_args(a.shared, *loaded, a.backend);
   auto devices = open_devices(backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
   auto streams = open_lsl(a.lsl, *loaded, *devices.clock);
   o.streams = streams.get();
@@ -478,7 +487,11 @@ void resume_command(ResumeArgs a) {
   if (o.observer) observer_model = rn::to_string(o.observer->model);
   else if (observer_model.empty()) observer_model = stored.observer ? rn::to_string(stored.observer->model) : "none";
   o.run_options_json = run_options_json(a.backend, observer_model);
+  // A station that comes back rejoins its game (docs/shared_play.md, "Faults").
+  auto shared = open_shared(a.shared, "", *loaded, stored.protocol_text, *devices.clock, o.stop_signal);
+  o.shared = shared.get();
   auto result = rn::resume_session(a.db, a.session, stored, *loaded, o, devices.station, *devices.clock);
+  close_shared(shared.get(), result && result->status == data::SessionStatus::completed);
   console.reset();
   streams.reset();
   report(result, a.backend, devices.station.display->info().msaa);
@@ -504,6 +517,7 @@ void add_run_commands(CLI::App& app) {
   add_observer_options(r, run->observer);
   add_backend_options(r, run->backend);
   add_lsl_options(r, run->lsl);
+  add_shared_options(r, run->shared);
   r->callback([run] { run_command(*run); });
 
   auto res = std::make_shared<ResumeArgs>();
@@ -513,6 +527,7 @@ void add_run_commands(CLI::App& app) {
   add_observer_options(rs, res->observer);
   add_backend_options(rs, res->backend);
   add_lsl_options(rs, res->lsl);
+  add_shared_options(rs, res->shared);
   rs->callback([res, rs] {
     res->observer_given = false;
     res->given.clear();

@@ -11,7 +11,7 @@ namespace {
 // the order a person expects, and equal events give equal texts.
 using Json = nlohmann::ordered_json;
 
-constexpr std::array<std::pair<EventKind, std::string_view>, 33> kind_names{{
+constexpr std::array<std::pair<EventKind, std::string_view>, 39> kind_names{{
     {EventKind::session_start, "session_start"},
     {EventKind::observer, "observer"},
     {EventKind::resume, "resume"},
@@ -45,6 +45,12 @@ constexpr std::array<std::pair<EventKind, std::string_view>, 33> kind_names{{
     {EventKind::questionnaire_end, "questionnaire_end"},
     {EventKind::merged_from, "merged_from"},
     {EventKind::session_renumbered, "session_renumbered"},
+    {EventKind::shared_game, "shared_game"},
+    {EventKind::partner_clock, "partner_clock"},
+    {EventKind::shared_shot, "shared_shot"},
+    {EventKind::shared_network, "shared_network"},
+    {EventKind::partner_left, "partner_left"},
+    {EventKind::partner_back, "partner_back"},
 }};
 
 Json pose_json(const Pose16& m) {
@@ -174,6 +180,43 @@ Detail detail(const events::QuestionnaireStart& e) {
 Detail detail(const events::QuestionnaireEnd& e) {
   return {EventKind::questionnaire_end,
           Json{{"block", e.block}, {"instrument", e.instrument}, {"answered", e.answered}}};
+}
+Detail detail(const events::SharedGame& e) {
+  return {EventKind::shared_game, Json{{"game_uuid", e.game_uuid},
+                                       {"role", e.role},
+                                       {"partner_initials", e.partner_initials},
+                                       {"partner_version", e.partner_version},
+                                       {"completed_shots", e.completed_shots}}};
+}
+Detail detail(const events::PartnerClock& e) {
+  return {EventKind::partner_clock, Json{{"offset_ns", e.offset_ns},
+                                         {"round_trip_ns", e.round_trip_ns},
+                                         {"uncertainty_ns", e.uncertainty_ns},
+                                         {"samples", e.samples}}};
+}
+Detail detail(const events::SharedShot& e) {
+  return {EventKind::shared_shot, Json{{"shot_index", e.shot_index},
+                                       {"shooter", e.shooter},
+                                       {"local", e.local},
+                                       {"same_events", e.same_events},
+                                       {"rest_difference_m", e.rest_difference_m}}};
+}
+Detail detail(const events::SharedNetwork& e) {
+  return {EventKind::shared_network, Json{{"rtt_ms", e.rtt_ms},
+                                          {"loss", e.loss},
+                                          {"poses_received", e.poses_received},
+                                          {"poses_late", e.poses_late},
+                                          {"poses_lost", e.poses_lost},
+                                          {"bytes_sent", e.bytes_sent},
+                                          {"bytes_received", e.bytes_received},
+                                          {"dropped", e.dropped},
+                                          {"disconnects", e.disconnects}}};
+}
+Detail detail(const events::PartnerLeft& e) {
+  return {EventKind::partner_left, Json{{"completed_shots", e.completed_shots}}};
+}
+Detail detail(const events::PartnerBack& e) {
+  return {EventKind::partner_back, Json{{"completed_shots", e.completed_shots}, {"away_s", e.away_s}}};
 }
 
 // The lapse keys are null when the method keeps λ fixed.

@@ -12,6 +12,12 @@
 // tip's offset taken from the tip's motion over the last frames. On the
 // desktop, holding the cue-strike key (space) and letting go strikes along
 // the line of sight, harder the longer it was held.
+//
+// Shared (docs/shared_play.md): two stations take turns — the host shoots
+// the even shots, the joiner the odd ones. The shooter's station simulates
+// its shot and sends the inputs, events and rest state; the other station
+// simulates the same inputs again when they arrive, compares, keeps the
+// shooter's rest state, and stores the shot as its own session's.
 #include "../block_kind.hpp"
 #include "../play_scene.hpp"
 
@@ -20,9 +26,12 @@
 #include "curvlab/renderer/colour.hpp"
 #include "curvlab/harness/billiards/shot.hpp"
 #include "curvlab/harness/protocol/random.hpp"
+#include "curvlab/harness/net/partner_poses.hpp"
+#include "curvlab/harness/runner/shared_play.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -270,6 +279,53 @@ class TrackedCue {
   mutable phys::Vec2 aim_{0.0, -1.0};
 };
 
+// The partner in a shared game (docs/shared_play.md, "The partner seen"):
+// a head, two hands and a cue placed each frame from the partner's stream at
+// this frame's display time (PartnerPoseBuffer), hidden where the partner's
+// tracking or the stream is lost. The objects are ordinary scene objects, so
+// every view mode draws them, and in S3 their antipodal images too.
+class PartnerAvatar {
+ public:
+  PartnerAvatar(renderer::Scene& scene, const geometry::Space& space) : space_(space) {
+    head_ = scene.add(renderer::ball_object(space, 0.11, renderer::display(0.25f, 0.45f, 0.85f), {}));
+    for (auto& h : hands_) h = scene.add(renderer::ball_object(space, 0.04, renderer::display(0.35f, 0.55f, 0.9f), {}));
+    geometry::BentStick stick;
+    stick.length_m = TrackedCue::kLength_m;
+    stick.radius_m = 0.0065;
+    cue_ = scene.add(renderer::stick_object(space, stick, {}));
+    hide(scene);
+  }
+
+  void update(renderer::Scene& scene, const net::PartnerPose& p) {
+    auto set = [&](std::size_t i, int device, const geometry::Isometry& pose) {
+      const bool visible = p.valid && (p.tracked & (1u << device)) != 0;
+      const auto& o = scene.objects()[i];
+      if (o.visible == visible && (!visible || o.pose.m == pose.m)) return;  // an unchanged frame stays unchanged
+      auto& e = scene.edit(i);
+      e.visible = visible;
+      if (visible) e.pose = pose;
+    };
+    set(head_, net::PoseFrame::head, p.pose[net::PoseFrame::head]);
+    set(hands_[0], net::PoseFrame::left_hand, p.pose[net::PoseFrame::left_hand]);
+    set(hands_[1], net::PoseFrame::right_hand, p.pose[net::PoseFrame::right_hand]);
+    // The stick's model chord along x, centred: turned along the tip's −z,
+    // its front end at the tip (as this station's own cue).
+    set(cue_, net::PoseFrame::cue,
+        p.pose[net::PoseFrame::cue] * geometry::rotation(glm::dvec3(0.0, 1.0, 0.0), kPi / 2.0) *
+            geometry::translation_m(space_, {-TrackedCue::kLength_m / 2.0, 0.0, 0.0}));
+  }
+
+  void hide(renderer::Scene& scene) const {
+    for (std::size_t i : {head_, hands_[0], hands_[1], cue_})
+      if (scene.objects()[i].visible) scene.edit(i).visible = false;
+  }
+
+ private:
+  geometry::Space space_;
+  std::size_t head_ = 0, cue_ = 0;
+  std::array<std::size_t, 2> hands_{};
+};
+
 class PlayBlock {
  public:
   explicit PlayBlock(BlockRun& run)
@@ -291,6 +347,12 @@ class PlayBlock {
     add_objects();
     rest_.emplace(bl::at_rest(cloth_, params_, balls_));
     simulated_ = f_.options().observer.has_value();
+    shared_ = f_.options().shared;
+    if (shared_) {
+      partner_completed_ = shared_->partner_completed_shots;
+      avatar_.emplace(f_.scene().scene(), f_.world().space);
+      start_shared();
+    }
     const auto& tip = f_.protocol.calibration.tip_offset_m;
     tip_offset_m_ = {tip[0], tip[1], tip[2]};
     if (!simulated_) cue_.emplace(f_.scene().scene(), f_.world().space, tip_offset_m_);
@@ -313,7 +375,8 @@ class PlayBlock {
     }
     const double duration_ns = play_.duration_s * 1e9 - elapsed_before_s_ * 1e9;
     std::optional<Rolling> rolling;
-    const io::Overlay overlay{Phase::stimulus, run_.block.name + "  play: strike the white ball with the cue", !simulated_};
+    const std::string line = run_.block.name + "  play: strike the white ball with the cue";
+    io::Overlay overlay{Phase::stimulus, line, !simulated_};
     for (;;) {
       Frame g;
       if (!f_.begin(g)) return Outcome::quit;
@@ -323,14 +386,44 @@ class PlayBlock {
       }
       const std::int64_t t_ns = g.timing.predicted_display_ns;
       figures_.add(f_.lab(), physical, f_.tracking());
+      if (shared_) {
+        exchange(t_ns);
+        avatar_->update(f_.scene().scene(), partner_poses_.at(t_ns));
+        overlay.text = partner_away_ ? run_.block.name + "  paused: the partner station is disconnected; the game "
+                                                         "goes on when it is back"
+                                     : line;
+      }
       if (!rolling) {
-        if (finished(static_cast<double>(g.timing.now_ns - start_ns) > duration_ns)) {
-          f_.end(g, overlay, false, trial_id_);
-          break;
+        const bool out_of_time = static_cast<double>(g.timing.now_ns - start_ns) > duration_ns;
+        const auto next = shared_ ? pending_.find(static_cast<std::uint32_t>(shots_)) : pending_.end();
+        if (next != pending_.end()) {
+          // The partner's shot — or, for a station that came back behind,
+          // one it missed, sent again.
+          rolling = start_partner_shot(next->second, t_ns);
+          pending_.erase(pending_.begin(), std::next(next));
+        } else if (shared_ && (!my_turn() || partner_completed_ > shots_)) {
+          // The partner's turn, or shots this station missed still to come:
+          // wait for them, or for the end the partner decided.
+          if (partner_completed_ <= shots_ && (partner_over_ || finished(false))) {
+            f_.end(g, overlay, false, trial_id_);
+            break;
+          }
+          std::optional<std::string> ignored;
+          (void)take_strike(g, t_ns, next_shot_ns, ignored);  // draws the cue; not this station's turn
+        } else {
+          if (finished(out_of_time)) {
+            if (shared_) send_game_over();
+            f_.end(g, overlay, false, trial_id_);
+            break;
+          }
+          std::optional<std::string> cue_pose;
+          auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
+          if (shared_ && partner_away_) spec.reset();  // paused until the partner is back
+          if (spec) {
+            rolling = start_shot(t_ns, *spec, cue_pose);
+            if (shared_) send_shot(*rolling);
+          }
         }
-        std::optional<std::string> cue_pose;
-        const auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
-        if (spec) rolling = start_shot(t_ns, *spec, cue_pose);
       }
       if (rolling) {
         const double t_s = static_cast<double>(t_ns - rolling->strike_ns) * 1e-9;
@@ -349,6 +442,7 @@ class PlayBlock {
     store_play(start_ns);
     scene_->hide(f_.scene().scene());
     if (cue_) cue_->hide(f_.scene().scene());
+    if (avatar_) avatar_->hide(f_.scene().scene());
     return Outcome::done;
   }
 
@@ -360,7 +454,203 @@ class PlayBlock {
     phys::System system;
     std::optional<std::string> cue_pose;
     phys::Strike strike;
+    std::optional<net::Shot> from_partner;  // shared: the partner's shot as it sent it
   };
+
+  // ---- Shared play (docs/shared_play.md)
+
+  [[nodiscard]] bool my_turn() const { return (shots_ % 2 == 0) == (shared_->mine.role == net::Role::host); }
+
+  void start_shared() {
+    events::SharedGame e;
+    e.game_uuid = uuid_text(shared_->game_uuid);
+    e.role = std::string(net::to_string(shared_->mine.role));
+    e.partner_initials = shared_->partner.initials;
+    e.partner_version = shared_->partner.software_version;
+    e.completed_shots = shots_;
+    f_.event(trial_id_, e);
+    // Where this station's game stands: a station that comes back behind its
+    // partner is sent the shots it missed.
+    send_game_state(net::GameState::Phase::playing);
+  }
+
+  void send_game_state(net::GameState::Phase phase) {
+    net::GameState g;
+    g.game_uuid = shared_->game_uuid;
+    g.phase = phase;
+    g.completed_shots = static_cast<std::uint32_t>(shots_);
+    g.next_shooter = shots_ % 2 == 0 ? net::Role::host : net::Role::join;
+    g.balls = static_cast<std::uint16_t>(balls_.size());
+    shared_->send(g);
+    shared_->flush();
+  }
+
+  // The partner disconnected: the game pauses (no new shot) until it is back.
+  void partner_left(std::int64_t t_ns) {
+    if (partner_away_) return;
+    partner_away_ = true;
+    away_since_ns_ = t_ns;
+    f_.event(trial_id_, events::PartnerLeft{shots_}, t_ns);
+  }
+
+  // A partner connected (again): both sides say who they are and where their
+  // game stands.
+  void partner_connected() {
+    // The hello names this station's game and where it stands, so that a
+    // host that was killed and resumed rejoins the game.
+    shared_->mine.game_uuid = shared_->game_uuid;
+    shared_->mine.completed_shots = static_cast<std::uint32_t>(shots_);
+    shared_->send(shared_->mine);
+    send_game_state(net::GameState::Phase::playing);
+  }
+
+  void partner_hello(const net::Hello& h, std::int64_t t_ns) {
+    if (const auto why = net::incompatibility(shared_->mine, h)) {
+      shared_->send(net::Bye{net::Bye::Reason::incompatible, *why});
+      shared_->flush();
+      return;
+    }
+    shared_->partner = h;
+    if (!partner_away_) return;
+    partner_away_ = false;
+    f_.event(trial_id_, events::PartnerBack{shots_, static_cast<double>(t_ns - away_since_ns_) * 1e-9}, t_ns);
+  }
+
+  // Each frame: what the partner sent, this station's poses out, and the
+  // clock estimate stored every 5 s.
+  void exchange(std::int64_t t_ns) {
+    SharedPlay& link = *shared_;
+    const net::Poll poll = link.take();
+    if (poll.disconnected) partner_left(t_ns);
+    if (poll.connected) partner_connected();
+    if (!link.connected() && shared_->mine.role == net::Role::join && t_ns >= next_reconnect_ns_) {
+      link.reconnect();
+      next_reconnect_ns_ = t_ns + 1'000'000'000;
+    }
+    for (const auto& r : poll.messages) {
+      if (const auto* shot = std::get_if<net::Shot>(&r.message)) {
+        // Kept by index: a partner whose last shot came to rest sooner on its
+        // table may strike the next one before this station has stored it.
+        if (static_cast<int>(shot->shot_index) >= shots_ && shot->cue_ball < static_cast<int>(balls_.size()))
+          pending_.emplace(shot->shot_index, *shot);
+      } else if (const auto* g = std::get_if<net::GameState>(&r.message)) {
+        if (g->phase == net::GameState::Phase::over) partner_over_ = true;
+        partner_completed_ = std::max<std::int64_t>(partner_completed_, g->completed_shots);
+        // Behind: the shots it missed, as they were played.
+        for (auto it = history_.lower_bound(g->completed_shots); it != history_.end(); ++it) link.send(it->second);
+      } else if (const auto* h = std::get_if<net::Hello>(&r.message)) {
+        partner_hello(*h, t_ns);
+      } else if (const auto* bye = std::get_if<net::Bye>(&r.message)) {
+        // The game over; a partner that quit (interrupted) is a pause.
+        if (bye->reason == net::Bye::Reason::done) partner_over_ = true;
+        if (bye->reason == net::Bye::Reason::quitting) partner_left(t_ns);
+      } else if (const auto* pose = std::get_if<net::PoseFrame>(&r.message)) {
+        partner_poses_.push(*pose, link.to_local_ns(pose->display_ns));
+      }
+    }
+    send_poses(t_ns);
+    const net::ClockEstimate c = link.clock();
+    if (c.valid && t_ns >= next_clock_event_ns_) {
+      f_.event(trial_id_, events::PartnerClock{c.offset_ns, c.round_trip_ns, c.uncertainty_ns,
+                                               static_cast<std::int64_t>(c.samples)});
+      next_clock_event_ns_ = t_ns + 5'000'000'000;
+    }
+    link.flush();
+  }
+
+  // Head, hands and cue tip as this station's tracking placed them.
+  void send_poses(std::int64_t t_ns) {
+    const geometry::TrackingOutput* t = f_.tracking();
+    if (t == nullptr) return;
+    net::PoseFrame m;
+    m.sequence = ++pose_sequence_;
+    m.display_ns = t_ns;
+    m.space = f_.world().space.kind;
+    m.radius_m = f_.world().space.radius_m;
+    for (int d = 0; d < 3; ++d) {
+      m.pose[static_cast<std::size_t>(d)] = t->pose[static_cast<std::size_t>(d)];
+      if (t->tracked[static_cast<std::size_t>(d)]) m.tracked |= static_cast<std::uint8_t>(1u << d);
+    }
+    m.pose[net::PoseFrame::cue] = t->pose[2] * geometry::translation_m(f_.world().space, tip_offset_m_);
+    if (t->tracked[2]) m.tracked |= 1u << net::PoseFrame::cue;
+    shared_->send(m);
+  }
+
+  void send_shot(const Rolling& r) {
+    net::Shot m;
+    m.shot_index = static_cast<std::uint32_t>(shots_);
+    m.shooter = shared_->mine.role;
+    m.simulated = simulated_;
+    m.strike_ns = r.strike_ns;
+    m.cue_ball = 0;
+    m.toward_x_m = r.spec.toward_m.x;
+    m.toward_z_m = r.spec.toward_m.y;
+    m.cue_speed_m_s = r.spec.cue_speed_m_s.value_or(0.0);
+    m.tip_side = r.spec.tip.x;
+    m.tip_height = r.spec.tip.y;
+    for (const auto& e : r.outcome.events) {
+      if (m.events.size() == net::kMaxEvents) break;
+      m.events.push_back({e.event.t_s, static_cast<std::uint8_t>(e.event.kind), static_cast<std::int16_t>(e.event.a),
+                          static_cast<std::int16_t>(e.event.b), static_cast<std::int16_t>(e.event.cushion),
+                          static_cast<std::int16_t>(e.event.pocket)});
+    }
+    for (const auto& b : bl::rest_state(r.outcome))
+      m.rest.push_back({b.native_m.x, b.native_m.y, b.pocketed, static_cast<std::int8_t>(b.pocket)});
+    history_[m.shot_index] = m;
+    shared_->send(m);
+    shared_->flush();
+  }
+
+  void send_game_over() { send_game_state(net::GameState::Phase::over); }
+
+  // The partner's shot from its inputs, struck when the partner struck it
+  // (on this station's clock), so both tables show the balls rolling together.
+  Rolling start_partner_shot(const net::Shot& m, std::int64_t t_ns) {
+    bl::ShotSpec spec;
+    spec.ball = balls_[static_cast<std::size_t>(m.cue_ball)].id;
+    spec.toward_m = {m.toward_x_m, m.toward_z_m};
+    spec.cue_speed_m_s = m.cue_speed_m_s;
+    spec.tip = {m.tip_side, m.tip_height};
+    const std::int64_t strike_ns = std::min(t_ns, shared_->to_local_ns(m.strike_ns));
+    Rolling r = start_shot(strike_ns, spec, std::nullopt);
+    r.from_partner = m;
+    return r;
+  }
+
+  // The partner's shot as simulated here against what it sent: the same
+  // events, and the largest distance between rest places.
+  static std::pair<bool, double> compare(const Rolling& r, const std::vector<bl::BallPlace>& mine) {
+    const net::Shot& m = *r.from_partner;
+    bool same = m.events.size() == r.outcome.events.size();
+    for (std::size_t i = 0; same && i < m.events.size(); ++i) {
+      const auto& a = m.events[i];
+      const auto& b = r.outcome.events[i].event;
+      same = a.t_s == b.t_s && a.kind == static_cast<std::uint8_t>(b.kind) && a.a == b.a && a.b == b.b &&
+             a.cushion == b.cushion && a.pocket == b.pocket;
+    }
+    double diff = 0.0;
+    if (m.rest.size() != mine.size()) return {false, 0.0};
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      diff = std::max(diff, std::hypot(m.rest[i].x_m - mine[i].native_m.x, m.rest[i].z_m - mine[i].native_m.y));
+      if (m.rest[i].pocketed != mine[i].pocketed || m.rest[i].pocket != mine[i].pocket) same = false;
+    }
+    return {same, diff};
+  }
+
+  void store_network() {
+    const net::LinkCounters c = shared_->counters();
+    events::SharedNetwork e;
+    e.rtt_ms = c.enet_rtt_ms;
+    e.loss = c.enet_loss;
+    e.poses_received = static_cast<std::int64_t>(c.poses_received);
+    e.poses_late = static_cast<std::int64_t>(c.poses_late);
+    e.poses_lost = static_cast<std::int64_t>(c.poses_lost);
+    e.bytes_sent = static_cast<std::int64_t>(c.wire_bytes_sent);
+    e.bytes_received = static_cast<std::int64_t>(c.wire_bytes_received);
+    e.dropped = static_cast<std::int64_t>(c.dropped.total());
+    e.disconnects = static_cast<std::int64_t>(c.disconnects);
+    f_.event(trial_id_, e);
+  }
 
   // Laps enough for the whole block at a slow walk, 0.4 m/s.
   geometry::Trajectory walking_trajectory(const geometry::PhysicalTable& table) const {
@@ -407,6 +697,7 @@ std::optional<bl::ShotSpec> spec;
   // The block's figures (a play_summary event and the run summary) and its
   // one trial, completed.
   void store_play(std::int64_t start_ns) {
+    if (shared_) store_network();
     events::PlaySummary summary;
     summary.block = run_.block.name;
     summary.shots = shots_;
@@ -507,7 +798,7 @@ std::optional<bl::ShotSpec> spec;
 
   Rolling start_shot(std::int64_t t_ns, const bl::ShotSpec& spec, std::optional<std::string> cue_pose) {
     Rolling r{t_ns, spec, bl::simulate(cloth_, params_, balls_, spec, 120.0), *rest_, std::move(cue_pose),
-              bl::strike_for(*rest_, params_, 0, spec)};
+              bl::strike_for(*rest_, params_, 0, spec), std::nullopt};
     if (!r.strike.miscue) r.system.set_motion(0, r.strike.v, r.strike.w);
     f_.event(trial_id_, events::Strike{shots_, spec.ball, glm::length(r.strike.v), r.strike.miscue}, t_ns);
     return r;
@@ -520,7 +811,8 @@ std::optional<bl::ShotSpec> spec;
     s.shot_index = shots_;
     s.t_ns = r.strike_ns;
     s.rest_ns = rest_ns;
-    s.player = simulated_ ? "simulated" : "participant";
+    const bool simulated = r.from_partner ? r.from_partner->simulated : simulated_;
+    s.player = simulated ? "simulated" : "participant";
     s.ball = r.spec.ball;
     // rest_ still holds the balls as they were struck.
     const phys::Vec2 aim =
@@ -557,11 +849,31 @@ std::optional<bl::ShotSpec> spec;
         f_.event(trial_id_, events::Pocket{shots_, balls_[static_cast<std::size_t>(e.event.a)].id, e.event.pocket},
                  r.strike_ns + static_cast<std::int64_t>(e.event.t_s * 1e9));
     balls_ = bl::rest_state(r.outcome);
+    std::optional<events::SharedShot> shared_shot;
+    if (shared_) {
+      shared_shot.emplace();
+      shared_shot->shot_index = shots_;
+      shared_shot->local = !r.from_partner;
+      shared_shot->shooter = std::string(net::to_string(r.from_partner ? r.from_partner->shooter : shared_->mine.role));
+    }
+    if (r.from_partner) {
+      history_[r.from_partner->shot_index] = *r.from_partner;
+      // The shooter's station is the authority: its rest state is kept.
+      const auto [same, diff] = compare(r, balls_);
+      shared_shot->same_events = same;
+      shared_shot->rest_difference_m = diff;
+      if (r.from_partner->rest.size() == balls_.size())
+        for (std::size_t i = 0; i < balls_.size(); ++i) {
+          const auto& b = r.from_partner->rest[i];
+          balls_[i] = {balls_[i].id, {b.x_m, b.z_m}, b.pocketed, b.pocket};
+        }
+    }
     if (balls_[0].pocketed) respot_cue_ball();
     s.rest_state = bl::to_json(balls_).dump();
     pocketed_ += static_cast<int>(pocketed.size());
     ++shots_;
     f_.check(f_.writer.wait_durable(f_.writer.journal(std::move(s))));
+    if (shared_shot) f_.event(trial_id_, *shared_shot);
     f_.summary.shots += 1;
     f_.summary.balls_pocketed += static_cast<std::int64_t>(pocketed.size());
     rest_.emplace(bl::at_rest(cloth_, params_, balls_));
@@ -588,6 +900,18 @@ std::optional<bl::ShotSpec> spec;
   std::optional<TrackedCue> cue_;
   glm::dvec3 tip_offset_m_{0.0};
   std::optional<std::int64_t> charge_from_ns_;
+  SharedPlay* shared_ = nullptr;
+  net::PartnerPoseBuffer partner_poses_;
+  std::optional<PartnerAvatar> avatar_;
+  std::map<std::uint32_t, net::Shot> pending_;  // the partner's shots not yet played here, by index
+  bool partner_over_ = false;
+  bool partner_away_ = false;
+  std::int64_t partner_completed_ = 0;  // the partner's completed shots, as it last said
+  std::int64_t away_since_ns_ = 0;
+  std::int64_t next_reconnect_ns_ = 0;
+  std::map<std::uint32_t, net::Shot> history_;  // shared: the shots this station played or received, by index
+  std::int64_t next_clock_event_ns_ = 0;
+  std::uint32_t pose_sequence_ = 0;
 };
 
 class PlayKind final : public BlockKind {

@@ -51,6 +51,12 @@ enum class EventKind {
   merged_from,
   session_renumbered,
   feedback,      // what the participant was shown after an answer (judgement.feedback)
+  shared_game,     // a shared play block's game and partner (docs/shared_play.md)
+  partner_clock,   // the partner's clock offset, measured every few seconds
+  shared_shot,     // who shot, and how the other station's simulation compared
+  shared_network,  // the link's figures when a shared play block ends
+  partner_left,    // the partner disconnected; the game pauses
+  partner_back,    // the partner came back; the game goes on
 };
 
 std::string_view to_string(EventKind kind);
@@ -224,6 +230,46 @@ struct QuestionnaireEnd {
   std::string instrument;
   std::int64_t answered = 0;
 };
+// Shared play (docs/shared_play.md, "Data").
+struct SharedGame {
+  std::string game_uuid;
+  std::string role;  // this station's: host or join
+  std::string partner_initials;
+  std::string partner_version;
+  std::int64_t completed_shots = 0;  // when this station (re)joined
+};
+// partner clock − this session's clock = offset_ns, within ± uncertainty_ns.
+struct PartnerClock {
+  std::int64_t offset_ns = 0;
+  std::int64_t round_trip_ns = 0;
+  std::int64_t uncertainty_ns = 0;
+  std::int64_t samples = 0;
+};
+struct SharedShot {
+  std::int64_t shot_index = 0;
+  std::string shooter;  // host or join
+  bool local = false;   // this station shot it
+  // The partner's shot simulated again here from its inputs: whether every
+  // event and the rest state agreed, and the largest distance between a
+  // ball's rest places (the sender's are kept).
+  bool same_events = true;
+  double rest_difference_m = 0.0;
+};
+struct SharedNetwork {
+  double rtt_ms = 0.0;  // ENet's mean round trip of reliable packets
+  double loss = 0.0;    // ENet's mean reliable-packet loss, 0–1
+  std::int64_t poses_received = 0, poses_late = 0, poses_lost = 0;
+  std::int64_t bytes_sent = 0, bytes_received = 0;
+  std::int64_t dropped = 0;  // malformed or oversized messages
+  std::int64_t disconnects = 0;
+};
+struct PartnerLeft {
+  std::int64_t completed_shots = 0;
+};
+struct PartnerBack {
+  std::int64_t completed_shots = 0;
+  double away_s = 0.0;
+};
 
 }  // namespace events
 
@@ -233,7 +279,10 @@ using Event = std::variant<events::SessionStart, events::Observer, events::Resum
                            events::TrialSkipped, events::EarlyInput, events::AdjustmentEvent, events::Onset,
                            events::TrackingFlagged, events::EventsLost, events::StageMoved, events::RefreshRate,
                            events::Posterior, events::PlaySummary, events::Strike, events::Pocket,
-                           events::QuestionnaireStart, events::QuestionnaireEnd>;
+                           events::QuestionnaireStart, events::QuestionnaireEnd,
+
+                           events::SharedGame, events::PartnerClock, events::SharedShot, events::SharedNetwork,
+                           events::PartnerLeft, events::PartnerBack>;
 
 // The row an event is stored as.
 EventRecord event_record(std::int64_t session_id, std::optional<std::int64_t> trial_id, std::int64_t t_ns,

@@ -42,6 +42,10 @@
 #include <vector>
 
 namespace curvlab::harness::runner {
+struct SharedPlay;
+}
+
+namespace curvlab::harness::runner {
 
 // Which frames the backend must draw. Fast headless runs need pixels only
 // for the stimulus images; every other frame is planned (counts logged) but
@@ -83,6 +87,10 @@ struct RunOptions {
   // The experimenter's note at the start (run --note, the start form),
   // stored as an operator_note event with the session's start; "" none.
   std::string note;
+  // Shared play's partner (shared_play.hpp): connected and compared before
+  // the session was written. Not owned; outlives the run. nullptr: play
+  // blocks are played alone.
+  SharedPlay* shared = nullptr;
 };
 
 struct SessionSummary {
