@@ -280,7 +280,6 @@ using Event = std::variant<events::SessionStart, events::Observer, events::Resum
                            events::TrackingFlagged, events::EventsLost, events::StageMoved, events::RefreshRate,
                            events::Posterior, events::PlaySummary, events::Strike, events::Pocket,
                            events::QuestionnaireStart, events::QuestionnaireEnd,
-
                            events::SharedGame, events::PartnerClock, events::SharedShot, events::SharedNetwork,
                            events::PartnerLeft, events::PartnerBack>;
 
