@@ -3,6 +3,7 @@
 // program (`curvlab billiards shot`) from its stored inputs alone, gives the
 // stored events; a play block killed with SIGKILL resumes at the rest state
 // after its last completed shot.
+#include "../support/edited_file.hpp"
 #include "run_and_kill.hpp"
 #include "run_cli.hpp"
 #include "session_db.hpp"
@@ -22,19 +23,9 @@ using Json = nlohmann::ordered_json;
 
 namespace {
 
-std::string protocol_text() {
-  std::ifstream in(std::string(CURVLAB_SOURCE_DIR) + "/protocols/adaptation_play.toml");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using curvlab::test::replaced;
 
-std::string replaced(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
+std::string protocol_text() { return curvlab::test::read_text(std::string(CURVLAB_SOURCE_DIR) + "/protocols/adaptation_play.toml"); }
 
 // The adaptation protocol with its play block in `space`.
 std::string play_in(const std::string& space) {

@@ -4,6 +4,7 @@
 // (python3) that scores the exported answers itself; the same session run
 // again gives the same answers; merge pools both; a session killed inside a
 // questionnaire resumes at its first unanswered item.
+#include "../support/edited_file.hpp"
 #include "run_and_kill.hpp"
 #include "run_cli.hpp"
 #include "session_db.hpp"
@@ -22,19 +23,9 @@ using curvlab::testing::run_shell;
 
 namespace {
 
-std::string protocol_text() {
-  std::ifstream in(std::string(CURVLAB_SOURCE_DIR) + "/protocols/ssq_play.toml");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using curvlab::test::replaced;
 
-std::string replaced(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
+std::string protocol_text() { return curvlab::test::read_text(std::string(CURVLAB_SOURCE_DIR) + "/protocols/ssq_play.toml"); }
 
 // The shipped SSQ protocol with a short play block.
 std::string short_protocol() {

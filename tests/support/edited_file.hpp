@@ -12,18 +12,26 @@
 
 namespace curvlab::test {
 
-inline std::string edited_file(const std::string& path,
-                               const std::vector<std::pair<std::string, std::string>>& replacements) {
+inline std::string read_text(const std::string& path) {
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
-  std::string out = text.str();
-  EXPECT_FALSE(out.empty()) << "cannot read " << path;
-  for (const auto& [from, to] : replacements) {
-    const auto at = out.find(from);
-    EXPECT_NE(at, std::string::npos) << path << " has no '" << from << "'";
-    if (at != std::string::npos) out.replace(at, from.size(), to);
-  }
+  EXPECT_FALSE(text.str().empty()) << "cannot read " << path;
+  return text.str();
+}
+
+// `text` with the first `from` replaced by `to`.
+inline std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << "no '" << from << "'";
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+inline std::string edited_file(const std::string& path,
+                               const std::vector<std::pair<std::string, std::string>>& replacements) {
+  std::string out = read_text(path);
+  for (const auto& [from, to] : replacements) out = replaced(std::move(out), from, to);
   return out;
 }
 

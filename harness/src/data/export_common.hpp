@@ -46,6 +46,10 @@ Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options)
 // The questionnaire blocks' answers, one row per item answered, and their
 // scores, one row per block and subscale (export_questionnaires.cpp); no
 // rows where no questionnaire was answered.
+// The rows of `sql` (session id first, then one column per table column),
+// `session_id` bound to ?1 (NULL: every session).
+Expected<TrialTable> load_rows(Database& db, const ExportOptions& options, std::vector<Column> columns,
+                               const std::string& sql);
 Expected<TrialTable> load_questionnaire_table(Database& db, const ExportOptions& options);
 Expected<TrialTable> load_questionnaire_score_table(Database& db, const ExportOptions& options);
 

@@ -20,26 +20,6 @@ std::vector<Column> block_columns() {
   };
 }
 
-// The rows of `sql` (session id first, then one column per table column),
-// `session_id` bound to ?1 (NULL: every session).
-Expected<TrialTable> load_rows(Database& db, const ExportOptions& options, std::vector<Column> columns,
-                               const std::string& sql) {
-  TrialTable table;
-  table.columns = std::move(columns);
-  try {
-    Statement s(db.connection(), sql);
-    s.bind(1, options.session_id);
-    while (s.step()) {
-      std::vector<Cell> row;
-      for (int c = 1; c <= static_cast<int>(table.columns.size()); ++c) row.push_back(s.column_opt_text(c));
-      table.rows.push_back(std::move(row));
-      table.row_session.push_back(s.column_int(0));
-    }
-  } catch (const SqliteFailure& f) {
-    return to_data_error(f, db.path());
-  }
-  return table;
-}
 
 constexpr const char* kBlockJoins =
     "JOIN sessions s ON s.session_id = x.session_id "

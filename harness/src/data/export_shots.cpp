@@ -7,8 +7,7 @@
 namespace curvlab::harness::data::exporting {
 
 Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options) {
-  TrialTable table;
-  table.columns = {
+  std::vector<Column> columns{
       {"session_uuid", "The session's UUID", ""},
       {"participant", "The participant's pseudonym", ""},
       {"session_number", "The participant's session number", ""},
@@ -30,31 +29,19 @@ Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options)
       {"pocketed", "Object balls the shot pocketed (ids separated by spaces)", ""},
       {"pocketed_count", "Number of object balls the shot pocketed", ""},
   };
-  try {
-    Statement s(db.connection(),
-                "SELECT sh.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, "
-                "json_extract(sh.table_settings, '$.space'), sh.shot_index, "
-                "(sh.t_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = sh.session_id)) / 1e9, "
-                "(sh.rest_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = sh.session_id)) / 1e9, "
-                "sh.player, sh.ball, sh.aim_x, sh.aim_z, sh.speed_m_s, sh.cue_speed_m_s, sh.tip_side, "
-                "sh.tip_height, CASE sh.miscue WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, sh.event_count, "
-                "(SELECT group_concat(value, ' ') FROM json_each(sh.pocketed)), json_array_length(sh.pocketed) "
-                "FROM shots sh JOIN sessions s ON s.session_id = sh.session_id "
-                "JOIN participants p ON p.participant_id = s.participant_id "
-                "JOIN trials t ON t.trial_id = sh.trial_id JOIN blocks b ON b.block_id = t.block_id "
-                "WHERE ?1 IS NULL OR sh.session_id = ?1 ORDER BY s.session_uuid, sh.session_id, sh.trial_id, "
-                "sh.shot_index");
-    s.bind(1, options.session_id);
-    while (s.step()) {
-      std::vector<Cell> row;
-      for (int c = 1; c <= static_cast<int>(table.columns.size()); ++c) row.push_back(s.column_opt_text(c));
-      table.rows.push_back(std::move(row));
-      table.row_session.push_back(s.column_int(0));
-    }
-  } catch (const SqliteFailure& f) {
-    return to_data_error(f, db.path());
-  }
-  return table;
+  return load_rows(db, options, std::move(columns),
+                   "SELECT sh.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, "
+                   "json_extract(sh.table_settings, '$.space'), sh.shot_index, "
+                   "(sh.t_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = sh.session_id)) / 1e9, "
+                   "(sh.rest_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = sh.session_id)) / 1e9, "
+                   "sh.player, sh.ball, sh.aim_x, sh.aim_z, sh.speed_m_s, sh.cue_speed_m_s, sh.tip_side, "
+                   "sh.tip_height, CASE sh.miscue WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, sh.event_count, "
+                   "(SELECT group_concat(value, ' ') FROM json_each(sh.pocketed)), json_array_length(sh.pocketed) "
+                   "FROM shots sh JOIN sessions s ON s.session_id = sh.session_id "
+                   "JOIN participants p ON p.participant_id = s.participant_id "
+                   "JOIN trials t ON t.trial_id = sh.trial_id JOIN blocks b ON b.block_id = t.block_id "
+                   "WHERE ?1 IS NULL OR sh.session_id = ?1 ORDER BY s.session_uuid, sh.session_id, sh.trial_id, "
+                   "sh.shot_index");
 }
 
 }  // namespace curvlab::harness::data::exporting
