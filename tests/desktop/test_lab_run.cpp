@@ -287,7 +287,9 @@ TEST(LabRun, ADesktopPilotStrikesTheCueBallWithTheTrackedCue) {
   // The cue ball rests 0.2 m in from the middle of edge 0, at cue height;
   // the hand moves 0.25 m toward the centre in four 20 ms steps.
   std::ofstream(dir / "keys.txt") << "space 300\nhand right 0 0.79 0.45 300\nhand right 0 0.79 0.33 20\n"
-                                     "hand right 0 0.79 0.27 20\nhand right 0 0.79 0.23 20\nhand right 0 0.79 0.20 20\n";
+                                     "hand right 0 0.79 0.27 20\nhand right 0 0.79 0.23 20\nhand right 0 0.79 0.20 20\n"
+                                     // The closing page: a person would press space; the script does.
+                                     "space done+300\n";
   const auto db = (dir / "pilot.db").string();
   const auto r = run_cli("run " + (dir / "play.toml").string() + " --participant T3 --db " + db +
                          " --backend desktop --software --window-size 256x256 --key-script " +
