@@ -18,8 +18,9 @@ extern char** environ;
 
 namespace curvlab::testing {
 
-inline bool run_and_kill(const std::vector<std::string>& args, std::chrono::milliseconds delay,
-                         const std::function<bool()>& ready = [] { return true; }) {
+// Starts CURVLAB_BIN with `args`, its stdout and stderr written to `out`
+// (truncated; /dev/null discards them): its pid, or 0 when it did not start.
+inline pid_t spawn_curvlab(const std::vector<std::string>& args, const std::string& out = "/dev/null") {
   std::vector<char*> argv;
   std::string bin = CURVLAB_BIN;
   argv.push_back(bin.data());
@@ -28,12 +29,18 @@ inline bool run_and_kill(const std::vector<std::string>& args, std::chrono::mill
   argv.push_back(nullptr);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
   pid_t pid = 0;
-  const int rc = posix_spawn(&pid, bin.c_str(), &actions, nullptr, argv.data(), environ);
+  if (posix_spawn(&pid, bin.c_str(), &actions, nullptr, argv.data(), environ) != 0) pid = 0;
   posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) return false;
+  return pid;
+}
+
+inline bool run_and_kill(const std::vector<std::string>& args, std::chrono::milliseconds delay,
+                         const std::function<bool()>& ready = [] { return true; }) {
+  const pid_t pid = spawn_curvlab(args);
+  if (pid == 0) return false;
   int status = 0;
   for (int i = 0; i < 6000 && !ready(); ++i) {
     if (waitpid(pid, &status, WNOHANG) != 0) return false;

@@ -27,6 +27,10 @@ inline CliResult run_shell(const std::string& cmd) {
   return r;
 }
 
-inline CliResult run_cli(const std::string& args) { return run_shell(std::string(CURVLAB_BIN) + " " + args + " 2>&1"); }
+// A run that hangs is stopped after 10 minutes (exit 124, its output kept),
+// so a broken session fails its test instead of holding up the suite.
+inline CliResult run_cli(const std::string& args) {
+  return run_shell("timeout --foreground -k 10 600 " + std::string(CURVLAB_BIN) + " " + args + " 2>&1");
+}
 
 }  // namespace curvlab::testing

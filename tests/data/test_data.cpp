@@ -291,16 +291,20 @@ constexpr const char* kDropLslTables =
 // What version 8 added: the questionnaire blocks' tables.
 constexpr const char* kDropQuestionnaireTables = "DROP TABLE questionnaire_answers; DROP TABLE questionnaire_scores;";
 
-// A file of version 5 (before the LSL tables) gets them, as a new file has
-// them, empty.
-TEST(Schema, MigratesVersion5FileAddingTheLslTables) {
-  const auto dir = fresh_dir("migrate5");
-  const auto path = (dir / "v5.db").string();
+namespace {
+
+// A new file set back to schema `version` by `undo` (SQL removing what the
+// later versions added), opened again: it is migrated to the current version,
+// with the same tables, indexes and triggers as a new file, the `added`
+// tables empty, and the migration past `version` recorded once.
+void expect_migrated_from(int version, const std::string& undo, std::initializer_list<const char*> added) {
+  const auto dir = fresh_dir("migrate" + std::to_string(version));
+  const auto path = (dir / ("v" + std::to_string(version) + ".db")).string();
   {
     auto db = Database::open(path, OpenMode::create_or_open);
     ASSERT_TRUE(db);
-    db.value().connection().exec(std::string(kDropLslTables) + kDropQuestionnaireTables +
-                                 "DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 5");
+    db.value().connection().exec(undo + "DELETE FROM schema_migrations; PRAGMA user_version = " +
+                                 std::to_string(version));
   }
   auto db = Database::open(path, OpenMode::open_existing);
   ASSERT_TRUE(db) << db.error().message;
@@ -308,75 +312,40 @@ TEST(Schema, MigratesVersion5FileAddingTheLslTables) {
   auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
   ASSERT_TRUE(fresh);
   EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
-  for (const char* table : {"lsl_streams", "lsl_samples", "lsl_clock"})
+  for (const char* table : added)
     EXPECT_EQ(db.value().connection().query_int(std::string("SELECT count(*) FROM ") + table), 0) << table;
-  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 6"), 1);
+  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = " +
+                                              std::to_string(version + 1)),
+            1);
 }
+
+}  // namespace
 
 // A file of version 4 (before gaze_samples) gets the table, as a new file
 // has it, and keeps its sessions.
 TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
-  const auto dir = fresh_dir("migrate4");
-  const auto path = (dir / "v4.db").string();
-  {
-    auto db = Database::open(path, OpenMode::create_or_open);
-    ASSERT_TRUE(db);
-    auto& c = db.value().connection();
-    c.exec(std::string(kDropLslTables) + kDropQuestionnaireTables +
-           "DROP TABLE shots; DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; "
-           "DELETE FROM schema_migrations; PRAGMA user_version = 4");
-  }
-  auto db = Database::open(path, OpenMode::open_existing);
-  ASSERT_TRUE(db) << db.error().message;
-  EXPECT_EQ(db.value().schema_version(), current_schema_version);
-  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
-  ASSERT_TRUE(fresh);
-  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
-  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM gaze_samples"), 0);
-  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 5"), 1);
+  expect_migrated_from(4,
+                       std::string(kDropLslTables) + kDropQuestionnaireTables +
+                           "DROP TABLE shots; DROP INDEX gaze_samples_by_session_time; DROP TABLE gaze_samples; ",
+                       {"gaze_samples"});
+}
+
+// A file of version 5 (before the Lab Streaming Layer) gets its tables.
+TEST(Schema, MigratesVersion5FileAddingTheLslTables) {
+  expect_migrated_from(5, std::string(kDropLslTables) + kDropQuestionnaireTables + "DROP TABLE shots; ",
+                       {"lsl_streams", "lsl_samples", "lsl_clock"});
 }
 
 // A file of version 6 (before play blocks) gets the shots table, as a new
 // file has it.
 TEST(Schema, MigratesVersion6FileAddingTheShotsTable) {
-  const auto dir = fresh_dir("migrate6");
-  const auto path = (dir / "v6.db").string();
-  {
-    auto db = Database::open(path, OpenMode::create_or_open);
-    ASSERT_TRUE(db);
-    db.value().connection().exec(std::string(kDropQuestionnaireTables) +
-                                 "DROP TABLE shots; DELETE FROM schema_migrations; PRAGMA user_version = 6");
-  }
-  auto db = Database::open(path, OpenMode::open_existing);
-  ASSERT_TRUE(db) << db.error().message;
-  EXPECT_EQ(db.value().schema_version(), current_schema_version);
-  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
-  ASSERT_TRUE(fresh);
-  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
-  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM shots"), 0);
-  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 7"), 1);
+  expect_migrated_from(6, std::string(kDropQuestionnaireTables) + "DROP TABLE shots; ", {"shots"});
 }
 
 // A file of version 7 (before questionnaire blocks) gets their tables, as a
-// new file has them, empty, and keeps its sessions and shots.
+// new file has them, empty.
 TEST(Schema, MigratesVersion7FileAddingTheQuestionnaireTables) {
-  const auto dir = fresh_dir("migrate7");
-  const auto path = (dir / "v7.db").string();
-  {
-    auto db = Database::open(path, OpenMode::create_or_open);
-    ASSERT_TRUE(db);
-    db.value().connection().exec(std::string(kDropQuestionnaireTables) +
-                                 "DELETE FROM schema_migrations; PRAGMA user_version = 7");
-  }
-  auto db = Database::open(path, OpenMode::open_existing);
-  ASSERT_TRUE(db) << db.error().message;
-  EXPECT_EQ(db.value().schema_version(), current_schema_version);
-  auto fresh = Database::open((dir / "new.db").string(), OpenMode::create_or_open);
-  ASSERT_TRUE(fresh);
-  EXPECT_EQ(master_rows(db.value().connection(), true), master_rows(fresh.value().connection(), true));
-  for (const char* table : {"questionnaire_answers", "questionnaire_scores"})
-    EXPECT_EQ(db.value().connection().query_int(std::string("SELECT count(*) FROM ") + table), 0) << table;
-  EXPECT_EQ(db.value().connection().query_int("SELECT count(*) FROM schema_migrations WHERE version = 8"), 1);
+  expect_migrated_from(7, kDropQuestionnaireTables, {"questionnaire_answers", "questionnaire_scores"});
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {

@@ -5,6 +5,7 @@
 #include "xvfb.hpp"
 #include "../support/edited_file.hpp"
 #include "../support/png_files.hpp"
+#include "../support/table_protocol.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
 
@@ -275,15 +276,9 @@ TEST(LabRun, ADesktopPilotStrikesTheCueBallWithTheTrackedCue) {
   curvlab::test::XServer x;
   if (!x.available()) GTEST_SKIP() << "no X display: " << x.reason();
   const auto dir = fresh_dir("play_cue");
-  std::ofstream(dir / "play.toml") << "[protocol]\nname = \"play-pilot\"\nversion = \"1.0.0\"\n"
-                                      "[randomization]\nseed = 1\n[table]\nedge_m = 1.0\n"
-                                      "[space]\nkind = \"H3\"\nradius_m = \"from_table\"\n"
-                                      "[tracking]\nalgorithm = \"table-anchored\"\n"
-                                      "[judgement]\ntype = \"choice\"\nprompt = \"?\"\n"
-                                      "[[judgement.options]]\nvalue = \"a\"\nkeys = [\"1\"]\n"
-                                      "[[judgement.options]]\nvalue = \"b\"\nkeys = [\"2\"]\n"
-                                      "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 8\nshots = 1\n"
-                                      "instructions = [\"Play.\"]\n";
+  std::ofstream(dir / "play.toml") << curvlab::test::table_protocol_head("play-pilot") +
+                                          "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 8\nshots = 1\n"
+                                          "instructions = [\"Play.\"]\n";
   // The cue ball rests 0.2 m in from the middle of edge 0, at cue height;
   // the hand moves 0.25 m toward the centre in four 20 ms steps.
   std::ofstream(dir / "keys.txt") << "space 300\nhand right 0 0.79 0.45 300\nhand right 0 0.79 0.33 20\n"

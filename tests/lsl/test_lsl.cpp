@@ -5,6 +5,7 @@
 // back with the same source ids, and a test outlet's markers recorded with
 // --lsl-record land in the database and its export. Without liblsl the
 // streaming tests skip and --lsl is refused (exit 2).
+#include "run_and_kill.hpp"
 #include "run_cli.hpp"
 #include "session_db.hpp"
 
@@ -60,20 +61,8 @@ struct Running {
   pid_t pid = 0;
   std::string log;
 
-  Running(const std::vector<std::string>& args, std::string log_path) : log(std::move(log_path)) {
-    std::vector<char*> argv;
-    std::string bin = CURVLAB_BIN;
-    argv.push_back(bin.data());
-    std::vector<std::string> copy = args;
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    if (posix_spawn(&pid, bin.c_str(), &actions, nullptr, argv.data(), environ) != 0) pid = 0;
-    posix_spawn_file_actions_destroy(&actions);
-  }
+  Running(const std::vector<std::string>& args, std::string log_path)
+      : pid(curvlab::testing::spawn_curvlab(args, log_path)), log(std::move(log_path)) {}
   Running(const Running&) = delete;
   Running& operator=(const Running&) = delete;
   ~Running() {

@@ -4,6 +4,7 @@
 // the participant along the swing.
 #include "../cli/run_cli.hpp"
 #include "runtime_env.hpp"
+#include "../support/table_protocol.hpp"
 
 #include <gtest/gtest.h>
 
@@ -24,15 +25,9 @@ TEST(XrPlay, AScriptedSwingOfTheRightControllerStrikesTheCueBall) {
   const auto dir = fs::temp_directory_path() / ("curvlab_xr_play_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  std::ofstream(dir / "play.toml") << "[protocol]\nname = \"play-xr\"\nversion = \"1.0.0\"\n"
-                                      "[randomization]\nseed = 1\n[table]\nedge_m = 1.0\n"
-                                      "[space]\nkind = \"H3\"\nradius_m = \"from_table\"\n"
-                                      "[tracking]\nalgorithm = \"table-anchored\"\n"
-                                      "[judgement]\ntype = \"choice\"\nprompt = \"?\"\n"
-                                      "[[judgement.options]]\nvalue = \"a\"\nkeys = [\"1\"]\nbuttons = [\"a\"]\n"
-                                      "[[judgement.options]]\nvalue = \"b\"\nkeys = [\"2\"]\nbuttons = [\"b\"]\n"
-                                      "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 6\nshots = 1\n"
-                                      "instructions = [\"Play.\"]\n";
+  std::ofstream(dir / "play.toml") << curvlab::test::table_protocol_head("play-xr", "a", "b") +
+                                          "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 6\nshots = 1\n"
+                                          "instructions = [\"Play.\"]\n";
   // The grip waits behind the cue ball (0.2 m in from the middle of edge 0,
   // at cue height), then moves 0.25 m toward the centre in 80 ms.
   std::string hand = "right@0.2=0,0.79,0.45";

@@ -6,6 +6,7 @@
 // Questionnaires section.
 #include "../cli/run_cli.hpp"
 #include "runtime_env.hpp"
+#include "../support/table_protocol.hpp"
 
 #include <gtest/gtest.h>
 
@@ -82,16 +83,10 @@ TEST(XrQuestionnaire, SsqBeforeAndAfterPlayAnsweredWithTheControllersIsScoredInT
   const auto dir = fs::temp_directory_path() / ("curvlab_xr_ssq_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  std::ofstream(dir / "ssq.toml") << "[protocol]\nname = \"ssq-xr\"\nversion = \"1.0.0\"\n"
-                                     "[randomization]\nseed = 1\n[table]\nedge_m = 1.0\n"
-                                     "[space]\nkind = \"H3\"\nradius_m = \"from_table\"\n"
-                                     "[tracking]\nalgorithm = \"table-anchored\"\n"
-                                     "[judgement]\ntype = \"choice\"\nprompt = \"?\"\n"
-                                     "[[judgement.options]]\nvalue = \"a\"\nkeys = [\"1\"]\nbuttons = [\"x\"]\n"
-                                     "[[judgement.options]]\nvalue = \"b\"\nkeys = [\"2\"]\nbuttons = [\"y\"]\n"
-                                     "[[blocks]]\nname = \"ssq_before\"\nkind = \"questionnaire\"\ninstrument = \"ssq\"\n"
-                                     "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 2\n"
-                                     "[[blocks]]\nname = \"ssq_after\"\nkind = \"questionnaire\"\ninstrument = \"ssq\"\n";
+  std::ofstream(dir / "ssq.toml") << curvlab::test::table_protocol_head("ssq-xr", "x", "y") +
+                                         "[[blocks]]\nname = \"ssq_before\"\nkind = \"questionnaire\"\ninstrument = \"ssq\"\n"
+                                         "[[blocks]]\nname = \"play\"\nkind = \"play\"\nduration_s = 2\n"
+                                         "[[blocks]]\nname = \"ssq_after\"\nkind = \"questionnaire\"\ninstrument = \"ssq\"\n";
   // Every 0.4 s from 1 s after focus: A moves the mark to Slight, and 0.2 s
   // later the trigger chooses it. An item that comes up between an A and
   // its trigger is answered None (its mark never moved).

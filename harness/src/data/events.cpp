@@ -154,6 +154,7 @@ Detail detail(const events::RefreshRate& e) {
 
 Detail detail(const events::PlaySummary& e) {
   return {EventKind::play_summary, Json{{"block", e.block},
+                                        {"ended", e.ended},
                                         {"shots", e.shots},
                                         {"pocketed", e.pocketed},
                                         {"time_s", e.time_s},

@@ -161,28 +161,9 @@ Expected<std::vector<ShotRecord>> read_shots(Database& db, std::int64_t trial_id
     std::vector<ShotRecord> out;
     while (s.step()) {
       ShotRecord r;
-      r.session_id = s.column_int(0);
-      r.trial_id = s.column_int(1);
-      r.shot_index = s.column_int(2);
-      r.t_ns = s.column_int(3);
-      r.rest_ns = s.column_int(4);
-      r.player = s.column_text(5);
-      r.ball = s.column_text(6);
-      r.aim_x = s.column_double(7);
-      r.aim_z = s.column_double(8);
-      r.speed_m_s = s.column_double(9);
-      r.cue_speed_m_s = s.column_opt_double(10);
-      r.tip_side = s.column_opt_double(11);
-      r.tip_height = s.column_opt_double(12);
-      r.miscue = s.column_int(13) != 0;
-      r.cue_pose = s.column_opt_text(14);
-      r.table_settings = s.column_text(15);
-      r.before_state = s.column_text(16);
-      r.shot = s.column_text(17);
-      r.events = s.column_text(18);
-      r.rest_state = s.column_text(19);
-      r.pocketed = s.column_text(20);
-      r.event_count = s.column_int(21);
+      s.columns(r.session_id, r.trial_id, r.shot_index, r.t_ns, r.rest_ns, r.player, r.ball, r.aim_x, r.aim_z,
+                r.speed_m_s, r.cue_speed_m_s, r.tip_side, r.tip_height, r.miscue, r.cue_pose, r.table_settings,
+                r.before_state, r.shot, r.events, r.rest_state, r.pocketed, r.event_count);
       out.push_back(std::move(r));
     }
     return out;

@@ -563,17 +563,8 @@ Expected<std::vector<QuestionnaireAnswer>> SessionStore::answers(std::int64_t tr
     std::vector<QuestionnaireAnswer> out;
     while (s.step()) {
       QuestionnaireAnswer a;
-      a.session_id = s.column_int(0);
-      a.trial_id = s.column_int(1);
-      a.instrument = s.column_text(2);
-      a.item_index = s.column_int(3);
-      a.item_id = s.column_text(4);
-      a.item_text = s.column_text(5);
-      a.value = s.column_int(6);
-      a.label = s.column_text(7);
-      a.shown_ns = s.column_int(8);
-      a.t_ns = s.column_int(9);
-      a.device = s.column_text(10);
+      s.columns(a.session_id, a.trial_id, a.instrument, a.item_index, a.item_id, a.item_text, a.value, a.label,
+                a.shown_ns, a.t_ns, a.device);
       out.push_back(std::move(a));
     }
     return out;

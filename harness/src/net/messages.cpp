@@ -23,20 +23,10 @@ constexpr std::size_t kMaxInitials = 8;
 
 class Writer {
  public:
-  template <class T>
-  void put(T v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    if constexpr (std::is_floating_point_v<T>) {
-      put(std::bit_cast<std::conditional_t<sizeof(T) == 8, std::uint64_t, std::uint32_t>>(v));
-    } else if constexpr (std::is_enum_v<T>) {
-      put(static_cast<std::underlying_type_t<T>>(v));
-    } else {
-      auto u = static_cast<std::make_unsigned_t<T>>(v);
-      for (std::size_t i = 0; i < sizeof(T); ++i) {
-        out_.push_back(static_cast<std::uint8_t>(u & 0xffu));
-        if constexpr (sizeof(T) > 1) u = static_cast<decltype(u)>(u >> 8);
-      }
-    }
+  // The fields in order, each little-endian at its own width.
+  template <class... T>
+  void put(T... v) {
+    (put_one(v), ...);
   }
   void text(const std::string& s, std::size_t max, const char* field) {
     if (s.size() > max) contract(field);
@@ -50,6 +40,21 @@ class Writer {
   std::vector<std::uint8_t>& bytes() { return out_; }
 
  private:
+  template <class T>
+  void put_one(T v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if constexpr (std::is_floating_point_v<T>) {
+      put_one(std::bit_cast<std::conditional_t<sizeof(T) == 8, std::uint64_t, std::uint32_t>>(v));
+    } else if constexpr (std::is_enum_v<T>) {
+      put_one(static_cast<std::underlying_type_t<T>>(v));
+    } else {
+      auto u = static_cast<std::make_unsigned_t<T>>(v);
+      for (std::size_t i = 0; i < sizeof(T); ++i) {
+        out_.push_back(static_cast<std::uint8_t>(u & 0xffu));
+        if constexpr (sizeof(T) > 1) u = static_cast<decltype(u)>(u >> 8);
+      }
+    }
+  }
   std::vector<std::uint8_t> out_;
 };
 
@@ -73,6 +78,11 @@ class Reader {
       pos_ += sizeof(T);
       return static_cast<T>(u);
     }
+  }
+  // Fields read in order, each at its own type's width (no range checks).
+  template <class... T>
+  void read(T&... v) {
+    ((v = get<T>()), ...);
   }
   double finite(double max = kMaxMagnitude) {
     const double v = get<double>();
@@ -175,19 +185,14 @@ Hello get_hello(Reader& r) {
 bool valid_kind(std::uint8_t k) { return k <= static_cast<std::uint8_t>(geometry::SpaceKind::H3); }
 
 void put_body(Writer& w, const PoseFrame& p) {
-  w.put(p.sequence);
-  w.put(p.display_ns);
-  w.put(static_cast<std::uint8_t>(p.space));
-  w.put(p.radius_m);
-  w.put(p.tracked);
+  w.put(p.sequence, p.display_ns, static_cast<std::uint8_t>(p.space), p.radius_m, p.tracked);
   for (const auto& iso : p.pose)
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) w.put(iso.m[c][r]);
 }
 PoseFrame get_pose(Reader& r) {
   PoseFrame p;
-  p.sequence = r.get<std::uint32_t>();
-  p.display_ns = r.get<std::int64_t>();
+  r.read(p.sequence, p.display_ns);
   const auto kind = r.get<std::uint8_t>();
   if (!valid_kind(kind)) r.fail(DecodeFailure::bad_value);
   p.space = static_cast<geometry::SpaceKind>(valid_kind(kind) ? kind : 1);
@@ -220,32 +225,12 @@ constexpr std::size_t kBallBytes = 2 * 8 + 2;
 constexpr double kMaxNative_m = 1e3;
 
 void put_body(Writer& w, const Shot& s) {
-  w.put(s.shot_index);
-  w.put(s.shooter);
-  w.put(static_cast<std::uint8_t>(s.simulated ? 1 : 0));
-  w.put(s.strike_ns);
-  w.put(s.cue_ball);
-  w.put(s.toward_x_m);
-  w.put(s.toward_z_m);
-  w.put(s.cue_speed_m_s);
-  w.put(s.tip_side);
-  w.put(s.tip_height);
+  w.put(s.shot_index, s.shooter, static_cast<std::uint8_t>(s.simulated ? 1 : 0), s.strike_ns, s.cue_ball,
+        s.toward_x_m, s.toward_z_m, s.cue_speed_m_s, s.tip_side, s.tip_height);
   w.count(s.events.size(), kMaxEvents, "Shot::events");
-  for (const auto& e : s.events) {
-    w.put(e.t_s);
-    w.put(e.kind);
-    w.put(e.a);
-    w.put(e.b);
-    w.put(e.cushion);
-    w.put(e.pocket);
-  }
+  for (const auto& e : s.events) w.put(e.t_s, e.kind, e.a, e.b, e.cushion, e.pocket);
   w.count(s.rest.size(), kMaxBalls, "Shot::rest");
-  for (const auto& b : s.rest) {
-    w.put(b.x_m);
-    w.put(b.z_m);
-    w.put(static_cast<std::uint8_t>(b.pocketed ? 1 : 0));
-    w.put(b.pocket);
-  }
+  for (const auto& b : s.rest) w.put(b.x_m, b.z_m, static_cast<std::uint8_t>(b.pocketed ? 1 : 0), b.pocket);
 }
 Shot get_shot(Reader& r) {
   Shot s;
@@ -269,11 +254,7 @@ Shot get_shot(Reader& r) {
   for (std::size_t i = 0; i < ne && r.ok(); ++i) {
     ShotEvent e;
     e.t_s = r.finite(1e6);
-    e.kind = r.get<std::uint8_t>();
-    e.a = r.get<std::int16_t>();
-    e.b = r.get<std::int16_t>();
-    e.cushion = r.get<std::int16_t>();
-    e.pocket = r.get<std::int16_t>();
+    r.read(e.kind, e.a, e.b, e.cushion, e.pocket);
     if (e.kind > 5) r.fail(DecodeFailure::bad_value);
     for (auto idx : {e.a, e.b, e.cushion, e.pocket})
       if (idx < -1 || idx >= static_cast<std::int16_t>(kMaxBalls)) r.fail(DecodeFailure::bad_value);
@@ -298,46 +279,30 @@ Shot get_shot(Reader& r) {
 // ---- GameState, Ping, Pong, Bye
 void put_body(Writer& w, const GameState& g) {
   for (auto b : g.game_uuid) w.put(b);
-  w.put(g.phase);
-  w.put(g.completed_shots);
-  w.put(g.next_shooter);
-  w.put(g.rack_seed);
-  w.put(g.balls);
+  w.put(g.phase, g.completed_shots, g.next_shooter, g.rack_seed, g.balls);
 }
 GameState get_game_state(Reader& r) {
   GameState g;
   for (auto& b : g.game_uuid) b = r.get<std::uint8_t>();
-  g.phase = r.get<GameState::Phase>();
-  g.completed_shots = r.get<std::uint32_t>();
-  g.next_shooter = r.get<Role>();
-  g.rack_seed = r.get<std::uint64_t>();
-  g.balls = r.get<std::uint16_t>();
+  r.read(g.phase, g.completed_shots, g.next_shooter, g.rack_seed, g.balls);
   if (static_cast<int>(g.phase) > 3 || static_cast<int>(g.next_shooter) > 1 || g.balls > kMaxBalls)
     r.fail(DecodeFailure::bad_value);
   return g;
 }
 void put_body(Writer& w, const Ping& p) {
-  w.put(p.id);
-  w.put(p.t1_ns);
+  w.put(p.id, p.t1_ns);
 }
 Ping get_ping(Reader& r) {
   Ping p;
-  p.id = r.get<std::uint32_t>();
-  p.t1_ns = r.get<std::int64_t>();
+  r.read(p.id, p.t1_ns);
   return p;
 }
 void put_body(Writer& w, const Pong& p) {
-  w.put(p.id);
-  w.put(p.t1_ns);
-  w.put(p.t2_ns);
-  w.put(p.t3_ns);
+  w.put(p.id, p.t1_ns, p.t2_ns, p.t3_ns);
 }
 Pong get_pong(Reader& r) {
   Pong p;
-  p.id = r.get<std::uint32_t>();
-  p.t1_ns = r.get<std::int64_t>();
-  p.t2_ns = r.get<std::int64_t>();
-  p.t3_ns = r.get<std::int64_t>();
+  r.read(p.id, p.t1_ns, p.t2_ns, p.t3_ns);
   return p;
 }
 void put_body(Writer& w, const Bye& b) {

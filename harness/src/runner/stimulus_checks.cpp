@@ -81,111 +81,129 @@ std::vector<FieldOfView> fields_of_view(const protocol::Protocol& p) {
   return out;
 }
 
+namespace {
+
+// One condition seen from where the headless participant stands: for each
+// shown eye, the judged points a field of view loses (and the first field
+// that loses them), and the judged point farthest from the fixated one.
+struct ViewCheck {
+  std::string lost;  // "" when every judged point stays in view
+  double worst_rad = 0.0;
+  std::string worst_point;
+};
+
+ViewCheck check_view(const World& world, const protocol::Settings& s, const std::vector<geometry::Point>& points,
+                     const std::string& judged, const std::vector<FieldOfView>& fovs) {
+  const geometry::Isometry head = standing_head(world, s);
+  const geometry::ViewPreset preset = perceived_preset(s);
+  const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
+  const bool shown[2] = {s.viewing.eyes != renderer::EyeSelection::right,
+                         s.viewing.eyes != renderer::EyeSelection::left};
+  const std::size_t fixated = judged_kind(s).fixated_point(points.size());
+  const auto to_fixated = geometry::sight_lines(world.space, head, eyes, preset, points[fixated]);
+  ViewCheck out;
+  std::string lost_by[2];
+  std::string fov_named;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto lines = geometry::sight_lines(world.space, head, eyes, preset, points[i]);
+    for (int e = 0; e < 2; ++e) {
+      if (!shown[e]) continue;
+      const geometry::Vec3 d = lines[e].direction;
+      const double h = std::atan2(std::abs(d.x), -d.z);
+      const double v = std::atan2(std::abs(d.y), -d.z);
+      for (const auto& fov : fovs) {
+        if (d.z < 0.0 && h <= fov.half_horizontal_rad && v <= fov.half_vertical_rad) continue;
+        lost_by[e] += std::string(lost_by[e].empty() ? "" : ", ") + point_name(judged, i, points.size()) + " (" +
+                      degrees(h) + " across, " + degrees(v) + " vertically)";
+        if (fov_named.find(fov.name) == std::string::npos)
+          fov_named += std::string(fov_named.empty() ? "" : " or ") + fov.name;
+        break;
+      }
+      const double ecc = std::acos(std::clamp(glm::dot(d, to_fixated[e].direction), -1.0, 1.0));
+      // Ties (a stick's two ends seen symmetrically) go to the first point
+      // whatever the last bits of the build's arithmetic say.
+      if (ecc > out.worst_rad + 1e-9) {
+        out.worst_rad = ecc;
+        out.worst_point = point_name(judged, i, points.size());
+      }
+    }
+  }
+  for (int e = 0; e < 2; ++e)
+    if (!lost_by[e].empty())
+      out.lost += std::string(out.lost.empty() ? "" : "; ") + "the " + (e == 0 ? "left" : "right") + " eye loses the " +
+                  judged + "'s " + lost_by[e];
+  if (!out.lost.empty()) out.lost += " — outside " + fov_named;
+  return out;
+}
+
+// The human model's range, per block: its binocular conditions, those that
+// reach beyond the eccentricity its data span where its own distortion
+// exceeds its noise, and the worst of them.
+struct ModelRange {
+  int beyond = 0, conditions = 0;
+  double worst_rad = 0.0;
+  double distortion_m = 0.0, noise_sd_m = 0.0;  // the model's bias there, and its noise
+  std::string point, judged;
+
+  void add(const protocol::Settings& s, const ViewCheck& view, const std::string& judged_name) {
+    ++conditions;
+    if (view.worst_rad * kDeg <= kHumanModelEccentricityDeg) return;
+    // Beyond the data, what the model predicts there matters when its own
+    // frontal-plane distortion is larger than its noise: the bow it sees in
+    // the same shape, physically straight, in Euclidean space, where an
+    // ideal observer sees none.
+    const auto distortion = frontal_plane_distortion(s);
+    if (!distortion || std::abs(distortion->first) <= distortion->second) return;
+    ++beyond;
+    if (std::abs(distortion->first) <= std::abs(distortion_m)) return;
+    worst_rad = view.worst_rad;
+    point = view.worst_point;
+    judged = judged_name;
+    distortion_m = distortion->first;
+    noise_sd_m = distortion->second;
+  }
+
+  [[nodiscard]] std::string text(const std::string& block) const {
+    char mm[96];
+    std::snprintf(mm, sizeof mm, "%+.0f mm against a noise SD of %.1f mm", distortion_m * 1000.0, noise_sd_m * 1000.0);
+    return "block " + block + ": in " + std::to_string(beyond) + " of its " + std::to_string(conditions) +
+           " binocular conditions the human observer model's predictions lie outside its range of validity: the "
+           "judged points reach beyond the ±" +
+           degrees(kHumanModelEccentricityDeg / kDeg) + " of eccentricity its data span (the " + judged + "'s " +
+           point + " " + degrees(worst_rad) + " from the fixated point), where its own frontal-plane distortion "
+           "reaches " + mm + " (a physically straight shape in E3); predicted values, PSEs and power there reflect "
+           "the model, not the space";
+  }
+};
+
+}  // namespace
+
 std::vector<StimulusWarning> stimulus_warnings(const protocol::Protocol& p) {
   std::vector<StimulusWarning> out;
   const auto fovs = fields_of_view(p);
   const protocol::Design design = protocol::expand_design(p, 1);
   std::set<std::pair<std::string, std::string>> seen;
-  // The model's range, per block: conditions beyond it and the worst.
-  struct Range {
-    int beyond = 0, conditions = 0;
-    double worst_rad = 0.0;
-    double distortion_m = 0.0, noise_sd_m = 0.0;  // the model's bias there, and its noise
-    std::string point, judged;
-  };
-  std::vector<std::pair<std::string, Range>> ranges;  // in design order
+  std::vector<std::pair<std::string, ModelRange>> ranges;  // in design order
   for (const auto& t : design.trials) {
     const std::string condition = label_of(t.levels);
     if (!seen.insert({t.block, condition}).second) continue;
     auto world = make_world(t.settings);
     if (!world) continue;  // the validator reports an impossible table
     const auto& s = t.settings;
-    const geometry::Isometry head = standing_head(*world, s);
-    const Placement placement = place_stimulus(*world, s, head);
-    const auto points = judged_points(*world, s, placement);
+    const auto points = judged_points(*world, s, place_stimulus(*world, s, standing_head(*world, s)));
     if (points.empty()) continue;
     const std::string judged(judged_kind(s).name());
-    const geometry::ViewPreset preset = perceived_preset(s);
-    const auto eyes = geometry::eyes_from_ipd(s.viewing.ipd_m);
-    const bool shown[2] = {s.viewing.eyes != renderer::EyeSelection::right,
-                           s.viewing.eyes != renderer::EyeSelection::left};
-    const std::size_t fixated = judged_kind(s).fixated_point(points.size());
-    const auto to_fixated = geometry::sight_lines(world->space, head, eyes, preset, points[fixated]);
-
-    // Per eye, the judged points it loses and the first field of view that loses each.
-    std::string lost_by[2];
-    std::string fov_named;
-    double worst = 0.0;
-    std::string worst_point;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const auto lines = geometry::sight_lines(world->space, head, eyes, preset, points[i]);
-      for (int e = 0; e < 2; ++e) {
-        if (!shown[e]) continue;
-        const geometry::Vec3 d = lines[e].direction;
-        const double h = std::atan2(std::abs(d.x), -d.z);
-        const double v = std::atan2(std::abs(d.y), -d.z);
-        for (const auto& fov : fovs) {
-          if (d.z < 0.0 && h <= fov.half_horizontal_rad && v <= fov.half_vertical_rad) continue;
-          lost_by[e] += std::string(lost_by[e].empty() ? "" : ", ") + point_name(judged, i, points.size()) + " (" +
-                        degrees(h) + " across, " + degrees(v) + " vertically)";
-          if (fov_named.find(fov.name) == std::string::npos)
-            fov_named += std::string(fov_named.empty() ? "" : " or ") + fov.name;
-          break;
-        }
-        const double ecc = std::acos(std::clamp(glm::dot(d, to_fixated[e].direction), -1.0, 1.0));
-        // Ties (a stick's two ends seen symmetrically) go to the first point
-        // whatever the last bits of the build's arithmetic say.
-        if (ecc > worst + 1e-9) {
-          worst = ecc;
-          worst_point = point_name(judged, i, points.size());
-        }
-      }
-    }
-    std::string lost;
-    for (int e = 0; e < 2; ++e)
-      if (!lost_by[e].empty())
-        lost += std::string(lost.empty() ? "" : "; ") + "the " + (e == 0 ? "left" : "right") + " eye loses the " +
-                judged + "'s " + lost_by[e];
-    if (!lost.empty()) lost += " — outside " + fov_named;
-    if (!lost.empty())
+    const ViewCheck view = check_view(*world, s, points, judged, fovs);
+    if (!view.lost.empty())
       out.push_back({StimulusWarningKind::out_of_view, t.block, condition,
-                     where_of(t.block, condition) + ": the stimulus leaves the view: " + lost});
-    if (!geometry::binocular(preset)) continue;
+                     where_of(t.block, condition) + ": the stimulus leaves the view: " + view.lost});
+    if (!geometry::binocular(perceived_preset(s))) continue;
     auto it = std::find_if(ranges.begin(), ranges.end(), [&](const auto& r) { return r.first == t.block; });
-    if (it == ranges.end()) it = ranges.insert(ranges.end(), {t.block, Range{}});
-    Range& r = it->second;
-    ++r.conditions;
-    if (worst * kDeg <= kHumanModelEccentricityDeg) continue;
-    // Beyond the data, what the model predicts there matters when its own
-    // frontal-plane distortion is larger than its noise: the bow it sees in
-    // the same shape, physically straight, in Euclidean space, where an
-    // ideal observer sees none.
-    const auto distortion = frontal_plane_distortion(s);
-    if (!distortion || std::abs(distortion->first) <= distortion->second) continue;
-    ++r.beyond;
-    if (std::abs(distortion->first) > std::abs(r.distortion_m)) {
-      r.worst_rad = worst;
-      r.point = worst_point;
-      r.judged = judged;
-      r.distortion_m = distortion->first;
-      r.noise_sd_m = distortion->second;
-    }
+    if (it == ranges.end()) it = ranges.insert(ranges.end(), {t.block, ModelRange{}});
+    it->second.add(s, view, judged);
   }
-  for (const auto& [block, r] : ranges) {
-    if (r.beyond == 0) continue;
-    char mm[96];
-    std::snprintf(mm, sizeof mm, "%+.0f mm against a noise SD of %.1f mm", r.distortion_m * 1000.0,
-                  r.noise_sd_m * 1000.0);
-    out.push_back({StimulusWarningKind::model_range, block, "",
-                   "block " + block + ": in " + std::to_string(r.beyond) + " of its " + std::to_string(r.conditions) +
-                       " binocular conditions the human observer model's predictions lie outside its range of "
-                       "validity: the judged points reach beyond the ±" +
-                       degrees(kHumanModelEccentricityDeg / kDeg) + " of eccentricity its data span (the " +
-                       r.judged + "'s " + r.point + " " + degrees(r.worst_rad) +
-                       " from the fixated point), where its own frontal-plane distortion reaches " + mm +
-                       " (a physically straight shape in E3); predicted values, PSEs and power there reflect the "
-                       "model, not the space"});
-  }
+  for (const auto& [block, r] : ranges)
+    if (r.beyond > 0) out.push_back({StimulusWarningKind::model_range, block, "", r.text(block)});
   return out;
 }
 

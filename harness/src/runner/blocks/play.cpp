@@ -335,6 +335,71 @@ class PlayBlock {
         params_(play_parameters(play_)) {}
 
   Outcome run() {
+    begin();
+    const std::int64_t start_ns = f_.clock.now_ns();
+    next_shot_ns_ = start_ns + think_ns();
+    // The simulated player walks round the physical table while it plays.
+    struct Restore {
+      SessionFrames& f;
+      ~Restore() { f.lab_override = nullptr; }
+    } restore{f_};
+    const geometry::PhysicalTable physical = f_.physical_table();
+    if (simulated_) walk_around(physical, start_ns);
+    const std::string line = run_.block.name + "  play: strike the white ball with the cue";
+    io::Overlay overlay{Phase::stimulus, line, !simulated_};
+    std::optional<Rolling> rolling;
+    for (;;) {
+      Frame g;
+      if (!f_.begin(g)) return Outcome::quit;
+      if (g.signal == Signal::pause) {
+        if (f_.hold(Phase::stimulus, trial_id_) == Outcome::quit) return Outcome::quit;
+        continue;
+      }
+      const std::int64_t t_ns = g.timing.predicted_display_ns;
+      figures_.add(f_.lab(), physical, f_.tracking());
+      if (shared_) {
+        exchange(t_ns);
+        avatar_->update(f_.scene().scene(), partner_poses_.at(t_ns));
+        overlay.text = partner_away_ ? run_.block.name + "  paused: the partner station is disconnected; the game "
+                                                         "goes on when it is back"
+                                     : line;
+      }
+      if (!rolling) {
+        if (const auto why = between_shots(g, t_ns, start_ns, rolling)) {
+          ended_ = *why;
+          f_.end(g, overlay, false, trial_id_);
+          break;
+        }
+      }
+      if (rolling && roll(*rolling, t_ns)) {
+        commit_shot(*rolling, t_ns, static_cast<double>(g.timing.now_ns - start_ns) * 1e-9);
+        rolling.reset();
+        next_shot_ns_ = g.timing.now_ns + think_ns();
+      }
+      f_.end(g, overlay, false, trial_id_);
+      if (g.signal == Signal::quit) return Outcome::quit;
+    }
+    store_play(start_ns);
+    scene_->hide(f_.scene().scene());
+    if (cue_) cue_->hide(f_.scene().scene());
+    if (avatar_) avatar_->hide(f_.scene().scene());
+    return Outcome::done;
+  }
+
+ private:
+  struct Rolling {
+    std::int64_t strike_ns = 0;
+    bl::ShotSpec spec;
+    bl::ShotOutcome outcome;
+    phys::System system;
+    std::optional<std::string> cue_pose;
+    phys::Strike strike;
+    std::optional<net::Shot> from_partner;  // shared: the partner's shot as it sent it
+  };
+
+  // The block's one trial begun: its world, the balls where the last stored
+  // shot left them, the cue, and in a shared game the partner.
+  void begin() {
     index_ = run_.block.first_trial;
     trial_id_ = f_.trial_ids[index_];
     const auto& planned = f_.design.trials[index_];
@@ -357,105 +422,69 @@ class PlayBlock {
     tip_offset_m_ = {tip[0], tip[1], tip[2]};
     if (!simulated_) cue_.emplace(f_.scene().scene(), f_.world().space, tip_offset_m_);
     rng_.seed(protocol::mix_seed(f_.design.seed ^ protocol::mix_seed(0x9a1e0000ULL + index_)));
-    const std::int64_t start_ns = f_.clock.now_ns();
-    std::int64_t next_shot_ns = start_ns + think_ns();
-    // The simulated player walks round the physical table while it plays.
-    struct Restore {
-      SessionFrames& f;
-      ~Restore() { f.lab_override = nullptr; }
-    } restore{f_};
-    const geometry::PhysicalTable physical = f_.physical_table();
-    if (simulated_) walk_ = walking_trajectory(physical);
-    if (!walk_.empty()) {
-      f_.lab_override = [this, start_ns](const io::FrameTiming& t) {
-        const std::int64_t period = walk_[1].t_ns - walk_[0].t_ns;
-        const auto k = static_cast<std::size_t>(std::max<std::int64_t>(0, t.predicted_display_ns - start_ns) / period);
-        return walk_[std::min(k, walk_.size() - 1)].frame;
-      };
-    }
-    const double duration_ns = play_.duration_s * 1e9 - elapsed_before_s_ * 1e9;
-    std::optional<Rolling> rolling;
-    const std::string line = run_.block.name + "  play: strike the white ball with the cue";
-    io::Overlay overlay{Phase::stimulus, line, !simulated_};
-    for (;;) {
-      Frame g;
-      if (!f_.begin(g)) return Outcome::quit;
-      if (g.signal == Signal::pause) {
-        if (f_.hold(Phase::stimulus, trial_id_) == Outcome::quit) return Outcome::quit;
-        continue;
-      }
-      const std::int64_t t_ns = g.timing.predicted_display_ns;
-      figures_.add(f_.lab(), physical, f_.tracking());
-      if (shared_) {
-        exchange(t_ns);
-        avatar_->update(f_.scene().scene(), partner_poses_.at(t_ns));
-        overlay.text = partner_away_ ? run_.block.name + "  paused: the partner station is disconnected; the game "
-                                                         "goes on when it is back"
-                                     : line;
-      }
-      if (!rolling) {
-        const bool out_of_time = static_cast<double>(g.timing.now_ns - start_ns) > duration_ns;
-        const auto next = shared_ ? pending_.find(static_cast<std::uint32_t>(shots_)) : pending_.end();
-        if (next != pending_.end()) {
-          // The partner's shot — or, for a station that came back behind,
-          // one it missed, sent again.
-          rolling = start_partner_shot(next->second, t_ns);
-          pending_.erase(pending_.begin(), std::next(next));
-        } else if (shared_ && (!my_turn() || partner_completed_ > shots_)) {
-          // The partner's turn, or shots this station missed still to come:
-          // wait for them, or for the end the partner decided.
-          if (partner_completed_ <= shots_ && (partner_over_ || finished(false))) {
-            f_.end(g, overlay, false, trial_id_);
-            break;
-          }
-          std::optional<std::string> ignored;
-          (void)take_strike(g, t_ns, next_shot_ns, ignored);  // draws the cue; not this station's turn
-        } else {
-          if (finished(out_of_time)) {
-            if (shared_) send_game_over();
-            f_.end(g, overlay, false, trial_id_);
-            break;
-          }
-          std::optional<std::string> cue_pose;
-          auto spec = take_strike(g, t_ns, next_shot_ns, cue_pose);
-          if (shared_ && partner_away_) spec.reset();  // paused until the partner is back
-          if (spec) {
-            rolling = start_shot(t_ns, *spec, cue_pose);
-            if (shared_) send_shot(*rolling);
-          }
-        }
-      }
-      if (rolling) {
-        const double t_s = static_cast<double>(t_ns - rolling->strike_ns) * 1e-9;
-        while (rolling->system.next_event(t_s)) {
-        }
-        show(rolling->system, t_s);
-        if (rolling->system.all_still() || t_s > rolling->outcome.end_s) {
-          commit_shot(*rolling, t_ns, static_cast<double>(g.timing.now_ns - start_ns) * 1e-9);
-          rolling.reset();
-          next_shot_ns = g.timing.now_ns + think_ns();
-        }
-      }
-      f_.end(g, overlay, false, trial_id_);
-      if (g.signal == Signal::quit) return Outcome::quit;
-    }
-    store_play(start_ns);
-    scene_->hide(f_.scene().scene());
-    if (cue_) cue_->hide(f_.scene().scene());
-    if (avatar_) avatar_->hide(f_.scene().scene());
-    return Outcome::done;
+    duration_ns_ = play_.duration_s * 1e9 - elapsed_before_s_ * 1e9;
   }
 
- private:
-  struct Rolling {
-    std::int64_t strike_ns = 0;
-    bl::ShotSpec spec;
-    bl::ShotOutcome outcome;
-    phys::System system;
+  // The simulated player's walk round the physical table, as the lab pose of
+  // each frame.
+  void walk_around(const geometry::PhysicalTable& physical, std::int64_t start_ns) {
+    walk_ = walking_trajectory(physical);
+    if (walk_.empty()) return;
+    f_.lab_override = [this, start_ns](const io::FrameTiming& t) {
+      const std::int64_t period = walk_[1].t_ns - walk_[0].t_ns;
+      const auto k = static_cast<std::size_t>(std::max<std::int64_t>(0, t.predicted_display_ns - start_ns) / period);
+      return walk_[std::min(k, walk_.size() - 1)].frame;
+    };
+  }
+
+  // While no ball rolls: the partner's next shot, this station's strike, or
+  // the end of the game (why it ended).
+  std::optional<std::string> between_shots(const Frame& g, std::int64_t t_ns, std::int64_t start_ns,
+                                           std::optional<Rolling>& rolling) {
+    const bool out_of_time = static_cast<double>(g.timing.now_ns - start_ns) > duration_ns_;
+    const auto next = shared_ ? pending_.find(static_cast<std::uint32_t>(shots_)) : pending_.end();
+    if (next != pending_.end()) {
+      // The partner's shot — or, for a station that came back behind, one it
+      // missed, sent again.
+      rolling = start_partner_shot(next->second, t_ns);
+      pending_.erase(pending_.begin(), std::next(next));
+      return std::nullopt;
+    }
+    if (shared_ && partner_lost(t_ns)) return "partner_lost";
+    if (shared_ && (!my_turn() || partner_completed_ > shots_)) {
+      // The partner's turn, or shots this station missed still to come: wait
+      // for them, or for the end the partner decided.
+      if (partner_completed_ <= shots_) {
+        if (auto why = end_reason(false)) return why;
+        if (partner_over_) return "partner_ended";
+      }
+      std::optional<std::string> ignored;
+      (void)take_strike(g, t_ns, ignored);  // draws the cue; not this station's turn
+      return std::nullopt;
+    }
+    if (auto why = end_reason(out_of_time)) {
+      if (shared_) send_game_over();
+      return why;
+    }
     std::optional<std::string> cue_pose;
-    phys::Strike strike;
-    std::optional<net::Shot> from_partner;  // shared: the partner's shot as it sent it
-  };
+    auto spec = take_strike(g, t_ns, cue_pose);
+    if (shared_ && partner_away_) spec.reset();  // paused until the partner is back
+    if (spec) {
+      rolling = start_shot(t_ns, *spec, cue_pose);
+      if (shared_) send_shot(*rolling);
+    }
+    return std::nullopt;
+  }
+
+  // The rolling balls advanced to this frame and shown; true once they rest
+  // (or the shot's time is up).
+  bool roll(Rolling& r, std::int64_t t_ns) {
+    const double t_s = static_cast<double>(t_ns - r.strike_ns) * 1e-9;
+    while (r.system.next_event(t_s)) {
+    }
+    show(r.system, t_s);
+    return r.system.all_still() || t_s > r.outcome.end_s;
+  }
 
   // ---- Shared play (docs/shared_play.md)
 
@@ -491,6 +520,12 @@ class PlayBlock {
     partner_away_ = true;
     away_since_ns_ = t_ns;
     f_.event(trial_id_, events::PartnerLeft{shots_}, t_ns);
+  }
+
+  // A partner away for longer than the station waits for one (--partner-wait-s)
+  // ends the game here: the stored shots stay, and a resumed run goes on.
+  [[nodiscard]] bool partner_lost(std::int64_t t_ns) const {
+    return partner_away_ && t_ns - away_since_ns_ > shared_->options.wait_ns;
   }
 
   // A partner connected (again): both sides say who they are and where their
@@ -665,10 +700,9 @@ class PlayBlock {
   // This frame's strike, if any: the simulated player's when its thinking
   // time is up; the tracked cue's tip entering the cue ball; the desktop's
   // strike key held and let go.
-  std::optional<bl::ShotSpec> take_strike(const Frame& g, std::int64_t t_ns, std::int64_t next_shot_ns,
-                                          std::optional<std::string>& cue_pose) {
-std::optional<bl::ShotSpec> spec;
-    if (simulated_ && g.timing.now_ns >= next_shot_ns) spec = choose_shot(*rest_, balls_, params_, rng_);
+  std::optional<bl::ShotSpec> take_strike(const Frame& g, std::int64_t t_ns, std::optional<std::string>& cue_pose) {
+    std::optional<bl::ShotSpec> spec;
+    if (simulated_ && g.timing.now_ns >= next_shot_ns_) spec = choose_shot(*rest_, balls_, params_, rng_);
     if (cue_ && f_.tracking() != nullptr) {
       cue_->update(f_.scene().scene(), *f_.tracking(), cue_ball_pose(), t_ns);
       if (auto s = cue_->strike(params_.radius_m)) {
@@ -700,6 +734,7 @@ std::optional<bl::ShotSpec> spec;
     if (shared_) store_network();
     events::PlaySummary summary;
     summary.block = run_.block.name;
+    summary.ended = ended_;
     summary.shots = shots_;
     summary.pocketed = pocketed_;
     summary.time_s = static_cast<double>(f_.clock.now_ns() - start_ns) * 1e-9 + elapsed_before_s_;
@@ -724,15 +759,18 @@ std::optional<bl::ShotSpec> spec;
     return static_cast<std::int64_t>((1.5 + 1.5 * protocol::uniform01(rng_)) * 1e9);
   }
 
-  bool finished(bool out_of_time) const {
-    if (out_of_time) return true;
-    if (play_.shots > 0 && shots_ >= play_.shots) return true;
+  // Why the game is over, if it is: its time is up, its shots are played,
+  // every object ball is pocketed (until = "all_pocketed"), or there are no balls.
+  std::optional<std::string> end_reason(bool out_of_time) const {
+    if (out_of_time) return "time";
+    if (play_.shots > 0 && shots_ >= play_.shots) return "shots";
     if (play_.until_all_pocketed) {
       bool any = false;
       for (std::size_t i = 1; i < balls_.size(); ++i) any = any || !balls_[i].pocketed;
-      if (!any) return true;
+      if (!any) return "all_pocketed";
     }
-    return balls_.empty();
+    if (balls_.empty()) return "no_balls";
+    return std::nullopt;
   }
 
   // A pocketed cue ball comes back on its spot, halfway from the centre to
@@ -911,6 +949,9 @@ std::optional<bl::ShotSpec> spec;
   std::int64_t next_reconnect_ns_ = 0;
   std::map<std::uint32_t, net::Shot> history_;  // shared: the shots this station played or received, by index
   std::int64_t next_clock_event_ns_ = 0;
+  std::int64_t next_shot_ns_ = 0;  // when the simulated player strikes next
+  double duration_ns_ = 0.0;       // the block's time left when it began
+  std::string ended_;              // why the game ended (play_summary's "ended")
   std::uint32_t pose_sequence_ = 0;
 };
 

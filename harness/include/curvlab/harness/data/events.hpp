@@ -191,6 +191,10 @@ struct Posterior {
 // azimuth about each table's centre), and the seen-versus-felt hand error.
 struct PlaySummary {
   std::string block;
+  // Why the game ended: time, shots, all_pocketed, no_balls; in a shared
+  // game also partner_ended (the partner's station ended it) or partner_lost
+  // (the partner was away longer than --partner-wait-s).
+  std::string ended;
   std::int64_t shots = 0;
   std::int64_t pocketed = 0;
   double time_s = 0.0;

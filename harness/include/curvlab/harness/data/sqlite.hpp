@@ -113,7 +113,23 @@ class Statement {
   int column_count() const;
   std::string column_name(int column) const;
 
+  // The row's columns 0, 1, … read into `out` in order, each by its type:
+  // int64, double, bool, string, or an optional of one (NULL: nullopt).
+  template <class... T>
+  void columns(T&... out) const {
+    int column = 0;
+    (read_column(column++, out), ...);
+  }
+
  private:
+  void read_column(int c, std::int64_t& v) const { v = column_int(c); }
+  void read_column(int c, double& v) const { v = column_double(c); }
+  void read_column(int c, bool& v) const { v = column_int(c) != 0; }
+  void read_column(int c, std::string& v) const { v = column_text(c); }
+  void read_column(int c, std::optional<std::int64_t>& v) const { v = column_opt_int(c); }
+  void read_column(int c, std::optional<double>& v) const { v = column_opt_double(c); }
+  void read_column(int c, std::optional<std::string>& v) const { v = column_opt_text(c); }
+
   Connection* db_;
   StatementHandle handle_;
 };
