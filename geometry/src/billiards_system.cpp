@@ -18,6 +18,13 @@ constexpr double kContact_m = 1e-12;
 // The most a touching, non-closing pair may close within one step of the
 // search (below the invariants' 1e-9 m).
 constexpr double kOverlap_m = 1e-10;
+// A touching pair or cushion is a contact only when it closes faster than
+// this fraction of its speeds: slower, the closing is rounding (the search's
+// rate and the collision's normal speed are the same quantity computed two
+// ways, and may differ in sign there), and a contact the collision then
+// finds not closing would be found again at the same instant for ever. A
+// pair closing that slowly overlaps by at most 1e-12 m per metre travelled.
+constexpr double kClosingRel = 1e-12;
 // The shortest step of the root search away from a touching contact.
 constexpr double kMinStep_s = 1e-9;
 // How far ahead one pass of the search looks before it stops to check.
@@ -264,18 +271,18 @@ namespace {
 
 bool translating(Motion m) { return m == Motion::sliding || m == Motion::rolling; }
 
-// The first t in [from, to] where gap(t) reaches 0 while closing, given
-// |gap''| ≤ bound. Each step goes as far as the lower bound
+// The first t in [from, to] where gap(t) reaches 0 while closing faster
+// than min_closing (m/s), given |gap''| ≤ bound. Each step goes as far as the lower bound
 // gap + gap'·h − ½·bound·h² stays positive, so no root is stepped over.
 template <class GapFn>
-std::optional<double> first_contact(GapFn&& gap, double from, double to, double bound,
+std::optional<double> first_contact(GapFn&& gap, double from, double to, double bound, double min_closing,
                                     long long& steps) {
   double t = from;
   bound = std::max(bound, 1e-300);
   while (t <= to) {
     ++steps;
     const auto [g, rate] = gap(t);
-    if (g <= kContact_m && rate < 0.0) return t;
+    if (g <= kContact_m && rate < -min_closing) return t;
     const double gp = std::max(g, 0.0);
     // The positive root of gap + rate·h − ½·bound·h² = 0, in the form that
     // does not cancel.
@@ -319,7 +326,7 @@ void System::search_pair(std::size_t i, std::size_t j, Search& s, double to_s) {
   };
   const double speeds = si.max_speed_m_s + sj.max_speed_m_s;
   const double bound = si.accel_m_s2 + sj.accel_m_s2 + speeds * speeds * (1.0 / two_r + 1.0 / rho);
-  const auto t = first_contact(gap, s.searched_to_s, end, bound, root_steps_);
+  const auto t = first_contact(gap, s.searched_to_s, end, bound, kClosingRel * speeds, root_steps_);
   if (t) {
     Event e;
     e.t_s = *t;
@@ -432,7 +439,7 @@ void System::search_walls(std::size_t i, Search& s, double to_s) {
       };
       const double bound =
           seg.accel_m_s2 + seg.max_speed_m_s * seg.max_speed_m_s * (k != 0.0 ? 2.0 / rho : 0.0);
-      if (auto t = first_contact(gap, s.searched_to_s, end, bound, root_steps_))
+      if (auto t = first_contact(gap, s.searched_to_s, end, bound, kClosingRel * seg.max_speed_m_s, root_steps_))
         offer(*t, EventKind::cushion, edge);
     }
   }
@@ -448,7 +455,7 @@ void System::search_walls(std::size_t i, Search& s, double to_s) {
       };
       const double bound = seg.accel_m_s2 + seg.max_speed_m_s * seg.max_speed_m_s *
                                                 (1.0 / params_.pocket_radius_m + 1.0 / rho);
-      if (auto t = first_contact(gap, s.searched_to_s, end, bound, root_steps_))
+      if (auto t = first_contact(gap, s.searched_to_s, end, bound, 0.0, root_steps_))
         offer(*t, EventKind::pocket, corner);
     }
   }

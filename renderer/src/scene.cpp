@@ -79,14 +79,18 @@ std::variant<SceneObject, RenderError> text_panel_object(const Space& space, std
   const int h = static_cast<int>(std::lround(w * height_m / width_m));
   auto bmp = render_text(text, w, h, h / 2.5, font);
   if (auto* e = std::get_if<RenderError>(&bmp)) return *e;
+  return image_panel_object(space, std::move(name), std::move(std::get<CoverageBitmap>(bmp)), width_m, height_m,
+                            pose);
+}
+
+SceneObject image_panel_object(const Space& space, std::string name, CoverageBitmap image, double width_m,
+                               double height_m, const Isometry& pose) {
   SceneObject o;
   o.name = std::move(name);
-  o.build = [space, width_m, height_m](int level) {
-    return build_panel(space, width_m, height_m, level);
-  };
+  o.build = [space, width_m, height_m](int level) { return build_panel(space, width_m, height_m, level); };
   o.info = panel_info(space, width_m, height_m);
   o.pose = pose;
-  o.text = std::move(std::get<CoverageBitmap>(bmp));
+  o.text = std::move(image);
   return o;
 }
 

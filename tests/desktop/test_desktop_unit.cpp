@@ -98,7 +98,7 @@ TEST(KeyScript, UnprintableBytesInAMessageAreEscaped) {
 
 TEST(KeyScript, EachKeyWaitsForTheNextWaitAndItsDelay) {
   using curvlab::harness::io::Phase;
-  KeyScriptPlayer player({{"space", 100, 1, std::nullopt, false, std::nullopt}, {"2", 50, 2, std::nullopt, false, std::nullopt}});
+  KeyScriptPlayer player({{"space", 100, 1, std::nullopt, false, std::nullopt, false, std::nullopt}, {"2", 50, 2, std::nullopt, false, std::nullopt, false, std::nullopt}});
   constexpr std::int64_t ms = 1'000'000;
   EXPECT_FALSE(player.due(0));                       // nothing armed yet
   player.on_frame(Phase::fixation, false, 0);        // fixation: not waiting

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 
 namespace curvlab::geometry::billiards {
 namespace {
@@ -450,6 +451,27 @@ TEST(Billiards, StandardBreakEndsStillWithEnergyNeverRising) {
     EXPECT_LT(s.invariants().max_energy_rise_rel, 1e-12);
     EXPECT_LT(s.invariants().max_overlap_m, 1e-9);
   }
+}
+
+// A break whose balls, touching, close by rounding alone: the contact search
+// once found that contact, the collision found it not closing, and the
+// search found it again at the same instant for ever (an H3 break struck by
+// a tracked cue in a desktop pilot). It ends still.
+TEST(Billiards, ABreakWithBallsTouchingAndClosingByRoundingEndsStill) {
+  const Cloth c = table_cloth(SpaceKind::H3);
+  const Parameters p;
+  const auto balls = std::get<std::vector<RackBall>>(rack(c, p, 15));
+  std::vector<Ball> state;
+  for (const auto& rb : balls) state.push_back(ball_at_native(c, rb.native_m));
+  System s(c, p, state);
+  const Vec2 toward = direction_toward(c, s.ball(0).frame, from_native(c, Vec2{-0.04654741698486584, -0.3}));
+  const Strike st = cue_strike(p, toward, 2.07780982802994, {0.35688509706516336, -0.10282320083907087});
+  s.set_motion(0, st.v, st.w);
+  int events = 0;
+  while (events < 20000 && s.next_event(1e9)) ++events;
+  EXPECT_LT(events, 20000);
+  EXPECT_TRUE(s.all_still());
+  EXPECT_LT(s.invariants().max_energy_rise_rel, 1e-12);
 }
 
 TEST(Billiards, CueStrikeGivesNaturalRollAtTwoFifthsAndMiscuesPastTheLimit) {

@@ -74,7 +74,8 @@ inline std::vector<harness::net::Message> every_message() {
           g,
           Ping{9, -123456789},
           Pong{9, 1, 2, 3},
-          Bye{Bye::Reason::quitting, "the experimenter ended the session"}};
+          Bye{Bye::Reason::quitting, "the experimenter ended the session"},
+          Avatar{3, 2, {0, 64, 128, 192, 255, 7}}};
 }
 
 }  // namespace curvlab::test

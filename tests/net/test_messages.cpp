@@ -60,7 +60,7 @@ TEST(NetMessages, HeaderTamperingIsRefusedWithItsReason) {
   b = good;
   b[3] = 0;
   EXPECT_EQ(net::decode(b).failure, net::DecodeFailure::unknown_type);
-  b[3] = 8;
+  b[3] = static_cast<std::uint8_t>(net::MessageType::avatar) + 1;
   EXPECT_EQ(net::decode(b).failure, net::DecodeFailure::unknown_type);
   b = good;
   set_u32(b, 4, 13);

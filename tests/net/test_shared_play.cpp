@@ -10,10 +10,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <future>
 #include <sstream>
 #include <unistd.h>
 
+#include "../desktop/xvfb.hpp"
+#include "../support/png_files.hpp"
 #include "run_and_kill.hpp"
 #include "run_cli.hpp"
 #include "session_db.hpp"
@@ -27,7 +30,8 @@ using Json = nlohmann::ordered_json;
 
 namespace {
 
-// A play-only protocol: four turns at a rack of three.
+// A play-only protocol: four turns at a rack of three (played out even when
+// the rack is cleared sooner).
 std::string protocol(const std::string& space, const std::string& extra = "") {
   std::ifstream in(std::string(CURVLAB_SOURCE_DIR) + "/protocols/adaptation_play.toml");
   std::stringstream ss;
@@ -37,7 +41,7 @@ std::string protocol(const std::string& space, const std::string& extra = "") {
   const std::string from = "levels = [\"E3\", \"H3\"]";
   t.replace(t.find(from), from.size(), "levels = [\"S3\", \"E3\", \"H3\"]");
   t += "[[blocks]]\nname = \"play\"\nkind = \"play\"\nlevels = { space = \"" + space +
-       "\" }\nduration_s = 120\nshots = 4\nuntil = \"all_pocketed\"\nrack = 3\n" + extra;
+       "\" }\nduration_s = 120\nshots = 4\nuntil = \"time\"\nrack = 3\n" + extra;
   return t;
 }
 
@@ -259,4 +263,72 @@ TEST(SharedPlay, ASharedRunNeedsRealTimeAndAPort) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find("--partner HOST:PORT"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(dir / "x.sqlite"));
+}
+
+namespace {
+
+// Pixels of the upper half of an eye's image that `is` picks.
+int count_upper(const curvlab::renderer::Rgba8Image& image, const std::function<bool(int, int, int)>& is) {
+  int n = 0;
+  for (int y = 0; y < image.height / 2; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const auto* p = &image.pixels[4 * (static_cast<std::size_t>(y) * image.width + x)];
+      n += is(p[0], p[1], p[2]) ? 1 : 0;
+    }
+  return n;
+}
+
+}  // namespace
+
+// Two desktop pilots on one X display, each in its own window, the joiner
+// standing across the E3 table from the host: the host sends a photo
+// (--avatar), the joiner only its initials. In each station's F12
+// screenshot the partner's head stands across the table, and the joiner sees
+// the host's photo on its face, where the host sees initials.
+TEST(SharedPlay, TwoDesktopWindowsShowEachPlayerThePartnersAvatar) {
+  curvlab::test::XServer xserver;
+  if (!xserver.available()) GTEST_SKIP() << "no X display: " << xserver.reason();
+  const auto dir = fresh_dir("shared_avatar");
+  std::string text = protocol("E3");
+  text.replace(text.find("duration_s = 120"), 16, "duration_s = 6");
+  const std::string p = write(dir / "p.toml", text);
+  const std::string keys = write(dir / "keys.txt", "f12 stimulus+2500\nspace done+300\n");
+  // A mid-grey face with a dark frame, 60 × 75 pixels.
+  curvlab::renderer::Rgba8Image photo{60, 75, {}};
+  for (int y = 0; y < photo.height; ++y)
+    for (int x = 0; x < photo.width; ++x) {
+      const std::uint8_t g = (x < 4 || y < 4 || x >= photo.width - 4 || y >= photo.height - 4) ? 20 : 170;
+      photo.pixels.insert(photo.pixels.end(), {g, g, g, 255});
+    }
+  ASSERT_TRUE(curvlab::test::png_written(curvlab::renderer::write_png((dir / "face.png").string(), photo)));
+  const std::uint16_t port = port_for(6);
+  auto desktop = [&](const std::string& who, const std::string& shared) {
+    std::filesystem::create_directories(dir / who);
+    return run_cli("run " + p + " --participant " + who + " --db " + (dir / (who + ".sqlite")).string() +
+                   " --backend desktop --software --window-size 320x320 --key-script " + keys + " --screenshot " +
+                   (dir / who).string() + " --partner-wait-s 30 " + shared);
+  };
+  auto host = std::async(std::launch::async, [&] {
+    return desktop("HOST01", "--shared host --bind 127.0.0.1 --listen " + std::to_string(port) + " --avatar " +
+                                 (dir / "face.png").string());
+  });
+  auto join = std::async(std::launch::async, [&] {
+    return desktop("JOIN01", "--shared join --initials JB --partner 127.0.0.1:" + std::to_string(port));
+  });
+  const CliResult h = host.get(), j = join.get();
+  ASSERT_EQ(h.exit_code, 0) << h.out;
+  ASSERT_EQ(j.exit_code, 0) << j.out;
+  const auto blue = [](int r, int g, int b) { return b > 150 && b > r + 60 && b > g + 20; };
+  const auto light_grey = [](int r, int g, int b) {
+    return std::abs(r - g) < 12 && std::abs(g - b) < 12 && r > 90 && r < 235;
+  };
+  curvlab::renderer::Rgba8Image seen_by_host, seen_by_join;
+  ASSERT_TRUE(curvlab::test::read_png_into((dir / "HOST01" / "screenshot_001_left.png").string(), seen_by_host));
+  ASSERT_TRUE(curvlab::test::read_png_into((dir / "JOIN01" / "screenshot_001_left.png").string(), seen_by_join));
+  EXPECT_GT(count_upper(seen_by_host, blue), 30) << "the host does not see the joiner's head";
+  EXPECT_GT(count_upper(seen_by_join, blue), 30) << "the joiner does not see the host's head";
+  const int photo_at_join = count_upper(seen_by_join, light_grey);
+  const int photo_at_host = count_upper(seen_by_host, light_grey);
+  EXPECT_GT(photo_at_join, 40) << "the host's photo is not on its avatar's face";
+  EXPECT_GT(photo_at_join, 3 * photo_at_host) << "the joiner's initials card looks like a photo";
 }

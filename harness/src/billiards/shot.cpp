@@ -187,7 +187,13 @@ ShotOutcome simulate(const phys::Cloth& cloth, const phys::Parameters& params,
   const phys::Strike strike = strike_for(system, params, cue, shot);
   out.miscue = strike.miscue;
   if (!strike.miscue) system.set_motion(cue, strike.v, strike.w);
-  while (auto e = system.next_event(until_s)) {
+  while (true) {
+    if (out.events.size() == kMaxShotEvents) {
+      out.event_limit = true;
+      break;
+    }
+    const auto e = system.next_event(until_s);
+    if (!e) break;
     EventRecord r;
     r.event = *e;
     for (int who : {e->a, e->b})
@@ -265,6 +271,7 @@ Json to_json(const ShotOutcome& outcome, const std::vector<BallPlace>& balls) {
               {"final", final},
               {"end_s", outcome.end_s},
               {"all_still", outcome.all_still},
+              {"event_limit", outcome.event_limit},
               {"invariants",
                {{"max_off_surface_rel", outcome.invariants.max_off_surface_rel},
                 {"max_overlap_m", std::max(0.0, outcome.invariants.max_overlap_m)},

@@ -133,43 +133,52 @@ void check_operator_args(const BackendArgs& a) {
 }
 
 
-// The samples per pixel: --msaa, else the protocol's [viewing] msaa. "auto"
-// (nullopt) lets the display's renderer pick for its device; a count is
-// clamped to the device, with a warning. The count drawn with is the
-// display's (DisplayInfo::msaa), stored with the session.
 // What a key script must fit (desktop.hpp): each timed phase's shortest
-// length over the protocol's blocks, and every key that answers.
+// length over the blocks that show it (a play block's stimulus phase is the
+// whole game; a questionnaire block shows only pages), and every key that
+// answers. A phase no block shows lasts 0 ms.
 desktop::KeyScriptLimits key_script_limits(const pr::Protocol& p) {
   desktop::KeyScriptLimits l;
   l.protocol = p.file;
-  bool first = true;
   auto add_keys = [&l](const pr::Judgement& j) {
     for (const auto& option : j.options)
       for (const auto& key : option.keys) l.answer_keys.push_back(key);
   };
+  std::optional<std::int64_t> fixation, stimulus, response, iti;
+  auto shortest = [](std::optional<std::int64_t>& limit, std::int64_t ms) { limit = std::min(limit.value_or(ms), ms); };
   add_keys(p.judgement);
   for (const auto& b : p.blocks) {
-    const auto t = p.block_settings(b).timeline;
-    l.fixation_ms = first ? t.fixation_ms : std::min(l.fixation_ms, t.fixation_ms);
-    l.stimulus_ms = first ? t.stimulus_ms : std::min(l.stimulus_ms, t.stimulus_ms);
-    l.response_ms = first ? t.response_ms : std::min(l.response_ms, t.response_ms);
-    l.iti_ms = first ? t.iti_ms : std::min(l.iti_ms, t.iti_ms);
-    first = false;
     add_keys(b.judgement);
+    if (b.kind == "play") shortest(stimulus, std::llround(b.play.duration_s * 1000.0));
+    if (b.kind != "trials") continue;
+    const auto t = p.block_settings(b).timeline;
+    shortest(fixation, t.fixation_ms);
+    shortest(stimulus, t.stimulus_ms);
+    shortest(response, t.response_ms);
+    shortest(iti, t.iti_ms);
   }
-  if (first) {
+  if (p.blocks.empty()) {
     const auto t = p.session_settings().timeline;
-    l.fixation_ms = t.fixation_ms;
-    l.stimulus_ms = t.stimulus_ms;
-    l.response_ms = t.response_ms;
-    l.iti_ms = t.iti_ms;
+    fixation = t.fixation_ms;
+    stimulus = t.stimulus_ms;
+    response = t.response_ms;
+    iti = t.iti_ms;
   }
+  l.fixation_ms = fixation.value_or(0);
+  l.stimulus_ms = stimulus.value_or(0);
+  l.response_ms = response.value_or(0);
+  l.iti_ms = iti.value_or(0);
   return l;
 }
 
+// The samples per pixel: --msaa, else the protocol's [viewing] msaa. "auto"
+// (nullopt) lets the display's renderer pick for its device; a count is
+// clamped to the device, with a warning. The count drawn with is the
+// display's (DisplayInfo::msaa), stored with the session.
 Devices open_devices(const BackendArgs& a, const pr::Protocol& p, const geometry::PhysicalTableFit& table,
-                     std::int64_t start_ns) {
+                     std::int64_t start_ns, const SharedArgs& shared) {
   StationNeeds n;
+  n.stand_across = shared.role == "join";
   n.msaa = a.msaa ? parse_msaa(*a.msaa) : p.session_settings().viewing.msaa;
   n.refresh_hz = p.refresh_hz;
   n.width_px = static_cast<std::uint32_t>(p.resolution_width);
@@ -397,7 +406,7 @@ void run_command(const RunArgs& a) {
   check_answers_reachable(backend, p, o.observer.has_value());
   check_lsl_args(a.lsl, p, a.backend);
   check_shared_args(a.shared, p, a.backend);
-  auto devices = open_devices(backend, p, table, 0);
+  auto devices = open_devices(backend, p, table, 0, a.shared);
   auto streams = open_lsl(a.lsl, p, *devices.clock);
   o.streams = streams.get();
   watch_stop_signals(o);
@@ -478,7 +487,7 @@ void resume_command(ResumeArgs a) {
   check_answers_reachable(backend, *loaded, o.observer.has_value() || stored.observer.has_value());
   check_lsl_args(a.lsl, *loaded, a.backend);
   check_shared_args(a.shared, *loaded, a.backend);
-  auto devices = open_devices(backend, *loaded, table, stored.last_t_ns + 1'000'000'000);
+  auto devices = open_devices(backend, *loaded, table, stored.last_t_ns + 1'000'000'000, a.shared);
   auto streams = open_lsl(a.lsl, *loaded, *devices.clock);
   o.streams = streams.get();
   auto console = open_console(a.backend, std::move(script), *devices.station.display, a.db);

@@ -17,6 +17,7 @@ void add_shared_options(CLI::App* cmd, SharedArgs& a) {
   cmd->add_option("--bind", a.bind, "--shared host: the address to listen on (default 0.0.0.0, every interface)");
   cmd->add_option("--initials", a.initials, "shown on this station's avatar at the partner (default: the participant's first two characters)");
   cmd->add_option("--partner-wait-s", a.wait_s, "how long to wait for the partner station (default 60 s)");
+  cmd->add_option("--avatar", a.avatar, "a PNG photo of this player, drawn on its avatar's face at the partner (default: the initials)");
 }
 
 void check_shared_args(const SharedArgs& a, const harness::protocol::Protocol& p, const BackendArgs& backend) {
@@ -47,6 +48,11 @@ std::unique_ptr<rn::SharedPlay> open_shared(const SharedArgs& a, const std::stri
   o.bind_address = a.bind;
   o.initials = a.initials.empty() ? participant.substr(0, 2) : a.initials;
   o.wait_ns = static_cast<std::int64_t>(std::llround(a.wait_s * 1e9));
+  if (!a.avatar.empty()) {
+    auto photo = rn::avatar_from_png(a.avatar);
+    if (!photo) throw UsageError(photo.error().message);
+    o.avatar = std::move(photo).value();
+  }
   if (o.role == net::Role::host) {
     unsigned port = 0;
     const auto [end, ec] = std::from_chars(a.listen.data(), a.listen.data() + a.listen.size(), port);

@@ -25,6 +25,7 @@ struct SharedArgs {
   std::string bind = "0.0.0.0";
   std::string initials;  // --initials (default: the participant's first two characters)
   double wait_s = 60.0;  // --partner-wait-s
+  std::string avatar;    // --avatar FILE.png (default: the initials)
 };
 
 void add_shared_options(CLI::App* cmd, SharedArgs& a);

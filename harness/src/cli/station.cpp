@@ -115,6 +115,7 @@ Devices open_devices_of_kind(const BackendArgs& a, const StationNeeds& n) {
     o.key_script_limits = n.key_script_limits;
     o.software = a.software;
     o.msaa = n.msaa;
+    o.stand_across = n.stand_across;
     o.clock = out.clock;
     auto made = desktop::make_desktop_backend(o);
     if (!made) raise(made.error());

@@ -104,6 +104,7 @@ struct StationNeeds {
   // The protocol's timeline and answer keys a desktop key script is checked
   // against (nullopt: a calibration, which has no trials).
   std::optional<desktop::KeyScriptLimits> key_script_limits;
+  bool stand_across = false;  // the desktop body starts across the table (a shared game's joiner)
 };
 
 // Opens --backend's display (with --responses' HID devices). A bad option

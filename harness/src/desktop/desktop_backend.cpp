@@ -157,7 +157,17 @@ std::string key_name(int key) {
   }
 }
 
-DesktopBackend::DesktopBackend(const DesktopOptions& options) : options_(options) {}
+namespace {
+
+PilotBodyOptions body_options(const DesktopOptions& o) {
+  PilotBodyOptions b;
+  if (o.stand_across) b.start_head_m.z = -b.start_head_m.z;
+  return b;
+}
+
+}  // namespace
+
+DesktopBackend::DesktopBackend(const DesktopOptions& options) : options_(options), body_(body_options(options)) {}
 
 DesktopBackend::~DesktopBackend() {
   // Members go in reverse order: renderer (waits for its frames), target
@@ -355,9 +365,11 @@ Signal DesktopBackend::poll(std::vector<InputEvent>& out) {
   if (script_) {
     if (auto key = script_->due(options_.clock->now_ns())) {
       if (key->hand_m) body_.place_hand(key->left_hand ? Hand::left : Hand::right, *key->hand_m);
+      else if (key->look_deg) body_.turn(glm::radians(key->look_deg->x), glm::radians(key->look_deg->y));
       else out.push_back(key_input(options_.clock->now_ns(), key->name, true, harness::io::SourceKind::script));
-      // A scripted Escape ends the session as the key does.
+      // A scripted Escape ends the session as the key does; F12 saves a screenshot.
       if (key->name == "escape") glfwSetWindowShouldClose(window_.get(), GLFW_TRUE);
+      if (key->name == "f12") f12_ = true;
     }
     if (script_->ran_out(options_.clock->now_ns()) && !quit_delivered_) {
       std::cerr << "curvlab: " << script_->ran_out_message(options_.key_script, last_phase_) << '\n';

@@ -95,7 +95,9 @@ Result<std::vector<ScriptedKey>> parse_key_script(const std::string& text,
     std::transform(key.begin(), key.end(), key.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     k.name = key;
-    const std::string form = key == "hand" ? "`hand left|right X Y Z [PHASE+DELAY_MS | DELAY_MS]`" : "`KEY [PHASE+DELAY_MS | DELAY_MS]`";
+    const std::string form = key == "hand"   ? "`hand left|right X Y Z [PHASE+DELAY_MS | DELAY_MS]`"
+                             : key == "look" ? "`look LEFT_DEG UP_DEG [PHASE+DELAY_MS | DELAY_MS]`"
+                                             : "`KEY [PHASE+DELAY_MS | DELAY_MS]`";
     if (key == "hand") {
       std::string side;
       words >> side;
@@ -104,6 +106,13 @@ Result<std::vector<ScriptedKey>> parse_key_script(const std::string& text,
       if ((side != "left" && side != "right") || !k.hand_m)
         return Error{Error::Kind::bad_input, where + "expected " + form +
                                                  " with the hand's lab position X Y Z in metres (each within 10)"};
+    }
+    if (key == "look") {
+      glm::dvec2 turn{};
+      if (!(words >> turn.x >> turn.y) || !(std::abs(turn.x) <= 180.0) || !(std::abs(turn.y) <= 90.0))
+        return Error{Error::Kind::bad_input,
+                     where + "expected " + form + " with the turn left and up in degrees (within ±180 and ±90)"};
+      k.look_deg = turn;
     }
     if (words >> delay) {
       // `PHASE+DELAY_MS`, `PHASE` or a bare `DELAY_MS`.

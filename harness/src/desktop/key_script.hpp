@@ -37,6 +37,8 @@ struct ScriptedKey {
   // frame on which the runner waits for input.
   std::optional<harness::io::Phase> phase;
   bool repeat = false;  // a standing rule (needs a phase)
+  // A look line: the head turned by (left +, up +) degrees, as the mouse turns it.
+  std::optional<glm::dvec2> look_deg;
 };
 
 // Parses script text; `origin` names the file in messages. A bad line is a

@@ -38,9 +38,12 @@ void PilotBody::walk(double forward, double right, double up, double dt_s) {
 }
 
 void PilotBody::look(double dx_px, double dy_px) {
-  yaw_rad_ = std::remainder(yaw_rad_ - dx_px * options_.look_rad_per_px, 2.0 * std::numbers::pi);
-  pitch_rad_ = std::clamp(pitch_rad_ - dy_px * options_.look_rad_per_px, -kMaxPitchRad,
-                          kMaxPitchRad);
+  turn(-dx_px * options_.look_rad_per_px, -dy_px * options_.look_rad_per_px);
+}
+
+void PilotBody::turn(double left_rad, double up_rad) {
+  yaw_rad_ = std::remainder(yaw_rad_ + left_rad, 2.0 * std::numbers::pi);
+  pitch_rad_ = std::clamp(pitch_rad_ + up_rad, -kMaxPitchRad, kMaxPitchRad);
 }
 
 void PilotBody::move_hand(Hand hand, double dx_px, double dy_px, double scroll_steps) {

@@ -33,6 +33,8 @@ class PilotBody {
   // Turns the head by a mouse movement in pixels (right and down positive);
   // pitch stops short of straight up and down.
   void look(double dx_px, double dy_px);
+  // Turns the head left (+) and up (+) by angles (scripted pilots).
+  void turn(double left_rad, double up_rad);
   // Moves a hand in the head's heading frame: right, up (mouse, pixels) and
   // forward (scroll steps).
   void move_hand(Hand hand, double dx_px, double dy_px, double scroll_steps);

@@ -77,11 +77,11 @@ harness::Result<std::unique_ptr<ScriptedKeys>> make_scripted_keys(harness::io::D
   auto loaded = load_key_script(script);
   if (!loaded) return loaded.error();
   for (const auto& k : loaded.value())
-    if (k.hand_m)
+    if (k.hand_m || k.look_deg)
       return harness::Error{harness::Error::Kind::usage,
-                            script + ":" + std::to_string(k.line) +
-                                ": a hand line needs hands to move; expected --backend desktop (this run has "
-                                "no keyboard or mouse body, only its key script)"};
+                            script + ":" + std::to_string(k.line) + ": a " + k.name + " line needs a body to move; " +
+                                "expected --backend desktop (this run has no keyboard or mouse body, only its "
+                                "key script)"};
   if (limits)
     if (auto wrong = check_key_script(loaded.value(), script, *limits)) return *wrong;
   return std::unique_ptr<ScriptedKeys>(new ScriptedKeysImpl(inner, clock, std::move(loaded).value(), script));

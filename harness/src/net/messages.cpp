@@ -317,6 +317,28 @@ Bye get_bye(Reader& r) {
   return b;
 }
 
+// ---- Avatar
+void put_body(Writer& w, const Avatar& a) {
+  if (a.width == 0 || a.height == 0 || a.width > kMaxAvatarSide || a.height > kMaxAvatarSide ||
+      a.grey.size() != std::size_t{a.width} * a.height)
+    contract("Avatar: 1 to kMaxAvatarSide pixels a side, width × height grey levels");
+  w.put(a.width, a.height);
+  for (auto g : a.grey) w.put(g);
+}
+Avatar get_avatar(Reader& r) {
+  Avatar a;
+  r.read(a.width, a.height);
+  if (!r.ok()) return a;
+  if (a.width == 0 || a.height == 0 || a.width > kMaxAvatarSide || a.height > kMaxAvatarSide) {
+    r.fail(DecodeFailure::bad_value);
+    return a;
+  }
+  const std::size_t n = std::size_t{a.width} * a.height;
+  a.grey.resize(n);
+  for (std::size_t i = 0; i < n && r.ok(); ++i) a.grey[i] = r.get<std::uint8_t>();
+  return a;
+}
+
 }  // namespace
 
 bool PoseFrame::operator==(const PoseFrame& o) const {
@@ -337,6 +359,7 @@ std::string_view to_string(MessageType type) {
     case MessageType::ping: return "ping";
     case MessageType::pong: return "pong";
     case MessageType::bye: return "bye";
+    case MessageType::avatar: return "avatar";
   }
   return "unknown";
 }
@@ -389,7 +412,7 @@ Decoded decode(std::span<const std::uint8_t> bytes) {
   if (bytes[0] != kMagic0 || bytes[1] != kMagic1) return {std::nullopt, DecodeFailure::bad_magic};
   if (bytes[2] != kCodecVersion) return {std::nullopt, DecodeFailure::unsupported_version};
   const std::uint8_t type = bytes[3];
-  if (type < 1 || type > 7) return {std::nullopt, DecodeFailure::unknown_type};
+  if (type < 1 || type > static_cast<std::uint8_t>(MessageType::avatar)) return {std::nullopt, DecodeFailure::unknown_type};
   std::uint32_t n = 0;
   for (int i = 0; i < 4; ++i) n |= static_cast<std::uint32_t>(bytes[4 + i]) << (8 * i);
   if (n != bytes.size() - kHeaderBytes) return {std::nullopt, DecodeFailure::length_mismatch};
@@ -404,6 +427,7 @@ Decoded decode(std::span<const std::uint8_t> bytes) {
     case MessageType::ping: m = get_ping(r); break;
     case MessageType::pong: m = get_pong(r); break;
     case MessageType::bye: m = get_bye(r); break;
+    case MessageType::avatar: m = get_avatar(r); break;
   }
   if (!r.ok()) return {std::nullopt, r.failure()};
   if (!r.at_end()) return {std::nullopt, DecodeFailure::trailing_bytes};

@@ -154,6 +154,9 @@ class SessionFrames {
   } resumed_trial;
   std::vector<std::int64_t> cpu_ns;  // the runner's own time per frame
 
+  // The panels' font: --font, or the built-in DejaVu Sans.
+  std::string font() const;
+
  private:
   struct ProgressPoint progress_point() const;
   Signal poll_devices(std::vector<io::InputEvent>& inputs);
@@ -169,7 +172,6 @@ class SessionFrames {
   Outcome page(const std::string& text, std::size_t k, Phase phase, std::int64_t min_ns,
                std::optional<std::int64_t> trial_id);
   Error head_never_came(AbortReason reason) const;
-  std::string font() const;
 
   RunOptions options_;
   std::int64_t frame_index_;

@@ -2,9 +2,12 @@
 
 #include "curvlab/harness/data/sha256.hpp"
 #include "curvlab/harness/data/uuid.hpp"
+#include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/version.hpp"
+#include "curvlab/renderer/image_io.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -110,6 +113,63 @@ void SharedPlay::close(const net::Bye& bye, int timeout_ms) {
   if (link) link->close(bye, timeout_ms);
 }
 
+Result<net::Avatar> avatar_from_png(const std::string& path) {
+  auto read = from_renderer(renderer::read_png(path), "--avatar: ");
+  if (!read) return Error{Error::Kind::usage, read.error().message};
+  const renderer::Rgba8Image& image = read.value();
+  if (image.width < 1 || image.height < 1) return Error{Error::Kind::usage, "--avatar: " + path + " has no pixels"};
+  // Whole source pixels per avatar pixel: the smallest step that fits.
+  const int side = static_cast<int>(net::kMaxAvatarSide);
+  const int step = std::max((image.width + side - 1) / side, (image.height + side - 1) / side);
+  net::Avatar a;
+  a.width = static_cast<std::uint16_t>(image.width / step);
+  a.height = static_cast<std::uint16_t>(image.height / step);
+  if (a.width == 0 || a.height == 0)
+    return Error{Error::Kind::usage, "--avatar: " + path + " is too thin to draw (" + std::to_string(image.width) +
+                                         " × " + std::to_string(image.height) + " pixels)"};
+  a.grey.resize(std::size_t{a.width} * a.height);
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      double sum = 0.0;
+      for (int dy = 0; dy < step; ++dy)
+        for (int dx = 0; dx < step; ++dx) {
+          const std::uint8_t* p = &image.pixels[4 * (static_cast<std::size_t>(y * step + dy) * image.width + x * step + dx)];
+          // Rec. 709 luma of the encoded values, over white by its alpha.
+          const double luma = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+          const double alpha = p[3] / 255.0;
+          sum += alpha * luma + (1.0 - alpha) * 255.0;
+        }
+      a.grey[static_cast<std::size_t>(y) * a.width + x] =
+          static_cast<std::uint8_t>(std::lround(sum / static_cast<double>(step * step)));
+    }
+  return a;
+}
+
+Result<renderer::CoverageBitmap> avatar_face(const std::optional<net::Avatar>& photo, const std::string& initials,
+                                             const std::string& font) {
+  // A card 4 wide by 5 high; a photo is centred on it at its own aspect.
+  // Panels draw light ink on dark paper: the coverage is the brightness.
+  constexpr int kWidth = 128, kHeight = 160;
+  if (!photo) {
+    auto text = from_renderer(renderer::render_text(initials.empty() ? "?" : initials, kWidth, kHeight, 64.0, font));
+    if (!text) return Error{Error::Kind::device, "the partner's avatar: " + text.error().message};
+    return std::move(text).value();
+  }
+  renderer::CoverageBitmap card{kWidth, kHeight, std::vector<std::uint8_t>(std::size_t{kWidth} * kHeight, 0)};
+  const double scale = std::min(double(kWidth) / photo->width, double(kHeight) / photo->height);
+  const int w = std::max(1, static_cast<int>(photo->width * scale));
+  const int h = std::max(1, static_cast<int>(photo->height * scale));
+  const int x0 = (kWidth - w) / 2, y0 = (kHeight - h) / 2;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int sx = std::min<int>(photo->width - 1, static_cast<int>(x / scale));
+      const int sy = std::min<int>(photo->height - 1, static_cast<int>(y / scale));
+      card.pixels[static_cast<std::size_t>(y0 + y) * kWidth + x0 + x] =
+          photo->grey[static_cast<std::size_t>(sy) * photo->width + sx];
+    }
+  return card;
+}
+
 std::string uuid_text(const net::Uuid& u) {
   static constexpr char hex[] = "0123456789abcdef";
   std::string s;
@@ -170,10 +230,14 @@ Result<std::unique_ptr<SharedPlay>> connect_partner(const SharedOptions& options
       sent = false;
       l.reconnect();
     }
-    if (l.connected() && !sent) sent = l.send(shared->mine);
+    if (l.connected() && !sent) {
+      sent = l.send(shared->mine);
+      if (sent && options.avatar) l.send(*options.avatar);
+    }
     for (const auto& r : poll.messages) {
       if (const auto* h = std::get_if<net::Hello>(&r.message)) partner = *h;
       if (const auto* g = std::get_if<net::GameState>(&r.message)) game = *g;
+      if (const auto* a = std::get_if<net::Avatar>(&r.message)) shared->partner_avatar = *a;
       if (const auto* bye = std::get_if<net::Bye>(&r.message))
         return Error{Error::Kind::usage, "the partner station refused this one: " + bye->text};
     }

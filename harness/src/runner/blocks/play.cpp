@@ -280,14 +280,18 @@ class TrackedCue {
 };
 
 // The partner in a shared game (docs/shared_play.md, "The partner seen"):
-// a head, two hands and a cue placed each frame from the partner's stream at
-// this frame's display time (PartnerPoseBuffer), hidden where the partner's
+// a head with a face card (the partner's photo or initials) in front of it,
+// two hands and a cue placed each frame from the partner's stream at this
+// frame's display time (PartnerPoseBuffer), hidden where the partner's
 // tracking or the stream is lost. The objects are ordinary scene objects, so
 // every view mode draws them, and in S3 their antipodal images too.
 class PartnerAvatar {
  public:
-  PartnerAvatar(renderer::Scene& scene, const geometry::Space& space) : space_(space) {
+  PartnerAvatar(renderer::Scene& scene, const geometry::Space& space, renderer::CoverageBitmap face)
+      : space_(space) {
     head_ = scene.add(renderer::ball_object(space, 0.11, renderer::display(0.25f, 0.45f, 0.85f), {}));
+    face_ = scene.add(renderer::image_panel_object(space, "partner_face", std::move(face), kFaceWidth_m,
+                                                   kFaceHeight_m, {}));
     for (auto& h : hands_) h = scene.add(renderer::ball_object(space, 0.04, renderer::display(0.35f, 0.55f, 0.9f), {}));
     geometry::BentStick stick;
     stick.length_m = TrackedCue::kLength_m;
@@ -306,6 +310,11 @@ class PartnerAvatar {
       if (visible) e.pose = pose;
     };
     set(head_, net::PoseFrame::head, p.pose[net::PoseFrame::head]);
+    // The card just in front of the head, turned to face where it looks
+    // (the panel's front is its +z; the head looks along −z).
+    set(face_, net::PoseFrame::head,
+        p.pose[net::PoseFrame::head] * geometry::translation_m(space_, {0.0, 0.0, -0.115}) *
+            geometry::rotation(glm::dvec3(0.0, 1.0, 0.0), kPi));
     set(hands_[0], net::PoseFrame::left_hand, p.pose[net::PoseFrame::left_hand]);
     set(hands_[1], net::PoseFrame::right_hand, p.pose[net::PoseFrame::right_hand]);
     // The stick's model chord along x, centred: turned along the tip's −z,
@@ -316,13 +325,20 @@ class PartnerAvatar {
   }
 
   void hide(renderer::Scene& scene) const {
-    for (std::size_t i : {head_, hands_[0], hands_[1], cue_})
+    for (std::size_t i : {head_, face_, hands_[0], hands_[1], cue_})
       if (scene.objects()[i].visible) scene.edit(i).visible = false;
   }
 
+  // A new face (the partner's photo arrived, or it came back with another).
+  void set_face(renderer::Scene& scene, renderer::CoverageBitmap face) {
+    const auto& o = scene.objects()[face_];
+    scene.replace_mesh(face_, o.build, o.info, std::move(face));
+  }
+
  private:
+  static constexpr double kFaceWidth_m = 0.16, kFaceHeight_m = 0.2;
   geometry::Space space_;
-  std::size_t head_ = 0, cue_ = 0;
+  std::size_t head_ = 0, face_ = 0, cue_ = 0;
   std::array<std::size_t, 2> hands_{};
 };
 
@@ -395,6 +411,7 @@ class PlayBlock {
     std::optional<std::string> cue_pose;
     phys::Strike strike;
     std::optional<net::Shot> from_partner;  // shared: the partner's shot as it sent it
+    std::size_t events_shown = 0;           // of outcome.events, replayed by `system`
   };
 
   // The block's one trial begun: its world, the balls where the last stored
@@ -415,7 +432,7 @@ class PlayBlock {
     shared_ = f_.options().shared;
     if (shared_) {
       partner_completed_ = shared_->partner_completed_shots;
-      avatar_.emplace(f_.scene().scene(), f_.world().space);
+      avatar_.emplace(f_.scene().scene(), f_.world().space, face());
       start_shared();
     }
     const auto& tip = f_.protocol.calibration.tip_offset_m;
@@ -480,10 +497,12 @@ class PlayBlock {
   // (or the shot's time is up).
   bool roll(Rolling& r, std::int64_t t_ns) {
     const double t_s = static_cast<double>(t_ns - r.strike_ns) * 1e-9;
-    while (r.system.next_event(t_s)) {
-    }
+    // The same events as the outcome's, and no more (one stopped at its
+    // event limit ends there).
+    while (r.events_shown < r.outcome.events.size() && r.system.next_event(t_s)) ++r.events_shown;
     show(r.system, t_s);
-    return r.system.all_still() || t_s > r.outcome.end_s;
+    return r.system.all_still() || t_s > r.outcome.end_s ||
+           (r.outcome.event_limit && r.events_shown == r.outcome.events.size());
   }
 
   // ---- Shared play (docs/shared_play.md)
@@ -536,7 +555,13 @@ class PlayBlock {
     shared_->mine.game_uuid = shared_->game_uuid;
     shared_->mine.completed_shots = static_cast<std::uint32_t>(shots_);
     shared_->send(shared_->mine);
+    if (shared_->options.avatar) shared_->send(*shared_->options.avatar);
     send_game_state(net::GameState::Phase::playing);
+  }
+
+  // The partner's face: its photo, or its initials.
+  renderer::CoverageBitmap face() {
+    return f_.check(avatar_face(shared_->partner_avatar, shared_->partner.initials, f_.font()));
   }
 
   void partner_hello(const net::Hello& h, std::int64_t t_ns) {
@@ -579,6 +604,9 @@ class PlayBlock {
         // The game over; a partner that quit (interrupted) is a pause.
         if (bye->reason == net::Bye::Reason::done) partner_over_ = true;
         if (bye->reason == net::Bye::Reason::quitting) partner_left(t_ns);
+      } else if (const auto* photo = std::get_if<net::Avatar>(&r.message)) {
+        shared_->partner_avatar = *photo;
+        avatar_->set_face(f_.scene().scene(), face());
       } else if (const auto* pose = std::get_if<net::PoseFrame>(&r.message)) {
         partner_poses_.push(*pose, link.to_local_ns(pose->display_ns));
       }

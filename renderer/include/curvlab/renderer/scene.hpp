@@ -72,6 +72,11 @@ std::variant<SceneObject, RenderError> text_panel_object(const Space& space, std
                                                          const std::string& font, double width_m,
                                                          double height_m, const Isometry& pose);
 
+// A panel of width × height metres showing `image` (ink coverage over
+// paper, stretched to the panel): a picture in the world, e.g. a face.
+SceneObject image_panel_object(const Space& space, std::string name, CoverageBitmap image, double width_m,
+                               double height_m, const Isometry& pose);
+
 // Where a head-locked text panel sits and how large its text is, in visual
 // angle: a participant reads it at the same size in S3, E3 and H3.
 struct HeadPanelLayout {

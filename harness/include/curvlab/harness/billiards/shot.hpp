@@ -70,8 +70,14 @@ struct EventRecord {
   std::vector<BallState> after;  // the balls involved, just after
 };
 
+// A shot stops after this many events wherever its balls are (a cluster of
+// touching balls trading ever smaller bounces never comes to rest in a
+// finite number of events); ShotOutcome::event_limit says so.
+inline constexpr std::size_t kMaxShotEvents = 20000;
+
 struct ShotOutcome {
   bool miscue = false;
+  bool event_limit = false;  // stopped at kMaxShotEvents events
   std::vector<EventRecord> events;
   std::vector<BallState> final;
   phys::Invariants invariants;

@@ -47,6 +47,9 @@ struct DesktopOptions {
   bool vsync = true;
   std::optional<std::uint32_t> msaa;  // samples per pixel requested (clamped); nullopt: the device's automatic count
   bool validation = false;  // Khronos validation layer on (tests); messages go to stderr
+  // The body starts across the table, outside its −z edge (a shared game's
+  // joiner, so that the two players face each other from the first frame).
+  bool stand_across = false;
   const harness::io::Clock* clock = nullptr;  // the session's; required
 };
 

@@ -40,6 +40,7 @@ inline constexpr std::size_t kMaxLongText = 512;    // a refusal or farewell
 inline constexpr std::size_t kMaxParameters = 128;  // Hello::parameters
 inline constexpr std::size_t kMaxEvents = 2048;     // Shot::events
 inline constexpr std::size_t kMaxBalls = 32;        // Shot::rest, GameState
+inline constexpr std::size_t kMaxAvatarSide = 128;  // Avatar: at most 128 × 128 grey levels
 // A pose's isometry entries and a strike's numbers beyond this are refused:
 // H3 isometries 40 radians from the origin have entries near 1e17 and the
 // table is a few radians across.
@@ -53,6 +54,7 @@ enum class MessageType : std::uint8_t {
   ping = 5,
   pong = 6,
   bye = 7,
+  avatar = 8,
 };
 std::string_view to_string(MessageType type);
 
@@ -157,7 +159,15 @@ struct Bye {
   bool operator==(const Bye&) const = default;
 };
 
-using Message = std::variant<Hello, PoseFrame, Shot, GameState, Ping, Pong, Bye>;
+// The player's photo, sent once after each hello, drawn on the face of the
+// partner's avatar: grey levels (0 black, 255 white), row major from the top.
+struct Avatar {
+  std::uint16_t width = 0, height = 0;  // 1 … kMaxAvatarSide each
+  std::vector<std::uint8_t> grey;       // width × height
+  bool operator==(const Avatar&) const = default;
+};
+
+using Message = std::variant<Hello, PoseFrame, Shot, GameState, Ping, Pong, Bye, Avatar>;
 MessageType type_of(const Message& m);
 
 // Why a message was dropped.

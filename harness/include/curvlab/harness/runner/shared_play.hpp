@@ -16,6 +16,7 @@
 #include "curvlab/harness/net/link.hpp"
 #include "curvlab/harness/protocol/protocol.hpp"
 #include "curvlab/harness/result.hpp"
+#include "curvlab/renderer/text.hpp"
 
 #include <atomic>
 #include <mutex>
@@ -33,6 +34,7 @@ struct SharedOptions {
   std::uint16_t port = 0;          // host: the port it listens on; join: the host's
   std::string bind_address = "0.0.0.0";
   std::string initials;            // drawn on this station's avatar at the partner's
+  std::optional<net::Avatar> avatar;  // this player's photo, drawn there instead (avatar_from_png)
   std::int64_t wait_ns = 60'000'000'000;  // for the partner to appear
 };
 
@@ -49,6 +51,7 @@ class SharedPlay {
   net::Hello mine, partner;
   net::Uuid game_uuid{};
   std::uint32_t partner_completed_shots = 0;  // as the partner's game state said at connection
+  std::optional<net::Avatar> partner_avatar;  // the partner's photo, when it sent one
   std::string software_version;
 
   SharedPlay() = default;
@@ -92,5 +95,17 @@ Result<std::unique_ptr<SharedPlay>> connect_partner(const SharedOptions& options
                                                     const std::atomic<int>* stop_signal);
 
 std::string uuid_text(const net::Uuid& u);
+
+// A player's photo for the partner's avatar: a PNG in grey levels, scaled
+// down by whole-pixel averages to fit kMaxAvatarSide (aspect kept), any
+// transparency on white. An Error (usage) names the file and what is wrong.
+Result<net::Avatar> avatar_from_png(const std::string& path);
+
+// The face the partner's avatar shows: its photo, or else its initials
+// ("?" when it has none), as ink coverage for a panel (0 paper, 255 ink;
+// panels draw light ink on dark paper, so a photo's coverage is its grey).
+// An Error (device) when the font cannot be read.
+Result<renderer::CoverageBitmap> avatar_face(const std::optional<net::Avatar>& photo, const std::string& initials,
+                                             const std::string& font);
 
 }  // namespace curvlab::harness::runner
