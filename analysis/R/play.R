@@ -72,13 +72,38 @@ play_change <- function(trials, play, positive) {
   list(shares = wide, coefficients = coefs, formula = formula_text, notes = unique(notes), trials = nrow(d))
 }
 
+# Shared games (docs/shared_play.md), one row per station: each station
+# stores its own copy of the game, so a merged study has both sides; the
+# shots each player struck and the balls pocketed on them must agree.
+shared_games_table <- function(play) {
+  if (is.null(play) || !nrow(play) || !"game_uuid" %in% names(play)) return(data.frame())
+  g <- play[!is.na(play$game_uuid), , drop = FALSE]
+  if (!nrow(g)) return(data.frame())
+  out <- data.frame(game = substr(g$game_uuid, 1, 8), participant = g$participant, role = g$role, space = g$space,
+                    ended = g$ended, host_shots = as.integer(g$host_shots), join_shots = as.integer(g$join_shots),
+                    host_pocketed = as.integer(g$host_pocketed), join_pocketed = as.integer(g$join_pocketed),
+                    walked_m = round(as.numeric(g$walked_m), 1),
+                    laps_physical = round(abs(as.numeric(g$laps_physical)), 2),
+                    laps_virtual = round(abs(as.numeric(g$laps_virtual)), 2), stringsAsFactors = FALSE)
+  key <- paste(out$host_shots, out$join_shots, out$host_pocketed, out$join_pocketed)
+  sides <- tapply(key, out$game, function(k) if (length(k) < 2) NA else length(unique(k)) == 1)
+  out$both_sides_agree <- ifelse(is.na(sides[out$game]), "(one side)", ifelse(sides[out$game], "yes", "NO"))
+  out[order(out$game, out$role), , drop = FALSE]
+}
+
 play_section_html <- function(play, trials, positive) {
   summary <- play_summary_table(play)
   if (!nrow(summary)) return("")
   change <- play_change(trials, play, positive)
+  shared <- shared_games_table(play)
   c("<h2>Play</h2>",
     "<p class=\"method\">Each play block's figures: laps are the head's unwrapped azimuth about the physical table's centre and about the virtual table's, so their ratio is the number of physical laps per virtual lap (the paper's 0.75 for the S3 triangle, 1.25 for the H3 pentagon); the hand error is the mean seen-versus-felt distance of the hands.</p>",
     html_table(summary, "Play blocks per participant (laps as absolute values)"),
+    if (nrow(shared)) c(
+      "<h3>Shared games</h3>",
+      "<p class=\"method\">Two stations, one game (docs/shared_play.md): each row is one station's copy, with the shots the host and the joiner struck and the balls pocketed on them, and that station's player's walk round its own physical table. Where both stations' files are in the study, their copies must agree.</p>",
+      html_table(shared, "Shared games, from each station"))
+    else "",
     if (!is.null(change)) c(
       sprintf("<p>Judgements before and after the first play block of each session (%d answered trials): the share of <em>%s</em> answers per space &times; view, and a logistic model <code>%s</code> whose phase terms are the change across play.</p>",
               change$trials, html_escape(positive), html_escape(change$formula)),

@@ -125,6 +125,32 @@ void expect_merged_game(const std::filesystem::path& dir) {
   EXPECT_EQ(query(study, "SELECT 1 FROM shots").size(), 8u);
 }
 
+// The report on the merged study shows the game from both stations, each
+// copy with the same shots struck and balls pocketed by host and joiner.
+void expect_report_shows_both_sides(const std::filesystem::path& dir) {
+  if (::access("/usr/bin/Rscript", X_OK) != 0) {
+    std::printf("Rscript not found: the report's part of this test did not run\n");
+    return;
+  }
+  const auto out = dir / "report";
+  const auto r = curvlab::testing::run_shell("/usr/bin/Rscript " + std::string(CURVLAB_SOURCE_DIR) +
+                                             "/analysis/report.R --db " + (dir / "study.sqlite").string() +
+                                             " --out " + out.string() + " --quiet 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::ifstream in(out / "report.html");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string html = ss.str();
+  const auto at = html.find("<h3>Shared games</h3>");
+  ASSERT_NE(at, std::string::npos);
+  const std::string section = html.substr(at, html.find("</table>", at) - at);
+  EXPECT_NE(section.find("<td>host</td>"), std::string::npos) << section;
+  EXPECT_NE(section.find("<td>join</td>"), std::string::npos) << section;
+  std::size_t agree = 0;
+  for (auto p = section.find("<td>yes</td>"); p != std::string::npos; p = section.find("<td>yes</td>", p + 1)) ++agree;
+  EXPECT_EQ(agree, 2u) << section;
+}
+
 }  // namespace
 
 TEST(SharedPlay, TwoStationsPlayTheSameGameInEverySpace) {
@@ -139,6 +165,7 @@ TEST(SharedPlay, TwoStationsPlayTheSameGameInEverySpace) {
     ASSERT_EQ(r.join.exit_code, 0) << r.join.out;
     expect_same_game(dir);
     expect_merged_game(dir);
+    if (space == "H3") expect_report_shows_both_sides(dir);
   }
 }
 
