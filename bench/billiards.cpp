@@ -9,7 +9,11 @@
 //      time during a break, against the headset's 11.1 ms frame;
 //  (d) with --stress [EVENTS] (default 10⁶): a conservative table (no
 //      friction, restitution 1, no pockets) run for EVENTS events per space,
-//      with the worst invariants and events per second.
+//      with the worst invariants and events per second;
+//  (e) random breaks with the real parameters (aim, cue speed and tip drawn
+//      at random, seeded): events per break, the breaks that reach the event
+//      limit a shot stops at (20 000, harness billiards/shot.hpp), the worst
+//      overlap and energy rise, and time per break.
 // Usage: bench_billiards [--quick] [--stress [EVENTS]]
 //   --quick runs tiny versions of every table (a smoke run).
 #include "curvlab/geometry/billiards.hpp"
@@ -23,6 +27,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <random>
 #include <string>
 #include <tuple>
 #include <variant>
@@ -519,6 +524,49 @@ void stress(long events) {
   std::printf("\n");
 }
 
+// ---- (e) ----------------------------------------------------------------
+
+void random_breaks(int per_space) {
+  constexpr long kLimit = 20000;
+  std::printf("(e) random breaks: %d per space, real parameters, aim within 0.08 m of the rack's axis, cue\n", per_space);
+  std::printf("    0.3-9 m/s, tip within 0.6 R (seeded); a break stops at %ld events\n\n", kLimit);
+  std::printf("%-5s %7s %12s %11s %12s %14s %16s %12s\n", "space", "breaks", "mean events", "max events",
+              "at limit", "max_overlap_m", "max_energy_rise", "ms/break");
+  std::mt19937_64 rng(20261128);
+  std::uniform_real_distribution<double> aim(-0.08, 0.08), speed(0.3, 9.0), tip(-0.6, 0.6);
+  for (SpaceKind kind : kKinds) {
+    const Cloth c = table_cloth(kind);
+    const Parameters p;
+    const auto rb = std::get<std::vector<RackBall>>(rack(c, p, 15));
+    long total = 0, most = 0;
+    int at_limit = 0;
+    double overlap = 0.0, rise = 0.0;
+    const auto t0 = Clock::now();
+    for (int k = 0; k < per_space; ++k) {
+      std::vector<Ball> balls;
+      for (const auto& b : rb) balls.push_back(ball_at_native(c, b.native_m));
+      System s(c, p, balls);
+      const Vec2 toward = direction_toward(c, s.ball(0).frame, from_native(c, Vec2{aim(rng), -0.3}));
+      const double v = speed(rng), side = tip(rng), height = tip(rng);
+      const Strike st = cue_strike(p, toward, v, {side, height});
+      if (!st.miscue) s.set_motion(0, st.v, st.w);
+      long n = 0;
+      while (n < kLimit && s.next_event(kUntil_s)) ++n;
+      total += n;
+      most = std::max(most, n);
+      at_limit += n == kLimit ? 1 : 0;
+      overlap = std::max(overlap, s.invariants().max_overlap_m);
+      rise = std::max(rise, s.invariants().max_energy_rise_rel);
+    }
+    const double wall = seconds_since(t0);
+    std::printf("%-5s %7d %12.1f %11ld %12d %14.3e %16.3e %12.2f\n", std::string(to_string(kind)).c_str(), per_space,
+                static_cast<double>(total) / per_space, most, at_limit, std::max(0.0, overlap), rise,
+                wall / per_space * 1e3);
+    std::fflush(stdout);
+  }
+  std::printf("\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -550,6 +598,7 @@ int main(int argc, char** argv) {
   time_against_error(quick);
   break_cost(quick);
   frame_cost(quick);
+  random_breaks(quick ? 4 : 200);
   if (quick) stress(stress_events > 0 ? std::min(stress_events, 20000L) : 20000L);
   return 0;
 }

@@ -25,6 +25,9 @@ constexpr double kOverlap_m = 1e-10;
 // finds not closing would be found again at the same instant for ever. A
 // pair closing that slowly overlaps by at most 1e-12 m per metre travelled.
 constexpr double kClosingRel = 1e-12;
+// How long two billiard balls stay in contact in a collision (about 200 µs;
+// a ball struck again sooner is in a cluster, see resolve).
+constexpr double kContactTime_s = 2e-4;
 // The shortest step of the root search away from a touching contact.
 constexpr double kMinStep_s = 1e-9;
 // How far ahead one pass of the search looks before it stops to check.
@@ -102,6 +105,7 @@ System::System(Cloth cloth, Parameters params, std::vector<Ball> balls)
   version_.assign(n, 0u);
   pairs_.resize(n * n);
   walls_.resize(n);
+  last_hit_s_.assign(n, -kInf);
   for (std::size_t i = 0; i < n; ++i) begin_segment(i, 0.0, balls[i]);
   energy_ref_j_ = energy_last_j_ = kinetic_energy_j();
 }
@@ -544,7 +548,14 @@ void System::resolve(const Event& e) {
     case EventKind::ball: {
       const auto j = static_cast<std::size_t>(e.b);
       Ball b = evaluate(segments_[j], e.t_s);
-      if (collide_balls(cloth_, params_, a, b)) a.motion = b.motion = Motion::sliding;
+      // A ball struck again within the contact time of its last collision
+      // is in a cluster: that collision is elastic, so the cluster does not
+      // collapse into ever smaller bounces (the TC model of event-driven
+      // granular simulation: Luding & McNamara 1998, Granular Matter 1, 113).
+      Parameters p = params_;
+      if (e.t_s - last_hit_s_[i] < kContactTime_s || e.t_s - last_hit_s_[j] < kContactTime_s) p.restitution_ball = 1.0;
+      last_hit_s_[i] = last_hit_s_[j] = e.t_s;
+      if (collide_balls(cloth_, p, a, b)) a.motion = b.motion = Motion::sliding;
       begin_segment(i, e.t_s, a);
       begin_segment(j, e.t_s, b);
       break;

@@ -182,3 +182,21 @@ TEST(PlayBlock, ReplayDrawsAFrameOfPlayFromTheStoredShots) {
 }
 
 }  // namespace
+
+// `predict` forecasts the judgements before and after play, not the play
+// block's one trial: the trials it counts are the design's outside that block.
+TEST(PlayBlock, PredictCountsOnlyTheJudgementTrials) {
+  const std::string file = std::string(CURVLAB_SOURCE_DIR) + "/protocols/adaptation_play.toml";
+  const auto design = run_cli("design " + file + " --participant 1 --json");
+  ASSERT_EQ(design.exit_code, 0) << design.out;
+  const Json trials = Json::parse(design.out)["trials"];
+  int judged = 0;
+  for (const auto& t : trials) judged += t["block"] != "play" ? 1 : 0;
+  const auto predicted = run_cli("predict " + file + " --participants 4 --simulations 20 --json");
+  ASSERT_EQ(predicted.exit_code, 0) << predicted.out;
+  const Json j = Json::parse(predicted.out.substr(predicted.out.find('{')));
+  int counted = 0;
+  for (const auto& c : j["conditions"]) counted += c["trials_per_participant"].get<int>();
+  EXPECT_EQ(counted, judged);
+  EXPECT_NE(j["notes"].dump().find("play and questionnaire blocks are not predicted"), std::string::npos) << j["notes"];
+}

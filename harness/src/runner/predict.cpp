@@ -295,8 +295,14 @@ Result<Conditions> collect_conditions(const protocol::Protocol& p, Prediction& o
   const protocol::Design design = protocol::expand_design(p, 1);
   std::map<std::vector<std::size_t>, Condition> choice, adaptive;
   bool skipped_other = false;
+  bool skipped_kind = false;
   for (const auto& t : design.trials) {
     if (t.practice) continue;
+    // A play or questionnaire block's one trial is not a judgement.
+    if (p.blocks.at(t.protocol_block).kind != "trials") {
+      skipped_kind = true;
+      continue;
+    }
     const protocol::Forecast forecast = t.judgement->forecast();
     if (forecast == protocol::Forecast::none) {
       skipped_other = true;
@@ -320,6 +326,7 @@ Result<Conditions> collect_conditions(const protocol::Protocol& p, Prediction& o
     it->second.trials.push_back(t);
   }
   if (skipped_other) out.notes.push_back(not_predicted_note());
+  if (skipped_kind) out.notes.push_back("play and questionnaire blocks are not predicted (they ask no judgement)");
   Conditions all;
   for (auto& [key, c] : choice) all.choice.push_back(std::move(c));
   for (auto& [key, c] : adaptive) all.adaptive.push_back(std::move(c));

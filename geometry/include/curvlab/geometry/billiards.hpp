@@ -229,6 +229,7 @@ class System {
   std::vector<unsigned> version_;
   std::vector<Search> pairs_;  // i·n + j, i < j
   std::vector<Search> walls_;
+  std::vector<double> last_hit_s_;  // each ball's last collision with a ball
   double t_s_ = 0.0;
   double energy_ref_j_ = 0.0;
   double energy_last_j_ = 0.0;
