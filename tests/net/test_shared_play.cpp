@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "../desktop/xvfb.hpp"
+#include "../support/edited_file.hpp"
 #include "../support/png_files.hpp"
 #include "run_and_kill.hpp"
 #include "run_cli.hpp"
@@ -137,10 +138,7 @@ void expect_report_shows_both_sides(const std::filesystem::path& dir) {
                                              "/analysis/report.R --db " + (dir / "study.sqlite").string() +
                                              " --out " + out.string() + " --quiet 2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  std::ifstream in(out / "report.html");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string html = ss.str();
+  const std::string html = curvlab::test::read_text((out / "report.html").string());
   const auto at = html.find("<h3>Shared games</h3>");
   ASSERT_NE(at, std::string::npos);
   const std::string section = html.substr(at, html.find("</table>", at) - at);

@@ -4,6 +4,7 @@
 #include "curvlab/harness/data/uuid.hpp"
 #include "curvlab/harness/render_result.hpp"
 #include "curvlab/harness/version.hpp"
+#include "curvlab/renderer/colour.hpp"
 #include "curvlab/renderer/image_io.hpp"
 
 #include <algorithm>
@@ -135,7 +136,7 @@ Result<net::Avatar> avatar_from_png(const std::string& path) {
         for (int dx = 0; dx < step; ++dx) {
           const std::uint8_t* p = &image.pixels[4 * (static_cast<std::size_t>(y * step + dy) * image.width + x * step + dx)];
           // Rec. 709 luma of the encoded values, over white by its alpha.
-          const double luma = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+          const double luma = renderer::relative_luminance(glm::vec3(p[0], p[1], p[2]));
           const double alpha = p[3] / 255.0;
           sum += alpha * luma + (1.0 - alpha) * 255.0;
         }

@@ -288,7 +288,11 @@ class TrackedCue {
 class PartnerAvatar {
  public:
   PartnerAvatar(renderer::Scene& scene, const geometry::Space& space, renderer::CoverageBitmap face)
-      : space_(space) {
+      : space_(space),
+        // The card just in front of the head, turned to face where it looks
+        // (the panel's front is its +z; the head looks along −z).
+        face_offset_(geometry::translation_m(space, {0.0, 0.0, -0.115}) *
+                     geometry::rotation(glm::dvec3(0.0, 1.0, 0.0), kPi)) {
     head_ = scene.add(renderer::ball_object(space, 0.11, renderer::display(0.25f, 0.45f, 0.85f), {}));
     face_ = scene.add(renderer::image_panel_object(space, "partner_face", std::move(face), kFaceWidth_m,
                                                    kFaceHeight_m, {}));
@@ -310,11 +314,7 @@ class PartnerAvatar {
       if (visible) e.pose = pose;
     };
     set(head_, net::PoseFrame::head, p.pose[net::PoseFrame::head]);
-    // The card just in front of the head, turned to face where it looks
-    // (the panel's front is its +z; the head looks along −z).
-    set(face_, net::PoseFrame::head,
-        p.pose[net::PoseFrame::head] * geometry::translation_m(space_, {0.0, 0.0, -0.115}) *
-            geometry::rotation(glm::dvec3(0.0, 1.0, 0.0), kPi));
+    set(face_, net::PoseFrame::head, p.pose[net::PoseFrame::head] * face_offset_);
     set(hands_[0], net::PoseFrame::left_hand, p.pose[net::PoseFrame::left_hand]);
     set(hands_[1], net::PoseFrame::right_hand, p.pose[net::PoseFrame::right_hand]);
     // The stick's model chord along x, centred: turned along the tip's −z,
@@ -338,6 +338,7 @@ class PartnerAvatar {
  private:
   static constexpr double kFaceWidth_m = 0.16, kFaceHeight_m = 0.2;
   geometry::Space space_;
+  geometry::Isometry face_offset_;  // head → face card
   std::size_t head_ = 0, face_ = 0, cue_ = 0;
   std::array<std::size_t, 2> hands_{};
 };
@@ -362,6 +363,8 @@ class PlayBlock {
     const geometry::PhysicalTable physical = f_.physical_table();
     if (simulated_) walk_around(physical, start_ns);
     const std::string line = run_.block.name + "  play: strike the white ball with the cue";
+    const std::string paused =
+        run_.block.name + "  paused: the partner station is disconnected; the game goes on when it is back";
     io::Overlay overlay{Phase::stimulus, line, !simulated_};
     std::optional<Rolling> rolling;
     for (;;) {
@@ -376,9 +379,8 @@ class PlayBlock {
       if (shared_) {
         exchange(t_ns);
         avatar_->update(f_.scene().scene(), partner_poses_.at(t_ns));
-        overlay.text = partner_away_ ? run_.block.name + "  paused: the partner station is disconnected; the game "
-                                                         "goes on when it is back"
-                                     : line;
+        const std::string& now = partner_away_ ? paused : line;
+        if (overlay.text != now) overlay.text = now;  // no copy on an unchanged frame
       }
       if (!rolling) {
         if (const auto why = between_shots(g, t_ns, start_ns, rolling)) {
