@@ -162,7 +162,7 @@ RenderPlan plan_frame(const Scene& scene, const FrameDescription& frame) {
         const SceneObject& o = objects[i];
         if (!o.visible) continue;
         if (o.head_locked) {
-          if (hemi == Hemisphere::front)
+          if (hemi == Hemisphere::front && frame.draw_head_locked)
             vp.draws.push_back({i, 0, hemi, head_locked_clip(frame.rig.eyes[e], o.pose.m), true});
           continue;
         }

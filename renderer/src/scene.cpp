@@ -114,6 +114,7 @@ std::variant<SceneObject, RenderError> head_panel_object(std::string name, const
   o.pose.m[3] = glm::dvec4(0.0, d * std::tan(layout.elevation_deg * deg), -d, 1.0);
   o.text = std::move(block.bitmap);
   o.head_locked = true;
+  o.panel_size_m = {2.0 * half_w, 2.0 * half_h};
   return o;
 }
 

@@ -1,6 +1,7 @@
 // Device tests on lavapipe (label "vulkan"), validation layer on: any
 // validation message fails the test.
 #include "stimulus_fixtures.hpp"
+#include "../support/panel_ink.hpp"
 #include "../support/png_files.hpp"
 
 #include "curvlab/renderer/colour.hpp"
@@ -668,56 +669,9 @@ TEST_F(VulkanTest, SrgbTargetsShowTheAuthoredDisplayValues) {
 
 // ---- head-locked panels: what the participant reads ----------------------
 
-namespace {
-
-// The ink of the response panel in a rendered eye: the panel is the box of
-// pixels in the panel's paper colour, its ink the pixels inside that are
-// nearer the ink's colour than the paper's.
-struct PanelInk {
-  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // the panel's box, inclusive
-  std::vector<std::uint8_t> ink;          // row major over the box
-  [[nodiscard]] int width() const { return x1 - x0 + 1; }
-  [[nodiscard]] int height() const { return y1 - y0 + 1; }
-  [[nodiscard]] bool at(int x, int y) const { return ink[static_cast<std::size_t>(y * width() + x)] != 0; }
-};
-
-PanelInk find_panel(const Rgba8Image& img) {
-  auto to_display = [](const glm::vec4& c) {
-    return glm::dvec3(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z));
-  };
-  const glm::dvec3 paper = to_display(palette::text_paper);
-  const glm::dvec3 ink = to_display(palette::text_ink);
-  auto channel = [&](int x, int y, int c) {
-    return static_cast<double>(img.pixels[static_cast<std::size_t>((y * img.width + x) * 4 + c)]) / 255.0;
-  };
-  PanelInk p{img.width, img.height, -1, -1, {}};
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x) {
-      bool is_paper = true;
-      for (int c = 0; c < 3; ++c) is_paper = is_paper && std::abs(channel(x, y, c) - paper[c]) < 1.5 / 255.0;
-      if (!is_paper) continue;
-      p.x0 = std::min(p.x0, x), p.y0 = std::min(p.y0, y), p.x1 = std::max(p.x1, x), p.y1 = std::max(p.y1, y);
-    }
-  if (p.x1 < p.x0) return p;
-  const double mid = 0.5 * (paper.y + ink.y);
-  for (int y = p.y0; y <= p.y1; ++y)
-    for (int x = p.x0; x <= p.x1; ++x) p.ink.push_back(channel(x, y, 1) > mid ? 1 : 0);
-  return p;
-}
-
-// The rows of the panel's first line of text: the first run of rows with ink.
-std::pair<int, int> first_line_rows(const PanelInk& p) {
-  int first = -1;
-  for (int y = 0; y < p.height(); ++y) {
-    bool any = false;
-    for (int x = 0; x < p.width(); ++x) any = any || p.at(x, y);
-    if (any && first < 0) first = y;
-    if (!any && first >= 0) return {first, y - 1};
-  }
-  return {first, p.height() - 1};
-}
-
-}  // namespace
+using test::find_panel;
+using test::first_line_rows;
+using test::PanelInk;
 
 // The response panel is fixed to the head and drawn over the curved scene:
 // its capitals are as tall as the protocol's viewing.text_height_deg says,
@@ -765,19 +719,9 @@ TEST_F(VulkanTest, ResponsePanelTextIsTheStatedVisualAngleInEverySpace) {
 
     // Not mirrored: the first ink column of the first line is an F's stem
     // (as tall as the capital), the last its arm's end (short).
-    auto column_ink = [&](int x) {
-      int n = 0;
-      for (int y = top; y <= bottom; ++y) n += p.at(x, y) ? 1 : 0;
-      return n;
-    };
-    int first_col = -1, last_col = -1;
-    for (int x = 0; x < p.width(); ++x)
-      if (column_ink(x) > 0) {
-        if (first_col < 0) first_col = x;
-        last_col = x;
-      }
-    EXPECT_GE(column_ink(first_col), cap_px - 1);
-    EXPECT_LE(column_ink(last_col), cap_px / 2);
+    const auto [first_col, last_col] = test::ink_columns(p, top, bottom);
+    EXPECT_GE(test::column_ink(p, first_col, top, bottom), cap_px - 1);
+    EXPECT_LE(test::column_ink(p, last_col, top, bottom), cap_px / 2);
     panels.push_back(std::move(p));
   }
   for (std::size_t i = 1; i < panels.size(); ++i) {

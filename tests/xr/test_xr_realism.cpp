@@ -9,10 +9,12 @@
 #include "../cli/run_cli.hpp"
 #include "../desktop/xvfb.hpp"
 #include "../runner/session_db.hpp"
+#include "../support/panel_ink.hpp"
 #include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
 #include "curvlab/renderer/image_io.hpp"
+#include "curvlab/renderer/text.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -25,6 +27,8 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <numbers>
+#include <variant>
 #include <sstream>
 #include <unistd.h>
 
@@ -457,7 +461,9 @@ TEST(XrRealism, SwapchainFormatsInTheRuntimesOrderShowTheSameColours) {
     ASSERT_EQ(run.cli.exit_code, 0) << run.cli.out;
     const RuntimeLog log(run.log_path);
     EXPECT_TRUE(log.problems().empty()) << joined(log.problems());
-    ASSERT_EQ(log.of("swapchain").size(), 2u);
+    // The two eyes' swapchains first, then the panels' (quad layers), all in
+    // the chosen format.
+    ASSERT_GE(log.of("swapchain").size(), 2u);
     for (const auto& w : log.of("swapchain")) EXPECT_EQ(w[2], c.chosen);
     for (const int trial : {1, 6}) {
       const ImageDiff d = onset_against_replay(run, log, trial, c.linear_store);
@@ -690,6 +696,87 @@ TEST(XrRealism, TheProtocolsRefreshRateIsRequestedAndChangesAreRecorded) {
   fs::remove_all(r.dir);
   fs::remove_all(other.dir);
   fs::remove_all(dir);
+}
+
+// ---- 12. panels as quad layers ----------------------------------------------
+
+// The response panel reaches the headset as a quad layer of its own, in
+// VIEW space, over the projection layer; the runtime composites it as a
+// compositor does (each pixel's ray meets the quad, whose image is sampled
+// there). In the captured eye the first line's capitals are as tall as the
+// quad's size, its distance and the eye's field of view make them: the
+// stated text height (viewing.text_height_deg), at least half a degree, the
+// same pixels in S3, E3 and H3, and an F's stem on its left (not mirrored).
+TEST(XrRealism, ResponsePanelsAreQuadLayersOfTheStatedAngleInEverySpace) {
+  constexpr int kEyePx = 1024;
+  // The runtime's left eye: 0.80 rad up, 0.88 rad down (tests/xr/runtime).
+  const double focal_y_px = kEyePx / (std::tan(0.80) + std::tan(0.88));
+  // The runner's panel texels per degree for this eye (session_frames.cpp).
+  const double px_per_deg = kEyePx / 90.0;
+  auto block = curvlab::renderer::render_text_block("F", 2.0 * px_per_deg, 600, CURVLAB_DEFAULT_FONT);
+  ASSERT_TRUE(std::holds_alternative<curvlab::renderer::TextBlock>(block));
+  const double cap_texels = std::get<curvlab::renderer::TextBlock>(block).cap_height_px;
+
+  std::vector<curvlab::test::PanelInk> panels;
+  for (const std::string kind : {"S3", "E3", "H3"}) {
+    SCOPED_TRACE(kind);
+    const auto dir = fresh_dir("quad_protocol_" + kind);
+    std::ifstream in(kProtocol);
+    std::ostringstream text;
+    text << in.rdbuf();
+    std::string protocol = text.str();
+    for (const auto& [from, to] :
+         {std::pair<std::string, std::string>{R"(levels = ["E3", "H3"])", "levels = [\"" + kind + "\"]"},
+          {R"(prompt = "Convex, straight or concave?")", R"(prompt = "FFF FFF")"}}) {
+      const auto at = protocol.find(from);
+      ASSERT_NE(at, std::string::npos) << from;
+      protocol.replace(at, from.size(), to);
+    }
+    std::ofstream(dir / "protocol.toml") << protocol;
+    const auto captures = fresh_dir("quad_captures_" + kind);
+    const DemoRun run = run_demo("quad_run_" + kind,
+                                 {{"CURVLAB_TEST_XR_SIZE", std::to_string(kEyePx) + "x" + std::to_string(kEyePx)},
+                                  {"CURVLAB_TEST_XR_CAPTURE_DIR", captures.string()},
+                                  {"CURVLAB_TEST_XR_CAPTURE_EVERY", "20"}},
+                                 (dir / "protocol.toml").string());
+    ASSERT_EQ(run.cli.exit_code, 0) << run.cli.out;
+    const RuntimeLog log(run.log_path);
+    EXPECT_TRUE(log.problems().empty()) << joined(log.problems());
+    // "quad PNG texels WxH size_m W H at X Y Z", one per quad of a captured frame.
+    const auto& quads = log.of("quad");
+    ASSERT_FALSE(quads.empty()) << "no quad layer reached the runtime";
+    const auto& q = quads[quads.size() / 2];
+    const int texels_h = std::stoi(q[3].substr(q[3].find('x') + 1));
+    const double size_h_m = std::stod(q[6]);
+    const double depth_m = -std::stod(q[10]);
+    ASSERT_GT(depth_m, 0.0);
+
+    curvlab::renderer::Rgba8Image eye;
+    ASSERT_TRUE(curvlab::test::read_png_into(q[1], eye));
+    curvlab::test::PanelInk p = curvlab::test::find_panel(eye);
+    ASSERT_GT(p.width(), 20) << "no response panel in " << q[1];
+    const auto [top, bottom] = curvlab::test::first_line_rows(p);
+    ASSERT_GE(top, 0) << "no text on the panel";
+    const int cap_px = bottom - top + 1;
+    // A card facing the eye at depth_m: heights on it project linearly.
+    const double expected_px = focal_y_px * (cap_texels * size_h_m / texels_h) / depth_m;
+    EXPECT_NEAR(cap_px, expected_px, 1.5) << "capital " << cap_px << " px in " << q[1];
+    EXPECT_GE(cap_px, 0.5 * std::numbers::pi / 180.0 * focal_y_px) << "text under half a degree";
+    std::cout << "[ quad     ] " << kind << ": capital " << cap_px << " px (expected " << expected_px << "), "
+              << quads.size() << " captured quads\n";
+    const auto [first_col, last_col] = curvlab::test::ink_columns(p, top, bottom);
+    EXPECT_GE(curvlab::test::column_ink(p, first_col, top, bottom), cap_px - 1) << "an F's stem on its left";
+    EXPECT_LE(curvlab::test::column_ink(p, last_col, top, bottom), cap_px / 2);
+    panels.push_back(std::move(p));
+    fs::remove_all(run.dir);
+    fs::remove_all(captures);
+    fs::remove_all(dir);
+  }
+  for (std::size_t i = 1; i < panels.size(); ++i) {
+    EXPECT_EQ(panels[i].width(), panels[0].width());
+    EXPECT_EQ(panels[i].height(), panels[0].height());
+    EXPECT_EQ(panels[i].ink, panels[0].ink) << "the panel's text differs between spaces";
+  }
 }
 
 }  // namespace

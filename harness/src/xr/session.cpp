@@ -173,7 +173,7 @@ void Session::on_state(SessionState next) {
     if (const XrResult r = xrBeginSession(session_.get(), &info); XR_FAILED(r)) fail(r, "xrBeginSession");
   }
   if (u.end_session) {
-    if (frame_begun_) (void)end_frame(nullptr);  // the session is ending: only xrEndSession counts
+    if (frame_begun_) (void)end_frame({});  // the session is ending: only xrEndSession counts
     if (const XrResult r = xrEndSession(session_.get()); XR_FAILED(r))
       std::cerr << "curvlab: xr: " << failure_of(r, "xrEndSession").message << '\n';
   }
@@ -270,12 +270,12 @@ XrResult Session::begin_frame() {
   return r;
 }
 
-XrResult Session::end_frame(const XrCompositionLayerBaseHeader* layer) {
+XrResult Session::end_frame(const std::vector<const XrCompositionLayerBaseHeader*>& layers) {
   auto info = tagged<XrFrameEndInfo>(XR_TYPE_FRAME_END_INFO);
   info.displayTime = frame_state_.predictedDisplayTime;
   info.environmentBlendMode = XR_ENVIRONMENT_BLEND_MODE_OPAQUE;
-  info.layerCount = layer != nullptr ? 1 : 0;
-  info.layers = layer != nullptr ? &layer : nullptr;
+  info.layerCount = static_cast<std::uint32_t>(layers.size());
+  info.layers = layers.empty() ? nullptr : layers.data();
   frame_begun_ = false;
   ++frames_ended_;
   return xrEndFrame(session_.get(), &info);

@@ -5,6 +5,7 @@
 #include "curvlab/harness/xr/swapchain_display.hpp"
 
 #include "mirror.hpp"
+#include "quad_panels.hpp"
 #include "swapchains.hpp"
 
 #include "curvlab/harness/io/frame.hpp"
@@ -56,6 +57,7 @@ Result<Done> SwapchainDisplay::make_renderer(const SwapchainDisplayOptions& opti
                                        ": " + renderer::vk_result_name(e.code().value())};
   }
   target_ = std::make_unique<renderer::ExternalImagesTarget>(c);
+  panels_ = std::make_unique<QuadPanels>(c, swapchains_->format());
   if (options.mirror) {
     const auto format = static_cast<vk::Format>(swapchains_->format());
     const bool bgra = format == vk::Format::eB8G8R8A8Srgb || format == vk::Format::eB8G8R8A8Unorm;
@@ -135,8 +137,16 @@ XrResult SwapchainDisplay::end_frame(FrameLayer what) {
   layer.space = poses_.stage();
   layer.viewCount = 2;
   layer.views = views.data();
-  const auto* header = reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer);
-  return session_.end_frame(what != FrameLayer::none ? header : nullptr);
+  // The head-locked panels follow as quad layers, over the projection (a
+  // held frame keeps the last ones: their swapchains keep their images).
+  std::vector<const XrCompositionLayerBaseHeader*> layers;
+  if (what != FrameLayer::none) {
+    layers.push_back(reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer));
+    if (panels_)
+      for (const XrCompositionLayerQuad& quad : panels_->layers())
+        layers.push_back(reinterpret_cast<const XrCompositionLayerBaseHeader*>(&quad));
+  }
+  return session_.end_frame(layers);
 }
 
 // Until the runtime makes the session READY there is no frame loop; wait
@@ -263,6 +273,10 @@ renderer::FrameStats SwapchainDisplay::submit(const renderer::Scene& scene, cons
   f.width_px = swapchains_->width();
   f.height_px = swapchains_->height();
   try {
+    // The panels as quad layers; where the runtime refuses their
+    // swapchains, drawn into the eye images from then on.
+    if (panels_ && !panels_->update(session_, poses_.view(), scene)) panels_.reset();
+    f.draw_head_locked = panels_ == nullptr;
     // render() submits before returning, as xrReleaseSwapchainImage requires.
     stats = renderer_->render(scene, f, *target_);
     // The operator window's copy, while the images are still acquired.

@@ -75,15 +75,23 @@ Result<Done> EyeSwapchains::make(const Session& session, Eye& eye, const XrViewC
   info.mipCount = 1;
   if (const XrResult r = xrCreateSwapchain(session.handle(), &info, eye.handle.out()); XR_FAILED(r))
     return failure_of(r, "xrCreateSwapchain");
+  auto images = swapchain_images(eye.handle.get());
+  if (!images) return images.error();
+  eye.images = std::move(images).value();
+  return Done{};
+}
+
+Result<std::vector<XrSwapchainImageVulkan2KHR>> swapchain_images(XrSwapchain swapchain) {
   std::uint32_t count = 0;
-  if (const XrResult r = xrEnumerateSwapchainImages(eye.handle.get(), 0, &count, nullptr); XR_FAILED(r))
+  if (const XrResult r = xrEnumerateSwapchainImages(swapchain, 0, &count, nullptr); XR_FAILED(r))
     return failure_of(r, "xrEnumerateSwapchainImages");
-  eye.images.assign(count, tagged<XrSwapchainImageVulkan2KHR>(XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR));
-  if (const XrResult r = xrEnumerateSwapchainImages(
-          eye.handle.get(), count, &count, reinterpret_cast<XrSwapchainImageBaseHeader*>(eye.images.data()));
+  std::vector<XrSwapchainImageVulkan2KHR> images(
+      count, tagged<XrSwapchainImageVulkan2KHR>(XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR));
+  if (const XrResult r = xrEnumerateSwapchainImages(swapchain, count, &count,
+                                                    reinterpret_cast<XrSwapchainImageBaseHeader*>(images.data()));
       XR_FAILED(r))
     return failure_of(r, "xrEnumerateSwapchainImages");
-  return Done{};
+  return images;
 }
 
 XrSwapchainSubImage EyeSwapchains::sub_image(std::size_t i) const {
@@ -106,7 +114,7 @@ std::array<vk::Image, 2> EyeSwapchains::acquire(Session& session) {
     }
     acquired_[i] = true;
     try {
-      wait_image(session, eye.handle.get());
+      wait_swapchain_image(session, eye.handle.get(), wait_said_);
     } catch (const harness::io::DeviceFailure&) {
       // A waited image is released by release(); one the wait never got
       // is not (the runtime refuses it): the frame is lost either way.
@@ -128,7 +136,7 @@ void EyeSwapchains::release() {
   }
 }
 
-void EyeSwapchains::wait_image(Session& session, XrSwapchain swapchain) {
+void wait_swapchain_image(Session& session, XrSwapchain swapchain, bool& said) {
   // XR_TIMEOUT_EXPIRED is a success code: the image is not yet the
   // application's (OpenXR 1.0 §10.1, xrWaitSwapchainImage), so it is waited
   // again, and a wait past kLimit is a failure of the compositor.
@@ -139,10 +147,10 @@ void EyeSwapchains::wait_image(Session& session, XrSwapchain swapchain) {
     const XrResult r = xrWaitSwapchainImage(swapchain, &wait);
     if (XR_FAILED(r)) session.fail(r, "xrWaitSwapchainImage");
     if (r != XR_TIMEOUT_EXPIRED) return;
-    if (!wait_said_) {
+    if (!said) {
       std::cerr << "curvlab: xr: the compositor has held a swapchain image for more than " << kStep / 1'000'000
                 << " ms; waiting for it\n";
-      wait_said_ = true;
+      said = true;
     }
     if (waited + kStep >= kLimit) session.fail(XR_TIMEOUT_EXPIRED, "xrWaitSwapchainImage");
   }

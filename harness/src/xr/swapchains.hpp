@@ -21,6 +21,14 @@
 
 namespace curvlab::harness::xr {
 
+// xrWaitSwapchainImage in bounded steps (a runtime's back-pressure): a
+// compositor that holds an image is said once (`said`) and, past a limit,
+// a failure (Session::fail).
+void wait_swapchain_image(Session& session, XrSwapchain swapchain, bool& said);
+
+// xrEnumerateSwapchainImages into Vulkan image structs.
+harness::Result<std::vector<XrSwapchainImageVulkan2KHR>> swapchain_images(XrSwapchain swapchain);
+
 class EyeSwapchains {
  public:
   static harness::Result<EyeSwapchains> create(const Session& session);
@@ -51,9 +59,6 @@ class EyeSwapchains {
   };
   EyeSwapchains() = default;
   harness::Result<harness::Done> make(const Session& session, Eye& eye, const XrViewConfigurationView& view) const;
-  // xrWaitSwapchainImage in bounded steps (a runtime's back-pressure), so a
-  // compositor that holds an image is said and, past a limit, a failure.
-  void wait_image(Session& session, XrSwapchain swapchain);
 
   std::array<Eye, 2> eyes_;
   std::int64_t format_ = 0;

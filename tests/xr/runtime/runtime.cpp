@@ -51,7 +51,9 @@
 //                            tracked, as Monado's simulated headset reports
 //   CURVLAB_TEST_XR_CAPTURE_DIR   write the left eye of submitted frames here
 //                            as PNG (left_<frame>_<monotonic ns>.png, the
-//                            frame's predicted display time on CLOCK_MONOTONIC)
+//                            frame's predicted display time on CLOCK_MONOTONIC):
+//                            the projection layer with the quad layers laid
+//                            over it, a "quad" log line for each of these
 //   CURVLAB_TEST_XR_CAPTURE_EVERY every n-th submitted frame (default 1)
 //   CURVLAB_TEST_XR_LOG      a text log: one "frame" line per xrWaitFrame with
 //                            the predicted display time (XrTime and
@@ -645,10 +647,10 @@ VkImageMemoryBarrier image_barrier(VkImage image, VkImageLayout from, VkImageLay
 
 // Reads the rectangle of a released swapchain image (in
 // COLOR_ATTACHMENT_OPTIMAL, as the application must leave it) back to the
-// CPU as RGB and writes it as PNG. The image is returned to
-// COLOR_ATTACHMENT_OPTIMAL, as a compositor would after sampling it.
-bool capture(Session& s, const Swapchain& sc, std::uint32_t index, const XrRect2Di& rect, std::uint32_t layer,
-             const std::string& path) {
+// CPU, its bytes as stored (4 per texel, rows packed). The image is returned
+// to COLOR_ATTACHMENT_OPTIMAL, as a compositor would after sampling it.
+std::optional<std::vector<std::uint8_t>> read_back(Session& s, const Swapchain& sc, std::uint32_t index,
+                                                   const XrRect2Di& rect, std::uint32_t layer) {
   const VulkanDevice& vk = *s.vk;
   const auto w = static_cast<std::uint32_t>(rect.extent.width);
   const auto h = static_cast<std::uint32_t>(rect.extent.height);
@@ -658,7 +660,7 @@ bool capture(Session& s, const Swapchain& sc, std::uint32_t index, const XrRect2
   bi.size = size;
   bi.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   VkBuffer buffer = VK_NULL_HANDLE;
-  if (vk.vkCreateBuffer(vk.device, &bi, nullptr, &buffer) != VK_SUCCESS) return false;
+  if (vk.vkCreateBuffer(vk.device, &bi, nullptr, &buffer) != VK_SUCCESS) return std::nullopt;
   VkMemoryRequirements req{};
   vk.vkGetBufferMemoryRequirements(vk.device, buffer, &req);
   const auto type = memory_type(vk, req.memoryTypeBits,
@@ -693,38 +695,59 @@ bool capture(Session& s, const Swapchain& sc, std::uint32_t index, const XrRect2
                                  VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0, nullptr, 0, nullptr, 1,
                                  &back);
        });
-  if (ok) {
-    void* mapped = nullptr;
-    ok = vk.vkMapMemory(vk.device, memory, 0, size, 0, &mapped) == VK_SUCCESS;
-    if (ok) {
-      const auto* px = static_cast<const std::uint8_t*>(mapped);
-      const bool bgra = sc.format == VK_FORMAT_B8G8R8A8_UNORM || sc.format == VK_FORMAT_B8G8R8A8_SRGB;
-      // An sRGB image stores the encoded bytes a display shows: written as
-      // they are. A UNORM image holds linear values (a runtime treats them as
-      // linear, XR_KHR_vulkan_enable2), which the compositor encodes for the
-      // display: so does the capture (IEC 61966-2-1).
-      const bool linear = sc.format == VK_FORMAT_R8G8B8A8_UNORM || sc.format == VK_FORMAT_B8G8R8A8_UNORM;
-      std::array<std::uint8_t, 256> encode{};
-      for (int v = 0; v < 256; ++v) {
-        const double l = v / 255.0;
-        const double e = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
-        encode[static_cast<std::size_t>(v)] = static_cast<std::uint8_t>(std::lround((linear ? e : l) * 255.0));
-      }
-      std::vector<std::uint8_t> rgb(static_cast<std::size_t>(w) * h * 3);
-      for (std::size_t i = 0; i < static_cast<std::size_t>(w) * h; ++i) {
-        rgb[3 * i + 0] = encode[px[4 * i + (bgra ? 2 : 0)]];
-        rgb[3 * i + 1] = encode[px[4 * i + 1]];
-        rgb[3 * i + 2] = encode[px[4 * i + (bgra ? 0 : 2)]];
-      }
-      vk.vkUnmapMemory(vk.device, memory);
-      ok = stbi_write_png(path.c_str(), static_cast<int>(w), static_cast<int>(h), 3, rgb.data(),
-                          static_cast<int>(w * 3)) != 0;
-    }
+  std::optional<std::vector<std::uint8_t>> out;
+  void* mapped = nullptr;
+  if (ok && vk.vkMapMemory(vk.device, memory, 0, size, 0, &mapped) == VK_SUCCESS) {
+    const auto* px = static_cast<const std::uint8_t*>(mapped);
+    out.emplace(px, px + size);
+    vk.vkUnmapMemory(vk.device, memory);
   }
   vk.vkDestroyBuffer(vk.device, buffer, nullptr);
   if (memory != VK_NULL_HANDLE) vk.vkFreeMemory(vk.device, memory, nullptr);
-  return ok;
+  return out;
 }
+
+// sRGB decoding and encoding of one channel, 0–1 (IEC 61966-2-1).
+double srgb_decode(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
+double srgb_encode(double l) { return l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055; }
+
+// A swapchain image read back, as linear RGBA: an sRGB image stores the
+// encoded values a display shows; a UNORM image holds linear values (a
+// runtime treats them as linear, XR_KHR_vulkan_enable2).
+struct LinearImage {
+  int width = 0, height = 0;
+  std::vector<float> rgba;  // 4 per texel
+
+  LinearImage(const std::vector<std::uint8_t>& bytes, VkFormat format, int w, int h) : width(w), height(h) {
+    const bool bgra = format == VK_FORMAT_B8G8R8A8_UNORM || format == VK_FORMAT_B8G8R8A8_SRGB;
+    const bool srgb = format == VK_FORMAT_R8G8B8A8_SRGB || format == VK_FORMAT_B8G8R8A8_SRGB;
+    std::array<float, 256> decode{};
+    for (int v = 0; v < 256; ++v)
+      decode[static_cast<std::size_t>(v)] = static_cast<float>(srgb ? srgb_decode(v / 255.0) : v / 255.0);
+    rgba.resize(bytes.size());
+    for (std::size_t i = 0; i + 3 < bytes.size(); i += 4) {
+      rgba[i + 0] = decode[bytes[i + (bgra ? 2 : 0)]];
+      rgba[i + 1] = decode[bytes[i + 1]];
+      rgba[i + 2] = decode[bytes[i + (bgra ? 0 : 2)]];
+      rgba[i + 3] = static_cast<float>(bytes[i + 3] / 255.0);
+    }
+  }
+  // Bilinear, clamped to the edge, at texel coordinates (x, y) (texel
+  // centres at half-integers), as a compositor's sampler filters.
+  [[nodiscard]] std::array<double, 4> sample(double x, double y) const {
+    const double fx = std::clamp(x - 0.5, 0.0, width - 1.0);
+    const double fy = std::clamp(y - 0.5, 0.0, height - 1.0);
+    const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+    const int x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
+    const double ax = fx - x0, ay = fy - y0;
+    std::array<double, 4> out{};
+    for (std::size_t c = 0; c < 4; ++c) {
+      auto at = [&](int u, int v) { return double(rgba[(static_cast<std::size_t>(v) * width + u) * 4 + c]); };
+      out[c] = (1 - ay) * ((1 - ax) * at(x0, y0) + ax * at(x1, y0)) + ay * ((1 - ax) * at(x0, y1) + ax * at(x1, y1));
+    }
+    return out;
+  }
+};
 
 // ---- controller inputs --------------------------------------------------------
 
@@ -1842,11 +1865,110 @@ XrResult XRAPI_CALL BeginFrame(XrSession h, const XrFrameBeginInfo* info) {
   return discarded ? XR_FRAME_DISCARDED : XR_SUCCESS;
 }
 
+// The left eye as the compositor shows it, written as an sRGB PNG: the
+// projection layer's left view, with each quad layer after it laid over it
+// as that eye sees the quad. Each pixel's ray from the eye meets the quad's
+// plane; the quad's image is sampled there (bilinear, in linear light) and,
+// where the layer asks for it, blended by its alpha (OpenXR 1.0 §10.6).
+bool capture_left(Session& s, const XrFrameEndInfo& info, const XrCompositionLayerProjection& projection,
+                  const std::string& path) {
+  const XrCompositionLayerProjectionView& v = projection.views[0];
+  const Swapchain& sc = *swapchain_of(v.subImage.swapchain);
+  const XrRect2Di& rect = v.subImage.imageRect;
+  const auto bytes = read_back(s, sc, *sc.last_released, rect, v.subImage.imageArrayIndex);
+  if (!bytes) return false;
+  const int w = rect.extent.width, h = rect.extent.height;
+  LinearImage eye(*bytes, sc.format, w, h);
+  std::vector<bool> covered(static_cast<std::size_t>(w) * h, false);
+  const Pose eye_pose = compose(stage_pose(*space_of(projection.space), info.displayTime).first, to_pose(v.pose));
+  const double tl = std::tan(v.fov.angleLeft), tr = std::tan(v.fov.angleRight);
+  const double tu = std::tan(v.fov.angleUp), td = std::tan(v.fov.angleDown);
+  for (uint32_t i = 0; i < info.layerCount; ++i) {
+    if (info.layers[i]->type != XR_TYPE_COMPOSITION_LAYER_QUAD) continue;
+    const auto& q = *reinterpret_cast<const XrCompositionLayerQuad*>(info.layers[i]);
+    if (q.eyeVisibility == XR_EYE_VISIBILITY_RIGHT) continue;
+    const Swapchain& qsc = *swapchain_of(q.subImage.swapchain);
+    const XrRect2Di& qr = q.subImage.imageRect;
+    const auto texels = read_back(s, qsc, *qsc.last_released, qr, q.subImage.imageArrayIndex);
+    if (!texels) return false;
+    const LinearImage quad(*texels, qsc.format, qr.extent.width, qr.extent.height);
+    const Pose quad_pose = compose(stage_pose(*space_of(q.space), info.displayTime).first, to_pose(q.pose));
+    const Pose eye_in_quad = compose(inverse(quad_pose), eye_pose);
+    const bool blend = (q.layerFlags & XR_COMPOSITION_LAYER_BLEND_TEXTURE_SOURCE_ALPHA_BIT) != 0;
+    const bool unpremultiplied = (q.layerFlags & XR_COMPOSITION_LAYER_UNPREMULTIPLIED_ALPHA_BIT) != 0;
+    const Vec3& o = eye_in_quad.position_m;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Vec3 d = rotate(eye_in_quad.orientation,
+                              Vec3{tl + (x + 0.5) / w * (tr - tl), tu - (y + 0.5) / h * (tu - td), -1.0});
+        if (std::abs(d.z) < 1e-12) continue;
+        const double t = -o.z / d.z;
+        if (t <= 0.0) continue;
+        const double u = (o.x + t * d.x) / double(q.size.width) + 0.5;
+        const double vv = 0.5 - (o.y + t * d.y) / double(q.size.height);
+        if (u < 0.0 || u > 1.0 || vv < 0.0 || vv > 1.0) continue;
+        const auto c = quad.sample(u * quad.width, vv * quad.height);
+        const std::size_t at = static_cast<std::size_t>(y) * w + x;
+        float* dst = &eye.rgba[4 * at];
+        const double a = blend ? c[3] : 1.0;
+        for (std::size_t k = 0; k < 3; ++k)
+          dst[k] = static_cast<float>((unpremultiplied || !blend ? c[k] * a : c[k]) + double(dst[k]) * (1.0 - a));
+        covered[at] = true;
+      }
+  }
+  // Pixels no quad covers keep the projection's bytes: an sRGB image's as
+  // they are, a UNORM image's sRGB-encoded for the display.
+  const bool bgra = sc.format == VK_FORMAT_B8G8R8A8_UNORM || sc.format == VK_FORMAT_B8G8R8A8_SRGB;
+  const bool linear = sc.format == VK_FORMAT_R8G8B8A8_UNORM || sc.format == VK_FORMAT_B8G8R8A8_UNORM;
+  std::array<std::uint8_t, 256> encode{};
+  for (int b = 0; b < 256; ++b)
+    encode[static_cast<std::size_t>(b)] =
+        static_cast<std::uint8_t>(std::lround((linear ? srgb_encode(b / 255.0) : b / 255.0) * 255.0));
+  std::vector<std::uint8_t> rgb(static_cast<std::size_t>(w) * h * 3);
+  for (std::size_t i = 0; i < covered.size(); ++i)
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t from = bgra ? 2 - k : k;
+      rgb[3 * i + k] = covered[i] ? static_cast<std::uint8_t>(std::lround(
+                                        srgb_encode(std::clamp(double(eye.rgba[4 * i + k]), 0.0, 1.0)) * 255.0))
+                                  : encode[(*bytes)[4 * i + from]];
+    }
+  return stbi_write_png(path.c_str(), w, h, 3, rgb.data(), w * 3) != 0;
+}
+
+// A quad layer: a released image of a swapchain of this session, its
+// rectangle inside the swapchain, a positive size and a unit orientation.
+XrResult check_quad(const Session& s, const XrCompositionLayerQuad& q) {
+  constexpr const char* fn = "xrEndFrame";
+  const Space* space = space_of(q.space);
+  if (space == nullptr || space->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, "quad layer space");
+  if (q.eyeVisibility != XR_EYE_VISIBILITY_BOTH && q.eyeVisibility != XR_EYE_VISIBILITY_LEFT &&
+      q.eyeVisibility != XR_EYE_VISIBILITY_RIGHT)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "quad layer eyeVisibility");
+  const Swapchain* sc = swapchain_of(q.subImage.swapchain);
+  if (sc == nullptr || sc->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, "quad layer swapchain");
+  if (!sc->last_released) return violation(fn, XR_ERROR_LAYER_INVALID, "quad layer: its swapchain has no released image");
+  if (!sc->acquired.empty())
+    return violation(fn, XR_ERROR_LAYER_INVALID, "quad layer: its swapchain still has an acquired image");
+  const XrRect2Di& r = q.subImage.imageRect;
+  if (r.offset.x < 0 || r.offset.y < 0 || r.extent.width <= 0 || r.extent.height <= 0 ||
+      static_cast<std::uint32_t>(r.offset.x + r.extent.width) > sc->width ||
+      static_cast<std::uint32_t>(r.offset.y + r.extent.height) > sc->height)
+    return violation(fn, XR_ERROR_SWAPCHAIN_RECT_INVALID, "quad layer: rectangle outside the swapchain");
+  if (q.subImage.imageArrayIndex >= sc->array_size)
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "quad layer: imageArrayIndex");
+  if (!(q.size.width > 0.0f && q.size.height > 0.0f && std::isfinite(q.size.width) && std::isfinite(q.size.height)))
+    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "quad layer: size");
+  if (!normalized(q.pose.orientation)) return violation(fn, XR_ERROR_POSE_INVALID, "quad layer: orientation");
+  return XR_SUCCESS;
+}
+
 XrResult check_layer(const Session& s, const XrCompositionLayerBaseHeader* header) {
   constexpr const char* fn = "xrEndFrame";
   if (header == nullptr) return violation(fn, XR_ERROR_LAYER_INVALID, "null layer");
+  if (header->type == XR_TYPE_COMPOSITION_LAYER_QUAD)
+    return check_quad(s, *reinterpret_cast<const XrCompositionLayerQuad*>(header));
   if (header->type != XR_TYPE_COMPOSITION_LAYER_PROJECTION)
-    return violation(fn, XR_ERROR_LAYER_INVALID, "only projection layers are supported");
+    return violation(fn, XR_ERROR_LAYER_INVALID, "only projection and quad layers are supported");
   const auto* layer = reinterpret_cast<const XrCompositionLayerProjection*>(header);
   const Space* space = space_of(layer->space);
   if (space == nullptr || space->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, "layer space");
@@ -1928,17 +2050,28 @@ XrResult XRAPI_CALL EndFrame(XrSession h, const XrFrameEndInfo* info) {
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "layers missing");
   for (uint32_t i = 0; i < info->layerCount; ++i)
     if (const XrResult r = check_layer(*s, info->layers[i]); XR_FAILED(r)) return r;
-  // The left eye of the first layer, as the compositor would show it.
+  // The left eye, as the compositor would show it: the first projection
+  // layer and the quad layers over it.
   const Script& script = s->instance->script;
   if (info->layerCount > 0) {
     const std::int64_t n = s->frames_submitted++;
-    if (!script.capture_dir.empty() && n % script.capture_every == 0) {
-      const auto* layer = reinterpret_cast<const XrCompositionLayerProjection*>(info->layers[0]);
-      const XrCompositionLayerProjectionView& v = layer->views[0];
-      const Swapchain& sc = *swapchain_of(v.subImage.swapchain);
+    const auto* first = std::find_if(info->layers, info->layers + info->layerCount, [](const auto* l) {
+      return l->type == XR_TYPE_COMPOSITION_LAYER_PROJECTION;
+    });
+    if (!script.capture_dir.empty() && n % script.capture_every == 0 && first != info->layers + info->layerCount) {
+      const auto* layer = reinterpret_cast<const XrCompositionLayerProjection*>(*first);
       const std::string path = script.capture_dir + "/left_" + std::to_string(n) + "_" +
                                std::to_string(to_mono(info->displayTime)) + ".png";
-      if (capture(*s, sc, *sc.last_released, v.subImage.imageRect, v.subImage.imageArrayIndex, path))
+      for (uint32_t i = 0; i < info->layerCount; ++i)
+        if (info->layers[i]->type == XR_TYPE_COMPOSITION_LAYER_QUAD) {
+          const auto& q = *reinterpret_cast<const XrCompositionLayerQuad*>(info->layers[i]);
+          const XrRect2Di& r = q.subImage.imageRect;
+          log_line("quad " + path + " texels " + std::to_string(r.extent.width) + "x" +
+                   std::to_string(r.extent.height) + " size_m " + std::to_string(q.size.width) + " " +
+                   std::to_string(q.size.height) + " at " + std::to_string(q.pose.position.x) + " " +
+                   std::to_string(q.pose.position.y) + " " + std::to_string(q.pose.position.z));
+        }
+      if (capture_left(*s, *info, *layer, path))
         log_line("capture " + path + " monotonic_ns " + std::to_string(to_mono(info->displayTime)));
       else
         warning(fn, "could not capture " + path);

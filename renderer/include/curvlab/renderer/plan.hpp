@@ -16,6 +16,9 @@ struct FrameDescription {
   StereoRig rig = StereoRig::from_ipd(0.063, Fov{});
   std::uint32_t width_px = 1024;   // per eye
   std::uint32_t height_px = 1024;
+  // Head-locked objects drawn over the scene; false where the display's
+  // compositor shows them as layers of their own (OpenXR quad layers).
+  bool draw_head_locked = true;
 };
 
 inline constexpr int kMaxSubdivisionLevel = 6;

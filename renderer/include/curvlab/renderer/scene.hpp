@@ -7,6 +7,8 @@
 #include "curvlab/renderer/mesh.hpp"
 #include "curvlab/renderer/text.hpp"
 
+#include <glm/vec2.hpp>
+
 #include <functional>
 #include <optional>
 #include <string>
@@ -29,6 +31,9 @@ struct SceneObject {
   // Euclidean perspective: the same size, never mirrored or culled, in every
   // space and view (instructions, prompts, answers).
   bool head_locked = false;
+  // A head-locked panel's width × height in metres (its card at pose), for a
+  // display that shows it as a layer of its own (OpenXR quad layers).
+  glm::dvec2 panel_size_m{0.0};
 };
 
 // A list of objects. Not thread-safe. Every mutable access bumps revision();

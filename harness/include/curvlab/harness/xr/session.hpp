@@ -120,10 +120,11 @@ class Session {
 
   // --- the frame loop's calls (driven by the swapchain display) ---
   // xrWaitFrame into frame(); xrBeginFrame; xrEndFrame at frame()'s display
-  // time with `layer` (nullptr: none). The results are the caller's.
+  // time with `layers`, back to front (none: nothing shown). The results are
+  // the caller's.
   [[nodiscard]] XrResult wait_frame();
   [[nodiscard]] XrResult begin_frame();
-  [[nodiscard]] XrResult end_frame(const XrCompositionLayerBaseHeader* layer);
+  [[nodiscard]] XrResult end_frame(const std::vector<const XrCompositionLayerBaseHeader*>& layers);
   [[nodiscard]] const XrFrameState& frame() const { return frame_state_; }
   // A frame was begun and not yet ended.
   [[nodiscard]] bool frame_begun() const { return frame_begun_; }

@@ -5,6 +5,9 @@
 // rate it asks the runtime for (refresh_rate.hpp), and the operator window's
 // copies of what it submitted.
 //
+// The scene's head-locked panels go over it as quad layers in VIEW space
+// (quad_panels.hpp), drawn by the runtime's compositor.
+//
 // Every frame the runtime shows ends with a projection layer: a frame the
 // runner begins but does not draw submits the last drawn frame's layer again
 // (docs/xr.md, "No black refresh"). While the runtime has the session stopped
@@ -43,6 +46,7 @@ namespace curvlab::harness::xr {
 
 class EyeSwapchains;
 class OperatorMirror;
+class QuadPanels;
 
 struct SwapchainDisplayOptions {
   // Offer copies of the submitted images for the operator window (mirror()).
@@ -115,6 +119,7 @@ class SwapchainDisplay final : public harness::io::Display, private SessionPart 
   std::unique_ptr<renderer::Renderer> renderer_;
   std::unique_ptr<renderer::ExternalImagesTarget> target_;
   std::unique_ptr<OperatorMirror> mirror_;
+  std::unique_ptr<QuadPanels> panels_;  // null: the panels are drawn into the eye images
 
   std::int64_t frame_index_ = 0;
   XrTime last_display_ = 0;  // the previous frame's predicted display time

@@ -47,6 +47,8 @@ class TrackedPoses final : public harness::io::PoseSource, private SessionPart {
   void lose_tracking();
   // STAGE as curvlab uses it (views and layers are in it too).
   [[nodiscard]] XrSpace stage() const { return stage_.get(); }
+  // VIEW: the head (the rig's nose), where head-locked panels are placed.
+  [[nodiscard]] XrSpace view() const { return view_.get(); }
   // The head at the last locate (the VIEW space in STAGE).
   [[nodiscard]] const StagePose& head() const { return head_; }
 
