@@ -12,8 +12,10 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 using curvlab::testing::fresh_dir;
 using curvlab::testing::query;
@@ -199,4 +201,24 @@ TEST(PlayBlock, PredictCountsOnlyTheJudgementTrials) {
   for (const auto& c : j["conditions"]) counted += c["trials_per_participant"].get<int>();
   EXPECT_EQ(counted, judged);
   EXPECT_NE(j["notes"].dump().find("play and questionnaire blocks are not predicted"), std::string::npos) << j["notes"];
+}
+
+// `preview` shows the judged blocks' conditions and describes the play
+// block in the block table: the play block's one trial is no condition.
+TEST(PlayBlock, PreviewDescribesThePlayBlockAndShowsNoConditionForIt) {
+  const std::string file = std::string(CURVLAB_SOURCE_DIR) + "/protocols/adaptation_play.toml";
+  const auto dir = std::filesystem::temp_directory_path() / ("curvlab_play_preview_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const auto r = run_cli("preview " + file + " --out " + dir.string() + " --size 64x64 --software");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const std::string html = curvlab::test::read_text((dir / "index.html").string());
+  EXPECT_NE(html.find("play: billiards until 1 min"), std::string::npos) << "the block table does not describe play";
+  // Each condition panel lists its trials per block; none names the play block.
+  for (std::size_t at = html.find("<th>trials per block</th><td>"); at != std::string::npos;
+       at = html.find("<th>trials per block</th><td>", at + 1)) {
+    const std::string cell = html.substr(at, html.find("</td>", at) - at);
+    EXPECT_EQ(cell.find("play:"), std::string::npos) << cell;
+  }
+  EXPECT_EQ(html.find("prompt in block play"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }

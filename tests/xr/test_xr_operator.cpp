@@ -7,6 +7,7 @@
 #include "../cli/run_cli.hpp"
 #include "../desktop/xvfb.hpp"
 #include "../runner/session_db.hpp"
+#include "../support/panel_ink.hpp"
 #include "../support/png_files.hpp"
 #include "runtime_env.hpp"
 
@@ -16,6 +17,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
@@ -141,6 +143,17 @@ TEST(XrOperator, ScriptedActionsAndTheWindowsScreenshots) {
   }
   EXPECT_GT(best.eye_pixels, 960 * 430 / 2) << "the eye area is blank";
   EXPECT_GT(best.cloth_pixels, 5000) << "no table in the participant's image";
+
+  // The note's screenshot falls in the response window: the participant's
+  // image shows the response panel, which reaches the headset as a quad
+  // layer (not in the eye images) and is laid over the window's copy.
+  curvlab::renderer::Rgba8Image note_shot;
+  ASSERT_TRUE(curvlab::test::read_png_into((shots / "action_1_note.png").string(), note_shot));
+  note_shot.height = 430;
+  note_shot.pixels.resize(static_cast<std::size_t>(note_shot.width) * 430 * 4);
+  const auto panel = curvlab::test::find_panel(note_shot);
+  EXPECT_GT(panel.width(), 20) << "no response panel in the participant's image";
+  EXPECT_GT(std::count(panel.ink.begin(), panel.ink.end(), 1), 20) << "no text on the response panel";
 }
 
 // The runtime misses refreshes and hides frames; curvlab counts them late,

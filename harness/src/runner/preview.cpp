@@ -217,6 +217,9 @@ std::vector<PreviewCondition> preview_conditions(const protocol::Protocol& p, co
   std::vector<PreviewCondition> out;
   std::map<std::string, std::size_t> index;
   for (const auto& t : design.trials) {
+    // A play or questionnaire block's one trial shows no stimulus to judge:
+    // the block table describes it instead.
+    if (p.blocks.at(t.protocol_block).kind != "trials") continue;
     // Trials are one condition when their levels, tracks and planned
     // settings agree and both are practice or both are not; an adjustment
     // trial's own start value does not make a condition of its own.
@@ -347,6 +350,20 @@ void write_header(std::ostringstream& o, const protocol::Protocol& p, const Prev
 }
 
 // Block order and timelines.
+// What a play or questionnaire block does, in the judgement's column.
+std::string kind_text(const protocol::Block& b) {
+  if (b.kind == "play") {
+    std::string out = "play: billiards until " + duration_text(static_cast<std::int64_t>(b.play.duration_s * 1000.0));
+    if (b.play.shots > 0) out += ", " + std::to_string(b.play.shots) + " shots";
+    if (b.play.until_all_pocketed) out += " or every ball pocketed";
+    return out + " (rack of " + std::to_string(b.play.rack) + ")";
+  }
+  if (b.kind == "questionnaire")
+    return "questionnaire: " + (b.instrument.title.empty() ? b.instrument.name : b.instrument.title) + " (" +
+           std::to_string(b.instrument.items.size()) + " items)";
+  return b.kind;
+}
+
 void write_blocks(std::ostringstream& o, const protocol::Protocol& p, const protocol::Design& design) {
   o << "<h2>Block order for participant " << design.participant << "</h2>\n<table>\n"
     << "<tr><th>#</th><th>block</th><th>trials</th><th>judgement</th><th>timeline (fixation / stimulus / "
@@ -363,6 +380,10 @@ void write_blocks(std::ostringstream& o, const protocol::Protocol& p, const prot
     }
     std::string judgement = b ? std::string(b->judgement.type->name()) : "";
     if (b && b->judgement.type->stops_early()) judgement += " (trial count at most)";
+    if (b && b->kind != "trials") {
+      judgement = kind_text(*b);
+      timeline = "—";
+    }
     std::string breaks = "none";
     if (b && b->break_every_trials > 0)
       breaks = "every " + std::to_string(b->break_every_trials) + " trials, at least " + duration_text(b->break_min_ms);
@@ -387,7 +408,7 @@ void write_texts(std::ostringstream& o, const protocol::Protocol& p, const proto
     const protocol::Block* b = block_at(p, pb.protocol_block);
     if (!pb.instructions.empty())
       o << "<tr><td>before block " << html(pb.name) << "</td><td>" << texts(pb.instructions) << "</td></tr>\n";
-    if (b && !b->judgement.prompt.empty())
+    if (b && b->kind == "trials" && !b->judgement.prompt.empty())
       o << "<tr><td>prompt in block " << html(pb.name) << "</td><td>" << texts({b->judgement.prompt})
         << "</td></tr>\n";
     if (b && b->break_every_trials > 0)
@@ -430,7 +451,7 @@ void write_responses(std::ostringstream& o, const protocol::Protocol& p, const p
   std::vector<std::pair<std::vector<std::string>, std::string>> entries;  // blocks, tables
   for (const auto& pb : design.blocks) {
     const protocol::Block* b = block_at(p, pb.protocol_block);
-    if (!b) continue;
+    if (!b || b->kind != "trials") continue;
     const std::string tables = judgement_tables(b->judgement);
     const std::string name = pb.name + (pb.practice ? " (practice)" : "");
     const auto same = std::find_if(entries.begin(), entries.end(), [&](const auto& e) { return e.second == tables; });

@@ -22,8 +22,8 @@ constexpr std::uint32_t kGrain = 64;
 
 std::uint32_t rounded_up(std::uint32_t n) { return (n + kGrain - 1) / kGrain * kGrain; }
 
-// Each coverage value's bytes in the swapchain's format: the panel's paper
-// and ink mixed in linear light as the renderer's text shader mixes them,
+}  // namespace
+
 // sRGB-encoded for an sRGB format (IEC 61966-2-1), linear for a UNORM one.
 std::array<std::array<std::uint8_t, 4>, 256> panel_texels(std::int64_t format) {
   const auto f = static_cast<vk::Format>(format);
@@ -43,8 +43,6 @@ std::array<std::array<std::uint8_t, 4>, 256> panel_texels(std::int64_t format) {
   }
   return lut;
 }
-
-}  // namespace
 
 QuadPanels::QuadPanels(const renderer::Context& ctx, std::int64_t format)
     : ctx_(ctx), format_(format), texels_(panel_texels(format)) {}

@@ -31,6 +31,11 @@ class Scene;
 
 namespace curvlab::harness::xr {
 
+// Each coverage value's bytes in a swapchain format (8-bit RGBA or BGRA,
+// sRGB or UNORM): the panels' paper and ink (renderer::palette) mixed in
+// linear light, as the renderer's text shader mixes them.
+std::array<std::array<std::uint8_t, 4>, 256> panel_texels(std::int64_t format);
+
 class QuadPanels {
  public:
   // `format`: the eye swapchains' VkFormat (an 8-bit RGBA or BGRA format,

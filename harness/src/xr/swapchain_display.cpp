@@ -251,6 +251,19 @@ renderer::StereoRig SwapchainDisplay::rig(const FrameTiming& frame, double ipd_m
                         {to_fov(views_[0].fov), to_fov(views_[1].fov)});
 }
 
+// Each eye of this frame in the head's frame (VIEW), with its field of view.
+std::array<MirrorEye, 2> SwapchainDisplay::mirror_eyes() const {
+  const StagePose& head = poses_.head();
+  const glm::dquat from_stage = glm::conjugate(head.orientation);
+  std::array<MirrorEye, 2> eyes{};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const StagePose eye = to_stage_pose(views_[i].pose);
+    eyes[i].in_head = {from_stage * (eye.position_m - head.position_m), from_stage * eye.orientation};
+    eyes[i].view = tangents(to_fov(views_[i].fov));
+  }
+  return eyes;
+}
+
 renderer::FrameStats SwapchainDisplay::submit(const renderer::Scene& scene, const renderer::FrameDescription& frame,
                                               const harness::io::Overlay& overlay, bool draw) {
   // The headset shows every frame: `draw` cannot skip one.
@@ -280,7 +293,7 @@ renderer::FrameStats SwapchainDisplay::submit(const renderer::Scene& scene, cons
     // render() submits before returning, as xrReleaseSwapchainImage requires.
     stats = renderer_->render(scene, f, *target_);
     // The operator window's copy, while the images are still acquired.
-    if (mirror_) mirror_->copy(images);
+    if (mirror_) mirror_->copy(images, scene, !f.draw_head_locked, mirror_eyes());
   } catch (const renderer::VulkanFailure& e) {
     swapchains_->release();
     fail(e);

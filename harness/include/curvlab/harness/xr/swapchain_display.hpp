@@ -47,6 +47,7 @@ namespace curvlab::harness::xr {
 class EyeSwapchains;
 class OperatorMirror;
 class QuadPanels;
+struct MirrorEye;
 
 struct SwapchainDisplayOptions {
   // Offer copies of the submitted images for the operator window (mirror()).
@@ -98,6 +99,8 @@ class SwapchainDisplay final : public harness::io::Display, private SessionPart 
   harness::io::FrameTiming stopped_frame();
   void mark_late(harness::io::FrameTiming& timing);
   void render(const renderer::Scene& scene, const renderer::FrameDescription& frame);
+  // This frame's eyes in the head's frame, for the operator's copy.
+  [[nodiscard]] std::array<MirrorEye, 2> mirror_eyes() const;
   void leave_session();
   [[noreturn]] void fail(const renderer::VulkanFailure& f);
   // --- refresh-rate negotiation (XR_FB_display_refresh_rate) ---
