@@ -4,7 +4,7 @@
 -- nanoseconds of the session's monotonic clock, *_utc are ISO 8601 UTC text.
 -- Adding or changing anything here means a new version, a migration in
 -- migrations/, and a codebook entry: no column is ever added at run time.
-PRAGMA user_version = 8;
+PRAGMA user_version = 9;
 
 CREATE TABLE schema_migrations (
   version INTEGER PRIMARY KEY,
@@ -291,3 +291,19 @@ CREATE TABLE questionnaire_scores (
   score REAL,
   UNIQUE (trial_id, subscale_index)
 ) STRICT;
+
+CREATE TABLE partner_samples (
+  sample_id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(session_id),
+  trial_id INTEGER,
+  frame_index INTEGER NOT NULL,
+  device TEXT NOT NULL CHECK (device IN ('head', 'left_hand', 'right_hand', 'cue')),
+  t_ns INTEGER NOT NULL,
+  virtual_pose BLOB NOT NULL CHECK (length(virtual_pose) = 128),
+  tracked INTEGER NOT NULL CHECK (tracked IN (0, 1)),
+  extrapolated INTEGER NOT NULL CHECK (extrapolated IN (0, 1)),
+  sample_age_ns INTEGER NOT NULL,
+  distance_m REAL
+) STRICT;
+
+CREATE INDEX partner_samples_by_session_time ON partner_samples (session_id, t_ns);

@@ -13,7 +13,7 @@
 # names the file and what was expected; report.R turns it into exit code 2.
 
 curvlab_application_id <- 1129729090  # PRAGMA application_id "CVLB"
-curvlab_schema_version <- 8L
+curvlab_schema_version <- 9L
 
 input_error <- function(...) {
   stop(structure(class = c("curvlab_input_error", "error", "condition"),
@@ -299,8 +299,14 @@ read_database <- function(path, max_tracking_per_device = 20000L) {
     paste0("(SELECT coalesce(sum(json_array_length(sh.pocketed)), 0) FROM shots sh WHERE sh.trial_id = e.trial_id",
            " AND sh.shot_index IN (SELECT json_extract(ss.detail, '$.shot_index') FROM events ss",
            " WHERE ss.trial_id = e.trial_id AND ss.kind = 'shared_shot'",
-           " AND json_extract(ss.detail, '$.shooter') = '", c("host", "join"), "')) AS ", c("host", "join"), "_pocketed",
-           c(",", ""), collapse = " "),
+           " AND json_extract(ss.detail, '$.shooter') = '", c("host", "join"), "')) AS ", c("host", "join"), "_pocketed,",
+           collapse = " "),
+    # The two players' heads apart in the virtual space, as this station
+    # drew the partner (partner_samples).
+    "(SELECT avg(x.distance_m) FROM partner_samples x WHERE x.trial_id = e.trial_id AND x.device = 'head')",
+    "   AS partner_distance_m,",
+    "(SELECT min(x.distance_m) FROM partner_samples x WHERE x.trial_id = e.trial_id AND x.device = 'head')",
+    "   AS partner_closest_m",
     "FROM events e JOIN sessions se ON se.session_id = e.session_id",
     "JOIN participants p ON p.participant_id = se.participant_id",
     "JOIN trials t ON t.trial_id = e.trial_id JOIN blocks b ON b.block_id = t.block_id",

@@ -84,7 +84,10 @@ shared_games_table <- function(play) {
                     host_pocketed = as.integer(g$host_pocketed), join_pocketed = as.integer(g$join_pocketed),
                     walked_m = round(as.numeric(g$walked_m), 1),
                     laps_physical = round(abs(as.numeric(g$laps_physical)), 2),
-                    laps_virtual = round(abs(as.numeric(g$laps_virtual)), 2), stringsAsFactors = FALSE)
+                    laps_virtual = round(abs(as.numeric(g$laps_virtual)), 2),
+                    partner_distance_m = if ("partner_distance_m" %in% names(g)) round(as.numeric(g$partner_distance_m), 2) else NA_real_,
+                    partner_closest_m = if ("partner_closest_m" %in% names(g)) round(as.numeric(g$partner_closest_m), 2) else NA_real_,
+                    stringsAsFactors = FALSE)
   key <- paste(out$host_shots, out$join_shots, out$host_pocketed, out$join_pocketed)
   sides <- tapply(key, out$game, function(k) if (length(k) < 2) NA else length(unique(k)) == 1)
   out$both_sides_agree <- ifelse(is.na(sides[out$game]), "(one side)", ifelse(sides[out$game], "yes", "NO"))
@@ -101,7 +104,7 @@ play_section_html <- function(play, trials, positive) {
     html_table(summary, "Play blocks per participant (laps as absolute values)"),
     if (nrow(shared)) c(
       "<h3>Shared games</h3>",
-      "<p class=\"method\">Two stations, one game (docs/shared_play.md): each row is one station's copy, with the shots the host and the joiner struck and the balls pocketed on them, and that station's player's walk round its own physical table. Where both stations' files are in the study, their copies must agree.</p>",
+      "<p class=\"method\">Two stations, one game (docs/shared_play.md): each row is one station's copy, with the shots the host and the joiner struck and the balls pocketed on them, that station's player's walk round its own physical table, and how far apart the two players' heads were in the virtual space (mean and closest, geodesic, as this station drew the partner). Where both stations' files are in the study, their copies must agree.</p>",
       html_table(shared, "Shared games, from each station"))
     else "",
     if (!is.null(change)) c(

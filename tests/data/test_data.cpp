@@ -288,8 +288,13 @@ constexpr const char* kDropLslTables =
     "DROP INDEX lsl_samples_by_stream_time; DROP INDEX lsl_clock_by_session_time; DROP TABLE lsl_samples; "
     "DROP TABLE lsl_streams; DROP TABLE lsl_clock;";
 
-// What version 8 added: the questionnaire blocks' tables.
-constexpr const char* kDropQuestionnaireTables = "DROP TABLE questionnaire_answers; DROP TABLE questionnaire_scores;";
+// What version 9 added: the partner's poses in a shared game.
+constexpr const char* kDropPartnerTable =
+    "DROP INDEX partner_samples_by_session_time; DROP TABLE partner_samples; ";
+
+// What version 8 added: the questionnaire blocks' tables (and what came after).
+const std::string kDropQuestionnaireTables =
+    std::string(kDropPartnerTable) + "DROP TABLE questionnaire_answers; DROP TABLE questionnaire_scores;";
 
 namespace {
 
@@ -332,20 +337,26 @@ TEST(Schema, MigratesVersion4FileAddingTheGazeTable) {
 
 // A file of version 5 (before the Lab Streaming Layer) gets its tables.
 TEST(Schema, MigratesVersion5FileAddingTheLslTables) {
-  expect_migrated_from(5, std::string(kDropLslTables) + kDropQuestionnaireTables + "DROP TABLE shots; ",
+  expect_migrated_from(5, kDropLslTables + kDropQuestionnaireTables + "DROP TABLE shots; ",
                        {"lsl_streams", "lsl_samples", "lsl_clock"});
 }
 
 // A file of version 6 (before play blocks) gets the shots table, as a new
 // file has it.
 TEST(Schema, MigratesVersion6FileAddingTheShotsTable) {
-  expect_migrated_from(6, std::string(kDropQuestionnaireTables) + "DROP TABLE shots; ", {"shots"});
+  expect_migrated_from(6, kDropQuestionnaireTables + "DROP TABLE shots; ", {"shots"});
 }
 
 // A file of version 7 (before questionnaire blocks) gets their tables, as a
 // new file has them, empty.
 TEST(Schema, MigratesVersion7FileAddingTheQuestionnaireTables) {
   expect_migrated_from(7, kDropQuestionnaireTables, {"questionnaire_answers", "questionnaire_scores"});
+}
+
+// A file of version 8 (before shared games stored the partner's poses) gets
+// the partner_samples table, as a new file has it, empty.
+TEST(Schema, MigratesVersion8FileAddingThePartnerTable) {
+  expect_migrated_from(8, kDropPartnerTable, {"partner_samples"});
 }
 
 TEST(Schema, BadPathsGiveClearErrors) {

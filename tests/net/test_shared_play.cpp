@@ -103,6 +103,16 @@ void expect_same_game(const std::filesystem::path& dir, std::size_t shots = 4) {
       EXPECT_EQ(std::stod(t[3]), 0.0) << db;
     }
     EXPECT_FALSE(query(db, "SELECT 1 FROM events WHERE kind = 'partner_clock'").empty()) << db;
+    // The partner as drawn: head, hands and cue at each frame, the head
+    // rows with the two heads' distance in the virtual space.
+    const auto devices = query(db, "SELECT device, count(*) FROM partner_samples GROUP BY device ORDER BY device");
+    ASSERT_EQ(devices.size(), 4u) << db;
+    EXPECT_GT(std::stoi(devices[0][1]), 20) << db;
+    const auto far = query(db, "SELECT count(distance_m), min(distance_m), max(distance_m) FROM partner_samples "
+                               "WHERE device = 'head'");
+    EXPECT_GT(std::stoi(far[0][0]), 20) << db;
+    EXPECT_GT(std::stod(far[0][1]), 0.1) << "two players at one point: " << db;
+    EXPECT_LT(std::stod(far[0][2]), 10.0) << db;
     const auto net = query(db, "SELECT json_extract(detail, '$.poses_received') FROM events WHERE kind = 'shared_network'");
     ASSERT_FALSE(net.empty()) << db;
     EXPECT_GT(std::stoi(net.back()[0]), 0) << db;
@@ -122,8 +132,20 @@ void expect_merged_game(const std::filesystem::path& dir) {
   EXPECT_EQ(players[0][1], "host");
   EXPECT_EQ(players[1][1], "join");
   EXPECT_NE(players[0][2], players[1][2]);
-  // Each session keeps its copy of the game's shots.
+  // Each session keeps its copy of the game's shots and of its partner as drawn.
   EXPECT_EQ(query(study, "SELECT 1 FROM shots").size(), 8u);
+  const auto drawn = [](const std::string& db) {
+    return std::stoll(query(db, "SELECT count(*) FROM partner_samples")[0][0]);
+  };
+  EXPECT_EQ(drawn(study), drawn((dir / "host.sqlite").string()) + drawn((dir / "join.sqlite").string()));
+  // The distance between the two heads is one quantity seen from both
+  // stations: their means agree to within the partner stream's latency.
+  const auto means = query(study, "SELECT avg(distance_m) FROM partner_samples WHERE device = 'head' "
+                                  "GROUP BY session_id ORDER BY session_id");
+  ASSERT_EQ(means.size(), 2u);
+  EXPECT_NEAR(std::stod(means[0][0]), std::stod(means[1][0]), 0.25);
+  std::printf("heads apart in the virtual space: %.3f m (host's view), %.3f m (joiner's view)\n",
+              std::stod(means[0][0]), std::stod(means[1][0]));
 }
 
 // The report on the merged study shows the game from both stations, each
@@ -147,6 +169,7 @@ void expect_report_shows_both_sides(const std::filesystem::path& dir) {
   std::size_t agree = 0;
   for (auto p = section.find("<td>yes</td>"); p != std::string::npos; p = section.find("<td>yes</td>", p + 1)) ++agree;
   EXPECT_EQ(agree, 2u) << section;
+  EXPECT_NE(section.find("partner_<wbr>distance_<wbr>m"), std::string::npos) << section;
 }
 
 }  // namespace

@@ -9,7 +9,8 @@ file(READ "${SCHEMA_DIR}/migrations/0005_from_v4.sql" m5)
 file(READ "${SCHEMA_DIR}/migrations/0006_from_v5.sql" m6)
 file(READ "${SCHEMA_DIR}/migrations/0007_from_v6.sql" m7)
 file(READ "${SCHEMA_DIR}/migrations/0008_from_v7.sql" m8)
-foreach(text IN ITEMS "${schema}" "${m2}" "${m3}" "${m4}" "${m5}" "${m6}" "${m7}" "${m8}")
+file(READ "${SCHEMA_DIR}/migrations/0009_from_v8.sql" m9)
+foreach(text IN ITEMS "${schema}" "${m2}" "${m3}" "${m4}" "${m5}" "${m6}" "${m7}" "${m8}" "${m9}")
   string(FIND "${text}" ")curvlab_sql\"" clash)
   if(NOT clash EQUAL -1)
     message(FATAL_ERROR "SQL text contains the raw-string delimiter")
@@ -28,6 +29,7 @@ constexpr std::string_view k_migration_5 = R\"curvlab_sql(${m5})curvlab_sql\";
 constexpr std::string_view k_migration_6 = R\"curvlab_sql(${m6})curvlab_sql\";
 constexpr std::string_view k_migration_7 = R\"curvlab_sql(${m7})curvlab_sql\";
 constexpr std::string_view k_migration_8 = R\"curvlab_sql(${m8})curvlab_sql\";
+constexpr std::string_view k_migration_9 = R\"curvlab_sql(${m9})curvlab_sql\";
 }  // namespace
 
 std::string_view schema_sql() { return k_schema; }
@@ -40,6 +42,7 @@ std::string_view migration_sql(std::int64_t to) {
   if (to == 6) return k_migration_6;
   if (to == 7) return k_migration_7;
   if (to == 8) return k_migration_8;
+  if (to == 9) return k_migration_9;
   return {};
 }
 

@@ -43,6 +43,8 @@ Expected<TrialTable> load_trial_table(Database& db, const ExportOptions& options
 // The play blocks' shots, one row per shot (export_shots.cpp); no rows where
 // nothing was played.
 Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options);
+// partner.csv: a shared game's partner head as drawn, with the players' distance.
+Expected<TrialTable> load_partner_table(Database& db, const ExportOptions& options);
 // The questionnaire blocks' answers, one row per item answered, and their
 // scores, one row per block and subscale (export_questionnaires.cpp); no
 // rows where no questionnaire was answered.

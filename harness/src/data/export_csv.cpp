@@ -86,17 +86,19 @@ Expected<ExportSummary> export_trials_csv(Database& db, const ExportOptions& opt
     if (!lsl) return lsl.error();
     written->files.push_back(lsl_name);
   }
-  // Play blocks' shots and questionnaire blocks' answers and scores beside
-  // the trials, where there are any.
+  // Play blocks' shots, questionnaire blocks' answers and scores, and a
+  // shared game's partner beside the trials, where there are any.
   auto shots = load_shot_table(db, options);
   if (!shots) return shots.error();
   auto answers = load_questionnaire_table(db, options);
   if (!answers) return answers.error();
   auto scores = load_questionnaire_score_table(db, options);
   if (!scores) return scores.error();
+  auto partner = load_partner_table(db, options);
+  if (!partner) return partner.error();
   const std::pair<const char*, const TrialTable*> beside[] = {
       {"shots.csv", &shots.value()}, {"questionnaires.csv", &answers.value()},
-      {"questionnaire_scores.csv", &scores.value()}};
+      {"questionnaire_scores.csv", &scores.value()}, {"partner.csv", &partner.value()}};
   for (const auto& [file, rows] : beside) {
     if (rows->rows.empty()) continue;
     const std::string file_name(file);

@@ -1,7 +1,8 @@
 // The play blocks' shots as a table (shots.csv; a Psych-DS file per session
 // that played): one row per shot, with the session, participant, block and
 // the shot's inputs and outcome. Events and ball positions stay in the
-// database's JSON columns (docs/billiards.md).
+// database's JSON columns (docs/billiards.md). A shared game's partner as
+// drawn, head rows with the players' distance (partner.csv).
 #include "export_common.hpp"
 
 namespace curvlab::harness::data::exporting {
@@ -42,6 +43,31 @@ Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options)
                    "JOIN trials t ON t.trial_id = sh.trial_id JOIN blocks b ON b.block_id = t.block_id "
                    "WHERE ?1 IS NULL OR sh.session_id = ?1 ORDER BY s.session_uuid, sh.session_id, sh.trial_id, "
                    "sh.shot_index");
+}
+
+Expected<TrialTable> load_partner_table(Database& db, const ExportOptions& options) {
+  std::vector<Column> columns{
+      {"session_uuid", "This station's session UUID", ""},
+      {"participant", "This station's participant (pseudonym)", ""},
+      {"session_number", "The participant's session number", ""},
+      {"block", "The shared play block's name", ""},
+      {"frame_index", "This station's frame that drew the partner", ""},
+      {"t_s", "When the frame was shown, from the session's start", "s"},
+      {"distance_m", "Geodesic distance in the virtual space between the two players' heads", "m"},
+      {"tracked", "The partner's station tracked its head (TRUE/FALSE)", ""},
+      {"extrapolated", "Drawn past the newest pose received (TRUE/FALSE)", ""},
+      {"sample_age_ms", "Age of the newest pose received when the frame was shown", "ms"},
+  };
+  return load_rows(db, options, std::move(columns),
+                   "SELECT x.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, x.frame_index, "
+                   "(x.t_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = x.session_id)) / 1e9, "
+                   "x.distance_m, CASE x.tracked WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, "
+                   "CASE x.extrapolated WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, x.sample_age_ns / 1e6 "
+                   "FROM partner_samples x JOIN sessions s ON s.session_id = x.session_id "
+                   "JOIN participants p ON p.participant_id = s.participant_id "
+                   "JOIN trials t ON t.trial_id = x.trial_id JOIN blocks b ON b.block_id = t.block_id "
+                   "WHERE x.device = 'head' AND (?1 IS NULL OR x.session_id = ?1) "
+                   "ORDER BY s.session_uuid, x.session_id, x.sample_id");
 }
 
 }  // namespace curvlab::harness::data::exporting

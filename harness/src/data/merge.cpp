@@ -40,7 +40,7 @@ std::string in_schema(std::string sql, const std::string& schema) {
 // pseudonym). session_number is left out: a merge may renumber. The events
 // a merge writes itself (merged_from, session_renumbered) are provenance of
 // the pooled copy, not something the session recorded, so they are left out.
-constexpr std::array<const char*, 11> digest_queries = {
+constexpr std::array<const char*, 12> digest_queries = {
     "SELECT json_array(s.session_uuid, pr.sha256, p.pseudonym, s.software_version, s.software_commit, "
     "s.backend, s.renderer_device, s.renderer_driver, s.display_refresh_hz, s.seed, s.table_calibration, "
     "s.status, s.started_utc, s.ended_utc) FROM {s}.sessions s "
@@ -84,6 +84,9 @@ constexpr std::array<const char*, 11> digest_queries = {
     "x.answered, x.raw, x.score) FROM {s}.questionnaire_scores x "
     "JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE x.session_id = ?1 "
     "ORDER BY t.trial_index, x.subscale_index",
+    "SELECT json_array(t.trial_index, x.frame_index, x.device, x.t_ns, hex(x.virtual_pose), x.tracked, "
+    "x.extrapolated, x.sample_age_ns, x.distance_m) FROM {s}.partner_samples x LEFT JOIN {s}.trials t "
+    "ON t.trial_id = x.trial_id AND t.session_id = x.session_id WHERE x.session_id = ?1 ORDER BY x.sample_id",
     "SELECT json_array(t.trial_index, x.t_ns, x.kind, x.detail) FROM {s}.events x "
     "LEFT JOIN {s}.trials t ON t.trial_id = x.trial_id AND t.session_id = x.session_id "
     "WHERE x.session_id = ?1 AND x.kind NOT IN ('merged_from', 'session_renumbered') ORDER BY x.event_id",
@@ -233,7 +236,7 @@ struct RowCopy {
   std::int64_t MergeInputReport::*counted = nullptr;
 };
 
-constexpr std::array<RowCopy, 10> copy_statements = {{
+constexpr std::array<RowCopy, 11> copy_statements = {{
     {"INSERT INTO main.blocks (session_id, block_index, name, is_practice, settings) SELECT ?2, block_index, "
     "name, is_practice, settings FROM src.blocks WHERE session_id = ?1 ORDER BY block_id", nullptr},
     {"INSERT INTO main.trials (session_id, block_id, trial_index, trial_in_block, conditions, stimulus, status, "
@@ -280,6 +283,10 @@ constexpr std::array<RowCopy, 10> copy_statements = {{
     "weight, items, answered, raw, score) SELECT ?2, mt.trial_id, x.instrument, x.subscale_index, x.subscale, "
     "x.rule, x.weight, x.items, x.answered, x.raw, x.score "
     "FROM src.questionnaire_scores x{trial} WHERE x.session_id = ?1 ORDER BY x.score_id", nullptr},
+    {"INSERT INTO main.partner_samples (session_id, trial_id, frame_index, device, t_ns, virtual_pose, tracked, "
+    "extrapolated, sample_age_ns, distance_m) SELECT ?2, mt.trial_id, x.frame_index, x.device, x.t_ns, "
+    "x.virtual_pose, x.tracked, x.extrapolated, x.sample_age_ns, x.distance_m "
+    "FROM src.partner_samples x{trial} WHERE x.session_id = ?1 ORDER BY x.sample_id", nullptr},
     {"INSERT INTO main.events (session_id, trial_id, t_ns, kind, detail) SELECT ?2, mt.trial_id, x.t_ns, "
     "x.kind, x.detail FROM src.events x{trial} WHERE x.session_id = ?1 ORDER BY x.event_id", nullptr},
 }};

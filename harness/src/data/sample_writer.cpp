@@ -35,6 +35,9 @@ constexpr const char* insert_tracking_sql =
     "virtual_pose, physical_edge, virtual_edge, laps, anchor_fraction, coherence_error_m, "
     "coherence_error_rad) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, "
     "?15, ?16, ?17, ?18, ?19, ?20, ?21)";
+constexpr const char* insert_partner_sql =
+    "INSERT INTO partner_samples (session_id, trial_id, frame_index, device, t_ns, virtual_pose, tracked, "
+    "extrapolated, sample_age_ns, distance_m) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)";
 constexpr const char* insert_frame_sql =
     "INSERT INTO frames (session_id, trial_id, frame_index, t_ns, predicted_display_ns, "
     "cpu_time_ns, gpu_time_ns, dropped_frames, views, passes, draws, triangles, eye_width_px, "
@@ -65,6 +68,7 @@ struct SampleWriter::Impl {
         store(std::move(s)),
         connection(std::move(c)),
         insert_tracking(connection, insert_tracking_sql),
+        insert_partner(connection, insert_partner_sql),
         insert_frame(connection, insert_frame_sql),
         insert_gaze(connection, insert_gaze_sql),
         insert_event(connection, insert_event_sql),
@@ -105,7 +109,7 @@ struct SampleWriter::Impl {
   SessionStore store;  // its own connection, synchronous = FULL
   std::deque<JournalEntry> journal_pending;
   Connection connection;
-  Statement insert_tracking, insert_frame, insert_gaze, insert_event, insert_wait;
+  Statement insert_tracking, insert_partner, insert_frame, insert_gaze, insert_event, insert_wait;
   // Since when the writer has found the file locked by another program (a
   // reader's checkpoint, another program's write transaction); the wait
   // to store as a logger_waited event once it has ended.
@@ -145,6 +149,17 @@ struct SampleWriter::Impl {
     } else {
       for (int i = 16; i <= 21; ++i) st.bind_null(i);
     }
+  }
+
+  void bind_partner(const TrackingSample& s) {
+    auto& st = insert_partner;
+    st.bind(1, s.session_id);
+    if (s.trial_id >= 0) st.bind(2, s.trial_id); else st.bind_null(2);
+    st.bind(3, s.frame_index).bind_static(4, s.device == TrackedDevice::other ? "cue" : to_string(s.device));
+    st.bind(5, s.t_ns).bind_blob(6, std::as_bytes(std::span<const double, 16>(s.virtual_pose)));
+    st.bind(7, std::int64_t{s.position_valid ? 1 : 0}).bind(8, std::int64_t{s.extrapolated ? 1 : 0});
+    st.bind(9, s.sample_age_ns);
+    if (s.distance_m >= 0.0) st.bind(10, s.distance_m); else st.bind_null(10);
   }
 
   void bind_frame(const FrameRecord& f) {
@@ -226,8 +241,13 @@ struct SampleWriter::Impl {
     try {
       Transaction txn(connection);
       for (const auto& s : pending_tracking) {
-        bind_sample(s);
-        insert_tracking.run();
+        if (s.partner) {
+          bind_partner(s);
+          insert_partner.run();
+        } else {
+          bind_sample(s);
+          insert_tracking.run();
+        }
       }
       for (const auto& f : pending_frames) {
         bind_frame(f);

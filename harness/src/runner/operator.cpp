@@ -204,6 +204,7 @@ std::vector<std::string> status_lines(const OperatorStatus& s, std::optional<dou
   else
     std::snprintf(buf, sizeof buf, "disk free ?   logger drops %llu", static_cast<unsigned long long>(s.logger_drops));
   lines.emplace_back(buf);
+  if (!s.partner.empty()) lines.push_back(s.partner);
   if (s.logger_lock_wait_s > 0.0) {
     std::snprintf(buf, sizeof buf, "logger waiting %.0f s for another program's lock on the data file",
                   s.logger_lock_wait_s);

@@ -367,6 +367,14 @@ data::TrackingSample SessionFrames::sample(const Frame& f, std::int64_t trial_id
   return s;
 }
 
+void SessionFrames::log_sample(const Frame& f, std::int64_t trial_id, data::TrackingSample s) {
+  s.session_id = session_id;
+  s.trial_id = trial_id;
+  s.frame_index = frame_index_;
+  s.t_ns = f.timing.predicted_display_ns;
+  push([&] { return writer.push_tracking(s); });
+}
+
 // The frame record carries the eye geometry it was drawn with, so that
 // replay draws from what was recorded (the writer stores only changes).
 void SessionFrames::log_frame(const Frame& f, const renderer::FrameStats& stats,

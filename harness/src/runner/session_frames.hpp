@@ -97,6 +97,10 @@ class SessionFrames {
   [[nodiscard]] renderer::Eye dominant() const { return dominant_; }
   [[nodiscard]] std::int64_t frame_index() const { return frame_index_; }
 
+  // A sample of this frame (partner_samples when `s.partner`): stamped with
+  // the session, the frame's index and display time, and stored by the
+  // sample writer with the frame's own.
+  void log_sample(const Frame& f, std::int64_t trial_id, data::TrackingSample s);
   // ---- records ----
   // Stored, and streamed as a marker (session_markers.cpp) stamped with the
   // moment it describes: `moment_ns`, else the event's own time, else now.

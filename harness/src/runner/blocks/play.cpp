@@ -31,6 +31,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <numbers>
 #include <random>
@@ -378,7 +379,10 @@ class PlayBlock {
       figures_.add(f_.lab(), physical, f_.tracking());
       if (shared_) {
         exchange(t_ns);
-        avatar_->update(f_.scene().scene(), partner_poses_.at(t_ns));
+        const net::PartnerPose partner = partner_poses_.at(t_ns);
+        avatar_->update(f_.scene().scene(), partner);
+        log_partner(g, partner);
+        show_link(t_ns);
         const std::string& now = partner_away_ ? paused : line;
         if (overlay.text != now) overlay.text = now;  // no copy on an unchanged frame
       }
@@ -397,6 +401,7 @@ class PlayBlock {
       f_.end(g, overlay, false, trial_id_);
       if (g.signal == Signal::quit) return Outcome::quit;
     }
+    f_.room.status.partner.clear();
     store_play(start_ns);
     scene_->hide(f_.scene().scene());
     if (cue_) cue_->hide(f_.scene().scene());
@@ -623,6 +628,58 @@ class PlayBlock {
     link.flush();
   }
 
+  // The operator's line about the shared game, twice a second: both
+  // players, the link's state and figures, and how far apart the heads are.
+  void show_link(std::int64_t t_ns) {
+    if (t_ns < next_link_line_ns_) return;
+    next_link_line_ns_ = t_ns + 500'000'000;
+    const net::LinkCounters c = shared_->counters();
+    const net::ClockEstimate clock = shared_->clock();
+    char figures[160];
+    std::snprintf(figures, sizeof figures, "  RTT %u ms  loss %.0f %%", c.enet_rtt_ms, 100.0 * c.enet_loss);
+    std::string line = "you " + std::string(to_string(shared_->mine.role)) + " " + shared_->mine.initials +
+                       ", partner " + std::string(to_string(shared_->partner.role)) + " " +
+                       shared_->partner.initials + ": " +
+                       (partner_away_ ? "DISCONNECTED, game paused" : "connected") + figures;
+    if (clock.valid) {
+      std::snprintf(figures, sizeof figures, "  clock offset %+.2f ms", static_cast<double>(clock.offset_ns) / 1e6);
+      line += figures;
+    }
+    if (last_distance_m_ >= 0.0) {
+      std::snprintf(figures, sizeof figures, "  heads %.2f m apart", last_distance_m_);
+      line += figures;
+    }
+    f_.room.status.partner = std::move(line);
+  }
+
+  // The partner as this frame draws it (partner_samples), with the two
+  // heads' geodesic distance in the virtual space where this head is known.
+  void log_partner(const Frame& g, const net::PartnerPose& partner) {
+    if (!partner.valid) return;
+    static constexpr data::TrackedDevice devices[net::PoseFrame::kDevices] = {
+        data::TrackedDevice::head, data::TrackedDevice::left_hand, data::TrackedDevice::right_hand,
+        data::TrackedDevice::other};
+    const geometry::TrackingOutput* mine = f_.tracking();
+    const geometry::Space& space = f_.world().space;
+    for (int d = 0; d < net::PoseFrame::kDevices; ++d) {
+      data::TrackingSample s;
+      s.partner = true;
+      s.device = devices[d];
+      s.position_valid = (partner.tracked & (1u << d)) != 0;
+      s.extrapolated = partner.extrapolated;
+      s.sample_age_ns = g.timing.predicted_display_ns - partner.newest_sample_ns;
+      const auto& m = partner.pose[static_cast<std::size_t>(d)].m;
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) s.virtual_pose[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
+      if (d == net::PoseFrame::head && mine != nullptr && mine->tracked[0]) {
+        s.distance_m = geometry::distance_m(space, mine->pose[0] * geometry::origin(space),
+                                            partner.pose[0] * geometry::origin(space));
+        last_distance_m_ = s.distance_m;
+      }
+      f_.log_sample(g, trial_id_, s);
+    }
+  }
+
   // Head, hands and cue tip as this station's tracking placed them.
   void send_poses(std::int64_t t_ns) {
     const geometry::TrackingOutput* t = f_.tracking();
@@ -717,11 +774,14 @@ class PlayBlock {
     f_.event(trial_id_, e);
   }
 
-  // Laps enough for the whole block at a slow walk, 0.4 m/s.
+  // Laps enough for the whole block at a slow walk, 0.4 m/s. In a shared
+  // game the joiner starts across the table from the host, as two players
+  // do, so the two simulated players never stand in one place.
   geometry::Trajectory walking_trajectory(const geometry::PhysicalTable& table) const {
     geometry::WalkAroundOptions o;
     o.common.table = table;
     o.speed_m_s = 0.4;
+    if (shared_ != nullptr && shared_->mine.role == net::Role::join) o.start_azimuth_rad = kPi;
     const double circle_m = 2.0 * kPi * (0.5 * table.edge_m + o.common.head_distance_m);
     o.laps = std::ceil(play_.duration_s * o.speed_m_s / circle_m) + 1.0;
     return geometry::walk_around(o);
@@ -970,6 +1030,8 @@ class PlayBlock {
   std::optional<std::int64_t> charge_from_ns_;
   SharedPlay* shared_ = nullptr;
   net::PartnerPoseBuffer partner_poses_;
+  std::int64_t next_link_line_ns_ = 0;  // the operator's next line about the link
+  double last_distance_m_ = -1.0;       // the heads' last distance; negative: not yet known
   std::optional<PartnerAvatar> avatar_;
   std::map<std::uint32_t, net::Shot> pending_;  // the partner's shots not yet played here, by index
   bool partner_over_ = false;

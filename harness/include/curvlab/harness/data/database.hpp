@@ -14,7 +14,7 @@
 namespace curvlab::harness::data {
 
 // The schema version this build writes (PRAGMA user_version).
-inline constexpr std::int64_t current_schema_version = 8;
+inline constexpr std::int64_t current_schema_version = 9;
 // Marks curvlab files (PRAGMA application_id, ASCII "CVLB").
 inline constexpr std::int64_t curvlab_application_id = 0x43564C42;
 // Free space required before a session may start; below it opening for a

@@ -212,6 +212,14 @@ struct TrackingSample {
   std::array<double, 4> lab_orientation_xyzw{0.0, 0.0, 0.0, 1.0};
   std::array<double, 16> virtual_pose{};  // column-major 4x4 isometry
   TrackingStateRecord state{};
+  // A shared game's partner as this station drew it (partner_samples, not
+  // tracking_samples): `device` head, left_hand, right_hand or other (the
+  // cue); position_valid: the partner's station tracked it; the pose in
+  // virtual_pose. Lab columns are unused.
+  bool partner = false;
+  bool extrapolated = false;
+  std::int64_t sample_age_ns = 0;
+  double distance_m = -1.0;  // head: the players' geodesic distance; negative: none
 };
 
 // One gaze ray in the lab (STAGE) frame: where it starts (metres) and its

@@ -90,6 +90,10 @@ struct OperatorStatus {
   double logger_lock_wait_s = 0.0;  // how long another program has held the file's lock (0: not waiting)
   bool paused = false;
   bool ended = false;  // the session is over; last status
+  // A shared game: both players and the link ("you host P01, partner join
+  // AB: connected  RTT 3 ms  clock offset +0.2 ms  loss 0 %  heads 1.8 m
+  // apart"); empty outside shared games.
+  std::string partner;
 };
 
 // The operator's console: the status shown and the actions taken. The
