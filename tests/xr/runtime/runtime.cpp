@@ -698,8 +698,10 @@ std::optional<std::vector<std::uint8_t>> read_back(Session& s, const Swapchain& 
   std::optional<std::vector<std::uint8_t>> out;
   void* mapped = nullptr;
   if (ok && vk.vkMapMemory(vk.device, memory, 0, size, 0, &mapped) == VK_SUCCESS) {
-    const auto* px = static_cast<const std::uint8_t*>(mapped);
-    out.emplace(px, px + size);
+    if (mapped != nullptr) {
+      out.emplace(static_cast<std::size_t>(size));
+      std::memcpy(out->data(), mapped, out->size());
+    }
     vk.vkUnmapMemory(vk.device, memory);
   }
   vk.vkDestroyBuffer(vk.device, buffer, nullptr);
@@ -1873,26 +1875,31 @@ XrResult XRAPI_CALL BeginFrame(XrSession h, const XrFrameBeginInfo* info) {
 bool capture_left(Session& s, const XrFrameEndInfo& info, const XrCompositionLayerProjection& projection,
                   const std::string& path) {
   const XrCompositionLayerProjectionView& v = projection.views[0];
-  const Swapchain& sc = *swapchain_of(v.subImage.swapchain);
+  const Swapchain* eye_chain = swapchain_of(v.subImage.swapchain);
+  const Space* layer_space = space_of(projection.space);
+  if (eye_chain == nullptr || !eye_chain->last_released || layer_space == nullptr) return false;  // checked before
+  const Swapchain& sc = *eye_chain;
   const XrRect2Di& rect = v.subImage.imageRect;
   const auto bytes = read_back(s, sc, *sc.last_released, rect, v.subImage.imageArrayIndex);
   if (!bytes) return false;
   const int w = rect.extent.width, h = rect.extent.height;
   LinearImage eye(*bytes, sc.format, w, h);
   std::vector<bool> covered(static_cast<std::size_t>(w) * h, false);
-  const Pose eye_pose = compose(stage_pose(*space_of(projection.space), info.displayTime).first, to_pose(v.pose));
+  const Pose eye_pose = compose(stage_pose(*layer_space, info.displayTime).first, to_pose(v.pose));
   const double tl = std::tan(v.fov.angleLeft), tr = std::tan(v.fov.angleRight);
   const double tu = std::tan(v.fov.angleUp), td = std::tan(v.fov.angleDown);
   for (uint32_t i = 0; i < info.layerCount; ++i) {
     if (info.layers[i]->type != XR_TYPE_COMPOSITION_LAYER_QUAD) continue;
     const auto& q = *reinterpret_cast<const XrCompositionLayerQuad*>(info.layers[i]);
     if (q.eyeVisibility == XR_EYE_VISIBILITY_RIGHT) continue;
-    const Swapchain& qsc = *swapchain_of(q.subImage.swapchain);
+    const Swapchain* quad_chain = swapchain_of(q.subImage.swapchain);
+    const Space* quad_space = space_of(q.space);
+    if (quad_chain == nullptr || !quad_chain->last_released || quad_space == nullptr) return false;  // checked before
     const XrRect2Di& qr = q.subImage.imageRect;
-    const auto texels = read_back(s, qsc, *qsc.last_released, qr, q.subImage.imageArrayIndex);
+    const auto texels = read_back(s, *quad_chain, *quad_chain->last_released, qr, q.subImage.imageArrayIndex);
     if (!texels) return false;
-    const LinearImage quad(*texels, qsc.format, qr.extent.width, qr.extent.height);
-    const Pose quad_pose = compose(stage_pose(*space_of(q.space), info.displayTime).first, to_pose(q.pose));
+    const LinearImage quad(*texels, quad_chain->format, qr.extent.width, qr.extent.height);
+    const Pose quad_pose = compose(stage_pose(*quad_space, info.displayTime).first, to_pose(q.pose));
     const Pose eye_in_quad = compose(inverse(quad_pose), eye_pose);
     const bool blend = (q.layerFlags & XR_COMPOSITION_LAYER_BLEND_TEXTURE_SOURCE_ALPHA_BIT) != 0;
     const bool unpremultiplied = (q.layerFlags & XR_COMPOSITION_LAYER_UNPREMULTIPLIED_ALPHA_BIT) != 0;
