@@ -3,7 +3,7 @@
 #
 # 1. installs the Debian packages it needs (only those missing);
 # 2. verifies the pinned sources in ../shared/third_party against SHA256SUMS
-#    and builds SQLite, Nettle, GLFW, hidapi, the OpenXR loader, GoogleTest
+#    and builds SQLite, Nettle, GLFW, hidapi, the OpenXR loader, ENet, GoogleTest
 #    and the stb implementations for x86_64-w64-mingw32 once, into a cache
 #    outside the clone keyed by the sources' checksums and this recipe
 #    (/var/cache/curvlab/mingw-<key>, or $CURVLAB_CACHE/mingw-<key>);
@@ -186,6 +186,38 @@ if [ ! -f "$cache/built" ]; then
   build_deps "$cache"
   touch "$cache/built"
   log "dependencies built in $(( $(date +%s) - start )) s"
+fi
+# ENet, the transport of shared play (docs/shared_play.md): a static
+# library built into the same prefix once, from the pinned tarball, so that
+# adding it did not rebuild the dependencies above. Without the tarball
+# curvlab.exe is built without shared play and says so.
+enet_tar=enet-1.3.17.tar.gz
+if [ -f "$third_party/$enet_tar" ] && [ ! -f "$prefix/lib/libenet.a" ]; then
+  (cd "$third_party" && grep " $enet_tar\$" SHA256SUMS | sha256sum -c --quiet -) || {
+    log "$third_party/$enet_tar does not match SHA256SUMS"
+    exit 1
+  }
+  log "ENet"
+  enet_src=$cache/src/enet
+  rm -rf "$enet_src"
+  mkdir -p "$enet_src/obj"
+  tar -xzf "$third_party/$enet_tar" -C "$enet_src" --strip-components=1
+  for c in callbacks compress host list packet peer protocol win32; do
+    $triple-gcc-posix -O2 -I"$enet_src/include" -c "$enet_src/$c.c" -o "$enet_src/obj/$c.o"
+  done
+  $triple-ar rcs "$enet_src/libenet.a" "$enet_src"/obj/*.o
+  mkdir -p "$prefix/include/enet"
+  cp "$enet_src"/include/enet/*.h "$prefix/include/enet/"
+  cat > "$prefix/lib/pkgconfig/libenet.pc" <<EOF
+prefix=$prefix
+Name: libenet
+Description: ENet reliable UDP networking (static, for Windows)
+Version: 1.3.17
+Libs: -L\${prefix}/lib -lenet -lws2_32 -lwinmm
+Cflags: -I\${prefix}/include
+EOF
+  # Last: its presence marks ENet as built.
+  cp "$enet_src/libenet.a" "$prefix/lib/"
 fi
 if [ "${1:-}" = "--deps-only" ]; then
   echo "$prefix"

@@ -6,7 +6,7 @@
 #   run.sh CASE SOURCE_DIR LINUX_CURVLAB WINDOWS_BUILD_DIR WORK_DIR
 #
 # Cases: prefix (makes the Wine prefix the others use), unit-NAME (a gtest
-# binary), cli, session, render, resume, desktop, xr.
+# binary), cli, session, render, resume, desktop, xr, shared.
 set -euo pipefail
 case_name=$1 src=$2 linux=$3 wbuild=$4 work=$5
 
@@ -264,6 +264,64 @@ assert len(stored) > 100 and worst < 50_000, (
     f"stored display times are up to {worst / 1e6:.3f} ms from the runtime's ({len(stored)} frames)")
 print(f"xr session through the Windows loader: 8 trials, {frames} frames, {len(states)} state changes, "
       f"{len(stored)} stored display times within {worst / 1e3:.1f} us of the runtime's")
+PY
+    ;;
+
+  shared)
+    # Shared play across builds (docs/shared_play.md): the Linux build hosts,
+    # curvlab.exe under Wine joins over ENet on the loopback, each with its
+    # own database. Both store the same game: the same shot inputs and rest
+    # states (each station keeps the shooter's), the same events to the last
+    # bits of two C libraries, and every shot the other build simulated again
+    # recorded with its difference.
+    /usr/bin/python3 - "$src/protocols/adaptation_play.toml" "$out/play.toml" <<'PY'
+import sys
+text = open(sys.argv[1]).read()
+text = text[:text.index("[[blocks]]")].replace('levels = ["E3", "H3"]', 'levels = ["S3", "E3", "H3"]')
+text += ('[[blocks]]\nname = "play"\nkind = "play"\nlevels = { space = "H3" }\nduration_s = 120\n'
+         'shots = 4\nuntil = "time"\nrack = 3\n')
+open(sys.argv[2], "w").write(text)
+PY
+    port=$((23000 + $$ % 4000))
+    station=(run "$out/play.toml" --render none --pace realtime --partner-wait-s 90 --json)
+    "$linux" "${station[@]}" --participant HOST01 --db "$out/host.sqlite" --shared host --bind 127.0.0.1 \
+      --listen $port > "$out/host.json" 2> "$out/host.err" &
+    host=$!
+    win "${station[@]}" --participant JOIN01 --db "$out/join.sqlite" --shared join \
+      --partner 127.0.0.1:$port > "$out/join.json" 2> "$out/join.err" || { cat "$out/join.err" >&2; kill $host; exit 1; }
+    wait $host || { cat "$out/host.err" >&2; exit 1; }
+    /usr/bin/python3 - "$out/host.sqlite" "$out/join.sqlite" <<'PY'
+import json, sqlite3, sys
+q = "SELECT shot_index, player, ball, shot, before_state, rest_state, pocketed, events FROM shots ORDER BY shot_index"
+host, join = (sqlite3.connect(p) for p in sys.argv[1:3])
+a, b = host.execute(q).fetchall(), join.execute(q).fetchall()
+assert len(a) == 4 and len(b) == 4, f"shots stored: host {len(a)}, joiner {len(b)}, expected 4 each"
+# Inputs, the state before, the rest state (the shooter's, kept by both)
+# and the balls pocketed: the same bytes.
+assert [r[:7] for r in a] == [r[:7] for r in b], "the two builds stored different shots or rest states"
+# The events each station stored: the same collisions in the same order; the
+# numbers may differ in their last bits (two C libraries' sin, cos, exp).
+worst_t = worst_x = 0.0
+for ra, rb in zip(a, b):
+    ea, eb = json.loads(ra[7]), json.loads(rb[7])
+    assert [(e["kind"], e.get("balls")) for e in ea] == [(e["kind"], e.get("balls")) for e in eb], \
+        f"shot {ra[0]}: different events"
+    for x, y in zip(ea, eb):
+        worst_t = max(worst_t, abs(x["t_s"] - y["t_s"]))
+        for p, r in zip(x.get("after", []), y.get("after", [])):
+            worst_x = max(worst_x, abs(p["x_m"] - r["x_m"]), abs(p["z_m"] - r["z_m"]))
+assert worst_t < 1e-9 and worst_x < 1e-9, f"events differ by {worst_t} s, {worst_x} m"
+game = "SELECT json_extract(detail, '$.game_uuid') FROM events WHERE kind = 'shared_game'"
+assert host.execute(game).fetchall() == join.execute(game).fetchall()
+checks = ("SELECT json_extract(detail, '$.rest_difference_m') FROM events WHERE kind = 'shared_shot' "
+          "AND json_extract(detail, '$.local') = 0")
+diffs = [d for (d,) in host.execute(checks).fetchall() + join.execute(checks).fetchall()]
+assert len(diffs) == 4 and max(diffs) < 1e-9, f"the other build's rest places: {diffs}"
+drawn = join.execute("SELECT count(*) FROM partner_samples WHERE device = 'head'").fetchone()[0]
+assert drawn > 20, f"the Windows station drew the Linux player {drawn} times"
+print(f"shared game, Linux host and Windows joiner: 4 shots with the same inputs and rest states; "
+      f"events within {worst_t:.2g} s and {worst_x:.2g} m; the other build's rest places within "
+      f"{max(diffs):.2g} m; the partner drawn {drawn} frames")
 PY
     ;;
 
