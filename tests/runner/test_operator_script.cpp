@@ -129,11 +129,13 @@ TEST(OperatorStatus, LinesShowTrialPhaseTrackingAndTiming) {
   s.last_rt_ms = 812.0;
   s.late_trial = 2;
   s.late_session = 5;
+  s.partner = "you host P07, partner join AB: connected  RTT 3 ms  loss 0 %";
   const auto lines = rn::status_lines(s, 12.5);
   std::string all;
   for (const auto& l : lines) all += l + "\n";
   for (const char* want : {"participant P07", "session 3", "protocol demo", "trial 4/8", "space=H3",
                            "phase response  1.5 s left", "left LOST 2.0 s", "right ok", "convex  RT 812 ms",
-                           "late frames 2 trial  5 session", "disk free 12.5 GB"})
+                           "late frames 2 trial  5 session", "disk free 12.5 GB",
+                           "partner join AB: connected"})
     EXPECT_NE(all.find(want), std::string::npos) << want << "\n" << all;
 }
