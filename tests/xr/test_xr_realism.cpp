@@ -133,14 +133,18 @@ DemoRun run_demo(const std::string& name, std::map<std::string, std::string> var
   return r;
 }
 
-// A copy of the demo protocol with `from` replaced by `to`.
-fs::path protocol_with(const fs::path& dir, const std::string& from, const std::string& to) {
+// A copy of the demo protocol with each `from` replaced by its `to`; a
+// `from` the protocol lacks fails the test.
+fs::path protocol_with(const fs::path& dir, std::initializer_list<std::pair<std::string, std::string>> edits) {
   std::ifstream in(kProtocol);
   std::ostringstream text;
   text << in.rdbuf();
   std::string s = text.str();
-  const auto at = s.find(from);
-  if (at != std::string::npos) s.replace(at, from.size(), to);
+  for (const auto& [from, to] : edits) {
+    const auto at = s.find(from);
+    if (at == std::string::npos) ADD_FAILURE() << "the demo protocol has no " << from;
+    else s.replace(at, from.size(), to);
+  }
   const auto path = dir / "protocol.toml";
   std::ofstream(path) << s;
   return path;
@@ -686,7 +690,7 @@ TEST(XrRealism, TheProtocolsRefreshRateIsRequestedAndChangesAreRecorded) {
 
   // A rate the display does not offer is said, and the display's own kept.
   const auto dir = fresh_dir("refresh_protocol");
-  const auto protocol = protocol_with(dir, "refresh_hz = 90", "refresh_hz = 100");
+  const auto protocol = protocol_with(dir, {{"refresh_hz = 90", "refresh_hz = 100"}});
   const DemoRun other = run_demo("refresh_100", {{"CURVLAB_TEST_XR_REFRESH", "72,90,120@72"}}, protocol.string());
   ASSERT_EQ(other.cli.exit_code, 0) << other.cli.out;
   EXPECT_NE(other.cli.out.find("does not offer the protocol's 100 Hz (it offers 72, 90, 120 Hz)"), std::string::npos)
@@ -721,24 +725,15 @@ TEST(XrRealism, ResponsePanelsAreQuadLayersOfTheStatedAngleInEverySpace) {
   for (const std::string kind : {"S3", "E3", "H3"}) {
     SCOPED_TRACE(kind);
     const auto dir = fresh_dir("quad_protocol_" + kind);
-    std::ifstream in(kProtocol);
-    std::ostringstream text;
-    text << in.rdbuf();
-    std::string protocol = text.str();
-    for (const auto& [from, to] :
-         {std::pair<std::string, std::string>{R"(levels = ["E3", "H3"])", "levels = [\"" + kind + "\"]"},
-          {R"(prompt = "Convex, straight or concave?")", R"(prompt = "FFF FFF")"}}) {
-      const auto at = protocol.find(from);
-      ASSERT_NE(at, std::string::npos) << from;
-      protocol.replace(at, from.size(), to);
-    }
-    std::ofstream(dir / "protocol.toml") << protocol;
+    const auto protocol = protocol_with(dir, {{R"(levels = ["E3", "H3"])", "levels = [\"" + kind + "\"]"},
+                                              {R"(prompt = "Convex, straight or concave?")", R"(prompt = "FFF FFF")"}});
+    ASSERT_FALSE(::testing::Test::HasFailure());
     const auto captures = fresh_dir("quad_captures_" + kind);
     const DemoRun run = run_demo("quad_run_" + kind,
                                  {{"CURVLAB_TEST_XR_SIZE", std::to_string(kEyePx) + "x" + std::to_string(kEyePx)},
                                   {"CURVLAB_TEST_XR_CAPTURE_DIR", captures.string()},
                                   {"CURVLAB_TEST_XR_CAPTURE_EVERY", "20"}},
-                                 (dir / "protocol.toml").string());
+                                 protocol.string());
     ASSERT_EQ(run.cli.exit_code, 0) << run.cli.out;
     const RuntimeLog log(run.log_path);
     EXPECT_TRUE(log.problems().empty()) << joined(log.problems());

@@ -48,6 +48,17 @@ Expected<TrialTable> load_partner_table(Database& db, const ExportOptions& optio
 // The questionnaire blocks' answers, one row per item answered, and their
 // scores, one row per block and subscale (export_questionnaires.cpp); no
 // rows where no questionnaire was answered.
+// The session, participant and block of a row of a table aliased `x` that
+// has session_id and trial_id (s, p, t and b in the query).
+inline constexpr const char* kBlockJoins =
+    "JOIN sessions s ON s.session_id = x.session_id "
+    "JOIN participants p ON p.participant_id = s.participant_id "
+    "JOIN trials t ON t.trial_id = x.trial_id JOIN blocks b ON b.block_id = t.block_id ";
+// Column `x.<column>` (ns on the session clock) in seconds from the session's
+// first frame.
+inline std::string seconds_from_start(const std::string& column) {
+  return "(x." + column + " - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = x.session_id)) / 1e9";
+}
 // The rows of `sql` (session id first, then one column per table column),
 // `session_id` bound to ?1 (NULL: every session).
 Expected<TrialTable> load_rows(Database& db, const ExportOptions& options, std::vector<Column> columns,

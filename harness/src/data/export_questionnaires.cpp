@@ -21,11 +21,6 @@ std::vector<Column> block_columns() {
 }
 
 
-constexpr const char* kBlockJoins =
-    "JOIN sessions s ON s.session_id = x.session_id "
-    "JOIN participants p ON p.participant_id = s.participant_id "
-    "JOIN trials t ON t.trial_id = x.trial_id JOIN blocks b ON b.block_id = t.block_id ";
-
 }  // namespace
 
 Expected<TrialTable> load_questionnaire_table(Database& db, const ExportOptions& options) {
@@ -44,8 +39,8 @@ Expected<TrialTable> load_questionnaire_table(Database& db, const ExportOptions&
   return load_rows(db, options, std::move(columns),
                    std::string("SELECT x.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, "
                                "b.block_index, x.instrument, x.item_index, x.item_id, x.item_text, x.value, x.label, "
-                               "x.rt_ms, (x.t_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = "
-                               "x.session_id)) / 1e9, x.device FROM questionnaire_answers x ") +
+                               "x.rt_ms, ") +
+                       seconds_from_start("t_ns") + ", x.device FROM questionnaire_answers x " +
                        kBlockJoins +
                        "WHERE ?1 IS NULL OR x.session_id = ?1 ORDER BY s.session_uuid, x.session_id, "
                        "b.block_index, x.item_index");

@@ -31,18 +31,16 @@ Expected<TrialTable> load_shot_table(Database& db, const ExportOptions& options)
       {"pocketed_count", "Number of object balls the shot pocketed", ""},
   };
   return load_rows(db, options, std::move(columns),
-                   "SELECT sh.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, "
-                   "json_extract(sh.table_settings, '$.space'), sh.shot_index, "
-                   "(sh.t_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = sh.session_id)) / 1e9, "
-                   "(sh.rest_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = sh.session_id)) / 1e9, "
-                   "sh.player, sh.ball, sh.aim_x, sh.aim_z, sh.speed_m_s, sh.cue_speed_m_s, sh.tip_side, "
-                   "sh.tip_height, CASE sh.miscue WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, sh.event_count, "
-                   "(SELECT group_concat(value, ' ') FROM json_each(sh.pocketed)), json_array_length(sh.pocketed) "
-                   "FROM shots sh JOIN sessions s ON s.session_id = sh.session_id "
-                   "JOIN participants p ON p.participant_id = s.participant_id "
-                   "JOIN trials t ON t.trial_id = sh.trial_id JOIN blocks b ON b.block_id = t.block_id "
-                   "WHERE ?1 IS NULL OR sh.session_id = ?1 ORDER BY s.session_uuid, sh.session_id, sh.trial_id, "
-                   "sh.shot_index");
+                   "SELECT x.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, "
+                   "json_extract(x.table_settings, '$.space'), x.shot_index, " +
+                       seconds_from_start("t_ns") + ", " + seconds_from_start("rest_ns") +
+                       ", x.player, x.ball, x.aim_x, x.aim_z, x.speed_m_s, x.cue_speed_m_s, x.tip_side, "
+                       "x.tip_height, CASE x.miscue WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, x.event_count, "
+                       "(SELECT group_concat(value, ' ') FROM json_each(x.pocketed)), json_array_length(x.pocketed) "
+                       "FROM shots x " +
+                       kBlockJoins +
+                       "WHERE ?1 IS NULL OR x.session_id = ?1 ORDER BY s.session_uuid, x.session_id, x.trial_id, "
+                       "x.shot_index");
 }
 
 Expected<TrialTable> load_partner_table(Database& db, const ExportOptions& options) {
@@ -59,15 +57,14 @@ Expected<TrialTable> load_partner_table(Database& db, const ExportOptions& optio
       {"sample_age_ms", "Age of the newest pose received when the frame was shown", "ms"},
   };
   return load_rows(db, options, std::move(columns),
-                   "SELECT x.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, x.frame_index, "
-                   "(x.t_ns - (SELECT MIN(t_ns) FROM frames f WHERE f.session_id = x.session_id)) / 1e9, "
-                   "x.distance_m, CASE x.tracked WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, "
-                   "CASE x.extrapolated WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, x.sample_age_ns / 1e6 "
-                   "FROM partner_samples x JOIN sessions s ON s.session_id = x.session_id "
-                   "JOIN participants p ON p.participant_id = s.participant_id "
-                   "JOIN trials t ON t.trial_id = x.trial_id JOIN blocks b ON b.block_id = t.block_id "
-                   "WHERE x.device = 'head' AND (?1 IS NULL OR x.session_id = ?1) "
-                   "ORDER BY s.session_uuid, x.session_id, x.sample_id");
+                   "SELECT x.session_id, s.session_uuid, p.pseudonym, s.session_number, b.name, x.frame_index, " +
+                       seconds_from_start("t_ns") +
+                       ", x.distance_m, CASE x.tracked WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, "
+                       "CASE x.extrapolated WHEN 1 THEN 'TRUE' ELSE 'FALSE' END, x.sample_age_ns / 1e6 "
+                       "FROM partner_samples x " +
+                       kBlockJoins +
+                       "WHERE x.device = 'head' AND (?1 IS NULL OR x.session_id = ?1) "
+                       "ORDER BY s.session_uuid, x.session_id, x.sample_id");
 }
 
 }  // namespace curvlab::harness::data::exporting

@@ -335,18 +335,13 @@ data::TrackingSample SessionFrames::sample(const Frame& f, std::int64_t trial_id
   static constexpr data::TrackedDevice devices[] = {data::TrackedDevice::head, data::TrackedDevice::left_hand,
                                                     data::TrackedDevice::right_hand};
   data::TrackingSample s;
-  s.session_id = session_id;
-  s.trial_id = trial_id;
-  s.frame_index = frame_index_;
-  s.t_ns = f.timing.predicted_display_ns;
+  stamp(s, f, trial_id);
   s.device = devices[d];
   s.position_valid = pose.valid;
   s.orientation_valid = pose.valid || pose.orientation_valid;
   s.lab_position_m = {pose.position_m.x, pose.position_m.y, pose.position_m.z};
   s.lab_orientation_xyzw = {pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w};
-  const auto& m = out.pose[static_cast<std::size_t>(d)].m;
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) s.virtual_pose[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
+  store_pose(out.pose[static_cast<std::size_t>(d)].m, s.virtual_pose);
   const bool finite =
       std::all_of(s.virtual_pose.begin(), s.virtual_pose.end(), [](double v) { return std::isfinite(v); });
   s.has_virtual_pose = out.tracked[static_cast<std::size_t>(d)] && finite;
@@ -367,11 +362,15 @@ data::TrackingSample SessionFrames::sample(const Frame& f, std::int64_t trial_id
   return s;
 }
 
-void SessionFrames::log_sample(const Frame& f, std::int64_t trial_id, data::TrackingSample s) {
+void SessionFrames::stamp(data::TrackingSample& s, const Frame& f, std::int64_t trial_id) const {
   s.session_id = session_id;
   s.trial_id = trial_id;
   s.frame_index = frame_index_;
   s.t_ns = f.timing.predicted_display_ns;
+}
+
+void SessionFrames::log_sample(const Frame& f, std::int64_t trial_id, data::TrackingSample s) {
+  stamp(s, f, trial_id);
   push([&] { return writer.push_tracking(s); });
 }
 

@@ -18,6 +18,9 @@
 #include "curvlab/harness/runner/stimulus.hpp"
 #include "curvlab/harness/runner/trial_state.hpp"
 
+#include <glm/mat4x4.hpp>
+
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -47,6 +50,13 @@ struct Frame {
     return {timing.now_ns, timing.predicted_display_ns, head_tracked, signal};
   }
 };
+
+// An isometry's 4×4 matrix as a stored virtual pose: column-major, as
+// tracking_samples.virtual_pose and partner_samples.virtual_pose hold it.
+inline void store_pose(const glm::dmat4& m, std::array<double, 16>& out) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) out[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
+}
 
 class SessionFrames {
  public:
@@ -167,6 +177,8 @@ class SessionFrames {
   void store_display_reports();
   void take_stop_signal(Frame& f);
   data::TrackingSample sample(const Frame& f, std::int64_t trial_id, int d) const;
+  // The session, trial, frame index and display time of this frame's sample.
+  void stamp(data::TrackingSample& s, const Frame& f, std::int64_t trial_id) const;
   void log_frame(const Frame& f, const renderer::FrameStats& stats, std::optional<std::int64_t> trial_id,
                  const renderer::StereoRig& rig);
   template <class Push>

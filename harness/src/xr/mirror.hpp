@@ -70,6 +70,8 @@ class OperatorMirror final : public harness::io::FrameMirror {
   void request() override;
   bool take(harness::io::MirrorImage& out) override;
 
+  // Frame thread: the window has asked for a copy that copy() would make.
+  [[nodiscard]] bool wanted() const { return state_.load(std::memory_order_acquire) == kRequested; }
   // Frame thread, with both eyes' swapchain images still acquired and the
   // frame's own commands submitted: copies them when a copy was requested,
   // with the scene's visible head-locked panels when `panels_as_layers`

@@ -83,29 +83,15 @@ bool QuadPanels::fit(Session& session, Slot& slot, std::uint32_t width, std::uin
   if (slot.handle.get() != XR_NULL_HANDLE && width <= slot.width && height <= slot.height) return true;
   const std::uint32_t w = rounded_up(std::max(width, slot.width));
   const std::uint32_t h = rounded_up(std::max(height, slot.height));
-  auto info = tagged<XrSwapchainCreateInfo>(XR_TYPE_SWAPCHAIN_CREATE_INFO);
-  info.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT;
-  info.format = format_;
-  info.sampleCount = 1;
-  info.width = w;
-  info.height = h;
-  info.faceCount = 1;
-  info.arraySize = 1;
-  info.mipCount = 1;
-  SwapchainHandle handle;
-  if (const XrResult r = xrCreateSwapchain(session.handle(), &info, handle.out()); XR_FAILED(r)) {
-    std::cerr << "curvlab: xr: " << failure_of(r, "xrCreateSwapchain").message
+  auto made = make_swapchain(session, format_, w, h,
+                             XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT);
+  if (!made) {
+    std::cerr << "curvlab: xr: " << made.error().message
               << "; the panels are drawn into the eye images instead of as quad layers\n";
     return false;
   }
-  auto images = swapchain_images(handle.get());
-  if (!images) {
-    std::cerr << "curvlab: xr: " << images.error().message
-              << "; the panels are drawn into the eye images instead of as quad layers\n";
-    return false;
-  }
-  slot.handle = std::move(handle);
-  slot.images = std::move(images).value();
+  slot.handle = std::move(made.value().handle);
+  slot.images = std::move(made.value().images);
   slot.width = w;
   slot.height = h;
   slot.staging = renderer::Buffer::create(ctx_, vk::DeviceSize{w} * h * 4, vk::BufferUsageFlagBits::eTransferSrc);

@@ -139,14 +139,14 @@ XrResult SwapchainDisplay::end_frame(FrameLayer what) {
   layer.views = views.data();
   // The head-locked panels follow as quad layers, over the projection (a
   // held frame keeps the last ones: their swapchains keep their images).
-  std::vector<const XrCompositionLayerBaseHeader*> layers;
+  layers_.clear();  // its capacity kept: no allocation per frame
   if (what != FrameLayer::none) {
-    layers.push_back(reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer));
+    layers_.push_back(reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer));
     if (panels_)
       for (const XrCompositionLayerQuad& quad : panels_->layers())
-        layers.push_back(reinterpret_cast<const XrCompositionLayerBaseHeader*>(&quad));
+        layers_.push_back(reinterpret_cast<const XrCompositionLayerBaseHeader*>(&quad));
   }
-  return session_.end_frame(layers);
+  return session_.end_frame(layers_);
 }
 
 // Until the runtime makes the session READY there is no frame loop; wait
@@ -293,7 +293,7 @@ renderer::FrameStats SwapchainDisplay::submit(const renderer::Scene& scene, cons
     // render() submits before returning, as xrReleaseSwapchainImage requires.
     stats = renderer_->render(scene, f, *target_);
     // The operator window's copy, while the images are still acquired.
-    if (mirror_) mirror_->copy(images, scene, !f.draw_head_locked, mirror_eyes());
+    if (mirror_ && mirror_->wanted()) mirror_->copy(images, scene, !f.draw_head_locked, mirror_eyes());
   } catch (const renderer::VulkanFailure& e) {
     swapchains_->release();
     fail(e);

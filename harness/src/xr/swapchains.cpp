@@ -62,36 +62,39 @@ Result<EyeSwapchains> EyeSwapchains::create(const Session& session) {
 Result<Done> EyeSwapchains::make(const Session& session, Eye& eye, const XrViewConfigurationView& view) const {
   eye.width = view.recommendedImageRectWidth;
   eye.height = view.recommendedImageRectHeight;
-  auto info = tagged<XrSwapchainCreateInfo>(XR_TYPE_SWAPCHAIN_CREATE_INFO);
   // TRANSFER_SRC: the operator window's copies (OperatorMirror).
-  info.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT |
-                    XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT;
-  info.format = format_;
-  info.sampleCount = 1;
-  info.width = eye.width;
-  info.height = eye.height;
-  info.faceCount = 1;
-  info.arraySize = 1;
-  info.mipCount = 1;
-  if (const XrResult r = xrCreateSwapchain(session.handle(), &info, eye.handle.out()); XR_FAILED(r))
-    return failure_of(r, "xrCreateSwapchain");
-  auto images = swapchain_images(eye.handle.get());
-  if (!images) return images.error();
-  eye.images = std::move(images).value();
+  auto made = make_swapchain(session, format_, eye.width, eye.height,
+                             XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT |
+                                 XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT);
+  if (!made) return made.error();
+  eye.handle = std::move(made.value().handle);
+  eye.images = std::move(made.value().images);
   return Done{};
 }
 
-Result<std::vector<XrSwapchainImageVulkan2KHR>> swapchain_images(XrSwapchain swapchain) {
+Result<MadeSwapchain> make_swapchain(const Session& session, std::int64_t format, std::uint32_t width,
+                                     std::uint32_t height, XrSwapchainUsageFlags usage) {
+  auto info = tagged<XrSwapchainCreateInfo>(XR_TYPE_SWAPCHAIN_CREATE_INFO);
+  info.usageFlags = usage;
+  info.format = format;
+  info.sampleCount = 1;
+  info.width = width;
+  info.height = height;
+  info.faceCount = 1;
+  info.arraySize = 1;
+  info.mipCount = 1;
+  MadeSwapchain out;
+  if (const XrResult r = xrCreateSwapchain(session.handle(), &info, out.handle.out()); XR_FAILED(r))
+    return failure_of(r, "xrCreateSwapchain");
   std::uint32_t count = 0;
-  if (const XrResult r = xrEnumerateSwapchainImages(swapchain, 0, &count, nullptr); XR_FAILED(r))
+  if (const XrResult r = xrEnumerateSwapchainImages(out.handle.get(), 0, &count, nullptr); XR_FAILED(r))
     return failure_of(r, "xrEnumerateSwapchainImages");
-  std::vector<XrSwapchainImageVulkan2KHR> images(
-      count, tagged<XrSwapchainImageVulkan2KHR>(XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR));
-  if (const XrResult r = xrEnumerateSwapchainImages(swapchain, count, &count,
-                                                    reinterpret_cast<XrSwapchainImageBaseHeader*>(images.data()));
+  out.images.assign(count, tagged<XrSwapchainImageVulkan2KHR>(XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR));
+  if (const XrResult r = xrEnumerateSwapchainImages(
+          out.handle.get(), count, &count, reinterpret_cast<XrSwapchainImageBaseHeader*>(out.images.data()));
       XR_FAILED(r))
     return failure_of(r, "xrEnumerateSwapchainImages");
-  return images;
+  return out;
 }
 
 XrSwapchainSubImage EyeSwapchains::sub_image(std::size_t i) const {

@@ -26,8 +26,14 @@ namespace curvlab::harness::xr {
 // a failure (Session::fail).
 void wait_swapchain_image(Session& session, XrSwapchain swapchain, bool& said);
 
-// xrEnumerateSwapchainImages into Vulkan image structs.
-harness::Result<std::vector<XrSwapchainImageVulkan2KHR>> swapchain_images(XrSwapchain swapchain);
+// A single-sample, single-layer 2D swapchain of `format` and its Vulkan
+// images (xrCreateSwapchain, xrEnumerateSwapchainImages).
+struct MadeSwapchain {
+  SwapchainHandle handle;
+  std::vector<XrSwapchainImageVulkan2KHR> images;
+};
+harness::Result<MadeSwapchain> make_swapchain(const Session& session, std::int64_t format, std::uint32_t width,
+                                              std::uint32_t height, XrSwapchainUsageFlags usage);
 
 class EyeSwapchains {
  public:

@@ -1942,8 +1942,27 @@ bool capture_left(Session& s, const XrFrameEndInfo& info, const XrCompositionLay
   return stbi_write_png(path.c_str(), w, h, 3, rgb.data(), w * 3) != 0;
 }
 
-// A quad layer: a released image of a swapchain of this session, its
-// rectangle inside the swapchain, a positive size and a unit orientation.
+// A layer's sub-image: a swapchain of this session with a released image
+// and none still acquired, the rectangle inside it, an existing array layer.
+// `which` begins each message ("view 0: ", "quad layer: ").
+XrResult check_sub_image(const Session& s, const XrSwapchainSubImage& sub, const std::string& which) {
+  constexpr const char* fn = "xrEndFrame";
+  const Swapchain* sc = swapchain_of(sub.swapchain);
+  if (sc == nullptr || sc->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, which + "swapchain");
+  if (!sc->last_released) return violation(fn, XR_ERROR_LAYER_INVALID, which + "its swapchain has no released image");
+  if (!sc->acquired.empty())
+    return violation(fn, XR_ERROR_LAYER_INVALID, which + "its swapchain still has an acquired image");
+  const XrRect2Di& r = sub.imageRect;
+  if (r.offset.x < 0 || r.offset.y < 0 || r.extent.width <= 0 || r.extent.height <= 0 ||
+      static_cast<std::uint32_t>(r.offset.x + r.extent.width) > sc->width ||
+      static_cast<std::uint32_t>(r.offset.y + r.extent.height) > sc->height)
+    return violation(fn, XR_ERROR_SWAPCHAIN_RECT_INVALID, which + "rectangle outside the swapchain");
+  if (sub.imageArrayIndex >= sc->array_size) return violation(fn, XR_ERROR_VALIDATION_FAILURE, which + "imageArrayIndex");
+  return XR_SUCCESS;
+}
+
+// A quad layer: its space, eye visibility and sub-image, a positive size
+// and a unit orientation.
 XrResult check_quad(const Session& s, const XrCompositionLayerQuad& q) {
   constexpr const char* fn = "xrEndFrame";
   const Space* space = space_of(q.space);
@@ -1951,18 +1970,7 @@ XrResult check_quad(const Session& s, const XrCompositionLayerQuad& q) {
   if (q.eyeVisibility != XR_EYE_VISIBILITY_BOTH && q.eyeVisibility != XR_EYE_VISIBILITY_LEFT &&
       q.eyeVisibility != XR_EYE_VISIBILITY_RIGHT)
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "quad layer eyeVisibility");
-  const Swapchain* sc = swapchain_of(q.subImage.swapchain);
-  if (sc == nullptr || sc->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, "quad layer swapchain");
-  if (!sc->last_released) return violation(fn, XR_ERROR_LAYER_INVALID, "quad layer: its swapchain has no released image");
-  if (!sc->acquired.empty())
-    return violation(fn, XR_ERROR_LAYER_INVALID, "quad layer: its swapchain still has an acquired image");
-  const XrRect2Di& r = q.subImage.imageRect;
-  if (r.offset.x < 0 || r.offset.y < 0 || r.extent.width <= 0 || r.extent.height <= 0 ||
-      static_cast<std::uint32_t>(r.offset.x + r.extent.width) > sc->width ||
-      static_cast<std::uint32_t>(r.offset.y + r.extent.height) > sc->height)
-    return violation(fn, XR_ERROR_SWAPCHAIN_RECT_INVALID, "quad layer: rectangle outside the swapchain");
-  if (q.subImage.imageArrayIndex >= sc->array_size)
-    return violation(fn, XR_ERROR_VALIDATION_FAILURE, "quad layer: imageArrayIndex");
+  if (const XrResult r = check_sub_image(s, q.subImage, "quad layer: "); XR_FAILED(r)) return r;
   if (!(q.size.width > 0.0f && q.size.height > 0.0f && std::isfinite(q.size.width) && std::isfinite(q.size.height)))
     return violation(fn, XR_ERROR_VALIDATION_FAILURE, "quad layer: size");
   if (!normalized(q.pose.orientation)) return violation(fn, XR_ERROR_POSE_INVALID, "quad layer: orientation");
@@ -1987,19 +1995,7 @@ XrResult check_layer(const Session& s, const XrCompositionLayerBaseHeader* heade
     const std::string which = "view " + std::to_string(i) + ": ";
     if (v.type != XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW)
       return violation(fn, XR_ERROR_VALIDATION_FAILURE, which + "untyped");
-    const Swapchain* sc = swapchain_of(v.subImage.swapchain);
-    if (sc == nullptr || sc->session != &s) return violation(fn, XR_ERROR_HANDLE_INVALID, which + "swapchain");
-    if (!sc->last_released)
-      return violation(fn, XR_ERROR_LAYER_INVALID, which + "its swapchain has no released image");
-    if (!sc->acquired.empty())
-      return violation(fn, XR_ERROR_LAYER_INVALID, which + "its swapchain still has an acquired image");
-    const XrRect2Di& r = v.subImage.imageRect;
-    if (r.offset.x < 0 || r.offset.y < 0 || r.extent.width <= 0 || r.extent.height <= 0 ||
-        static_cast<std::uint32_t>(r.offset.x + r.extent.width) > sc->width ||
-        static_cast<std::uint32_t>(r.offset.y + r.extent.height) > sc->height)
-      return violation(fn, XR_ERROR_SWAPCHAIN_RECT_INVALID, which + "rectangle outside the swapchain");
-    if (v.subImage.imageArrayIndex >= sc->array_size)
-      return violation(fn, XR_ERROR_VALIDATION_FAILURE, which + "imageArrayIndex");
+    if (const XrResult r = check_sub_image(s, v.subImage, which); XR_FAILED(r)) return r;
     if (!normalized(v.pose.orientation)) return violation(fn, XR_ERROR_POSE_INVALID, which + "orientation");
     if (!(v.fov.angleLeft < v.fov.angleRight && v.fov.angleDown < v.fov.angleUp))
       return violation(fn, XR_ERROR_VALIDATION_FAILURE, which + "degenerate field of view");

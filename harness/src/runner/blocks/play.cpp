@@ -668,9 +668,7 @@ class PlayBlock {
       s.position_valid = (partner.tracked & (1u << d)) != 0;
       s.extrapolated = partner.extrapolated;
       s.sample_age_ns = g.timing.predicted_display_ns - partner.newest_sample_ns;
-      const auto& m = partner.pose[static_cast<std::size_t>(d)].m;
-      for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) s.virtual_pose[static_cast<std::size_t>(c * 4 + r)] = m[c][r];
+      store_pose(partner.pose[static_cast<std::size_t>(d)].m, s.virtual_pose);
       if (d == net::PoseFrame::head && mine != nullptr && mine->tracked[0]) {
         s.distance_m = geometry::distance_m(space, mine->pose[0] * geometry::origin(space),
                                             partner.pose[0] * geometry::origin(space));

@@ -123,6 +123,7 @@ class SwapchainDisplay final : public harness::io::Display, private SessionPart 
   std::unique_ptr<renderer::ExternalImagesTarget> target_;
   std::unique_ptr<OperatorMirror> mirror_;
   std::unique_ptr<QuadPanels> panels_;  // null: the panels are drawn into the eye images
+  std::vector<const XrCompositionLayerBaseHeader*> layers_;  // the frame's, reused by end_frame
 
   std::int64_t frame_index_ = 0;
   XrTime last_display_ = 0;  // the previous frame's predicted display time
